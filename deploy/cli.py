@@ -1,0 +1,48 @@
+"""The ``zendock`` command: one subcommand per module in :mod:`deploy.commands`.
+
+Each command module defines ``register(subparsers)``, which adds its parser(s) and sets ``func`` to a
+callable taking the parsed arguments and returning an exit code. Bad arguments exit 2 with argparse's
+message; a :class:`~shared.config_errors.ConfigError` from a command prints one line and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+from collections.abc import Sequence
+
+from deploy import commands
+from shared.config_errors import ConfigError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="zendock",
+        description="Autonomous docking for a two-wheeled robot, as services over Zenoh.",
+    )
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers.required = True
+    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"{commands.__name__}.{info.name}")
+        register = getattr(module, "register", None)
+        if callable(register):
+            register(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except ConfigError as exc:
+        print(f"zendock {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,220 @@
+"""The common shell of every service: flags, parameters, logging, the session, signals.
+
+Every ``python -m services.<name>`` takes the same flags::
+
+    --namespace NS          robot namespace (env ZENDOCK_NAMESPACE)
+    --connect ENDPOINT      repeatable; default tcp/127.0.0.1:7447 (env ZENDOCK_CONNECT, comma-separated)
+    --listen ENDPOINT       repeatable
+    --zenoh-config FILE     a Zenoh json5 config applied before the flags
+    --config FILE           YAML parameters (flat, or ROS style ``node: {ros__parameters: {...}}``)
+    -p NAME=VALUE           repeatable parameter override, value parsed as YAML
+    --node-name NAME        default: the service's name
+    --log-level LEVEL
+
+Parameters are a pydantic model per service (unknown names and bad values are errors). A bad flag or
+parameter prints one clear message and exits with code 2. SIGINT and SIGTERM stop the node, close the
+session and exit 0. :func:`run_service` is the whole lifecycle; tests call :func:`serve` with options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import signal
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol, TypeVar
+
+import yaml
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from shared.config_errors import ConfigError, format_validation_error
+from shared.names import normalise_namespace
+from shared.node import Node
+from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+
+P = TypeVar("P", bound="ServiceParams")
+
+
+class ServiceParams(BaseModel):
+    """Base of every service's parameters: strict (unknown names are errors)."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    use_sim_time: bool = False
+
+
+class Closeable(Protocol):
+    def close(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class ServiceOptions:
+    """Everything a service needs to start, after flags and environment are read."""
+
+    node_name: str
+    namespace: str = ""
+    connect: tuple[str, ...] = (DEFAULT_ROUTER_ENDPOINT,)
+    listen: tuple[str, ...] = ()
+    zenoh_config: str | None = None
+    config_file: str | None = None
+    overrides: dict[str, Any] = field(default_factory=dict)
+    log_level: str = "INFO"
+
+    def session_spec(self) -> SessionSpec:
+        return SessionSpec(mode="client", connect=self.connect, listen=self.listen, config_file=self.zenoh_config)
+
+
+def _parse_override(text: str) -> tuple[str, Any]:
+    name, sep, raw = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise ConfigError(f"-p {text!r}: expected NAME=VALUE")
+    try:
+        value = yaml.safe_load(raw) if raw.strip() else ""
+    except yaml.YAMLError:
+        value = raw
+    return name, value
+
+
+def build_arg_parser(service_name: str, description: str = "") -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog=f"python -m services.{service_name}", description=description)
+    env_connect = [e for e in os.environ.get("ZENDOCK_CONNECT", "").split(",") if e.strip()]
+    parser.add_argument("--namespace", default=os.environ.get("ZENDOCK_NAMESPACE", ""), help="robot namespace")
+    parser.add_argument("--connect", action="append", default=None, metavar="ENDPOINT",
+                        help=f"Zenoh endpoint to connect to (repeatable; default {DEFAULT_ROUTER_ENDPOINT})")
+    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT", help="Zenoh endpoint to listen on")
+    parser.add_argument("--zenoh-config", default=None, metavar="FILE", help="Zenoh json5 configuration file")
+    parser.add_argument("--config", default=None, metavar="FILE", help="YAML file of parameters")
+    parser.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter")
+    parser.add_argument("--node-name", default=service_name, help="name of the node on the bus")
+    parser.add_argument("--log-level", default="INFO", type=str.upper,
+                        choices=["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"])
+    parser.set_defaults(_env_connect=env_connect)
+    return parser
+
+
+def options_from_args(args: argparse.Namespace, flag_params: dict[str, str] | None = None) -> ServiceOptions:
+    """Turn parsed flags into :class:`ServiceOptions`; ``flag_params`` maps extra flags to parameters."""
+    overrides: dict[str, Any] = {}
+    for dest, param in (flag_params or {}).items():
+        value = getattr(args, dest, None)
+        if value is not None:
+            overrides[param] = value
+    for text in args.param:
+        name, value = _parse_override(text)
+        overrides[name] = value
+    try:
+        namespace = normalise_namespace(args.namespace)
+    except ValueError as exc:
+        raise ConfigError(f"--namespace: {exc}") from None
+    connect = tuple(args.connect or args._env_connect or [DEFAULT_ROUTER_ENDPOINT])
+    return ServiceOptions(
+        node_name=args.node_name,
+        namespace=namespace,
+        connect=connect,
+        listen=tuple(args.listen),
+        zenoh_config=args.zenoh_config,
+        config_file=args.config,
+        overrides=overrides,
+        log_level=args.log_level,
+    )
+
+
+def load_params(model: type[P], options: ServiceOptions) -> P:
+    """Parameters from the config file, then ``-p`` overrides, validated by ``model``."""
+    values: dict[str, Any] = {}
+    source = "parameters"
+    if options.config_file:
+        path = Path(options.config_file)
+        source = str(path)
+        try:
+            data = yaml.safe_load(path.read_text()) or {}
+        except OSError as exc:
+            raise ConfigError(f"{path}: cannot read parameter file: {exc.strerror or exc}") from None
+        except yaml.YAMLError as exc:
+            raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+        if not isinstance(data, dict):
+            raise ConfigError(f"{path}: expected a mapping of parameter names to values")
+        for scope in (options.node_name, "/**"):
+            scoped = data.get(scope)
+            if isinstance(scoped, dict) and isinstance(scoped.get("ros__parameters"), dict):
+                data = scoped["ros__parameters"]
+                break
+        values.update(data)
+    values.update(options.overrides)
+    try:
+        return model.model_validate(values)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, source)) from None
+
+
+def configure_logging(options: ServiceOptions) -> logging.Logger:
+    ns = f"{options.namespace}/" if options.namespace else ""
+    logging.basicConfig(
+        level=options.log_level,
+        format=f"%(asctime)s %(levelname)s [{ns}{options.node_name}] %(message)s",
+        datefmt="%H:%M:%S",
+        stream=sys.stderr,
+        force=True,
+    )
+    return logging.getLogger(options.node_name)
+
+
+def serve(
+    options: ServiceOptions,
+    params: P,
+    build: Callable[[Node, P], Closeable | None],
+    *,
+    install_signal_handlers: bool = True,
+) -> int:
+    """Open the session, build the service on a node, announce it, spin until stopped, close everything."""
+    log = configure_logging(options)
+    with open_session(options.session_spec()) as session:
+        node = Node(options.node_name, session, options.namespace, use_sim_time=params.use_sim_time, logger=log)
+        if install_signal_handlers:
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(sig, lambda *_: node.shutdown())
+        service = build(node, params)
+        node.declare_ready()
+        log.info("ready (namespace %r, connect %s)", options.namespace, ",".join(options.connect))
+        try:
+            node.spin()
+        finally:
+            if service is not None:
+                service.close()
+            node.close()
+    log.info("stopped")
+    return 0
+
+
+def run_service(
+    service_name: str,
+    params_model: type[P],
+    build: Callable[[Node, P], Closeable | None],
+    argv: Sequence[str] | None = None,
+    *,
+    description: str = "",
+    add_flags: Callable[[argparse.ArgumentParser], dict[str, str]] | None = None,
+) -> int:
+    """The whole life of ``python -m services.<name>``: parse, validate, serve. Returns the exit code.
+
+    ``add_flags`` may add service-specific flags and returns which parameter each one sets
+    (e.g. ``--world`` sets ``world``).
+    """
+    parser = build_arg_parser(service_name, description)
+    flag_params = add_flags(parser) if add_flags else {}
+    args = parser.parse_args(argv)
+    try:
+        options = options_from_args(args, flag_params)
+        params = load_params(params_model, options)
+    except ConfigError as exc:
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        return serve(options, params, build)
+    except ConfigError as exc:  # raised while building (a bad world file, a bad map)
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        return 2

@@ -1,0 +1,363 @@
+"""Typed message schemas: dataclasses that mirror ROS 2 messages, encoded as msgpack maps.
+
+A message class is a dataclass decorated with :func:`message`, which records its ROS type name and
+compiles one validator per field. Decoding checks every field (type, range, finiteness, array shape)
+and raises :class:`MessageError` naming the key, the type, the field path and the reason; encoding
+runs the same checks so an invalid message is refused at the sender.
+
+Field annotations understood:
+
+- ``float`` (finite), :data:`FloatAny` (NaN and infinities allowed), ``int`` and the sized integer
+  aliases (:data:`UInt8`, :data:`Int32`, ...), ``bool``, ``str``;
+- another message class, or ``list[MessageClass]``;
+- numeric arrays :data:`Float64Array`, :data:`Float32Array`, :data:`FloatAnyArray`, :data:`Int8Array`,
+  :data:`UInt8Array`: numpy arrays in Python, lists on the wire;
+- ``list[str]``.
+
+``Annotated[int, Range(lo, hi)]`` and ``Annotated[float, Range(lo, hi)]`` bound a value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import typing
+from collections.abc import Callable
+from typing import Annotated, Any, ClassVar, TypeVar, dataclass_transform
+
+import msgpack
+import numpy as np
+
+MAX_ARRAY_LEN = 4_000_000  # a map of 2000 x 2000 cells; anything larger is refused
+
+
+class MessageError(ValueError):
+    """A payload is not a valid message of the expected type."""
+
+    def __init__(self, reason: str, *, type_name: str = "", field: str = "", key: str = "") -> None:
+        self.reason = reason
+        self.type_name = type_name
+        self.field = field
+        self.key = key
+        super().__init__(self._text())
+
+    def _text(self) -> str:
+        where = [p for p in (self.key, self.type_name) if p]
+        prefix = ": ".join(where)
+        field = f"field '{self.field}': " if self.field else ""
+        return f"{prefix}: {field}{self.reason}" if prefix else f"{field}{self.reason}"
+
+    def at(self, *, key: str | None = None, type_name: str | None = None) -> MessageError:
+        """Fill in where the error happened (the innermost type and field are kept)."""
+        if key is not None and not self.key:
+            self.key = key
+        if type_name is not None and not self.type_name:
+            self.type_name = type_name
+        self.args = (self._text(),)
+        return self
+
+
+class _FieldError(Exception):
+    """Internal: carries a reason and a field path up to the message level."""
+
+    def __init__(self, path: str, reason: str) -> None:
+        self.path = path
+        self.reason = reason
+
+
+@dataclasses.dataclass(frozen=True)
+class Range:
+    """Inclusive bounds for a numeric field."""
+
+    lo: float
+    hi: float
+
+
+class _AllowNonFinite:
+    pass
+
+
+class _ArraySpec:
+    def __init__(self, dtype: type, allow_nonfinite: bool = False) -> None:
+        self.dtype = np.dtype(dtype)
+        self.allow_nonfinite = allow_nonfinite
+
+
+FloatAny = Annotated[float, _AllowNonFinite()]
+UInt8 = Annotated[int, Range(0, 255)]
+Int8 = Annotated[int, Range(-128, 127)]
+UInt16 = Annotated[int, Range(0, 65535)]
+Int32 = Annotated[int, Range(-(2**31), 2**31 - 1)]
+UInt32 = Annotated[int, Range(0, 2**32 - 1)]
+Int64 = Annotated[int, Range(-(2**63), 2**63 - 1)]
+UInt64 = Annotated[int, Range(0, 2**64 - 1)]
+Float64Array = Annotated[np.ndarray, _ArraySpec(np.float64)]
+Float32Array = Annotated[np.ndarray, _ArraySpec(np.float32)]
+FloatAnyArray = Annotated[np.ndarray, _ArraySpec(np.float32, allow_nonfinite=True)]
+Int8Array = Annotated[np.ndarray, _ArraySpec(np.int8)]
+UInt8Array = Annotated[np.ndarray, _ArraySpec(np.uint8)]
+
+Validator = Callable[[Any, str], Any]
+#: Validates a Python value and returns its wire form in one pass (the sender's check).
+Encoder = Callable[[Any, str], Any]
+
+
+class Message:
+    """Base of every message class (added by :func:`message`)."""
+
+    TYPE_NAME: ClassVar[str] = ""
+    _FIELDS: ClassVar[tuple[tuple[str, Validator, Encoder], ...]] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """The msgpack-ready map, validated (raises :class:`MessageError`)."""
+        try:
+            return _encode_message(self, "")
+        except _FieldError as exc:
+            raise MessageError(exc.reason, type_name=self.TYPE_NAME, field=exc.path) from None
+
+    @classmethod
+    def from_dict(cls: type[M], data: Any) -> M:
+        try:
+            return _decode_message(cls, data, "")
+        except _FieldError as exc:
+            raise MessageError(exc.reason, type_name=cls.TYPE_NAME, field=exc.path) from None
+
+    def encode(self) -> bytes:
+        return msgpack.packb(self.to_dict(), use_bin_type=True)
+
+    @classmethod
+    def decode(cls: type[M], payload: bytes) -> M:
+        return cls.from_dict(unpack(payload, cls.TYPE_NAME))
+
+
+M = TypeVar("M", bound=Message)
+_REGISTRY: dict[str, type[Message]] = {}
+
+
+def unpack(payload: bytes, type_name: str = "") -> Any:
+    """msgpack bytes -> Python objects, with a :class:`MessageError` for garbage."""
+    try:
+        return msgpack.unpackb(payload, raw=False, strict_map_key=True)
+    except Exception as exc:  # msgpack raises several unrelated types for garbage
+        detail = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+        raise MessageError(f"payload is not valid msgpack ({detail})", type_name=type_name) from None
+
+
+def message_type(type_name: str) -> type[Message]:
+    """The message class registered under a ROS type name (``KeyError`` if unknown)."""
+    return _REGISTRY[type_name]
+
+
+def registered_types() -> dict[str, type[Message]]:
+    return dict(_REGISTRY)
+
+
+@dataclass_transform()
+def message(type_name: str) -> Callable[[type[M]], type[M]]:
+    """Class decorator: make a dataclass message registered under ``type_name``."""
+
+    def wrap(cls: type[M]) -> type[M]:
+        if not issubclass(cls, Message):
+            raise TypeError(f"{cls.__name__} must subclass shared.schema.Message")
+        cls = dataclasses.dataclass(cls)
+        cls.TYPE_NAME = type_name
+        hints = typing.get_type_hints(cls, include_extras=True)
+        cls._FIELDS = tuple(
+            (f.name, *_compile(hints[f.name], f.name)) for f in dataclasses.fields(cls)  # type: ignore[arg-type]
+        )
+        if type_name in _REGISTRY and _REGISTRY[type_name].__qualname__ != cls.__qualname__:
+            raise ValueError(f"message type {type_name} registered twice")
+        _REGISTRY[type_name] = cls
+        return cls
+
+    return wrap
+
+
+# --- compilation of per-field validators and encoders -------------------------------------------
+
+
+def _compile(annotation: Any, name: str) -> tuple[Validator, Encoder]:
+    base: Any = annotation
+    extras: tuple[Any, ...] = ()
+    if typing.get_origin(annotation) is Annotated:
+        base, *extras_list = typing.get_args(annotation)
+        extras = tuple(extras_list)
+    bounds: Range | None = next((e for e in extras if isinstance(e, Range)), None)
+    array: _ArraySpec | None = next((e for e in extras if isinstance(e, _ArraySpec)), None)
+    if array is not None:
+        validate_array = _array_validator(array)
+        return validate_array, lambda value, path: _array_to_wire(validate_array(value, path))
+    if base is float:
+        check = _float_validator(any(isinstance(e, _AllowNonFinite) for e in extras), bounds)
+        return check, check
+    if base is bool:
+        return _bool_validator, _bool_validator
+    if base is int:
+        check = _int_validator(bounds)
+        return check, check
+    if base is str:
+        return _str_validator, _str_validator
+    if isinstance(base, type) and issubclass(base, Message):
+        return _nested_validator(base), _nested_encoder(base)
+    if typing.get_origin(base) is list:
+        (item,) = typing.get_args(base)
+        if item is str:
+            return _str_list_validator, _str_list_validator
+        if isinstance(item, type) and issubclass(item, Message):
+            return _message_list_validator(item), _message_list_encoder(item)
+    raise TypeError(f"field {name!r}: unsupported annotation {annotation!r}")
+
+
+def _float_validator(allow_nonfinite: bool, bounds: Range | None) -> Validator:
+    def check(value: Any, path: str) -> float:
+        if type(value) is float:
+            v = value
+        elif isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool):
+            v = float(value)
+        else:
+            raise _FieldError(path, f"expected a number, got {type(value).__name__}")
+        if not allow_nonfinite and not math.isfinite(v):
+            raise _FieldError(path, f"must be finite, got {v}")
+        if bounds is not None and math.isfinite(v) and not bounds.lo <= v <= bounds.hi:
+            raise _FieldError(path, f"must be within [{bounds.lo}, {bounds.hi}], got {v}")
+        return v
+
+    return check
+
+
+def _int_validator(bounds: Range | None) -> Validator:
+    def check(value: Any, path: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            raise _FieldError(path, f"expected an integer, got {type(value).__name__}")
+        v = int(value)
+        if bounds is not None and not bounds.lo <= v <= bounds.hi:
+            raise _FieldError(path, f"must be within [{int(bounds.lo)}, {int(bounds.hi)}], got {v}")
+        return v
+
+    return check
+
+
+def _bool_validator(value: Any, path: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise _FieldError(path, f"expected true or false, got {type(value).__name__}")
+    return bool(value)
+
+
+def _str_validator(value: Any, path: str) -> str:
+    if not isinstance(value, str):
+        raise _FieldError(path, f"expected a string, got {type(value).__name__}")
+    return value
+
+
+def _str_list_validator(value: Any, path: str) -> list[str]:
+    if not isinstance(value, (list, tuple)):
+        raise _FieldError(path, f"expected a list of strings, got {type(value).__name__}")
+    return [_str_validator(v, f"{path}[{i}]") for i, v in enumerate(value)]
+
+
+def _array_validator(spec: _ArraySpec) -> Validator:
+    is_float = spec.dtype.kind == "f"
+
+    def check(value: Any, path: str) -> np.ndarray:
+        if isinstance(value, np.ndarray):
+            raw = value
+        elif isinstance(value, (list, tuple)):
+            if len(value) > MAX_ARRAY_LEN:
+                raise _FieldError(path, f"array of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
+            if value and not all(type(v) in (int, float) for v in value):
+                bad = next(v for v in value if type(v) not in (int, float))
+                raise _FieldError(path, f"array items must be numbers, found {type(bad).__name__}")
+            raw = np.asarray(value, dtype=np.float64 if is_float else np.int64)
+        elif isinstance(value, (bytes, bytearray)) and spec.dtype.itemsize == 1:
+            raw = np.frombuffer(bytes(value), dtype=spec.dtype)
+        else:
+            raise _FieldError(path, f"expected a list of numbers, got {type(value).__name__}")
+        if raw.ndim != 1:
+            raise _FieldError(path, f"expected a flat array, got shape {raw.shape}")
+        if raw.size > MAX_ARRAY_LEN:
+            raise _FieldError(path, f"array of {raw.size} items exceeds the limit of {MAX_ARRAY_LEN}")
+        if is_float:
+            if raw.dtype.kind not in "fiu":
+                raise _FieldError(path, f"expected numbers, got dtype {raw.dtype}")
+            if not spec.allow_nonfinite and raw.size and not np.isfinite(raw).all():
+                raise _FieldError(path, "array items must be finite")
+            return raw.astype(spec.dtype, copy=False)
+        if raw.dtype.kind not in "iu":
+            raise _FieldError(path, f"expected integers, got dtype {raw.dtype}")
+        info = np.iinfo(spec.dtype.type)  # type: ignore[type-var]
+        if raw.size and (raw.min() < info.min or raw.max() > info.max):
+            raise _FieldError(path, f"array items must be within [{info.min}, {info.max}]")
+        return raw.astype(spec.dtype, copy=False)
+
+    return check
+
+
+def _array_to_wire(value: np.ndarray) -> Any:
+    if value.dtype.itemsize == 1 and value.dtype.kind in "iu" and value.size > 64:
+        return value.tobytes()
+    return value.tolist()
+
+
+def _nested_validator(cls: type[Message]) -> Validator:
+    def check(value: Any, path: str) -> Message:
+        return _decode_message(cls, value, path)
+
+    return check
+
+
+def _nested_encoder(cls: type[Message]) -> Encoder:
+    def encode(value: Any, path: str) -> dict[str, Any]:
+        if isinstance(value, cls):
+            return _encode_message(value, path)
+        if isinstance(value, dict):  # a plain map is accepted if it is a valid message
+            return _encode_message(_decode_message(cls, value, path), path)
+        raise _FieldError(path, f"expected {cls.TYPE_NAME}, got {type(value).__name__}")
+
+    return encode
+
+
+def _message_list_validator(cls: type[Message]) -> Validator:
+    def check(value: Any, path: str) -> list[Message]:
+        if not isinstance(value, (list, tuple)):
+            raise _FieldError(path, f"expected a list of {cls.TYPE_NAME}, got {type(value).__name__}")
+        if len(value) > MAX_ARRAY_LEN:
+            raise _FieldError(path, f"list of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
+        return [_decode_message(cls, v, f"{path}[{i}]") for i, v in enumerate(value)]
+
+    return check
+
+
+def _message_list_encoder(cls: type[Message]) -> Encoder:
+    encode_item = _nested_encoder(cls)
+
+    def encode(value: Any, path: str) -> list[dict[str, Any]]:
+        if not isinstance(value, (list, tuple)):
+            raise _FieldError(path, f"expected a list of {cls.TYPE_NAME}, got {type(value).__name__}")
+        return [encode_item(v, f"{path}[{i}]") for i, v in enumerate(value)]
+
+    return encode
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
+
+
+def _decode_message(cls: type[M], data: Any, path: str) -> M:
+    if isinstance(data, cls):
+        _encode_message(data, path)  # validates
+        return data
+    if not isinstance(data, dict):
+        raise _FieldError(path, f"expected a map for {cls.TYPE_NAME}, got {type(data).__name__}")
+    values = {}
+    for name, validate, _ in cls._FIELDS:
+        if name not in data:
+            raise _FieldError(_join(path, name), "missing")
+        values[name] = validate(data[name], _join(path, name))
+    if len(data) != len(cls._FIELDS):
+        unknown = sorted(str(k) for k in data if k not in values)
+        raise _FieldError(_join(path, unknown[0]), f"unknown field for {cls.TYPE_NAME}")
+    return cls(**values)
+
+
+def _encode_message(msg: Message, path: str) -> dict[str, Any]:
+    return {name: encode(getattr(msg, name), _join(path, name)) for name, _, encode in msg._FIELDS}

@@ -1,0 +1,65 @@
+"""Zenoh session configuration with explicit endpoints and no multicast scouting.
+
+zendock never relies on discovery by multicast: every process connects to (or listens on) the endpoints
+it is given, so tests on free ports and several stacks on one machine never meet by accident.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import zenoh
+
+DEFAULT_ROUTER_ENDPOINT = "tcp/127.0.0.1:7447"
+
+
+@dataclass(frozen=True)
+class SessionSpec:
+    """How a process joins the Zenoh network."""
+
+    mode: str = "client"  # client | peer | router
+    connect: tuple[str, ...] = (DEFAULT_ROUTER_ENDPOINT,)
+    listen: tuple[str, ...] = ()
+    config_file: str | None = None
+    #: Extra json5 settings as (path, json-value) pairs, applied last.
+    overrides: tuple[tuple[str, str], ...] = field(default_factory=tuple)
+
+
+def make_config(spec: SessionSpec) -> zenoh.Config:
+    """Build a zenoh.Config: the file (if any) first, then mode, endpoints and the no-multicast rule."""
+    if spec.mode not in ("client", "peer", "router"):
+        raise ValueError(f"zenoh mode must be client, peer or router, got {spec.mode!r}")
+    if spec.config_file:
+        path = Path(spec.config_file)
+        if not path.is_file():
+            raise ValueError(f"zenoh config file {path} does not exist")
+        conf = zenoh.Config.from_file(str(path))
+    else:
+        conf = zenoh.Config()
+    conf.insert_json5("mode", json.dumps(spec.mode))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    if spec.connect:
+        conf.insert_json5("connect/endpoints", json.dumps(list(spec.connect)))
+    if spec.listen:
+        conf.insert_json5("listen/endpoints", json.dumps(list(spec.listen)))
+    elif spec.mode != "router":
+        conf.insert_json5("listen/endpoints", "[]")
+    if spec.mode == "client":
+        # Keep trying to reach the router instead of failing at start-up, so start order does not matter.
+        conf.insert_json5("connect/timeout_ms", "-1")
+        conf.insert_json5("connect/exit_on_failure", "false")
+    for path_key, value in spec.overrides:
+        conf.insert_json5(path_key, value)
+    return conf
+
+
+def open_session(spec: SessionSpec) -> zenoh.Session:
+    """Open a session; use it as a context manager so it is always closed."""
+    return zenoh.open(make_config(spec))
+
+
+def client_spec(connect: Sequence[str] = (DEFAULT_ROUTER_ENDPOINT,)) -> SessionSpec:
+    return SessionSpec(mode="client", connect=tuple(connect))

@@ -1,0 +1,231 @@
+"""World files: the room the simulator builds and the planner maps.
+
+The schema (``deploy/worlds/*.yaml``)::
+
+    name: seed_room
+    bounds: [xmin, ymin, xmax, ymax]          # four opaque outer walls on these edges
+    walls: [[[x1, y1], [x2, y2]], ...]        # opaque segments: lidar and sonar see them
+    glass: [[[x1, y1], [x2, y2]], ...]        # glass: sonar sees it, lidar does not
+    boxes: [{pose: [x, y, yaw], size: [w, d]}, ...]
+    docks: [{id: home, pose: [x, y, yaw], type: charger}, ...]
+    robot: {start: [x, y, yaw]}
+
+A dock's pose is the robot's base_link pose when docked with contacts mated; the dock body and its
+charging plate stand directly ahead of it (see :data:`ROBOT_FRONT_M` and :class:`DockGeometry`).
+Keys this version does not know are reported as warnings, not errors, so newer world files still load.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from shared.config_errors import ConfigError, format_validation_error
+from shared.geometry import Pose2D
+
+log = logging.getLogger(__name__)
+
+#: Robot footprint (length along x, width along y) and where base_link sits: at its centre.
+ROBOT_LENGTH_M = 0.40
+ROBOT_WIDTH_M = 0.30
+ROBOT_FRONT_M = ROBOT_LENGTH_M / 2.0
+
+Point = tuple[float, float]
+Segment = tuple[Point, Point]
+
+
+def _finite(values: tuple[float, ...], what: str) -> tuple[float, ...]:
+    for v in values:
+        if not math.isfinite(v):
+            raise ValueError(f"{what} must be finite numbers, got {list(values)}")
+    return values
+
+
+class _Lenient(BaseModel):
+    """Known keys are validated strictly; unknown keys are kept and reported as warnings."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+
+class Box(_Lenient):
+    pose: tuple[float, float, float]
+    size: tuple[float, float]
+
+    @field_validator("pose")
+    @classmethod
+    def _pose_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        return _finite(v, "pose")  # type: ignore[return-value]
+
+    @field_validator("size")
+    @classmethod
+    def _size_positive(cls, v: tuple[float, float]) -> tuple[float, float]:
+        _finite(v, "size")
+        if v[0] <= 0 or v[1] <= 0:
+            raise ValueError(f"size must be two positive lengths [w, d], got {list(v)}")
+        return v
+
+    def corners(self) -> list[Point]:
+        """The four corners in the world frame, counter-clockwise; ``w`` along the box's x axis."""
+        w, d = self.size
+        frame = Pose2D(*self.pose)
+        local = [(-w / 2, -d / 2), (w / 2, -d / 2), (w / 2, d / 2), (-w / 2, d / 2)]
+        return [frame.transform_point(px, py) for px, py in local]
+
+
+class Dock(_Lenient):
+    id: str = Field(min_length=1)
+    pose: tuple[float, float, float]
+    type: str = "charger"
+
+    @field_validator("pose")
+    @classmethod
+    def _pose_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        return _finite(v, "pose")  # type: ignore[return-value]
+
+    @property
+    def pose2d(self) -> Pose2D:
+        return Pose2D.from_seq(self.pose)
+
+
+class RobotSpec(_Lenient):
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @field_validator("start")
+    @classmethod
+    def _start_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        return _finite(v, "start")  # type: ignore[return-value]
+
+
+class DockGeometry(BaseModel):
+    """Where a dock's physical parts stand, in the dock pose's frame (x ahead of the docked robot).
+
+    The charging plate's face is at ``x = ROBOT_FRONT_M``: the robot's front touches it when its
+    base_link is at the dock pose. The body is a box behind the plate.
+    """
+
+    model_config = ConfigDict(frozen=True)
+    body_depth_m: float = 0.20
+    body_width_m: float = 0.40
+    #: The marker (ARTag) is on the body's face, centred, facing the robot.
+    marker_height_m: float = 0.10
+
+    def body_box(self, dock: Dock) -> Box:
+        centre = dock.pose2d.compose(Pose2D(ROBOT_FRONT_M + self.body_depth_m / 2, 0.0, 0.0))
+        return Box(pose=centre.as_tuple(), size=(self.body_depth_m, self.body_width_m))
+
+    def marker_pose(self, dock: Dock) -> Pose2D:
+        """Pose of the marker on the plate's face; its x axis points out of the dock, towards the robot."""
+        return dock.pose2d.compose(Pose2D(ROBOT_FRONT_M, 0.0, math.pi))
+
+
+DOCK_GEOMETRY = DockGeometry()
+
+
+class World(_Lenient):
+    name: str = Field(min_length=1)
+    bounds: tuple[float, float, float, float]
+    walls: list[Segment] = Field(default_factory=list)
+    glass: list[Segment] = Field(default_factory=list)
+    boxes: list[Box] = Field(default_factory=list)
+    docks: list[Dock] = Field(default_factory=list)
+    robot: RobotSpec = Field(default_factory=RobotSpec)
+
+    @field_validator("bounds")
+    @classmethod
+    def _bounds_ordered(cls, v: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        _finite(v, "bounds")
+        xmin, ymin, xmax, ymax = v
+        if not (xmax > xmin and ymax > ymin):
+            raise ValueError(f"bounds must be [xmin, ymin, xmax, ymax] with xmax > xmin and ymax > ymin, got {list(v)}")
+        return v
+
+    @field_validator("walls", "glass")
+    @classmethod
+    def _segments_nonzero(cls, v: list[Segment]) -> list[Segment]:
+        for i, (a, b) in enumerate(v):
+            _finite((*a, *b), f"segment {i}")
+            if math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-6:
+                raise ValueError(f"segment {i} has zero length: {[list(a), list(b)]}")
+        return v
+
+    @model_validator(mode="after")
+    def _docks_unique_and_inside(self) -> World:
+        seen: set[str] = set()
+        for dock in self.docks:
+            if dock.id in seen:
+                raise ValueError(f"dock id {dock.id!r} appears twice")
+            seen.add(dock.id)
+            if not self.contains(dock.pose[0], dock.pose[1]):
+                raise ValueError(f"dock {dock.id!r} at {list(dock.pose[:2])} is outside bounds {list(self.bounds)}")
+        if not self.contains(self.robot.start[0], self.robot.start[1]):
+            raise ValueError(f"robot.start {list(self.robot.start[:2])} is outside bounds {list(self.bounds)}")
+        return self
+
+    def contains(self, x: float, y: float) -> bool:
+        xmin, ymin, xmax, ymax = self.bounds
+        return xmin < x < xmax and ymin < y < ymax
+
+    def boundary_walls(self) -> list[Segment]:
+        xmin, ymin, xmax, ymax = self.bounds
+        return [
+            ((xmin, ymin), (xmax, ymin)),
+            ((xmax, ymin), (xmax, ymax)),
+            ((xmax, ymax), (xmin, ymax)),
+            ((xmin, ymax), (xmin, ymin)),
+        ]
+
+    def opaque_segments(self) -> list[Segment]:
+        """Every segment the lidar sees: outer walls, inner walls, box edges, dock body edges."""
+        segments = self.boundary_walls() + list(self.walls)
+        for box in self.boxes + [DOCK_GEOMETRY.body_box(d) for d in self.docks]:
+            c = box.corners()
+            segments += [(c[i], c[(i + 1) % 4]) for i in range(4)]
+        return segments
+
+    def dock(self, dock_id: str) -> Dock:
+        for dock in self.docks:
+            if dock.id == dock_id:
+                return dock
+        raise KeyError(f"no dock {dock_id!r} in world {self.name!r} (docks: {[d.id for d in self.docks]})")
+
+    def unknown_keys(self) -> list[str]:
+        """Dotted paths of keys this version does not know (kept, reported as warnings)."""
+        found = [k for k in (self.model_extra or {})]
+        for i, box in enumerate(self.boxes):
+            found += [f"boxes.{i}.{k}" for k in (box.model_extra or {})]
+        for i, dock in enumerate(self.docks):
+            found += [f"docks.{i}.{k}" for k in (dock.model_extra or {})]
+        found += [f"robot.{k}" for k in (self.robot.model_extra or {})]
+        return found
+
+
+def parse_world(data: Any, source: str | Path = "<world>") -> World:
+    """Validate a decoded world document; raises :class:`ConfigError` naming the file and field."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: a world file must be a mapping with name, bounds, walls, ...; got {type(data).__name__}")
+    try:
+        world = World.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, source)) from None
+    for key in world.unknown_keys():
+        log.warning("%s: unknown key %r ignored", source, key)
+    return world
+
+
+def load_world(path: str | Path) -> World:
+    """Read and validate a world file."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read world file: {exc.strerror or exc}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+    return parse_world(data, path)
