@@ -1,0 +1,1 @@
+"""Test harness: routers on free ports, service processes that never outlive a test, waiting on the bus."""
