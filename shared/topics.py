@@ -1,0 +1,38 @@
+"""Topic, service and action names (relative: the node's namespace is prepended).
+
+One place for the names keeps publishers and subscribers in different processes in agreement.
+"""
+
+CLOCK = "clock"
+CMD_VEL = "cmd_vel"
+ODOM = "odom"
+TF = "tf"
+TF_STATIC = "tf_static"
+SCAN = "scan"
+ULTRASONIC = "ultrasonic"
+BATTERY_STATUS = "battery_status"
+POSE2D = "map_to_base_link_pose2d"
+DOCK_CONTACT = "dock_contact"
+COLLISIONS = "collisions"
+GROUND_TRUTH_POSE = "ground_truth_pose"
+DETECTED_DOCK_POSE = "detected_dock_pose"
+MAP = "map"
+PLAN = "plan"
+
+# Services (request/response over Zenoh queryables)
+SIM_TELEPORT = "simulator/teleport"
+SIM_STATE = "simulator/state"
+BATTERY_SET_STATE = "battery/set_state"
+
+# Actions (shared.action)
+NAVIGATE_TO_POSE = "navigate_to_pose"
+DOCK_ROBOT = "dock_robot"
+UNDOCK_ROBOT = "undock_robot"
+
+# Frames (REP 105)
+MAP_FRAME = "map"
+ODOM_FRAME = "odom"
+BASE_FRAME = "base_link"
+LIDAR_FRAME = "lidar_link"
+ULTRASONIC_FRAME = "ultrasonic_link"
+CAMERA_FRAME = "camera_link"
