@@ -1,0 +1,54 @@
+"""The far end of the bus benchmark: sends every ping straight back as a pong.
+
+``typed``: a zendock node (validated decode on the executor, validated re-encode). ``raw``: plain
+zenoh-python callbacks that copy the bytes. Run as ``python -m deploy.bench.echo MODE ENDPOINT``.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+
+from shared.messages import Twist
+from shared.node import RELIABLE, Node
+from shared.session import SessionSpec, open_session
+
+PING_KEY = "zendock_bench/ping"
+PONG_KEY = "zendock_bench/pong"
+
+
+def run_typed(endpoint: str, stop: threading.Event) -> None:
+    with open_session(SessionSpec(connect=(endpoint,))) as session:
+        node = Node("bench_echo", session)
+        pong = node.create_publisher(Twist, PONG_KEY, RELIABLE)
+        node.create_subscription(Twist, PING_KEY, pong.publish, RELIABLE)
+        node.declare_ready()
+        threading.Thread(target=lambda: (stop.wait(), node.shutdown()), daemon=True).start()
+        print("ready", flush=True)
+        node.spin()
+        node.close()
+
+
+def run_raw(endpoint: str, stop: threading.Event) -> None:
+    with open_session(SessionSpec(connect=(endpoint,))) as session:
+        pong = session.declare_publisher(PONG_KEY)
+        sub = session.declare_subscriber(PING_KEY, lambda sample: pong.put(sample.payload))
+        print("ready", flush=True)
+        stop.wait()
+        sub.undeclare()
+
+
+def main(mode: str, endpoint: str) -> int:
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    (run_typed if mode == "typed" else run_raw)(endpoint, stop)
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3 or sys.argv[1] not in ("typed", "raw"):
+        print("usage: python -m deploy.bench.echo typed|raw ENDPOINT", file=sys.stderr)
+        sys.exit(2)
+    sys.exit(main(sys.argv[1], sys.argv[2]))

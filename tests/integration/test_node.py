@@ -1,0 +1,145 @@
+"""The node runtime over a real router: typed pub/sub, rejection of bad input, timers, requests."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+
+import pytest
+import zenoh
+
+from shared.messages import Bool, Clock, Time, Twist
+from shared.node import RELIABLE, Node, QoS, ServiceError, ServiceType, call_service, sequence_number
+from shared.session import SessionSpec, open_session
+from tests.support.bus import liveliness_keys
+
+ECHO = ServiceType("zendock_msgs/srv/Echo", Twist, Twist)
+
+
+@pytest.fixture
+def node_pair(router_endpoint: str, namespace: str) -> Iterator[tuple[Node, Node]]:
+    with open_session(SessionSpec(connect=(router_endpoint,))) as s1, open_session(SessionSpec(connect=(router_endpoint,))) as s2:
+        a, b = Node("talker", s1, namespace), Node("listener", s2, namespace, use_sim_time=True)
+        spinner = threading.Thread(target=b.spin, daemon=True)
+        spinner.start()
+        yield a, b
+        b.shutdown()
+        spinner.join(5)
+        a.close()
+        b.close()
+
+
+def _wait(event: threading.Event, what: str, timeout_s: float = 5.0) -> None:
+    assert event.wait(timeout_s), f"timed out waiting for {what}"
+
+
+def test_typed_pub_sub_and_rejection(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
+    talker, listener = node_pair
+    got: list[Twist] = []
+    done = threading.Event()
+
+    def on_twist(msg: Twist) -> None:
+        got.append(msg)
+        if len(got) == 3:
+            done.set()
+
+    listener.create_subscription(Twist, "cmd_vel", on_twist, RELIABLE)
+    pub = talker.create_publisher(Twist, "cmd_vel")
+    keys = liveliness_keys(bus)
+    assert any(k.endswith(f"/sub/{listener.namespace}/listener/geometry_msgs%msg%Twist/{listener.namespace}/cmd_vel") for k in keys), keys
+    for bad in (b"garbage", Bool(True).encode()):
+        bus.put(talker.key("cmd_vel"), bad)
+    for i in range(3):
+        pub.publish(Twist.planar(0.1 * i, 0.0))
+    _wait(done, "three twists")
+    assert [m.linear.x for m in got] == pytest.approx([0.0, 0.1, 0.2])
+    assert listener.stats.rejected[talker.key("cmd_vel")] == 2
+
+
+def test_sequence_numbers_attached(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
+    talker, _ = node_pair
+    seqs: list[int | None] = []
+    done = threading.Event()
+    sub = bus.declare_subscriber(talker.key("seq"), lambda s: (seqs.append(sequence_number(s.attachment)), len(seqs) == 3 and done.set()))
+    pub = talker.create_publisher(Bool, "seq")
+    for _ in range(3):
+        pub.publish(Bool(True))
+    _wait(done, "three samples")
+    sub.undeclare()
+    assert seqs == [1, 2, 3]
+
+
+def test_sim_time_timer_follows_clock(node_pair: tuple[Node, Node]) -> None:
+    talker, listener = node_pair
+    ticks: list[float] = []
+    done = threading.Event()
+
+    def tick() -> None:
+        ticks.append(listener.now())
+        if len(ticks) == 5:
+            done.set()
+
+    listener.create_timer(0.1, tick)
+    clock = talker.create_publisher(Clock, "clock", QoS(depth=1))
+    for i in range(200):
+        clock.publish(Clock(Time.from_sec(i * 0.01)))
+        if done.is_set():
+            break
+        done.wait(0.002)
+    _wait(done, "five sim-time ticks")
+    assert all(b - a == pytest.approx(0.1, abs=0.021) for a, b in zip(ticks, ticks[1:])), ticks
+
+
+def test_callback_exception_does_not_stop_the_node(node_pair: tuple[Node, Node]) -> None:
+    talker, listener = node_pair
+    survived = threading.Event()
+
+    def flaky(msg: Bool) -> None:
+        if msg.data:
+            raise RuntimeError("boom")
+        survived.set()
+
+    listener.create_subscription(Bool, "flaky", flaky)
+    pub = talker.create_publisher(Bool, "flaky")
+    pub.publish(Bool(True))
+    pub.publish(Bool(False))
+    _wait(survived, "the second message after a failing callback")
+    assert listener.stats.callback_errors == 1
+
+
+def test_requests(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
+    talker, listener = node_pair
+
+    def handler(req: Twist) -> Twist:
+        if req.linear.x < 0:
+            raise ValueError("linear.x must be positive")
+        return Twist.planar(req.linear.x * 2, 0.0)
+
+    listener.create_service(ECHO, "double", handler)
+    assert talker.call(ECHO, "double", Twist.planar(1.5, 0.0)).linear.x == 3.0
+    with pytest.raises(ServiceError, match="must be positive"):
+        talker.call(ECHO, "double", Twist.planar(-1.0, 0.0))
+    replies = list(bus.get(listener.key("double"), payload=b"\xc1", timeout=2.0))
+    assert replies and replies[0].err is not None and "not valid msgpack" in replies[0].err.payload.to_string()
+    with pytest.raises(ServiceError, match="no service answered"):
+        call_service(bus, listener.key("absent"), ECHO, Twist(), timeout_s=0.5)
+
+    results: list[tuple[object, object]] = []
+    done = threading.Event()
+    talker_spin = threading.Thread(target=talker.spin, daemon=True)
+    talker_spin.start()
+    talker.call_async(ECHO, "double", Twist.planar(2.0, 0.0), lambda r, e: (results.append((r, e)), done.set()))
+    _wait(done, "the asynchronous reply")
+    talker.shutdown()
+    talker_spin.join(5)
+    response, error = results[0]
+    assert error is None and isinstance(response, Twist) and response.linear.x == 4.0
+
+
+def test_publisher_refuses_invalid_message(node_pair: tuple[Node, Node]) -> None:
+    talker, _ = node_pair
+    pub = talker.create_publisher(Twist, "cmd_vel")
+    with pytest.raises(Exception, match="must be finite"):
+        pub.publish(Twist.planar(float("nan"), 0.0))
+    with pytest.raises(Exception, match="expects geometry_msgs/msg/Twist"):
+        pub.publish(Bool(True))  # type: ignore[arg-type]

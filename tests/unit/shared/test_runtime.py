@@ -1,0 +1,84 @@
+"""Service flags and parameters: strict, with one clear message and exit code 2 for bad input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from shared.config_errors import ConfigError
+from shared.runtime import (
+    ServiceOptions,
+    ServiceParams,
+    build_arg_parser,
+    load_params,
+    options_from_args,
+    run_service,
+)
+
+
+class DemoParams(ServiceParams):
+    rate_hz: float = 10.0
+    target_frame: str = "base_link"
+
+
+def _options(*argv: str) -> ServiceOptions:
+    return options_from_args(build_arg_parser("demo").parse_args(list(argv)))
+
+
+def test_defaults_and_env(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ZENDOCK_CONNECT", "tcp/127.0.0.1:9000,tcp/127.0.0.1:9001")
+    monkeypatch.setenv("ZENDOCK_NAMESPACE", "/robot1/")
+    opts = _options()
+    assert opts.connect == ("tcp/127.0.0.1:9000", "tcp/127.0.0.1:9001")
+    assert opts.namespace == "robot1"
+    assert _options("--connect", "tcp/127.0.0.1:1", "--namespace", "r2").connect == ("tcp/127.0.0.1:1",)
+
+
+def test_overrides_are_typed_yaml_scalars() -> None:
+    params = load_params(DemoParams, _options("-p", "rate_hz=20", "-p", "use_sim_time=true", "-p", "target_frame=lidar_link"))
+    assert params.rate_hz == 20.0 and params.use_sim_time is True and params.target_frame == "lidar_link"
+
+
+def test_unknown_parameter_is_an_error() -> None:
+    with pytest.raises(ConfigError, match="rate: unknown key"):
+        load_params(DemoParams, _options("-p", "rate=3"))
+
+
+def test_bad_value_is_an_error() -> None:
+    with pytest.raises(ConfigError, match="rate_hz"):
+        load_params(DemoParams, _options("-p", "rate_hz=fast"))
+
+
+def test_malformed_override() -> None:
+    with pytest.raises(ConfigError, match="NAME=VALUE"):
+        _options("-p", "nonsense")
+
+
+def test_bad_namespace() -> None:
+    with pytest.raises(ConfigError, match="--namespace"):
+        _options("--namespace", "robot*")
+
+
+def test_config_file_flat_and_ros_style(tmp_path: Path) -> None:
+    flat = tmp_path / "flat.yaml"
+    flat.write_text("rate_hz: 5\n")
+    assert load_params(DemoParams, _options("--config", str(flat))).rate_hz == 5
+    ros = tmp_path / "ros.yaml"
+    ros.write_text("demo:\n  ros__parameters:\n    rate_hz: 7\n")
+    assert load_params(DemoParams, _options("--config", str(ros), "-p", "target_frame=x")).rate_hz == 7
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("rate_hz: [1\n")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        load_params(DemoParams, _options("--config", str(bad)))
+    with pytest.raises(ConfigError, match="cannot read"):
+        load_params(DemoParams, _options("--config", str(tmp_path / "missing.yaml")))
+
+
+def test_run_service_exits_2_on_bad_parameter(capsys: pytest.CaptureFixture[str]) -> None:
+    def never_built(node, params):  # type: ignore[no-untyped-def]
+        raise AssertionError("must not start with bad parameters")
+
+    assert run_service("demo", DemoParams, never_built, ["-p", "bogus=1"]) == 2
+    err = capsys.readouterr().err
+    assert "bogus: unknown key" in err and err.count("\n") == 1
