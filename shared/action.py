@@ -1,0 +1,464 @@
+"""ROS-like actions over Zenoh, with the key layout zenoh-bridge-ros2dds uses::
+
+    <ns>/<action>/_action/send_goal     queryable   {goal_id, goal}      -> {accepted, stamp}
+    <ns>/<action>/_action/cancel_goal   queryable   {goal_info}          -> {return_code, goals_canceling}
+    <ns>/<action>/_action/get_result    queryable   {goal_id}            -> {status, result}  (answered when done)
+    <ns>/<action>/_action/feedback      topic       {goal_id, feedback}
+    <ns>/<action>/_action/status        topic       {status_list: [{goal_info, status}]}
+
+Message layouts mirror ``action_msgs`` and the generated ``<Action>_SendGoal`` etc. types. A server
+here runs one goal at a time: accepting a new goal preempts the active one (it ends CANCELED), as a
+navigation server does. Everything runs on the node's executor: the server never blocks, and the
+:class:`ActionClient` is asynchronous so services can use it from their callbacks.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Annotated, Any, Generic, TypeVar
+
+import numpy as np
+import zenoh
+
+from shared.messages import Time
+from shared.node import BLOCKING, RELIABLE, Node, ServiceError, ServiceType, encoding_for
+from shared.schema import Message, MessageError, Range, UInt8Array, message
+
+G = TypeVar("G", bound=Message)
+R = TypeVar("R", bound=Message)
+F = TypeVar("F", bound=Message)
+
+log = logging.getLogger(__name__)
+
+
+class GoalStatusCode(enum.IntEnum):
+    """``action_msgs/msg/GoalStatus`` values."""
+
+    UNKNOWN = 0
+    ACCEPTED = 1
+    EXECUTING = 2
+    CANCELING = 3
+    SUCCEEDED = 4
+    CANCELED = 5
+    ABORTED = 6
+
+    @property
+    def terminal(self) -> bool:
+        return self in (GoalStatusCode.SUCCEEDED, GoalStatusCode.CANCELED, GoalStatusCode.ABORTED)
+
+
+def _uuid16() -> np.ndarray:
+    return np.zeros(16, dtype=np.uint8)
+
+
+@message("unique_identifier_msgs/msg/UUID")
+class UUID(Message):
+    uuid: UInt8Array = field(default_factory=_uuid16)
+
+    @classmethod
+    def random(cls) -> UUID:
+        return cls(np.frombuffer(uuid.uuid4().bytes, dtype=np.uint8).copy())
+
+    def hex(self) -> str:
+        return bytes(self.uuid.astype(np.uint8)).hex()
+
+    def is_zero(self) -> bool:
+        return not self.uuid.any()
+
+
+@message("action_msgs/msg/GoalInfo")
+class GoalInfo(Message):
+    goal_id: UUID = field(default_factory=UUID)
+    stamp: Time = field(default_factory=Time)
+
+
+@message("action_msgs/msg/GoalStatus")
+class GoalStatus(Message):
+    goal_info: GoalInfo = field(default_factory=GoalInfo)
+    status: Annotated[int, Range(0, 6)] = 0
+
+
+@message("action_msgs/msg/GoalStatusArray")
+class GoalStatusArray(Message):
+    status_list: list[GoalStatus] = field(default_factory=list)
+
+
+@message("action_msgs/srv/CancelGoal_Request")
+class CancelGoalRequest(Message):
+    goal_info: GoalInfo = field(default_factory=GoalInfo)
+
+
+@message("action_msgs/srv/CancelGoal_Response")
+class CancelGoalResponse(Message):
+    ERROR_NONE = 0
+    ERROR_REJECTED = 1
+    ERROR_UNKNOWN_GOAL_ID = 2
+    ERROR_GOAL_TERMINATED = 3
+    return_code: Annotated[int, Range(0, 3)] = 0
+    goals_canceling: list[GoalInfo] = field(default_factory=list)
+
+
+@message("zendock_msgs/msg/Empty")
+class Empty(Message):
+    pass
+
+
+CANCEL_GOAL = ServiceType("action_msgs/srv/CancelGoal", CancelGoalRequest, CancelGoalResponse)
+
+
+def _wrapper(type_name: str, fields: dict[str, Any]) -> Any:
+    namespace: dict[str, Any] = {"__annotations__": dict(fields)}
+    for name, annotation in fields.items():
+        default: Any
+        if annotation is bool:
+            default = False
+        elif annotation is int or getattr(annotation, "__origin__", None) is int:
+            default = 0
+        else:
+            default = field(default_factory=annotation)
+        namespace[name] = default
+    cls = type(type_name.rsplit("/", 1)[-1], (Message,), namespace)
+    return message(type_name)(cls)
+
+
+class ActionType(Generic[G, R, F]):
+    """An action interface: goal, result and feedback messages plus the generated wrappers."""
+
+    def __init__(self, type_name: str, goal: type[G], result: type[R], feedback: type[F]) -> None:
+        self.type_name = type_name
+        self.goal = goal
+        self.result = result
+        self.feedback = feedback
+        self.send_goal_request = _wrapper(f"{type_name}_SendGoal_Request", {"goal_id": UUID, "goal": goal})
+        self.send_goal_response = _wrapper(f"{type_name}_SendGoal_Response", {"accepted": bool, "stamp": Time})
+        self.get_result_request = _wrapper(f"{type_name}_GetResult_Request", {"goal_id": UUID})
+        self.get_result_response = _wrapper(
+            f"{type_name}_GetResult_Response", {"status": Annotated[int, Range(0, 6)], "result": result}
+        )
+        self.feedback_message = _wrapper(f"{type_name}_FeedbackMessage", {"goal_id": UUID, "feedback": feedback})
+        self.send_goal = ServiceType(f"{type_name}_SendGoal", self.send_goal_request, self.send_goal_response)
+        self.get_result = ServiceType(f"{type_name}_GetResult", self.get_result_request, self.get_result_response)
+
+
+def action_key(action_name: str, part: str) -> str:
+    """Relative key of one part of an action, e.g. ``navigate_to_pose/_action/send_goal``."""
+    return f"{action_name.strip('/')}/_action/{part}"
+
+
+# --- server ---------------------------------------------------------------------------------------
+
+
+class ServerGoalHandle(Generic[G, R, F]):
+    """One accepted goal on the server side. Finish it with exactly one of succeed / abort / canceled."""
+
+    def __init__(self, server: ActionServer[G, R, F], goal_id: UUID, goal: G, stamp: Time) -> None:
+        self._server = server
+        self.goal_id = goal_id
+        self.goal = goal
+        self.info = GoalInfo(goal_id, stamp)
+        self.status = GoalStatusCode.ACCEPTED
+        self.cancel_requested = False
+        self.result: R | None = None
+
+    @property
+    def id_hex(self) -> str:
+        return self.goal_id.hex()
+
+    @property
+    def active(self) -> bool:
+        return not self.status.terminal
+
+    def execute(self) -> None:
+        if self.status == GoalStatusCode.ACCEPTED:
+            self._server._set_status(self, GoalStatusCode.EXECUTING)
+
+    def publish_feedback(self, feedback: F) -> None:
+        if self.active:
+            self._server._publish_feedback(self, feedback)
+
+    def succeed(self, result: R) -> None:
+        self._server._finish(self, GoalStatusCode.SUCCEEDED, result)
+
+    def abort(self, result: R) -> None:
+        self._server._finish(self, GoalStatusCode.ABORTED, result)
+
+    def canceled(self, result: R) -> None:
+        self._server._finish(self, GoalStatusCode.CANCELED, result)
+
+
+class ActionServer(Generic[G, R, F]):
+    """Serves one action on a node.
+
+    ``on_goal(goal) -> None`` validates a goal (raise ``ValueError(reason)`` to reject it: the client sees
+    the reason). ``on_accepted(handle)`` starts work, normally by remembering the handle for a timer to
+    step. ``on_cancel(handle)`` is told of a cancel request; it ends the goal itself (``handle.canceled``)
+    once the robot is stopped. ``on_preempt(old)`` is told when a new goal replaces the active one;
+    by default the old goal ends CANCELED with ``preempt_result()``.
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        action: ActionType[G, R, F],
+        name: str,
+        *,
+        on_goal: Callable[[G], None],
+        on_accepted: Callable[[ServerGoalHandle[G, R, F]], None],
+        on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
+        preempt_result: Callable[[], R] | None = None,
+        result_timeout_s: float = 3600.0,
+    ) -> None:
+        self.node = node
+        self.action = action
+        self.name = name
+        self._on_goal = on_goal
+        self._on_accepted = on_accepted
+        self._on_cancel = on_cancel
+        self._preempt_result = preempt_result or action.result
+        self._result_timeout_s = result_timeout_s
+        self.active_goal: ServerGoalHandle[G, R, F] | None = None
+        self._finished: dict[str, ServerGoalHandle[G, R, F]] = {}
+        self._waiting: dict[str, list[zenoh.Query]] = {}
+        self._feedback = node.create_publisher(action.feedback_message, action_key(name, "feedback"), RELIABLE)
+        self._status = node.create_publisher(GoalStatusArray, action_key(name, "status"), BLOCKING)
+        node.create_service(action.send_goal, action_key(name, "send_goal"), self._handle_send_goal)
+        node.create_service(CANCEL_GOAL, action_key(name, "cancel_goal"), self._handle_cancel)
+        self._result_key = node.key(action_key(name, "get_result"))
+        self._result_queryable = node.session.declare_queryable(self._result_key, self._on_result_query)
+        node._declare_endpoint("act", action.type_name, node.key(name))
+
+    # request handlers (executor thread)
+
+    def _handle_send_goal(self, request: Any) -> Any:
+        self._on_goal(request.goal)  # ValueError -> the client gets the reason
+        handle: ServerGoalHandle[G, R, F] = ServerGoalHandle(self, request.goal_id, request.goal, self.node.now_msg())
+        previous = self.active_goal
+        if previous is not None and previous.active:
+            previous.cancel_requested = True
+            self._finish(previous, GoalStatusCode.CANCELED, self._preempt_result())
+        self.active_goal = handle
+        self._publish_status()
+        self.node.post(self._on_accepted, handle)
+        return self.action.send_goal_response(accepted=True, stamp=handle.info.stamp)
+
+    def _handle_cancel(self, request: CancelGoalRequest) -> CancelGoalResponse:
+        goal = self.active_goal
+        wanted = request.goal_info.goal_id
+        if goal is None or not goal.active:
+            code = CancelGoalResponse.ERROR_GOAL_TERMINATED if goal else CancelGoalResponse.ERROR_UNKNOWN_GOAL_ID
+            return CancelGoalResponse(return_code=code)
+        if not wanted.is_zero() and wanted.hex() != goal.id_hex:
+            known = wanted.hex() in self._finished
+            code = CancelGoalResponse.ERROR_GOAL_TERMINATED if known else CancelGoalResponse.ERROR_UNKNOWN_GOAL_ID
+            return CancelGoalResponse(return_code=code)
+        goal.cancel_requested = True
+        self._set_status(goal, GoalStatusCode.CANCELING)
+        self.node.post(self._on_cancel, goal)
+        return CancelGoalResponse(return_code=CancelGoalResponse.ERROR_NONE, goals_canceling=[goal.info])
+
+    def _on_result_query(self, query: zenoh.Query) -> None:
+        payload = query.payload
+        try:
+            request = self.action.get_result_request.decode(payload.to_bytes() if payload is not None else b"")
+        except MessageError as exc:
+            self.node._reject(self._result_key, exc.at(key=self._result_key))
+            query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
+            query.drop()
+            return
+        self.node.post(self._answer_result, query, request.goal_id.hex())
+
+    def _answer_result(self, query: zenoh.Query, goal_hex: str) -> None:
+        done = self._finished.get(goal_hex)
+        if done is not None:
+            self._reply_result(query, done)
+        elif self.active_goal is not None and self.active_goal.id_hex == goal_hex:
+            self._waiting.setdefault(goal_hex, []).append(query)  # answered when the goal ends
+        else:
+            query.reply_err(f"unknown goal {goal_hex}".encode(), encoding=zenoh.Encoding("text/plain"))
+            query.drop()
+
+    def _reply_result(self, query: zenoh.Query, handle: ServerGoalHandle[G, R, F]) -> None:
+        response = self.action.get_result_response(status=int(handle.status), result=handle.result)
+        try:
+            query.reply(self._result_key, response.encode(), encoding=encoding_for(self.action.get_result_response.TYPE_NAME))
+        finally:
+            query.drop()
+
+    # goal handle callbacks
+
+    def _set_status(self, handle: ServerGoalHandle[G, R, F], status: GoalStatusCode) -> None:
+        handle.status = status
+        self._publish_status()
+
+    def _publish_feedback(self, handle: ServerGoalHandle[G, R, F], feedback: F) -> None:
+        self._feedback.publish(self.action.feedback_message(goal_id=handle.goal_id, feedback=feedback))
+
+    def _finish(self, handle: ServerGoalHandle[G, R, F], status: GoalStatusCode, result: R) -> None:
+        if handle.status.terminal:
+            return
+        handle.status = status
+        handle.result = result
+        self._finished[handle.id_hex] = handle
+        if len(self._finished) > 64:
+            self._finished.pop(next(iter(self._finished)))
+        self._publish_status()
+        for query in self._waiting.pop(handle.id_hex, []):
+            self._reply_result(query, handle)
+
+    def _publish_status(self) -> None:
+        handles = list(self._finished.values())[-8:]
+        if self.active_goal is not None and self.active_goal.active:
+            handles.append(self.active_goal)
+        self._status.publish(GoalStatusArray([GoalStatus(h.info, int(h.status)) for h in handles]))
+
+    def close(self) -> None:
+        for queries in self._waiting.values():
+            for query in queries:
+                query.reply_err(b"action server shutting down", encoding=zenoh.Encoding("text/plain"))
+                query.drop()
+        self._waiting.clear()
+        self._result_queryable.undeclare()
+
+
+# --- client ---------------------------------------------------------------------------------------
+
+
+@dataclass
+class ClientGoal(Generic[R, F]):
+    """What a client knows of one goal it sent. Read it from the node's executor thread (or under ``lock``)."""
+
+    goal_id: UUID
+    accepted: bool | None = None
+    rejection: str = ""
+    status: GoalStatusCode = GoalStatusCode.UNKNOWN
+    result: R | None = None
+    feedback: F | None = None
+    error: str = ""
+    sent_at: float = field(default_factory=time.monotonic)
+
+    @property
+    def done(self) -> bool:
+        return self.accepted is False or self.status.terminal or bool(self.error)
+
+
+class ActionClient(Generic[G, R, F]):
+    """Sends goals to an action server; every reply lands on the node's executor (never blocks it).
+
+    Scripts that do not spin the node themselves can use :meth:`spin_in_background`.
+    """
+
+    def __init__(self, node: Node, action: ActionType[G, R, F], name: str) -> None:
+        self.node = node
+        self.action = action
+        self.name = name
+        self.lock = threading.Lock()
+        self._goals: dict[str, ClientGoal[R, F]] = {}
+        self._feedback_cbs: dict[str, Callable[[F], None]] = {}
+        node.create_subscription(action.feedback_message, action_key(name, "feedback"), self._on_feedback, RELIABLE)
+        node.create_subscription(GoalStatusArray, action_key(name, "status"), self._on_status, RELIABLE)
+        self._server_key = node.key(action_key(name, "send_goal"))
+
+    def server_ready(self, timeout_s: float = 1.0) -> bool:
+        """Whether an action server answers (its send_goal queryable is declared)."""
+        token_pattern = f"@zendock/act/**/{self.node.key(self.name)}"
+        replies = self.node.session.liveliness().get(token_pattern, timeout=timeout_s)
+        return any(r.ok is not None for r in replies)
+
+    def send_goal(
+        self,
+        goal: G,
+        on_feedback: Callable[[F], None] | None = None,
+        on_done: Callable[[ClientGoal[R, F]], None] | None = None,
+        timeout_s: float = 5.0,
+    ) -> ClientGoal[R, F]:
+        """Send a goal; returns at once. ``on_done`` runs on the executor when the goal ends or fails."""
+        handle: ClientGoal[R, F] = ClientGoal(UUID.random())
+        key = handle.goal_id.hex()
+        with self.lock:
+            self._goals[key] = handle
+            if on_feedback is not None:
+                self._feedback_cbs[key] = on_feedback
+        request = self.action.send_goal_request(goal_id=handle.goal_id, goal=goal)
+
+        def accepted(response: Any, error: ServiceError | None) -> None:
+            with self.lock:
+                if error is not None or response is None:
+                    handle.accepted = False
+                    handle.rejection = str(error) if error else "no response"
+                elif not response.accepted:
+                    handle.accepted = False
+                    handle.rejection = "goal rejected by the server"
+                else:
+                    handle.accepted = True
+                    if handle.status == GoalStatusCode.UNKNOWN:
+                        handle.status = GoalStatusCode.ACCEPTED
+            if handle.accepted:
+                self._request_result(handle, on_done)
+            elif on_done is not None:
+                on_done(handle)
+
+        self.node.call_async(self.action.send_goal, action_key(self.name, "send_goal"), request, accepted, timeout_s)
+        return handle
+
+    def _request_result(self, handle: ClientGoal[R, F], on_done: Callable[[ClientGoal[R, F]], None] | None) -> None:
+        request = self.action.get_result_request(goal_id=handle.goal_id)
+
+        def got(response: Any, error: ServiceError | None) -> None:
+            with self.lock:
+                if error is not None or response is None:
+                    handle.error = str(error) if error else "no result"
+                else:
+                    handle.status = GoalStatusCode(response.status)
+                    handle.result = response.result
+                self._feedback_cbs.pop(handle.goal_id.hex(), None)
+            if on_done is not None:
+                on_done(handle)
+
+        self.node.call_async(self.action.get_result, action_key(self.name, "get_result"), request, got, timeout_s=3600.0)
+
+    def cancel_goal(self, handle: ClientGoal[R, F] | None = None, timeout_s: float = 5.0,
+                    on_done: Callable[[CancelGoalResponse | None, ServiceError | None], None] | None = None) -> None:
+        """Ask the server to cancel ``handle`` (or every goal when ``None``); returns at once."""
+        goal_id = handle.goal_id if handle is not None else UUID()
+        request = CancelGoalRequest(GoalInfo(goal_id, Time()))
+        self.node.call_async(CANCEL_GOAL, action_key(self.name, "cancel_goal"), request,
+                             on_done or (lambda _r, _e: None), timeout_s)
+
+    def _on_feedback(self, msg: Any) -> None:
+        key = msg.goal_id.hex()
+        with self.lock:
+            handle = self._goals.get(key)
+            if handle is None:
+                return
+            handle.feedback = msg.feedback
+            callback = self._feedback_cbs.get(key)
+        if callback is not None:
+            callback(msg.feedback)
+
+    def _on_status(self, msg: GoalStatusArray) -> None:
+        with self.lock:
+            for status in msg.status_list:
+                handle = self._goals.get(status.goal_info.goal_id.hex())
+                if handle is not None and not handle.status.terminal:
+                    # the terminal status comes with the result; status only tracks progress
+                    code = GoalStatusCode(status.status)
+                    if not code.terminal:
+                        handle.status = code
+
+    def forget(self, handle: ClientGoal[R, F]) -> None:
+        with self.lock:
+            self._goals.pop(handle.goal_id.hex(), None)
+            self._feedback_cbs.pop(handle.goal_id.hex(), None)
+
+
+def spin_in_background(node: Node) -> threading.Thread:
+    """Run a node's executor on a daemon thread (for scripts and tests); stop it with ``node.shutdown()``."""
+    thread = threading.Thread(target=node.spin, name=f"{node.name}-executor", daemon=True)
+    thread.start()
+    return thread
