@@ -1,10 +1,13 @@
 """A node: one service's publishers, subscriptions, timers and request handlers on a Zenoh session.
 
-Threading model (the contract every service relies on): Zenoh delivers samples and queries on its own
-threads; the node only decodes them there and queues the work. All user callbacks (subscriptions,
-timers, request handlers, replies to asynchronous calls) run one at a time on the node's executor,
-:meth:`Node.spin`, so service code needs no locks. A subscription created with ``inline=True`` runs its
-callback directly on the Zenoh thread instead: only for short, non-blocking work (the clock, benchmarks).
+Threading model (the contract every service relies on): all user callbacks (subscriptions, timers,
+request handlers, replies to asynchronous calls) run one at a time, never concurrently, so service code
+needs no locks. Zenoh delivers samples on its own threads; the node decodes them there. When the
+executor is idle and nothing is queued, the subscription callback runs at once on that thread, holding
+the executor's lock (this saves two thread hand-offs per message); otherwise the message is queued and
+:meth:`Node.spin` runs it in order. Timers and request handlers always run on the spinning thread, so
+long work belongs in timers. A subscription created with ``inline=True`` always runs on the Zenoh
+thread without taking the lock: only for tiny, thread-safe work (the clock).
 
 Input never kills a node: a payload that fails validation is counted and logged once per key per
 interval; an exception in a callback is logged with its traceback (rate-limited) and counted.
@@ -35,6 +38,7 @@ Req = TypeVar("Req", bound=Message)
 Res = TypeVar("Res", bound=Message)
 
 ENCODING_PREFIX = "application/msgpack"
+_callback_context = threading.local()
 _SEQ = struct.Struct("<Q")
 
 
@@ -113,6 +117,14 @@ class _Executor:
         self._ready: deque[tuple[Callable[..., Any], tuple[Any, ...]]] = deque()
         self._stop = False
         self._timers: list[Timer] = []
+        #: Held while any callback runs: callbacks are mutually exclusive whatever thread runs them.
+        self.run_lock = threading.Lock()
+
+    def try_enter(self) -> bool:
+        """Take the run lock if the executor is idle with nothing queued (for direct dispatch)."""
+        if self._ready or self._stop:
+            return False
+        return self.run_lock.acquire(blocking=False)
 
     def post(self, fn: Callable[..., Any], *args: Any) -> None:
         with self._cv:
@@ -161,11 +173,12 @@ class _Executor:
                 work = list(self._ready)
                 self._ready.clear()
                 timers = list(self._timers)
-            for fn, args in work:
-                self._node._run_callback(fn, *args)
-            for timer in timers:
-                if timer.due():
-                    self._node._run_callback(timer.fire)
+            with self.run_lock:
+                for fn, args in work:
+                    self._node._run_callback(fn, *args)
+                for timer in timers:
+                    if timer.due():
+                        self._node._run_callback(timer.fire)
 
     def _next_wall_wait(self) -> float:
         wait = 0.1
@@ -304,6 +317,14 @@ class Subscription(Generic[M]):
         node._count(node.stats.received, key)
         if self._inline:
             node._run_callback(self._deliver, key, msg)
+            return
+        with self._lock:
+            idle = not self._scheduled and not self._queue
+        if idle and node._executor.try_enter():
+            try:
+                node._run_callback(self._deliver, key, msg)
+            finally:
+                node._executor.run_lock.release()
             return
         with self._lock:
             if len(self._queue) == self._queue.maxlen:
@@ -527,14 +548,21 @@ class Node:
         )
 
     def call(self, srv: ServiceType[Req, Res], name: str, request: Req, timeout_s: float = 5.0) -> Res:
-        """Blocking request; never call it from a callback on this node's executor (use :meth:`call_async`)."""
-        if threading.current_thread() is getattr(self, "_spin_thread", None):
-            raise RuntimeError("Node.call would block the executor; use call_async from callbacks")
+        """Blocking request; never from this node's callbacks (use :meth:`call_async` there)."""
+        if getattr(_callback_context, "active", False):
+            raise RuntimeError("Node.call would block the node's callbacks; use call_async from callbacks")
         return call_service(self.session, self.key(name), srv, request, timeout_s)
 
     def post(self, fn: Callable[..., Any], *args: Any) -> None:
         """Run ``fn(*args)`` on the executor (from any thread)."""
         self._executor.post(fn, *args)
+
+    def exclusive(self) -> threading.Lock:
+        """A context manager: code in it never runs at the same time as this node's callbacks.
+
+        For a service's own loop thread (the simulator's stepping loop) that shares state with callbacks.
+        """
+        return self._executor.run_lock
 
     # --- graph -------------------------------------------------------------------------------------
 
@@ -554,7 +582,6 @@ class Node:
 
     def spin(self, until: Callable[[], bool] | None = None, timeout_s: float | None = None) -> bool:
         """Run callbacks on this thread until :meth:`shutdown` (or ``until()``/timeout); see the module doc."""
-        self._spin_thread = threading.current_thread()
         return self._executor.spin(until, timeout_s)
 
     def shutdown(self) -> None:
@@ -590,10 +617,14 @@ class Node:
         self._ratelimited.warning(f"reject:{key}", "rejected message on %s (%d so far): %s", key, n, error)
 
     def _run_callback(self, fn: Callable[..., Any], *args: Any) -> None:
+        outer = getattr(_callback_context, "active", False)
+        _callback_context.active = True
         try:
             fn(*args)
         except Exception as exc:
             self._log_callback_error(exc)
+        finally:
+            _callback_context.active = outer
 
     def _log_callback_error(self, exc: BaseException) -> None:
         self.stats.callback_errors += 1

@@ -172,6 +172,7 @@ def serve(
 ) -> int:
     """Open the session, build the service on a node, announce it, spin until stopped, close everything."""
     log = configure_logging(options)
+    log.info("connecting to %s", ",".join(options.connect))
     with open_session(options.session_spec()) as session:
         node = Node(options.node_name, session, options.namespace, use_sim_time=params.use_sim_time, logger=log)
         if install_signal_handlers:

@@ -1,0 +1,1 @@
+"""The simulator service: physics of the robot in its room, and its sensors."""

@@ -1,0 +1,5 @@
+import sys
+
+from services.simulator.node import main
+
+sys.exit(main())

@@ -1,0 +1,90 @@
+"""How much faster than real time the simulator's pure core runs, without a bus.
+
+One simulated second is what the simulator service computes per second of robot time: 100 physics
+steps with odometry, 10 lidar scans, 20 ultrasonic readings, 10 dock detections and 50 contact checks.
+The robot wanders (a slow sine-wave steering command) so contacts and sensor geometry vary.
+
+    python -m services.simulator.bench deploy/worlds/seed_room.yaml 60
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+from services.simulator.physics import SimParams, SimWorld
+from shared.world import load_world
+
+LIDAR_HZ = 10
+ULTRASONIC_HZ = 20
+CAMERA_HZ = 10
+CONTACT_HZ = 50
+
+
+def bench_simulation(
+    world_path: str | Path, seconds: float, params: SimParams | None = None
+) -> dict[str, float]:
+    """Run ``seconds`` of simulated time as fast as possible; returns timings and the real-time factor."""
+    sim = SimWorld(load_world(world_path), params=params)
+    dt = sim.params.dt_s
+    steps = max(1, round(seconds / dt))
+    every = {
+        name: max(1, round(1.0 / (hz * dt)))
+        for name, hz in (
+            ("lidar", LIDAR_HZ),
+            ("ultrasonic", ULTRASONIC_HZ),
+            ("camera", CAMERA_HZ),
+            ("contact", CONTACT_HZ),
+        )
+    }
+    spent = {"step": 0.0, "lidar": 0.0, "ultrasonic": 0.0, "camera": 0.0, "contact": 0.0}
+    calls = dict.fromkeys(spent, 0)
+    clock = time.perf_counter
+    started = clock()
+    for i in range(steps):
+        t = i * dt
+        t0 = clock()
+        sim.step(0.4, 1.2 * math.sin(0.5 * t))
+        _ = sim.odom_pose, sim.twist, sim.map_to_odom()
+        sim.drain_collisions()
+        spent["step"] += clock() - t0
+        calls["step"] += 1
+        for name, call in (
+            ("lidar", sim.lidar_scan),
+            ("ultrasonic", sim.ultrasonic_range),
+            ("camera", sim.detect_docks),
+            ("contact", sim.dock_contact),
+        ):
+            if i % every[name] == 0:
+                t0 = clock()
+                call()
+                spent[name] += clock() - t0
+                calls[name] += 1
+    wall_s = clock() - started
+    sim_s = steps * dt
+    result: dict[str, float] = {
+        "sim_seconds": sim_s,
+        "wall_seconds": wall_s,
+        "real_time_factor": sim_s / wall_s,
+        "steps_per_s": steps / wall_s,
+        "collisions": float(sum(sim.collision_counts.values())),
+    }
+    for name in spent:
+        result[f"{name}_us_per_call"] = 1e6 * spent[name] / max(1, calls[name])
+    return result
+
+
+def main(world_path: str, seconds: float) -> int:
+    print(json.dumps(bench_simulation(world_path, seconds), indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("world", help="world file, e.g. deploy/worlds/seed_room.yaml")
+    parser.add_argument("seconds", type=float, nargs="?", default=60.0, help="simulated seconds (default 60)")
+    args = parser.parse_args()
+    raise SystemExit(main(args.world, args.seconds))

@@ -1,0 +1,353 @@
+"""The simulated room: a pymunk space with the world's walls, glass, boxes and docks, and the robot in it.
+
+The robot is a dynamic box whose velocity is set every step from the limited diff-drive twist (forward
+along its heading, no sideways slip), then pymunk's contact solver stops it at whatever it drives into.
+Every obstacle is solid, glass included. The space steps at a fixed ``dt_s``; nothing here knows about
+wall-clock time or the bus (Chipmunk2D, the engine under pymunk, is described at chipmunk-physics.net).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymunk
+
+from services.simulator import sensors
+from services.simulator.dock_contact import DockContact, DockContactParams, dock_contact
+from services.simulator.footprint import footprint_corners, separated
+from services.simulator.localisation import map_to_odom
+from services.simulator.odometry import Odometry
+from services.simulator.raycast import SegmentSet
+from services.simulator.robot_model import DiffDrive, DiffDriveParams, Twist2D
+from shared.geometry import Pose2D, wrap_angle
+from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, Dock, World
+
+ROBOT_COLLISION_TYPE = 1
+OBSTACLE_COLLISION_TYPE = 2
+COLLISION_KINDS = ("wall", "glass", "box", "dock")
+
+
+class PoseInCollisionError(ValueError):
+    """A requested robot pose overlaps an obstacle or lies outside the room."""
+
+
+@dataclass(frozen=True, slots=True)
+class SimParams:
+    """Everything about the simulation that is not the room or the drive."""
+
+    dt_s: float = 0.01
+    #: Relative std dev of each wheel's travel per step seen by odometry (0: odometry follows the truth).
+    odom_noise: float = 0.0
+    seed: int = 0
+    lidar: sensors.LidarParams = field(default_factory=sensors.LidarParams)
+    ultrasonic: sensors.UltrasonicParams = field(default_factory=sensors.UltrasonicParams)
+    camera: sensors.FiducialCameraParams = field(default_factory=sensors.FiducialCameraParams)
+    contact: DockContactParams = field(default_factory=DockContactParams)
+    #: Localisation error (in base_link) of the simulated localiser; see services.simulator.localisation.
+    localisation_error: Pose2D = field(default_factory=Pose2D)
+    #: A touch on the dock's plate is docking, not a collision, if the robot is within this heading of the
+    #: dock or slower than ``dock_gentle_speed_mps`` at the contact point.
+    dock_align_tolerance_rad: float = 0.35
+    dock_gentle_speed_mps: float = 0.10
+    #: A contact with the same obstacle that begins again within this time of ending is the same collision.
+    collision_debounce_s: float = 0.2
+    #: Penetration tolerated when placing the robot (teleport).
+    placement_tolerance_m: float = 0.001
+    friction: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.dt_s) and 0.0 < self.dt_s <= 0.05):
+            raise ValueError(f"SimParams.dt_s must be in (0, 0.05] s, got {self.dt_s!r}")
+        for name in (
+            "odom_noise",
+            "dock_align_tolerance_rad",
+            "dock_gentle_speed_mps",
+            "collision_debounce_s",
+            "placement_tolerance_m",
+            "friction",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"SimParams.{name} must be >= 0, got {value!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class CollisionEvent:
+    """The robot started touching an obstacle it should not have touched.
+
+    ``kind`` is one of :data:`COLLISION_KINDS`; ``dock_id`` is set for "dock"; ``speed_mps`` is the speed
+    of the robot's contact point as the contact began; ``x_m``, ``y_m`` locate the contact in the map.
+    """
+
+    kind: str
+    time_s: float
+    x_m: float
+    y_m: float
+    speed_mps: float
+    dock_id: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class _Obstacle:
+    kind: str
+    dock: Dock | None = None
+
+
+def _sinc(x: float) -> float:
+    return 1.0 - x * x / 6.0 if abs(x) < 1e-4 else math.sin(x) / x
+
+
+class SimWorld:
+    """One robot in one room, stepped at a fixed rate. Public methods are the simulator service's API.
+
+    Not thread-safe: step it and read its sensors from one thread.
+    """
+
+    def __init__(self, world: World, drive: DiffDriveParams | None = None, params: SimParams | None = None):
+        self.world = world
+        self.params = params or SimParams()
+        self.drive = DiffDrive(drive)
+        # Separate streams: how often sensors are read does not change the odometry's noise.
+        sensor_seed, odom_seed = np.random.SeedSequence(self.params.seed).spawn(2)
+        self.rng = np.random.default_rng(sensor_seed)
+        self.odometry = Odometry(self.drive.params, self.params.odom_noise, np.random.default_rng(odom_seed))
+        self.time_s = 0.0
+        self.steps = 0
+        self.collision_counts = dict.fromkeys(COLLISION_KINDS, 0)
+        self.twist = Twist2D()  # measured body twist of the last step
+        self._events: list[CollisionEvent] = []
+        self._last_separation_s: dict[pymunk.Shape, float] = {}
+        self._obstacles: dict[pymunk.Shape, _Obstacle] = {}
+        #: (label, outline) of every obstacle, for placement checks: segments as 2 points, boxes as 4.
+        self._outlines: list[tuple[str, np.ndarray]] = []
+
+        self.opaque = SegmentSet(world.opaque_segments())
+        self.glass = SegmentSet(world.glass)
+        self.sonar_visible = SegmentSet.concat(self.opaque, self.glass)
+
+        self.space = pymunk.Space()
+        self.space.gravity = (0.0, 0.0)
+        # Pymunk's defaults suit pixels; the room is in metres.
+        self.space.collision_slop = 0.0005
+        self.space.iterations = 10
+        self._add_obstacles()
+        start = Pose2D.from_seq(world.robot.start)
+        self._check_placement(start, "robot.start")
+        self.body, self.shape = self._new_robot(start)
+        self.space.on_collision(
+            ROBOT_COLLISION_TYPE, OBSTACLE_COLLISION_TYPE, begin=self._on_begin, separate=self._on_separate
+        )
+
+    # ----------------------------------------------------------------------------------------- building
+    def _add_static(
+        self, shape: pymunk.Shape, obstacle: _Obstacle, outline: list[tuple[float, float]]
+    ) -> None:
+        label = obstacle.kind if obstacle.dock is None else f"dock {obstacle.dock.id!r}"
+        self._outlines.append((label, np.asarray(outline, dtype=float)))
+        shape.collision_type = OBSTACLE_COLLISION_TYPE
+        shape.friction = self.params.friction
+        shape.elasticity = 0.0
+        self.space.add(shape)
+        self._obstacles[shape] = obstacle
+
+    def _add_obstacles(self) -> None:
+        static = self.space.static_body
+        for a, b in self.world.boundary_walls() + list(self.world.walls):
+            self._add_static(pymunk.Segment(static, a, b, 0.0), _Obstacle("wall"), [a, b])
+        for a, b in self.world.glass:
+            self._add_static(pymunk.Segment(static, a, b, 0.0), _Obstacle("glass"), [a, b])
+        for box in self.world.boxes:
+            self._add_static(pymunk.Poly(static, box.corners()), _Obstacle("box"), box.corners())
+        for dock in self.world.docks:
+            corners = DOCK_GEOMETRY.body_box(dock).corners()
+            self._add_static(pymunk.Poly(static, corners), _Obstacle("dock", dock), corners)
+
+    def _new_robot(self, pose: Pose2D) -> tuple[pymunk.Body, pymunk.Poly]:
+        """The robot's body at ``pose``, added to the space, standing still."""
+        p = self.drive.params
+        size = (p.footprint_length_m, p.footprint_width_m)
+        body = pymunk.Body(p.mass_kg, pymunk.moment_for_box(p.mass_kg, size))
+        body.position = (pose.x, pose.y)
+        body.angle = pose.yaw
+        body.velocity_func = self._drive_velocity
+        shape = pymunk.Poly.create_box(body, size, radius=0.0)
+        shape.collision_type = ROBOT_COLLISION_TYPE
+        shape.friction = self.params.friction
+        shape.elasticity = 0.0
+        self.space.add(body, shape)
+        return body, shape
+
+    def _drive_velocity(self, body: pymunk.Body, gravity: object, damping: float, dt: float) -> None:
+        """Pymunk's velocity phase: the wheels impose the delivered twist, then the solver resolves contacts.
+
+        Chipmunk integrates positions at the start of the next step with the solved velocity, moving the
+        body in a straight line; aiming that chord along the arc the twist describes keeps free motion exact.
+        """
+        twist = self.drive.delivered
+        turn = twist.angular_rps * dt
+        chord_speed = twist.linear_mps * _sinc(0.5 * turn)
+        mid = body.angle + 0.5 * turn
+        body.velocity = (chord_speed * math.cos(mid), chord_speed * math.sin(mid))
+        body.angular_velocity = twist.angular_rps
+
+    # ----------------------------------------------------------------------------------------- state
+    @property
+    def pose(self) -> Pose2D:
+        """Ground-truth base_link pose in the map."""
+        x, y = self.body.position
+        return Pose2D(float(x), float(y), wrap_angle(float(self.body.angle)))
+
+    @property
+    def odom_pose(self) -> Pose2D:
+        """odom -> base_link from wheel odometry."""
+        return self.odometry.pose
+
+    def map_to_odom(self) -> Pose2D:
+        """The map -> odom transform of the simulated localiser (with the configured error)."""
+        return map_to_odom(self.pose, self.odometry.pose, self.params.localisation_error)
+
+    def overlapping_obstacles(self, pose: Pose2D) -> list[str]:
+        """What the robot's footprint would overlap at ``pose`` by more than ``placement_tolerance_m``."""
+        p, inset = self.drive.params, 2.0 * self.params.placement_tolerance_m
+        footprint = footprint_corners(pose, p.footprint_length_m - inset, p.footprint_width_m - inset)
+        return [label for label, outline in self._outlines if not separated(footprint, outline)]
+
+    def _check_placement(self, pose: Pose2D, what: str) -> None:
+        if not all(math.isfinite(v) for v in pose.as_tuple()):
+            raise PoseInCollisionError(f"{what} {pose.as_tuple()} is not finite")
+        if not self.world.contains(pose.x, pose.y):
+            raise PoseInCollisionError(
+                f"{what} ({pose.x:.3f}, {pose.y:.3f}) is outside the room bounds {list(self.world.bounds)}"
+            )
+        overlaps = self.overlapping_obstacles(pose)
+        if overlaps:
+            raise PoseInCollisionError(
+                f"{what} ({pose.x:.3f}, {pose.y:.3f}, {pose.yaw:.3f}) puts the robot into "
+                + ", ".join(overlaps)
+            )
+
+    def teleport(self, pose: Pose2D) -> None:
+        """Place the robot at ``pose``, standing still, and restart odometry there.
+
+        Raises :class:`PoseInCollisionError` if base_link is outside the room or the footprint overlaps
+        anything; the robot then stays where it was.
+        """
+        self._check_placement(pose, "pose")
+        # A fresh body carries no velocity or solver state (penetration bias) over from the old place.
+        self.space.remove(self.body, self.shape)
+        self.body, self.shape = self._new_robot(pose)
+        self.drive.stop()
+        self.odometry.reset()
+        self.twist = Twist2D()
+
+    # ----------------------------------------------------------------------------------------- stepping
+    def step(self, cmd_v: float, cmd_w: float) -> None:
+        """Advance one ``dt_s`` with the base commanded to ``cmd_v`` (m/s) and ``cmd_w`` (rad/s).
+
+        The motion of a step follows the twist set in the previous step (pymunk integrates positions
+        before velocities), so the base answers a command one step (``dt_s``) later.
+        """
+        dt = self.params.dt_s
+        self.drive.step(Twist2D(cmd_v, cmd_w), dt)
+        x0, y0 = self.body.position
+        yaw0 = float(self.body.angle)
+        self.space.step(dt)
+        self.steps += 1
+        self.time_s = self.steps * dt
+        # What the wheels rolled: the displacement along the heading, not any sideways push by a contact.
+        dx, dy = self.body.position[0] - x0, self.body.position[1] - y0
+        turned = float(self.body.angle) - yaw0
+        mid = yaw0 + 0.5 * turned
+        travelled = (dx * math.cos(mid) + dy * math.sin(mid)) / _sinc(0.5 * turned)
+        self.twist = Twist2D(travelled / dt, turned / dt)
+        self.odometry.update(self.twist, dt)
+
+    # ----------------------------------------------------------------------------------------- collisions
+    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        robot_shape, other = arbiter.shapes
+        if robot_shape is not self.shape:
+            robot_shape, other = other, robot_shape
+        obstacle = self._obstacles.get(other)
+        if obstacle is None:
+            return
+        last = self._last_separation_s.get(other)
+        if last is not None and self.time_s - last < self.params.collision_debounce_s:
+            return
+        points = arbiter.contact_point_set.points
+        if points:
+            cx = sum(0.5 * (p.point_a.x + p.point_b.x) for p in points) / len(points)
+            cy = sum(0.5 * (p.point_a.y + p.point_b.y) for p in points) / len(points)
+        else:
+            cx, cy = self.body.position
+        speed = float(abs(self.body.velocity_at_world_point((cx, cy))))
+        if obstacle.dock is not None and self._is_docking_touch(obstacle.dock, points, speed):
+            return
+        self.collision_counts[obstacle.kind] += 1
+        self._events.append(
+            CollisionEvent(
+                kind=obstacle.kind,
+                time_s=self.time_s,
+                x_m=float(cx),
+                y_m=float(cy),
+                speed_mps=speed,
+                dock_id=obstacle.dock.id if obstacle.dock is not None else None,
+            )
+        )
+
+    def _on_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        for shape in arbiter.shapes:
+            if shape in self._obstacles:
+                self._last_separation_s[shape] = self.time_s
+
+    def _is_docking_touch(self, dock: Dock, points: Sequence[pymunk.ContactPoint], speed_mps: float) -> bool:
+        """A touch on the charging plate, square to the dock or gentle, is docking rather than a crash."""
+        frame = dock.pose2d
+        half_width = 0.5 * DOCK_GEOMETRY.body_width_m
+        for p in points:
+            local = Pose2D(0.5 * (p.point_a.x + p.point_b.x), 0.5 * (p.point_a.y + p.point_b.y)).relative_to(
+                frame
+            )
+            if abs(local.x - ROBOT_FRONT_M) > 0.01 or abs(local.y) > half_width + 0.01:
+                return False
+        aligned = abs(wrap_angle(float(self.body.angle) - frame.yaw)) <= self.params.dock_align_tolerance_rad
+        return aligned or speed_mps <= self.params.dock_gentle_speed_mps
+
+    def drain_collisions(self) -> list[CollisionEvent]:
+        """Collision events since the last call, oldest first (the caller publishes them)."""
+        events, self._events = self._events, []
+        return events
+
+    # ----------------------------------------------------------------------------------------- sensors
+    def lidar_scan(self, pose: Pose2D | None = None) -> sensors.LidarScan:
+        """A lidar scan from ``pose`` (default: the robot's true pose); sees opaque surfaces, not glass."""
+        at = self.pose if pose is None else pose
+        return sensors.lidar_scan(at, self.opaque, self.params.lidar, self.rng)
+
+    def ultrasonic_range(self, pose: Pose2D | None = None) -> float:
+        """The front ultrasonic reading from ``pose`` (default: true pose); sees opaque surfaces and glass."""
+        at = self.pose if pose is None else pose
+        return sensors.ultrasonic_range(at, self.sonar_visible, self.params.ultrasonic, self.rng)
+
+    def detect_docks(self, pose: Pose2D | None = None) -> list[sensors.DockDetection]:
+        """Every dock the camera reads from ``pose`` (default: true pose), nearest first; glass hides none."""
+        at = self.pose if pose is None else pose
+        return sensors.detect_docks(at, self.world.docks, self.opaque, self.params.camera, self.rng)
+
+    def detect_dock(
+        self, pose: Pose2D | None = None, dock_id: str | None = None
+    ) -> sensors.DockDetection | None:
+        """The nearest visible dock (or the one named ``dock_id``), None if the camera reads no marker.
+
+        The result's ``dock_pose_in_base`` is the dock pose (base_link's pose when docked) in base_link.
+        """
+        for detection in self.detect_docks(pose):
+            if dock_id is None or detection.dock_id == dock_id:
+                return detection
+        return None
+
+    def dock_contact(self) -> DockContact:
+        """Ground-truth contact state against the nearest dock."""
+        return dock_contact(self.pose, self.world.docks, self.params.contact)
