@@ -78,7 +78,8 @@ class Params(ServiceParams):
     detection_rate_hz: float = Field(15.0, gt=0)
     contact_rate_hz: float = Field(20.0, gt=0)
     ground_truth_rate_hz: float = Field(20.0, gt=0)
-    cmd_vel_timeout_s: float = Field(0.5, gt=0, description="watchdog: stop when no command for this long")
+    cmd_vel_timeout_s: float = Field(
+        0.3, gt=0, description="watchdog: brake when no command for this long (standing still 0.5 s after the last)")
     # drive (Gazebo diff_drive / ros2_control names)
     wheel_separation_m: float = Field(0.26, gt=0)
     wheel_radius_m: float = Field(0.033, gt=0)
@@ -86,6 +87,8 @@ class Params(ServiceParams):
     max_angular_rps: float = Field(1.5, gt=0)
     max_linear_accel: float = Field(1.0, gt=0)
     max_angular_accel: float = Field(3.0, gt=0)
+    max_linear_decel: float = Field(2.5, gt=0)
+    max_angular_decel: float = Field(6.0, gt=0)
     # sensors
     lidar_noise_m: float = Field(0.01, ge=0)
     ultrasonic_noise_m: float = Field(0.005, ge=0)
@@ -160,6 +163,8 @@ class Params(ServiceParams):
             max_angular_rps=self.max_angular_rps,
             max_linear_accel=self.max_linear_accel,
             max_angular_accel=self.max_angular_accel,
+            max_linear_decel=self.max_linear_decel,
+            max_angular_decel=self.max_angular_decel,
         )
 
 

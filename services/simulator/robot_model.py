@@ -24,6 +24,10 @@ class DiffDriveParams:
     max_angular_rps: float = 1.5
     max_linear_accel: float = 1.0  # m/s^2
     max_angular_accel: float = 3.0  # rad/s^2
+    #: Braking is harder than speeding up (diff_drive_controller's max_deceleration): the watchdog's stop
+    #: from full speed takes 0.2 s.
+    max_linear_decel: float = 2.5  # m/s^2
+    max_angular_decel: float = 6.0  # rad/s^2
     footprint_length_m: float = ROBOT_LENGTH_M
     footprint_width_m: float = ROBOT_WIDTH_M
     mass_kg: float = 5.0
@@ -36,6 +40,8 @@ class DiffDriveParams:
             "max_angular_rps",
             "max_linear_accel",
             "max_angular_accel",
+            "max_linear_decel",
+            "max_angular_decel",
             "footprint_length_m",
             "footprint_width_m",
             "mass_kg",
@@ -88,8 +94,9 @@ def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
 
-def _rate_limit(target: float, previous: float, max_rate: float, dt_s: float) -> float:
-    step = max_rate * dt_s
+def _rate_limit(target: float, previous: float, max_accel: float, max_decel: float, dt_s: float) -> float:
+    slowing = abs(target) < abs(previous) and target * previous >= 0.0
+    step = (max_decel if slowing else max_accel) * dt_s
     return previous + _clamp(target - previous, step)
 
 
@@ -103,8 +110,8 @@ def limit_twist(command: Twist2D, previous: Twist2D, dt_s: float, params: DiffDr
     w_cmd = command.angular_rps if math.isfinite(command.angular_rps) else 0.0
     v = _clamp(v_cmd, params.max_linear_mps)
     w = _clamp(w_cmd, params.max_angular_rps)
-    v = _rate_limit(v, previous.linear_mps, params.max_linear_accel, dt_s)
-    w = _rate_limit(w, previous.angular_rps, params.max_angular_accel, dt_s)
+    v = _rate_limit(v, previous.linear_mps, params.max_linear_accel, params.max_linear_decel, dt_s)
+    w = _rate_limit(w, previous.angular_rps, params.max_angular_accel, params.max_angular_decel, dt_s)
     wheels = wheel_speeds_from_twist(Twist2D(v, w), params)
     fastest = max(abs(wheels.left_radps), abs(wheels.right_radps))
     if fastest > params.max_wheel_speed_radps:

@@ -1,0 +1,116 @@
+"""The simulator as a real process: valid messages on every key, driving, glass, watchdog, teleport."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import zenoh
+
+from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
+from shared.messages import (
+    Clock,
+    DockContact,
+    LaserScan,
+    Odometry,
+    PoseStamped,
+    Range,
+    TFMessage,
+    Twist,
+)
+from shared.node import call_service
+from shared.world import load_world
+from tests.support.bus import KeyRecorder
+from tests.support.processes import REPO_ROOT, wait_until
+
+GLASS_ROOM = str(REPO_ROOT / "deploy/worlds/glass_room.yaml")
+
+
+def _state(bus: zenoh.Session, ns: str):  # type: ignore[no-untyped-def]
+    return call_service(bus, f"{ns}/simulator/state", SIM_STATE, SimStateRequest(), timeout_s=5.0)
+
+
+def test_every_key_carries_valid_messages(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
+    expected = {
+        "clock": Clock, "odom": Odometry, "tf": TFMessage, "tf_static": TFMessage, "scan": LaserScan,
+        "ultrasonic": Range, "dock_contact": DockContact, "ground_truth_pose": PoseStamped,
+    }
+    recorders = {k: KeyRecorder(bus, f"{namespace}/{k}", t) for k, t in expected.items()}
+    spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=5")
+    for key, recorder in recorders.items():
+        recorder.wait_for(timeout_s=20.0)
+        assert not recorder.errors, f"{key}: {recorder.errors[:2]}"
+    scan = recorders["scan"].latest()
+    assert scan is not None and len(scan.ranges) == 360 and scan.header.frame_id == "lidar_link"
+    sonar = recorders["ultrasonic"].latest()
+    assert sonar is not None and sonar.radiation_type == Range.ULTRASOUND
+    static = recorders["tf_static"].latest()
+    assert static is not None and {t.child_frame_id for t in static.transforms} >= {"lidar_link", "ultrasonic_link"}
+
+
+def test_cmd_vel_moves_the_robot_and_watchdog_stops_it(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
+    odom = KeyRecorder(bus, f"{namespace}/odom", Odometry)
+    clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
+    spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=2")
+    clock.wait_for(timeout_s=20.0)
+    start = _state(bus, namespace).pose.position
+    cmd = bus.declare_publisher(f"{namespace}/cmd_vel")
+    bus.put(f"{namespace}/cmd_vel", b"not msgpack")  # garbage on a key never kills the service
+    forward = Twist.planar(0.3, 0.0).encode()
+    t_start = clock.latest().clock.to_sec()  # type: ignore[union-attr]
+
+    def moved() -> bool:
+        cmd.put(forward)
+        return abs(_state(bus, namespace).pose.position.y - start.y) > 0.3
+
+    wait_until(moved, 20.0, lambda: f"robot still near {start}")
+    stopped_at = clock.latest().clock.to_sec()  # type: ignore[union-attr]
+    assert stopped_at > t_start
+    # commands stop: the watchdog halts the robot within 0.5 s of sim time
+    odom.wait_for(lambda m: m.header.stamp.to_sec() > stopped_at + 0.5 + 0.2, timeout_s=20.0)
+    after = [m for m in odom.messages if m.header.stamp.to_sec() > stopped_at + 0.5 + 0.1]
+    assert after and all(abs(m.twist.twist.linear.x) < 1e-3 for m in after), [m.twist.twist.linear.x for m in after]
+    cmd.undeclare()
+
+
+def test_sonar_sees_glass_that_lidar_does_not(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
+    world = load_world(GLASS_ROOM)
+    (gx1, gy), (gx2, _) = world.glass[0]
+    scan = KeyRecorder(bus, f"{namespace}/scan", LaserScan)
+    sonar = KeyRecorder(bus, f"{namespace}/ultrasonic", Range)
+    spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=2")
+    scan.wait_for(timeout_s=20.0)
+    # face the glass from 0.8 m away (robot's front at 0.6 m)
+    x = (gx1 + gx2) / 2
+    reply = call_service(bus, f"{namespace}/simulator/teleport", TELEPORT, TeleportRequest(x=x, y=gy + 0.8, yaw=-math.pi / 2))
+    assert reply.success, reply.message
+    t0 = _state(bus, namespace).stamp.to_sec()
+    s = sonar.wait_for(lambda m: m.header.stamp.to_sec() > t0 + 0.1, timeout_s=10.0)
+    lidar = scan.wait_for(lambda m: m.header.stamp.to_sec() > t0 + 0.1, timeout_s=10.0)
+    assert s.range == np.float32(s.range) and abs(s.range - 0.6) < 0.05, s.range
+    ahead = lidar.ranges[180]  # beam 180 points along the robot's heading
+    assert ahead > 1.5 or math.isinf(ahead), f"lidar saw something {ahead} m ahead where only glass stands"
+
+
+def test_teleport_into_a_wall_is_refused(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
+    clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
+    spawn("simulator", "--world", GLASS_ROOM)
+    clock.wait_for(timeout_s=20.0)
+    before = _state(bus, namespace).pose.position
+    reply = call_service(bus, f"{namespace}/simulator/teleport", TELEPORT, TeleportRequest(x=-2.99, y=1.0, yaw=0.0))
+    assert not reply.success and "wall" in reply.message
+    after = _state(bus, namespace).pose.position
+    assert (after.x, after.y) == (before.x, before.y)
+
+
+def test_bad_world_exits_2_with_one_clear_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nbounds: [0, 0, -1, 1]\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "services.simulator", "--world", str(bad), "--connect", "tcp/127.0.0.1:1"],
+        cwd=REPO_ROOT, capture_output=True, text=True, timeout=30,
+    )
+    assert result.returncode == 2
+    assert "bounds" in result.stderr and "xmax > xmin" in result.stderr
