@@ -58,11 +58,20 @@ class MessageError(ValueError):
 
 
 class _FieldError(Exception):
-    """Internal: carries a reason and a field path up to the message level."""
+    """Internal: carries a reason and a field path (built on the way up) to the message level."""
 
     def __init__(self, path: str, reason: str) -> None:
         self.path = path
         self.reason = reason
+
+    def under(self, parent: str) -> _FieldError:
+        if not self.path:
+            self.path = parent
+        elif self.path.startswith("["):
+            self.path = parent + self.path
+        else:
+            self.path = f"{parent}.{self.path}"
+        return self
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,9 +106,9 @@ FloatAnyArray = Annotated[np.ndarray, _ArraySpec(np.float32, allow_nonfinite=Tru
 Int8Array = Annotated[np.ndarray, _ArraySpec(np.int8)]
 UInt8Array = Annotated[np.ndarray, _ArraySpec(np.uint8)]
 
-Validator = Callable[[Any, str], Any]
+Validator = Callable[[Any], Any]
 #: Validates a Python value and returns its wire form in one pass (the sender's check).
-Encoder = Callable[[Any, str], Any]
+Encoder = Callable[[Any], Any]
 
 
 class Message:
@@ -111,14 +120,14 @@ class Message:
     def to_dict(self) -> dict[str, Any]:
         """The msgpack-ready map, validated (raises :class:`MessageError`)."""
         try:
-            return _encode_message(self, "")
+            return _encode_message(self)
         except _FieldError as exc:
             raise MessageError(exc.reason, type_name=self.TYPE_NAME, field=exc.path) from None
 
     @classmethod
     def from_dict(cls: type[M], data: Any) -> M:
         try:
-            return _decode_message(cls, data, "")
+            return _decode_message(cls, data)
         except _FieldError as exc:
             raise MessageError(exc.reason, type_name=cls.TYPE_NAME, field=exc.path) from None
 
@@ -174,6 +183,10 @@ def message(type_name: str) -> Callable[[type[M]], type[M]]:
 
 
 # --- compilation of per-field validators and encoders -------------------------------------------
+#
+# Validators take a value and return it checked; on failure they raise _FieldError with a path relative
+# to the value, and each enclosing message or list prepends its own part while the error travels up.
+# The success path therefore builds no strings.
 
 
 def _compile(annotation: Any, name: str) -> tuple[Validator, Encoder]:
@@ -186,7 +199,7 @@ def _compile(annotation: Any, name: str) -> tuple[Validator, Encoder]:
     array: _ArraySpec | None = next((e for e in extras if isinstance(e, _ArraySpec)), None)
     if array is not None:
         validate_array = _array_validator(array)
-        return validate_array, lambda value, path: _array_to_wire(validate_array(value, path))
+        return validate_array, lambda value: _array_to_wire(validate_array(value))
     if base is float:
         check = _float_validator(any(isinstance(e, _AllowNonFinite) for e in extras), bounds)
         return check, check
@@ -209,84 +222,87 @@ def _compile(annotation: Any, name: str) -> tuple[Validator, Encoder]:
 
 
 def _float_validator(allow_nonfinite: bool, bounds: Range | None) -> Validator:
-    def check(value: Any, path: str) -> float:
+    def check(value: Any) -> float:
         if type(value) is float:
             v = value
         elif isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool):
             v = float(value)
         else:
-            raise _FieldError(path, f"expected a number, got {type(value).__name__}")
+            raise _FieldError("", f"expected a number, got {type(value).__name__}")
         if not allow_nonfinite and not math.isfinite(v):
-            raise _FieldError(path, f"must be finite, got {v}")
+            raise _FieldError("", f"must be finite, got {v}")
         if bounds is not None and math.isfinite(v) and not bounds.lo <= v <= bounds.hi:
-            raise _FieldError(path, f"must be within [{bounds.lo}, {bounds.hi}], got {v}")
+            raise _FieldError("", f"must be within [{bounds.lo}, {bounds.hi}], got {v}")
         return v
 
     return check
 
 
 def _int_validator(bounds: Range | None) -> Validator:
-    def check(value: Any, path: str) -> int:
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-            raise _FieldError(path, f"expected an integer, got {type(value).__name__}")
+    def check(value: Any) -> int:
+        if type(value) is not int and (isinstance(value, bool) or not isinstance(value, (int, np.integer))):
+            raise _FieldError("", f"expected an integer, got {type(value).__name__}")
         v = int(value)
         if bounds is not None and not bounds.lo <= v <= bounds.hi:
-            raise _FieldError(path, f"must be within [{int(bounds.lo)}, {int(bounds.hi)}], got {v}")
+            raise _FieldError("", f"must be within [{int(bounds.lo)}, {int(bounds.hi)}], got {v}")
         return v
 
     return check
 
 
-def _bool_validator(value: Any, path: str) -> bool:
+def _bool_validator(value: Any) -> bool:
     if not isinstance(value, (bool, np.bool_)):
-        raise _FieldError(path, f"expected true or false, got {type(value).__name__}")
+        raise _FieldError("", f"expected true or false, got {type(value).__name__}")
     return bool(value)
 
 
-def _str_validator(value: Any, path: str) -> str:
+def _str_validator(value: Any) -> str:
     if not isinstance(value, str):
-        raise _FieldError(path, f"expected a string, got {type(value).__name__}")
+        raise _FieldError("", f"expected a string, got {type(value).__name__}")
     return value
 
 
-def _str_list_validator(value: Any, path: str) -> list[str]:
+def _str_list_validator(value: Any) -> list[str]:
     if not isinstance(value, (list, tuple)):
-        raise _FieldError(path, f"expected a list of strings, got {type(value).__name__}")
-    return [_str_validator(v, f"{path}[{i}]") for i, v in enumerate(value)]
+        raise _FieldError("", f"expected a list of strings, got {type(value).__name__}")
+    for i, v in enumerate(value):
+        if not isinstance(v, str):
+            raise _FieldError(f"[{i}]", f"expected a string, got {type(v).__name__}")
+    return list(value)
 
 
 def _array_validator(spec: _ArraySpec) -> Validator:
     is_float = spec.dtype.kind == "f"
 
-    def check(value: Any, path: str) -> np.ndarray:
+    def check(value: Any) -> np.ndarray:
         if isinstance(value, np.ndarray):
             raw = value
         elif isinstance(value, (list, tuple)):
             if len(value) > MAX_ARRAY_LEN:
-                raise _FieldError(path, f"array of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
+                raise _FieldError("", f"array of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
             if value and not all(type(v) in (int, float) for v in value):
                 bad = next(v for v in value if type(v) not in (int, float))
-                raise _FieldError(path, f"array items must be numbers, found {type(bad).__name__}")
+                raise _FieldError("", f"array items must be numbers, found {type(bad).__name__}")
             raw = np.asarray(value, dtype=np.float64 if is_float else np.int64)
         elif isinstance(value, (bytes, bytearray)) and spec.dtype.itemsize == 1:
             raw = np.frombuffer(bytes(value), dtype=spec.dtype)
         else:
-            raise _FieldError(path, f"expected a list of numbers, got {type(value).__name__}")
+            raise _FieldError("", f"expected a list of numbers, got {type(value).__name__}")
         if raw.ndim != 1:
-            raise _FieldError(path, f"expected a flat array, got shape {raw.shape}")
+            raise _FieldError("", f"expected a flat array, got shape {raw.shape}")
         if raw.size > MAX_ARRAY_LEN:
-            raise _FieldError(path, f"array of {raw.size} items exceeds the limit of {MAX_ARRAY_LEN}")
+            raise _FieldError("", f"array of {raw.size} items exceeds the limit of {MAX_ARRAY_LEN}")
         if is_float:
             if raw.dtype.kind not in "fiu":
-                raise _FieldError(path, f"expected numbers, got dtype {raw.dtype}")
+                raise _FieldError("", f"expected numbers, got dtype {raw.dtype}")
             if not spec.allow_nonfinite and raw.size and not np.isfinite(raw).all():
-                raise _FieldError(path, "array items must be finite")
+                raise _FieldError("", "array items must be finite")
             return raw.astype(spec.dtype, copy=False)
         if raw.dtype.kind not in "iu":
-            raise _FieldError(path, f"expected integers, got dtype {raw.dtype}")
+            raise _FieldError("", f"expected integers, got dtype {raw.dtype}")
         info = np.iinfo(spec.dtype.type)  # type: ignore[type-var]
         if raw.size and (raw.min() < info.min or raw.max() > info.max):
-            raise _FieldError(path, f"array items must be within [{info.min}, {info.max}]")
+            raise _FieldError("", f"array items must be within [{info.min}, {info.max}]")
         return raw.astype(spec.dtype, copy=False)
 
     return check
@@ -299,30 +315,36 @@ def _array_to_wire(value: np.ndarray) -> Any:
 
 
 def _nested_validator(cls: type[Message]) -> Validator:
-    def check(value: Any, path: str) -> Message:
-        return _decode_message(cls, value, path)
+    def check(value: Any) -> Message:
+        return _decode_message(cls, value)
 
     return check
 
 
 def _nested_encoder(cls: type[Message]) -> Encoder:
-    def encode(value: Any, path: str) -> dict[str, Any]:
+    def encode(value: Any) -> dict[str, Any]:
         if isinstance(value, cls):
-            return _encode_message(value, path)
+            return _encode_message(value)
         if isinstance(value, dict):  # a plain map is accepted if it is a valid message
-            return _encode_message(_decode_message(cls, value, path), path)
-        raise _FieldError(path, f"expected {cls.TYPE_NAME}, got {type(value).__name__}")
+            return _encode_message(_decode_message(cls, value))
+        raise _FieldError("", f"expected {cls.TYPE_NAME}, got {type(value).__name__}")
 
     return encode
 
 
 def _message_list_validator(cls: type[Message]) -> Validator:
-    def check(value: Any, path: str) -> list[Message]:
+    def check(value: Any) -> list[Message]:
         if not isinstance(value, (list, tuple)):
-            raise _FieldError(path, f"expected a list of {cls.TYPE_NAME}, got {type(value).__name__}")
+            raise _FieldError("", f"expected a list of {cls.TYPE_NAME}, got {type(value).__name__}")
         if len(value) > MAX_ARRAY_LEN:
-            raise _FieldError(path, f"list of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
-        return [_decode_message(cls, v, f"{path}[{i}]") for i, v in enumerate(value)]
+            raise _FieldError("", f"list of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
+        out = []
+        for i, v in enumerate(value):
+            try:
+                out.append(_decode_message(cls, v))
+            except _FieldError as exc:
+                raise exc.under(f"[{i}]") from None
+        return out
 
     return check
 
@@ -330,34 +352,45 @@ def _message_list_validator(cls: type[Message]) -> Validator:
 def _message_list_encoder(cls: type[Message]) -> Encoder:
     encode_item = _nested_encoder(cls)
 
-    def encode(value: Any, path: str) -> list[dict[str, Any]]:
+    def encode(value: Any) -> list[dict[str, Any]]:
         if not isinstance(value, (list, tuple)):
-            raise _FieldError(path, f"expected a list of {cls.TYPE_NAME}, got {type(value).__name__}")
-        return [encode_item(v, f"{path}[{i}]") for i, v in enumerate(value)]
+            raise _FieldError("", f"expected a list of {cls.TYPE_NAME}, got {type(value).__name__}")
+        out = []
+        for i, v in enumerate(value):
+            try:
+                out.append(encode_item(v))
+            except _FieldError as exc:
+                raise exc.under(f"[{i}]") from None
+        return out
 
     return encode
 
 
-def _join(path: str, name: str) -> str:
-    return f"{path}.{name}" if path else name
-
-
-def _decode_message(cls: type[M], data: Any, path: str) -> M:
+def _decode_message(cls: type[M], data: Any) -> M:
     if isinstance(data, cls):
-        _encode_message(data, path)  # validates
+        _encode_message(data)  # validates
         return data
     if not isinstance(data, dict):
-        raise _FieldError(path, f"expected a map for {cls.TYPE_NAME}, got {type(data).__name__}")
+        raise _FieldError("", f"expected a map for {cls.TYPE_NAME}, got {type(data).__name__}")
     values = {}
     for name, validate, _ in cls._FIELDS:
-        if name not in data:
-            raise _FieldError(_join(path, name), "missing")
-        values[name] = validate(data[name], _join(path, name))
+        try:
+            values[name] = validate(data[name])
+        except KeyError:
+            raise _FieldError(name, "missing") from None
+        except _FieldError as exc:
+            raise exc.under(name) from None
     if len(data) != len(cls._FIELDS):
         unknown = sorted(str(k) for k in data if k not in values)
-        raise _FieldError(_join(path, unknown[0]), f"unknown field for {cls.TYPE_NAME}")
+        raise _FieldError(unknown[0], f"unknown field for {cls.TYPE_NAME}")
     return cls(**values)
 
 
-def _encode_message(msg: Message, path: str) -> dict[str, Any]:
-    return {name: encode(getattr(msg, name), _join(path, name)) for name, _, encode in msg._FIELDS}
+def _encode_message(msg: Message) -> dict[str, Any]:
+    out = {}
+    for name, _, encode in msg._FIELDS:
+        try:
+            out[name] = encode(getattr(msg, name))
+        except _FieldError as exc:
+            raise exc.under(name) from None
+    return out
