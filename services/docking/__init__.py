@@ -1,0 +1,14 @@
+"""The docking service: takes the robot from anywhere in the room onto its charging dock.
+
+Pure logic, no bus (each module unit-tested on its own):
+
+- :mod:`~services.docking.approach` -- staging poses, waypoints and targets derived from a dock pose;
+- :mod:`~services.docking.seed_controller` -- the baseline bang-bang line approach and the low-battery trigger;
+- :mod:`~services.docking.graceful` -- the graceful (Park & Kuipers) docking controller;
+- :mod:`~services.docking.pose_estimator` -- robot pose smoothing and latency compensation for the controller;
+- :mod:`~services.docking.pose_filter` -- dock detection smoothing with timeout and outlier rejection;
+- :mod:`~services.docking.dock_db` -- the dock database;
+- :mod:`~services.docking.errors` -- result codes, feedback states and docking exceptions (Nav2's numbers);
+- :mod:`~services.docking.kinematics` and :mod:`~services.docking.bench` -- a kinematic robot to test and
+  compare controllers on.
+"""

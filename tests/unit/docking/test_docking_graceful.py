@@ -1,0 +1,155 @@
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from services.docking.approach import dock_frame_error, offset_along
+from services.docking.graceful import (
+    NAV2_DOCKING_DEFAULTS,
+    NAV2_DOCKING_PARAMS,
+    ZENDOCK_PARAMS,
+    ZENDOCK_TUNED,
+    EgoPolar,
+    GracefulDockController,
+    GracefulGains,
+    curvature,
+    ego_polar,
+    smooth_control_law,
+)
+from services.docking.kinematics import PoseSensing, simulate_approach
+from shared.geometry import Pose2D
+
+DOCK = Pose2D(-1.0, 0.83, -math.pi / 2)
+
+
+def test_nav2_default_gains() -> None:
+    g = NAV2_DOCKING_DEFAULTS
+    assert (g.k_phi, g.k_delta, g.beta, g.lambda_) == (3.0, 2.0, 0.4, 2.0)
+    assert (g.v_linear_min_mps, g.v_linear_max_mps, g.v_angular_max_radps, g.slowdown_radius_m) == (0.1, 0.25, 0.75, 0.25)
+
+
+def test_tuned_gains_respect_the_robot_limits() -> None:
+    assert ZENDOCK_TUNED.v_linear_max_mps <= 0.5
+    assert ZENDOCK_TUNED.v_angular_max_radps <= 1.5
+
+
+def test_ego_polar_coordinates() -> None:
+    ahead = ego_polar(Pose2D(2.0, 0.0, 0.0), Pose2D(0.0, 0.0, 0.0))
+    assert (ahead.r_m, ahead.phi_rad, ahead.delta_rad) == pytest.approx((2.0, 0.0, 0.0))
+    # Target to the left, facing +y: the line of sight is +90 degrees, so the robot's heading is -90 from it.
+    left = ego_polar(Pose2D(0.0, 1.0, math.pi / 2), Pose2D(0.0, 0.0, 0.0))
+    assert (left.r_m, left.phi_rad, left.delta_rad) == pytest.approx((1.0, 0.0, -math.pi / 2))
+
+
+def test_curvature_matches_the_published_law() -> None:
+    # Worked by hand: k_delta*(delta - atan(-k_phi*phi)) = 2*(-0.1 + atan(0.6)) = 0.880839,
+    # (1 + 3/(1 + 0.36)) * sin(-0.1) = -0.320054, kappa = -(0.880839 - 0.320054) / 1.0 = -0.560785.
+    assert curvature(EgoPolar(1.0, 0.2, -0.1), NAV2_DOCKING_DEFAULTS) == pytest.approx(-0.560785, abs=1e-6)
+    assert curvature(EgoPolar(0.5, 0.2, -0.1), NAV2_DOCKING_DEFAULTS) == pytest.approx(-1.121570, abs=1e-6)
+
+
+def test_turns_towards_a_target_on_the_left() -> None:
+    v, w = smooth_control_law(Pose2D(0.0, 1.0, math.pi / 2), Pose2D(), NAV2_DOCKING_DEFAULTS).as_tuple()
+    assert v > 0.0 and w > 0.0
+
+
+def test_speed_limits_and_slowdown() -> None:
+    g = NAV2_DOCKING_DEFAULTS
+    far = smooth_control_law(Pose2D(3.0, 0.0, 0.0), Pose2D(), g)
+    assert far.linear_x_mps == pytest.approx(g.v_linear_max_mps) and far.angular_z_radps == 0.0
+    near = smooth_control_law(Pose2D(0.05, 0.0, 0.0), Pose2D(), g)
+    assert near.linear_x_mps == pytest.approx(g.v_linear_min_mps)  # slowdown floored at v_min
+    sharp = smooth_control_law(Pose2D(0.0, 0.1, math.pi), Pose2D(), g)
+    assert abs(sharp.angular_z_radps) == pytest.approx(g.v_angular_max_radps)
+    # w saturated: v is recomputed from the clamped w, so the robot keeps to the curve (below v_min).
+    assert sharp.linear_x_mps == pytest.approx(sharp.angular_z_radps / sharp.curvature_per_m)
+    assert sharp.linear_x_mps < g.v_linear_min_mps
+
+
+def test_backward_motion_drives_in_reverse() -> None:
+    v, w = smooth_control_law(Pose2D(-1.0, 0.0, 0.0), Pose2D(), NAV2_DOCKING_DEFAULTS, backward=True).as_tuple()
+    assert v < 0.0 and w == pytest.approx(0.0)
+
+
+def test_no_nan_at_or_near_the_target() -> None:
+    for gains in (NAV2_DOCKING_DEFAULTS, ZENDOCK_TUNED):
+        assert smooth_control_law(Pose2D(1.0, 2.0, 0.3), Pose2D(1.0, 2.0, -2.0), gains).as_tuple() == (0.0, 0.0)
+        for r in (1e-12, 1e-7, 1e-5, 1e-3):
+            for phi in np.linspace(-math.pi, math.pi, 7):
+                target = Pose2D(r, 0.0, float(phi))
+                v, w = smooth_control_law(target, Pose2D(), gains).as_tuple()
+                assert math.isfinite(v) and math.isfinite(w)
+                assert abs(w) <= gains.v_angular_max_radps + 1e-12
+
+
+def test_gains_are_validated() -> None:
+    with pytest.raises(ValueError):
+        replace(NAV2_DOCKING_DEFAULTS, k_phi=0.0)
+    with pytest.raises(ValueError):
+        replace(NAV2_DOCKING_DEFAULTS, v_linear_min_mps=0.5)
+    assert isinstance(ZENDOCK_TUNED, GracefulGains)
+
+
+@pytest.mark.parametrize("params", [ZENDOCK_PARAMS, NAV2_DOCKING_PARAMS], ids=["zendock", "nav2"])
+def test_converges_onto_the_dock_from_random_staging_starts(params) -> None:
+    rng = np.random.default_rng(7)
+    for i in range(15):
+        dock = Pose2D(float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), float(rng.uniform(-math.pi, math.pi)))
+        start = offset_along(dock, -float(rng.uniform(0.5, 1.2)), float(rng.uniform(-0.2, 0.2)), float(rng.uniform(-0.4, 0.4)))
+        result = simulate_approach(GracefulDockController(dock, params), start, dock, 0.05, timeout_s=20.0)
+        assert result.contact, f"run {i}: no contact from {start}"
+        assert result.mated, f"run {i}: lateral {result.lateral_error_m:.4f} m, yaw {result.yaw_error_rad:.4f} rad"
+        assert np.isfinite(result.trajectory).all()
+
+
+def test_tuned_controller_is_robust_to_latency_and_noise() -> None:
+    sensing_errors = []
+    for i, (back, lateral, yaw) in enumerate([(0.7, 0.15, -0.3), (0.7, -0.1, 0.2), (1.0, 0.0, 0.3), (0.6, 0.1, 0.0)]):
+        start = offset_along(DOCK, -back, lateral, yaw)
+        result = simulate_approach(
+            GracefulDockController(DOCK), start, DOCK, 0.05,
+            sensing=PoseSensing(0.05, 0.002, math.radians(0.2), seed=i),
+        )
+        assert result.mated
+        sensing_errors.append((abs(result.lateral_error_m), abs(result.yaw_error_rad)))
+    assert max(lat for lat, _ in sensing_errors) < 0.005
+    assert max(yaw for _, yaw in sensing_errors) < math.radians(1.5)
+
+
+def test_arrival_speed_is_capped_near_the_plate() -> None:
+    start = offset_along(DOCK, -1.0, 0.0, 0.0)
+    result = simulate_approach(GracefulDockController(DOCK), start, DOCK, 0.05)
+    assert result.contact and result.contact_speed_mps < 0.2
+    assert result.trajectory[:, 4].max() > 0.4  # but it is fast on the way
+
+
+def test_target_is_past_the_plate_and_follows_dock_updates() -> None:
+    controller = GracefulDockController(DOCK)
+    assert dock_frame_error(controller.target, DOCK).along_m == pytest.approx(ZENDOCK_PARAMS.dock_target_past_m)
+    moved = Pose2D(0.0, 0.0, 0.0)
+    controller.set_dock_pose(moved)
+    assert dock_frame_error(controller.target, moved).along_m == pytest.approx(ZENDOCK_PARAMS.dock_target_past_m)
+
+
+def test_distance_test_stops_the_robot() -> None:
+    controller = GracefulDockController(DOCK, NAV2_DOCKING_PARAMS)
+    assert controller.step(-1.0, 0.86, -math.pi / 2) == (0.0, 0.0)
+    assert controller.step(-1.0, 1.5, -math.pi / 2)[0] > 0.0
+    assert not GracefulDockController(DOCK).is_docked_by_distance(DOCK)  # zendock leaves stopping to the caller
+
+
+def test_estimator_takes_the_callers_timing_and_odometry() -> None:
+    start = offset_along(DOCK, -0.7, 0.0, 0.0)
+    blocked = GracefulDockController(DOCK)
+    assert blocked.compute(start).linear_x_mps > 0.0
+    # The base did not move (odometry says so): the estimate stays where the robot is.
+    blocked.compute(start, dt_s=0.5, pose_age_s=0.0, base_twist=(0.0, 0.0))
+    assert blocked.estimator is not None and blocked.estimator.pose.distance_to(start) < 1e-9
+    # Without odometry the estimate follows the last command, ahead of the stale measurement.
+    trusting = GracefulDockController(DOCK)
+    trusting.compute(start)
+    trusting.compute(start, dt_s=0.5)
+    assert trusting.estimator is not None and trusting.estimator.pose.distance_to(start) > 0.05
+    trusting.reset()
+    assert not trusting.estimator.initialised
