@@ -1,0 +1,171 @@
+"""The pose service's wiring: ``tf`` and ``tf_static`` in, ``map_to_base_link_pose2d`` out.
+
+Every ``1 / publish_rate_hz`` seconds on the node's clock it looks up ``reference_frame ->
+target_frame`` at the latest common time and publishes std_msgs/Float64MultiArray ``[x, y, yaw]``
+(metres, radians in [-pi, pi)) with the layout ``dim = [{label: pose2d, size: 3, stride: 3}]``.
+While the lookup fails, or the newest transform is older than ``max_transform_age_s`` on the node's
+clock, it publishes nothing and says why (rate-limited). The simulator republishes ``tf_static``
+every second, so a late joiner has the static links within a second.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydantic import Field, field_validator
+
+from services.pose.tf_buffer import RigidTransform, StampedTransform, TfBuffer, TransformError
+from shared import topics
+from shared.messages import (
+    Float64MultiArray,
+    MultiArrayDimension,
+    MultiArrayLayout,
+    TFMessage,
+    TransformStamped,
+)
+from shared.node import RELIABLE, Node, QoS
+from shared.ratelimit import RateLimitedLogger
+from shared.runtime import ServiceParams, run_service
+
+#: tf is a high-rate stream: keep a deep queue so a busy moment loses no history.
+TF_QOS = QoS(reliable=False, depth=100)
+#: tf_static is state: reliable, every message kept.
+TF_STATIC_QOS = QoS(reliable=True, depth=20)
+#: How often the same complaint may be logged.
+LOG_INTERVAL_S = 2.0
+#: A clock reading this much earlier than the previous tick is a reset.
+CLOCK_RESET_S = 1.0
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.pose`` (``-p name=value`` or a YAML file)."""
+
+    target_frame: str = Field("base_link", description="frame whose pose is published (e.g. lidar_link)")
+    reference_frame: str = Field("map", description="frame the pose is expressed in")
+    publish_rate_hz: float = Field(10.0, gt=0.0, le=100.0, description="publication rate on the node's clock")
+    cache_time_s: float = Field(10.0, gt=0.0, description="how much tf history is kept for interpolation")
+    max_transform_age_s: float = Field(
+        1.0, ge=0.0, description="publish nothing when the newest transform is older than this (0: no limit)"
+    )
+
+    @field_validator("target_frame", "reference_frame")
+    @classmethod
+    def _frame_name(cls, value: str) -> str:
+        name = value.strip().lstrip("/")
+        if not name:
+            raise ValueError("a frame name must not be empty")
+        return name
+
+
+def pose2d_message(transform: StampedTransform) -> Float64MultiArray:
+    """``[x, y, yaw]`` of a transform, with the pose2d layout."""
+    pose = transform.transform.to_pose2d()
+    return Float64MultiArray(
+        layout=MultiArrayLayout(dim=[MultiArrayDimension(label="pose2d", size=3, stride=3)], data_offset=0),
+        data=np.array([pose.x, pose.y, pose.yaw], dtype=np.float64),
+    )
+
+
+def rigid_transform(msg: TransformStamped) -> RigidTransform:
+    t, q = msg.transform.translation, msg.transform.rotation
+    return RigidTransform((t.x, t.y, t.z), (q.x, q.y, q.z, q.w))
+
+
+class PoseService:
+    """The tf listener and 2-D pose publisher on a node; see the module docstring."""
+
+    def __init__(self, node: Node, params: Params) -> None:
+        self._node = node
+        self._params = params
+        self._log = node.log
+        self._say = RateLimitedLogger(node.log, interval_s=LOG_INTERVAL_S)
+        self._buffer = TfBuffer(cache_time_s=params.cache_time_s, time_jump_reset_s=CLOCK_RESET_S)
+        self._available = False
+        self._last_tick_s: float | None = None
+        self._publisher = node.create_publisher(Float64MultiArray, topics.POSE2D, RELIABLE)
+        self._tf_sub = node.create_subscription(TFMessage, topics.TF, self._on_tf, TF_QOS)
+        self._tf_static_sub = node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, TF_STATIC_QOS)
+        self._timer = node.create_timer(1.0 / params.publish_rate_hz, self._on_timer)
+        self._clock_wait_timer = node.create_timer(5.0, self._on_clock_wait, wall=True) if node.use_sim_time else None
+        self._log.info(
+            "publishing %s -> %s as %s at %g Hz on %s time",
+            params.reference_frame, params.target_frame, self._publisher.key, params.publish_rate_hz,
+            "sim" if node.use_sim_time else "wall",
+        )
+
+    def _on_tf(self, msg: TFMessage) -> None:
+        self._insert(msg, static=False)
+
+    def _on_tf_static(self, msg: TFMessage) -> None:
+        self._insert(msg, static=True)
+
+    def _insert(self, msg: TFMessage, static: bool) -> None:
+        for item in msg.transforms:
+            try:
+                reset = self._buffer.set_transform(
+                    item.header.frame_id, item.child_frame_id, item.header.stamp.to_sec(), rigid_transform(item),
+                    static=static,
+                )
+            except ValueError as exc:
+                self._say.warning(f"bad:{item.header.frame_id}->{item.child_frame_id}", "ignored a transform: %s", exc)
+                continue
+            if reset:
+                self._log.warning(
+                    "transform %s -> %s went back in time to %.3f s (a reset?): cleared the tf history",
+                    item.header.frame_id, item.child_frame_id, item.header.stamp.to_sec(),
+                )
+
+    def _on_timer(self) -> None:
+        now_s = self._node.now()
+        if self._last_tick_s is not None and now_s < self._last_tick_s - CLOCK_RESET_S:
+            self._log.warning("clock jumped back to %.3f s (a reset?): cleared the tf history", now_s)
+            self._buffer.clear_dynamic()
+        self._last_tick_s = now_s
+        reference, target = self._params.reference_frame, self._params.target_frame
+        try:
+            transform = self._buffer.lookup(reference, target)
+        except TransformError as exc:
+            self._unavailable(f"no transform {reference} -> {target} yet: {exc}")
+            return
+        static_only = transform.stamp_s == 0.0
+        age_s = now_s - transform.stamp_s
+        limit_s = self._params.max_transform_age_s
+        if limit_s > 0.0 and not static_only and age_s > limit_s:
+            self._unavailable(
+                f"transform {reference} -> {target} is {age_s:.3f} s old (stamp {transform.stamp_s:.3f} s, clock "
+                f"{now_s:.3f} s), more than max_transform_age_s={limit_s:g}"
+                + ("" if self._node.use_sim_time else "; is use_sim_time needed?")
+            )
+            return
+        if not self._available:
+            self._available = True
+            self._log.info("transform %s -> %s available: publishing", reference, target)
+        self._publisher.publish(pose2d_message(transform))
+
+    def _unavailable(self, reason: str) -> None:
+        if self._available:
+            self._available = False
+            self._log.warning("%s; publishing nothing until it is back", reason)
+            return
+        self._say.info("unavailable", "%s; publishing nothing", reason)
+
+    def _on_clock_wait(self) -> None:
+        if self._node.clock_started:
+            assert self._clock_wait_timer is not None
+            self._clock_wait_timer.cancel()
+            return
+        self._log.warning("use_sim_time is set but no clock message has arrived yet: nothing is published")
+
+    def close(self) -> None:
+        self._timer.cancel()
+        if self._clock_wait_timer is not None:
+            self._clock_wait_timer.cancel()
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_service(
+        "pose",
+        Params,
+        PoseService,
+        argv,
+        description="Keeps a tf buffer and publishes the map -> target_frame pose as [x, y, yaw].",
+    )
