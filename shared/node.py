@@ -66,9 +66,11 @@ def sequence_number(attachment: zenoh.ZBytes | None) -> int | None:
 class QoS:
     """Delivery policy mapped onto Zenoh.
 
-    ``reliable``: Zenoh reliability; ``block``: congestion control BLOCK instead of DROP (never lose a
-    message, at the cost of stalling the sender); ``depth``: how many unprocessed messages a subscription
-    keeps (keep-last, the oldest are dropped); ``express``: send without batching.
+    Publisher side: ``reliable`` (Zenoh reliability), ``block`` (congestion control BLOCK instead of DROP:
+    never lose a message, at the cost of stalling the sender) and ``express`` (send without batching).
+    Subscriber side: ``depth``, how many unprocessed messages a subscription keeps (keep-last: the oldest
+    are dropped and counted). Zenoh decides reliability at the sender, so a subscription's ``reliable``
+    has no effect.
     """
 
     reliable: bool = True
