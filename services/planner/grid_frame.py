@@ -1,0 +1,88 @@
+"""Where a grid of square cells sits in the map frame, and conversions between metres and cells.
+
+The convention is ROS ``nav_msgs/OccupancyGrid``: ``origin`` is the pose of cell (0, 0)'s outer corner,
+cell ``(ix, iy)`` covers ``[ix, ix+1) x [iy, iy+1)`` cell widths from it along the origin's axes, and
+arrays are indexed ``array[iy, ix]`` (row-major, row 0 at the origin, so rows grow with y).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, slots=True)
+class GridFrame:
+    """Geometry of a ``height x width`` grid: resolution and the origin pose ``(x, y, yaw)``."""
+
+    resolution_m: float
+    origin: tuple[float, float, float]
+    width: int
+    height: int
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.resolution_m) and self.resolution_m > 0):
+            raise ValueError(f"resolution_m must be a positive number, got {self.resolution_m}")
+        if self.width < 0 or self.height < 0:
+            raise ValueError(f"grid size must be non-negative, got {self.width} x {self.height}")
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(height, width)``: the shape of arrays on this grid."""
+        return (self.height, self.width)
+
+    def _to_local(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        ox, oy, yaw = self.origin
+        dx, dy = x - ox, y - oy
+        if yaw == 0.0:
+            return dx, dy
+        c, s = math.cos(yaw), math.sin(yaw)
+        return c * dx + s * dy, -s * dx + c * dy
+
+    def world_to_grid(self, points_xy: np.ndarray) -> np.ndarray:
+        """Continuous grid coordinates (in cells, cell centres at ``i + 0.5``) of ``(N, 2)`` world points."""
+        pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
+        lx, ly = self._to_local(pts[:, 0], pts[:, 1])
+        return np.stack([lx, ly], axis=1) / self.resolution_m
+
+    def world_to_cells(self, points_xy: np.ndarray) -> np.ndarray:
+        """Integer ``(ix, iy)`` of the cells holding ``(N, 2)`` world points; may lie outside the grid."""
+        # A tiny epsilon keeps points that sit exactly on a cell edge (up to rounding) in the upper cell.
+        return np.floor(self.world_to_grid(points_xy) + 1e-9).astype(np.int64)
+
+    def world_to_cell(self, x: float, y: float) -> tuple[int, int]:
+        """``(ix, iy)`` of the cell holding world point ``(x, y)``; may lie outside the grid."""
+        ix, iy = self.world_to_cells(np.array([[x, y]]))[0]
+        return int(ix), int(iy)
+
+    def cells_to_world(self, cells_ixy: np.ndarray) -> np.ndarray:
+        """World ``(x, y)`` of the centres of ``(N, 2)`` integer cells ``(ix, iy)``."""
+        cells = np.asarray(cells_ixy, dtype=float).reshape(-1, 2)
+        lx = (cells[:, 0] + 0.5) * self.resolution_m
+        ly = (cells[:, 1] + 0.5) * self.resolution_m
+        ox, oy, yaw = self.origin
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.stack([ox + c * lx - s * ly, oy + s * lx + c * ly], axis=1)
+
+    def cell_to_world(self, ix: int, iy: int) -> tuple[float, float]:
+        """World ``(x, y)`` of the centre of cell ``(ix, iy)``."""
+        x, y = self.cells_to_world(np.array([[ix, iy]]))[0]
+        return float(x), float(y)
+
+    def in_bounds(self, ix: int, iy: int) -> bool:
+        return 0 <= ix < self.width and 0 <= iy < self.height
+
+    def cells_in_bounds(self, cells_ixy: np.ndarray) -> np.ndarray:
+        """Boolean mask of the ``(N, 2)`` cells that lie on the grid."""
+        cells = np.asarray(cells_ixy).reshape(-1, 2)
+        return (
+            (cells[:, 0] >= 0) & (cells[:, 0] < self.width) & (cells[:, 1] >= 0) & (cells[:, 1] < self.height)
+        )
+
+    def cell_centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """World x and y of every cell centre, each shaped ``(height, width)``."""
+        iy, ix = np.mgrid[0 : self.height, 0 : self.width]
+        xy = self.cells_to_world(np.stack([ix.ravel(), iy.ravel()], axis=1))
+        return xy[:, 0].reshape(self.shape), xy[:, 1].reshape(self.shape)
