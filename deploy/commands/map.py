@@ -22,9 +22,13 @@ def _safe_stem(name: str) -> str:
 
 
 def save_world_map(
-    world_file: str | Path, output_dir: str | Path, resolution_m: float, padding_m: float
+    world_file: str | Path, output: str | Path, resolution_m: float, padding_m: float
 ) -> tuple[Path, Path]:
-    """Rasterise ``world_file`` and write the map; returns ``(yaml_path, pgm_path)``."""
+    """Rasterise ``world_file`` and write the map; returns ``(yaml_path, pgm_path)``.
+
+    ``output`` is a directory (the map is named after the world) or a ``.yaml`` file path (a fixed name,
+    so a stack file can point the planner at it whatever the world is).
+    """
     from services.planner.occupancy_map import save_map  # noqa: PLC0415 - keep CLI start-up light
     from services.planner.rasterize import map_from_world  # noqa: PLC0415
     from shared.world import load_world  # noqa: PLC0415
@@ -35,7 +39,10 @@ def save_world_map(
         raise ConfigError(f"--padding must be a non-negative number of metres, got {padding_m}")
     world = load_world(world_file)
     occupancy = map_from_world(world, resolution_m=resolution_m, padding_m=padding_m)
-    return save_map(occupancy, Path(output_dir) / f"{_safe_stem(world.name)}.yaml")
+    target = Path(output)
+    if target.suffix not in (".yaml", ".yml"):
+        target = target / f"{_safe_stem(world.name)}.yaml"
+    return save_map(occupancy, target)
 
 
 def _save(args: argparse.Namespace) -> int:
@@ -56,9 +63,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("map", help="occupancy maps (map_server YAML + PGM)")
     verbs = parser.add_subparsers(dest="map_command", metavar="VERB")
     verbs.required = True
-    save = verbs.add_parser("save", help="rasterise a world file into <DIR>/<world>.yaml and .pgm")
+    save = verbs.add_parser("save", help="rasterise a world file into <DIR>/<world>.yaml and .pgm (or FILE.yaml)")
     save.add_argument("--world", required=True, help="world file (deploy/worlds/*.yaml)")
-    save.add_argument("-o", "--output", default=".", metavar="DIR", help="output directory (default: .)")
+    save.add_argument("-o", "--output", default=".", metavar="DIR|FILE.yaml",
+                      help="output directory, or the map's .yaml path (default: .)")
     save.add_argument("--resolution", type=float, default=0.05, help="metres per cell (default: 0.05)")
     save.add_argument(
         "--padding",

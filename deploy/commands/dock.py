@@ -1,0 +1,252 @@
+"""``zendock dock [DOCK_ID]`` and ``zendock undock``: the docking service's actions from the command line.
+
+Both send one goal to the docking service (``dock_robot`` / ``undock_robot`` in ``--namespace``), print
+each change of the feedback as it comes (time on the service's clock, state, retries) and the result,
+and exit 0 on success, 1 on failure or when no docking service answers, 130 when interrupted (the goal
+is cancelled first: the robot stops). Endpoints come from ``--connect`` (repeatable), else
+``ZENDOCK_CONNECT``, else ``ZENOH_CONNECT``, else the default router; the namespace from
+``--namespace``, else ``ZENDOCK_NAMESPACE``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import threading
+from collections.abc import Callable
+from typing import Any, TextIO
+
+import zenoh
+
+from shared import topics
+from shared.action import ActionClient, ActionType, ClientGoal, GoalStatusCode, spin_in_background
+from shared.config_errors import ConfigError
+from shared.geometry import Pose2D
+from shared.interfaces.docking import (
+    DOCK_ROBOT,
+    UNDOCK_ROBOT,
+    DockRobotFeedback,
+    DockRobotGoal,
+    DockRobotResult,
+    UndockRobotGoal,
+)
+from shared.messages import Header, Pose, PoseStamped
+from shared.names import normalise_namespace
+from shared.node import Node
+from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+
+EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130
+ENV_CONNECT = ("ZENDOCK_CONNECT", "ZENOH_CONNECT")
+
+
+def _constant_names(cls: type, exclude: tuple[str, ...] = ()) -> dict[int, str]:
+    return {v: k for k, v in vars(cls).items() if k.isupper() and isinstance(v, int) and k not in exclude}
+
+
+#: Feedback ``state`` and result ``error_code`` values by name, from the interface's constants.
+STATE_NAMES = _constant_names(DockRobotFeedback)
+ERROR_NAMES = _constant_names(DockRobotResult)
+
+
+def endpoints(flags: list[str] | None) -> tuple[str, ...]:
+    if flags:
+        return tuple(flags)
+    for name in ENV_CONNECT:
+        found = [e.strip() for e in os.environ.get(name, "").split(",") if e.strip()]
+        if found:
+            return tuple(found)
+    return (DEFAULT_ROUTER_ENDPOINT,)
+
+
+class RouterUnreachable(Exception):
+    """No Zenoh router answered at the endpoints within the connect timeout."""
+
+
+def _session(args: argparse.Namespace) -> zenoh.Session:
+    spec = SessionSpec(
+        mode="client",
+        connect=endpoints(args.connect),
+        overrides=(("connect/timeout_ms", json.dumps(int(args.connect_timeout * 1000))),
+                   ("connect/exit_on_failure", "true")),
+    )
+    try:
+        return open_session(spec)
+    except zenoh.ZError as exc:
+        detail = str(exc).split(" at /")[0]
+        raise RouterUnreachable(f"cannot reach a Zenoh router at {', '.join(spec.connect)} ({detail}); "
+                                "is the stack up?") from None
+
+
+def _namespace(args: argparse.Namespace) -> str:
+    raw = os.environ.get("ZENDOCK_NAMESPACE", "") if args.namespace is None else args.namespace
+    try:
+        return normalise_namespace(raw)
+    except ValueError as exc:
+        raise ConfigError(f"--namespace: {exc}") from None
+
+
+def describe_dock_feedback(feedback: DockRobotFeedback) -> tuple[object, str]:
+    """What changed (state, retries) and the line to print for it."""
+    state = STATE_NAMES.get(feedback.state, str(feedback.state))
+    retries = f"  (retry {feedback.num_retries})" if feedback.num_retries else ""
+    return (feedback.state, feedback.num_retries), f"{feedback.docking_time.to_sec():7.1f} s  {state}{retries}"
+
+
+def run_action(
+    session: zenoh.Session,
+    namespace: str,
+    action: ActionType[Any, Any, Any],
+    action_name: str,
+    goal: Any,
+    out: TextIO,
+    *,
+    describe_feedback: Callable[[Any], tuple[object, str]] | None = None,
+    server_timeout_s: float = 10.0,
+    timeout_s: float | None = None,
+) -> tuple[int, ClientGoal[Any, Any] | None]:
+    """Send ``goal``, print feedback changes, wait for the result; returns the exit code and the goal.
+
+    ``describe_feedback`` turns a feedback message into ``(what changed, line)``; a line is printed when
+    what changed differs from the previous message's.
+    """
+    node = Node("zendock_cli", session, namespace)
+    thread = spin_in_background(node)
+    client: ActionClient[Any, Any, Any] = ActionClient(node, action, action_name)
+    try:
+        if not client.server_ready(timeout_s=server_timeout_s):
+            where = f"namespace {namespace!r}" if namespace else "the root namespace"
+            print(f"no {action_name} server in {where} (is the docking service running?)", file=sys.stderr)
+            return EXIT_FAILED, None
+        done = threading.Event()
+        previous: list[object] = []
+
+        def on_feedback(feedback: Any) -> None:
+            if describe_feedback is None:
+                return
+            change, line = describe_feedback(feedback)
+            if not previous or previous[-1] != change:
+                previous.append(change)
+                print(line, file=out, flush=True)
+
+        handle = client.send_goal(goal, on_feedback=on_feedback, on_done=lambda _h: done.set())
+        try:
+            finished = done.wait(timeout_s) if timeout_s is not None else _wait_forever(done)
+        except KeyboardInterrupt:
+            print("interrupted: cancelling", file=sys.stderr)
+            client.cancel_goal(handle)
+            done.wait(5.0)
+            return EXIT_INTERRUPTED, handle
+        if not finished:
+            print(f"no result within {timeout_s:g} s: cancelling", file=sys.stderr)
+            client.cancel_goal(handle)
+            done.wait(5.0)
+            return EXIT_FAILED, handle
+        return (EXIT_OK if _succeeded(handle) else EXIT_FAILED), handle
+    finally:
+        node.shutdown()
+        thread.join(5.0)
+        node.close()
+
+
+def _wait_forever(event: threading.Event) -> bool:
+    while not event.wait(0.2):  # short waits keep Ctrl-C responsive
+        pass
+    return True
+
+
+def _succeeded(handle: ClientGoal[Any, Any]) -> bool:
+    return handle.status == GoalStatusCode.SUCCEEDED and handle.result is not None and bool(handle.result.success)
+
+
+def _outcome(handle: ClientGoal[Any, Any]) -> str:
+    if handle.accepted is False:
+        return f"rejected: {handle.rejection}"
+    if handle.error:
+        return f"failed: {handle.error}"
+    result = handle.result
+    code = getattr(result, "error_code", 0)
+    detail = f" (error {code} {ERROR_NAMES.get(code, '')})".rstrip() if code else ""
+    return f"{handle.status.name.lower()}{detail}"
+
+
+def dock_main(args: argparse.Namespace) -> int:
+    namespace = _namespace(args)
+    goal = DockRobotGoal(
+        use_dock_id=args.pose is None,
+        dock_id=args.dock_id or "",
+        navigate_to_staging_pose=not args.no_staging,
+        max_staging_time=args.max_staging_time,
+    )
+    if args.pose is not None:
+        if not all(math.isfinite(v) for v in args.pose):
+            raise ConfigError(f"--pose: expected three finite numbers, got {args.pose}")
+        goal.dock_pose = PoseStamped(Header(frame_id=topics.MAP_FRAME), Pose.from_pose2d(Pose2D.from_seq(args.pose)))
+    target = f"dock {args.dock_id!r}" if args.dock_id else ("the given pose" if args.pose else "the nearest dock")
+    print(f"docking at {target}", flush=True)
+    try:
+        with _session(args) as session:
+            code, handle = run_action(session, namespace, DOCK_ROBOT, topics.DOCK_ROBOT, goal, sys.stdout,
+                                      describe_feedback=describe_dock_feedback, server_timeout_s=args.server_timeout,
+                                      timeout_s=args.timeout)
+    except RouterUnreachable as exc:
+        print(f"zendock dock: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    if handle is not None:
+        retries = getattr(handle.result, "num_retries", 0)
+        suffix = f" after {retries} retr{'y' if retries == 1 else 'ies'}" if retries else ""
+        print(("docked" if code == EXIT_OK else f"docking {_outcome(handle)}") + suffix, flush=True)
+    return code
+
+
+def undock_main(args: argparse.Namespace) -> int:
+    namespace = _namespace(args)
+    goal = UndockRobotGoal(dock_type=args.dock_type, max_undocking_time=args.max_undocking_time)
+    print("undocking", flush=True)
+    try:
+        with _session(args) as session:
+            code, handle = run_action(session, namespace, UNDOCK_ROBOT, topics.UNDOCK_ROBOT, goal, sys.stdout,
+                                      server_timeout_s=args.server_timeout, timeout_s=args.timeout)
+    except RouterUnreachable as exc:
+        print(f"zendock undock: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    if handle is not None:
+        print("undocked" if code == EXIT_OK else f"undocking {_outcome(handle)}", flush=True)
+    return code
+
+
+def _bus_flags(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("bus")
+    group.add_argument("--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)")
+    group.add_argument("--connect", action="append", metavar="ENDPOINT",
+                       help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
+                            f"default {DEFAULT_ROUTER_ENDPOINT})")
+    group.add_argument("--connect-timeout", type=float, default=3.0, metavar="S",
+                       help="give up reaching the router after S seconds (default 3)")
+    group.add_argument("--server-timeout", type=float, default=10.0, metavar="S",
+                       help="wait this long for the docking service to answer (default 10)")
+    group.add_argument("--timeout", type=float, default=None, metavar="S",
+                       help="cancel and fail if there is no result after S wall seconds (default: wait)")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    dock = subparsers.add_parser("dock", help="dock the robot (dock_robot action); exit 0 once charging",
+                                 description="Send a dock_robot goal, print its feedback, exit 0 on success.")
+    dock.add_argument("dock_id", nargs="?", default="", metavar="DOCK_ID", help="dock id (default: the nearest dock)")
+    dock.add_argument("--pose", type=float, nargs=3, metavar=("X", "Y", "YAW"),
+                      help="dock at this map pose instead of a database dock")
+    dock.add_argument("--no-staging", action="store_true",
+                      help="the robot is already at the staging pose: skip the planner")
+    dock.add_argument("--max-staging-time", type=float, default=1000.0, metavar="S",
+                      help="time limit to reach the staging pose, seconds (default 1000)")
+    _bus_flags(dock)
+    dock.set_defaults(func=dock_main)
+    undock = subparsers.add_parser("undock", help="undock the robot (undock_robot action); exit 0 once off the dock",
+                                   description="Send an undock_robot goal, exit 0 on success.")
+    undock.add_argument("--dock-type", default="", help="dock type (default: any)")
+    undock.add_argument("--max-undocking-time", type=float, default=30.0, metavar="S",
+                        help="time limit to back off the dock, seconds (default 30)")
+    _bus_flags(undock)
+    undock.set_defaults(func=undock_main)

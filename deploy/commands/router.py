@@ -1,0 +1,66 @@
+"""``zendock router``: an embedded Zenoh router, so a stack needs nothing installed beyond PyPI.
+
+It listens on loopback by default, never scouts by multicast, prints one line once it is listening and
+exits 0 on SIGINT or SIGTERM after closing its session (the launcher stops services that way).
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from collections.abc import Sequence
+
+from shared.config_errors import ConfigError
+from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+
+
+def router_spec(listen: Sequence[str], config_file: str | None) -> SessionSpec:
+    """Listen endpoints win over the config file's; with neither, listen on the default loopback endpoint."""
+    if not listen and not config_file:
+        listen = (DEFAULT_ROUTER_ENDPOINT,)
+    return SessionSpec(mode="router", connect=(), listen=tuple(listen), config_file=config_file)
+
+
+def run_router(spec: SessionSpec, stop: threading.Event) -> int:
+    """Serve until ``stop`` is set; the session is closed on the way out."""
+    try:
+        session = open_session(spec)
+    except ValueError as exc:  # a missing config file or a bad mode
+        raise ConfigError(str(exc)) from exc
+    except Exception as exc:  # zenoh.ZError: the endpoint is taken or malformed
+        print(f"zendock router: cannot start: {exc}", file=sys.stderr, flush=True)
+        return 1
+    with session:
+        where = ", ".join(spec.listen) if spec.listen else f"the endpoints of {spec.config_file}"
+        print(f"zendock router: listening on {where} (zid {session.info.zid()})", flush=True)
+        stop.wait()
+    return 0
+
+
+def main(args: argparse.Namespace) -> int:
+    stop = threading.Event()
+
+    def request_stop(_signum: int, _frame: object) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGINT, request_stop)
+    signal.signal(signal.SIGTERM, request_stop)
+    return run_router(router_spec(args.listen or (), args.config), stop)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "router",
+        help="run an embedded Zenoh router",
+        description="Run an embedded Zenoh router (multicast scouting off). Exits 0 on SIGINT/SIGTERM.",
+    )
+    parser.add_argument(
+        "--listen",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"endpoint to listen on, repeatable (default {DEFAULT_ROUTER_ENDPOINT}, or the config file's)",
+    )
+    parser.add_argument("--config", metavar="FILE", help="a Zenoh json5 config file (e.g. deploy/zenoh/router.json5)")
+    parser.set_defaults(func=main)

@@ -1,0 +1,121 @@
+"""Health checks: liveliness tokens seen by one Zenoh client session, and exec tests.
+
+A zendock service declares ``node_token_key(namespace, node)`` once it is ready, so "the token is alive"
+is the readiness probe, and a crashed service's token disappears with its session. Zenoh runs callbacks on
+its own threads: events are handed to the asyncio loop with ``call_soon_threadsafe``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import zenoh
+
+from shared.names import GRAPH_PREFIX
+from shared.session import SessionSpec, open_session
+
+NODE_TOKENS = f"{GRAPH_PREFIX}/node/**"
+_OPEN_ATTEMPT_MS = 1000
+
+
+class LivelinessWatcher:
+    """Tracks which node tokens are alive, and since when (monotonic time of the last PUT).
+
+    The session is opened on a background thread, retrying until the router answers, so the supervisor
+    can start the router itself. ``on_change`` runs on the event loop after every token event.
+    """
+
+    def __init__(self, connect: Sequence[str], loop: asyncio.AbstractEventLoop, on_change: Callable[[], None]) -> None:
+        self._spec = SessionSpec(
+            mode="client",
+            connect=tuple(connect),
+            overrides=(("connect/timeout_ms", str(_OPEN_ATTEMPT_MS)), ("connect/exit_on_failure", "true")),
+        )
+        self._loop = loop
+        self._on_change = on_change
+        self._alive_since: dict[str, float] = {}
+        self._closing = threading.Event()
+        self._lock = threading.Lock()
+        self._session: zenoh.Session | None = None
+        self._subscriber: zenoh.Subscriber | None = None
+        self.connected = threading.Event()
+        self._thread = threading.Thread(target=self._connect, name="zendock-liveliness", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def alive_since(self, key: str) -> float | None:
+        return self._alive_since.get(key)
+
+    def _connect(self) -> None:
+        while not self._closing.is_set():
+            try:
+                session = open_session(self._spec)
+            except Exception:  # zenoh.ZError: no router yet
+                self._closing.wait(0.2)
+                continue
+            with self._lock:
+                if self._closing.is_set():
+                    session.close()
+                    return
+                self._session = session
+                self._subscriber = session.liveliness().declare_subscriber(NODE_TOKENS, self._on_sample, history=True)
+            self.connected.set()
+            return
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        alive = sample.kind == zenoh.SampleKind.PUT
+        with contextlib.suppress(RuntimeError):  # the loop is closed: the supervisor is gone
+            self._loop.call_soon_threadsafe(self._apply, str(sample.key_expr), alive, time.monotonic())
+
+    def _apply(self, key: str, alive: bool, when: float) -> None:
+        if alive:
+            self._alive_since[key] = when
+        else:
+            self._alive_since.pop(key, None)
+        self._on_change()
+
+    def close(self) -> None:
+        """Blocking (run it off the loop): undeclare and close the session."""
+        self._closing.set()
+        with self._lock:
+            session, subscriber = self._session, self._subscriber
+            self._session = self._subscriber = None
+        if subscriber is not None:
+            with contextlib.suppress(Exception):
+                subscriber.undeclare()
+        if session is not None:
+            with contextlib.suppress(Exception):
+                session.close()
+
+
+async def run_check(argv: Sequence[str], *, cwd: Path, env: dict[str, str], timeout_s: float) -> bool:
+    """One exec health test: True when it exits 0 within ``timeout_s`` (its whole group is killed otherwise)."""
+    try:
+        proc = await asyncio.create_subprocess_exec(
+            *argv,
+            cwd=str(cwd),
+            env=env,
+            stdin=asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.DEVNULL,
+            stderr=asyncio.subprocess.DEVNULL,
+            start_new_session=True,
+        )
+    except OSError:
+        return False
+    try:
+        return await asyncio.wait_for(proc.wait(), timeout_s) == 0
+    except TimeoutError:
+        return False
+    finally:
+        if proc.returncode is None:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            await proc.wait()

@@ -1,0 +1,153 @@
+"""Per-service log files on disk: timestamped lines, rotated by size, read back by ``zendock logs``.
+
+Each line is ``<UTC timestamp> <text>``; the timestamp lets ``logs`` interleave several services in the
+order things happened. ``name.log`` is the newest file, then ``name.log.1`` ... ``name.log.<backups>``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TextIO
+
+DEFAULT_MAX_BYTES = 5 * 1024 * 1024
+DEFAULT_BACKUPS = 3
+_LINE_RE = re.compile(r"^(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z) (.*)$")
+
+
+def utc_stamp(epoch_s: float | None = None) -> str:
+    moment = datetime.fromtimestamp(time.time() if epoch_s is None else epoch_s, tz=UTC)
+    return moment.strftime("%Y-%m-%dT%H:%M:%S.") + f"{moment.microsecond // 1000:03d}Z"
+
+
+class RotatingLog:
+    """Append-only line log that rolls over to ``.1`` once it exceeds ``max_bytes``."""
+
+    def __init__(self, path: Path, max_bytes: int = DEFAULT_MAX_BYTES, backups: int = DEFAULT_BACKUPS) -> None:
+        self.path = path
+        self.max_bytes = max_bytes
+        self.backups = backups
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = path.open("a", encoding="utf-8")
+
+    def rotate(self) -> None:
+        """Shift ``name.log`` to ``name.log.1`` (and so on), dropping the oldest, and start a new file."""
+        self._file.close()
+        for index in range(self.backups, 0, -1):
+            older = self.path.with_name(f"{self.path.name}.{index}")
+            newer = self.path.with_name(f"{self.path.name}.{index - 1}") if index > 1 else self.path
+            if newer.exists():
+                os.replace(newer, older)
+        if self.backups == 0:
+            self.path.unlink(missing_ok=True)
+        self._file = self.path.open("a", encoding="utf-8")
+
+    def write(self, text: str) -> None:
+        self._file.write(f"{utc_stamp()} {text}\n")
+        self._file.flush()
+        if self._file.tell() >= self.max_bytes:
+            self.rotate()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+@dataclass(frozen=True)
+class LogLine:
+    service: str
+    stamp: str
+    text: str
+
+
+def parse_line(service: str, raw: str) -> LogLine:
+    match = _LINE_RE.match(raw)
+    if match is None:
+        return LogLine(service, "", raw)
+    return LogLine(service, match.group(1), match.group(2))
+
+
+def log_files(log_dir: Path, service: str) -> list[Path]:
+    """Oldest first."""
+    base = log_dir / f"{service}.log"
+    rotated = sorted(
+        (p for p in log_dir.glob(f"{service}.log.*") if p.suffix[1:].isdigit()),
+        key=lambda p: int(p.suffix[1:]),
+        reverse=True,
+    )
+    return [*rotated, *([base] if base.exists() else [])]
+
+
+def tail(log_dir: Path, service: str, count: int | None) -> list[LogLine]:
+    """The last ``count`` lines of a service (all when ``None``), across rotated files."""
+    lines: deque[LogLine] = deque(maxlen=count) if count is not None else deque()
+    if count == 0:
+        return []
+    for path in log_files(log_dir, service):
+        with path.open(encoding="utf-8", errors="replace") as handle:
+            for raw in handle:
+                lines.append(parse_line(service, raw.rstrip("\n")))
+    return list(lines)
+
+
+def merge_by_time(per_service: list[list[LogLine]]) -> list[LogLine]:
+    """Interleave several services' lines by timestamp (stable within a service)."""
+    tagged = [(line.stamp, index, order, line) for index, lines in enumerate(per_service) for order, line in enumerate(lines)]
+    return [item[3] for item in sorted(tagged, key=lambda item: (item[0], item[1], item[2]))]
+
+
+class Follower:
+    """New lines of one service's log as they are written, surviving rotation (the file is re-opened)."""
+
+    def __init__(self, log_dir: Path, service: str) -> None:
+        self.path = log_dir / f"{service}.log"
+        self.service = service
+        self._handle: TextIO | None = None
+        self._inode: int | None = None
+        self._partial = ""
+        self._open(at_end=True)
+
+    def _open(self, at_end: bool) -> None:
+        try:
+            handle = self.path.open(encoding="utf-8", errors="replace")
+        except FileNotFoundError:
+            return
+        if at_end:
+            handle.seek(0, os.SEEK_END)
+        self._handle = handle
+        self._inode = os.fstat(handle.fileno()).st_ino
+
+    def poll(self) -> Iterator[LogLine]:
+        if self._handle is None:
+            self._open(at_end=False)
+            if self._handle is None:
+                return
+        yield from self._drain()
+        try:
+            current = os.stat(self.path).st_ino
+        except FileNotFoundError:
+            return
+        if current != self._inode:
+            self._handle.close()
+            self._handle = None
+            self._open(at_end=False)
+            yield from self._drain()
+
+    def _drain(self) -> Iterator[LogLine]:
+        assert self._handle is not None
+        chunk = self._handle.read()
+        if not chunk:
+            return
+        text = self._partial + chunk
+        *complete, self._partial = text.split("\n")
+        for raw in complete:
+            yield parse_line(self.service, raw)
+
+    def close(self) -> None:
+        if self._handle is not None:
+            self._handle.close()

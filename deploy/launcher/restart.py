@@ -1,0 +1,63 @@
+"""Restart policies and the exponential backoff between restarts (the rules ``ps`` shows the effect of)."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+RESTART_MODES = ("no", "always", "on-failure", "unless-stopped")
+_POLICY_RE = re.compile(r"^(no|always|unless-stopped|on-failure)(?::(\d+))?$")
+
+
+@dataclass(frozen=True)
+class RestartPolicy:
+    """When a service that exited by itself is started again.
+
+    ``always`` and ``unless-stopped`` restart after any exit; ``on-failure`` after a non-zero exit (a
+    signal counts as a failure), at most ``max_retries`` times in a row when given. A service stopped by the
+    user (``stop``, ``down``) is never restarted, whatever the policy.
+    """
+
+    mode: str = "no"
+    max_retries: int | None = None
+
+    def should_restart(self, exit_code: int, consecutive_restarts: int) -> bool:
+        if self.mode in ("always", "unless-stopped"):
+            return True
+        if self.mode == "on-failure" and exit_code != 0:
+            return self.max_retries is None or consecutive_restarts < self.max_retries
+        return False
+
+    def __str__(self) -> str:
+        return f"{self.mode}:{self.max_retries}" if self.max_retries is not None else self.mode
+
+
+def parse_restart_policy(value: object) -> RestartPolicy:
+    """``no`` | ``always`` | ``on-failure[:max]`` | ``unless-stopped``; YAML's bare ``no`` (False) is ``no``."""
+    if value is False:
+        return RestartPolicy("no")
+    if isinstance(value, RestartPolicy):
+        return value
+    match = _POLICY_RE.match(value) if isinstance(value, str) else None
+    if match is None:
+        raise ValueError(f"expected one of no, always, on-failure[:max], unless-stopped; got {value!r}")
+    mode, retries = match.group(1), match.group(2)
+    if retries is not None and mode != "on-failure":
+        raise ValueError(f"only on-failure takes a maximum, got {value!r}")
+    return RestartPolicy(mode, int(retries) if retries is not None else None)
+
+
+@dataclass(frozen=True)
+class Backoff:
+    """Exponential delay before restart n (0-based) of a streak: ``initial_s * 2**n``, capped at ``max_s``.
+
+    A run that lasted ``reset_after_s`` or longer ends the streak, so a service that crashes once a day
+    restarts quickly while one that crashes at start-up settles at one attempt every ``max_s``.
+    """
+
+    initial_s: float = 0.5
+    max_s: float = 10.0
+    reset_after_s: float = 10.0
+
+    def delay_s(self, consecutive_restarts: int) -> float:
+        return min(self.max_s, self.initial_s * 2.0 ** min(consecutive_restarts, 32))

@@ -1,0 +1,402 @@
+"""The stack file: a Compose-like YAML description of the services to run, strictly validated.
+
+Validation happens once, here: unknown keys and bad values are :class:`ConfigError`\\ s whose lines read
+``FILE: services.planner.restart: reason``. Keys starting with ``x-`` are extensions and are ignored,
+at the top level and in a service, as in Compose.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from deploy.launcher.durations import format_duration, parse_duration
+from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
+from deploy.launcher.interpolation import InterpolationError, interpolate_tree, parse_env_file
+from deploy.launcher.restart import RestartPolicy, parse_restart_policy
+from shared.config_errors import ConfigError, format_validation_error
+from shared.names import normalise_namespace
+from shared.session import DEFAULT_ROUTER_ENDPOINT
+
+DEFAULT_CONNECT = f"${{ZENOH_CONNECT:-{DEFAULT_ROUTER_ENDPOINT}}}"
+DEFAULT_STOP_GRACE_S = 5.0
+DEFAULT_LIVELINESS_TIMEOUT_S = 30.0
+DEFAULT_CHECK_TIMEOUT_S = 5.0
+Condition = Literal["service_started", "service_healthy", "service_completed_successfully"]
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+Duration = Annotated[float, BeforeValidator(parse_duration)]
+Restart = Annotated[RestartPolicy, BeforeValidator(parse_restart_policy)]
+
+
+def _drop_extensions(data: Any) -> Any:
+    if isinstance(data, dict):
+        return {key: value for key, value in data.items() if not (isinstance(key, str) and key.startswith("x-"))}
+    return data
+
+
+def _as_text(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (str, int, float)):
+        return str(value)
+    raise ValueError(f"expected text or a number, got {value!r}")
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Dependency(_Strict):
+    condition: Condition = "service_started"
+
+
+class Healthcheck(_Strict):
+    """Healthy when the service's liveliness token is up and/or an exec test passes.
+
+    ``liveliness: true`` watches the token of the node named like the service (a string names the node);
+    ``timeout`` is then how long the service has to declare it before it counts as unhealthy. ``test``
+    runs a command every ``interval`` (``timeout`` per run); ``retries`` failures in a row make it unhealthy.
+    """
+
+    liveliness: bool | str = False
+    test: list[str] | str | None = None
+    interval: Duration = 2.0
+    timeout: Duration | None = None
+    retries: int = Field(default=3, ge=1)
+    start_period: Duration = 0.0
+    disable: bool = False
+
+    @field_validator("test", mode="before")
+    @classmethod
+    def _test_words(cls, value: Any) -> Any:
+        if isinstance(value, list):
+            return [_as_text(word) for word in value]
+        return value
+
+    @model_validator(mode="after")
+    def _has_a_check(self) -> Healthcheck:
+        if not self.disable and not self.liveliness and not self.test:
+            raise ValueError("give liveliness: true or a test command (or disable: true)")
+        if isinstance(self.liveliness, str) and not _NAME_RE.match(self.liveliness):
+            raise ValueError(f"liveliness: {self.liveliness!r} is not a node name")
+        return self
+
+    @property
+    def enabled(self) -> bool:
+        return not self.disable and bool(self.liveliness or self.test)
+
+
+class ServiceSpec(_Strict):
+    """One service of the stack; keys and meanings follow the Compose specification."""
+
+    command: list[str]
+    working_dir: str | None = None
+    environment: dict[str, str | None] = Field(default_factory=dict)
+    depends_on: dict[str, Dependency] = Field(default_factory=dict)
+    restart: Restart = RestartPolicy("no")
+    healthcheck: Healthcheck | None = None
+    profiles: list[str] = Field(default_factory=list)
+    stop_grace_period: Duration = DEFAULT_STOP_GRACE_S
+    namespace: str | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _strip_extensions(cls, data: Any) -> Any:
+        return _drop_extensions(data)
+
+    @field_validator("command", mode="before")
+    @classmethod
+    def _command_words(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            value = shlex.split(value)
+        if isinstance(value, list):
+            if not value:
+                raise ValueError("command is empty")
+            return [_as_text(word) for word in value]
+        return value
+
+    @field_validator("environment", mode="before")
+    @classmethod
+    def _environment_map(cls, value: Any) -> Any:
+        if isinstance(value, list):
+            pairs: dict[str, str | None] = {}
+            for item in value:
+                key, sep, text = _as_text(item).partition("=")
+                pairs[key] = text if sep else None
+            return pairs
+        if isinstance(value, dict):
+            return {str(key): None if text is None else _as_text(text) for key, text in value.items()}
+        return value
+
+    @field_validator("depends_on", mode="before")
+    @classmethod
+    def _depends_on_map(cls, value: Any) -> Any:
+        if isinstance(value, list):
+            return {_as_text(name): {} for name in value}
+        if isinstance(value, dict):
+            return {name: {} if spec is None else spec for name, spec in value.items()}
+        return value
+
+    @field_validator("namespace")
+    @classmethod
+    def _namespace_chars(cls, value: str | None) -> str | None:
+        if value is not None:
+            normalise_namespace(value)
+        return value
+
+
+class ZenohSettings(_Strict):
+    """Where services and the launcher's health checker connect (``ZENDOCK_CONNECT`` of every service)."""
+
+    connect: list[str] = Field(default_factory=lambda: [DEFAULT_ROUTER_ENDPOINT])
+
+    @field_validator("connect")
+    @classmethod
+    def _split_endpoints(cls, value: list[str]) -> list[str]:
+        endpoints = [part.strip() for item in value for part in item.split(",") if part.strip()]
+        if not endpoints:
+            raise ValueError("give at least one endpoint, e.g. tcp/127.0.0.1:7447")
+        return endpoints
+
+
+class StackFile(_Strict):
+    name: str | None = None
+    namespace: str = ""
+    zenoh: ZenohSettings = Field(default_factory=ZenohSettings)
+    services: dict[str, ServiceSpec] = Field(min_length=1)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _strip_extensions(cls, data: Any) -> Any:
+        return _drop_extensions(data)
+
+    @field_validator("name")
+    @classmethod
+    def _project_name(cls, value: str | None) -> str | None:
+        if value is not None and not _NAME_RE.match(value):
+            raise ValueError("use letters, digits, '_', '-' and '.', starting with a letter or digit")
+        return value
+
+    @field_validator("namespace")
+    @classmethod
+    def _namespace_chars(cls, value: str) -> str:
+        return normalise_namespace(value)
+
+
+def join_namespace(stack_namespace: str, service_namespace: str | None) -> str:
+    """A service's namespace is relative to the stack's unless it starts with ``/``."""
+    if service_namespace is None:
+        return normalise_namespace(stack_namespace)
+    if service_namespace.startswith("/"):
+        return normalise_namespace(service_namespace)
+    return normalise_namespace(f"{stack_namespace}/{service_namespace}")
+
+
+@dataclass(frozen=True)
+class Stack:
+    """A validated, interpolated stack file, ready to plan a launch from."""
+
+    source: Path
+    project_name: str
+    namespace: str
+    connect: tuple[str, ...]
+    services: Mapping[str, ServiceSpec]
+    #: The variables interpolation used (shell environment over ``.env``), for ``KEY:`` pass-throughs.
+    variables: Mapping[str, str] = field(default_factory=dict, repr=False)
+
+    @property
+    def profiles(self) -> list[str]:
+        return sorted({profile for spec in self.services.values() for profile in spec.profiles})
+
+    def dependencies(self) -> dict[str, list[str]]:
+        return {name: list(spec.depends_on) for name, spec in self.services.items()}
+
+    def select(self, names: Iterable[str] = (), profiles: Iterable[str] = ()) -> list[str]:
+        """The services ``up`` starts, in dependency order.
+
+        Named services are started whatever their profiles; without names, every service with no profile
+        or an active one. Dependencies are pulled in either way.
+        """
+        wanted = list(names)
+        unknown = [name for name in wanted if name not in self.services]
+        if unknown:
+            raise ConfigError(f"{self.source}: no such service: {', '.join(unknown)}")
+        active = set(profiles)
+        if not wanted:
+            wanted = [
+                name
+                for name, spec in self.services.items()
+                if not spec.profiles or active.intersection(spec.profiles)
+            ]
+        selected = with_dependencies(wanted, self.dependencies())
+        return [name for name in dependency_order(self.dependencies()) if name in selected]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The normalised stack, as ``zendock config`` prints it."""
+        services: dict[str, Any] = {}
+        for name, spec in self.services.items():
+            entry: dict[str, Any] = {"command": list(spec.command)}
+            if spec.working_dir is not None:
+                entry["working_dir"] = spec.working_dir
+            if spec.namespace is not None:
+                entry["namespace"] = spec.namespace
+            if spec.environment:
+                entry["environment"] = dict(spec.environment)
+            if spec.depends_on:
+                entry["depends_on"] = {dep: {"condition": d.condition} for dep, d in spec.depends_on.items()}
+            entry["restart"] = str(spec.restart)
+            if spec.healthcheck is not None:
+                entry["healthcheck"] = _healthcheck_dict(spec.healthcheck)
+            if spec.profiles:
+                entry["profiles"] = list(spec.profiles)
+            entry["stop_grace_period"] = format_duration(spec.stop_grace_period)
+            services[name] = entry
+        return {
+            "name": self.project_name,
+            "namespace": self.namespace,
+            "zenoh": {"connect": list(self.connect)},
+            "services": services,
+        }
+
+
+def _healthcheck_dict(check: Healthcheck) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    if check.disable:
+        out["disable"] = True
+    if check.liveliness:
+        out["liveliness"] = check.liveliness
+    if check.test:
+        out["test"] = check.test if isinstance(check.test, str) else list(check.test)
+        out["interval"] = format_duration(check.interval)
+        out["retries"] = check.retries
+    if check.timeout is not None:
+        out["timeout"] = format_duration(check.timeout)
+    if check.start_period:
+        out["start_period"] = format_duration(check.start_period)
+    return out
+
+
+def load_variables(project_dir: Path, env: Mapping[str, str] | None, env_file: Path | None) -> dict[str, str]:
+    """Interpolation variables: ``env`` (default: the shell's environment) over the ``.env`` file.
+
+    The ``.env`` file is ``env_file`` when given (it must exist), else ``project_dir/.env`` if present.
+    """
+    base = dict(os.environ if env is None else env)
+    path = env_file if env_file is not None else project_dir / ".env"
+    if env_file is not None and not env_file.is_file():
+        raise ConfigError(f"{env_file}: env file not found")
+    if not path.is_file():
+        return base
+    try:
+        dotenv = parse_env_file(path, base)
+    except InterpolationError as exc:
+        raise ConfigError(str(exc)) from None
+    return {**dotenv, **base}
+
+
+def project_name_from_dir(project_dir: Path) -> str:
+    """Compose's rule: the project directory's name, lower-cased, other characters turned into ``_``."""
+    name = re.sub(r"[^a-z0-9_.-]", "_", project_dir.resolve().name.lower()).lstrip("._-")
+    return name or "zendock"
+
+
+def read_document(path: Path) -> dict[str, Any]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the stack file: {exc.strerror}") from None
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: invalid YAML: {exc}") from None
+    if not isinstance(document, dict):
+        raise ConfigError(f"{path}: (top level): expected a mapping with a 'services' key")
+    return document
+
+
+def load_stack(
+    path: str | Path,
+    *,
+    env: Mapping[str, str] | None = None,
+    env_file: str | Path | None = None,
+    project_dir: str | Path | None = None,
+    project_name: str | None = None,
+) -> Stack:
+    """Read, interpolate and validate a stack file.
+
+    ``env`` replaces the shell environment for interpolation (tests pass a dict); ``project_dir``
+    (default: the current directory) is where ``.env`` is looked up and names the project when the file
+    has no ``name``. Raises :class:`ConfigError` listing every problem found.
+    """
+    source = Path(path)
+    directory = Path(project_dir) if project_dir is not None else Path.cwd()
+    variables = load_variables(directory, env, Path(env_file) if env_file is not None else None)
+    document = read_document(source)
+    zenoh_section = document.get("zenoh")
+    if zenoh_section is None:
+        document["zenoh"] = {"connect": [DEFAULT_CONNECT]}
+    elif isinstance(zenoh_section, dict) and "connect" not in zenoh_section:
+        document["zenoh"] = {**zenoh_section, "connect": [DEFAULT_CONNECT]}
+    try:
+        document = interpolate_tree(document, variables)  # type: ignore[assignment]
+    except InterpolationError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    try:
+        parsed = StackFile.model_validate(document)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, source)) from None
+    problems = _reference_problems(parsed)
+    if problems:
+        raise ConfigError("\n".join(f"{source}: {problem}" for problem in problems))
+    return Stack(
+        source=source,
+        project_name=project_name or parsed.name or project_name_from_dir(directory),
+        namespace=parsed.namespace,
+        connect=tuple(parsed.zenoh.connect),
+        services=dict(parsed.services),
+        variables=variables,
+    )
+
+
+def _reference_problems(parsed: StackFile) -> list[str]:
+    problems = []
+    for name, spec in parsed.services.items():
+        if not _NAME_RE.match(name):
+            problems.append(f"services.{name}: a service name uses letters, digits, '_', '-' and '.'")
+        for dependency, condition in spec.depends_on.items():
+            where = f"services.{name}.depends_on.{dependency}"
+            target = parsed.services.get(dependency)
+            if target is None:
+                problems.append(f"{where}: unknown service")
+            elif dependency == name:
+                problems.append(f"{where}: a service cannot depend on itself")
+            elif condition.condition == "service_healthy" and not (
+                target.healthcheck is not None and target.healthcheck.enabled
+            ):
+                problems.append(f"{where}.condition: service_healthy needs a healthcheck on {dependency}")
+        if spec.namespace is not None:
+            try:
+                join_namespace(parsed.namespace, spec.namespace)
+            except ValueError as exc:
+                problems.append(f"services.{name}.namespace: {exc}")
+    cycle = find_cycle({name: [d for d in spec.depends_on if d != name] for name, spec in parsed.services.items()})
+    if cycle:
+        problems.append(f"services: dependency cycle: {' -> '.join(cycle)}")
+    return problems

@@ -1,0 +1,64 @@
+"""What ``ps`` reports about a service, and the phases a service goes through."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from enum import StrEnum
+from typing import Any
+
+
+class Phase(StrEnum):
+    """The supervisor's view of a service.
+
+    ``waiting``: for its dependencies before a (re)start; ``running``; ``restarting``: exited, next start
+    after a backoff delay; ``exited``: ended by itself (or its dependencies failed) and stays down;
+    ``stopped``: stopped by the user, or not started yet.
+    """
+
+    WAITING = "waiting"
+    RUNNING = "running"
+    RESTARTING = "restarting"
+    EXITED = "exited"
+    STOPPED = "stopped"
+
+
+#: ``ps --json`` states. A service waiting for its dependencies shows as ``stopped`` before its first
+#: start and as ``restarting`` when it waits between two runs; ``detail`` says which dependency it waits for.
+PUBLIC_STATES = ("running", "restarting", "exited", "stopped")
+HEALTH_VALUES = ("healthy", "starting", "unhealthy", "none")
+
+
+@dataclass(frozen=True)
+class ServiceStatus:
+    name: str
+    state: str
+    pid: int | None
+    restarts: int
+    health: str
+    phase: str = "stopped"
+    exit_code: int | None = None
+    #: Human-readable: "waiting for router (service_healthy)", "restarting in 2s", "exited with code 1".
+    detail: str = ""
+    starts: int = 0
+    uptime_s: float | None = None
+    #: Wall-clock time (epoch seconds) the current process was launched.
+    started_at: float | None = None
+    pid_create_time: float | None = None
+
+    def ps_json(self) -> dict[str, Any]:
+        """Exactly the keys ``zendock ps --json`` promises."""
+        return {"name": self.name, "state": self.state, "pid": self.pid, "restarts": self.restarts, "health": self.health}
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ServiceStatus:
+        known = {key: data[key] for key in cls.__dataclass_fields__ if key in data}
+        return cls(**known)
+
+
+def public_state(phase: Phase, starts: int) -> str:
+    if phase is Phase.WAITING:
+        return "restarting" if starts else "stopped"
+    return phase.value

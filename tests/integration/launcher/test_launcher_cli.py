@@ -1,0 +1,181 @@
+"""The ``zendock`` launcher commands as users run them: ``up -d``, ``ps``, ``logs``, ``stop``/``start``,
+``down``, and a foreground ``up`` stopped with Ctrl-C. The stack runs its own embedded router."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.integration.launcher.conftest import fake, marked_processes, wait_for
+
+REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+def stack_text(endpoint: str) -> str:
+    return f"""\
+        name: clitest
+        zenoh: {{connect: ["{endpoint}"]}}
+        services:
+          router:
+            command: [zendock, router, --listen, "{endpoint}"]
+          talker:
+            command: {fake("--name", "talker", "--token", "talker")}
+            depends_on: {{router: {{condition: service_started}}}}
+            healthcheck: {{liveliness: true, timeout: 15s}}
+            restart: on-failure
+          helper:
+            command: {fake("--name", "helper", "--grandchild", "group")}
+            depends_on: {{talker: {{condition: service_healthy}}}}
+        """
+
+
+def zendock(cwd: Path, mark: str, *args: str, timeout_s: float = 60.0) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "ZENDOCK_TEST_MARK": mark, "PYTHONPATH": str(REPO_ROOT), "NO_COLOR": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "deploy.cli", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+    )
+
+
+@pytest.fixture
+def project(tmp_path: Path, write_stack, endpoint: str, mark: str):  # type: ignore[no-untyped-def]
+    write_stack(stack_text(endpoint))
+    yield tmp_path
+    zendock(tmp_path, mark, "down")
+
+
+def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: str) -> None:
+    up = zendock(project, mark, "up", "-d", "--wait", "--wait-timeout", "30")
+    assert up.returncode == 0, up.stderr + up.stdout
+    assert "talker: healthy" in up.stdout and "helper: running" in up.stdout
+
+    ps = zendock(project, mark, "ps", "--json")
+    assert ps.returncode == 0, ps.stderr
+    rows = json.loads(ps.stdout)
+    assert [row["name"] for row in rows] == ["router", "talker", "helper"]
+    assert all(set(row) == {"name", "state", "pid", "restarts", "health"} for row in rows)
+    by_name = {row["name"]: row for row in rows}
+    assert by_name["talker"]["health"] == "healthy" and by_name["router"]["health"] == "none"
+    assert all(row["state"] == "running" and isinstance(row["pid"], int) for row in rows)
+
+    os.kill(by_name["talker"]["pid"], signal.SIGKILL)
+
+    def talker_back() -> bool:
+        talker = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}["talker"]
+        return talker["restarts"] == 1 and talker["state"] == "running" and talker["health"] == "healthy"
+
+    wait_for(talker_back, 20, "talker restarted and healthy")
+
+    logs = zendock(project, mark, "logs", "--tail", "50", "talker")
+    assert "talker | talker ready" in logs.stdout
+    assert "talker | [zendock] killed by signal 9" in logs.stdout
+
+    stop = zendock(project, mark, "stop", "helper")
+    assert stop.returncode == 0 and "helper: stopped" in stop.stdout
+    start = zendock(project, mark, "start", "helper")
+    assert start.returncode == 0 and "helper: running" in start.stdout, start.stdout + start.stderr
+
+    table = zendock(project, mark, "ps")
+    assert table.stdout.splitlines()[0].split() == ["NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL"]
+
+    down = zendock(project, mark, "down")
+    assert down.returncode == 0, down.stderr
+    assert not marked_processes(mark)
+    state_dir = project / ".zendock" / "clitest"
+    assert not (state_dir / "state.json").exists() and not (state_dir / "supervisor.json").exists()
+    assert (state_dir / "logs" / "talker.log").exists()
+    assert json.loads(zendock(project, mark, "ps", "--json").stdout) == []
+    assert "nothing is up" in zendock(project, mark, "down").stdout
+
+
+def test_foreground_up_prints_prefixed_output_and_stops_on_ctrl_c(project: Path, mark: str) -> None:
+    env = {**os.environ, "ZENDOCK_TEST_MARK": mark, "PYTHONPATH": str(REPO_ROOT), "NO_COLOR": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "deploy.cli", "up"],
+        cwd=project,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    seen: list[str] = []
+    try:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            seen.append(line.rstrip("\n"))
+            if line.startswith("helper") and "helper up" in line:
+                break
+        assert any(line.startswith("router | zendock router: listening on") for line in seen), seen
+        assert "talker | talker ready" in seen
+        proc.send_signal(signal.SIGINT)
+        rest, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, rest
+    lines = rest.splitlines()
+    assert "helper | [zendock] stopped" in lines and "router | [zendock] stopped" in lines
+    assert "router | [zendock] exited with code 0" in lines and "talker | [zendock] exited with code 0" in lines
+    assert lines.index("helper | [zendock] stopped") < lines.index("router | [zendock] stopped")
+    assert not marked_processes(mark)
+
+
+def test_up_refuses_an_invalid_stack_with_the_key_path(tmp_path: Path, mark: str) -> None:
+    (tmp_path / "stack.yaml").write_text("services:\n  a: {command: [x], restart: sometimes}\n", encoding="utf-8")
+    result = zendock(tmp_path, mark, "up", "-d")
+    assert result.returncode == 2
+    assert "stack.yaml: services.a.restart: expected one of no, always" in result.stderr
+
+
+def test_down_cleans_up_after_a_supervisor_that_died(project: Path, mark: str) -> None:
+    up = zendock(project, mark, "up", "-d", "--wait", "--wait-timeout", "30")
+    assert up.returncode == 0, up.stderr + up.stdout
+    state_dir = project / ".zendock" / "clitest"
+    supervisor_pid = json.loads((state_dir / "supervisor.json").read_text())["pid"]
+    os.kill(supervisor_pid, signal.SIGKILL)
+    wait_for(lambda: not any(p.pid == supervisor_pid for p in marked_processes(mark)), 10, "the supervisor to die")
+    ps = zendock(project, mark, "ps", "--json")
+    assert "supervisor is not running" in ps.stderr
+    assert {row["name"] for row in json.loads(ps.stdout)} == {"router", "talker", "helper"}
+    down = zendock(project, mark, "down")
+    assert down.returncode == 0, down.stderr
+    assert not marked_processes(mark)
+    assert not (state_dir / "state.json").exists()
+
+
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
+def test_router_serves_with_the_shipped_config_and_exits_0(endpoint: str, stop_signal: int) -> None:
+    config = REPO_ROOT / "deploy" / "zenoh" / "router.json5"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "deploy.cli", "router", "--config", str(config), "--listen", endpoint],
+        cwd=REPO_ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        assert proc.stdout is not None
+        ready = proc.stdout.readline()
+        assert ready.startswith(f"zendock router: listening on {endpoint}"), ready
+        from shared.session import SessionSpec, open_session
+
+        with open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
+            assert session.info.routers_zid(), "the client sees no router"
+        proc.send_signal(stop_signal)
+        assert proc.wait(timeout=10) == 0
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()

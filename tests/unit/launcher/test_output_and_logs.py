@@ -1,0 +1,72 @@
+"""The foreground printer and the per-service log files (rotation, tail, follow, merge)."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+from deploy.launcher.logs import Follower, LogLine, RotatingLog, log_files, merge_by_time, parse_line, tail
+from deploy.launcher.printer import Printer
+
+
+def test_printer_aligns_names_and_colours_only_when_asked() -> None:
+    out = io.StringIO()
+    printer = Printer(out, ["router", "simulator"], colour=False)
+    printer.line("router", "listening")
+    printer.line("simulator", "ready")
+    assert out.getvalue() == "router    | listening\nsimulator | ready\n"
+    coloured = io.StringIO()
+    printer = Printer(coloured, ["a", "b"], colour=True)
+    printer.line("a", "x")
+    printer.line("b", "y")
+    first, second = coloured.getvalue().splitlines()
+    assert first.startswith("\033[") and first.endswith("a | \033[0mx")
+    assert first.split("m", 1)[0] != second.split("m", 1)[0]
+
+
+def test_printer_colour_follows_the_terminal_and_no_color(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.delenv("NO_COLOR", raising=False)
+    monkeypatch.delenv("FORCE_COLOR", raising=False)
+    assert Printer(io.StringIO(), []).colour is False
+    monkeypatch.setenv("FORCE_COLOR", "1")
+    assert Printer(io.StringIO(), []).colour is True
+    monkeypatch.setenv("NO_COLOR", "1")
+    assert Printer(io.StringIO(), []).colour is False
+
+
+def test_logs_rotate_and_tail_reads_across_files(tmp_path: Path) -> None:
+    log = RotatingLog(tmp_path / "sim.log", max_bytes=200, backups=2)
+    for index in range(40):
+        log.write(f"line {index}")
+    log.close()
+    files = log_files(tmp_path, "sim")
+    assert [p.name for p in files] == ["sim.log.2", "sim.log.1", "sim.log"]
+    assert all(p.stat().st_size < 200 + 40 for p in files)
+    kept = [line.text for line in tail(tmp_path, "sim", None)]
+    assert kept == [f"line {i}" for i in range(40 - len(kept), 40)]
+    assert [line.text for line in tail(tmp_path, "sim", 3)] == ["line 37", "line 38", "line 39"]
+    assert tail(tmp_path, "sim", 0) == []
+    assert all(line.stamp.endswith("Z") for line in tail(tmp_path, "sim", 3))
+
+
+def test_lines_parse_and_merge_by_time() -> None:
+    parsed = parse_line("a", "2025-01-02T03:04:05.678Z hello world")
+    assert parsed == LogLine("a", "2025-01-02T03:04:05.678Z", "hello world")
+    assert parse_line("a", "no stamp") == LogLine("a", "", "no stamp")
+    a = [LogLine("a", "2025-01-01T00:00:01.000Z", "a1"), LogLine("a", "2025-01-01T00:00:03.000Z", "a3")]
+    b = [LogLine("b", "2025-01-01T00:00:02.000Z", "b2")]
+    assert [line.text for line in merge_by_time([a, b])] == ["a1", "b2", "a3"]
+
+
+def test_follower_sees_new_lines_through_a_rotation(tmp_path: Path) -> None:
+    log = RotatingLog(tmp_path / "pose.log", max_bytes=10_000, backups=1)
+    log.write("before")
+    follower = Follower(tmp_path, "pose")
+    assert list(follower.poll()) == []
+    log.write("after 1")
+    assert [line.text for line in follower.poll()] == ["after 1"]
+    log.rotate()
+    log.write("after rotation")
+    assert [line.text for line in follower.poll()] == ["after rotation"]
+    follower.close()
+    log.close()

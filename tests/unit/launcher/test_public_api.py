@@ -1,0 +1,49 @@
+"""The launcher's public surface is what its docstring promises."""
+
+from __future__ import annotations
+
+import socket
+
+import deploy.launcher as launcher
+from deploy.launcher import ServiceStatus, free_endpoint, is_ready
+
+
+def test_exported_names() -> None:
+    assert set(launcher.__all__) == {
+        "Backoff",
+        "Launcher",
+        "RestartPolicy",
+        "ServiceStatus",
+        "Stack",
+        "StackNotReady",
+        "free_endpoint",
+        "free_tcp_port",
+        "is_ready",
+        "load_stack",
+    }
+    assert all(hasattr(launcher, name) for name in launcher.__all__)
+
+
+def test_free_endpoint_is_a_bindable_loopback_port() -> None:
+    endpoint = free_endpoint()
+    scheme, address = endpoint.split("/")
+    host, port = address.rsplit(":", 1)
+    assert (scheme, host) == ("tcp", "127.0.0.1")
+    with socket.socket() as probe:
+        probe.bind((host, int(port)))
+
+
+def test_ps_json_has_exactly_the_promised_keys() -> None:
+    status = ServiceStatus("planner", "running", 42, 1, "healthy", phase="running", detail="up 3s", starts=2)
+    assert status.ps_json() == {"name": "planner", "state": "running", "pid": 42, "restarts": 1, "health": "healthy"}
+    assert ServiceStatus.from_dict({**status.to_dict(), "unknown": 1}) == status
+
+
+def test_readiness_counts_completed_steps_and_unchecked_services() -> None:
+    assert is_ready(ServiceStatus("a", "running", 1, 0, "healthy"))
+    assert is_ready(ServiceStatus("a", "running", 1, 0, "none"))
+    assert not is_ready(ServiceStatus("a", "running", 1, 0, "starting"))
+    assert not is_ready(ServiceStatus("a", "running", 1, 0, "unhealthy"))
+    assert is_ready(ServiceStatus("map", "exited", None, 0, "none", phase="exited", exit_code=0))
+    assert not is_ready(ServiceStatus("map", "exited", None, 0, "none", phase="exited", exit_code=1))
+    assert not is_ready(ServiceStatus("a", "stopped", None, 0, "none", phase="waiting"))
