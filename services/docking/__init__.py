@@ -10,5 +10,15 @@ Pure logic, no bus (each module unit-tested on its own):
 - :mod:`~services.docking.dock_db` -- the dock database;
 - :mod:`~services.docking.errors` -- result codes, feedback states and docking exceptions (Nav2's numbers);
 - :mod:`~services.docking.kinematics` and :mod:`~services.docking.bench` -- a kinematic robot to test and
-  compare controllers on.
+  compare controllers on;
+- :mod:`~services.docking.robot_track` -- localisation carried forward by odometry, queryable at any time;
+- :mod:`~services.docking.dock_tracker` -- detections placed in the map and filtered, per expected dock;
+- :mod:`~services.docking.safety` -- lidar and sonar obstacle checks that excuse the dock;
+- :mod:`~services.docking.approach_control` -- the two approach controllers behind one interface, backing off;
+- :mod:`~services.docking.task_io`, :mod:`~services.docking.docking_run`, :mod:`~services.docking.undocking_run`,
+  :mod:`~services.docking.patrol` -- the service's tasks as pure state machines;
+- :mod:`~services.docking.drive_arbiter` -- one driver at a time (the service's cmd_vel or the planner);
+- :mod:`~services.docking.mission` -- patrol, dock when low, resume when charged.
+
+Wiring: :mod:`~services.docking.node` (``python -m services.docking``).
 """

@@ -1,0 +1,5 @@
+import sys
+
+from services.docking.node import main
+
+sys.exit(main())

@@ -1,0 +1,196 @@
+"""The final approach's controllers behind one interface, and the backing-off law.
+
+:class:`SeedApproach` runs the line approach (:mod:`services.docking.seed_controller`) through its
+waypoints and reports arrival once its last goal is reached. :class:`GracefulApproach` runs the graceful
+law (:mod:`services.docking.graceful`) on the latency-compensated pose; since it aims past the plate it
+never "arrives" by itself: the approach ends with charging, or when the robot has pushed against
+something without moving for ``stall_time_s`` (the plate, when charging does not come), or when the
+robot believes it is already past the dock pose (it is mislocalised). Both accept a newer dock pose
+every tick. :func:`back_off_command` drives backwards along the dock's axis to a pose behind it.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, replace
+from typing import Protocol
+
+from services.docking.approach import (
+    DEFAULT_LINE_OFFSETS,
+    LineApproachOffsets,
+    dock_frame_error,
+    graceful_staging_pose,
+    line_approach,
+)
+from services.docking.graceful import (
+    ZENDOCK_PARAMS,
+    ZENDOCK_TUNED,
+    GracefulDockController,
+    GracefulDockParams,
+    GracefulGains,
+    smooth_control_law,
+)
+from services.docking.seed_controller import LineApproachController, LineApproachParams
+from services.docking.task_io import Velocity
+from shared.geometry import Pose2D
+
+
+class Arrival(enum.Enum):
+    """The approach has ended without charging (yet): wait for the charger to report."""
+
+    ARRIVED = "arrived"
+
+
+ARRIVED = Arrival.ARRIVED
+
+
+class ApproachController(Protocol):
+    """A final-approach controller: a map pose in, a command (or arrival) out."""
+
+    period_s: float
+
+    def staging_pose(self, dock_pose: Pose2D) -> Pose2D: ...
+
+    def begin(self, dock_pose: Pose2D) -> None: ...
+
+    def update_dock(self, dock_pose: Pose2D) -> None: ...
+
+    def hold(self) -> None:
+        """The last command was not sent: the robot was held still (an obstacle)."""
+
+    def command(
+        self, now_s: float, pose: Pose2D, pose_age_s: float, base_twist: tuple[float, float] | None
+    ) -> Velocity | Arrival: ...
+
+
+class SeedApproach:
+    """The line approach at 10 Hz: goals derived from the dock pose, bang-bang commands."""
+
+    def __init__(self, params: LineApproachParams | None = None, offsets: LineApproachOffsets = DEFAULT_LINE_OFFSETS):
+        self.params = params or LineApproachParams()
+        self.offsets = offsets
+        self.period_s = self.params.control_period_s
+        self._controller: LineApproachController | None = None
+
+    def staging_pose(self, dock_pose: Pose2D) -> Pose2D:
+        return line_approach(dock_pose, self.offsets).staging_goal
+
+    def begin(self, dock_pose: Pose2D) -> None:
+        self._controller = LineApproachController(line_approach(dock_pose, self.offsets).goals, self.params)
+
+    def update_dock(self, dock_pose: Pose2D) -> None:
+        """Move the goals with a refined dock pose; the goal being worked on stays the same."""
+        if self._controller is not None:
+            self._controller.goals = line_approach(dock_pose, self.offsets).goals
+
+    def hold(self) -> None:
+        pass
+
+    @property
+    def goal_index(self) -> int:
+        return self._controller.goal_idx if self._controller is not None else 0
+
+    def command(
+        self, now_s: float, pose: Pose2D, pose_age_s: float, base_twist: tuple[float, float] | None
+    ) -> Velocity | Arrival:
+        if self._controller is None:
+            raise RuntimeError("begin() first")
+        if self._controller.is_idle:
+            return ARRIVED
+        linear, angular = self._controller.step(pose.x, pose.y, pose.yaw)
+        if self._controller.is_idle:
+            return ARRIVED
+        return Velocity(linear, angular)
+
+
+@dataclass(frozen=True, slots=True)
+class ArrivalParams:
+    """When the graceful approach stops by itself (besides charging)."""
+
+    #: Commanding at least this forward speed...
+    stall_command_mps: float = 0.03
+    #: ...while odometry shows less than this...
+    stall_speed_mps: float = 0.01
+    #: ...for this long means the robot is pushing against something.
+    stall_time_s: float = 0.6
+    #: Believing to be this far past the dock pose means the robot is on the plate (or mislocalised).
+    overshoot_m: float = 0.02
+
+
+class GracefulApproach:
+    """The graceful law at 20 Hz on the estimated pose; arrival by stall or overshoot (see module doc)."""
+
+    def __init__(
+        self,
+        params: GracefulDockParams = ZENDOCK_PARAMS,
+        staging_offset_m: float = 0.7,
+        arrival: ArrivalParams | None = None,
+    ) -> None:
+        self.params = params
+        self.staging_offset_m = staging_offset_m
+        self.arrival = arrival or ArrivalParams()
+        self.period_s = params.control_period_s
+        self._controller: GracefulDockController | None = None
+        self._last_s: float | None = None
+        self._stalled_since_s: float | None = None
+        self._pushed = False
+
+    def staging_pose(self, dock_pose: Pose2D) -> Pose2D:
+        return graceful_staging_pose(dock_pose, self.staging_offset_m)
+
+    def begin(self, dock_pose: Pose2D) -> None:
+        self._controller = GracefulDockController(dock_pose, self.params)
+        self._controller.reset()
+        self._last_s = None
+        self._stalled_since_s = None
+        self._pushed = False
+
+    def update_dock(self, dock_pose: Pose2D) -> None:
+        if self._controller is not None:
+            self._controller.set_dock_pose(dock_pose)
+
+    def hold(self) -> None:
+        """The robot was held still instead: a stall is only counted while pushing commands go out."""
+        self._pushed = False
+        self._stalled_since_s = None
+
+    def command(
+        self, now_s: float, pose: Pose2D, pose_age_s: float, base_twist: tuple[float, float] | None
+    ) -> Velocity | Arrival:
+        controller = self._controller
+        if controller is None:
+            raise RuntimeError("begin() first")
+        dt = self.period_s if self._last_s is None else max(0.0, now_s - self._last_s)
+        self._last_s = now_s
+        if dock_frame_error(pose, controller.dock_pose).along_m >= self.arrival.overshoot_m:
+            return ARRIVED
+        command = controller.compute(pose, dt, pose_age_s, base_twist)
+        a = self.arrival
+        pushing = command.linear_x_mps >= a.stall_command_mps
+        if pushing and self._pushed and base_twist is not None and abs(base_twist[0]) < a.stall_speed_mps:
+            if self._stalled_since_s is None:
+                self._stalled_since_s = now_s
+            elif now_s - self._stalled_since_s >= a.stall_time_s:
+                return ARRIVED
+        else:
+            self._stalled_since_s = None
+        self._pushed = pushing
+        return Velocity(command.linear_x_mps, command.angular_z_radps)
+
+
+def graceful_params_with_speed(max_speed_mps: float, base: GracefulDockParams = ZENDOCK_PARAMS) -> GracefulDockParams:
+    """The tuned docking parameters with a different top speed (the minimum speed is kept below it)."""
+    gains = replace(base.gains, v_linear_max_mps=max_speed_mps,
+                    v_linear_min_mps=min(base.gains.v_linear_min_mps, max_speed_mps))
+    return replace(base, gains=gains)
+
+
+def back_off_gains(max_speed_mps: float = 0.2, base: GracefulGains = ZENDOCK_TUNED) -> GracefulGains:
+    """Gentle gains for driving backwards off the dock (Nav2 undocks with the same law, reversed)."""
+    return replace(base, v_linear_max_mps=max_speed_mps, v_linear_min_mps=min(0.05, max_speed_mps))
+
+
+def back_off_command(target: Pose2D, pose: Pose2D, gains: GracefulGains) -> Velocity:
+    """Reverse towards ``target`` (a pose facing the dock, behind it) with the graceful law."""
+    command = smooth_control_law(target, pose, gains, backward=True)
+    return Velocity(command.linear_x_mps, command.angular_z_radps)

@@ -1,0 +1,543 @@
+"""The docking service's wiring: battery, pose, odometry, detections and range sensors in; cmd_vel,
+planner goals, the dock_robot / undock_robot actions and ``docking/state`` out.
+
+Everything runs on the node's executor (callbacks never overlap, nothing blocks): sensor callbacks
+only store what arrives; one timer on the node's clock -- 20 Hz for the graceful controller, 10 Hz
+for the seed controller -- builds a :class:`~services.docking.task_io.TickInputs` snapshot, lets the
+:class:`~services.docking.mission.Mission` start what is due, steps the running task (a
+:class:`~services.docking.docking_run.DockingRun`, an :class:`~services.docking.undocking_run.UndockingRun`
+or a :class:`~services.docking.patrol.Patrol`) and carries out its intent through the
+:class:`~services.docking.drive_arbiter.DriveArbiter`, so that the service and the planner never drive
+at the same time. The low-battery trigger starts the same docking run as the action.
+
+Charging is read from battery_status (CHARGING or FULL), as a real robot would; the simulator's ground
+truth (dock_contact, ground_truth_pose) is never used.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import replace
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from services.docking.approach import GRACEFUL_STAGING_OFFSET_M
+from services.docking.approach_control import (
+    ApproachController,
+    GracefulApproach,
+    SeedApproach,
+    back_off_gains,
+    graceful_params_with_speed,
+)
+from services.docking.dock_db import DockDatabase, load_dock_db
+from services.docking.dock_tracker import DockTracker
+from services.docking.docking_run import DockingConfig, DockingRun, DockRequest
+from services.docking.drive_arbiter import DriveArbiter, DriveOrders
+from services.docking.errors import DockingState
+from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
+from services.docking.patrol import Patrol
+from services.docking.pose_filter import PoseFilterParams
+from services.docking.robot_track import OdomSample, RobotPoseTrack
+from services.docking.safety import ObstacleParams, lidar_blocked, scan_points, sonar_blocked
+from services.docking.task_io import (
+    Intent,
+    Navigate,
+    NavOutcome,
+    NavStatus,
+    Outcome,
+    Task,
+    TickInputs,
+    Velocity,
+)
+from services.docking.undocking_run import UndockConfig, UndockingRun
+from shared import topics
+from shared.action import ActionServer, ServerGoalHandle
+from shared.geometry import Pose2D
+from shared.interfaces.docking import (
+    DOCK_ROBOT,
+    UNDOCK_ROBOT,
+    DockRobotFeedback,
+    DockRobotGoal,
+    DockRobotResult,
+    UndockRobotFeedback,
+    UndockRobotGoal,
+    UndockRobotResult,
+)
+from shared.messages import (
+    BatteryState,
+    Duration,
+    Float64MultiArray,
+    LaserScan,
+    Odometry,
+    PoseStamped,
+    Range,
+    String,
+    TFMessage,
+    Twist,
+)
+from shared.navigation import NavigationClient, TaskResult
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.ratelimit import RateLimitedLogger
+from shared.runtime import ServiceParams, run_service
+
+#: std_msgs/String with the service's state name, for tools (published on change and every second).
+DOCKING_STATE = "docking/state"
+#: Control rates fixed by the controllers: graceful 20 Hz, seed (line approach) 10 Hz.
+CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1}
+#: A sensor reading older than this is ignored by the obstacle checks.
+SENSOR_MAX_AGE_S = 0.5
+STATE_PERIOD_S = 1.0
+_CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.docking`` (``-p name=value`` or a YAML file)."""
+
+    dock_database: str = Field(
+        description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
+    )
+    controller: Literal["graceful", "seed"] = Field("graceful", description="final approach controller")
+    dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
+    auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
+    low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
+    resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
+    patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw]")
+    max_retries: int = Field(3, ge=0)
+    use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
+    allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")
+    min_detections: int = Field(3, ge=1)
+    initial_perception_timeout_s: float = Field(2.0, gt=0.0)
+    detection_filter_coef: float = Field(0.1, gt=0.0, le=1.0)
+    max_detection_offset_m: float = Field(0.5, gt=0.0, description="detections farther from the database pose are ignored")
+    max_staging_time_s: float = Field(120.0, gt=0.0, description="staging time limit of battery-triggered runs")
+    approach_timeout_s: float = Field(120.0, gt=0.0)
+    obstacle_timeout_s: float = Field(20.0, gt=0.0, description="held by an obstacle this long, the attempt fails")
+    wait_charge_timeout_s: float = Field(5.0, gt=0.0)
+    max_docking_time_s: float = Field(600.0, gt=0.0)
+    staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
+    max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed")
+    undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5)
+    max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
+    pose_latency_s: float = Field(0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives")
+    battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
+    obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
+    use_lidar: bool = True
+    use_sonar: bool = True
+    feedback_period_s: float = Field(0.5, gt=0.0)
+
+    @field_validator("dock_database")
+    @classmethod
+    def _database_loads(cls, value: str) -> str:
+        load_dock_db(value)  # a ConfigError names the file and the field
+        return value
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Params:
+        if self.resume_at <= self.low_battery_threshold:
+            raise ValueError(f"resume_at ({self.resume_at}) must be above low_battery_threshold "
+                             f"({self.low_battery_threshold})")
+        return self
+
+
+class DockingService:
+    """The docking service on a node; see the module docstring."""
+
+    def __init__(self, node: Node, params: Params) -> None:
+        self.node = node
+        self.params = params
+        self.log = node.log
+        self._say = RateLimitedLogger(node.log, interval_s=5.0)
+        self.database: DockDatabase = load_dock_db(params.dock_database)
+        self.track = RobotPoseTrack()
+        self.arbiter = DriveArbiter()
+        self.obstacles = ObstacleParams(stop_distance_m=params.obstacle_stop_distance_m)
+        self.mission = Mission(
+            [Pose2D.from_seq(p) for p in params.patrol], params.resume_at, params.low_battery_threshold,
+            params.auto_dock,
+        )
+        self.task: Task[Any] | None = None
+        self.task_kind: TaskKind | None = None
+        self.task_handle: ServerGoalHandle[Any, Any, Any] | None = None
+        self._battery: BatteryState | None = None
+        self._battery_received_s = -math.inf
+        self._scan_points: np.ndarray | None = None
+        self._scan_received_s = -math.inf
+        self._sonar_range_m = math.inf
+        self._sonar_received_s = -math.inf
+        self._lidar_mount: Pose2D | None = None
+        self._last_now_s = -math.inf
+        self._holding = ""
+        self._last_state = ""
+        self._state_published_s = -math.inf
+        self._feedback_key: tuple[int, int] | None = None
+        self._feedback_published_s = -math.inf
+
+        self.cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        self.state_pub = node.create_publisher(String, DOCKING_STATE, RELIABLE)
+        self.nav = NavigationClient(node)
+        node.create_subscription(BatteryState, topics.BATTERY_STATUS, self._on_battery, QoS(depth=5))
+        node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_pose, QoS(depth=5))
+        node.create_subscription(Odometry, topics.ODOM, self._on_odom, SENSOR_DATA)
+        node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE, self._on_detection, SENSOR_DATA)
+        node.create_subscription(LaserScan, topics.SCAN, self._on_scan, SENSOR_DATA)
+        node.create_subscription(Range, topics.ULTRASONIC, self._on_sonar, SENSOR_DATA)
+        node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
+        self.dock_server = ActionServer(
+            node, DOCK_ROBOT, topics.DOCK_ROBOT, on_goal=self._check_dock_goal, on_accepted=self._on_dock_goal,
+            on_cancel=self._on_cancel, preempt_result=lambda: DockRobotResult(success=False),
+        )
+        self.undock_server = ActionServer(
+            node, UNDOCK_ROBOT, topics.UNDOCK_ROBOT, on_goal=self._check_undock_goal,
+            on_accepted=self._on_undock_goal, on_cancel=self._on_cancel,
+            preempt_result=lambda: UndockRobotResult(success=False),
+        )
+        self.period_s = CONTROL_PERIOD_S[params.controller]
+        self.timer = node.create_timer(self.period_s, self._on_tick)
+        self.log.info(
+            "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time",
+            params.controller, 1.0 / self.period_s, len(self.database), params.dock_database,
+            "on" if params.use_detection else "off", len(params.patrol), "sim" if node.use_sim_time else "wall",
+        )
+
+    # --- inputs ------------------------------------------------------------------------------------
+
+    def _on_battery(self, msg: BatteryState) -> None:
+        self._battery = msg
+        self._battery_received_s = self.node.now()
+        charging = msg.power_supply_status in _CHARGING
+        if self.mission.battery(msg.percentage, charging):
+            self.log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * msg.percentage,
+                          100.0 * self.params.low_battery_threshold)
+
+    def _on_pose(self, msg: Float64MultiArray) -> None:
+        data = msg.data
+        if len(data) < 3 or not np.all(np.isfinite(data[:3])):
+            self._say.warning("pose", "ignored a %s message without a finite [x, y, yaw]", topics.POSE2D)
+            return
+        self.track.add_pose(self.node.now(), Pose2D.from_seq(data[:3]), self.params.pose_latency_s)
+
+    def _on_odom(self, msg: Odometry) -> None:
+        twist = msg.twist.twist
+        self.track.add_odom(OdomSample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x,
+                                       twist.angular.z))
+
+    def _on_detection(self, msg: PoseStamped) -> None:
+        task = self.task
+        if not isinstance(task, DockingRun):
+            return
+        if msg.header.frame_id not in ("", topics.BASE_FRAME):
+            self._say.warning("detection-frame", "ignored a dock detection in frame %r (expected %s)",
+                              msg.header.frame_id, topics.BASE_FRAME)
+            return
+        stamp_s = msg.header.stamp.to_sec()
+        robot_at_stamp = self.track.pose_at(stamp_s)
+        if robot_at_stamp is None:
+            self._say.info("detection-pose", "no robot pose at a detection's stamp %.3f s: ignored", stamp_s)
+            return
+        task.add_detection(msg.pose.to_pose2d(), robot_at_stamp, stamp_s)
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        if self._lidar_mount is None:
+            return
+        self._scan_points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, self._lidar_mount)
+        self._scan_received_s = self.node.now()
+
+    def _on_sonar(self, msg: Range) -> None:
+        self._sonar_range_m = float(msg.range)
+        self._sonar_received_s = self.node.now()
+
+    def _on_tf_static(self, msg: TFMessage) -> None:
+        for transform in msg.transforms:
+            if transform.header.frame_id == topics.BASE_FRAME and transform.child_frame_id == topics.LIDAR_FRAME:
+                self._lidar_mount = transform.transform.to_pose2d()
+
+    def _charging(self, now_s: float) -> bool:
+        fresh = self._battery is not None and now_s - self._battery_received_s <= self.params.battery_timeout_s
+        return fresh and self._battery is not None and self._battery.power_supply_status in _CHARGING
+
+    def _nav_status(self) -> NavStatus:
+        busy = not self.nav.is_task_complete()
+        outcome: NavOutcome | None = None
+        if not busy and self.arbiter.nav_key is not None:
+            outcome = {
+                TaskResult.SUCCEEDED: NavOutcome.SUCCEEDED,
+                TaskResult.CANCELED: NavOutcome.CANCELED,
+            }.get(self.nav.get_result(), NavOutcome.FAILED)
+        return NavStatus(self.arbiter.nav_key, busy, outcome, self.nav.failure_reason() if outcome else "")
+
+    def _inputs(self, now_s: float) -> TickInputs:
+        robot_pose: Pose2D | None = None
+        pose_age_s = 0.0
+        if self.track.pose_fresh(now_s, self.params.max_pose_age_s):
+            latest = self.track.latest()
+            if latest is not None:
+                pose_stamp_s, robot_pose = latest
+                pose_age_s = max(0.0, now_s - pose_stamp_s)
+        blocked_ahead = blocked_behind = False
+        if robot_pose is not None and isinstance(self.task, (DockingRun, UndockingRun)):
+            dock = self.task.dock_pose
+            dock_in_base = dock.relative_to(robot_pose) if dock is not None else None
+            blocked_ahead, blocked_behind = self._blocked(now_s, dock_in_base)
+        return TickInputs(
+            now_s=now_s,
+            robot_pose=robot_pose,
+            pose_age_s=pose_age_s,
+            base_twist=self.track.twist(now_s, SENSOR_MAX_AGE_S),
+            charging=self._charging(now_s),
+            nav=self._nav_status(),
+            blocked_ahead=blocked_ahead,
+            blocked_behind=blocked_behind,
+        )
+
+    def _blocked(self, now_s: float, dock_in_base: Pose2D | None) -> tuple[bool, bool]:
+        ahead = behind = False
+        p = self.params
+        if p.use_lidar and self._scan_points is not None and now_s - self._scan_received_s <= SENSOR_MAX_AGE_S:
+            ahead = lidar_blocked(self._scan_points, True, dock_in_base, self.obstacles)
+            # Reversing never goes towards the dock: nothing behind is excused.
+            behind = lidar_blocked(self._scan_points, False, None, self.obstacles)
+        if p.use_sonar and now_s - self._sonar_received_s <= SENSOR_MAX_AGE_S:
+            ahead = ahead or sonar_blocked(self._sonar_range_m, dock_in_base, self.obstacles)
+        return ahead, behind
+
+    # --- the tick ----------------------------------------------------------------------------------
+
+    def _on_tick(self) -> None:
+        now = self.node.now()
+        if now < self._last_now_s - 1.0:
+            self.log.warning("clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs", now)
+            self.track.clear()
+            self.mission.trigger.reset()  # a low battery after the reset sends the robot home again
+            if self.task is not None:
+                self.task.cancel()
+        self._last_now_s = now
+        self._follow_mission(now)
+        task = self.task
+        if task is not None:
+            inputs = self._inputs(now)
+            intent = task.step(inputs)
+            if task.holding and task.holding != self._holding:
+                self._say.info(f"hold:{task.holding}", "holding still: %s", task.holding)
+            self._holding = task.holding
+            self._carry_out(intent, inputs)
+            self._publish_feedback(now)
+            if task.done:
+                self._end_task()
+        self._publish_state(now)
+
+    def _follow_mission(self, now: float) -> None:
+        order = self.mission.decide(now, self.task_kind)
+        if order is MissionOrder.DOCK:
+            self._start(self._docking_run(DockRequest(dock_id=self.params.dock_id,
+                                                      max_staging_time_s=self.params.max_staging_time_s)),
+                        TaskKind.DOCK)
+        elif order is MissionOrder.UNDOCK:
+            self.log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
+            self._start(self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK)
+        elif order is MissionOrder.PATROL:
+            self.log.info("patrolling from waypoint %d", self.mission.next_waypoint)
+            self._start(Patrol(self.mission.patrol, self.mission.next_waypoint), TaskKind.PATROL)
+
+    def _carry_out(self, intent: Intent, inputs: TickInputs) -> None:
+        if isinstance(intent, Velocity):
+            orders = self.arbiter.velocity(intent, inputs.nav.busy, inputs.now_s)
+        elif isinstance(intent, Navigate):
+            orders = self.arbiter.navigate(intent)
+        else:
+            orders = DriveOrders()
+        self._apply(orders)
+
+    def _apply(self, orders: DriveOrders) -> None:
+        if orders.cancel_nav:
+            self.nav.cancel_task()
+        if orders.publish is not None:
+            if not self.nav.is_task_complete():
+                # The arbiter never allows this; a stop is still better than nothing if it ever happens.
+                self._say.error("overlap", "publishing cmd_vel while the planner holds a goal")
+            self.cmd_vel.publish(Twist.planar(orders.publish.linear_x_mps, orders.publish.angular_z_radps))
+        if orders.send_goal is not None:
+            self.nav.go_to_pose(orders.send_goal)
+
+    # --- tasks -------------------------------------------------------------------------------------
+
+    def _approach(self) -> ApproachController:
+        if self.params.controller == "seed":
+            return SeedApproach()
+        return GracefulApproach(graceful_params_with_speed(self.params.max_approach_speed_mps),
+                                self.params.staging_offset_m)
+
+    def _docking_run(self, request: DockRequest) -> DockingRun:
+        p = self.params
+        config = DockingConfig(
+            max_retries=p.max_retries,
+            use_detection=p.use_detection,
+            allow_blind_docking=p.allow_blind_docking,
+            wait_for_detection=p.controller == "graceful",
+            min_detections=p.min_detections,
+            initial_perception_timeout_s=p.initial_perception_timeout_s,
+            approach_timeout_s=p.approach_timeout_s,
+            obstacle_timeout_s=p.obstacle_timeout_s,
+            wait_charge_timeout_s=p.wait_charge_timeout_s,
+            max_docking_time_s=p.max_docking_time_s,
+            staging_offset_m=p.staging_offset_m,
+            back_off_gains=back_off_gains(p.undock_speed_mps),
+        )
+        tracker = DockTracker(replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m)
+        return DockingRun(request, self.database, self._approach(), config, tracker)
+
+    def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
+        config = UndockConfig(staging_offset_m=self.params.staging_offset_m,
+                              gains=back_off_gains(self.params.undock_speed_mps))
+        return UndockingRun(self.database, max_time_s, dock_type, config)
+
+    def _start(self, task: Task[Any], kind: TaskKind,
+               handle: ServerGoalHandle[Any, Any, Any] | None = None) -> None:
+        """Run ``task`` from the next tick on, replacing whatever runs (its action, if any, is cancelled)."""
+        old, old_handle = self.task, self.task_handle
+        if isinstance(old, Patrol):
+            self.mission.next_waypoint = old.next_index
+        if old_handle is not None and old_handle.active:
+            old_handle.canceled(self._result_message(old_handle, None))
+        if old is not None:
+            self.log.info("%s replaced by %s", type(old).__name__, type(task).__name__)
+        self.task, self.task_kind, self.task_handle = task, kind, handle
+        self._feedback_key = None
+
+    def _end_task(self) -> None:
+        task, kind, handle = self.task, self.task_kind, self.task_handle
+        assert task is not None and task.result is not None and kind is not None
+        result = task.result
+        self.task, self.task_kind, self.task_handle = None, None, None
+        self._holding = ""
+        self._apply(self.arbiter.release())
+        if isinstance(task, Patrol):
+            self.mission.next_waypoint = task.next_index
+        self.mission.finished(kind, result.success, handle is not None, self.node.now())
+        level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
+        took = f" after {task.docking_time_s(self.node.now()):.1f} s" if isinstance(task, DockingRun) else ""
+        self.log.log(level, "%s %s%s (code %d, %d retries)%s", kind.value, result.outcome.value, took,
+                     int(result.error_code), result.num_retries, f": {result.message}" if result.message else "")
+        if handle is None or not handle.active:
+            return
+        message = self._result_message(handle, task)
+        if result.outcome is Outcome.SUCCEEDED:
+            handle.succeed(message)
+        elif result.outcome is Outcome.CANCELED:
+            handle.canceled(message)
+        else:
+            handle.abort(message)
+
+    @staticmethod
+    def _result_message(handle: ServerGoalHandle[Any, Any, Any], task: Task[Any] | None) -> Any:
+        result = task.result if task is not None else None
+        success = result is not None and result.success
+        code = int(result.error_code) if result is not None else 0
+        if isinstance(handle.goal, DockRobotGoal):
+            return DockRobotResult(success=success, error_code=code, num_retries=task.retries if task else 0)
+        return UndockRobotResult(success=success, error_code=code)
+
+    # --- actions -----------------------------------------------------------------------------------
+
+    def _check_dock_goal(self, goal: DockRobotGoal) -> None:
+        if not goal.use_dock_id and goal.dock_pose.header.frame_id not in ("", topics.MAP_FRAME):
+            raise ValueError(f"dock_pose must be in the {topics.MAP_FRAME} frame, got {goal.dock_pose.header.frame_id!r}")
+        if not goal.max_staging_time > 0.0:
+            raise ValueError(f"max_staging_time must be > 0, got {goal.max_staging_time}")
+
+    def _on_dock_goal(self, handle: ServerGoalHandle[DockRobotGoal, DockRobotResult, DockRobotFeedback]) -> None:
+        if not handle.active:
+            return
+        goal = handle.goal
+        handle.execute()
+        request = DockRequest(
+            dock_id=goal.dock_id if goal.use_dock_id else "",
+            dock_pose=None if goal.use_dock_id else goal.dock_pose.pose.to_pose2d(),
+            dock_type=goal.dock_type,
+            navigate_to_staging_pose=goal.navigate_to_staging_pose,
+            max_staging_time_s=goal.max_staging_time,
+        )
+        self.log.info("dock_robot: %s", f"dock {goal.dock_id!r}" if goal.use_dock_id and goal.dock_id
+                      else "the nearest dock" if goal.use_dock_id else "a given pose")
+        self._start(self._docking_run(request), TaskKind.DOCK, handle)
+
+    def _check_undock_goal(self, goal: UndockRobotGoal) -> None:
+        if not goal.max_undocking_time > 0.0:
+            raise ValueError(f"max_undocking_time must be > 0, got {goal.max_undocking_time}")
+
+    def _on_undock_goal(self, handle: ServerGoalHandle[UndockRobotGoal, UndockRobotResult, UndockRobotFeedback]) -> None:
+        if not handle.active:
+            return
+        handle.execute()
+        self.log.info("undock_robot")
+        self._start(self._undocking_run(handle.goal.max_undocking_time, handle.goal.dock_type), TaskKind.UNDOCK,
+                    handle)
+
+    def _on_cancel(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
+        if handle is self.task_handle and self.task is not None:
+            self.log.info("%s: cancel requested", type(self.task).__name__)
+            self.task.cancel()
+        elif handle.active:
+            handle.canceled(self._result_message(handle, None))
+
+    # --- status ------------------------------------------------------------------------------------
+
+    def _publish_feedback(self, now: float) -> None:
+        task, handle = self.task, self.task_handle
+        if not isinstance(task, DockingRun) or handle is None or not handle.active:
+            return
+        key = (int(task.feedback_state), task.num_retries)
+        if key == self._feedback_key and now - self._feedback_published_s < self.params.feedback_period_s:
+            return
+        self._feedback_key, self._feedback_published_s = key, now
+        handle.publish_feedback(DockRobotFeedback(
+            state=int(task.feedback_state),
+            docking_time=Duration.from_sec(max(0.0, task.docking_time_s(now))),
+            num_retries=task.num_retries,
+        ))
+
+    def state_name(self) -> str:
+        """What the service is doing, for ``docking/state``."""
+        task = self.task
+        if isinstance(task, DockingRun):
+            return task.feedback_state.name if task.feedback_state is not DockingState.NONE else "STARTING"
+        if isinstance(task, UndockingRun):
+            return "UNDOCKING"
+        if isinstance(task, Patrol):
+            return "PATROLLING"
+        if self._charging(self.node.now()):
+            return "DOCKED"
+        return "HOLDING" if self.mission.mode is MissionMode.HOLDING else "IDLE"
+
+    def _publish_state(self, now: float) -> None:
+        name = self.state_name()
+        if name == self._last_state and now - self._state_published_s < STATE_PERIOD_S:
+            return
+        if name != self._last_state:
+            self.log.info("state %s", name)
+        self._last_state, self._state_published_s = name, now
+        self.state_pub.publish(String(name))
+
+    def close(self) -> None:
+        self.timer.cancel()
+        if self.task is not None:
+            self.task.cancel()
+        if not self.nav.is_task_complete():
+            self.nav.cancel_task()
+        if self.arbiter.moving:
+            self.cmd_vel.publish(Twist.planar(0.0, 0.0))
+        self.dock_server.close()
+        self.undock_server.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_service(
+        "docking",
+        Params,
+        DockingService,
+        argv,
+        description="zendock docking: goes home to charge when the battery runs low; dock_robot and undock_robot",
+    )
+

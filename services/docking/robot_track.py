@@ -1,0 +1,194 @@
+"""The robot's recent map poses: localisation samples carried forward by odometry, queryable at any time.
+
+``map_to_base_link_pose2d`` arrives at a few hertz without a stamp; odometry arrives faster, stamped
+at capture. The pose at time ``t`` is the newest localisation sample taken at or before ``t`` moved by
+the odometry travelled since (as a localiser's map -> odom correction applied to newer odometry, REP
+105). This gives the docking loop a fresh, stamped pose every tick and lets a late detection be placed
+in the map with the pose the robot had when the camera took it. Without odometry the samples are
+interpolated. An odometry jump (a reset, a teleport) drops the history: poses from before it cannot
+be carried across it.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+
+from shared.geometry import Pose2D, wrap_angle
+
+#: How much history is kept, seconds.
+HISTORY_S = 3.0
+#: A clock this much earlier than the newest sample is a reset (the simulator restarted).
+CLOCK_RESET_S = 1.0
+#: Odometry may be extrapolated with its last twist at most this far past its newest sample.
+MAX_EXTRAPOLATION_S = 0.2
+#: Without odometry, a localisation sample stands for the robot's pose at most this long after it.
+MAX_HOLD_S = 0.5
+
+
+@dataclass(frozen=True, slots=True)
+class OdomSample:
+    stamp_s: float
+    pose: Pose2D
+    linear_mps: float
+    angular_radps: float
+
+
+def interpolate_pose(a: Pose2D, b: Pose2D, fraction: float) -> Pose2D:
+    """The pose ``fraction`` of the way from ``a`` to ``b`` (yaw along the shorter arc)."""
+    return Pose2D(
+        a.x + fraction * (b.x - a.x),
+        a.y + fraction * (b.y - a.y),
+        wrap_angle(a.yaw + fraction * wrap_angle(b.yaw - a.yaw)),
+    )
+
+
+def _advance(pose: Pose2D, linear_mps: float, angular_radps: float, dt_s: float) -> Pose2D:
+    """Unicycle motion over ``dt_s`` (exact arc)."""
+    if abs(angular_radps) < 1e-9:
+        return Pose2D(
+            pose.x + linear_mps * dt_s * math.cos(pose.yaw),
+            pose.y + linear_mps * dt_s * math.sin(pose.yaw),
+            pose.yaw,
+        )
+    yaw = pose.yaw + angular_radps * dt_s
+    r = linear_mps / angular_radps
+    return Pose2D(
+        pose.x + r * (math.sin(yaw) - math.sin(pose.yaw)),
+        pose.y - r * (math.cos(yaw) - math.cos(pose.yaw)),
+        wrap_angle(yaw),
+    )
+
+
+class RobotPoseTrack:
+    """Map poses (time they describe, pose) and odometry samples, a few seconds of each."""
+
+    def __init__(self, odom_jump_m: float = 0.05, odom_jump_rad: float = 0.2) -> None:
+        self.odom_jump_m = odom_jump_m
+        self.odom_jump_rad = odom_jump_rad
+        self._pose_times: list[float] = []
+        self._poses: list[Pose2D] = []
+        self._odom_times: list[float] = []
+        self._odom: list[OdomSample] = []
+        #: Clock time at which the newest localisation sample arrived (-inf before any).
+        self.last_pose_received_s = -math.inf
+        self.odom_resets = 0
+
+    def clear(self) -> None:
+        self._pose_times.clear()
+        self._poses.clear()
+        self._odom_times.clear()
+        self._odom.clear()
+        self.last_pose_received_s = -math.inf
+
+    # --- input -------------------------------------------------------------------------------------
+
+    def add_pose(self, received_s: float, pose: Pose2D, latency_s: float = 0.0) -> None:
+        """A localisation sample received at ``received_s`` describing the robot ``latency_s`` earlier."""
+        t = received_s - latency_s
+        if self._pose_times and t < self._pose_times[-1] - CLOCK_RESET_S:
+            self.clear()
+        if self._pose_times and t <= self._pose_times[-1]:
+            t = self._pose_times[-1] + 1e-6  # keep times increasing
+        self._pose_times.append(t)
+        self._poses.append(pose)
+        self.last_pose_received_s = received_s
+        self._forget(self._pose_times, self._poses, t)
+
+    def add_odom(self, sample: OdomSample) -> None:
+        """An odometry sample (odom -> base_link and the body twist), stamped at capture."""
+        if self._odom:
+            last = self._odom[-1]
+            if sample.stamp_s < last.stamp_s - CLOCK_RESET_S:
+                self.clear()
+            elif sample.stamp_s <= last.stamp_s:
+                return  # out of order or repeated
+            elif self._is_jump(last, sample):
+                self.odom_resets += 1
+                # Poses from before the jump cannot be carried across it.
+                self._odom_times.clear()
+                self._odom.clear()
+                self._pose_times.clear()
+                self._poses.clear()
+        self._odom_times.append(sample.stamp_s)
+        self._odom.append(sample)
+        self._forget(self._odom_times, self._odom, sample.stamp_s)
+
+    def _is_jump(self, last: OdomSample, sample: OdomSample) -> bool:
+        dt = sample.stamp_s - last.stamp_s
+        speed = max(abs(last.linear_mps), abs(sample.linear_mps))
+        turn = max(abs(last.angular_radps), abs(sample.angular_radps))
+        moved = last.pose.distance_to(sample.pose)
+        turned = abs(wrap_angle(sample.pose.yaw - last.pose.yaw))
+        return moved > self.odom_jump_m + 2.0 * speed * dt or turned > self.odom_jump_rad + 2.0 * turn * dt
+
+    @staticmethod
+    def _forget(times: list[float], items: list, newest_s: float) -> None:  # type: ignore[type-arg]
+        keep_from = bisect.bisect_left(times, newest_s - HISTORY_S)
+        if keep_from > 0:
+            del times[:keep_from]
+            del items[:keep_from]
+
+    # --- queries -----------------------------------------------------------------------------------
+
+    @property
+    def has_pose(self) -> bool:
+        return bool(self._poses)
+
+    def pose_fresh(self, now_s: float, max_age_s: float) -> bool:
+        """Whether a localisation sample arrived within ``max_age_s`` of ``now_s``."""
+        return self.has_pose and now_s - self.last_pose_received_s <= max_age_s
+
+    @property
+    def latest_odom(self) -> OdomSample | None:
+        return self._odom[-1] if self._odom else None
+
+    def twist(self, now_s: float, max_age_s: float) -> tuple[float, float] | None:
+        """The measured body velocity ``(v, w)``, or None when odometry is older than ``max_age_s``."""
+        odom = self.latest_odom
+        if odom is None or now_s - odom.stamp_s > max_age_s:
+            return None
+        return (odom.linear_mps, odom.angular_radps)
+
+    def odom_at(self, t_s: float) -> Pose2D | None:
+        """The odometry pose at ``t_s``: interpolated, or extrapolated a little past the newest sample."""
+        if not self._odom or t_s < self._odom_times[0]:
+            return None
+        i = bisect.bisect_right(self._odom_times, t_s)
+        if i >= len(self._odom):
+            last = self._odom[-1]
+            ahead = t_s - last.stamp_s
+            if ahead > MAX_EXTRAPOLATION_S:
+                return None
+            return _advance(last.pose, last.linear_mps, last.angular_radps, ahead)
+        a, b = self._odom[i - 1], self._odom[i]
+        return interpolate_pose(a.pose, b.pose, (t_s - a.stamp_s) / (b.stamp_s - a.stamp_s))
+
+    def pose_at(self, t_s: float) -> Pose2D | None:
+        """The robot's map pose at ``t_s``, or None when the history does not reach that far."""
+        if not self._poses:
+            return None
+        i = bisect.bisect_right(self._pose_times, t_s)
+        k = max(0, i - 1)  # the newest sample at or before t (or the oldest one)
+        anchor_t, anchor = self._pose_times[k], self._poses[k]
+        odom_anchor, odom_t = self.odom_at(anchor_t), self.odom_at(t_s)
+        if odom_anchor is not None and odom_t is not None:
+            return anchor.compose(odom_anchor.inverse().compose(odom_t))
+        if i == 0:
+            return anchor if anchor_t - t_s <= MAX_EXTRAPOLATION_S else None
+        if i < len(self._poses):
+            t1 = self._pose_times[i]
+            return interpolate_pose(anchor, self._poses[i], (t_s - anchor_t) / (t1 - anchor_t))
+        return anchor if t_s - anchor_t <= MAX_HOLD_S else None
+
+    def latest(self) -> tuple[float, Pose2D] | None:
+        """``(time, pose)`` of the newest pose this track knows: at the newest odometry when it has some."""
+        if not self._poses:
+            return None
+        odom = self.latest_odom
+        if odom is not None and odom.stamp_s >= self._pose_times[-1]:
+            pose = self.pose_at(odom.stamp_s)
+            if pose is not None:
+                return (odom.stamp_s, pose)
+        return (self._pose_times[-1], self._poses[-1])

@@ -1,0 +1,237 @@
+"""The docking run's state machine, stepped in the kinematic world of :mod:`tests.unit.docking.harness`."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from services.docking.approach import dock_frame_error, graceful_staging_pose, line_approach
+from services.docking.approach_control import GracefulApproach, SeedApproach
+from services.docking.dock_db import DockDatabase
+from services.docking.docking_run import DockingConfig, DockingRun, DockRequest, RunPhase, facing_dock_closely
+from services.docking.errors import DockingErrorCode, DockingState
+from services.docking.task_io import Outcome, TickInputs
+from shared.geometry import Pose2D
+from shared.world import Dock
+from tests.unit.docking.harness import SEED_DOCK, KinematicWorld
+
+FAR = Pose2D(1.8, 4.2, math.pi)
+DATABASE = DockDatabase([Dock(id="home", pose=SEED_DOCK.as_tuple()), Dock(id="spare", pose=(2.0, 0.83, -math.pi / 2))])
+
+
+def graceful_run(request: DockRequest | None = None, **config: object) -> DockingRun:
+    return DockingRun(request or DockRequest(dock_id="home"), DATABASE, GracefulApproach(),
+                      DockingConfig(**config))  # type: ignore[arg-type]
+
+
+def run_with_states(world: KinematicWorld, run: DockingRun, max_time_s: float) -> list[DockingState]:
+    states: list[DockingState] = []
+    while world.now_s < max_time_s and not run.done:
+        world.tick(run)
+        if not states or states[-1] != run.feedback_state:
+            states.append(run.feedback_state)
+    return states
+
+
+def test_graceful_run_stages_perceives_approaches_and_docks() -> None:
+    world = KinematicWorld(FAR)
+    run = graceful_run()
+    states = run_with_states(world, run, 60.0)
+    assert run.result is not None and run.result.outcome is Outcome.SUCCEEDED, run.result
+    assert states == [DockingState.NAV_TO_STAGING_POSE, DockingState.INITIAL_PERCEPTION,
+                      DockingState.CONTROLLING]
+    assert [g for _, g in world.log.goals] == [graceful_staging_pose(SEED_DOCK)]
+    assert world.mated and run.num_retries == 0 and not run.blind
+    assert world.log.overlaps == 0
+    assert world.log.published[-1][1].is_zero
+
+
+def test_nearest_dock_by_default_and_a_given_pose() -> None:
+    world = KinematicWorld(Pose2D(1.5, 2.0, 0.0), dock=Pose2D(2.0, 0.83, -math.pi / 2))
+    run = graceful_run(DockRequest())
+    world.run(run, 60.0)
+    assert run.dock_id == "spare" and run.result is not None and run.result.success
+    world = KinematicWorld(FAR)
+    run = graceful_run(DockRequest(dock_pose=SEED_DOCK))
+    world.run(run, 60.0)
+    assert run.dock_id == "" and run.result is not None and run.result.success
+
+
+@pytest.mark.parametrize("detections", [True, False])
+def test_detections_cancel_a_localisation_error_that_blind_docking_cannot(detections: bool) -> None:
+    world = KinematicWorld(FAR, error=Pose2D(0.03, 0.06, 0.03), detections=detections)
+    run = graceful_run(max_retries=1, wait_charge_timeout_s=2.0)
+    world.run(run, 120.0)
+    assert run.result is not None
+    if detections:
+        assert run.result.success and world.mated and not run.blind
+        assert abs(dock_frame_error(world.true_pose, SEED_DOCK).lateral_m) < 0.01
+    else:
+        assert run.blind and not world.mated
+        assert run.result.outcome is Outcome.FAILED and run.result.error_code is DockingErrorCode.FAILED_TO_CHARGE
+        assert run.result.num_retries == 1
+    assert world.log.overlaps == 0
+
+
+def test_seed_run_uses_the_line_approach_at_its_own_rate() -> None:
+    world = KinematicWorld(FAR, period_s=0.1)
+    run = DockingRun(DockRequest(dock_id="home"), DATABASE, SeedApproach(), DockingConfig(wait_for_detection=False))
+    world.run(run, 200.0)
+    assert run.result is not None and run.result.success, run.result
+    assert [g for _, g in world.log.goals] == [line_approach(SEED_DOCK).staging_goal]
+    commands = {(c.linear_x_mps, c.angular_z_radps) for _, c in world.log.published}
+    assert commands <= {(0.0, 0.0), (0.08, 0.0), (0.0, 0.1), (0.0, -0.1)}
+    assert world.mated
+
+
+def test_failed_staging_is_retried_and_counted() -> None:
+    world = KinematicWorld(FAR, nav_fails=1)
+    run = graceful_run()
+    states = run_with_states(world, run, 60.0)
+    assert run.result is not None and run.result.success and run.result.num_retries == 1
+    assert DockingState.RETRY in states and len(world.log.goals) == 2
+
+
+def test_retries_run_out_with_the_last_error() -> None:
+    world = KinematicWorld(FAR, nav_fails=10)
+    run = graceful_run(max_retries=2)
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.outcome is Outcome.FAILED
+    assert (run.result.error_code, run.result.num_retries, len(world.log.goals)) == (
+        DockingErrorCode.FAILED_TO_STAGE, 2, 3)
+
+
+def test_unknown_dock_fails_at_once_without_moving() -> None:
+    world = KinematicWorld(FAR)
+    run = graceful_run(DockRequest(dock_id="garage"))
+    world.run(run, 5.0)
+    assert run.result is not None and run.result.error_code is DockingErrorCode.DOCK_NOT_IN_DB
+    assert run.result.num_retries == 0 and not world.log.goals
+    assert all(c.is_zero for _, c in world.log.published)
+
+
+def test_already_charging_succeeds_at_once() -> None:
+    world = KinematicWorld(SEED_DOCK)
+    run = graceful_run()
+    world.run(run, 5.0)
+    assert run.result is not None and run.result.success and run.message == "already charging"
+    assert not world.log.goals
+
+
+def test_a_robot_in_front_of_the_dock_backs_off_before_staging() -> None:
+    start = SEED_DOCK.compose(Pose2D(-0.2, 0.01, 0.05))  # stopped mid-approach, not mated
+    assert facing_dock_closely(start, SEED_DOCK, 0.35)
+    world = KinematicWorld(start, charger_works=True)
+    run = graceful_run()
+    world.tick(run)
+    world.tick(run)
+    assert run.phase is RunPhase.RETREAT
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.success
+    first_goal_s = world.log.goals[0][0]
+    backing = [c for t, c in world.log.published if t < first_goal_s]
+    assert any(c.linear_x_mps < 0.0 for c in backing)
+    assert world.log.overlaps == 0
+
+
+def test_without_the_planner_a_retry_backs_off_to_staging() -> None:
+    staging = graceful_staging_pose(SEED_DOCK)
+    world = KinematicWorld(staging, charger_works=False)
+    run = graceful_run(DockRequest(dock_id="home", navigate_to_staging_pose=False), max_retries=1,
+                       wait_charge_timeout_s=1.0)
+    world.run(run, 60.0)
+    assert not world.log.goals
+    assert run.result is not None and run.result.error_code is DockingErrorCode.FAILED_TO_CHARGE
+    assert run.result.num_retries == 1
+    assert any(c.linear_x_mps < 0.0 for _, c in world.log.published)
+
+
+def test_cancel_while_controlling_publishes_zero() -> None:
+    world = KinematicWorld(FAR)
+    run = graceful_run()
+    world.run(run, 60.0, until=lambda: run.phase is RunPhase.CONTROLLING and world.robot.v_mps > 0.1)
+    run.cancel()
+    world.run(run, 5.0)
+    assert run.result is not None and run.result.outcome is Outcome.CANCELED
+    assert world.log.published[-1][1].is_zero and not world.mated
+
+
+def test_cancel_while_staging_cancels_the_planner_first() -> None:
+    world = KinematicWorld(FAR, nav_duration_s=10.0)
+    run = graceful_run()
+    world.run(run, 60.0, until=lambda: world.nav_busy)
+    run.cancel()
+    world.run(run, 5.0)
+    assert run.result is not None and run.result.outcome is Outcome.CANCELED
+    assert world.log.cancels and world.log.overlaps == 0
+    assert world.log.published[-1][1].is_zero
+
+
+def test_an_obstacle_holds_the_robot_until_it_goes() -> None:
+    world = KinematicWorld(FAR)
+    run = graceful_run()
+    window: list[float] = []
+
+    def blocked(w: KinematicWorld) -> bool:
+        if run.phase is RunPhase.CONTROLLING and not window:
+            window.append(w.now_s)
+        return bool(window) and w.now_s < window[0] + 2.0
+
+    world.blocked_ahead = blocked
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.success
+    held = [c for t, c in world.log.published if window[0] <= t < window[0] + 2.0]
+    assert held and all(c.linear_x_mps <= 0.0 for c in held)
+
+
+def test_an_obstacle_that_stays_fails_the_attempt() -> None:
+    world = KinematicWorld(FAR)
+    run = graceful_run(max_retries=0, obstacle_timeout_s=3.0)
+    world.blocked_ahead = lambda _w: True
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.error_code is DockingErrorCode.FAILED_TO_CONTROL
+    assert all(c.linear_x_mps <= 0.0 for _, c in world.log.published)
+
+
+def test_stale_localisation_holds_then_resumes() -> None:
+    world = KinematicWorld(FAR)
+    run = graceful_run()
+    gap: list[float] = []
+
+    def available(w: KinematicWorld) -> bool:
+        if run.phase is RunPhase.CONTROLLING and not gap and w.robot.v_mps > 0.1:
+            gap.append(w.now_s)
+        return not gap or w.now_s >= gap[0] + 1.0
+
+    world.pose_available = available
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.success
+    during = [c for t, c in world.log.published if gap[0] <= t < gap[0] + 1.0]
+    assert during and all(c.is_zero for c in during)
+
+
+def test_no_charge_means_wait_then_fail_to_charge() -> None:
+    world = KinematicWorld(FAR, charger_works=False)
+    run = graceful_run(max_retries=0, wait_charge_timeout_s=2.0)
+    states = run_with_states(world, run, 60.0)
+    assert DockingState.WAIT_FOR_CHARGE in states
+    assert run.result is not None and run.result.error_code is DockingErrorCode.FAILED_TO_CHARGE
+
+
+def test_the_whole_run_is_bounded() -> None:
+    world = KinematicWorld(FAR, nav_duration_s=100.0)
+    run = graceful_run(max_docking_time_s=5.0)
+    world.run(run, 30.0)
+    assert run.result is not None and run.result.error_code is DockingErrorCode.TIMEOUT
+    assert world.log.cancels  # the planner's goal was dropped before the final stop
+
+
+def test_nearest_dock_waits_for_a_pose_then_times_out() -> None:
+    run = graceful_run(DockRequest(), start_timeout_s=1.0)
+    now, intents = 0.0, []
+    while not run.done and now < 5.0:
+        intents.append(run.step(TickInputs(now_s=now)))
+        now += 0.05
+    assert run.result is not None and run.result.error_code is DockingErrorCode.TIMEOUT
+    assert 0.95 < now < 1.2 and all(i is None for i in intents[:-1])  # nothing to drive without a pose
