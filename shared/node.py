@@ -252,6 +252,7 @@ class Publisher(Generic[M]):
         )
         self._seq = itertools.count(1)
         self._lock = threading.Lock()
+        self._source_id = self._publisher.id
         self._token = node._declare_endpoint("pub", msg_type.TYPE_NAME, self.key)
 
     def publish(self, msg: M) -> None:
@@ -264,10 +265,14 @@ class Publisher(Generic[M]):
         self.publish_encoded(payload)
 
     def publish_encoded(self, payload: bytes) -> None:
-        """Put an already validated payload (replay, relays)."""
+        """Put an already validated payload (replay, relays).
+
+        Every sample carries its sequence number twice: as the attachment (any client can read it) and in
+        Zenoh's source info with the publisher's id, so a recorder counts losses per publisher.
+        """
         with self._lock:
             seq = next(self._seq)
-            self._publisher.put(payload, attachment=_SEQ.pack(seq))
+            self._publisher.put(payload, attachment=_SEQ.pack(seq), source_info=zenoh.SourceInfo(self._source_id, seq))
 
     def undeclare(self) -> None:
         self._token.undeclare()

@@ -1,0 +1,83 @@
+"""``zendock demo``: bring the stack up, let the battery run low, dock, report (what ``make run`` runs)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from shared.config_errors import ConfigError
+
+
+def _positive(text: str) -> float:
+    value = float(text)
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return value
+
+
+def _rtf(text: str) -> str:
+    if text.strip().lower() == "max":
+        return "max"
+    _positive(text)
+    return text
+
+
+def _print_report(report: dict, console: Console) -> None:
+    table = Table(title=f"zendock demo: {report['world']} with the {report['controller']} controller")
+    table.add_column("measure")
+    table.add_column("value", justify="right")
+    rows = [
+        ("docked and charging", "yes" if report["docked"] and report["charging"] else "NO"),
+        ("dock time (trigger to CHARGING)", f"{report['dock_time_s']:.1f} s sim"),
+        ("lower bound", f"{report['lower_bound_s']:.1f} s sim"),
+        ("lateral error at contact", f"{1000 * report['final_lateral_error_m']:.1f} mm"),
+        ("yaw error at contact", f"{math.degrees(report['final_yaw_error_rad']):.2f} deg"),
+        ("collisions", str(report["collisions"])),
+        ("path driven", f"{report['path_length_m']:.2f} m"),
+        ("wall time", f"{report['wall_s']:.1f} s"),
+    ]
+    rows += [(f"peak RSS {name}", f"{mb:.0f} MB") for name, mb in sorted(report.get("peak_rss_mb", {}).items())]
+    for name, value in rows:
+        table.add_row(name, value)
+    console.print(table)
+    console.print(f"report and trajectory picture in {report['run_dir']}")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from deploy.demo import DemoOptions, run_demo  # noqa: PLC0415 - heavy imports only when used
+
+    world = Path(args.world)
+    if not world.is_file():
+        raise ConfigError(f"--world {world}: no such file")
+    console = Console(stderr=args.json)
+    options = DemoOptions(
+        world=world.resolve(),
+        controller=args.controller,
+        rtf=args.rtf,
+        seed=args.seed,
+        start=tuple(args.start) if args.start else None,
+        timeout_sim_s=args.timeout,
+    )
+    report = run_demo(options, log=lambda text: console.print(f"[dim]demo:[/] {text}")).as_dict()
+    _print_report(report, console)
+    if args.json:
+        print(json.dumps(report))
+    return 0 if report["docked"] and report["charging"] else 1
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("demo", help="dock once on the full stack and report (what `make run` runs)")
+    parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file")
+    parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
+    parser.add_argument("--rtf", type=_rtf, default="1.0", help="real-time factor of the simulator, or max")
+    parser.add_argument("--seed", type=int, default=0, help="simulator noise seed")
+    parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"), help="start pose (map frame)")
+    parser.add_argument("--timeout", type=_positive, default=300.0, metavar="SIM_SECONDS",
+                        help="give up this many sim seconds after the trigger")
+    parser.add_argument("--json", action="store_true", help="print the JSON report as the last line")
+    parser.set_defaults(func=_run)

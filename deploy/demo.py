@@ -1,0 +1,193 @@
+"""``zendock demo``: the whole system once, start to charge, measured on ground truth.
+
+It brings the default stack up through the launcher (embedded router on a free loopback port, so it
+never meets another stack), optionally places the robot, sets the battery just above the low
+threshold so it soon crosses it, and waits for ``CHARGING``. Then it writes ``runs/<timestamp>/``:
+``report.json``, ``trajectory.png`` and the services' logs, prints a short report and brings the
+stack down. Exit 0 only when the robot docked and charges.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.memory import PeakRssSampler
+from deploy.observer import RunObserver, RunRecord
+from shared.geometry import Pose2D
+from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
+from shared.interfaces.simulator import TELEPORT, TeleportRequest
+from shared.names import topic_key
+from shared.node import ServiceError, call_service
+from shared.session import SessionSpec, open_session
+from shared.world import World, load_world
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
+DEFAULT_WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
+DOCK_SERVICES = ("router", "map", "simulator", "battery", "pose", "planner", "docking")
+
+
+@dataclass(frozen=True)
+class DemoOptions:
+    world: Path = DEFAULT_WORLD
+    controller: str = "graceful"
+    rtf: str = "1.0"
+    seed: int = 0
+    start: tuple[float, float, float] | None = None
+    timeout_sim_s: float = 300.0
+    battery_start: float = 0.26
+    drain_scale: float = 20.0
+    runs_dir: Path = REPO_ROOT / "runs"
+    #: map->odom error of the simulated localisation (x_m, y_m, yaw_rad); trials turn it on.
+    localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class DemoReport:
+    docked: bool
+    charging: bool
+    controller: str
+    world: str
+    dock_time_s: float
+    final_lateral_error_m: float
+    final_yaw_error_rad: float
+    collisions: int
+    path_length_m: float
+    lower_bound_s: float
+    wall_s: float
+    sim_s: float
+    trigger_s: float
+    peak_rss_mb: dict[str, float] = field(default_factory=dict)
+    run_dir: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def lower_bound(world_path: Path, start: Pose2D, goal: Pose2D) -> dict[str, float]:
+    """The shortest collision-free time from ``start`` to ``goal``, computed by the planner's own tool.
+
+    Run as a process (``python -m services.planner.lower_bound``) so the launcher floor stays apart
+    from the services' code.
+    """
+    command = [
+        sys.executable, "-m", "services.planner.lower_bound", "--world", str(world_path),
+        "--start", *map(str, start.as_tuple()), "--goal", *map(str, goal.as_tuple()),
+    ]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120, cwd=REPO_ROOT)
+    if done.returncode != 0:
+        raise RuntimeError(f"lower bound failed: {done.stderr.strip().splitlines()[-1:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def stack_environment(options: DemoOptions, endpoint: str) -> dict[str, str]:
+    return {
+        "ZENOH_LISTEN": endpoint,
+        "ZENOH_CONNECT": endpoint,
+        "ZENDOCK_WORLD": str(options.world),
+        "ZENDOCK_CONTROLLER": options.controller,
+        "ZENDOCK_RTF": options.rtf,
+        "ZENDOCK_SEED": str(options.seed),
+        "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(options.localisation_error)),
+    }
+
+
+def build_report(record: RunRecord, options: DemoOptions, world: World, wall_s: float, bound_s: float) -> DemoReport:
+    contact = record.contact_at_charging
+    docked = bool(record.charging and contact is not None and contact.mated)
+    trigger = record.trigger_s if record.trigger_s is not None else math.nan
+    return DemoReport(
+        docked=docked,
+        charging=record.charging,
+        controller=options.controller,
+        world=world.name,
+        dock_time_s=(record.charging_s - trigger) if record.charging_s is not None else math.nan,
+        final_lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
+        final_yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,
+        collisions=record.collisions,
+        path_length_m=record.driven_length_m(since_s=record.trigger_s),
+        lower_bound_s=bound_s,
+        wall_s=wall_s,
+        sim_s=record.sim_time_s,
+        trigger_s=trigger,
+    )
+
+
+def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
+    """Bring the stack up, dock once, write the run's files; always brings the stack down."""
+    world = load_world(options.world)
+    run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
+    run_dir.mkdir(parents=True, exist_ok=True)
+    endpoint = free_endpoint()
+    stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint), project_dir=REPO_ROOT)
+    wall_start = time.monotonic()
+    log(f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}")
+    with Launcher(stack, services=DOCK_SERVICES, project_dir=run_dir / "stack", working_dir=REPO_ROOT,
+                  project_name="demo") as launcher:
+        launcher.wait_healthy(timeout_s=90.0)
+        sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
+        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
+            observer = RunObserver(session)
+            try:
+                if options.start is not None:
+                    placed = call_service(session, topic_key("", "simulator/teleport"), TELEPORT,
+                                          TeleportRequest(*options.start))
+                    if not placed.success:
+                        raise ServiceError(f"--start {options.start}: {placed.message}")
+                observer.arm()
+                call_service(session, "battery/set_state", SET_BATTERY_STATE,
+                             SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
+                log(f"battery set to {options.battery_start:.0%}; waiting for the low-battery trigger and CHARGING")
+                deadline_wall = time.monotonic() + options.timeout_sim_s * 4 + 60.0
+
+                def finished(record: RunRecord) -> bool:
+                    too_late = record.trigger_s is not None and record.sim_time_s - record.trigger_s > options.timeout_sim_s
+                    return record.charging or too_late or record.sim_time_s > options.timeout_sim_s + 60.0
+
+                while not observer.wait(finished, timeout_s=1.0):
+                    if time.monotonic() > deadline_wall:
+                        log("wall-clock limit reached")
+                        break
+                record = observer.snapshot()
+            finally:
+                observer.close()
+        for name in DOCK_SERVICES:
+            (run_dir / f"{name}.log").write_text("\n".join(launcher.logs(name)) + "\n")
+    wall_s = time.monotonic() - wall_start
+    start_pose = record.pose_at(record.trigger_s) if record.trigger_s is not None else None
+    bound_s = math.nan
+    if start_pose is not None and world.docks:
+        try:
+            bound_s = lower_bound(options.world, start_pose, world.docks[0].pose2d)["lower_bound_s"]
+        except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
+            log(f"lower bound not computed: {exc}")
+    report = build_report(record, options, world, wall_s, bound_s)
+    report.run_dir = str(run_dir)
+    report.peak_rss_mb = dict(sampler.peak_mb)
+    (run_dir / "report.json").write_text(json.dumps(report.as_dict(), indent=2) + "\n")
+    _plot(world, record, run_dir / "trajectory.png", log)
+    return report
+
+
+def _plot(world: World, record: RunRecord, path: Path, log: Any) -> None:
+    try:
+        from deploy.plotting import plot_run  # noqa: PLC0415 - matplotlib is slow to import
+    except ImportError:
+        log("plotting is not available; no trajectory picture")
+        return
+    plot_run(
+        world,
+        path,
+        driven=[(x, y) for _, x, y, _ in record.driven],
+        plans=record.plans[:1] + record.plans[-1:] if record.plans else [],
+        sonar_hits=record.sonar_hits,
+        battery=record.battery,
+    )

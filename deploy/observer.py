@@ -1,0 +1,188 @@
+"""Watches one robot's docking run from the outside, on the bus, and measures it on ground truth.
+
+The observer never talks to a service's internals: it listens to the keys any tool could (battery,
+the simulator's ground truth, collisions, the plan, the ultrasonic range) and derives the run's numbers:
+when the battery crossed the low threshold (the trigger), when charging began, how far the robot
+drove, and the lateral and yaw error of its contacts at the moment charging began.
+
+Zenoh callbacks only decode and append under a lock; all arithmetic happens in the caller's thread.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+import zenoh
+
+from shared import topics
+from shared.geometry import Pose2D
+from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, Path, PoseStamped, Range
+from shared.names import topic_key
+from shared.schema import Message, MessageError
+
+#: The ultrasonic sensor's mount on base_link (the simulator's default), for placing sonar hits.
+ULTRASONIC_MOUNT = Pose2D(0.20, 0.0, 0.0)
+
+
+@dataclass
+class RunRecord:
+    """What the observer saw, as plain data (sim-time seconds)."""
+
+    trigger_s: float | None = None
+    charging_s: float | None = None
+    contact_at_charging: DockContact | None = None
+    collisions: int = 0
+    collision_kinds: list[str] = field(default_factory=list)
+    driven: list[tuple[float, float, float, float]] = field(default_factory=list)  # (t, x, y, yaw)
+    plans: list[list[tuple[float, float]]] = field(default_factory=list)
+    sonar_hits: list[tuple[float, float]] = field(default_factory=list)
+    battery: list[tuple[float, float]] = field(default_factory=list)  # (t, percentage)
+    sim_time_s: float = 0.0
+
+    @property
+    def charging(self) -> bool:
+        return self.charging_s is not None
+
+    def driven_length_m(self, since_s: float | None = None) -> float:
+        points = [(x, y) for t, x, y, _ in self.driven if since_s is None or t >= since_s]
+        return sum(math.dist(a, b) for a, b in zip(points, points[1:]))
+
+    def pose_at(self, t_s: float) -> Pose2D | None:
+        """The ground-truth pose at (or just before) ``t_s``."""
+        best = None
+        for t, x, y, yaw in self.driven:
+            if t > t_s:
+                break
+            best = Pose2D(x, y, yaw)
+        return best if best is not None else (Pose2D(*self.driven[0][1:]) if self.driven else None)
+
+
+class RunObserver:
+    """Subscribes to one robot's keys on ``session`` (namespace ``namespace``)."""
+
+    def __init__(self, session: zenoh.Session, namespace: str = "", low_threshold: float = 0.25) -> None:
+        self.namespace = namespace
+        self.low_threshold = low_threshold
+        self._lock = threading.Lock()
+        self._record = RunRecord()
+        self._contacts: list[DockContact] = []
+        self._truth: Pose2D | None = None
+        self._armed = False
+        self._changed = threading.Condition(self._lock)
+        key = lambda name: topic_key(namespace, name)  # noqa: E731
+        self._subscribers = [
+            session.declare_subscriber(key(topics.CLOCK), self._decoder(Clock, self._on_clock)),
+            session.declare_subscriber(key(topics.BATTERY_STATUS), self._decoder(BatteryState, self._on_battery)),
+            session.declare_subscriber(key(topics.DOCK_CONTACT), self._decoder(DockContact, self._on_contact)),
+            session.declare_subscriber(key(topics.COLLISIONS), self._decoder(CollisionEvent, self._on_collision)),
+            session.declare_subscriber(key(topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth)),
+            session.declare_subscriber(key(topics.PLAN), self._decoder(Path, self._on_plan)),
+            session.declare_subscriber(key(topics.ULTRASONIC), self._decoder(Range, self._on_range)),
+        ]
+
+    @staticmethod
+    def _decoder(msg_type: type[Message], handler: Any):  # type: ignore[no-untyped-def]
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                msg = msg_type.decode(sample.payload.to_bytes())
+            except MessageError:
+                return  # a tool watching the bus ignores what it cannot read; services count it
+            handler(msg)
+
+        return on_sample
+
+    def arm(self) -> None:
+        """From now on, the first crossing below the threshold (or a reading already below it) is the trigger."""
+        with self._lock:
+            self._armed = True
+
+    # --- callbacks (Zenoh threads) --------------------------------------------------------------------
+
+    def _on_clock(self, msg: Clock) -> None:
+        with self._lock:
+            self._record.sim_time_s = msg.clock.to_sec()
+
+    def _on_battery(self, msg: BatteryState) -> None:
+        t = msg.header.stamp.to_sec()
+        with self._changed:
+            record = self._record
+            record.battery.append((t, msg.percentage))
+            if self._armed and record.trigger_s is None and msg.percentage < self.low_threshold:
+                record.trigger_s = t  # crossed below, or was already below when armed
+            charging = msg.power_supply_status in (
+                BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+            if charging and record.trigger_s is not None and record.charging_s is None:
+                record.charging_s = t
+                record.contact_at_charging = self._contact_before(t)
+            self._changed.notify_all()
+
+    def _contact_before(self, t_s: float) -> DockContact | None:
+        mated = [c for c in self._contacts if c.mated and c.header.stamp.to_sec() <= t_s + 1e-6]
+        if mated:
+            return mated[-1]
+        return self._contacts[-1] if self._contacts else None
+
+    def _on_contact(self, msg: DockContact) -> None:
+        with self._lock:
+            self._contacts.append(msg)
+            if len(self._contacts) > 200:
+                del self._contacts[:100]
+
+    def _on_collision(self, msg: CollisionEvent) -> None:
+        with self._changed:
+            self._record.collisions += 1
+            self._record.collision_kinds.append(msg.kind)
+            self._changed.notify_all()
+
+    def _on_truth(self, msg: PoseStamped) -> None:
+        pose = msg.pose.to_pose2d()
+        with self._lock:
+            self._truth = pose
+            self._record.driven.append((msg.header.stamp.to_sec(), pose.x, pose.y, pose.yaw))
+
+    def _on_plan(self, msg: Path) -> None:
+        points = [(p.pose.position.x, p.pose.position.y) for p in msg.poses]
+        if points:
+            with self._lock:
+                self._record.plans.append(points)
+                if len(self._record.plans) > 50:
+                    del self._record.plans[1:26]  # keep the first plan and the recent ones
+
+    def _on_range(self, msg: Range) -> None:
+        if not (math.isfinite(msg.range) and msg.min_range <= msg.range < msg.max_range):
+            return
+        with self._lock:
+            if self._truth is None:
+                return
+            sensor = self._truth.compose(ULTRASONIC_MOUNT)
+            hit = sensor.transform_point(msg.range, 0.0)
+            hits = self._record.sonar_hits
+            if not hits or math.dist(hits[-1], hit) > 0.02:
+                hits.append(hit)
+
+    # --- reading ----------------------------------------------------------------------------------------
+
+    def snapshot(self) -> RunRecord:
+        with self._lock:
+            r = self._record
+            return RunRecord(
+                r.trigger_s, r.charging_s, r.contact_at_charging, r.collisions, list(r.collision_kinds),
+                list(r.driven), [list(p) for p in r.plans], list(r.sonar_hits), list(r.battery), r.sim_time_s,
+            )
+
+    def sim_time(self) -> float:
+        with self._lock:
+            return self._record.sim_time_s
+
+    def wait(self, predicate: Any, timeout_s: float) -> bool:
+        """Block until ``predicate(record)`` holds (checked on battery and collision events) or timeout."""
+        with self._changed:
+            return self._changed.wait_for(lambda: predicate(self._record), timeout=timeout_s)
+
+    def close(self) -> None:
+        for sub in self._subscribers:
+            sub.undeclare()
+        self._subscribers.clear()

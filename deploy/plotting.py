@@ -1,0 +1,206 @@
+"""A run as a picture: the room, the plan, the path driven, what the sonar hit, and the battery over time.
+
+Takes plain data (:func:`plot_run` with lists, or a :class:`RunPicture`), so anything that has a run's
+numbers can draw it: ``zendock plot`` reads them from a recording, ``zendock demo`` from its own run. Drawn with matplotlib's Agg backend (no
+display needed). Walls are black, glass light blue, docks green with their staging pose in orange, the
+planned path dashed, the driven trajectory coloured by time, sonar hits as small red dots.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402 - after choosing the backend
+import numpy as np  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
+
+from shared.foxglove_view.scene import DEFAULT_STAGING_OFFSET_M, staging_pose  # noqa: E402
+from shared.world import DOCK_GEOMETRY, World  # noqa: E402
+
+WALL_COLOR = "black"
+GLASS_COLOR = "#7ec8f0"
+BOX_COLOR = "#9c8c7a"
+DOCK_COLOR = "#1a9e3a"
+STAGING_COLOR = "#ff9900"
+PLAN_COLOR = "#d62728"
+SONAR_COLOR = "#e41a1c"
+BATTERY_COLOR = "#1f77b4"
+TRAJECTORY_CMAP = "viridis"
+
+
+@dataclass(frozen=True)
+class MapImage:
+    """An occupancy grid to draw under the run when there is no world file (cells -1, 0..100)."""
+
+    cells: np.ndarray  # (height, width) int8, row 0 at the origin's y
+    resolution_m: float
+    origin_x_m: float
+    origin_y_m: float
+
+
+@dataclass
+class RunPicture:
+    """What a run picture shows; every part is optional.
+
+    ``trajectory``: ``(N, 2)`` driven positions, with ``trajectory_times_s`` (``N``) to colour them by time
+    (else by progress along the run); ``planned_paths``: each ``(K, 2)`` in the map frame, in the order
+    planned: the first is drawn as the planned path, later replans faintly; ``sonar_hits``: ``(M, 2)``
+    points on the sonar's axis at the measured range (the echo may come from anywhere in its cone);
+    ``battery``: rows ``(t_s, percentage 0..1)``.
+    """
+
+    world: World | None = None
+    map_image: MapImage | None = None
+    planned_paths: list[np.ndarray] = field(default_factory=list)
+    trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    trajectory_times_s: np.ndarray | None = None
+    sonar_hits: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    battery: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    title: str = ""
+    staging_offset_m: float = DEFAULT_STAGING_OFFSET_M
+
+
+def _points(values: Sequence[Sequence[float]] | np.ndarray, columns: int) -> np.ndarray:
+    return np.asarray(values, dtype=np.float64).reshape(-1, columns)
+
+
+def _draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
+    for i, ((x1, y1), (x2, y2)) in enumerate(world.boundary_walls() + list(world.walls)):
+        ax.plot([x1, x2], [y1, y2], color=WALL_COLOR, linewidth=3, solid_capstyle="round",
+                label="walls" if i == 0 else None, zorder=3)
+    for i, ((x1, y1), (x2, y2)) in enumerate(world.glass):
+        ax.plot([x1, x2], [y1, y2], color=GLASS_COLOR, linewidth=5, solid_capstyle="round",
+                label="glass" if i == 0 else None, zorder=3)
+    for box in world.boxes:
+        ax.add_patch(Polygon(box.corners(), closed=True, facecolor=BOX_COLOR, edgecolor=WALL_COLOR, zorder=3))
+    for i, dock in enumerate(world.docks):
+        body = DOCK_GEOMETRY.body_box(dock)
+        ax.add_patch(Polygon(body.corners(), closed=True, facecolor=DOCK_COLOR, edgecolor="none",
+                             label="dock" if i == 0 else None, zorder=3))
+        pose = dock.pose2d
+        ax.annotate("", xy=(pose.x + 0.25 * np.cos(pose.yaw), pose.y + 0.25 * np.sin(pose.yaw)), xytext=(pose.x, pose.y),
+                    arrowprops={"arrowstyle": "->", "color": DOCK_COLOR, "lw": 2}, zorder=4)
+        staging = staging_pose(pose, staging_offset_m)
+        ax.plot([staging.x], [staging.y], marker="D", color=STAGING_COLOR, markersize=7, linestyle="none",
+                label="staging pose" if i == 0 else None, zorder=5)
+
+
+def _draw_map(ax: plt.Axes, image: MapImage) -> None:
+    cells = image.cells.astype(np.float64)
+    shade = np.where(cells < 0, 0.85, 1.0 - np.clip(cells, 0, 100) / 100.0)
+    height, width = cells.shape
+    extent = (image.origin_x_m, image.origin_x_m + width * image.resolution_m,
+              image.origin_y_m, image.origin_y_m + height * image.resolution_m)
+    ax.imshow(shade, cmap="gray", vmin=0.0, vmax=1.0, origin="lower", extent=extent, zorder=0)
+
+
+def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
+    for path in picture.planned_paths[1:]:
+        if len(path) >= 2:
+            ax.plot(path[:, 0], path[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=1, alpha=0.25, zorder=6)
+    if picture.planned_paths and len(picture.planned_paths[0]) >= 2:
+        first = picture.planned_paths[0]
+        ax.plot(first[:, 0], first[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=2, label="planned path", zorder=7)
+    hits = picture.sonar_hits
+    if len(hits):
+        ax.scatter(hits[:, 0], hits[:, 1], s=4, color=SONAR_COLOR, alpha=0.5, label="sonar hits", zorder=6)
+    traj = picture.trajectory
+    if len(traj) >= 2:
+        timed = picture.trajectory_times_s is not None and len(picture.trajectory_times_s) == len(traj)
+        colour_by = np.asarray(picture.trajectory_times_s) if timed else np.linspace(0.0, 100.0, len(traj))
+        points = traj.reshape(-1, 1, 2)
+        segments = np.concatenate([points[:-1], points[1:]], axis=1)
+        lines = LineCollection(list(segments), cmap=TRAJECTORY_CMAP, linewidth=2.5, zorder=8)
+        lines.set_array(colour_by[:-1])
+        ax.add_collection(lines)
+        fig.colorbar(lines, ax=ax, fraction=0.035, pad=0.02, label="time [s]" if timed else "progress [%]")
+        ax.plot([traj[0, 0]], [traj[0, 1]], marker="o", color="black", markersize=6, linestyle="none",
+                label="start", zorder=9)
+        ax.plot([traj[-1, 0]], [traj[-1, 1]], marker="s", color="black", markersize=6, linestyle="none",
+                label="end", zorder=9)
+
+
+def _frame(ax: plt.Axes, picture: RunPicture) -> None:
+    """Fit the room (or whatever was drawn) with a small margin."""
+    if picture.world is not None:
+        xmin, ymin, xmax, ymax = picture.world.bounds
+        ax.set_xlim(xmin - 0.2, xmax + 0.2)
+        ax.set_ylim(ymin - 0.2, ymax + 0.2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+
+
+def _draw_battery(ax: plt.Axes, battery: np.ndarray) -> None:
+    ax.set_title("battery")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("charge [%]")
+    ax.set_ylim(0, 105)
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    if len(battery) == 0:
+        ax.text(0.5, 0.5, "no battery_status recorded", ha="center", va="center", transform=ax.transAxes)
+        return
+    ax.plot(battery[:, 0], battery[:, 1] * 100.0, color=BATTERY_COLOR, linewidth=2)
+    ax.fill_between(battery[:, 0], 0, battery[:, 1] * 100.0, color=BATTERY_COLOR, alpha=0.15)
+
+
+def plot_picture(picture: RunPicture, output: str | Path, dpi: int = 120) -> Path:
+    """Draw ``picture`` into a PNG at ``output``; returns the path written."""
+    fig, (room, battery) = plt.subplots(1, 2, figsize=(13, 6), gridspec_kw={"width_ratios": [2.2, 1]})
+    try:
+        if picture.map_image is not None and picture.world is None:
+            _draw_map(room, picture.map_image)
+        if picture.world is not None:
+            _draw_world(room, picture.world, picture.staging_offset_m)
+        _draw_run(room, fig, picture)
+        _frame(room, picture)
+        room.set_title(picture.title or (picture.world.name if picture.world is not None else "run"))
+        handles, _ = room.get_legend_handles_labels()
+        if handles:
+            room.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=5, fontsize=8, frameon=False)
+        _draw_battery(battery, picture.battery)
+        fig.tight_layout()
+        path = Path(output)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=dpi)
+    finally:
+        plt.close(fig)
+    return path
+
+
+def plot_run(
+    world: World | None,
+    output: str | Path,
+    *,
+    driven: Sequence[Sequence[float]] | np.ndarray = (),
+    driven_times_s: Sequence[float] | np.ndarray | None = None,
+    plans: Sequence[Sequence[Sequence[float]] | np.ndarray] = (),
+    sonar_hits: Sequence[Sequence[float]] | np.ndarray = (),
+    battery: Sequence[Sequence[float]] | np.ndarray = (),
+    title: str = "",
+    map_image: MapImage | None = None,
+    dpi: int = 120,
+) -> Path:
+    """Draw a run from plain lists: ``driven`` ``(x, y)`` points (``driven_times_s`` to colour them by time),
+    ``plans`` as lists of ``(x, y)`` (the first drawn as the planned path), ``sonar_hits`` ``(x, y)``,
+    ``battery`` ``(t_s, percentage 0..1)``. Returns the PNG's path.
+    """
+    picture = RunPicture(
+        world=world,
+        map_image=map_image,
+        planned_paths=[_points(p, 2) for p in plans],
+        trajectory=_points(driven, 2),
+        trajectory_times_s=None if driven_times_s is None else np.asarray(driven_times_s, dtype=np.float64),
+        sonar_hits=_points(sonar_hits, 2),
+        battery=_points(battery, 2),
+        title=title,
+    )
+    return plot_picture(picture, output, dpi)

@@ -1,0 +1,169 @@
+"""The live view's wiring: zendock topics in, Foxglove channels out (WebSocket, port 8765 by default).
+
+Subscribes every topic of :data:`shared.foxglove_view.VIEWS` in the node's namespace (sensor streams
+best effort, with ``SENSOR_DATA``), converts each message to its Foxglove schema and logs it on the
+server. A stream nobody watches is not converted. The world file (optional) is drawn as a scene on
+``/world`` with each dock's staging pose; the robot's footprint is on ``/robot``. Rare topics (the map,
+the plan, static transforms, the scenes) are latched: a viewer that subscribes late gets the latest at
+once. The map is also asked for once at start, since Zenoh keeps no history for late joiners.
+
+Only the bus is touched through the node; the server's own threads just post "someone subscribed" to the
+node's executor. Restarting this service changes nothing for the others: it only listens.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, field_validator
+
+from services.viz.live_view import LiveView
+from shared.config_errors import ConfigError
+from shared.foxglove_view import (
+    DEFAULT_STAGING_OFFSET_M,
+    ROBOT_VIEW_TOPIC,
+    VIEWS,
+    WORLD_VIEW_TOPIC,
+    View,
+    robot_scene,
+    view_topic,
+    world_scene,
+)
+from shared.interfaces.map_server import GET_MAP, GET_MAP_SERVICE, GetMapRequest, GetMapResponse
+from shared.messages import OccupancyGrid
+from shared.node import SENSOR_DATA, Node, QoS, ServiceError
+from shared.runtime import ServiceParams, run_service
+from shared.schema import Message
+from shared.topics import MAP
+from shared.world import World, load_world
+
+#: Latched topics keep only the latest; a map or a plan arrives rarely.
+LATCHED_QOS = QoS(depth=2)
+#: Everything else that is reliable (tf, poses, battery): a short queue, the view only shows the latest.
+STATE_QOS = QoS(depth=10)
+MAP_REQUEST_PERIOD_S = 5.0
+#: The view's default Zenoh settings: no shared memory (see the file), which keeps its RSS under 100 MB.
+ZENOH_CONFIG = Path(__file__).with_name("zenoh.json5")
+MAP_VIEW = next(v for v in VIEWS if v.topic == MAP and v.msg_type is OccupancyGrid)
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.viz`` (``-p name=value``)."""
+
+    use_sim_time: bool = Field(True, description="stamp and broadcast on the simulator's clock")
+    host: str = Field("127.0.0.1", description="address to serve on (loopback: only this machine can connect)")
+    port: int = Field(8765, ge=0, le=65535, description="WebSocket port (0: any free port)")
+    world: str | None = Field(None, description="world file to draw walls, glass, boxes, docks and staging poses")
+    staging_offset_m: float = Field(DEFAULT_STAGING_OFFSET_M, ge=0.0, description="staging pose behind each dock")
+    time_broadcast_hz: float = Field(10.0, gt=0.0, le=100.0, description="how often viewers are told the time")
+
+    @field_validator("world")
+    @classmethod
+    def _world_loads(cls, value: str | None) -> str | None:
+        if value:
+            load_world(value)  # a ConfigError names the file and the problem
+        return value or None
+
+
+class VizService:
+    """Bridges the node's namespace to a Foxglove WebSocket server; see the module docstring."""
+
+    def __init__(self, node: Node, params: Params) -> None:
+        self._node = node
+        self._params = params
+        self._log = node.log
+        self._world: World | None = load_world(params.world) if params.world else None
+        try:
+            self._view = LiveView(params.host, params.port, self._now_ns, self._on_viewer_subscribed)
+        except RuntimeError as exc:  # the SDK's FoxgloveError: the port is taken, the address is not ours
+            raise ConfigError(f"cannot serve on {params.host}:{params.port}: {exc} (choose another with --port)") from None
+        self._world_topic = view_topic(node.namespace, WORLD_VIEW_TOPIC)
+        self._robot_topic = view_topic(node.namespace, ROBOT_VIEW_TOPIC)
+        self._map_received = False
+        self._publish_scenes()
+        for view in VIEWS:
+            qos = SENSOR_DATA if view.sensor else LATCHED_QOS if view.latched else STATE_QOS
+            node.create_subscription(view.msg_type, view.topic, lambda key, msg, v=view: self._on_message(v, key, msg),
+                                     qos, with_key=True)
+        self._time_timer = node.create_timer(1.0 / params.time_broadcast_hz, self._broadcast_time, wall=True)
+        self._map_timer = node.create_timer(MAP_REQUEST_PERIOD_S, self._request_map, wall=True)
+        self._request_map()
+        self._log.info("Foxglove WebSocket on ws://%s:%d (open it in Foxglove or Lichtblick)%s",
+                       params.host, self._view.port, f", world {self._world.name}" if self._world else "")
+
+    @property
+    def port(self) -> int:
+        return self._view.port
+
+    # --- time ------------------------------------------------------------------------------------
+
+    def _now_ns(self) -> int:
+        """Now on the robot's clock (sim time once the clock runs), for messages without a stamp."""
+        node = self._node
+        if node.use_sim_time and node.clock_started:
+            return int(node.now() * 1e9)
+        return time.time_ns()
+
+    def _broadcast_time(self) -> None:
+        if self._node.use_sim_time and self._node.clock_started:
+            self._view.broadcast_time(self._now_ns())
+
+    # --- inputs ----------------------------------------------------------------------------------
+
+    def _on_message(self, view: View, key: str, msg: Message) -> None:
+        if view.topic == MAP:
+            self._map_received = True
+        if not view.latched and not self._view.wants(key):
+            return
+        self._view.publish(key, view.convert("/" + key, msg), latched=view.latched)
+
+    def _request_map(self) -> None:
+        if self._map_received:
+            self._map_timer.cancel()
+            return
+        self._node.call_async(GET_MAP, GET_MAP_SERVICE, GetMapRequest(), self._on_map_reply, timeout_s=2.0)
+
+    def _on_map_reply(self, response: GetMapResponse | None, error: ServiceError | None) -> None:
+        if response is None or self._map_received:
+            if error is not None:
+                self._log.debug("no map yet: %s", error)
+            return
+        self._on_message(MAP_VIEW, self._node.key(MAP), response.map)
+
+    # --- the scenes and late viewers -------------------------------------------------------------
+
+    def _publish_scenes(self) -> None:
+        now = self._now_ns()
+        if self._world is not None:
+            scene = world_scene(self._world_topic, self._world, now, self._params.staging_offset_m)
+            self._view.publish(self._world_topic, [scene], latched=True)
+        self._view.publish(self._robot_topic, [robot_scene(self._robot_topic, now)], latched=True)
+
+    def _on_viewer_subscribed(self, topic: str) -> None:
+        """Runs on the server's thread: hand over to the node's executor."""
+        self._node.post(self._view.replay_latched, topic)
+
+    @property
+    def messages_sent(self) -> int:
+        return self._view.sent
+
+    def close(self) -> None:
+        self._time_timer.cancel()
+        self._map_timer.cancel()
+        self._view.close()
+
+
+def _add_flags(parser: Any) -> dict[str, str]:
+    parser.set_defaults(zenoh_config=str(ZENOH_CONFIG))
+    parser.add_argument("--port", type=int, default=None, help="WebSocket port (same as -p port=N)")
+    parser.add_argument("--host", default=None, help="address to serve on (same as -p host=ADDR)")
+    parser.add_argument("--world", default=None, help="world file to draw (same as -p world=FILE)")
+    return {"port": "port", "host": "host", "world": "world"}
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_service("viz", Params, VizService, argv,
+                       description="Live view: zendock topics on a Foxglove WebSocket server",
+                       add_flags=_add_flags)

@@ -1,0 +1,72 @@
+"""The live view as a process: a Foxglove WebSocket client sees the simulator's topics and the room."""
+
+from __future__ import annotations
+
+import psutil
+import zenoh
+
+from shared.messages import Clock
+from tests.support.bus import KeyRecorder
+from tests.support.foxglove_client import SUBPROTOCOLS, FoxgloveTestClient
+from tests.support.processes import REPO_ROOT, ServiceProcess, free_port, wait_until
+
+GLASS_ROOM = str(REPO_ROOT / "deploy/worlds/glass_room.yaml")
+#: The live view's memory budget.
+MAX_RSS_MB = 100.0
+
+
+def _connect(url: str, viz: ServiceProcess) -> FoxgloveTestClient:
+    clients: list[FoxgloveTestClient] = []
+
+    def connected() -> bool:
+        assert viz.alive(), viz.output()[-2000:]
+        try:
+            clients.append(FoxgloveTestClient(url).__enter__())
+        except OSError:
+            return False
+        return True
+
+    wait_until(connected, 20.0, lambda: f"no WebSocket server at {url}: {viz.output()[-1500:]}")
+    return clients[0]
+
+
+def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
+    port = free_port()
+    clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
+    spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=2")
+    viz = spawn("viz", "--world", GLASS_ROOM, "--port", str(port))
+    url = f"ws://127.0.0.1:{port}"
+    ns = f"/{namespace}"
+    wanted = {f"{ns}/scan": "foxglove.LaserScan", f"{ns}/tf": "foxglove.FrameTransforms",
+              f"{ns}/ultrasonic": "foxglove.SceneUpdate", f"{ns}/world": "foxglove.SceneUpdate",
+              f"{ns}/tf_static": "foxglove.FrameTransforms"}
+    client = _connect(url, viz)
+    try:
+        assert client.subprotocol in SUBPROTOCOLS
+        assert client.pump_until(lambda c: set(wanted) <= set(c.topics()), 20.0), sorted(client.topics())
+        assert client.server_info["op"] == "serverInfo" and "time" in client.server_info["capabilities"]
+        for topic, schema in wanted.items():
+            channel = client.topics()[topic]
+            assert (channel["schemaName"], channel["encoding"], channel["schemaEncoding"]) == (
+                schema, "protobuf", "protobuf"), channel
+        client.subscribe(*wanted)
+        assert client.pump_until(lambda c: all(c.received(t) for t in wanted) and c.times_ns, 20.0), (
+            {t: len(client.received(t)) for t in wanted})
+        world = client.received(f"{ns}/world")[0].payload
+        assert b"glass" in world and b"staging/home" in world  # latched: sent when the client subscribed
+        scan = client.received(f"{ns}/scan")[-1]
+        assert len(scan.payload) > 360 * 8 and scan.log_time_ns < 10**12  # stamped on the simulator's clock
+        assert psutil.Process(viz.pid).memory_info().rss / 1e6 < MAX_RSS_MB
+    finally:
+        client.__exit__()
+
+    # restarting the live view changes nothing for the others: the clock runs on, a new client sees it all
+    viz.stop()
+    seen = clock.count
+    clock.wait_for(after=seen + 20, timeout_s=10.0)
+    viz.start()
+    client = _connect(url, viz)
+    try:
+        assert client.pump_until(lambda c: f"{ns}/scan" in c.topics(), 20.0)
+    finally:
+        client.__exit__()

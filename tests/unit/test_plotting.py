@@ -1,0 +1,84 @@
+"""The run picture: a real PNG with the room's colours, the run's data from a recording, via ``zendock plot``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.image as mpimg
+import numpy as np
+
+from deploy.cli import main as zendock
+from deploy.plotting import (
+    DOCK_COLOR,
+    GLASS_COLOR,
+    PLAN_COLOR,
+    STAGING_COLOR,
+    RunPicture,
+    plot_picture,
+    plot_run,
+)
+from deploy.recording.reading import Recording
+from deploy.recording.run_data import run_picture, sonar_hit_points
+from shared.geometry import Pose2D
+from shared.world import load_world
+from tests.support.processes import REPO_ROOT
+from tests.unit.recording.synthetic import WALL_Y_M, write_run
+
+GLASS_ROOM = REPO_ROOT / "deploy/worlds/glass_room.yaml"
+
+
+def _rgb(hex_color: str) -> np.ndarray:
+    return np.array([int(hex_color[i:i + 2], 16) for i in (1, 3, 5)], dtype=np.float64) / 255.0
+
+
+def _pixels_near(image: np.ndarray, hex_color: str, tolerance: float = 0.08) -> int:
+    distance = np.abs(image[:, :, :3] - _rgb(hex_color)).max(axis=2)
+    return int((distance < tolerance).sum())
+
+
+def test_the_picture_is_a_png_with_the_room_in_its_colours(tmp_path: Path) -> None:
+    t = np.linspace(0.0, 20.0, 200)
+    driven = np.column_stack([-1.0 + 0.5 * np.cos(t / 5.0), 4.0 - 0.15 * t])
+    hits = [(x, 2.6) for x in np.linspace(-1.5, 0.5, 30)]
+    plan = [(-1.0, 4.2), (-2.4, 3.0), (-2.4, 2.0), (-1.0, 1.53)]
+    path = plot_run(load_world(GLASS_ROOM), tmp_path / "run.png", driven=driven, driven_times_s=t, plans=[plan],
+                    sonar_hits=hits, battery=[(ti, 1.0 - 0.01 * ti) for ti in t], title="test run", dpi=80)
+    image = mpimg.imread(path)
+    height, width = image.shape[:2]
+    assert width >= 800 and height >= 400
+    assert _pixels_near(image, "#000000", 0.1) > 500  # walls
+    for name, color in (("glass", GLASS_COLOR), ("dock", DOCK_COLOR), ("staging", STAGING_COLOR),
+                        ("plan", PLAN_COLOR)):
+        assert _pixels_near(image, color) > 20, f"no {name} colour {color} in the picture"
+    distinct = np.unique((image[:, :, :3] * 31).astype(np.int32).reshape(-1, 3), axis=0)
+    assert len(distinct) > 50  # the trajectory's colour ramp, the battery fill, the room
+
+
+def test_an_empty_run_still_draws(tmp_path: Path) -> None:
+    path = plot_picture(RunPicture(), tmp_path / "empty.png", dpi=60)
+    assert path.stat().st_size > 1000
+    path = plot_run(None, tmp_path / "plain.png", driven=[(0.0, 0.0), (1.0, 1.0)], dpi=60)
+    assert path.stat().st_size > 1000
+
+
+def test_sonar_hits_land_where_the_echo_came_from() -> None:
+    truth = np.array([[0.0, 0.0, 3.0, -np.pi / 2], [1.0, 0.0, 2.0, -np.pi / 2]])
+    ranges = np.array([[0.5, 1.0], [2.0, 1.0]])  # the second is outside the poses' time span
+    hits = sonar_hit_points(truth, ranges, Pose2D(0.2, 0.0, 0.0))
+    assert hits.shape == (1, 2)
+    np.testing.assert_allclose(hits[0], [0.0, 2.5 - 0.2 - 1.0], atol=1e-9)
+
+
+def test_zendock_plot_draws_a_recording(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    recording = tmp_path / "run.mcap"
+    write_run(recording, steps=40)
+    with Recording(recording) as r:
+        picture = run_picture(r)
+    assert len(picture.trajectory) == 40 and len(picture.battery) == 40
+    assert picture.world is not None and picture.world.name == "seed_room"
+    assert len(picture.planned_paths) == 1
+    np.testing.assert_allclose(picture.sonar_hits[:, 1], WALL_Y_M, atol=1e-6)
+    output = tmp_path / "run.png"
+    assert zendock(["plot", str(recording), "-o", str(output), "--dpi", "60"]) == 0
+    assert output.stat().st_size > 10_000
+    assert "40 poses" in capsys.readouterr().out
