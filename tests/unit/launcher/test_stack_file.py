@@ -246,7 +246,7 @@ def test_zendock_world_alone_switches_the_default_stack() -> None:
     world = "deploy/worlds/glass_room.yaml"
     stack = load_stack(DEFAULT_STACK, env={"ZENDOCK_WORLD": world}, project_dir=REPO_ROOT)
     mentions = {name: " ".join(spec.command) for name, spec in stack.services.items() if world in " ".join(spec.command)}
-    assert set(mentions) == {"map", "simulator", "docking"}
+    assert set(mentions) == {"map", "simulator", "docking", "viz"}
     assert "seed_room" not in " ".join(" ".join(spec.command) for spec in stack.services.values())
     map_file = stack.services["map"].command[stack.services["map"].command.index("-o") + 1]
     assert f"map_yaml={map_file}" in stack.services["planner"].command
