@@ -40,6 +40,29 @@ def _bench_sim(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_planner(args: argparse.Namespace) -> int:
+    try:
+        from services.planner.bench import bench_planning  # noqa: PLC0415 - the planner's own core
+    except ImportError:
+        print("zendock bench planner: the planner is not installed", file=sys.stderr)
+        return 1
+    result: dict = {k: round(v, 2) for k, v in bench_planning(args.repeats, args.resolution).items()}
+    if not args.planning_only:
+        from deploy.bench.navigation import run_navigation_bench  # noqa: PLC0415 - starts a stack
+
+        try:
+            routes = run_navigation_bench(rtf=args.rtf, timeout_s=args.timeout)
+        except RuntimeError as exc:
+            print(f"zendock bench planner: {exc}", file=sys.stderr)
+            return 1
+        for i, route in enumerate(routes):
+            x, y, _ = route.goal
+            label = f"{route.world}[{i}] ({route.start.x:.1f},{route.start.y:.1f})->({x:.1f},{y:.1f})"
+            result.update({f"{label} {key}": value for key, value in route.as_dict().items()})
+    _print(result, args.json, "planner: planning time on a 20 m x 20 m room, time to goal in the simulator")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("bench", help="benchmarks (latency, throughput, planning, docking)")
     verbs = parser.add_subparsers(dest="bench", metavar="BENCH")
@@ -54,3 +77,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sim.add_argument("--seconds", type=float, default=60.0, help="simulated seconds to run")
     sim.add_argument("--json", action="store_true")
     sim.set_defaults(func=_bench_sim)
+    planner = verbs.add_parser(
+        "planner", help="planning time on a 20 m room; time to goal with the real stack vs the shortest path")
+    planner.add_argument("--repeats", type=int, default=5, help="planning repeats per route (medians)")
+    planner.add_argument("--resolution", type=float, default=0.05, help="costmap resolution, metres")
+    planner.add_argument("--planning-only", action="store_true", help="skip the runs in the simulator")
+    planner.add_argument("--rtf", type=float, default=5.0, help="real-time factor of the simulator runs")
+    planner.add_argument("--timeout", type=float, default=120.0, help="wall seconds allowed per goal")
+    planner.add_argument("--json", action="store_true")
+    planner.set_defaults(func=_bench_planner)

@@ -50,10 +50,12 @@ def run_nav(
     namespace: str,
     timeout_s: float,
     server_timeout_s: float = 10.0,
-    out: TextIO = sys.stdout,
-    err: TextIO = sys.stderr,
+    out: TextIO | None = None,
+    err: TextIO | None = None,
 ) -> int:
     """Drive to ``(x, y, yaw)`` and report; returns the exit code (see the module docstring)."""
+    out = out or sys.stdout
+    err = err or sys.stderr
     import zenoh  # noqa: PLC0415
 
     from shared.action import spin_in_background  # noqa: PLC0415

@@ -1,0 +1,172 @@
+"""The planner service's parameters: one flat, validated set, mapped onto the algorithms' own settings.
+
+The mapping keeps what must agree in agreement: the follower's footprint and inflation settings are the
+costmap's (cost regulation inverts the same formula the inflation applied), and the search and the
+smoother share ``cost_weight`` and ``allow_unknown``. Defaults suit the robot: footprint 0.4 x 0.3 m,
+0.5 m/s, 1.5 rad/s, 1 m/s^2 and 3 rad/s^2.
+"""
+
+from __future__ import annotations
+
+import math
+
+from pydantic import Field, field_validator, model_validator
+
+from services.planner.astar import AStarParams
+from services.planner.costmap import CostmapParams
+from services.planner.global_planner import GlobalPlannerParams
+from services.planner.occupancy_map import OccupancyMap, load_map
+from services.planner.pure_pursuit import PurePursuitParams
+from services.planner.rasterize import map_from_world
+from services.planner.recovery import BackUpParams
+from services.planner.smoothing import SmoothingParams
+from shared.runtime import ServiceParams
+from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, load_world
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.planner`` (``-p name=value`` or a YAML file)."""
+
+    # map
+    map_yaml: str = Field("", description="map_server YAML loaded at start (wins over world)")
+    world: str = Field("", description="world file rasterised into the map when no map_yaml is given")
+    map_resolution_m: float = Field(0.05, gt=0.0, description="cell size when rasterising the world")
+    map_publish_period_s: float = Field(5.0, gt=0.0, description="republish the map this often (wall clock)")
+    costmap_publish_period_s: float = Field(1.0, ge=0.0, description="publish the costmap this often (0: never)")
+    # robot and goal
+    robot_length_m: float = Field(ROBOT_LENGTH_M, gt=0.0, description="footprint length along x")
+    robot_width_m: float = Field(ROBOT_WIDTH_M, gt=0.0, description="footprint width along y")
+    max_linear_vel_mps: float = Field(0.5, gt=0.0)
+    max_angular_vel_rps: float = Field(1.5, gt=0.0)
+    max_linear_accel_mps2: float = Field(1.0, gt=0.0)
+    max_linear_decel_mps2: float = Field(1.5, gt=0.0)
+    max_angular_accel_rps2: float = Field(3.0, gt=0.0)
+    xy_goal_tolerance_m: float = Field(0.05, gt=0.0)
+    yaw_goal_tolerance_rad: float = Field(0.05, gt=0.0)
+    trans_stopped_velocity_mps: float = Field(
+        0.05, gt=0.0, description="the goal counts as reached only when moving slower than this ...")
+    rot_stopped_velocity_rps: float = Field(0.1, gt=0.0, description="... and turning slower than this")
+    # costmap
+    inflation_radius_m: float = Field(0.55, ge=0.0)
+    cost_scaling_factor: float = Field(3.0, gt=0.0)
+    obstacle_max_range_m: float = Field(2.5, ge=0.0, description="lidar hits further than this do not mark")
+    raytrace_max_range_m: float = Field(3.0, ge=0.0, description="lidar beams clear up to this far")
+    costmap_update_rate_hz: float = Field(5.0, gt=0.0, description="sensor data folded in this often (sim time)")
+    scan_beam_stride: int = Field(1, ge=1, description="use every n-th lidar beam (2 halves the lidar's cost)")
+    idle_costmap_update_rate_hz: float = Field(1.0, gt=0.0, description="the same without an active goal")
+    glass_suspicion_radius_m: float = Field(
+        0.3, ge=0.0, description="unlooked-at floor this close to sonar-only marks counts as glass (0: off)")
+    lidar_mount: tuple[float, float, float] = Field(
+        (0.10, 0.0, 0.0), description="base_link -> lidar_link until tf_static says otherwise")
+    ultrasonic_mount: tuple[float, float, float] = Field(
+        (0.20, 0.0, 0.0), description="base_link -> ultrasonic_link until tf_static says otherwise")
+    # planning
+    cost_weight: float = Field(3.0, ge=0.0, description="how strongly inflation cost lengthens a step")
+    allow_unknown: bool = False
+    snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
+    replan_period_s: float = Field(1.0, gt=0.0, description="replan this often while following (sim time)")
+    min_replan_interval_s: float = Field(0.2, ge=0.0, description="urgent replans no more often than this")
+    # control and action
+    controller_rate_hz: float = Field(20.0, gt=0.0)
+    feedback_rate_hz: float = Field(5.0, gt=0.0)
+    pose_timeout_s: float = Field(0.5, gt=0.0, description="an older pose holds the robot still")
+    no_pose_timeout_s: float = Field(
+        5.0, gt=0.0, description="abort with NO_POSE after this long without one (sim and wall time)")
+    navigation_timeout_s: float = Field(0.0, ge=0.0, description="abort with TIMEOUT after this long (0: never)")
+    # recovery
+    progress_timeout_s: float = Field(10.0, gt=0.0, description="stuck if no progress for this long")
+    required_movement_m: float = Field(0.25, gt=0.0, description="progress: move this far ...")
+    required_rotation_rad: float = Field(0.5, gt=0.0, description="... or turn this much")
+    blocked_timeout_s: float = Field(2.0, gt=0.0, description="a collision ahead this long starts a recovery")
+    max_recoveries: int = Field(6, ge=0)
+    backup_distance_m: float = Field(0.15, gt=0.0)
+    backup_speed_mps: float = Field(0.1, gt=0.0)
+    recovery_wait_s: float = Field(0.5, ge=0.0, description="after clearing, let the sensors refill")
+
+    @field_validator("map_yaml")
+    @classmethod
+    def _map_loads(cls, value: str) -> str:
+        if value:
+            load_map(value)  # a ConfigError (a ValueError) names the file and the problem, before connecting
+        return value
+
+    @field_validator("world")
+    @classmethod
+    def _world_loads(cls, value: str) -> str:
+        if value:
+            load_world(value)
+        return value
+
+    @field_validator("lidar_mount", "ultrasonic_mount")
+    @classmethod
+    def _finite_mount(cls, value: tuple[float, float, float]) -> tuple[float, float, float]:
+        if not all(math.isfinite(v) for v in value):
+            raise ValueError(f"a mount is three finite numbers [x, y, yaw], got {list(value)}")
+        return value
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Params:
+        self.costmap_params()
+        self.follower_params()
+        self.planner_params()
+        self.backup_params()
+        return self
+
+    def costmap_params(self) -> CostmapParams:
+        return CostmapParams(
+            robot_length_m=self.robot_length_m,
+            robot_width_m=self.robot_width_m,
+            inflation_radius_m=self.inflation_radius_m,
+            cost_scaling_factor=self.cost_scaling_factor,
+            obstacle_max_range_m=self.obstacle_max_range_m,
+            raytrace_max_range_m=self.raytrace_max_range_m,
+        )
+
+    def planner_params(self) -> GlobalPlannerParams:
+        """Search and smoothing share ``cost_weight`` and ``allow_unknown`` (see GlobalPlannerParams)."""
+        return GlobalPlannerParams(
+            astar=self.astar_params(),
+            smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),
+        )
+
+    def astar_params(self) -> AStarParams:
+        return AStarParams(
+            cost_weight=self.cost_weight, snap_radius_m=self.snap_radius_m, allow_unknown=self.allow_unknown
+        )
+
+    def follower_params(self) -> PurePursuitParams:
+        """The follower's footprint and inflation settings are the costmap's, so cost regulation
+        inverts the same formula the inflation applied."""
+        costmap = self.costmap_params()
+        return PurePursuitParams(
+            desired_linear_vel_mps=self.max_linear_vel_mps,
+            max_angular_vel_rps=self.max_angular_vel_rps,
+            max_linear_accel_mps2=self.max_linear_accel_mps2,
+            max_linear_decel_mps2=self.max_linear_decel_mps2,
+            max_angular_accel_rps2=self.max_angular_accel_rps2,
+            rotate_to_heading_angular_vel_rps=self.max_angular_vel_rps,
+            inflation_cost_scaling_factor=costmap.cost_scaling_factor,
+            inscribed_radius_m=costmap.inscribed_radius_m,
+            xy_goal_tolerance_m=self.xy_goal_tolerance_m,
+            yaw_goal_tolerance_rad=self.yaw_goal_tolerance_rad,
+            robot_length_m=self.robot_length_m,
+            robot_width_m=self.robot_width_m,
+        )
+
+    def backup_params(self) -> BackUpParams:
+        return BackUpParams(
+            distance_m=self.backup_distance_m,
+            speed_mps=self.backup_speed_mps,
+            time_allowance_s=4.0 * self.backup_distance_m / self.backup_speed_mps,
+            robot_length_m=self.robot_length_m,
+            robot_width_m=self.robot_width_m,
+        )
+
+
+def load_initial_map(params: Params) -> tuple[OccupancyMap | None, str]:
+    """The map named by the parameters and where it came from; ``(None, "")`` when none is given."""
+    if params.map_yaml:
+        return load_map(params.map_yaml), params.map_yaml
+    if params.world:
+        return map_from_world(load_world(params.world), resolution_m=params.map_resolution_m), params.world
+    return None, ""

@@ -1,0 +1,37 @@
+"""The yardstick for navigation runs: the shortest collision-free path through a world, glass included.
+
+Every obstacle the robot can touch is drawn (glass too, unlike the lidar map), inflated only to the
+inscribed radius (the robot's centre must stay that far from everything), searched with A* at zero
+cost weight (pure length), and the grid path straightened by line-of-sight shortcuts. A real
+rectangular robot needs more room than its inscribed circle, so this length is a lower bound on any
+path it can drive; divided by the speed limit it bounds the time to goal from below.
+"""
+
+from __future__ import annotations
+
+from services.planner.astar import AStarParams, AStarPlanner
+from services.planner.costmap import CostmapParams, LayeredCostmap
+from services.planner.rasterize import map_from_world
+from services.planner.smoothing import SmoothingParams, path_length_m, shortcut_path
+from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, World
+
+
+def shortest_path_length_m(
+    world: World,
+    start_xy: tuple[float, float],
+    goal_xy: tuple[float, float],
+    resolution_m: float = 0.05,
+    robot_length_m: float = ROBOT_LENGTH_M,
+    robot_width_m: float = ROBOT_WIDTH_M,
+) -> float:
+    """Length of the shortest path for the robot's inscribed circle; ``PlanningError`` if there is none."""
+    solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
+    occupancy = map_from_world(solid, resolution_m=resolution_m)
+    inscribed_radius_m = 0.5 * min(robot_length_m, robot_width_m)
+    params = CostmapParams(
+        robot_length_m=robot_length_m, robot_width_m=robot_width_m, inflation_radius_m=inscribed_radius_m
+    )
+    grid = LayeredCostmap(occupancy, params).grid()
+    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=0.0)).plan(grid, start_xy, goal_xy)
+    straight = shortcut_path(grid, found.points_xy, SmoothingParams(max_cost=252, cost_weight=0.0))
+    return path_length_m(straight)

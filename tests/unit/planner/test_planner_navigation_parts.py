@@ -1,0 +1,342 @@
+"""The planner node's pure parts: goal checks, plan monitoring, the back-up recovery, messages,
+the planning worker, the shortest-path yardstick, sonar/lidar fusion, glass memory and the parameters."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+import pytest
+
+from services.planner.astar import AStarParams
+from services.planner.costmap import CostmapParams, LayeredCostmap
+from services.planner.glass_memory import GlassMemory
+from services.planner.global_planner import GlobalPlannerParams
+from services.planner.goal_check import check_goal_on_grid, goal_pose
+from services.planner.map_messages import (
+    costmap_message,
+    occupancy_grid_message,
+    occupancy_map_from_message,
+    path_message,
+)
+from services.planner.occupancy_map import OccupancyMap
+from services.planner.params import Params
+from services.planner.plan_monitor import ActivePlan, ProgressChecker
+from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
+from services.planner.rasterize import map_from_world
+from services.planner.recovery import BackUp, BackUpParams, BackUpStatus
+from services.planner.shortest_path import shortest_path_length_m
+from services.planner.sonar_fusion import echo_explained_by_lidar
+from shared.geometry import Pose2D
+from shared.messages import Header, OccupancyGrid, Path, Point, Pose, PoseStamped, Quaternion
+from shared.world import World, load_world
+from tests.support.processes import REPO_ROOT
+
+SEED_ROOM = REPO_ROOT / "deploy/worlds/seed_room.yaml"
+GLASS_ROOM = REPO_ROOT / "deploy/worlds/glass_room.yaml"
+
+
+def _room(walls: list | None = None) -> World:
+    return World.model_validate(
+        {"name": "room", "bounds": [0.0, 0.0, 4.0, 3.0], "walls": walls or [], "robot": {"start": [0.5, 1.5, 0.0]}}
+    )
+
+
+def _grid(world: World):  # type: ignore[no-untyped-def]
+    return LayeredCostmap(map_from_world(world), CostmapParams()).grid()
+
+
+def _goal(x: float = 1.0, y: float = 2.0, yaw: float = 0.5, frame: str = "map") -> PoseStamped:
+    return PoseStamped(Header(frame_id=frame), Pose(Point(x, y, 0.0), Quaternion.from_yaw(yaw)))
+
+
+# --- goal checks -----------------------------------------------------------------------------------
+
+
+def test_goal_pose_accepts_the_map_frame_and_normalises_the_quaternion() -> None:
+    assert goal_pose(_goal()) == Pose2D(1.0, 2.0, pytest.approx(0.5))
+    assert goal_pose(_goal(frame="")).yaw == pytest.approx(0.5)
+    assert goal_pose(_goal(frame="/map")).x == 1.0
+    scaled = _goal()
+    q = scaled.pose.orientation
+    scaled.pose.orientation = Quaternion(0.0, 0.0, 3 * q.z, 3 * q.w)
+    assert goal_pose(scaled).yaw == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize(
+    ("goal", "reason"),
+    [
+        (_goal(frame="odom"), "frame_id 'odom'"),
+        (PoseStamped(Header(frame_id="map"), Pose(Point(0, 0, 0), Quaternion(0, 0, 0, 0))), "zero quaternion"),
+    ],
+)
+def test_goal_pose_refusals_say_why(goal: PoseStamped, reason: str) -> None:
+    with pytest.raises(ValueError, match=reason):
+        goal_pose(goal)
+
+
+def test_goal_pose_refuses_non_finite_numbers() -> None:
+    goal = _goal()
+    object.__setattr__(goal.pose.position, "x", math.nan)  # a message built in-process, never encoded
+    with pytest.raises(ValueError, match="not finite: position.x=nan"):
+        goal_pose(goal)
+
+
+def test_goals_off_the_map_or_in_walls_are_refused_and_near_walls_accepted() -> None:
+    grid = _grid(_room(walls=[[[2.0, 0.0], [2.0, 3.0]]]))
+    astar = AStarParams(snap_radius_m=0.3)
+    check_goal_on_grid(grid, 1.0, 1.5, astar)
+    check_goal_on_grid(grid, 2.0, 1.5, astar)  # on the wall, but a free cell lies within 0.3 m
+    with pytest.raises(ValueError, match="outside the map"):
+        check_goal_on_grid(grid, 9.0, 1.5, astar)
+    with pytest.raises(ValueError, match="lethal space"):
+        check_goal_on_grid(grid, 2.0, 1.5, AStarParams(snap_radius_m=0.1))
+    with pytest.raises(ValueError, match="unknown space"):
+        check_goal_on_grid(grid, -0.4, 1.5, AStarParams(snap_radius_m=0.1))  # the unknown margin
+    check_goal_on_grid(grid, -0.4, 1.5, AStarParams(snap_radius_m=0.1, allow_unknown=True))
+
+
+# --- plan monitoring -------------------------------------------------------------------------------
+
+
+def _straight_plan(grid, y: float = 1.5) -> ActivePlan:  # type: ignore[no-untyped-def]
+    xs = np.linspace(0.5, 3.5, 61)
+    poses = np.stack([xs, np.full_like(xs, y), np.zeros_like(xs)], axis=1)
+    return ActivePlan.from_poses(poses, grid, planned_at_s=0.0)
+
+
+def test_remaining_distance_follows_the_path_from_the_closest_pose() -> None:
+    plan = _straight_plan(_grid(_room()))
+    assert plan.length_m == pytest.approx(3.0)
+    assert plan.remaining_m(0, Pose2D(0.5, 1.5, 0.0)) == pytest.approx(3.0)
+    assert plan.remaining_m(20, Pose2D(1.5, 1.8, 0.0)) == pytest.approx(2.0 + 0.3)
+
+
+def test_only_new_obstacles_ahead_block_a_plan() -> None:
+    room = _room()
+    costmap = LayeredCostmap(map_from_world(room), CostmapParams())
+    plan = _straight_plan(costmap.grid())
+    assert not plan.newly_blocked(costmap.grid(), 0, skip_m=0.15)
+    # A glass pane across the path, seen by the sonar from (1.0, 1.5) facing +x at 1.5 m.
+    costmap.update_with_range((1.0, 1.5, 0.0), 1.5, 0.5, 0.02, 3.0)
+    assert plan.newly_blocked(costmap.grid(), 0, skip_m=0.15)
+    # Once the robot is past it, it no longer counts.
+    assert not plan.newly_blocked(costmap.grid(), 50, skip_m=0.15)
+
+
+def test_a_path_planned_through_inflation_is_not_blocked_by_it() -> None:
+    grid = _grid(_room(walls=[[[0.0, 1.6], [4.0, 1.6]]]))  # the path runs 0.1 m from a wall
+    plan = _straight_plan(grid)
+    assert (plan.planned_costs >= 253).any()
+    assert not plan.newly_blocked(grid, 0, skip_m=0.15)
+
+
+def test_progress_checker_needs_movement_or_rotation_within_the_allowance() -> None:
+    checker = ProgressChecker(required_movement_m=0.25, required_rotation_rad=0.5, time_allowance_s=10.0)
+    assert checker.check(Pose2D(0, 0, 0), 0.0)
+    assert checker.check(Pose2D(0.1, 0, 0), 9.0)
+    assert not checker.check(Pose2D(0.2, 0, 0), 10.5)
+    checker.reset()
+    assert checker.check(Pose2D(0, 0, 0), 20.0)
+    assert checker.check(Pose2D(0.0, 0.0, 0.6), 29.0)  # turning counts
+    assert checker.check(Pose2D(0.0, 0.0, 0.6), 38.0)
+    assert not checker.check(Pose2D(0.0, 0.0, 0.6), 39.5)
+
+
+# --- back-up recovery ------------------------------------------------------------------------------
+
+
+def test_back_up_reverses_its_distance_then_stops() -> None:
+    grid = _grid(_room())
+    backup = BackUp(BackUpParams(distance_m=0.15, speed_mps=0.1))
+    pose = Pose2D(2.0, 1.5, 0.0)
+    backup.start(pose, 0.0)
+    speed, status = backup.step(pose, 0.0, grid)
+    assert (speed, status) == (-0.1, BackUpStatus.RUNNING)
+    assert backup.step(Pose2D(1.86, 1.5, 0.0), 1.4, grid) == (-0.1, BackUpStatus.RUNNING)
+    assert backup.step(Pose2D(1.84, 1.5, 0.0), 1.6, grid) == (0.0, BackUpStatus.DONE)
+
+
+def test_back_up_never_reverses_into_what_it_can_see_and_gives_up_in_time() -> None:
+    grid = _grid(_room(walls=[[[1.6, 0.0], [1.6, 3.0]]]))
+    backup = BackUp(BackUpParams(distance_m=0.15, speed_mps=0.1, time_allowance_s=2.0))
+    close_to_wall = Pose2D(1.85, 1.5, 0.0)  # rear edge 0.05 m in front of the wall
+    backup.start(close_to_wall, 0.0)
+    assert backup.step(close_to_wall, 0.0, grid) == (0.0, BackUpStatus.BLOCKED)
+    free = Pose2D(3.0, 1.5, 0.0)
+    backup.start(free, 0.0)
+    assert backup.step(free, 2.5, grid) == (0.0, BackUpStatus.TIMED_OUT)
+
+
+# --- messages --------------------------------------------------------------------------------------
+
+
+def test_occupancy_grid_round_trip_keeps_layout_and_origin() -> None:
+    occupancy = map_from_world(load_world(SEED_ROOM))
+    msg = occupancy_grid_message(occupancy, 12.5, "map")
+    decoded = OccupancyGrid.decode(msg.encode())
+    assert decoded.header.frame_id == "map" and decoded.header.stamp.to_sec() == pytest.approx(12.5)
+    assert (decoded.info.width, decoded.info.height) == (occupancy.width, occupancy.height)
+    back = occupancy_map_from_message(decoded)
+    np.testing.assert_array_equal(back.data, occupancy.data)
+    assert back.origin == pytest.approx(occupancy.origin)
+    # Row 0 is the lowest y: the cell under (x, y) is data[iy * width + ix].
+    ix, iy = occupancy.world_to_cell(-2.0, 3.8)  # inside the box
+    assert decoded.data[iy * decoded.info.width + ix] == 100
+    with pytest.raises(ValueError, match="cells for"):
+        occupancy_map_from_message(OccupancyGrid(info=decoded.info, data=decoded.data[:-1]))
+
+
+def test_costmap_and_path_messages() -> None:
+    occupancy = OccupancyMap(0.1, (0.0, 0.0, 0.0), np.zeros((5, 6), dtype=np.int8))
+    occupancy.data[2, 3] = 100
+    grid = LayeredCostmap(occupancy, CostmapParams()).grid()
+    msg = costmap_message(grid, 1.0, "map")
+    data = np.asarray(msg.data).reshape(5, 6)
+    assert data[2, 3] == 100 and data[2, 2] == 99 and data[0, 0] >= 0
+    path = path_message(np.array([[0.0, 0.0, 0.0], [1.0, 0.5, math.pi / 2]]), 3.0, "map")
+    decoded = Path.decode(path.encode())
+    assert [p.pose.to_pose2d().yaw for p in decoded.poses] == pytest.approx([0.0, math.pi / 2])
+    assert all(p.header.frame_id == "map" for p in decoded.poses)
+
+
+# --- planning worker -------------------------------------------------------------------------------
+
+
+def test_worker_delivers_paths_and_reasons_in_order() -> None:
+    grid = _grid(_room(walls=[[[2.0, 0.0], [2.0, 3.0]]]))  # a wall right across the room
+    outcomes: list[PlanOutcome] = []
+    done = threading.Event()
+
+    def deliver(outcome: PlanOutcome) -> None:
+        outcomes.append(outcome)
+        if len(outcomes) == 3:
+            done.set()
+
+    worker = PlanningWorker(GlobalPlannerParams(), deliver)
+    try:
+        worker.submit(PlanRequest(1, grid, Pose2D(0.5, 1.5, 0.0), Pose2D(1.5, 1.0, 0.0)))
+        worker.submit(PlanRequest(2, grid, Pose2D(0.5, 1.5, 0.0), Pose2D(3.5, 1.5, 0.0)))
+        worker.submit(PlanRequest(3, grid, Pose2D(0.5, 1.5, 0.0), Pose2D(9.0, 1.5, 0.0)))
+        assert done.wait(10.0)
+    finally:
+        worker.close()
+    assert [o.request.generation for o in outcomes] == [1, 2, 3]
+    assert outcomes[0].path is not None and outcomes[0].path.poses[-1, :2] == pytest.approx([1.5, 1.0])
+    assert outcomes[1].path is None and "no path" in outcomes[1].error and outcomes[1].blocked_end == ""
+    assert outcomes[2].path is None and outcomes[2].blocked_end == "goal" and "outside" in outcomes[2].error
+
+
+# --- shortest path yardstick -----------------------------------------------------------------------
+
+
+def test_shortest_path_goes_round_walls_and_glass() -> None:
+    open_room = _room()
+    assert shortest_path_length_m(open_room, (0.5, 1.5), (3.5, 1.5)) == pytest.approx(3.0, abs=0.05)
+    glass = load_world(GLASS_ROOM)
+    straight = math.hypot(0.5 - -1.0, 1.5 - 4.2)
+    around = shortest_path_length_m(glass, (-1.0, 4.2), (0.5, 1.5))
+    # Round the east end of the pane (x = 1.6) keeping 0.15 m (3 cells) clear of its last cell.
+    via_end = math.hypot(1.8 - -1.0, 2.75 - 4.2) + 0.3 + math.hypot(0.5 - 1.8, 1.5 - 2.45)
+    assert around > straight + 1.0 and around == pytest.approx(via_end, abs=0.1)
+
+
+# --- parameters ------------------------------------------------------------------------------------
+
+
+def test_parameters_keep_costmap_follower_and_planner_in_agreement() -> None:
+    params = Params(inflation_radius_m=0.7, cost_scaling_factor=4.0, robot_width_m=0.34,
+                    cost_weight=2.0, allow_unknown=True, max_linear_vel_mps=0.4)
+    costmap, follower, planner = params.costmap_params(), params.follower_params(), params.planner_params()
+    assert follower.inflation_cost_scaling_factor == costmap.cost_scaling_factor == 4.0
+    assert follower.inscribed_radius_m == costmap.inscribed_radius_m == pytest.approx(0.17)
+    assert (follower.robot_length_m, follower.robot_width_m) == (costmap.robot_length_m, costmap.robot_width_m)
+    assert planner.astar.cost_weight == planner.smoothing.cost_weight == 2.0
+    assert planner.astar.allow_unknown and planner.smoothing.allow_unknown
+    assert follower.desired_linear_vel_mps == 0.4
+
+
+def test_bad_parameters_are_refused() -> None:
+    with pytest.raises(ValueError, match="lidar_mount"):
+        Params(lidar_mount=(0.1, math.nan, 0.0))
+    with pytest.raises(ValueError, match="max_linear_vel_mps"):
+        Params(max_linear_vel_mps=0.0)
+    with pytest.raises(ValueError, match="no_such_parameter"):
+        Params.model_validate({"no_such_parameter": 1})
+    with pytest.raises(ValueError, match="(?s)map_yaml.*cannot read map file"):
+        Params(map_yaml="/nonexistent/map.yaml")
+    with pytest.raises(ValueError, match="(?s)world.*cannot read world file"):
+        Params(world="/nonexistent/world.yaml")
+
+
+# --- sonar and lidar -------------------------------------------------------------------------------
+
+
+def _wall_hits(x0: float, x1: float, y: float, spacing_m: float = 0.03) -> np.ndarray:
+    xs = np.arange(x0, x1, spacing_m)
+    return np.stack([xs, np.full_like(xs, y)], axis=1)
+
+
+def test_an_echo_from_a_wall_the_lidar_sees_is_explained() -> None:
+    ahead = _wall_hits(-1.0, 1.0, 1.5)
+    assert echo_explained_by_lidar((0.0, 0.0, math.pi / 2), 1.5, 0.5, ahead)
+
+
+def test_a_corridor_side_wall_explains_the_echo_at_the_cone_edge() -> None:
+    # Looking down a 1 m corridor (walls at y = +-0.5): the cone edge meets them about 2 m out,
+    # while straight ahead the lidar sees 6 m of free corridor.
+    sides = np.concatenate([_wall_hits(0.3, 6.0, 0.5, 0.12), _wall_hits(0.3, 6.0, -0.5, 0.12)])
+    echo = 0.5 / math.sin(0.25)
+    assert echo_explained_by_lidar((0.0, 0.0, 0.0), echo, 0.5, sides)
+
+
+def test_glass_is_not_explained_by_what_the_lidar_sees_through_it() -> None:
+    behind = _wall_hits(-1.0, 1.0, 3.5)  # the lidar's light went through the pane at 1.4 m
+    assert not echo_explained_by_lidar((0.0, 0.0, math.pi / 2), 1.4, 0.5, behind)
+    beside = _wall_hits(2.0, 3.0, 1.4)  # at the right range but far outside the cone
+    assert not echo_explained_by_lidar((0.0, 0.0, math.pi / 2), 1.4, 0.5, beside)
+    assert not echo_explained_by_lidar((0.0, 0.0, math.pi / 2), 1.4, 0.5, None)
+    assert not echo_explained_by_lidar((0.0, 0.0, math.pi / 2), math.inf, 0.5, behind)
+
+
+# --- glass memory ----------------------------------------------------------------------------------
+
+
+def _glass_memory(suspicion_m: float) -> GlassMemory:
+    frame = map_from_world(_room()).frame
+    return GlassMemory(frame, CostmapParams(), suspicion_radius_m=suspicion_m)
+
+
+def _is_glass(memory: GlassMemory, x: float, y: float) -> bool:
+    ix, iy = memory.frame.world_to_cell(x, y)
+    return bool(memory.glass_mask()[iy, ix])
+
+
+def test_glass_memory_marks_echoes_and_suspects_only_floor_the_sonar_never_saw() -> None:
+    memory = _glass_memory(suspicion_m=0.3)
+    # Facing +x from (1.0, 1.5): a pane 1.0 m ahead, the cone 0.5 rad wide (the arc spans about +-0.25 m).
+    memory.add_reading((1.0, 1.5, 0.0), 1.0, 0.5, 0.02, 3.0)
+    assert _is_glass(memory, 2.0, 1.5)  # the echo itself
+    assert not _is_glass(memory, 1.5, 1.5)  # looked through on the way
+    assert _is_glass(memory, 2.0, 1.5 + 0.45)  # the pane may go on beyond what the cone covered ...
+    assert _is_glass(memory, 2.2, 1.5)  # ... and behind it the sonar cannot look
+    assert not _is_glass(memory, 2.0, 1.5 + 0.7)  # but not further than the suspicion radius
+    # Looking along the suspected continuation from elsewhere clears it.
+    memory.add_clear_view((2.0, 0.2, math.pi / 2), 2.0, 0.5, 0.02)
+    assert not _is_glass(memory, 2.0, 1.0)
+    # Where the robot stands there is no glass; clear() forgets everything.
+    memory.observe_footprint((2.0, 1.5, 0.0))
+    assert not _is_glass(memory, 2.0, 1.5)
+    memory.clear()
+    assert not memory.glass_mask().any()
+
+
+def test_glass_memory_without_suspicion_keeps_only_the_marks() -> None:
+    memory = _glass_memory(suspicion_m=0.0)
+    memory.add_reading((1.0, 1.5, 0.0), 1.0, 0.5, 0.02, 3.0)
+    assert _is_glass(memory, 2.0, 1.5) and not _is_glass(memory, 2.0, 1.5 + 0.45)
+    memory.add_reading((1.0, 1.5, 0.0), math.inf, 0.5, 0.02, 3.0)  # no echo: the cone is clear
+    assert not memory.glass_mask().any()
+    with pytest.raises(ValueError, match="suspicion_radius_m"):
+        GlassMemory(memory.frame, CostmapParams(), suspicion_radius_m=-1.0)

@@ -1,0 +1,93 @@
+"""The pose tracker places the robot at any recent instant from a slow map pose and fast odometry."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from services.planner.pose_tracker import OdometrySample, PoseTracker, advance, interpolate
+from shared.geometry import Pose2D
+
+#: map -> odom of a localiser that is off by a fixed transform.
+MAP_TO_ODOM = Pose2D(1.0, -2.0, 0.3)
+
+
+def _turning(t: float) -> Pose2D:
+    """odom -> base_link of a robot driving a circle: 0.4 m/s, 1.2 rad/s from the odom origin."""
+    return advance(Pose2D(), 0.4, 1.2, t)
+
+
+def _feed(tracker: PoseTracker, until_s: float, map_every: int = 5) -> None:
+    """Odometry at 50 Hz, a map pose every ``map_every`` samples, all arriving when stamped."""
+    for i in range(int(round(until_s * 50)) + 1):
+        t = i / 50
+        tracker.add_odometry(OdometrySample(t, _turning(t), 0.4, 1.2), received_s=t)
+        if i % map_every == 0:
+            tracker.add_map_pose(MAP_TO_ODOM.compose(_turning(t)), received_s=t)
+
+
+def _close(a: Pose2D, b: Pose2D, tol_m: float = 1e-6, tol_rad: float = 1e-6) -> bool:
+    return a.distance_to(b) < tol_m and abs(math.remainder(a.yaw - b.yaw, 2 * math.pi)) < tol_rad
+
+
+def test_advance_and_interpolate_are_exact_arcs_and_shortest_turns() -> None:
+    quarter = advance(Pose2D(), 1.0, math.pi / 2, 1.0)  # a quarter circle of radius 2/pi
+    r = 2 / math.pi
+    assert _close(quarter, Pose2D(r, r, math.pi / 2))
+    assert _close(advance(Pose2D(0, 0, math.pi / 2), 2.0, 0.0, 0.5), Pose2D(0.0, 1.0, math.pi / 2))
+    mid = interpolate(Pose2D(0, 0, 3.0), Pose2D(2, 0, -3.0), 0.5)  # across +-pi, not through 0
+    assert _close(mid, Pose2D(1.0, 0.0, -math.pi), tol_rad=1e-9)
+
+
+def test_pose_at_a_sensor_stamp_between_map_poses_is_exact() -> None:
+    tracker = PoseTracker()
+    _feed(tracker, 1.0)
+    for stamp in (0.63, 0.8, 0.97, 1.0):
+        expected = MAP_TO_ODOM.compose(_turning(stamp))
+        got = tracker.pose_at(stamp)
+        assert got is not None and _close(got, expected, tol_m=2e-3, tol_rad=1e-3), (stamp, got, expected)
+
+
+def test_current_pose_extrapolates_along_the_twist() -> None:
+    tracker = PoseTracker(max_extrapolation_s=0.3)
+    _feed(tracker, 1.0)
+    got = tracker.current_pose(1.1)
+    expected = MAP_TO_ODOM.compose(_turning(1.1))
+    assert got is not None and _close(got, expected, tol_m=1e-6, tol_rad=1e-6)
+    # Extrapolation is capped: a second later it has not run away.
+    capped = tracker.current_pose(1.25)
+    assert capped is not None and _close(capped, MAP_TO_ODOM.compose(_turning(1.25)), tol_m=1e-6)
+    assert tracker.velocity(1.1) == pytest.approx((0.4, 1.2))
+
+
+def test_a_map_pose_arriving_late_pairs_with_the_odometry_it_was_taken_with() -> None:
+    tracker = PoseTracker()
+    _feed(tracker, 1.0)
+    # The pose service is two odometry samples behind: the pose of t=0.96 arrives after t=1.0's odometry.
+    tracker.add_map_pose(MAP_TO_ODOM.compose(_turning(0.96)), received_s=1.0)
+    got = tracker.pose_at(1.0)
+    assert got is not None and _close(got, MAP_TO_ODOM.compose(_turning(1.0)), tol_m=1e-6, tol_rad=1e-6)
+
+
+def test_without_odometry_the_last_map_pose_is_used_as_is() -> None:
+    tracker = PoseTracker()
+    assert tracker.current_pose(0.0) is None and tracker.pose_at(0.0) is None
+    assert tracker.map_pose_age_s(3.0) == math.inf
+    tracker.add_map_pose(Pose2D(1.0, 2.0, 0.5), received_s=2.0)
+    assert tracker.current_pose(2.2) == Pose2D(1.0, 2.0, 0.5)
+    assert tracker.pose_at(1.0) == Pose2D(1.0, 2.0, 0.5)
+    assert tracker.velocity(2.2) is None
+    assert tracker.map_pose_age_s(2.25) == pytest.approx(0.25)
+
+
+def test_stale_odometry_stops_extrapolation_and_a_clock_reset_clears_history() -> None:
+    tracker = PoseTracker(odom_timeout_s=0.5)
+    _feed(tracker, 2.0)
+    last_map = MAP_TO_ODOM.compose(_turning(2.0))
+    assert tracker.current_pose(3.0) == last_map and tracker.velocity(3.0) is None
+    # A sample older than the newest (out of order) is dropped; a jump back by over a second is a reset.
+    tracker.add_odometry(OdometrySample(1.5, Pose2D(), 0.0, 0.0), received_s=3.0)
+    assert _close(tracker.pose_at(1.5), MAP_TO_ODOM.compose(_turning(1.5)))  # type: ignore[arg-type]
+    tracker.add_odometry(OdometrySample(0.02, Pose2D(), 0.0, 0.0), received_s=0.02)
+    assert tracker.current_pose(0.02) is None
