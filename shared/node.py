@@ -121,6 +121,8 @@ class _Executor:
         self._timers: list[Timer] = []
         #: Held while any callback runs: callbacks are mutually exclusive whatever thread runs them.
         self.run_lock = threading.Lock()
+        #: The earliest sim time a sim-time timer is due; the clock wakes the executor only from then on.
+        self.next_sim_due = 0.0
 
     def try_enter(self) -> bool:
         """Take the run lock if the executor is idle with nothing queued (for direct dispatch)."""
@@ -140,6 +142,7 @@ class _Executor:
     def add_timer(self, timer: Timer) -> None:
         with self._cv:
             self._timers.append(timer)
+            self.next_sim_due = 0.0  # let the clock wake us to schedule the new timer
             self._cv.notify()
 
     def remove_timer(self, timer: Timer) -> None:
@@ -181,6 +184,8 @@ class _Executor:
                 for timer in timers:
                     if timer.due():
                         self._node._run_callback(timer.fire)
+                sim_deadlines = [t.next_due for t in timers if t.uses_sim_time and not t.cancelled]
+                self.next_sim_due = min((d if d is not None else 0.0 for d in sim_deadlines), default=float("inf"))
 
     def _next_wall_wait(self) -> float:
         wait = 0.1
@@ -216,6 +221,11 @@ class Timer:
             self._next = now + self.period_s  # first tick, or the clock jumped back (simulator reset)
             return False
         return now >= self._next
+
+    @property
+    def next_due(self) -> float | None:
+        """When the timer fires next on its clock (``None`` before its first tick is scheduled)."""
+        return self._next
 
     def wall_wait(self) -> float:
         if self._next is None:
@@ -478,9 +488,14 @@ class Node:
         return Time.from_sec(self.now())
 
     def _on_clock(self, msg: Clock) -> None:
-        self._sim_now = msg.clock.to_sec()
+        now = msg.clock.to_sec()
+        jumped_back = now < self._sim_now
+        self._sim_now = now
         self.clock_started = True
-        self._executor.wake()
+        # Wake the executor only when a sim-time timer is due (or time jumped back: a simulator restart),
+        # not on every tick of a 100 Hz clock.
+        if now >= self._executor.next_sim_due or jumped_back:
+            self._executor.wake()
 
     # --- entities ----------------------------------------------------------------------------------
 

@@ -280,10 +280,16 @@ def _array_validator(spec: _ArraySpec) -> Validator:
         elif isinstance(value, (list, tuple)):
             if len(value) > MAX_ARRAY_LEN:
                 raise _FieldError("", f"array of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
-            if value and not all(type(v) in (int, float) for v in value):
-                bad = next(v for v in value if type(v) not in (int, float))
+            # One C-level conversion, then a check of the resulting kind: no Python loop per item.
+            try:
+                raw = np.asarray(value)
+            except (OverflowError, ValueError, TypeError) as exc:
+                raise _FieldError("", f"array items must be numbers ({exc})") from None
+            if raw.size and raw.dtype.kind not in ("fi" if is_float else "i"):
+                if raw.dtype.kind == "f":
+                    raise _FieldError("", "array items must be integers, found a fraction")
+                bad = next((v for v in value if type(v) not in (int, float)), value[0])
                 raise _FieldError("", f"array items must be numbers, found {type(bad).__name__}")
-            raw = np.asarray(value, dtype=np.float64 if is_float else np.int64)
         elif isinstance(value, (bytes, bytearray)) and spec.dtype.itemsize == 1:
             raw = np.frombuffer(bytes(value), dtype=spec.dtype)
         else:

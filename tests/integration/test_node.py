@@ -12,6 +12,7 @@ from shared.messages import Bool, Clock, Time, Twist
 from shared.node import RELIABLE, Node, QoS, ServiceError, ServiceType, call_service, sequence_number
 from shared.session import SessionSpec, open_session
 from tests.support.bus import liveliness_keys
+from tests.support.processes import wait_until
 
 ECHO = ServiceType("zendock_msgs/srv/Echo", Twist, Twist)
 
@@ -45,8 +46,9 @@ def test_typed_pub_sub_and_rejection(node_pair: tuple[Node, Node], bus: zenoh.Se
 
     listener.create_subscription(Twist, "cmd_vel", on_twist, RELIABLE)
     pub = talker.create_publisher(Twist, "cmd_vel")
-    keys = liveliness_keys(bus)
-    assert any(k.endswith(f"/sub/{listener.namespace}/listener/geometry_msgs%msg%Twist/{listener.namespace}/cmd_vel") for k in keys), keys
+    token = f"/sub/{listener.namespace}/listener/geometry_msgs%msg%Twist/{listener.namespace}/cmd_vel"
+    wait_until(lambda: any(k.endswith(token) for k in liveliness_keys(bus)), 5.0,
+               lambda: f"no token ending {token}: {liveliness_keys(bus)}")
     for bad in (b"garbage", Bool(True).encode()):
         bus.put(talker.key("cmd_vel"), bad)
     for i in range(3):
@@ -116,6 +118,8 @@ def test_requests(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
         return Twist.planar(req.linear.x * 2, 0.0)
 
     listener.create_service(ECHO, "double", handler)
+    wait_until(lambda: any("/srv/" in k and k.endswith("/double") for k in liveliness_keys(bus)), 5.0,
+               "the service's token never appeared")
     assert talker.call(ECHO, "double", Twist.planar(1.5, 0.0)).linear.x == 3.0
     with pytest.raises(ServiceError, match="must be positive"):
         talker.call(ECHO, "double", Twist.planar(-1.0, 0.0))
