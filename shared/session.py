@@ -41,6 +41,10 @@ def make_config(spec: SessionSpec) -> zenoh.Config:
         conf = zenoh.Config()
     conf.insert_json5("mode", json.dumps(spec.mode))
     conf.insert_json5("scouting/multicast/enabled", "false")
+    # Shared memory off unless a config file turns it on: every receiver maps each sender's 16 MiB pool,
+    # which costs tens of MB of RSS per process, and zendock's messages are small.
+    if not spec.config_file:
+        conf.insert_json5("transport/shared_memory/enabled", "false")
     if spec.connect:
         conf.insert_json5("connect/endpoints", json.dumps(list(spec.connect)))
     if spec.listen:

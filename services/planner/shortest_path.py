@@ -9,11 +9,32 @@ path it can drive; divided by the speed limit it bounds the time to goal from be
 
 from __future__ import annotations
 
+import numpy as np
+
 from services.planner.astar import AStarParams, AStarPlanner
-from services.planner.costmap import CostmapParams, LayeredCostmap
+from services.planner.costmap import CostGrid, CostmapParams, LayeredCostmap
 from services.planner.rasterize import map_from_world
 from services.planner.smoothing import SmoothingParams, path_length_m, shortcut_path
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, World
+
+
+def solid_grid(
+    world: World, resolution_m: float = 0.05, robot_length_m: float = ROBOT_LENGTH_M, robot_width_m: float = ROBOT_WIDTH_M
+) -> CostGrid:
+    """Every surface the robot can touch (glass too), inflated to the inscribed radius only."""
+    solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
+    occupancy = map_from_world(solid, resolution_m=resolution_m)
+    inscribed_radius_m = 0.5 * min(robot_length_m, robot_width_m)
+    params = CostmapParams(
+        robot_length_m=robot_length_m, robot_width_m=robot_width_m, inflation_radius_m=inscribed_radius_m
+    )
+    return LayeredCostmap(occupancy, params).grid()
+
+
+def shortest_path(grid: CostGrid, start_xy: tuple[float, float], goal_xy: tuple[float, float]) -> np.ndarray:
+    """The shortest path's corner points ``(N, 2)`` on a :func:`solid_grid`; ``PlanningError`` if none."""
+    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=0.0)).plan(grid, start_xy, goal_xy)
+    return shortcut_path(grid, found.points_xy, SmoothingParams(max_cost=252, cost_weight=0.0))
 
 
 def shortest_path_length_m(
@@ -25,13 +46,5 @@ def shortest_path_length_m(
     robot_width_m: float = ROBOT_WIDTH_M,
 ) -> float:
     """Length of the shortest path for the robot's inscribed circle; ``PlanningError`` if there is none."""
-    solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
-    occupancy = map_from_world(solid, resolution_m=resolution_m)
-    inscribed_radius_m = 0.5 * min(robot_length_m, robot_width_m)
-    params = CostmapParams(
-        robot_length_m=robot_length_m, robot_width_m=robot_width_m, inflation_radius_m=inscribed_radius_m
-    )
-    grid = LayeredCostmap(occupancy, params).grid()
-    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=0.0)).plan(grid, start_xy, goal_xy)
-    straight = shortcut_path(grid, found.points_xy, SmoothingParams(max_cost=252, cost_weight=0.0))
-    return path_length_m(straight)
+    grid = solid_grid(world, resolution_m, robot_length_m, robot_width_m)
+    return path_length_m(shortest_path(grid, start_xy, goal_xy))

@@ -1,0 +1,91 @@
+"""``zendock trials``: Monte Carlo dockings from random starts, with a progress bar and a summary."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from shared.config_errors import ConfigError
+
+
+def _count(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
+    return value
+
+
+def _rtf(text: str) -> str:
+    if text.strip().lower() == "max":
+        return "max"
+    value = float(text)
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a positive number or max, got {text}")
+    return text
+
+
+def _summary_table(summary: dict) -> Table:
+    table = Table(title=f"{summary['n']} trials: {summary['world']}, {summary['controller']} controller")
+    table.add_column("measure")
+    table.add_column("value", justify="right")
+    fmt = {
+        "success_rate": lambda v: f"{100 * v:.1f} %",
+        "median_lateral_error_m": lambda v: f"{1000 * v:.1f} mm",
+        "p95_lateral_error_m": lambda v: f"{1000 * v:.1f} mm",
+        "median_yaw_error_rad": lambda v: f"{math.degrees(v):.2f} deg",
+    }
+    for key in ("successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_lateral_error_m",
+                "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s"):
+        value = summary[key]
+        text = fmt[key](value) if key in fmt else (f"{value:.1f}" if isinstance(value, float) else str(value))
+        table.add_row(key, text)
+    for name, mb in sorted(summary.get("peak_rss_mb", {}).items()):
+        table.add_row(f"peak RSS {name}", f"{mb:.0f} MB")
+    return table
+
+
+def _run(args: argparse.Namespace) -> int:
+    from deploy.trials import TrialOptions, run_trials  # noqa: PLC0415 - heavy imports only when used
+
+    world = Path(args.world)
+    if not world.is_file():
+        raise ConfigError(f"--world {world}: no such file")
+    options = TrialOptions(world=world.resolve(), n=args.n, controller=args.controller, seed=args.seed,
+                           rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout)
+    console = Console(stderr=args.json)
+    with Progress(TextColumn("trials"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[last]}"),
+                  TimeElapsedColumn(), console=console) as bar:
+        task = bar.add_task("trials", total=args.n, last="")
+
+        def advance(result) -> None:  # type: ignore[no-untyped-def]
+            status = "docked" if result.docked else "FAILED"
+            bar.update(task, advance=1, last=f"#{result.index} {status} {result.dock_time_s:.1f} s")
+
+        summary, _results, run_dir = run_trials(options, log=lambda t: console.print(f"[dim]trials:[/] {t}"),
+                                                progress=advance)
+    data = {**summary.headline(), "controller": summary.controller, "world": summary.world,
+            "peak_rss_mb": summary.peak_rss_mb}
+    console.print(_summary_table(data))
+    console.print(f"report and histograms in {run_dir}")
+    if args.json:
+        print(json.dumps(summary.headline()))
+    return 0 if summary.successes == summary.n else 1
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("trials", help="Monte Carlo dockings from random starts on the full stack")
+    parser.add_argument("--world", default="deploy/worlds/seed_room.yaml")
+    parser.add_argument("--n", type=_count, default=10, help="number of dockings")
+    parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the start poses and the simulator's noise")
+    parser.add_argument("--rtf", type=_rtf, default="8", help="simulator real-time factor, or max")
+    parser.add_argument("--workers", type=_count, default=1, help="robots docking side by side in one simulator")
+    parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
+    parser.set_defaults(func=_run)

@@ -1,0 +1,351 @@
+"""``zendock trials``: many dockings from random starts on the full distributed stack, measured.
+
+One stack serves ``workers`` robots at once: a single simulator process steps one copy of the room per
+robot (namespaces ``r0``, ``r1``, …), and each robot has its own battery, pose, planner and docking
+services, exactly the processes the default stack runs. Each trial places its robot at a random
+collision-free start (seeded, reproducible), sets the battery just above the low threshold and waits
+for ``CHARGING``; the :class:`~deploy.observer.RunObserver` measures it on ground truth. Noise and a
+map->odom localisation error are on, as on a real robot.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import queue
+import random
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.memory import PeakRssSampler
+from deploy.observer import RunObserver, RunRecord
+from shared.geometry import Pose2D
+from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
+from shared.interfaces.simulator import TELEPORT, TeleportRequest
+from shared.names import topic_key
+from shared.node import ServiceError, call_service
+from shared.session import SessionSpec, open_session
+from shared.world import World, load_world
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+#: The robot's circumscribed radius plus a margin: starts this far from every surface can always turn.
+START_CLEARANCE_M = 0.45
+#: Starts at least this far from the dock, so each trial navigates before it docks.
+MIN_START_DISTANCE_TO_DOCK_M = 1.2
+
+
+@dataclass(frozen=True)
+class TrialOptions:
+    world: Path
+    n: int = 10
+    controller: str = "graceful"
+    seed: int = 0
+    rtf: str = "8"
+    workers: int = 1
+    timeout_sim_s: float = 240.0
+    localisation_error: tuple[float, float, float] = (0.03, -0.02, 0.02)
+    battery_start: float = 0.255
+    drain_scale: float = 20.0
+    runs_dir: Path = REPO_ROOT / "runs"
+
+
+@dataclass
+class TrialResult:
+    index: int
+    robot: str
+    start: tuple[float, float, float]
+    docked: bool
+    charging: bool
+    dock_time_s: float
+    lateral_error_m: float
+    yaw_error_rad: float
+    collisions: int
+    path_length_m: float
+    lower_bound_s: float = math.nan
+    wall_s: float = 0.0
+    sim_s: float = 0.0
+
+
+@dataclass
+class TrialsSummary:
+    n: int
+    successes: int
+    success_rate: float
+    median_dock_time_s: float
+    median_lower_bound_s: float
+    median_lateral_error_m: float
+    p95_lateral_error_m: float
+    median_yaw_error_rad: float
+    collisions: int
+    wall_s: float
+    sim_s: float
+    controller: str = ""
+    world: str = ""
+    peak_rss_mb: dict[str, float] = field(default_factory=dict)
+
+    def headline(self) -> dict[str, Any]:
+        keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s",
+                "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s")
+        return {k: getattr(self, k) for k in keys}
+
+
+def random_starts(world: World, n: int, seed: int) -> list[Pose2D]:
+    """``n`` start poses with clearance from every surface (glass included) and away from the docks."""
+    rng = random.Random(seed)
+    xmin, ymin, xmax, ymax = world.bounds
+    segments = world.opaque_segments() + list(world.glass)
+    starts: list[Pose2D] = []
+    attempts = 0
+    while len(starts) < n:
+        attempts += 1
+        if attempts > 200_000:
+            raise RuntimeError(f"{world.name}: could not find {n} collision-free starts")
+        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+        if min(_distance_to_segment((x, y), s) for s in segments) < START_CLEARANCE_M:
+            continue
+        if any(math.dist((x, y), d.pose[:2]) < MIN_START_DISTANCE_TO_DOCK_M for d in world.docks):
+            continue
+        starts.append(Pose2D(x, y, rng.uniform(-math.pi, math.pi)))
+    return starts
+
+
+def _distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]) -> float:
+    (ax, ay), (bx, by) = segment
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / length2))
+    return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy)
+
+
+def trials_stack(options: TrialOptions, endpoint: str, robots: list[str]) -> dict[str, Any]:
+    """A stack file (as data) with one simulator for all robots and each robot's own services."""
+    world = str(options.world)
+    py = ["python", "-m"]
+    services: dict[str, Any] = {
+        "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
+        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", ".zendock/maps/map.yaml"], "restart": "no"},
+        "simulator": {
+            "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
+                        "-p", f"seed={options.seed}", "-p", f"robots={json.dumps(robots)}",
+                        "-p", f"localisation_error={json.dumps(list(options.localisation_error))}"],
+            "depends_on": {"router": {"condition": "service_started"}},
+            "healthcheck": {"liveliness": True, "timeout": "30s"},
+            "restart": "on-failure",
+        },
+    }
+    for robot in robots:
+        common = {"depends_on": {"router": {"condition": "service_started"}}, "namespace": robot,
+                  "healthcheck": {"liveliness": True, "timeout": "30s"}, "restart": "on-failure"}
+        services[f"battery_{robot}"] = {**common, "command": [*py, "services.battery", "-p", "use_sim_time=true"]}
+        services[f"pose_{robot}"] = {**common, "command": [*py, "services.pose", "-p", "use_sim_time=true"]}
+        services[f"planner_{robot}"] = {
+            **common,
+            "command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml"],
+            "depends_on": {"router": {"condition": "service_started"},
+                           "map": {"condition": "service_completed_successfully"}},
+        }
+        services[f"docking_{robot}"] = {
+            **common,
+            "command": [*py, "services.docking", "-p", "use_sim_time=true", "-p", f"dock_database={world}",
+                        "-p", f"controller={options.controller}"],
+        }
+    return {"name": "trials", "namespace": "", "zenoh": {"connect": [endpoint]}, "services": services}
+
+
+def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[float]:
+    """Shortest collision-free times for ``(start, goal)`` pairs, from the planner's own tool (one process)."""
+    if not pairs:
+        return []
+    lines = "\n".join(json.dumps({"start": list(s.as_tuple()), "goal": list(g.as_tuple())}) for s, g in pairs)
+    done = subprocess.run(
+        [sys.executable, "-m", "services.planner.lower_bound", "--world", str(world_path), "--batch"],
+        input=lines, capture_output=True, text=True, timeout=600, cwd=REPO_ROOT,
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"lower bounds failed: {done.stderr.strip()[-300:]}")
+    return [json.loads(line).get("lower_bound_s", math.nan) for line in done.stdout.strip().splitlines()]
+
+
+def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: TrialOptions) -> tuple[TrialResult, RunRecord]:
+    wall_start = time.monotonic()
+    placed = call_service(session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot))
+    if not placed.success:
+        raise ServiceError(f"trial {index}: start {start}: {placed.message}")
+    observer = RunObserver(session, robot)
+    try:
+        observer.arm()
+        call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+                     SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
+        started_sim = None
+        deadline_wall = time.monotonic() + options.timeout_sim_s * 3 + 120.0
+
+        def finished(record: RunRecord) -> bool:
+            nonlocal started_sim
+            if started_sim is None and record.sim_time_s > 0:
+                started_sim = record.sim_time_s
+            return record.charging or (started_sim is not None and record.sim_time_s - started_sim > options.timeout_sim_s)
+
+        while not observer.wait(finished, timeout_s=1.0) and time.monotonic() < deadline_wall:
+            pass
+        record = observer.snapshot()
+    finally:
+        observer.close()
+    contact = record.contact_at_charging
+    trigger = record.trigger_s if record.trigger_s is not None else math.nan
+    result = TrialResult(
+        index=index,
+        robot=robot,
+        start=start.as_tuple(),
+        docked=bool(record.charging and contact is not None and contact.mated),
+        charging=record.charging,
+        dock_time_s=(record.charging_s - trigger) if record.charging_s is not None else math.nan,
+        lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
+        yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,
+        collisions=record.collisions,
+        path_length_m=record.driven_length_m(since_s=record.trigger_s),
+        wall_s=time.monotonic() - wall_start,
+        sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
+    )
+    return result, record
+
+
+def _percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    if not ordered:
+        return math.nan
+    return ordered[min(len(ordered) - 1, max(0, math.ceil(q * len(ordered)) - 1))]
+
+
+def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, world: World) -> TrialsSummary:
+    ok = [r for r in results if r.docked]
+    med = lambda xs: statistics.median(xs) if xs else math.nan  # noqa: E731
+    bounds = [r.lower_bound_s for r in ok if math.isfinite(r.lower_bound_s)]
+    return TrialsSummary(
+        n=len(results),
+        successes=len(ok),
+        success_rate=len(ok) / len(results) if results else math.nan,
+        median_dock_time_s=med([r.dock_time_s for r in ok]),
+        median_lower_bound_s=med(bounds),
+        median_lateral_error_m=med([r.lateral_error_m for r in ok]),
+        p95_lateral_error_m=_percentile([r.lateral_error_m for r in ok], 0.95),
+        median_yaw_error_rad=med([r.yaw_error_rad for r in ok]),
+        collisions=sum(r.collisions for r in results),
+        wall_s=wall_s,
+        sim_s=sum(r.sim_s for r in results if math.isfinite(r.sim_s)),
+        controller=options.controller,
+        world=world.name,
+    )
+
+
+def run_trials(
+    options: TrialOptions,
+    log: Callable[[str], None] = print,
+    progress: Callable[[TrialResult], None] | None = None,
+) -> tuple[TrialsSummary, list[TrialResult], Path]:
+    """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs)."""
+    world = load_world(options.world)
+    if not world.docks:
+        raise ValueError(f"{options.world}: the world has no dock")
+    run_dir = options.runs_dir / f"trials-{time.strftime('%Y%m%d-%H%M%S')}"
+    run_dir.mkdir(parents=True, exist_ok=True)
+    workers = max(1, min(options.workers, options.n))
+    robots = [f"r{i}" for i in range(workers)]
+    starts = random_starts(world, options.n, options.seed)
+    endpoint = free_endpoint()
+    stack_path = run_dir / "stack.yaml"
+    stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots), sort_keys=False))
+    stack = load_stack(stack_path, env={}, project_dir=REPO_ROOT)
+    results: list[TrialResult] = []
+    records: dict[int, RunRecord] = {}
+    errors: list[str] = []
+    wall_start = time.monotonic()
+    log(f"{options.n} trials in {world.name} with {workers} robot(s), controller {options.controller}, rtf {options.rtf}")
+    with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
+        launcher.wait_healthy(timeout_s=120.0)
+        sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
+        todo: queue.Queue[tuple[int, Pose2D]] = queue.Queue()
+        for i, start in enumerate(starts):
+            todo.put((i, start))
+        lock = threading.Lock()
+        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
+
+            def worker(robot: str) -> None:
+                while True:
+                    try:
+                        index, start = todo.get_nowait()
+                    except queue.Empty:
+                        return
+                    try:
+                        result, record = _run_one(session, robot, index, start, options)
+                    except (ServiceError, OSError) as exc:
+                        with lock:
+                            errors.append(f"trial {index} ({robot}): {exc}")
+                        result = TrialResult(index, robot, start.as_tuple(), False, False, math.nan, math.nan,
+                                             math.nan, 0, 0.0)
+                        record = RunRecord()
+                    with lock:
+                        results.append(result)
+                        records[index] = record
+                    if progress is not None:
+                        progress(result)
+
+            threads = [threading.Thread(target=worker, args=(robot,), daemon=True) for robot in robots]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+        for status in launcher.ps():
+            (run_dir / f"{status.name}.log").write_text("\n".join(launcher.logs(status.name)) + "\n")
+    wall_s = time.monotonic() - wall_start
+    results.sort(key=lambda r: r.index)
+    pairs = []
+    for r in results:
+        record = records.get(r.index)
+        pose = record.pose_at(record.trigger_s) if record is not None and record.trigger_s is not None else None
+        pairs.append((pose or Pose2D(*r.start), world.docks[0].pose2d))
+    try:
+        for r, bound in zip(results, lower_bounds(options.world, pairs)):
+            r.lower_bound_s = bound
+    except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
+        log(f"lower bounds not computed: {exc}")
+    summary = summarise(results, wall_s, options, world)
+    summary.peak_rss_mb = dict(sampler.peak_mb)
+    report = {"summary": asdict(summary), "trials": [asdict(r) for r in results], "errors": errors,
+              "options": {k: str(v) for k, v in asdict(options).items()}}
+    (run_dir / "trials.json").write_text(json.dumps(report, indent=2) + "\n")
+    _histograms(results, run_dir / "histograms.png")
+    return summary, results, run_dir
+
+
+def _histograms(results: list[TrialResult], path: Path) -> None:
+    import matplotlib  # noqa: PLC0415 - slow to import; only when writing pictures
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    ok = [r for r in results if r.docked]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    panels = [
+        ("dock time (s, sim)", [r.dock_time_s for r in ok], "#4472c4"),
+        ("lateral error at contact (mm)", [1000 * r.lateral_error_m for r in ok], "#ed7d31"),
+        ("yaw error at contact (deg)", [math.degrees(r.yaw_error_rad) for r in ok], "#70ad47"),
+    ]
+    for ax, (title, values, colour) in zip(axes, panels):
+        if values:
+            ax.hist(values, bins=min(30, max(5, len(values) // 3)), color=colour, edgecolor="white")
+        ax.set_title(title)
+        ax.set_ylabel("trials")
+    fig.suptitle(f"{len(ok)}/{len(results)} docked")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
