@@ -156,6 +156,7 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
                     if time.monotonic() > deadline_wall:
                         log("wall-clock limit reached")
                         break
+                observer.settle()
                 record = observer.snapshot()
             finally:
                 observer.close()

@@ -116,20 +116,23 @@ class RunObserver:
                 BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
             if charging and record.trigger_s is not None and record.charging_s is None:
                 record.charging_s = t
-                record.contact_at_charging = self._contact_before(t)
             self._changed.notify_all()
 
-    def _contact_before(self, t_s: float) -> DockContact | None:
-        mated = [c for c in self._contacts if c.mated and c.header.stamp.to_sec() <= t_s + 1e-6]
+    def _contact_at(self, t_s: float) -> DockContact | None:
+        """The contact state when charging began: the mating that started it (messages from different
+        publishers arrive in any order, so the mated reading may come just after the battery's)."""
+        mated = [c for c in self._contacts if c.mated and c.header.stamp.to_sec() <= t_s + 0.5]
         if mated:
-            return mated[-1]
+            before = [c for c in mated if c.header.stamp.to_sec() <= t_s + 1e-6]
+            return before[-1] if before else mated[0]
         return self._contacts[-1] if self._contacts else None
 
     def _on_contact(self, msg: DockContact) -> None:
-        with self._lock:
+        with self._changed:
+            self._changed.notify_all()
             self._contacts.append(msg)
-            if len(self._contacts) > 200:
-                del self._contacts[:100]
+            if len(self._contacts) > 400 and self._record.charging_s is None:
+                del self._contacts[:200]
 
     def _on_collision(self, msg: CollisionEvent) -> None:
         with self._changed:
@@ -168,10 +171,20 @@ class RunObserver:
     def snapshot(self) -> RunRecord:
         with self._lock:
             r = self._record
+            contact = self._contact_at(r.charging_s) if r.charging_s is not None else None
             return RunRecord(
-                r.trigger_s, r.charging_s, r.contact_at_charging, r.collisions, list(r.collision_kinds),
+                r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds),
                 list(r.driven), [list(p) for p in r.plans], list(r.sonar_hits), list(r.battery), r.sim_time_s,
             )
+
+    def settle(self, timeout_s: float = 2.0) -> None:
+        """After charging began, wait (briefly) for the simulator's contact reading of that moment."""
+        def seen() -> bool:
+            t = self._record.charging_s
+            return t is None or any(c.header.stamp.to_sec() >= t for c in self._contacts)
+
+        with self._changed:
+            self._changed.wait_for(seen, timeout=timeout_s)
 
     def sim_time(self) -> float:
         with self._lock:

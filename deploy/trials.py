@@ -145,17 +145,24 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str]) -> dic
     }
     for robot in robots:
         common = {"depends_on": {"router": {"condition": "service_started"}}, "namespace": robot,
-                  "healthcheck": {"liveliness": True, "timeout": "30s"}, "restart": "on-failure"}
-        services[f"battery_{robot}"] = {**common, "command": [*py, "services.battery", "-p", "use_sim_time=true"]}
-        services[f"pose_{robot}"] = {**common, "command": [*py, "services.pose", "-p", "use_sim_time=true"]}
+                  "restart": "on-failure"}
+
+        def health(node: str) -> dict[str, Any]:
+            return {"healthcheck": {"liveliness": node, "timeout": "30s"}}
+
+        services[f"battery_{robot}"] = {**common, **health("battery"),
+                                        "command": [*py, "services.battery", "-p", "use_sim_time=true"]}
+        services[f"pose_{robot}"] = {**common, **health("pose"), "command": [*py, "services.pose", "-p", "use_sim_time=true"]}
         services[f"planner_{robot}"] = {
             **common,
+            **health("planner"),
             "command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml"],
             "depends_on": {"router": {"condition": "service_started"},
                            "map": {"condition": "service_completed_successfully"}},
         }
         services[f"docking_{robot}"] = {
             **common,
+            **health("docking"),
             "command": [*py, "services.docking", "-p", "use_sim_time=true", "-p", f"dock_database={world}",
                         "-p", f"controller={options.controller}"],
         }
@@ -197,6 +204,7 @@ def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: Trial
 
         while not observer.wait(finished, timeout_s=1.0) and time.monotonic() < deadline_wall:
             pass
+        observer.settle()
         record = observer.snapshot()
     finally:
         observer.close()
