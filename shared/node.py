@@ -38,6 +38,8 @@ Req = TypeVar("Req", bound=Message)
 Res = TypeVar("Res", bound=Message)
 
 ENCODING_PREFIX = "application/msgpack"
+#: Payloads larger than this are refused before decoding (a 2000 x 2000 map is 4 MB).
+MAX_PAYLOAD_BYTES = 8 * 1024 * 1024
 _callback_context = threading.local()
 _SEQ = struct.Struct("<Q")
 
@@ -327,6 +329,8 @@ class Subscription(Generic[M]):
             mime, schema = schema_of(sample.encoding)
             if schema and schema != self.msg_type.TYPE_NAME and mime == ENCODING_PREFIX:
                 raise MessageError(f"expected type {self.msg_type.TYPE_NAME}, got {schema}", key=key)
+            if len(sample.payload) > MAX_PAYLOAD_BYTES:
+                raise MessageError(f"payload of {len(sample.payload)} bytes exceeds {MAX_PAYLOAD_BYTES}", key=key)
             msg = self.msg_type.decode(sample.payload.to_bytes())
         except MessageError as exc:
             node._reject(key, exc.at(key=key))

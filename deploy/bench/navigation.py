@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from deploy.service_tools import run_tool
 from shared.action import spin_in_background
 from shared.geometry import Pose2D
 from shared.interfaces.simulator import SIM_STATE, SimStateRequest, SimStateResponse
@@ -142,10 +143,14 @@ class _Odometer:
             return self.distance_m
 
 
+def _shortest_path_length_m(world_file: str, start: Pose2D, goal: tuple[float, float, float]) -> float:
+    """The planner's own shortest collision-free path (glass included), run as a tool process."""
+    argv = ["--world", str(REPO_ROOT / world_file), "--start", *map(str, start.as_tuple()), "--goal", *map(str, goal)]
+    return float(run_tool("services.planner.lower_bound", argv).last_json()["path_length_m"])
+
+
 def _drive_world(world_file: str, goals: tuple[tuple[float, float, float], ...], rtf: float,
                  timeout_s: float, log_dir: Path) -> list[RouteResult]:
-    from services.planner.shortest_path import shortest_path_length_m  # noqa: PLC0415
-
     world = load_world(REPO_ROOT / world_file)
     endpoint, namespace = f"tcp/127.0.0.1:{_free_port()}", "bench"
     results = []
@@ -181,7 +186,7 @@ def _drive_world(world_file: str, goals: tuple[tuple[float, float, float], ...],
                         outcome=outcome.name if outcome is not TaskResult.UNKNOWN else "TIMEOUT",
                         time_s=after.stamp.to_sec() - before.stamp.to_sec(),
                         driven_m=odometer.stop(),
-                        shortest_m=shortest_path_length_m(world, (start.x, start.y), goal[:2]),
+                        shortest_m=_shortest_path_length_m(world_file, start, goal),
                         collisions=after.collisions - before.collisions,
                         recoveries=feedback.number_of_recoveries if feedback is not None else 0,
                     ))

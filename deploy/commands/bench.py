@@ -9,6 +9,8 @@ import sys
 from rich.console import Console
 from rich.table import Table
 
+from deploy.service_tools import run_tool
+
 
 def _print(result: dict, as_json: bool, title: str) -> None:
     if as_json:
@@ -30,23 +32,40 @@ def _bench_bus(args: argparse.Namespace) -> int:
     return 0
 
 
-def _bench_sim(args: argparse.Namespace) -> int:
+def _tool_json(command: str, module: str, argv: list[str]) -> dict | None:
+    """Run a service's benchmark as a process (the launcher floor never imports service code)."""
     try:
-        from services.simulator.bench import bench_simulation  # noqa: PLC0415 - the simulator's own core
-    except ImportError:
-        print("zendock bench sim: the simulator is not installed", file=sys.stderr)
+        return run_tool(module, argv).last_json()
+    except (RuntimeError, ValueError) as exc:
+        print(f"zendock bench {command}: {exc}", file=sys.stderr)
+        return None
+
+
+def _bench_sim(args: argparse.Namespace) -> int:
+    result = _tool_json("sim", "services.simulator.bench", [args.world, str(args.seconds)])
+    if result is None:
         return 1
-    _print(bench_simulation(args.world, args.seconds), args.json, "simulator throughput (all sensors on)")
+    _print(result, args.json, "simulator throughput (all sensors on, no bus)")
+    return 0
+
+
+def _bench_docking(args: argparse.Namespace) -> int:
+    argv = ["--json", "--latency", str(args.latency), "--seed", str(args.seed)]
+    report = _tool_json("docking", "services.docking.bench", argv)
+    if report is None:
+        return 1
+    summary = {f"{name} {key}": value for name, row in report.get("controllers", {}).items()
+               for key, value in row.items() if isinstance(value, (int, float, str))}
+    _print(summary or report, args.json, "final approach on the kinematic model: seed vs Nav2 defaults vs tuned")
     return 0
 
 
 def _bench_planner(args: argparse.Namespace) -> int:
-    try:
-        from services.planner.bench import bench_planning  # noqa: PLC0415 - the planner's own core
-    except ImportError:
-        print("zendock bench planner: the planner is not installed", file=sys.stderr)
+    planning = _tool_json("planner", "services.planner.bench",
+                          ["--repeats", str(args.repeats), "--resolution", str(args.resolution)])
+    if planning is None:
         return 1
-    result: dict = {k: round(v, 2) for k, v in bench_planning(args.repeats, args.resolution).items()}
+    result: dict = dict(planning)
     if not args.planning_only:
         from deploy.bench.navigation import run_navigation_bench  # noqa: PLC0415 - starts a stack
 
@@ -86,3 +105,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     planner.add_argument("--timeout", type=float, default=120.0, help="wall seconds allowed per goal")
     planner.add_argument("--json", action="store_true")
     planner.set_defaults(func=_bench_planner)
+    docking = verbs.add_parser("docking", help="final approach: seed vs Nav2-default graceful vs tuned, kinematic model")
+    docking.add_argument("--latency", type=float, default=0.05, help="pose latency, s")
+    docking.add_argument("--seed", type=int, default=0, help="noise seed")
+    docking.add_argument("--json", action="store_true")
+    docking.set_defaults(func=_bench_docking)

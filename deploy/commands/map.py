@@ -1,62 +1,20 @@
 """``zendock map save``: the occupancy map a lidar would build of a world file, in map_server format.
 
-Writes ``<DIR>/<world name>.yaml`` and ``<DIR>/<world name>.pgm`` and prints both paths. Glass is left
-out of the map on purpose (the lidar sees through it); the planner's range layer adds it at run time.
+Writes ``<DIR>/<world name>.yaml`` and ``.pgm`` (or the ``.yaml`` path given) and prints both paths.
+Glass is left out of the map on purpose (the lidar sees through it); the planner's range layer adds it
+at run time. The rasterising is the planner's own code, run as a process (``services.planner.map_save``).
 """
 
 from __future__ import annotations
 
 import argparse
-import math
-import re
-import sys
-from pathlib import Path
 
-from shared.config_errors import ConfigError
-
-
-def _safe_stem(name: str) -> str:
-    """A world name as a file name: letters, digits, '-', '_' and '.'; anything else becomes '_'."""
-    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", name).strip(".")
-    return stem or "map"
-
-
-def save_world_map(
-    world_file: str | Path, output: str | Path, resolution_m: float, padding_m: float
-) -> tuple[Path, Path]:
-    """Rasterise ``world_file`` and write the map; returns ``(yaml_path, pgm_path)``.
-
-    ``output`` is a directory (the map is named after the world) or a ``.yaml`` file path (a fixed name,
-    so a stack file can point the planner at it whatever the world is).
-    """
-    from services.planner.occupancy_map import save_map  # noqa: PLC0415 - keep CLI start-up light
-    from services.planner.rasterize import map_from_world  # noqa: PLC0415
-    from shared.world import load_world  # noqa: PLC0415
-
-    if not (math.isfinite(resolution_m) and resolution_m > 0):
-        raise ConfigError(f"--resolution must be a positive number of metres per cell, got {resolution_m}")
-    if not (math.isfinite(padding_m) and padding_m >= 0):
-        raise ConfigError(f"--padding must be a non-negative number of metres, got {padding_m}")
-    world = load_world(world_file)
-    occupancy = map_from_world(world, resolution_m=resolution_m, padding_m=padding_m)
-    target = Path(output)
-    if target.suffix not in (".yaml", ".yml"):
-        target = target / f"{_safe_stem(world.name)}.yaml"
-    return save_map(occupancy, target)
+from deploy.service_tools import run_tool
 
 
 def _save(args: argparse.Namespace) -> int:
-    try:
-        yaml_path, pgm_path = save_world_map(args.world, args.output, args.resolution, args.padding)
-    except ConfigError as exc:
-        print(f"zendock map save: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"zendock map save: cannot write to {args.output}: {exc.strerror or exc}", file=sys.stderr)
-        return 1
-    print(yaml_path)
-    print(pgm_path)
-    return 0
+    argv = ["--world", args.world, "-o", args.output, "--resolution", str(args.resolution), "--padding", str(args.padding)]
+    return run_tool("services.planner.map_save", argv).echo()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -68,10 +26,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     save.add_argument("-o", "--output", default=".", metavar="DIR|FILE.yaml",
                       help="output directory, or the map's .yaml path (default: .)")
     save.add_argument("--resolution", type=float, default=0.05, help="metres per cell (default: 0.05)")
-    save.add_argument(
-        "--padding",
-        type=float,
-        default=0.5,
-        help="unknown margin around the world's bounds, metres (default: 0.5)",
-    )
+    save.add_argument("--padding", type=float, default=0.5,
+                      help="unknown margin around the world's bounds, metres (default: 0.5)")
     save.set_defaults(func=_save)

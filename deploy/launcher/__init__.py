@@ -5,6 +5,7 @@ Stack file (``deploy/stack.yaml``; see :mod:`deploy.launcher.stack_file`)::
     name: zendock                      # project name: state under .zendock/<name>/
     namespace: ""                      # every service's ZENDOCK_NAMESPACE (a service's is relative to it)
     zenoh: {connect: ["${ZENOH_CONNECT:-tcp/127.0.0.1:7447}"]}   # every service's ZENDOCK_CONNECT
+    # zenoh.config: a Zenoh json5 file for the launcher's own (health-check) session, e.g. credentials
     services:
       router: {command: [zendock, router, --listen, "${ZENOH_LISTEN:-tcp/127.0.0.1:7447}"]}
       simulator:

@@ -13,6 +13,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Coroutine, Iterable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, TextIO, TypeVar
 
@@ -96,7 +97,7 @@ class Launcher:
             environment=environment,
         )
         if project_name:
-            self.plan = LaunchPlan(project_name, self.plan.namespace, self.plan.connect, self.plan.services)
+            self.plan = replace(self.plan, project=project_name)
         self.paths = RuntimePaths.for_project(self.project_dir, self.project)
         self._backoff = backoff
         self._printer = Printer(output, self.services) if output is not None else None

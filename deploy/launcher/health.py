@@ -30,12 +30,20 @@ class LivelinessWatcher:
 
     The session is opened on a background thread, retrying until the router answers, so the supervisor
     can start the router itself. ``on_change`` runs on the event loop after every token event.
+    ``config_file`` is a Zenoh json5 file applied first (the credentials of a secured router).
     """
 
-    def __init__(self, connect: Sequence[str], loop: asyncio.AbstractEventLoop, on_change: Callable[[], None]) -> None:
+    def __init__(
+        self,
+        connect: Sequence[str],
+        loop: asyncio.AbstractEventLoop,
+        on_change: Callable[[], None],
+        config_file: str | None = None,
+    ) -> None:
         self._spec = SessionSpec(
             mode="client",
             connect=tuple(connect),
+            config_file=config_file,
             overrides=(("connect/timeout_ms", str(_OPEN_ATTEMPT_MS)), ("connect/exit_on_failure", "true")),
         )
         self._loop = loop

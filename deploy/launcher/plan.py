@@ -80,6 +80,8 @@ class LaunchPlan:
     namespace: str
     connect: tuple[str, ...]
     services: Mapping[str, ServicePlan]
+    #: The Zenoh json5 file of the launcher's own session (absolute), from the stack's ``zenoh.config``.
+    zenoh_config: str | None = None
 
     @property
     def liveliness_needed(self) -> bool:
@@ -169,4 +171,7 @@ def plan_launch(
             stop_grace_s=spec.stop_grace_period,
             depends_on={dep: d.condition for dep, d in spec.depends_on.items()},
         )
-    return LaunchPlan(project=stack.project_name, namespace=stack_namespace, connect=endpoints, services=services)
+    zenoh_config = str((root / stack.zenoh_config).resolve()) if stack.zenoh_config else None
+    return LaunchPlan(
+        project=stack.project_name, namespace=stack_namespace, connect=endpoints, services=services, zenoh_config=zenoh_config
+    )

@@ -163,9 +163,14 @@ class ServiceSpec(_Strict):
 
 
 class ZenohSettings(_Strict):
-    """Where services and the launcher's health checker connect (``ZENDOCK_CONNECT`` of every service)."""
+    """Where services and the launcher's health checker connect (``ZENDOCK_CONNECT`` of every service).
+
+    ``config``: a Zenoh json5 file for the launcher's own session (the health checker), e.g. the
+    credentials a secured router asks for; relative to the directory services run in.
+    """
 
     connect: list[str] = Field(default_factory=lambda: [DEFAULT_ROUTER_ENDPOINT])
+    config: str | None = None
 
     @field_validator("connect")
     @classmethod
@@ -218,6 +223,8 @@ class Stack:
     namespace: str
     connect: tuple[str, ...]
     services: Mapping[str, ServiceSpec]
+    #: The Zenoh json5 file of the launcher's own session (``zenoh.config``), if any.
+    zenoh_config: str | None = None
     #: The variables interpolation used (shell environment over ``.env``), for ``KEY:`` pass-throughs.
     variables: Mapping[str, str] = field(default_factory=dict, repr=False)
 
@@ -271,7 +278,7 @@ class Stack:
         return {
             "name": self.project_name,
             "namespace": self.namespace,
-            "zenoh": {"connect": list(self.connect)},
+            "zenoh": {"connect": list(self.connect), **({"config": self.zenoh_config} if self.zenoh_config else {})},
             "services": services,
         }
 
@@ -371,6 +378,7 @@ def load_stack(
         namespace=parsed.namespace,
         connect=tuple(parsed.zenoh.connect),
         services=dict(parsed.services),
+        zenoh_config=parsed.zenoh.config or None,
         variables=variables,
     )
 

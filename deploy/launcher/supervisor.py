@@ -341,7 +341,9 @@ class Supervisor:
     def open(self) -> None:
         """Start the liveliness watcher when some service's health depends on a token."""
         if self.plan.liveliness_needed and self._watcher is None:
-            self._watcher = LivelinessWatcher(self.plan.connect, asyncio.get_running_loop(), self._on_tokens)
+            self._watcher = LivelinessWatcher(
+                self.plan.connect, asyncio.get_running_loop(), self._on_tokens, config_file=self.plan.zenoh_config
+            )
             self._watcher.start()
 
     async def close(self) -> None:

@@ -15,6 +15,7 @@ controller's pose estimator is given the true latency, as the service gives it t
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import statistics
 from collections.abc import Callable, Sequence
@@ -206,9 +207,10 @@ def format_comparison(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main(latency_s: float, position_noise_m: float, yaw_noise_deg: float, seed: int) -> int:
+def main(latency_s: float, position_noise_m: float, yaw_noise_deg: float, seed: int, as_json: bool = False) -> int:
     sensing = PoseSensing(latency_s, position_noise_m, math.radians(yaw_noise_deg), seed)
-    print(format_comparison(compare_controllers(sensing=sensing)))
+    report = compare_controllers(sensing=sensing)
+    print(json.dumps(report, default=str) if as_json else format_comparison(report))
     return 0
 
 
@@ -218,5 +220,6 @@ if __name__ == "__main__":
     parser.add_argument("--position-noise", type=float, default=0.002, help="pose position noise (1 sigma), m")
     parser.add_argument("--yaw-noise", type=float, default=0.2, help="pose yaw noise (1 sigma), degrees")
     parser.add_argument("--seed", type=int, default=0, help="noise seed")
+    parser.add_argument("--json", action="store_true", help="one JSON line instead of the table")
     args = parser.parse_args()
-    raise SystemExit(main(args.latency, args.position_noise, args.yaw_noise, args.seed))
+    raise SystemExit(main(args.latency, args.position_noise, args.yaw_noise, args.seed, args.json))

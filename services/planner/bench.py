@@ -112,3 +112,20 @@ def bench_planning(repeats: int = 5, resolution_m: float = 0.05) -> dict[str, fl
         result[f"{name}_ms"] = 1000.0 * statistics.median(times)
         result[f"{name}_max_ms"] = 1000.0 * max(times)
     return result
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m services.planner.bench [--repeats N] [--resolution R]``: medians as one JSON line."""
+    import argparse  # noqa: PLC0415
+    import json  # noqa: PLC0415
+
+    parser = argparse.ArgumentParser(prog="python -m services.planner.bench", description="planning time benchmark")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--resolution", type=float, default=0.05)
+    args = parser.parse_args(argv)
+    print(json.dumps({k: round(v, 2) for k, v in bench_planning(args.repeats, args.resolution).items()}))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

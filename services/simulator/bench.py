@@ -78,7 +78,7 @@ def bench_simulation(
 
 
 def main(world_path: str, seconds: float) -> int:
-    print(json.dumps(bench_simulation(world_path, seconds), indent=2))
+    print(json.dumps(bench_simulation(world_path, seconds)))
     return 0
 
 

@@ -92,3 +92,13 @@ def test_health_plans_watch_the_right_token(tmp_path: Path) -> None:
     assert pose.liveliness_timeout_s == 2.0 and pose.test_argv == (sys.executable, "-c", "pass")
     assert plan.services["absolute"].health is None
     assert plan.liveliness_needed
+
+
+def test_the_launchers_zenoh_config_is_resolved_against_the_working_dir(tmp_path: Path) -> None:
+    path = tmp_path / "secure.yaml"
+    path.write_text("zenoh: {connect: [tcp/127.0.0.1:7600], config: creds/viewer.json5}\nservices: {a: {command: [x]}}\n")
+    stack = load_stack(path, env={}, project_dir=tmp_path)
+    assert stack.zenoh_config == "creds/viewer.json5"
+    assert stack.to_dict()["zenoh"] == {"connect": ["tcp/127.0.0.1:7600"], "config": "creds/viewer.json5"}
+    assert plan_launch(stack, working_dir=tmp_path / "run").zenoh_config == str(tmp_path / "run/creds/viewer.json5")
+    assert plan_launch(_stack(tmp_path), working_dir=tmp_path).zenoh_config is None
