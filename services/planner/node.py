@@ -234,7 +234,8 @@ class PlannerService:
         node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_pose, QoS(depth=1))
         node.create_subscription(Odometry, topics.ODOM, self._on_odom, QoS(depth=5))
         node.create_subscription(LaserScan, topics.SCAN, self._on_scan, SENSOR_DATA)
-        node.create_subscription(Range, topics.ULTRASONIC, self._on_range, SENSOR_DATA)
+        if params.use_range_layer:
+            node.create_subscription(Range, topics.ULTRASONIC, self._on_range, SENSOR_DATA)
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=5))
         node.create_service(CLEAR_ENTIRE_COSTMAP, CLEAR_COSTMAPS_SERVICE, self._on_clear_costmaps)
         node.create_service(LOAD_MAP, LOAD_MAP_SERVICE, self._on_load_map)

@@ -54,6 +54,8 @@ class Params(ServiceParams):
     costmap_update_rate_hz: float = Field(5.0, gt=0.0, description="sensor data folded in this often (sim time)")
     scan_beam_stride: int = Field(1, ge=1, description="use every n-th lidar beam (2 halves the lidar's cost)")
     idle_costmap_update_rate_hz: float = Field(1.0, gt=0.0, description="the same without an active goal")
+    use_range_layer: bool = Field(
+        True, description="fold the ultrasonic range into the costmap (off: glass is invisible, for experiments)")
     glass_suspicion_radius_m: float = Field(
         0.3, ge=0.0, description="unlooked-at floor this close to sonar-only marks counts as glass (0: off)")
     lidar_mount: tuple[float, float, float] = Field(

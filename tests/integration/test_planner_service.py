@@ -281,3 +281,17 @@ def test_a_goal_behind_a_wall_of_glass_fails_after_recoveries_without_touching_i
     assert collisions.count == 0 and _state(bus, namespace).collisions == 0
     assert _state(bus, namespace).pose.position.x < 2.0 - 0.2  # never reached the pane
     _assert_no_errors(planner)
+
+
+def test_without_the_range_layer_the_robot_drives_into_the_glass(  # type: ignore[no-untyped-def]
+    spawn, bus: zenoh.Session, namespace: str, nav_node: Node
+) -> None:
+    """The control experiment: the lidar-built map has no glass, so only the sonar keeps the robot off it."""
+    collisions = KeyRecorder(bus, f"{namespace}/collisions", CollisionEvent)
+    _start_stack(spawn, GLASS_ROOM, "-p", f"world={GLASS_ROOM}", "-p", "use_range_layer=false")
+    nav = NavigationClient(nav_node)
+    assert nav.wait_until_active(30.0)
+    nav.go_to_pose(Pose2D(0.5, 1.5, 0.0))
+    hit = collisions.wait_for(lambda m: m.kind == "glass", timeout_s=GOAL_TIMEOUT_S)
+    assert hit.count >= 1
+    nav.cancel_task()
