@@ -57,6 +57,70 @@ class TrialOptions:
     battery_start: float = 0.255
     drain_scale: float = 20.0
     runs_dir: Path = REPO_ROOT / "runs"
+    #: Fault injection: every ``chaos_period_s`` wall seconds on average, kill -9 a random robot service
+    #: (battery, pose, planner or docking; never the simulator) and let the launcher restart it. 0: off.
+    chaos_period_s: float = 0.0
+
+
+@dataclass
+class ChaosReport:
+    kills: int = 0
+    recovered: int = 0
+    recovery_s: list[float] = field(default_factory=list)
+    killed: list[str] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        times = sorted(self.recovery_s)
+        return {
+            "kills": self.kills,
+            "recovered": self.recovered,
+            "median_recovery_s": round(statistics.median(times), 2) if times else math.nan,
+            "max_recovery_s": round(times[-1], 2) if times else math.nan,
+            "killed": self.killed,
+        }
+
+
+class ChaosMonkey:
+    """Kills random robot services at random times while trials run; measures how fast each comes back."""
+
+    VICTIMS = ("battery", "pose", "planner", "docking")
+
+    def __init__(self, launcher: Launcher, robots: list[str], period_s: float, seed: int) -> None:
+        self._launcher = launcher
+        self._names = [f"{v}_{r}" for r in robots for v in self.VICTIMS]
+        self._period_s = period_s
+        self._rng = random.Random(seed + 1)
+        self._stop = threading.Event()
+        self.report = ChaosReport()
+        self._thread = threading.Thread(target=self._run, name="chaos", daemon=True)
+
+    def __enter__(self) -> ChaosMonkey:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join(timeout=60.0)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self._rng.expovariate(1.0 / self._period_s)):
+            name = self._rng.choice(self._names)
+            try:
+                before = self._launcher.status(name).starts
+                self._launcher.kill(name)
+            except Exception:  # the stack is going down
+                return
+            killed_at = time.monotonic()
+            self.report.kills += 1
+            self.report.killed.append(name)
+            deadline = killed_at + 60.0
+            while time.monotonic() < deadline and not self._stop.is_set():
+                status = self._launcher.status(name)
+                if status.starts > before and status.health == "healthy":
+                    self.report.recovered += 1
+                    self.report.recovery_s.append(time.monotonic() - killed_at)
+                    break
+                time.sleep(0.05)
 
 
 @dataclass
@@ -92,6 +156,7 @@ class TrialsSummary:
     controller: str = ""
     world: str = ""
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
+    chaos: dict[str, Any] = field(default_factory=dict)
 
     def headline(self) -> dict[str, Any]:
         keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s",
@@ -285,7 +350,8 @@ def run_trials(
         for i, start in enumerate(starts):
             todo.put((i, start))
         lock = threading.Lock()
-        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
+        chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
+        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()):
 
             def worker(robot: str) -> None:
                 while True:
@@ -328,11 +394,21 @@ def run_trials(
         log(f"lower bounds not computed: {exc}")
     summary = summarise(results, wall_s, options, world)
     summary.peak_rss_mb = dict(sampler.peak_mb)
+    if chaos is not None:
+        summary.chaos = chaos.report.summary()
     report = {"summary": asdict(summary), "trials": [asdict(r) for r in results], "errors": errors,
               "options": {k: str(v) for k, v in asdict(options).items()}}
     (run_dir / "trials.json").write_text(json.dumps(report, indent=2) + "\n")
     _histograms(results, run_dir / "histograms.png")
     return summary, results, run_dir
+
+
+class _Nothing:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> None:
+        return None
 
 
 def _histograms(results: list[TrialResult], path: Path) -> None:

@@ -57,7 +57,8 @@ def _run(args: argparse.Namespace) -> int:
     if not world.is_file():
         raise ConfigError(f"--world {world}: no such file")
     options = TrialOptions(world=world.resolve(), n=args.n, controller=args.controller, seed=args.seed,
-                           rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout)
+                           rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
+                           chaos_period_s=args.chaos)
     console = Console(stderr=args.json)
     with Progress(TextColumn("trials"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[last]}"),
                   TimeElapsedColumn(), console=console) as bar:
@@ -72,9 +73,12 @@ def _run(args: argparse.Namespace) -> int:
     data = {**summary.headline(), "controller": summary.controller, "world": summary.world,
             "peak_rss_mb": summary.peak_rss_mb}
     console.print(_summary_table(data))
+    if summary.chaos:
+        console.print(f"chaos: {summary.chaos['kills']} kill -9, {summary.chaos['recovered']} back healthy, "
+                      f"median {summary.chaos['median_recovery_s']} s, max {summary.chaos['max_recovery_s']} s")
     console.print(f"report and histograms in {run_dir}")
     if args.json:
-        print(json.dumps(summary.headline()))
+        print(json.dumps({**summary.headline(), **({"chaos": summary.chaos} if summary.chaos else {})}))
     return 0 if summary.successes == summary.n else 1
 
 
@@ -87,5 +91,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--rtf", type=_rtf, default="8", help="simulator real-time factor, or max")
     parser.add_argument("--workers", type=_count, default=1, help="robots docking side by side in one simulator")
     parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
+    parser.add_argument("--chaos", type=float, default=0.0, metavar="PERIOD_S",
+                        help="kill -9 a random robot service every PERIOD_S wall seconds on average (0: off)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)
