@@ -41,6 +41,8 @@ class RunRecord:
     sonar_hits: list[tuple[float, float]] = field(default_factory=list)
     battery: list[tuple[float, float]] = field(default_factory=list)  # (t, percentage)
     sim_time_s: float = 0.0
+    #: Whether the latest battery message said CHARGING or FULL.
+    last_charging: bool = False
 
     @property
     def charging(self) -> bool:
@@ -114,6 +116,7 @@ class RunObserver:
                 record.trigger_s = t  # crossed below, or was already below when armed
             charging = msg.power_supply_status in (
                 BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+            record.last_charging = charging
             if charging and record.trigger_s is not None and record.charging_s is None:
                 record.charging_s = t
             self._changed.notify_all()
@@ -175,6 +178,7 @@ class RunObserver:
             return RunRecord(
                 r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds),
                 list(r.driven), [list(p) for p in r.plans], list(r.sonar_hits), list(r.battery), r.sim_time_s,
+                r.last_charging,
             )
 
     def settle(self, timeout_s: float = 2.0) -> None:

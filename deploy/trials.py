@@ -255,6 +255,10 @@ def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: Trial
         raise ServiceError(f"trial {index}: start {start}: {placed.message}")
     observer = RunObserver(session, robot)
     try:
+        # The robot may have been charging at the dock a moment ago: start only once the battery has
+        # seen it leave, or the old CHARGING would end the new trial at once.
+        if not observer.wait(lambda r: bool(r.battery) and not r.last_charging, timeout_s=30.0):
+            raise ServiceError(f"trial {index}: the battery still reports charging after the robot left the dock")
         observer.arm()
         call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
                      SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))

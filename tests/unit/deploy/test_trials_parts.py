@@ -1,0 +1,67 @@
+"""Trials: reproducible collision-free starts, the stack they run, and the summary arithmetic."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from deploy.trials import (
+    START_CLEARANCE_M,
+    TrialOptions,
+    TrialResult,
+    _distance_to_segment,
+    random_starts,
+    summarise,
+    trials_stack,
+)
+from shared.world import load_world
+
+WORLDS = sorted((Path(__file__).resolve().parents[3] / "deploy" / "worlds").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("path", WORLDS, ids=lambda p: p.stem)
+def test_starts_are_reproducible_clear_and_away_from_the_dock(path: Path) -> None:
+    world = load_world(path)
+    starts = random_starts(world, 25, seed=3)
+    assert starts == random_starts(world, 25, seed=3)
+    assert starts != random_starts(world, 25, seed=4)
+    segments = world.opaque_segments() + list(world.glass)
+    for pose in starts:
+        assert world.contains(pose.x, pose.y)
+        assert min(_distance_to_segment((pose.x, pose.y), s) for s in segments) >= START_CLEARANCE_M
+        assert math.dist((pose.x, pose.y), world.docks[0].pose[:2]) >= 1.2
+
+
+def test_distance_to_segment() -> None:
+    assert _distance_to_segment((0.0, 1.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(1.0)
+    assert _distance_to_segment((3.0, 0.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(2.0)
+
+
+def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:
+    options = TrialOptions(world=WORLDS[0], workers=2)
+    stack = trials_stack(options, "tcp/127.0.0.1:7999", ["r0", "r1"])
+    names = set(stack["services"])
+    assert {"router", "map", "simulator"} <= names
+    for robot in ("r0", "r1"):
+        for service in ("battery", "pose", "planner", "docking"):
+            spec = stack["services"][f"{service}_{robot}"]
+            assert spec["namespace"] == robot and spec["healthcheck"]["liveliness"] == service
+    assert 'robots=["r0", "r1"]' in stack["services"]["simulator"]["command"]
+
+
+def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: int = 0) -> TrialResult:
+    return TrialResult(i, "r0", (0.0, 0.0, 0.0), docked, docked, time_s, lateral_m, 0.01, collisions, 1.0, 4.0)
+
+
+def test_summary_counts_only_docked_runs_in_the_medians() -> None:
+    results = [_result(0, True, 10.0, 0.001), _result(1, True, 20.0, 0.003), _result(2, False, math.nan, math.nan, 1)]
+    summary = summarise(results, wall_s=5.0, options=TrialOptions(world=WORLDS[0]), world=load_world(WORLDS[0]))
+    assert (summary.n, summary.successes, summary.collisions) == (3, 2, 1)
+    assert summary.success_rate == pytest.approx(2 / 3)
+    assert summary.median_dock_time_s == pytest.approx(15.0)
+    assert summary.p95_lateral_error_m == pytest.approx(0.003)
+    assert set(summary.headline()) == {
+        "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_lateral_error_m",
+        "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s"}
