@@ -57,6 +57,10 @@ class MessageError(ValueError):
         return self
 
 
+class _Slow(Exception):
+    """Internal: the generated fast path met something unusual; the general path takes over."""
+
+
 class _FieldError(Exception):
     """Internal: carries a reason and a field path (built on the way up) to the message level."""
 
@@ -120,6 +124,10 @@ class Message:
     def to_dict(self) -> dict[str, Any]:
         """The msgpack-ready map, validated (raises :class:`MessageError`)."""
         try:
+            return self._fast_encode(self)
+        except _FAST_PATH_MISSES:
+            pass  # something unusual: the general path decides, and names the field if it is wrong
+        try:
             return _encode_message(self)
         except _FieldError as exc:
             raise MessageError(exc.reason, type_name=self.TYPE_NAME, field=exc.path) from None
@@ -127,9 +135,21 @@ class Message:
     @classmethod
     def from_dict(cls: type[M], data: Any) -> M:
         try:
+            return cls._fast_decode(data)
+        except _FAST_PATH_MISSES:
+            pass
+        try:
             return _decode_message(cls, data)
         except _FieldError as exc:
             raise MessageError(exc.reason, type_name=cls.TYPE_NAME, field=exc.path) from None
+
+    @staticmethod
+    def _fast_encode(msg: Any) -> dict[str, Any]:
+        raise _Slow
+
+    @staticmethod
+    def _fast_decode(data: Any) -> Any:
+        raise _Slow
 
     def encode(self) -> bytes:
         return msgpack.packb(self.to_dict(), use_bin_type=True)
@@ -141,6 +161,7 @@ class Message:
 
 M = TypeVar("M", bound=Message)
 _REGISTRY: dict[str, type[Message]] = {}
+_FAST_PATH_MISSES = (_Slow, _FieldError, KeyError, TypeError, AttributeError)
 
 
 def unpack(payload: bytes, type_name: str = "") -> Any:
@@ -174,6 +195,7 @@ def message(type_name: str) -> Callable[[type[M]], type[M]]:
         cls._FIELDS = tuple(
             (f.name, *_compile(hints[f.name], f.name)) for f in dataclasses.fields(cls)  # type: ignore[arg-type]
         )
+        _generate_fast_paths(cls, hints)
         if type_name in _REGISTRY and _REGISTRY[type_name].__qualname__ != cls.__qualname__:
             raise ValueError(f"message type {type_name} registered twice")
         _REGISTRY[type_name] = cls
@@ -400,3 +422,60 @@ def _encode_message(msg: Message) -> dict[str, Any]:
         except _FieldError as exc:
             raise exc.under(name) from None
     return out
+
+
+# --- generated fast paths -------------------------------------------------------------------------
+#
+# For each message class, straight-line code that decodes and encodes the common case (every float a
+# finite float, every nested message of its own class) with no per-field function calls. Anything else
+# raises _Slow, and the general path above runs instead: it accepts what is valid and names the field
+# of what is not, so both paths agree on every input.
+
+
+def _is_plain_finite_float(annotation: Any) -> bool:
+    if annotation is float:
+        return True
+    if typing.get_origin(annotation) is Annotated:
+        base, *extras = typing.get_args(annotation)
+        return base is float and not extras
+    return False
+
+
+def _generate_fast_paths(cls: type[Message], hints: dict[str, Any]) -> None:
+    env: dict[str, Any] = {"_Slow": _Slow, "cls": cls}
+    decode_lines = [
+        "def fast_decode(d):",
+        f"    if type(d) is not dict or len(d) != {len(cls._FIELDS)}:",
+        "        raise _Slow",
+    ]
+    encode_lines = ["def fast_encode(m):"]
+    names = []
+    for i, (name, validate, encode) in enumerate(cls._FIELDS):
+        annotation = hints[name]
+        var = f"v{i}"
+        names.append(var)
+        decode_lines.append(f"    {var} = d[{name!r}]")
+        encode_lines.append(f"    {var} = m.{name}")
+        if _is_plain_finite_float(annotation):
+            check = f"    if type({var}) is not float or {var} - {var} != 0.0:\n        raise _Slow"
+            decode_lines.append(check)
+            encode_lines.append(check)
+        elif annotation in (str, bool):
+            check = f"    if type({var}) is not {annotation.__name__}:\n        raise _Slow"
+            decode_lines.append(check)
+            encode_lines.append(check)
+        elif isinstance(annotation, type) and issubclass(annotation, Message):
+            env[f"N{i}"] = annotation
+            decode_lines.append(f"    {var} = N{i}._fast_decode({var})")
+            encode_lines.append(f"    if type({var}) is not N{i}:\n        raise _Slow")
+            encode_lines.append(f"    {var} = N{i}._fast_encode({var})")
+        else:
+            env[f"V{i}"], env[f"E{i}"] = validate, encode
+            decode_lines.append(f"    {var} = V{i}({var})")
+            encode_lines.append(f"    {var} = E{i}({var})")
+    decode_lines.append(f"    return cls({', '.join(names)})")
+    encode_lines.append("    return {" + ", ".join(f"{n!r}: v{i}" for i, (n, _, _) in enumerate(cls._FIELDS)) + "}")
+    exec("\n".join(decode_lines), env)  # noqa: S102 - code built from the class's own field names
+    exec("\n".join(encode_lines), env)  # noqa: S102
+    cls._fast_decode = staticmethod(env["fast_decode"])  # type: ignore[assignment]
+    cls._fast_encode = staticmethod(env["fast_encode"])  # type: ignore[assignment]
