@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from pydantic import ValidationError
 
@@ -25,3 +26,21 @@ def format_validation_error(error: ValidationError, source: str | Path, root: st
             reason = "unknown key"
         lines.append(f"{source}: {where}: {reason}")
     return "\n".join(lines)
+
+
+def read_yaml_file(path: str | Path, what: str) -> Any:
+    """Parse a user-written YAML file; a missing file or bad YAML is a :class:`ConfigError` naming it.
+
+    ``what`` says what the file is for the message ("world file", "dock database", "map file").
+    """
+    import yaml  # noqa: PLC0415 - only the loaders need it
+
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: not valid YAML: {exc}") from None

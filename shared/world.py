@@ -22,10 +22,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from shared.config_errors import ConfigError, format_validation_error
+from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
 from shared.geometry import Pose2D
 
 log = logging.getLogger(__name__)
@@ -219,13 +218,4 @@ def parse_world(data: Any, source: str | Path = "<world>") -> World:
 
 def load_world(path: str | Path) -> World:
     """Read and validate a world file."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read world file: {exc.strerror or exc}") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
-    return parse_world(data, path)
+    return parse_world(read_yaml_file(path, "world file"), Path(path))

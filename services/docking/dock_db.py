@@ -12,11 +12,10 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import ValidationError
 
 from services.docking.errors import DockNotInDbError, DockNotValidError
-from shared.config_errors import ConfigError, format_validation_error
+from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
 from shared.geometry import Pose2D
 from shared.world import Dock, World
 
@@ -110,13 +109,4 @@ def parse_dock_db(data: Any, source: str | Path = "<docks>") -> DockDatabase:
 
 def load_dock_db(path: str | Path) -> DockDatabase:
     """Read and validate a dock database file (or a world file)."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read dock database: {exc.strerror or exc}") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
-    return parse_dock_db(data, path)
+    return parse_dock_db(read_yaml_file(path, "dock database"), Path(path))

@@ -19,11 +19,10 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator, model_validator
 
 from services.planner.grid_frame import GridFrame
-from shared.config_errors import ConfigError, format_validation_error
+from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
 
 log = logging.getLogger(__name__)
 
@@ -223,14 +222,7 @@ def occupancy_from_pixels(
 def load_map(yaml_path: str | Path) -> OccupancyMap:
     """Load a map_server YAML and its image. Raises :class:`ConfigError` naming the file and field."""
     yaml_path = Path(yaml_path)
-    try:
-        text = yaml_path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"{yaml_path}: cannot read map file: {exc.strerror or exc}") from None
-    try:
-        doc: Any = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{yaml_path}: not valid YAML: {exc}") from None
+    doc: Any = read_yaml_file(yaml_path, "map file")
     if not isinstance(doc, dict):
         raise ConfigError(
             f"{yaml_path}: a map file must be a mapping with image, resolution, origin, "
