@@ -15,12 +15,19 @@ from collections.abc import Sequence
 from shared.config_errors import ConfigError
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
+#: A link whose send queue stays blocked this long (µs) is closed, instead of Zenoh's default 5 s: a cut
+#: link to another host must not hold up this router's forwarding to its local services.
+BLOCKED_LINK_CLOSE_US = 500_000
+
 
 def router_spec(listen: Sequence[str], config_file: str | None) -> SessionSpec:
     """Listen endpoints win over the config file's; with neither, listen on the default loopback endpoint."""
     if not listen and not config_file:
         listen = (DEFAULT_ROUTER_ENDPOINT,)
-    return SessionSpec(mode="router", connect=(), listen=tuple(listen), config_file=config_file)
+    overrides = () if config_file else (
+        ("transport/link/tx/queue/congestion_control/block/wait_before_close", str(BLOCKED_LINK_CLOSE_US)),
+    )
+    return SessionSpec(mode="router", connect=(), listen=tuple(listen), config_file=config_file, overrides=overrides)
 
 
 def run_router(spec: SessionSpec, stop: threading.Event) -> int:
