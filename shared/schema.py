@@ -302,6 +302,8 @@ def _array_validator(spec: _ArraySpec) -> Validator:
         elif isinstance(value, (list, tuple)):
             if len(value) > MAX_ARRAY_LEN:
                 raise _FieldError("", f"array of {len(value)} items exceeds the limit of {MAX_ARRAY_LEN}")
+            if not value:
+                return np.zeros(0, dtype=spec.dtype)
             # One C-level conversion, then a check of the resulting kind: no Python loop per item.
             try:
                 raw = np.asarray(value)

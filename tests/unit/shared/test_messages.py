@@ -179,3 +179,9 @@ def test_registry_knows_every_required_type() -> None:
     }
     assert required <= set(registered_types())
     assert message_type("geometry_msgs/msg/Twist") is Twist
+
+
+def test_empty_arrays_round_trip_with_their_type() -> None:
+    grid = OccupancyGrid.from_dict(OccupancyGrid().to_dict() | {"data": []})
+    assert grid.data.dtype == np.int8 and grid.data.size == 0
+    assert OccupancyGrid.decode(OccupancyGrid().encode()).data.size == 0
