@@ -10,6 +10,7 @@ cancellation and the result.
 
 from __future__ import annotations
 
+import abc
 import enum
 import itertools
 from dataclasses import dataclass, field
@@ -108,7 +109,7 @@ P = TypeVar("P", bound=enum.Enum)
 _task_ids = itertools.count(1)
 
 
-class Task(Generic[P]):
+class Task(abc.ABC, Generic[P]):
     """Phases with entry times, a cancel request and a result; subclasses implement :meth:`step`."""
 
     #: Upper bound on how long a cancel waits for the planner to drop its goal.
@@ -183,6 +184,7 @@ class Task(Generic[P]):
     def retries(self) -> int:
         return 0
 
+    @abc.abstractmethod
     def tick(self, inputs: TickInputs) -> Intent:
-        raise NotImplementedError
+        """One control period of the task: what to command now (each task defines it)."""
 
