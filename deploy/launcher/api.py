@@ -172,9 +172,23 @@ class Launcher:
                 asyncio.run_coroutine_threadsafe(host.down(), loop).result(timeout_s)
             except RuntimeError:  # the loop stopped meanwhile
                 pass
+            except TimeoutError:
+                raise TimeoutError(f"the stack {self.project} did not stop within {timeout_s}s: {self._still_active()}") from None
         thread.join(timeout_s)
         if thread.is_alive():
             raise TimeoutError(f"the supervisor of {self.project} did not stop within {timeout_s}s")
+
+    def _still_active(self) -> str:
+        """What a stuck ``down`` is waiting for: the services that have not ended, with their state."""
+        async def statuses_now() -> list[ServiceStatus]:
+            return self._supervisor().statuses()
+
+        try:
+            statuses = self._call(statuses_now, timeout_s=5.0)
+        except Exception as exc:  # the loop is stuck too
+            return f"(statuses unavailable: {exc!r})"
+        active = [f"{s.name}={s.state}" for s in statuses if s.state not in ("exited", "stopped")]
+        return ", ".join(active) or "every service ended; the supervisor itself is closing"
 
     # -- calls into the supervisor's loop ---------------------------------------------------------------
     def _call(self, make: Callable[[], Coroutine[Any, Any, T]], timeout_s: float | None = 60.0) -> T:

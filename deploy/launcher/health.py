@@ -90,6 +90,17 @@ class LivelinessWatcher:
             self._alive_since.pop(key, None)
         self._on_change()
 
+    def close_within(self, timeout_s: float) -> bool:
+        """Blocking: ``close`` on a daemon thread, waiting at most ``timeout_s``; False if it is still closing.
+
+        A Zenoh session's close can stall (a router that stopped answering mid-close); stopping the stack
+        must not stall with it, and a daemon thread does not keep the process alive.
+        """
+        closer = threading.Thread(target=self.close, name="zendock-liveliness-close", daemon=True)
+        closer.start()
+        closer.join(timeout_s)
+        return not closer.is_alive()
+
     def close(self) -> None:
         """Blocking (run it off the loop): undeclare and close the session."""
         self._closing.set()

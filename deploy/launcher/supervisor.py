@@ -22,6 +22,8 @@ from deploy.launcher.process import ServiceProcess
 from deploy.launcher.restart import Backoff
 from deploy.launcher.status import Phase, ServiceStatus, public_state
 
+WATCHER_CLOSE_S = 5.0
+
 #: Exit code reported when a command cannot be started at all (as a shell reports "command not found").
 SPAWN_FAILED_EXIT = 127
 
@@ -351,7 +353,9 @@ class Supervisor:
         await self.stop(list(self.runners))
         if self._watcher is not None:
             watcher, self._watcher = self._watcher, None
-            await asyncio.get_running_loop().run_in_executor(None, watcher.close)
+            closed = await asyncio.get_running_loop().run_in_executor(None, watcher.close_within, WATCHER_CLOSE_S)
+            if not closed:
+                self.emit_line("zendock", f"the liveliness watcher's session did not close within {WATCHER_CLOSE_S:g}s; left to close")
         for runner in self.runners.values():
             runner.close_log()
 
