@@ -4,8 +4,9 @@
 waypoints and reports arrival once its last goal is reached. :class:`GracefulApproach` runs the graceful
 law (:mod:`services.docking.graceful`) on the latency-compensated pose; since it aims past the plate it
 never "arrives" by itself: the approach ends with charging, or when the robot has pushed against
-something without moving for ``stall_time_s`` (the plate, when charging does not come), or when the
-robot believes it is already past the dock pose (it is mislocalised). Both accept a newer dock pose
+something without moving for ``stall_time_s`` (the plate, when charging does not come; longer away
+from it), or when the robot believes it is already past the dock pose (it is mislocalised); it gives
+up when the robot comes up to the plate too far off the dock's axis to mate. Both accept a newer dock pose
 every tick. :func:`back_off_command` drives backwards along the dock's axis to a pose behind it.
 """
 
@@ -36,12 +37,15 @@ from shared.geometry import Pose2D
 
 
 class Arrival(enum.Enum):
-    """The approach has ended without charging (yet): wait for the charger to report."""
+    """The approach has ended without charging (yet): wait for the charger to report (ARRIVED), or the
+    robot has come up to the plate too far off its axis to mate (MISALIGNED): back off and try again."""
 
     ARRIVED = "arrived"
+    MISALIGNED = "misaligned"
 
 
 ARRIVED = Arrival.ARRIVED
+MISALIGNED = Arrival.MISALIGNED
 
 
 class ApproachController(Protocol):
@@ -111,10 +115,22 @@ class ArrivalParams:
     stall_command_mps: float = 0.03
     #: ...while odometry shows less than this...
     stall_speed_mps: float = 0.01
-    #: ...for this long means the robot is pushing against something.
+    #: ...for this long means the robot is pushing against something: the plate, when it is within
+    #: ``plate_zone_m`` of the dock pose (along the axis), ...
     stall_time_s: float = 0.6
+    plate_zone_m: float = 0.12
+    #: ... something else (a corner on the dock's body) when it is further away.
+    far_stall_time_s: float = 2.0
+    #: A control tick this much later than the previous one restarts the stall clock: the base stops by
+    #: itself when commands stop coming, which is no stall.
+    max_tick_gap_s: float = 0.2
     #: Believing to be this far past the dock pose means the robot is on the plate (or mislocalised).
     overshoot_m: float = 0.02
+    #: This close to the dock pose (along its axis) the robot must be within these of it, or it would
+    #: meet the plate askew (a late control tick let it swing): MISALIGNED.
+    misaligned_zone_m: float = 0.12
+    misaligned_lateral_m: float = 0.03
+    misaligned_yaw_rad: float = 0.2
 
 
 class GracefulApproach:
@@ -150,9 +166,12 @@ class GracefulApproach:
             self._controller.set_dock_pose(dock_pose)
 
     def hold(self) -> None:
-        """The robot was held still instead: a stall is only counted while pushing commands go out."""
+        """The robot was held still instead: a stall is only counted while pushing commands go out, and
+        the commands just computed are not on their way to the base."""
         self._pushed = False
         self._stalled_since_s = None
+        if self._controller is not None:
+            self._controller.forget_commands()
 
     def command(
         self, now_s: float, pose: Pose2D, pose_age_s: float, base_twist: tuple[float, float] | None
@@ -162,15 +181,23 @@ class GracefulApproach:
             raise RuntimeError("begin() first")
         dt = self.period_s if self._last_s is None else max(0.0, now_s - self._last_s)
         self._last_s = now_s
-        if dock_frame_error(pose, controller.dock_pose).along_m >= self.arrival.overshoot_m:
+        error = dock_frame_error(pose, controller.dock_pose)
+        along_m = error.along_m
+        if along_m >= self.arrival.overshoot_m:
             return ARRIVED
-        command = controller.compute(pose, dt, pose_age_s, base_twist)
         a = self.arrival
+        if along_m >= -a.misaligned_zone_m and (
+            abs(error.lateral_m) > a.misaligned_lateral_m or abs(error.yaw_rad) > a.misaligned_yaw_rad
+        ):
+            return MISALIGNED
+        command = controller.compute(pose, dt, pose_age_s, base_twist)
         pushing = command.linear_x_mps >= a.stall_command_mps
-        if pushing and self._pushed and base_twist is not None and abs(base_twist[0]) < a.stall_speed_mps:
+        stopped = base_twist is not None and abs(base_twist[0]) < a.stall_speed_mps
+        if pushing and self._pushed and stopped and dt <= a.max_tick_gap_s:
+            stall_time_s = a.stall_time_s if along_m >= -a.plate_zone_m else a.far_stall_time_s
             if self._stalled_since_s is None:
                 self._stalled_since_s = now_s
-            elif now_s - self._stalled_since_s >= a.stall_time_s:
+            elif now_s - self._stalled_since_s >= stall_time_s:
                 return ARRIVED
         else:
             self._stalled_since_s = None

@@ -1,12 +1,14 @@
 """The dock pose refined from detections, in the map frame, for the dock a docking run is heading to.
 
 Each detection is the dock pose in base_link at the camera's capture time. Composed with the robot's
-map pose *at that time* (:class:`~services.docking.robot_track.RobotPoseTrack`) it becomes a dock pose in
-the map frame, which :class:`~services.docking.pose_filter.DockPoseFilter` smooths (Nav2's opennav_docking
-does the same with tf in its fixed frame). If the localiser is off by a few centimetres the filtered dock
-is off by the same amount, so the robot's pose relative to it -- all that the approach needs -- stays
-right: the error cancels. Detections far from the database pose of the expected dock belong to another
-dock (or are wrong) and are ignored.
+map pose *at that time* (:class:`~services.docking.robot_track.RobotPoseTrack`: odometry at the stamp
+through the localiser's current correction) it becomes a dock pose in the map frame, which
+:class:`~services.docking.pose_filter.DockPoseFilter` smooths. When the localiser's correction moves, the
+estimate moves with it (:meth:`DockTracker.shift`), so in effect the dock is tracked in the odometry
+frame, as Nav2's opennav_docking does in its fixed frame. If the localiser is off by a few centimetres
+the filtered dock is off by the same amount, so the robot's pose relative to it -- all that the approach
+needs -- stays right: the error cancels. Detections far from the database pose of the expected dock
+belong to another dock (or are wrong) and are ignored.
 """
 
 from __future__ import annotations
@@ -72,6 +74,12 @@ class DockTracker:
         self._filter.update(measured, stamp_s)
         self.detections += 1
         return True
+
+    def shift(self, correction: Pose2D) -> None:
+        """The localiser moved its map -> odom correction by ``correction`` (new = correction * old): the
+        detected dock moves with the robot's odometry, as Nav2 tracks it in the odom frame. The
+        database pose it is checked against stays where the map has it."""
+        self._filter.shift(correction)
 
     def estimate(self) -> DockEstimate | None:
         """The filtered dock pose, or None before the first accepted detection since the last reset."""

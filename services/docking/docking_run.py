@@ -12,6 +12,13 @@ The sequence follows Nav2's opennav_docking ``DockingServer::dockRobot``:
    charging ends it with success, otherwise arrival hands over to
 5. WAIT_FOR_CHARGE: zero command until charging is reported (906 after ``wait_charge_timeout_s``).
 
+With ``continuous_perception`` (the graceful approach) detections taken on the way count too, and with
+``handover_distance_m`` the approach takes over as soon as the robot is near the staging pose, behind
+the dock and facing it: the planner's goal is cancelled instead of being driven to a standstill and
+turned to its heading, INITIAL_PERCEPTION lasts one tick while the planner lets go, and nothing is
+driven before it has. An approach that comes up to the plate off the dock's axis backs off along it and
+tries again from there, without the planner.
+
 A failure in 2-5 is retried (RETRY: stop, back off if at the dock, stage again) up to ``max_retries``
 times; then the run fails with the last error. Cancelling commands zero and ends the run. The whole
 run is bounded by ``max_docking_time_s`` (907). Obstacles and stale localisation hold the robot with a
@@ -27,8 +34,9 @@ from dataclasses import dataclass, field
 
 from services.docking.approach import GRACEFUL_STAGING_OFFSET_M, dock_frame_error, graceful_staging_pose
 from services.docking.approach_control import (
-    ARRIVED,
+    MISALIGNED,
     ApproachController,
+    Arrival,
     back_off_command,
     back_off_gains,
 )
@@ -65,6 +73,26 @@ class DockingConfig:
     min_detections: int = 3
     #: Detections taken this soon after arriving at staging are ignored (inputs settle after a move).
     perception_settle_s: float = 0.15
+    #: Keep the detections taken while navigating (the robot pose track places them as consistently as
+    #: those taken standing still) instead of perceiving afresh at the staging pose.
+    continuous_perception: bool = False
+    #: With continuous perception: once the robot is this close to the staging pose, at least
+    #: ``handover_min_back_m`` behind the dock, heading within ``handover_yaw_rad`` of the dock's heading
+    #: and with the dock within ``handover_bearing_rad`` of its own, the approach controller takes over
+    #: from navigation (which is cancelled) instead of waiting for it to stop and turn at the staging
+    #: pose; detections refine the dock pose as they come. None: navigation finishes first.
+    handover_distance_m: float | None = None
+    handover_min_back_m: float = 0.45
+    handover_yaw_rad: float = 1.0
+    handover_bearing_rad: float = 0.9
+    #: This close to the staging pose any heading will do: the approach turns on the spot, as navigation
+    #: would before it could stop there.
+    handover_any_heading_m: float = 0.15
+    #: The dock is "in view" while the newest accepted detection is at most this old.
+    detection_fresh_s: float = 0.5
+    #: While controlling, a robot pose older than this (a late control tick) holds the robot rather than
+    #: steer it by where it was; None: any pose the node passes on is used.
+    max_control_pose_age_s: float | None = None
     initial_perception_timeout_s: float = 2.0
     #: Waiting for a robot pose to pick the nearest dock.
     start_timeout_s: float = 5.0
@@ -78,6 +106,9 @@ class DockingConfig:
     retreat_zone_m: float = 0.35
     #: Backing off ends this far from the dock pose (before the planner takes over).
     retreat_clear_m: float = 0.45
+    #: After an approach came up to the plate askew, the robot backs off this far from the dock pose and
+    #: approaches again from there, without the planner.
+    realign_clear_m: float = 0.6
     staging_offset_m: float = GRACEFUL_STAGING_OFFSET_M
     #: Without the planner, backing off ends within this distance of the staging pose.
     staging_tolerance_m: float = 0.05
@@ -136,7 +167,10 @@ class DockingRun(Task[RunPhase]):
         self.feedback_state = DockingState.NONE
         self._nav_key: object | None = None
         self._retreat_to_staging = False
+        self._realign = False
+        self._handed_over = False
         self._blocked_since_s: float | None = None
+        self._last_pose: Pose2D | None = None
 
     # --- what the node reads -----------------------------------------------------------------------
 
@@ -161,6 +195,10 @@ class DockingRun(Task[RunPhase]):
         if not self.config.use_detection or self.done:
             return False
         return self.tracker.add(dock_in_base, robot_pose_at_stamp, stamp_s)
+
+    def relocalised(self, correction: Pose2D) -> None:
+        """The localiser's map -> odom correction moved by ``correction``: detections move with odometry."""
+        self.tracker.shift(correction)
 
     def docking_time_s(self, now_s: float) -> float:
         return 0.0 if self.started_s is None else now_s - self.started_s
@@ -202,6 +240,8 @@ class DockingRun(Task[RunPhase]):
             if self.phase_time_s(now) > self.config.start_timeout_s:
                 return self._fail(DockingErrorCode.TIMEOUT, "no robot pose to choose the nearest dock", retry=False)
             return None
+        if inputs.robot_pose is None and self.phase_time_s(now) <= self.config.start_timeout_s:
+            return None  # where the robot is decides the first move (backing off the dock, or staging)
         self.database_pose = dock
         self.tracker.expect(dock)
         log.info("docking at %s (%.2f, %.2f, %.2f)", self.dock_id or "the given pose", dock.x, dock.y, dock.yaw)
@@ -230,17 +270,20 @@ class DockingRun(Task[RunPhase]):
     def _begin_attempt(self, inputs: TickInputs) -> Intent:
         """From wherever the robot is: back off if at the dock, then stage (or perceive, without the planner)."""
         now = inputs.now_s
+        if self.num_retries > 0 and self.config.continuous_perception:
+            self.tracker.reset()  # the attempt failed: perceive afresh
         dock = self.dock_pose
         assert dock is not None
         near = inputs.robot_pose is not None and facing_dock_closely(inputs.robot_pose, dock, self.config.retreat_zone_m)
-        self._retreat_to_staging = not self.request.navigate_to_staging_pose and self.num_retries > 0
+        self._realign = self._realign and near
+        self._retreat_to_staging = not self.request.navigate_to_staging_pose and self.num_retries > 0 and not self._realign
         if near or self._retreat_to_staging:
             self.enter(RunPhase.RETREAT, now)
             return STOP
         return self._after_retreat(now)
 
     def _after_retreat(self, now: float) -> Intent:
-        if self.request.navigate_to_staging_pose:
+        if self.request.navigate_to_staging_pose and not self._realign:
             self._nav_key = self.new_nav_key()
             self.enter(RunPhase.NAV_TO_STAGING, now)
         else:
@@ -259,6 +302,8 @@ class DockingRun(Task[RunPhase]):
         target = graceful_staging_pose(dock, self.config.staging_offset_m)
         if self._retreat_to_staging:
             finished = pose.distance_to(target) <= self.config.staging_tolerance_m
+        elif self._realign:
+            finished = pose.distance_to(dock) >= self.config.realign_clear_m
         else:
             finished = pose.distance_to(dock) >= self.config.retreat_clear_m
         if finished:
@@ -273,6 +318,15 @@ class DockingRun(Task[RunPhase]):
         assert self._nav_key is not None and dock is not None
         outcome = inputs.nav.finished(self._nav_key)
         if outcome is None:
+            if self._ready_to_hand_over(inputs):
+                assert inputs.robot_pose is not None
+                log.info("handing over from navigation to the approach %.2f m from the staging pose",
+                         inputs.robot_pose.distance_to(self.approach.staging_pose(dock)))
+                # One tick of perception (the planner is asked to let go meanwhile), then the approach
+                # starts on whatever dock pose there is: detections refine it on the way in.
+                self._handed_over = True
+                self._enter_perception(now)
+                return STOP
             if self.phase_time_s(now) > self.request.max_staging_time_s:
                 return self._fail(DockingErrorCode.FAILED_TO_STAGE,
                                   f"staging took longer than {self.request.max_staging_time_s:g} s")
@@ -283,8 +337,34 @@ class DockingRun(Task[RunPhase]):
         reason = inputs.nav.reason or outcome.value
         return self._fail(DockingErrorCode.FAILED_TO_STAGE, f"navigation to the staging pose {outcome.value}: {reason}")
 
+    def _ready_to_hand_over(self, inputs: TickInputs) -> bool:
+        """Close to the staging pose, behind the dock and roughly facing it: see ``handover_distance_m``."""
+        config = self.config
+        pose = inputs.robot_pose
+        if config.handover_distance_m is None or not config.continuous_perception or pose is None:
+            return False
+        dock = self.dock_pose
+        assert dock is not None
+        to_staging_m = pose.distance_to(self.approach.staging_pose(dock))
+        if to_staging_m > config.handover_distance_m:
+            return False
+        if to_staging_m <= config.handover_any_heading_m:
+            return True
+        error = dock_frame_error(pose, dock)
+        if error.along_m > -config.handover_min_back_m or abs(error.yaw_rad) > config.handover_yaw_rad:
+            return False
+        dock_in_base = dock.relative_to(pose)
+        return abs(math.atan2(dock_in_base.y, dock_in_base.x)) <= config.handover_bearing_rad
+
+    def _dock_in_view(self, now: float) -> bool:
+        """Enough detections, the newest of them recent."""
+        estimate = self.dock_estimate
+        return (estimate is not None and estimate.detections >= self.config.min_detections
+                and now - estimate.stamp_s <= self.config.detection_fresh_s)
+
     def _enter_perception(self, now: float) -> None:
-        self.tracker.reset(accept_from_s=now + self.config.perception_settle_s)
+        if not self.config.continuous_perception:
+            self.tracker.reset(accept_from_s=now + self.config.perception_settle_s)
         self.blind = False
         self.enter(RunPhase.INITIAL_PERCEPTION, now)
 
@@ -292,9 +372,12 @@ class DockingRun(Task[RunPhase]):
         now = inputs.now_s
         config = self.config
         estimate = self.dock_estimate
-        if not config.use_detection or not config.wait_for_detection:
+        if not config.use_detection or not config.wait_for_detection or self._handed_over:
             return self._start_control(now)
-        if estimate is not None and estimate.detections >= config.min_detections:
+        if config.continuous_perception:
+            if self._dock_in_view(now):
+                return self._start_control(now)
+        elif estimate is not None and estimate.detections >= config.min_detections:
             return self._start_control(now)
         if self.phase_time_s(now) > config.initial_perception_timeout_s:
             if not config.allow_blind_docking:
@@ -307,9 +390,15 @@ class DockingRun(Task[RunPhase]):
         return STOP
 
     def _start_control(self, now: float) -> Intent:
+        if self.config.continuous_perception and not self._dock_in_view(now):
+            # Detections from long ago (placed with whatever the localiser said then): steer on the
+            # database pose until the dock comes into view again.
+            self.tracker.reset()
         dock = self.dock_pose
         assert dock is not None
         self.approach.begin(dock)
+        self._realign = False
+        self._handed_over = False
         self._blocked_since_s = None
         self.enter(RunPhase.CONTROLLING, now)
         return STOP
@@ -317,19 +406,37 @@ class DockingRun(Task[RunPhase]):
     def _controlling(self, inputs: TickInputs) -> Intent:
         now = inputs.now_s
         if inputs.charging:
+            self._log_believed_error(now)
             return self._succeed("charging")
         if self.phase_time_s(now) > self.config.approach_timeout_s:
             return self._fail(DockingErrorCode.FAILED_TO_CONTROL,
                               f"not on the dock within {self.config.approach_timeout_s:g} s")
+        if inputs.nav.busy:
+            # Handed over while navigating: nothing is published until the planner has let go.
+            self.approach.hold()
+            return self.hold("waiting for navigation to let go")
         pose = inputs.robot_pose
         if pose is None:
             self.approach.hold()
             return self.hold("no robot pose")
+        limit = self.config.max_control_pose_age_s
+        if limit is not None and inputs.pose_age_s > limit:
+            self.approach.hold()
+            return self.hold("robot pose too old to steer by")
+        self._last_pose = pose
         dock = self.dock_pose
         assert dock is not None
         self.approach.update_dock(dock)
         command = self.approach.command(now, pose, inputs.pose_age_s, inputs.base_twist)
-        if command is ARRIVED:
+        if log.isEnabledFor(logging.DEBUG):
+            error = dock_frame_error(pose, dock)
+            log.debug("approach t=%.3f along=%.3f lateral=%.4f yaw=%.4f age=%.3f twist=%s -> %s", now, error.along_m,
+                      error.lateral_m, error.yaw_rad, inputs.pose_age_s, inputs.base_twist, command)
+        if isinstance(command, Arrival):
+            if command is MISALIGNED:
+                self._realign = True
+                return self._fail(DockingErrorCode.FAILED_TO_CONTROL,
+                                  "came up to the plate off its axis: backing off to approach again")
             self.enter(RunPhase.WAIT_FOR_CHARGE, now)
             return STOP
         blocked = inputs.blocked_ahead if command.linear_x_mps > 0.0 else inputs.blocked_behind
@@ -344,6 +451,16 @@ class DockingRun(Task[RunPhase]):
         self._blocked_since_s = None
         return command
 
+    def _log_believed_error(self, now: float) -> None:
+        """Where the robot believes it stands against the dock as charging begins (judged on truth elsewhere)."""
+        dock = self.dock_pose
+        if self._last_pose is None or dock is None:
+            return
+        error = dock_frame_error(self._last_pose, dock)
+        log.info("charging after %.2f s of approach; believed offset from the dock: along %.1f mm, lateral %.1f mm, "
+                 "yaw %.2f deg", self.phase_time_s(now), 1000.0 * error.along_m, 1000.0 * error.lateral_m,
+                 math.degrees(error.yaw_rad))
+
     def _wait_for_charge(self, inputs: TickInputs) -> Intent:
         if inputs.charging:
             return self._succeed("charging")
@@ -356,6 +473,8 @@ class DockingRun(Task[RunPhase]):
         # Hold still until the planner has let go of any goal, then start the next attempt.
         if inputs.nav.busy and self.phase_time_s(inputs.now_s) < self.cancel_timeout_s:
             return STOP
+        if inputs.robot_pose is None and self.phase_time_s(inputs.now_s) < self.config.start_timeout_s:
+            return self.hold("no robot pose")  # it decides whether to back off the dock first
         return self._begin_attempt(inputs)
 
     # --- endings -----------------------------------------------------------------------------------

@@ -20,12 +20,19 @@ contact, charging or an optional distance test ends the approach. It also caps t
 slows to about ``contact_speed_mps`` at the plate (keeping the curvature), and by default it steers on
 a filtered, latency-compensated robot pose (:mod:`services.docking.pose_estimator`): close to the
 target the law's 1/r gain turns millimetres of pose noise into large steering commands.
+
+zendock's configuration adds what a loaded, late control loop needs (see :class:`GracefulDockParams`):
+the target recedes to stay ``target_lookahead_m`` ahead near the plate, beta eases off far from it, a
+robot facing well away turns on the spot first (as Nav2's graceful controller's initial rotation), the
+last stretch only holds the dock's heading, and commands still on their way to the base can be
+predicted through (``command_delay_s``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, replace
 
 from services.docking.approach import dock_frame_error, docking_target
 from services.docking.pose_estimator import PoseEstimatorParams, RobotPoseEstimator
@@ -107,6 +114,18 @@ class VelocityCommand:
         return (self.linear_x_mps, self.angular_z_radps)
 
 
+def _drive(pose: Pose2D, v_mps: float, w_radps: float, dt_s: float) -> Pose2D:
+    """Unicycle motion at ``(v, w)`` for ``dt_s`` (exact arc)."""
+    if dt_s <= 0.0:
+        return pose
+    if abs(w_radps) < 1e-9:
+        return Pose2D(pose.x + v_mps * dt_s * math.cos(pose.yaw), pose.y + v_mps * dt_s * math.sin(pose.yaw), pose.yaw)
+    yaw = pose.yaw + w_radps * dt_s
+    r = v_mps / w_radps
+    return Pose2D(pose.x + r * (math.sin(yaw) - math.sin(pose.yaw)), pose.y - r * (math.cos(yaw) - math.cos(pose.yaw)),
+                  wrap_angle(yaw))
+
+
 def ego_polar(target: Pose2D, robot: Pose2D, backward: bool = False) -> EgoPolar:
     """Egocentric polar coordinates of ``target`` from ``robot`` (both in one frame)."""
     dx = target.x - robot.x
@@ -161,12 +180,43 @@ class GracefulDockParams:
     gains: GracefulGains = ZENDOCK_TUNED
     #: Aim this far past the dock pose (into the plate); 0 aims at the dock pose itself, as Nav2 does.
     dock_target_past_m: float = 0.2
+    #: Keep the target at least this far ahead of the robot along the dock's axis (None: fixed target).
+    #: Close to the plate the law's gain grows as 1/r, so a command held a moment too long (a late
+    #: control tick) swings the heading; a target that recedes keeps the gain bounded there, and the
+    #: robot converges onto the axis as a line follower does.
+    target_lookahead_m: float | None = 0.5
+    #: Far from the plate the speed falls less on curves: beta ramps from the gains' own at
+    #: ``near_distance_m`` to ``far_beta`` at ``far_distance_m`` (distances to the dock pose along its
+    #: axis). Turning early costs no precision, and with beta 0.3 the law never turns faster than
+    #: about 0.5 rad/s, so an approach that starts askew would crawl round its first curve. None: off.
+    far_beta: float | None = 0.08
+    near_distance_m: float = 0.45
+    far_distance_m: float = 0.9
+    #: Where the law asks for a sharper curve than this (it would crawl round it), turn on the spot
+    #: towards the heading it wants, as Nav2's graceful controller rotates first, until the curvature has
+    #: fallen below half of it; only further than ``pivot_min_distance_m`` from the dock pose (along its
+    #: axis). None: never.
+    pivot_curvature_per_m: float | None = 5.0
+    pivot_min_distance_m: float = 0.35
+    #: Angular deceleration the turn on the spot plans with (it slows to stop where the curve eases).
+    pivot_decel_radps2: float = 3.0
+    #: The last stretch, this far from the dock pose (along its axis), only holds the dock's heading
+    #: (``w = -align_gain * yaw error``, at most ``align_max_radps``): any law that still corrects a lateral
+    #: offset there turns it into yaw at the contacts (about ``k_phi * lateral / r``), and the contacts
+    #: care more about yaw than about a millimetre sideways. None: the law steers to the end.
+    align_distance_m: float | None = 0.15
+    align_gain_per_s: float = 4.0
+    align_max_radps: float = 0.3
     #: Along-axis distance short of the dock pose at which the contacts touch.
     contact_reach_m: float = 0.05
+    #: Dead time from a command to the base's response (transport, the base's own loop): the law steers
+    #: from the pose the robot will have when this command takes effect, predicted with the commands still
+    #: on their way (a Smith predictor). 0: steer from the estimated pose as it is.
+    command_delay_s: float = 0.0
     #: Speed allowed when the contacts touch; None disables the arrival speed cap.
-    contact_speed_mps: float | None = 0.1
+    contact_speed_mps: float | None = 0.08
     #: Deceleration the arrival speed cap plans with (keep it under the robot's limit).
-    approach_decel_mps2: float = 0.8
+    approach_decel_mps2: float = 0.5
     #: Stop (zero command) once within this distance of the dock pose; None leaves stopping to the caller.
     stop_distance_m: float | None = None
     #: Smooth and latency-compensate the robot pose before the law sees it; None uses raw poses.
@@ -181,6 +231,10 @@ class GracefulDockParams:
 NAV2_DOCKING_PARAMS = GracefulDockParams(
     gains=NAV2_DOCKING_DEFAULTS,
     dock_target_past_m=0.0,
+    target_lookahead_m=None,
+    far_beta=None,
+    pivot_curvature_per_m=None,
+    align_distance_m=None,
     contact_speed_mps=None,
     stop_distance_m=0.05,
     pose_estimator=None,
@@ -202,6 +256,10 @@ class GracefulDockController:
         self.dock_pose = dock_pose
         self.last_command = VelocityCommand(0.0, 0.0, 0.0)
         self.estimator = RobotPoseEstimator(params.pose_estimator) if params.pose_estimator else None
+        #: Commands sent within the last ``command_delay_s``: (time issued on the controller's clock, v, w).
+        self._in_flight: deque[tuple[float, float, float]] = deque()
+        self._clock_s = 0.0
+        self._pivoting = False
 
     def set_dock_pose(self, dock_pose: Pose2D) -> None:
         """Use a newer dock pose (for example the pose filter's output) from the next tick on."""
@@ -210,13 +268,47 @@ class GracefulDockController:
     def reset(self) -> None:
         """Forget the last command and the pose estimate (call before a new approach)."""
         self.last_command = VelocityCommand(0.0, 0.0, 0.0)
+        self.forget_commands()
+        self._pivoting = False
         if self.estimator is not None:
             self.estimator.reset()
 
+    def forget_commands(self) -> None:
+        """The commands computed lately were not sent (the robot was held still): predict without them."""
+        self._in_flight.clear()
+
+    def predict_pose(self, robot_pose: Pose2D) -> Pose2D:
+        """Where ``robot_pose`` will be once the commands still on their way have been carried out."""
+        pose = robot_pose
+        items = list(self._in_flight)
+        for i, (issued_s, v, w) in enumerate(items):
+            until_s = items[i + 1][0] if i + 1 < len(items) else self._clock_s
+            pose = _drive(pose, v, w, until_s - issued_s)
+        return pose
+
     @property
     def target(self) -> Pose2D:
-        """The point the law steers to: the dock pose pushed past the plate."""
+        """The point the law steers to from afar: the dock pose pushed past the plate."""
         return docking_target(self.dock_pose, self.params.dock_target_past_m)
+
+    def target_for(self, robot_pose: Pose2D) -> Pose2D:
+        """The point the law steers to from ``robot_pose``: :attr:`target`, or further on along the dock's
+        axis so that it stays ``target_lookahead_m`` ahead of the robot."""
+        past_m = self.params.dock_target_past_m
+        if self.params.target_lookahead_m is not None:
+            along_m = dock_frame_error(robot_pose, self.dock_pose).along_m
+            past_m = max(past_m, along_m + self.params.target_lookahead_m)
+        return docking_target(self.dock_pose, past_m)
+
+    def gains_at(self, robot_pose: Pose2D) -> GracefulGains:
+        """The law's gains from ``robot_pose``: beta eased far from the plate (see ``far_beta``)."""
+        p = self.params
+        if p.far_beta is None:
+            return p.gains
+        distance_m = -dock_frame_error(robot_pose, self.dock_pose).along_m
+        span_m = max(p.far_distance_m - p.near_distance_m, 1e-9)
+        fraction = min(1.0, max(0.0, (distance_m - p.near_distance_m) / span_m))
+        return replace(p.gains, beta=p.gains.beta + fraction * (p.far_beta - p.gains.beta))
 
     def is_docked_by_distance(self, robot_pose: Pose2D) -> bool:
         """The distance test: within ``stop_distance_m`` of the dock pose (False when disabled)."""
@@ -261,14 +353,54 @@ class GracefulDockController:
         """
         p = self.params
         robot_pose = self.estimate_pose(measured_pose, dt_s, pose_age_s, base_twist)
+        self._clock_s += p.control_period_s if dt_s is None else dt_s
+        while self._in_flight and self._in_flight[0][0] < self._clock_s - p.command_delay_s - 1e-9:
+            self._in_flight.popleft()
+        robot_pose = self.predict_pose(robot_pose)
         if self.is_docked_by_distance(robot_pose):
             self.last_command = VelocityCommand(0.0, 0.0, 0.0)
             return self.last_command
-        command = smooth_control_law(self.target, robot_pose, p.gains)
-        if p.contact_speed_mps is not None:
-            command = self._cap_arrival_speed(command, robot_pose, p.contact_speed_mps)
+        target, gains = self.target_for(robot_pose), self.gains_at(robot_pose)
+        command = smooth_control_law(target, robot_pose, gains)
+        if self._should_pivot(command, robot_pose):
+            command = self._pivot(command, ego_polar(target, robot_pose), gains)
+        else:
+            if p.contact_speed_mps is not None:
+                command = self._cap_arrival_speed(command, robot_pose, p.contact_speed_mps)
+            command = self._hold_heading_at_the_end(command, robot_pose)
         self.last_command = command
+        if p.command_delay_s > 0.0:
+            self._in_flight.append((self._clock_s, command.linear_x_mps, command.angular_z_radps))
         return command
+
+    def _hold_heading_at_the_end(self, command: VelocityCommand, robot_pose: Pose2D) -> VelocityCommand:
+        """Within ``align_distance_m`` of the dock pose: steer only to the dock's heading."""
+        p = self.params
+        error = dock_frame_error(robot_pose, self.dock_pose)
+        if p.align_distance_m is None or -error.along_m > p.align_distance_m or command.linear_x_mps <= 0.0:
+            return command
+        w = min(max(-p.align_gain_per_s * error.yaw_rad, -p.align_max_radps), p.align_max_radps)
+        return VelocityCommand(command.linear_x_mps, w, w / command.linear_x_mps)
+
+    def _should_pivot(self, command: VelocityCommand, robot_pose: Pose2D) -> bool:
+        p = self.params
+        if p.pivot_curvature_per_m is None:
+            return False
+        threshold = 0.5 * p.pivot_curvature_per_m if self._pivoting else p.pivot_curvature_per_m
+        far = -dock_frame_error(robot_pose, self.dock_pose).along_m > p.pivot_min_distance_m
+        self._pivoting = far and abs(command.curvature_per_m) > threshold
+        return self._pivoting
+
+    def _pivot(self, command: VelocityCommand, polar: EgoPolar, gains: GracefulGains) -> VelocityCommand:
+        """Turn on the spot the way the law curves, slowing to stop about where its curvature would vanish.
+
+        The law's curvature times ``r`` changes by ``k_delta + (1 + k_phi / (1 + (k_phi phi)^2)) cos(delta)``
+        per radian of heading, which turns the curvature into the angle still to turn.
+        """
+        slope = gains.k_delta + (1.0 + gains.k_phi / (1.0 + (gains.k_phi * polar.phi_rad) ** 2)) * math.cos(polar.delta_rad)
+        to_turn_rad = abs(command.curvature_per_m) * polar.r_m / max(slope, 1.0)
+        w = min(gains.v_angular_max_radps, math.sqrt(2.0 * self.params.pivot_decel_radps2 * to_turn_rad))
+        return VelocityCommand(0.0, math.copysign(w, command.curvature_per_m), command.curvature_per_m)
 
     def step(self, pose_x: float, pose_y: float, pose_yaw: float) -> tuple[float, float]:
         """One control tick: ``(linear_x m/s, angular_z rad/s)`` for the robot's map pose."""

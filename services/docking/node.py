@@ -90,6 +90,9 @@ CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1}
 #: A sensor reading older than this is ignored by the obstacle checks.
 SENSOR_MAX_AGE_S = 0.5
 STATE_PERIOD_S = 1.0
+#: After odometry restarts, localisation is ignored this long: the localiser's own inputs may run late and
+#: still place the robot where it was.
+RELOCALISE_SETTLE_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
 
 
@@ -118,10 +121,23 @@ class Params(ServiceParams):
     wait_charge_timeout_s: float = Field(5.0, gt=0.0)
     max_docking_time_s: float = Field(600.0, gt=0.0)
     staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
+    handover_distance_m: float = Field(
+        0.45, ge=0.0, description="graceful: the approach takes over from navigation this close to the staging "
+        "pose, with the dock in view (0: navigation always stops at the staging pose first)")
     max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed")
     undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5)
     max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
+    max_localisation_age_s: float = Field(
+        2.0, gt=0.0, description="... unless odometry no older than max_pose_age_s carries a pose this old forward")
     pose_latency_s: float = Field(0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives")
+    max_control_pose_age_s: float = Field(
+        0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)")
+    command_delay_s: float = Field(
+        0.15, ge=0.0, le=1.0, description="graceful: dead time from cmd_vel to the base's response, predicted "
+        "through with the commands still on their way")
+    pose_correction_gain: float = Field(
+        1.0, gt=0.0, le=1.0, description="graceful: how far each pose moves the approach's pose estimate "
+        "(1: the odometry-carried pose as it is, compensated for its age)")
     battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
     obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
     use_lidar: bool = True
@@ -168,6 +184,9 @@ class DockingService:
         self._sonar_range_m = math.inf
         self._sonar_received_s = -math.inf
         self._lidar_mount: Pose2D | None = None
+        self._ignore_poses_until_s = -math.inf
+        #: The map -> odom correction the running docking run's detections were last moved to.
+        self._applied_correction: Pose2D | None = None
         self._last_now_s = -math.inf
         self._holding = ""
         self._last_state = ""
@@ -217,12 +236,19 @@ class DockingService:
         if len(data) < 3 or not np.all(np.isfinite(data[:3])):
             self._say.warning("pose", "ignored a %s message without a finite [x, y, yaw]", topics.POSE2D)
             return
-        self.track.add_pose(self.node.now(), Pose2D.from_seq(data[:3]), self.params.pose_latency_s)
+        now = self.node.now()
+        if now < self._ignore_poses_until_s:
+            return
+        self.track.add_pose(now, Pose2D.from_seq(data[:3]), self.params.pose_latency_s)
 
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
+        resets = self.track.odom_resets
         self.track.add_odom(OdomSample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x,
                                        twist.angular.z))
+        if self.track.odom_resets != resets:
+            # Odometry restarted (the robot was moved): the localiser may still report where it was.
+            self._ignore_poses_until_s = self.node.now() + RELOCALISE_SETTLE_S
 
     def _on_detection(self, msg: PoseStamped) -> None:
         task = self.task
@@ -233,7 +259,8 @@ class DockingService:
                               msg.header.frame_id, topics.BASE_FRAME)
             return
         stamp_s = msg.header.stamp.to_sec()
-        robot_at_stamp = self.track.pose_at(stamp_s)
+        self._follow_correction()
+        robot_at_stamp = self.track.pose_now_at(stamp_s)
         if robot_at_stamp is None:
             self._say.info("detection-pose", "no robot pose at a detection's stamp %.3f s: ignored", stamp_s)
             return
@@ -254,6 +281,15 @@ class DockingService:
             if transform.header.frame_id == topics.BASE_FRAME and transform.child_frame_id == topics.LIDAR_FRAME:
                 self._lidar_mount = transform.transform.to_pose2d()
 
+    def _follow_correction(self) -> None:
+        """Move the detected dock with every change of the localiser's map -> odom correction, so that it
+        stays where odometry put it relative to the robot (see :mod:`services.docking.dock_tracker`)."""
+        correction = self.track.map_to_odom
+        applied = self._applied_correction
+        if isinstance(self.task, DockingRun) and correction is not None and applied is not None and correction != applied:
+            self.task.relocalised(correction.compose(applied.inverse()))
+        self._applied_correction = correction
+
     def _charging(self, now_s: float) -> bool:
         fresh = self._battery is not None and now_s - self._battery_received_s <= self.params.battery_timeout_s
         return fresh and self._battery is not None and self._battery.power_supply_status in _CHARGING
@@ -271,7 +307,7 @@ class DockingService:
     def _inputs(self, now_s: float) -> TickInputs:
         robot_pose: Pose2D | None = None
         pose_age_s = 0.0
-        if self.track.pose_fresh(now_s, self.params.max_pose_age_s):
+        if self.track.pose_fresh(now_s, self.params.max_pose_age_s, self.params.max_localisation_age_s):
             latest = self.track.latest()
             if latest is not None:
                 pose_stamp_s, robot_pose = latest
@@ -317,10 +353,16 @@ class DockingService:
         self._follow_mission(now)
         task = self.task
         if task is not None:
+            self._follow_correction()
             inputs = self._inputs(now)
             intent = task.step(inputs)
             if task.holding and task.holding != self._holding:
                 self._say.info(f"hold:{task.holding}", "holding still: %s", task.holding)
+            if task.holding and self.log.isEnabledFor(logging.DEBUG):
+                odom = self.track.latest_odom
+                self.log.debug("hold t=%.3f %s: localisation %.3f s old, odometry %s", now, task.holding,
+                               now - self.track.last_pose_received_s,
+                               f"{now - odom.stamp_s:.3f} s old" if odom else "none")
             self._holding = task.holding
             self._carry_out(intent, inputs)
             self._publish_feedback(now)
@@ -366,8 +408,13 @@ class DockingService:
     def _approach(self) -> ApproachController:
         if self.params.controller == "seed":
             return SeedApproach()
-        return GracefulApproach(graceful_params_with_speed(self.params.max_approach_speed_mps),
-                                self.params.staging_offset_m)
+        params = graceful_params_with_speed(self.params.max_approach_speed_mps)
+        params = replace(params, command_delay_s=self.params.command_delay_s)
+        if params.pose_estimator is not None:
+            # The pose comes carried by odometry, smooth and fresh: trust it, only compensate its age.
+            estimator = replace(params.pose_estimator, correction_gain=self.params.pose_correction_gain)
+            params = replace(params, pose_estimator=estimator)
+        return GracefulApproach(params, self.params.staging_offset_m)
 
     def _docking_run(self, request: DockRequest) -> DockingRun:
         p = self.params
@@ -376,6 +423,9 @@ class DockingService:
             use_detection=p.use_detection,
             allow_blind_docking=p.allow_blind_docking,
             wait_for_detection=p.controller == "graceful",
+            continuous_perception=p.controller == "graceful",
+            max_control_pose_age_s=p.max_control_pose_age_s if p.controller == "graceful" else None,
+            handover_distance_m=p.handover_distance_m if p.controller == "graceful" and p.handover_distance_m > 0 else None,
             min_detections=p.min_detections,
             initial_perception_timeout_s=p.initial_perception_timeout_s,
             approach_timeout_s=p.approach_timeout_s,
@@ -516,7 +566,7 @@ class DockingService:
         if name == self._last_state and now - self._state_published_s < STATE_PERIOD_S:
             return
         if name != self._last_state:
-            self.log.info("state %s", name)
+            self.log.info("state %s (clock %.2f s)", name, now)
         self._last_state, self._state_published_s = name, now
         self.state_pub.publish(String(name))
 

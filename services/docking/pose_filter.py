@@ -61,6 +61,11 @@ class DockPoseFilter:
         self._stamp_s = float("-inf")
         self.rejected_in_a_row = 0
 
+    def shift(self, transform: Pose2D) -> None:
+        """Move the filtered pose with its frame: ``transform`` maps old frame coordinates to new ones."""
+        if self._pose is not None:
+            self._pose = transform.compose(self._pose)
+
     def is_fresh(self, now_s: float) -> bool:
         """True while the last accepted detection is at most ``timeout_s`` old."""
         return self._pose is not None and now_s - self._stamp_s <= self.params.timeout_s

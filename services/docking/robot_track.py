@@ -1,12 +1,17 @@
 """The robot's recent map poses: localisation samples carried forward by odometry, queryable at any time.
 
 ``map_to_base_link_pose2d`` arrives at a few hertz without a stamp; odometry arrives faster, stamped
-at capture. The pose at time ``t`` is the newest localisation sample taken at or before ``t`` moved by
-the odometry travelled since (as a localiser's map -> odom correction applied to newer odometry, REP
-105). This gives the docking loop a fresh, stamped pose every tick and lets a late detection be placed
-in the map with the pose the robot had when the camera took it. Without odometry the samples are
-interpolated. An odometry jump (a reset, a teleport) drops the history: poses from before it cannot
-be carried across it.
+at capture. The pose at time ``t`` is the localiser's map -> odom correction of the newest localisation
+sample taken at or before ``t``, applied to the odometry at ``t`` (REP 105). A sample's correction comes
+from pairing it with the odometry sample it was computed from: of those stamped shortly before it (or
+after), the one that moves the correction least -- the correction changes slowly, and the pose service
+composes it with the very odometry the topic carries -- so a sample that arrives late (a busy machine)
+neither delays nor shakes the pose. This gives the docking loop a fresh, stamped pose every tick and
+lets a late detection be placed in the map with the pose the robot had when the camera took it
+(:meth:`RobotPoseTrack.pose_at`), or with the correction the robot's own pose gets now
+(:meth:`RobotPoseTrack.pose_now_at`, odometry's frame in effect), so that the correction's error cancels
+in the robot-to-dock geometry. Without odometry the samples are interpolated. An odometry jump (a
+reset, a teleport) drops the history: poses from before it cannot be carried across it.
 """
 
 from __future__ import annotations
@@ -25,6 +30,10 @@ CLOCK_RESET_S = 1.0
 MAX_EXTRAPOLATION_S = 0.2
 #: Without odometry, a localisation sample stands for the robot's pose at most this long after it.
 MAX_HOLD_S = 0.5
+#: A localisation sample pairs with odometry stamped at most this long before the time it describes (or later).
+PAIRING_WINDOW_S = 0.3
+#: Pose change that counts as much as 1 rad of heading change, when choosing the pairing.
+PAIRING_METRES_PER_RAD = 0.3
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +78,8 @@ class RobotPoseTrack:
         self.odom_jump_rad = odom_jump_rad
         self._pose_times: list[float] = []
         self._poses: list[Pose2D] = []
+        #: map -> odom of each localisation sample (None when there was no odometry to pair it with).
+        self._corrections: list[Pose2D | None] = []
         self._odom_times: list[float] = []
         self._odom: list[OdomSample] = []
         #: Clock time at which the newest localisation sample arrived (-inf before any).
@@ -78,6 +89,7 @@ class RobotPoseTrack:
     def clear(self) -> None:
         self._pose_times.clear()
         self._poses.clear()
+        self._corrections.clear()
         self._odom_times.clear()
         self._odom.clear()
         self.last_pose_received_s = -math.inf
@@ -91,10 +103,29 @@ class RobotPoseTrack:
             self.clear()
         if self._pose_times and t <= self._pose_times[-1]:
             t = self._pose_times[-1] + 1e-6  # keep times increasing
+        # Paired now if the odometry of its time is here, else when it comes (see add_odom).
+        correction = self._pair(pose, t) if self._odom and self._odom_times[-1] >= t else None
         self._pose_times.append(t)
         self._poses.append(pose)
+        self._corrections.append(correction)
         self.last_pose_received_s = received_s
-        self._forget(self._pose_times, self._poses, t)
+        self._forget(t, self._pose_times, self._poses, self._corrections)
+
+    def _pair(self, pose: Pose2D, t: float) -> Pose2D | None:
+        """The map -> odom correction of a localisation sample: see the module docstring."""
+        candidates = self._odom[bisect.bisect_left(self._odom_times, t - PAIRING_WINDOW_S):]
+        if not candidates:
+            return None
+        estimates = [pose.compose(sample.pose.inverse()) for sample in candidates]
+        previous = self.map_to_odom
+        if previous is None:
+            return estimates[min(range(len(candidates)), key=lambda i: abs(candidates[i].stamp_s - t))]
+
+        def change(estimate: Pose2D) -> float:
+            turn = abs(wrap_angle(estimate.yaw - previous.yaw))
+            return previous.distance_to(estimate) + PAIRING_METRES_PER_RAD * turn
+
+        return min(reversed(estimates), key=change)
 
     def add_odom(self, sample: OdomSample) -> None:
         """An odometry sample (odom -> base_link and the body twist), stamped at capture."""
@@ -111,9 +142,13 @@ class RobotPoseTrack:
                 self._odom.clear()
                 self._pose_times.clear()
                 self._poses.clear()
+                self._corrections.clear()
         self._odom_times.append(sample.stamp_s)
         self._odom.append(sample)
-        self._forget(self._odom_times, self._odom, sample.stamp_s)
+        self._forget(sample.stamp_s, self._odom_times, self._odom)
+        if self._corrections and self._corrections[-1] is None and sample.stamp_s >= self._pose_times[-1]:
+            # The newest localisation sample came before the odometry of its time.
+            self._corrections[-1] = self._pair(self._poses[-1], self._pose_times[-1])
 
     def _is_jump(self, last: OdomSample, sample: OdomSample) -> bool:
         dt = sample.stamp_s - last.stamp_s
@@ -124,11 +159,12 @@ class RobotPoseTrack:
         return moved > self.odom_jump_m + 2.0 * speed * dt or turned > self.odom_jump_rad + 2.0 * turn * dt
 
     @staticmethod
-    def _forget(times: list[float], items: list, newest_s: float) -> None:  # type: ignore[type-arg]
+    def _forget(newest_s: float, times: list[float], *items: list) -> None:  # type: ignore[type-arg]
         keep_from = bisect.bisect_left(times, newest_s - HISTORY_S)
         if keep_from > 0:
             del times[:keep_from]
-            del items[:keep_from]
+            for item in items:
+                del item[:keep_from]
 
     # --- queries -----------------------------------------------------------------------------------
 
@@ -136,9 +172,30 @@ class RobotPoseTrack:
     def has_pose(self) -> bool:
         return bool(self._poses)
 
-    def pose_fresh(self, now_s: float, max_age_s: float) -> bool:
-        """Whether a localisation sample arrived within ``max_age_s`` of ``now_s``."""
-        return self.has_pose and now_s - self.last_pose_received_s <= max_age_s
+    @property
+    def map_to_odom(self) -> Pose2D | None:
+        """The newest map -> odom correction (None without odometry to pair localisation with)."""
+        return self._correction_at(len(self._corrections) - 1)
+
+    def _correction_at(self, index: int) -> Pose2D | None:
+        """The correction of localisation sample ``index``, or of the newest one before it that has one."""
+        for correction in reversed(self._corrections[: index + 1]):
+            if correction is not None:
+                return correction
+        return None
+
+    def pose_fresh(self, now_s: float, max_age_s: float, carried_age_s: float = 0.0) -> bool:
+        """Whether a localisation sample arrived within ``max_age_s`` of ``now_s`` -- or within
+        ``carried_age_s`` while odometry no older than ``max_age_s`` carries it forward (map -> odom
+        changes slowly: a localiser running late does not make the robot's pose stale)."""
+        if not self.has_pose:
+            return False
+        age = now_s - self.last_pose_received_s
+        if age <= max_age_s:
+            return True
+        odom = self.latest_odom
+        carried = self.map_to_odom is not None and odom is not None and now_s - odom.stamp_s <= max_age_s
+        return carried and age <= carried_age_s
 
     @property
     def latest_odom(self) -> OdomSample | None:
@@ -171,10 +228,10 @@ class RobotPoseTrack:
             return None
         i = bisect.bisect_right(self._pose_times, t_s)
         k = max(0, i - 1)  # the newest sample at or before t (or the oldest one)
-        anchor_t, anchor = self._pose_times[k], self._poses[k]
-        odom_anchor, odom_t = self.odom_at(anchor_t), self.odom_at(t_s)
-        if odom_anchor is not None and odom_t is not None:
-            return anchor.compose(odom_anchor.inverse().compose(odom_t))
+        anchor_t, anchor, correction = self._pose_times[k], self._poses[k], self._correction_at(k)
+        odom_t = self.odom_at(t_s)
+        if correction is not None and odom_t is not None:
+            return correction.compose(odom_t)
         if i == 0:
             return anchor if anchor_t - t_s <= MAX_EXTRAPOLATION_S else None
         if i < len(self._poses):
@@ -182,13 +239,20 @@ class RobotPoseTrack:
             return interpolate_pose(anchor, self._poses[i], (t_s - anchor_t) / (t1 - anchor_t))
         return anchor if t_s - anchor_t <= MAX_HOLD_S else None
 
+    def pose_now_at(self, t_s: float) -> Pose2D | None:
+        """The odometry pose at ``t_s`` through the newest correction (what the robot's pose now is
+        made of), or :meth:`pose_at` without odometry."""
+        correction, odom_t = self.map_to_odom, self.odom_at(t_s)
+        if correction is not None and odom_t is not None:
+            return correction.compose(odom_t)
+        return self.pose_at(t_s)
+
     def latest(self) -> tuple[float, Pose2D] | None:
-        """``(time, pose)`` of the newest pose this track knows: at the newest odometry when it has some."""
+        """``(time, pose)`` of the newest pose this track knows: the newest odometry through the newest
+        correction when it has them (as :meth:`pose_now_at` places detections), else the newest sample."""
         if not self._poses:
             return None
-        odom = self.latest_odom
-        if odom is not None and odom.stamp_s >= self._pose_times[-1]:
-            pose = self.pose_at(odom.stamp_s)
-            if pose is not None:
-                return (odom.stamp_s, pose)
+        odom, correction = self.latest_odom, self.map_to_odom
+        if odom is not None and correction is not None:
+            return (odom.stamp_s, correction.compose(odom.pose))
         return (self._pose_times[-1], self._poses[-1])

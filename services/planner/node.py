@@ -23,7 +23,8 @@ cells), then CLEARING (the lidar layer is cleared, on every second recovery the 
 refills for ``recovery_wait_s``), then PLANNING again. After ``max_recoveries`` the goal is ABORTED with
 the error code of the last failure. These timeouts run on the control loop's own clock (sim time, each
 tick counting at most four periods), so a machine too busy to run the loop on time does not make the
-robot look stuck. A stale pose holds the robot still; NO_POSE after ``no_pose_timeout_s``.
+robot look stuck. A stale pose holds the robot still (a map pose carried forward by fresh odometry is
+stale only after ``carried_pose_timeout_s``); NO_POSE after ``no_pose_timeout_s``.
 """
 
 from __future__ import annotations
@@ -589,7 +590,9 @@ class PlannerService:
         """The robot's pose, or ``None`` (robot held, maybe goal aborted) when the pose is stale."""
         p = self._params
         age = self._tracker.map_pose_age_s(now)
-        if age <= p.pose_timeout_s:
+        # map -> odom changes slowly: while fresh odometry carries the pose, a localiser running late
+        # (a busy machine) is no reason to stop.
+        if age <= p.pose_timeout_s or (age <= p.carried_pose_timeout_s and self._tracker.carried_by_odometry(now)):
             if task.pose_lost_since_s is not None:
                 self._log.info("pose is back: resuming")
             task.pose_lost_since_s = None
@@ -609,7 +612,10 @@ class PlannerService:
     def _follow(self, task: _Task, pose: Pose2D, now: float, dt: float, grid: Any) -> None:
         p = self._params
         velocity = self._tracker.velocity(now) or self._last_cmd
-        command = self._follower.compute_velocity_command(pose, velocity, dt, grid)
+        # Acceleration limits (and the lookahead) start from the last command, as Nav2's velocity smoother
+        # does in open loop: measured odometry lags the base, and ramping from it would slow every start.
+        reference = self._last_cmd if p.open_loop_acceleration else velocity
+        command = self._follower.compute_velocity_command(pose, reference, dt, grid)
         if command.status is FollowStatus.GOAL_REACHED and (
             abs(velocity[0]) > p.trans_stopped_velocity_mps or abs(velocity[1]) > p.rot_stopped_velocity_rps
         ):

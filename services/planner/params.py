@@ -41,6 +41,12 @@ class Params(ServiceParams):
     max_linear_accel_mps2: float = Field(1.0, gt=0.0)
     max_linear_decel_mps2: float = Field(1.5, gt=0.0)
     max_angular_accel_rps2: float = Field(3.0, gt=0.0)
+    regulated_linear_scaling_min_radius_m: float = Field(
+        0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower")
+    approach_velocity_scaling_dist_m: float = Field(
+        0.3, gt=0.0, description="over this last stretch of the path the speed falls in proportion to what is left")
+    open_loop_acceleration: bool = Field(
+        True, description="ramp from the last command (true) or from the measured twist, which lags (false)")
     xy_goal_tolerance_m: float = Field(0.05, gt=0.0)
     yaw_goal_tolerance_rad: float = Field(0.05, gt=0.0)
     trans_stopped_velocity_mps: float = Field(
@@ -71,7 +77,9 @@ class Params(ServiceParams):
     # control and action
     controller_rate_hz: float = Field(20.0, gt=0.0)
     feedback_rate_hz: float = Field(5.0, gt=0.0)
-    pose_timeout_s: float = Field(0.5, gt=0.0, description="an older pose holds the robot still")
+    pose_timeout_s: float = Field(0.5, gt=0.0, description="an older pose holds the robot still ...")
+    carried_pose_timeout_s: float = Field(
+        2.0, gt=0.0, description="... unless fresh odometry carries it forward: then only a map pose older than this")
     no_pose_timeout_s: float = Field(
         5.0, gt=0.0, description="abort with NO_POSE after this long without one (sim and wall time)")
     navigation_timeout_s: float = Field(0.0, ge=0.0, description="abort with TIMEOUT after this long (0: never)")
@@ -147,6 +155,8 @@ class Params(ServiceParams):
             max_linear_decel_mps2=self.max_linear_decel_mps2,
             max_angular_accel_rps2=self.max_angular_accel_rps2,
             rotate_to_heading_angular_vel_rps=self.max_angular_vel_rps,
+            regulated_linear_scaling_min_radius_m=self.regulated_linear_scaling_min_radius_m,
+            approach_velocity_scaling_dist_m=self.approach_velocity_scaling_dist_m,
             inflation_cost_scaling_factor=costmap.cost_scaling_factor,
             inscribed_radius_m=costmap.inscribed_radius_m,
             xy_goal_tolerance_m=self.xy_goal_tolerance_m,

@@ -9,7 +9,9 @@ up to 0.1 s of heading lag, smearing walls 0.4 m sideways at 3 m.
 
 The map pose has no stamp, so which odometry sample it pairs with is a guess: of the newest few, the
 one that moves the map -> odom estimate least (map -> odom is nearly constant between corrections).
-Without odometry the tracker falls back to the last map pose as it came.
+Without odometry the tracker falls back to the last map pose as it came. Odometry that jumps (a
+teleport restarts it) drops the history, the map -> odom estimate and the map pose measured before it:
+the robot is placed again only once localisation has caught up.
 """
 
 from __future__ import annotations
@@ -25,6 +27,12 @@ from shared.geometry import Pose2D, wrap_angle
 PAIRING_CANDIDATES = 5
 #: A clock reading this much earlier than the newest sample is a reset (the simulator restarted).
 CLOCK_RESET_S = 1.0
+#: Odometry that moves this much more between two samples than its twist allows has jumped (a reset, a
+#: teleport): metres, radians.
+ODOM_JUMP_M = 0.05
+ODOM_JUMP_RAD = 0.2
+#: After a jump, map poses are ignored this long: the localiser may still publish the pose from before it.
+RELOCALISE_SETTLE_S = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,6 +67,16 @@ def interpolate(a: Pose2D, b: Pose2D, fraction: float) -> Pose2D:
     )
 
 
+def _jumped(last: OdometrySample, sample: OdometrySample) -> bool:
+    """Whether odometry moved between two samples by more than its own twist can explain."""
+    dt = sample.stamp_s - last.stamp_s
+    speed = max(abs(last.linear_mps), abs(sample.linear_mps))
+    turn = max(abs(last.angular_rps), abs(sample.angular_rps))
+    moved = last.pose.distance_to(sample.pose)
+    turned = abs(wrap_angle(sample.pose.yaw - last.pose.yaw))
+    return moved > ODOM_JUMP_M + 2.0 * speed * dt or turned > ODOM_JUMP_RAD + 2.0 * turn * dt
+
+
 def _pose_change(a: Pose2D, b: Pose2D) -> float:
     """A scalar size of the difference between two poses (metres, with 1 rad counted as 0.3 m)."""
     return math.hypot(b.x - a.x, b.y - a.y) + 0.3 * abs(wrap_angle(b.yaw - a.yaw))
@@ -84,6 +102,7 @@ class PoseTracker:
         self._map_pose: Pose2D | None = None
         self._map_received_s = -math.inf
         self._map_to_odom: Pose2D | None = None
+        self._ignore_map_until_s = -math.inf
 
     # --- inputs ---------------------------------------------------------------------------------
 
@@ -92,12 +111,22 @@ class PoseTracker:
             self.reset()
         if self._odom and sample.stamp_s <= self._odom[-1].stamp_s:
             return  # out of order or repeated: the history stays sorted
+        if self._odom and _jumped(self._odom[-1], sample):
+            # Odometry restarted (a teleport): neither the old map -> odom nor the map pose measured before
+            # it places the robot now. Hold on until localisation has caught up.
+            self._odom.clear()
+            self._map_to_odom = None
+            self._map_pose = None
+            self._map_received_s = -math.inf
+            self._ignore_map_until_s = received_s + RELOCALISE_SETTLE_S
         self._odom.append(sample)
         while self._odom and self._odom[0].stamp_s < sample.stamp_s - self.history_s:
             self._odom.popleft()
         self._odom_received_s = received_s
 
     def add_map_pose(self, pose: Pose2D, received_s: float) -> None:
+        if received_s < self._ignore_map_until_s:
+            return
         self._map_pose = pose
         self._map_received_s = received_s
         if not self._odom_fresh(received_s):
@@ -146,6 +175,10 @@ class PoseTracker:
         if self._map_to_odom is None or not self._odom:
             return self._map_pose
         return self._map_to_odom.compose(self._odom_pose_at(stamp_s))
+
+    def carried_by_odometry(self, now_s: float) -> bool:
+        """Whether fresh odometry carries the last map pose forward (a map -> odom estimate exists)."""
+        return self._map_to_odom is not None and self._odom_fresh(now_s)
 
     def velocity(self, now_s: float) -> tuple[float, float] | None:
         """The measured ``(linear, angular)`` twist, or ``None`` when odometry is stale."""

@@ -153,3 +153,68 @@ def test_estimator_takes_the_callers_timing_and_odometry() -> None:
     assert trusting.estimator is not None and trusting.estimator.pose.distance_to(start) > 0.05
     trusting.reset()
     assert not trusting.estimator.initialised
+
+
+def test_the_target_recedes_so_it_stays_a_lookahead_ahead() -> None:
+    controller = GracefulDockController(DOCK)
+    far = offset_along(DOCK, -1.0, 0.02)
+    near = offset_along(DOCK, -0.1, 0.02)
+    assert dock_frame_error(controller.target_for(far), DOCK).along_m == pytest.approx(ZENDOCK_PARAMS.dock_target_past_m)
+    lookahead = ZENDOCK_PARAMS.target_lookahead_m
+    assert lookahead is not None
+    assert dock_frame_error(controller.target_for(near), DOCK).along_m == pytest.approx(-0.1 + lookahead)
+    fixed = GracefulDockController(DOCK, replace(ZENDOCK_PARAMS, target_lookahead_m=None))
+    assert fixed.target_for(near) == fixed.target
+
+
+def test_beta_eases_off_far_from_the_plate() -> None:
+    controller = GracefulDockController(DOCK)
+    p = ZENDOCK_PARAMS
+    assert p.far_beta is not None
+    assert controller.gains_at(offset_along(DOCK, -0.3)).beta == pytest.approx(p.gains.beta)
+    assert controller.gains_at(offset_along(DOCK, -1.5)).beta == pytest.approx(p.far_beta)
+    middle = 0.5 * (p.near_distance_m + p.far_distance_m)
+    assert controller.gains_at(offset_along(DOCK, -middle)).beta == pytest.approx(0.5 * (p.gains.beta + p.far_beta))
+    # Askew far from the plate, the robot now turns faster than the law's beta alone would let it.
+    askew = offset_along(DOCK, -1.0, 0.15, -0.6)
+    plain = smooth_control_law(controller.target_for(askew), askew, p.gains)
+    assert abs(controller.compute(askew).angular_z_radps) > abs(plain.angular_z_radps)
+
+
+def test_facing_well_away_it_turns_on_the_spot_first_then_docks() -> None:
+    start = offset_along(DOCK, -0.7, 0.0, math.pi / 2)  # at the staging pose, turned a quarter away
+    first = GracefulDockController(DOCK).compute(start)
+    assert first.linear_x_mps == 0.0 and abs(first.angular_z_radps) > 1.0
+    assert first.angular_z_radps < 0.0  # the short way round
+    result = simulate_approach(GracefulDockController(DOCK), start, DOCK, 0.05, timeout_s=20.0)
+    assert result.mated and abs(result.yaw_error_rad) < math.radians(0.5), result.error
+    assert result.time_s < 4.0
+    close_by = offset_along(DOCK, -0.2, 0.0, math.pi / 2)  # no turning on the spot next to the dock
+    assert GracefulDockController(DOCK).compute(close_by).linear_x_mps > 0.0
+
+
+def test_the_last_stretch_only_holds_the_docks_heading() -> None:
+    controller = GracefulDockController(DOCK, replace(ZENDOCK_PARAMS, pose_estimator=None))
+    inside = offset_along(DOCK, -0.1, 0.01, 0.0)  # a centimetre to the side, square to the dock
+    command = controller.compute(inside)
+    assert command.linear_x_mps > 0.0 and command.angular_z_radps == 0.0  # no swing into yaw for 1 cm
+    turned = offset_along(DOCK, -0.1, 0.0, 0.02)
+    command = controller.compute(turned)
+    assert command.angular_z_radps == pytest.approx(-ZENDOCK_PARAMS.align_gain_per_s * 0.02)
+    outside = offset_along(DOCK, -0.4, 0.01, 0.0)
+    assert controller.compute(outside).angular_z_radps != 0.0  # the law still steers further out
+
+
+def test_commands_on_their_way_are_predicted_through() -> None:
+    params = replace(ZENDOCK_PARAMS, command_delay_s=0.2, pose_estimator=None)
+    controller = GracefulDockController(DOCK, params)
+    start = offset_along(DOCK, -1.0)
+    for _ in range(4):  # four commands of 0.05 s each are still on their way
+        command = controller.compute(start, 0.05)
+    assert command.linear_x_mps > 0.3
+    predicted = controller.predict_pose(start)
+    ahead = dock_frame_error(predicted, DOCK).along_m - dock_frame_error(start, DOCK).along_m
+    assert 0.05 < ahead < 0.5 * 0.2 + 1e-9
+    controller.forget_commands()  # the robot was held instead: nothing is on its way
+    assert controller.predict_pose(start) == start
+    assert GracefulDockController(DOCK).predict_pose(start) == start  # the bench default: no delay

@@ -195,3 +195,56 @@ def test_sonar_rules() -> None:
     assert expected_sonar_range(past, params) == 0.0 and not sonar_blocked(0.02, past, params)
     aside = Pose2D(0.5, 2.0, 0.0)  # the dock far to the left: not in the cone
     assert expected_sonar_range(aside, params) == math.inf and sonar_blocked(0.2, aside, params)
+
+
+def test_a_late_localisation_sample_pairs_with_the_odometry_it_was_made_from() -> None:
+    """Poses arriving late, or before the odometry of their time, still give the right map -> odom."""
+    correction = Pose2D(0.5, -0.2, 0.1)
+    start = Pose2D(0.0, 0.0, 0.3)
+    v, w = 0.4, 0.6
+    track = RobotPoseTrack()
+    for i in range(0, 60):
+        t = i * 0.02
+        track.add_odom(OdomSample(t, arc(start, v, w, t), v, w))
+        if i % 5 == 0 and i >= 10:
+            late_by = 0.1 if i % 10 == 0 else 0.0  # computed 0.1 s before it arrives, or on time
+            track.add_pose(t, correction.compose(arc(start, v, w, t - late_by)))
+    assert track.map_to_odom is not None and close(track.map_to_odom, correction, 1e-9)
+    # A sample computed from odometry that has not arrived yet is paired once that odometry comes.
+    t_next = 60 * 0.02
+    track.add_pose(t_next, correction.compose(arc(start, v, w, t_next)))
+    track.add_odom(OdomSample(t_next, arc(start, v, w, t_next), v, w))
+    assert close(track.map_to_odom, correction, 1e-9)
+    stamp, latest = track.latest()  # type: ignore[misc]
+    assert stamp == pytest.approx(t_next) and close(latest, correction.compose(arc(start, v, w, t_next)), 1e-9)
+    assert close(track.pose_now_at(0.9), correction.compose(arc(start, v, w, 0.9)), 1e-9)
+
+
+def test_odometry_carries_a_late_localisation_sample_forward() -> None:
+    track = RobotPoseTrack()
+    track.add_odom(OdomSample(0.0, Pose2D(), 0.0, 0.0))
+    track.add_pose(0.0, Pose2D(1.0, 1.0, 0.0))
+    for i in range(1, 51):
+        track.add_odom(OdomSample(0.02 * i, Pose2D(0.01 * i, 0.0, 0.0), 0.5, 0.0))
+    assert not track.pose_fresh(1.0, 0.5)  # localisation alone is a second old ...
+    assert track.pose_fresh(1.0, 0.5, carried_age_s=2.0)  # ... but fresh odometry carries it
+    assert not track.pose_fresh(3.5, 0.5, carried_age_s=2.0)  # and not for ever
+    assert not track.pose_fresh(1.7, 0.5, carried_age_s=2.0)  # nor when the odometry is stale too
+
+
+def test_the_detected_dock_moves_with_the_localisers_correction() -> None:
+    """A correction that moves the robot's map pose moves the dock estimate with it: the geometry between
+    them stays what odometry says (the dock is tracked in the odometry frame, in effect)."""
+    tracker = DockTracker()
+    tracker.expect(SEED_DOCK)
+    robot = graceful_staging_pose(SEED_DOCK)
+    for i in range(5):
+        tracker.add(SEED_DOCK.relative_to(robot), robot, 0.1 * i)
+    before = tracker.estimate()
+    assert before is not None
+    correction = Pose2D(0.02, -0.01, 0.015)  # new map -> odom = correction * old
+    tracker.shift(correction)
+    moved_robot = correction.compose(robot)
+    after = tracker.estimate()
+    assert after is not None and after.detections == before.detections
+    assert close(moved_robot.relative_to(after.pose), robot.relative_to(before.pose), 1e-9)

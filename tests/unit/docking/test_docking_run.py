@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
-from services.docking.approach import dock_frame_error, graceful_staging_pose, line_approach
-from services.docking.approach_control import GracefulApproach, SeedApproach
+from services.docking.approach import dock_frame_error, graceful_staging_pose, line_approach, offset_along
+from services.docking.approach_control import MISALIGNED, GracefulApproach, SeedApproach
 from services.docking.dock_db import DockDatabase
 from services.docking.docking_run import DockingConfig, DockingRun, DockRequest, RunPhase, facing_dock_closely
 from services.docking.errors import DockingErrorCode, DockingState
+from services.docking.kinematics import DiffDriveModel
 from services.docking.task_io import Outcome, TickInputs
 from shared.geometry import Pose2D
 from shared.world import Dock
@@ -235,3 +237,93 @@ def test_nearest_dock_waits_for_a_pose_then_times_out() -> None:
         now += 0.05
     assert run.result is not None and run.result.error_code is DockingErrorCode.TIMEOUT
     assert 0.95 < now < 1.2 and all(i is None for i in intents[:-1])  # nothing to drive without a pose
+
+
+def handover_run(approach: GracefulApproach | None = None, **config: object) -> DockingRun:
+    settings: dict[str, object] = {"continuous_perception": True, "handover_distance_m": 0.45,
+                                   "max_control_pose_age_s": 0.25} | config
+    return DockingRun(DockRequest(dock_id="home"), DATABASE, approach or GracefulApproach(),
+                      DockingConfig(**settings))  # type: ignore[arg-type]
+
+
+def test_the_approach_takes_over_from_navigation_near_the_staging_pose() -> None:
+    """Close to the staging pose and facing the dock, the run cancels navigation rather than wait for it
+    to stop there, drives nothing until the planner has let go, and docks from where the robot is."""
+    world = KinematicWorld(offset_along(SEED_DOCK, -1.6), nav_duration_s=30.0, error=Pose2D(0.03, -0.02, 0.02))
+    run = handover_run()
+    states = run_with_states(world, run, 0.5)
+    assert run.phase is RunPhase.NAV_TO_STAGING and len(world.log.goals) == 1
+    # The planner has brought the robot 0.3 m short of the staging pose, a little askew, still driving.
+    world.robot = DiffDriveModel(offset_along(SEED_DOCK, -1.0, 0.05, 0.2), world.robot.limits)
+    world.robot.v_mps = 0.4
+    states += run_with_states(world, run, 20.0)
+    assert run.result is not None and run.result.success, run.result
+    assert [s for i, s in enumerate(states) if i == 0 or s != states[i - 1]] == [
+        DockingState.NAV_TO_STAGING_POSE, DockingState.INITIAL_PERCEPTION, DockingState.CONTROLLING]
+    assert len(world.log.goals) == 1 and world.log.cancels and world.log.overlaps == 0
+    assert world.now_s < 6.0 and world.mated
+    error = dock_frame_error(world.true_pose, SEED_DOCK)
+    assert abs(error.lateral_m) < 0.01 and abs(error.yaw_rad) < math.radians(1.0)
+    # Already in the zone when the attempt begins: the planner is not even asked.
+    world = KinematicWorld(offset_along(SEED_DOCK, -1.0, 0.05, 0.2), nav_duration_s=30.0)
+    run = handover_run()
+    world.run(run, 20.0)
+    assert run.result is not None and run.result.success and not world.log.goals
+
+
+def test_no_takeover_far_from_staging_or_facing_away() -> None:
+    for start in (offset_along(SEED_DOCK, -1.5), offset_along(SEED_DOCK, -1.0, 0.0, 1.3)):
+        world = KinematicWorld(start, nav_duration_s=1.0)
+        run = handover_run()
+        run_with_states(world, run, 0.5)
+        assert run.phase is RunPhase.NAV_TO_STAGING and not world.log.cancels, start
+    at_staging = KinematicWorld(offset_along(SEED_DOCK, -0.7, 0.0, math.pi), nav_duration_s=5.0)
+    run = handover_run()  # right at the staging pose any heading will do: the approach turns on the spot
+    run_with_states(at_staging, run, 0.5)
+    assert run.phase is RunPhase.CONTROLLING
+
+
+class _SkewedOnce(GracefulApproach):
+    """Reports the first approach as off its axis at the plate (as a late control tick can make it)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.misaligned = 0
+
+    def command(self, now_s, pose, pose_age_s, base_twist):  # type: ignore[no-untyped-def]
+        if not self.misaligned and dock_frame_error(pose, self._controller.dock_pose).along_m > -0.1:  # type: ignore[union-attr]
+            self.misaligned += 1
+            return MISALIGNED
+        return super().command(now_s, pose, pose_age_s, base_twist)
+
+
+def test_coming_up_askew_backs_off_and_approaches_again_without_the_planner() -> None:
+    world = KinematicWorld(FAR)
+    approach = _SkewedOnce()
+    run = handover_run(approach)
+    states = run_with_states(world, run, 60.0)
+    assert run.result is not None and run.result.success and run.result.num_retries == 1, run.result
+    assert approach.misaligned == 1 and DockingState.RETRY in states
+    assert len(world.log.goals) == 1  # backed off along the dock's axis, not sent round by the planner
+    assert world.mated and world.log.overlaps == 0
+
+
+def test_a_pose_too_old_to_steer_by_holds_the_approach() -> None:
+    world = KinematicWorld(FAR)
+    run = handover_run()
+    late: list[float] = []
+    inputs = world.inputs
+
+    def with_late_pose() -> TickInputs:
+        fresh = inputs()
+        if run.phase is RunPhase.CONTROLLING and not late and world.robot.v_mps > 0.1:
+            late.append(world.now_s)
+        if late and late[0] <= world.now_s < late[0] + 0.5:
+            return replace(fresh, pose_age_s=0.4)
+        return fresh
+
+    world.inputs = with_late_pose  # type: ignore[method-assign]
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.success
+    during = [c for t, c in world.log.published if late[0] <= t < late[0] + 0.5]
+    assert during and all(c.is_zero for c in during)

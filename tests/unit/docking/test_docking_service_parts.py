@@ -9,6 +9,7 @@ from deploy.commands.dock import ERROR_NAMES, STATE_NAMES, describe_dock_feedbac
 from services.docking.approach import dock_frame_error, graceful_staging_pose, line_approach, offset_along
 from services.docking.approach_control import (
     ARRIVED,
+    MISALIGNED,
     GracefulApproach,
     SeedApproach,
     back_off_command,
@@ -138,3 +139,31 @@ def test_feedback_lines_change_with_state_and_retries() -> None:
     feedback.num_retries = 2
     key2, line2 = describe_dock_feedback(feedback)
     assert key2 != key and line2.endswith("CONTROLLING  (retry 2)")
+
+
+def test_a_late_tick_is_no_stall_and_a_stall_away_from_the_plate_takes_longer() -> None:
+    approach = GracefulApproach()
+    approach.begin(SEED_DOCK)
+    pose = offset_along(SEED_DOCK, -0.03)
+    t = 0.0
+    approach.command(t, pose, 0.0, (0.0, 0.0))
+    for gap in (0.3, 0.3, 0.3, 0.3):  # pushing, not moving, but every tick late: the base braked by itself
+        t += gap
+        assert approach.command(t, pose, 0.0, (0.0, 0.0)) is not ARRIVED
+    away = GracefulApproach()
+    away.begin(SEED_DOCK)
+    stuck = offset_along(SEED_DOCK, -0.3)  # a corner caught on something, 30 cm short of the dock pose
+    t = 0.0
+    while t < away.arrival.far_stall_time_s:
+        assert away.command(t, stuck, 0.0, (0.0, 0.0)) is not ARRIVED, t
+        t += 0.05
+    assert away.command(t + 0.05, stuck, 0.0, (0.0, 0.0)) is ARRIVED
+
+
+def test_coming_up_to_the_plate_off_its_axis_gives_up() -> None:
+    approach = GracefulApproach()
+    approach.begin(SEED_DOCK)
+    assert approach.command(0.0, offset_along(SEED_DOCK, -0.08, 0.035), 0.0, None) is MISALIGNED
+    assert approach.command(0.05, offset_along(SEED_DOCK, -0.08, 0.0, 0.25), 0.0, None) is MISALIGNED
+    assert approach.command(0.1, offset_along(SEED_DOCK, -0.08, 0.01, 0.05), 0.0, None) not in (ARRIVED, MISALIGNED)
+    assert approach.command(0.15, offset_along(SEED_DOCK, -0.3, 0.06), 0.0, None) not in (ARRIVED, MISALIGNED)

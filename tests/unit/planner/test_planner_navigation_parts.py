@@ -340,3 +340,13 @@ def test_glass_memory_without_suspicion_keeps_only_the_marks() -> None:
     assert not memory.glass_mask().any()
     with pytest.raises(ValueError, match="suspicion_radius_m"):
         GlassMemory(memory.frame, CostmapParams(), suspicion_radius_m=-1.0)
+
+
+def test_follower_settings_come_from_the_planner_parameters() -> None:
+    follower = Params().follower_params()
+    assert follower.approach_velocity_scaling_dist_m == pytest.approx(0.3)
+    assert follower.regulated_linear_scaling_min_radius_m == pytest.approx(0.6)
+    tuned = Params(approach_velocity_scaling_dist_m=0.6, regulated_linear_scaling_min_radius_m=0.9).follower_params()
+    assert (tuned.approach_velocity_scaling_dist_m, tuned.regulated_linear_scaling_min_radius_m) == (0.6, 0.9)
+    params = Params()
+    assert params.open_loop_acceleration and params.carried_pose_timeout_s > params.pose_timeout_s

@@ -91,3 +91,35 @@ def test_stale_odometry_stops_extrapolation_and_a_clock_reset_clears_history() -
     assert _close(tracker.pose_at(1.5), MAP_TO_ODOM.compose(_turning(1.5)))  # type: ignore[arg-type]
     tracker.add_odometry(OdometrySample(0.02, Pose2D(), 0.0, 0.0), received_s=0.02)
     assert tracker.current_pose(0.02) is None
+
+
+def test_fresh_odometry_carries_the_map_pose_while_the_localiser_is_late() -> None:
+    tracker = PoseTracker(odom_timeout_s=0.5)
+    assert not tracker.carried_by_odometry(0.0)
+    _feed(tracker, 1.0)
+    assert tracker.carried_by_odometry(1.0)
+    for i in range(51, 101):  # another second of odometry, no map pose
+        t = i / 50
+        tracker.add_odometry(OdometrySample(t, _turning(t), 0.4, 1.2), received_s=t)
+    assert tracker.map_pose_age_s(2.0) == pytest.approx(1.0)
+    assert tracker.carried_by_odometry(2.0)
+    pose = tracker.current_pose(2.0)
+    assert pose is not None and _close(pose, MAP_TO_ODOM.compose(_turning(2.0)), 1e-6, 1e-6)
+    assert not tracker.carried_by_odometry(2.6)  # the odometry has gone quiet too
+
+
+def test_odometry_that_jumps_waits_for_localisation_to_catch_up() -> None:
+    """A teleport restarts odometry: the old map -> odom would place the robot where it is not."""
+    tracker = PoseTracker(odom_timeout_s=0.5)
+    _feed(tracker, 1.0)
+    assert tracker.carried_by_odometry(1.0)
+    tracker.add_odometry(OdometrySample(1.02, Pose2D(), 0.0, 0.0), received_s=1.02)  # restarted at the origin
+    assert tracker.current_pose(1.02) is None and not tracker.carried_by_odometry(1.02)
+    tracker.add_map_pose(MAP_TO_ODOM.compose(_turning(1.0)), received_s=1.05)  # from before, arriving late
+    assert tracker.current_pose(1.05) is None
+    placed = Pose2D(-2.0, 3.0, 1.0)
+    tracker.add_odometry(OdometrySample(2.1, Pose2D(), 0.0, 0.0), received_s=2.1)
+    tracker.add_map_pose(placed, received_s=2.1)
+    tracker.add_odometry(OdometrySample(2.12, Pose2D(), 0.0, 0.0), received_s=2.12)
+    pose = tracker.current_pose(2.12)
+    assert pose is not None and _close(pose, placed)
