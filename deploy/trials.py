@@ -77,6 +77,7 @@ class ChaosReport:
             "median_recovery_s": round(statistics.median(times), 2) if times else math.nan,
             "max_recovery_s": round(times[-1], 2) if times else math.nan,
             "killed": self.killed,
+            "recovery_s": [round(t, 3) for t in self.recovery_s],
         }
 
 
@@ -147,6 +148,8 @@ class TrialsSummary:
     success_rate: float
     median_dock_time_s: float
     median_lower_bound_s: float
+    #: Median over docked trials of each trial's own dock time over its own lower bound.
+    median_time_ratio: float
     median_lateral_error_m: float
     p95_lateral_error_m: float
     median_yaw_error_rad: float
@@ -159,7 +162,7 @@ class TrialsSummary:
     chaos: dict[str, Any] = field(default_factory=dict)
 
     def headline(self) -> dict[str, Any]:
-        keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s",
+        keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
                 "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s")
         return {k: getattr(self, k) for k in keys}
 
@@ -250,6 +253,10 @@ def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[f
 
 def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: TrialOptions) -> tuple[TrialResult, RunRecord]:
     wall_start = time.monotonic()
+    # Full battery first: leaving the dock with the last trial's low charge would trigger docking at
+    # the moment of the teleport, before this trial's start is even in place.
+    call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+                 SetBatteryStateRequest(percentage=1.0, drain_scale=options.drain_scale))
     placed = call_service(session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot))
     if not placed.success:
         raise ServiceError(f"trial {index}: start {start}: {placed.message}")
@@ -304,23 +311,29 @@ def _percentile(values: list[float], q: float) -> float:
 
 
 def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, world: World) -> TrialsSummary:
+    return summarise_results(results, wall_s, options.controller, world.name)
+
+
+def summarise_results(results: list[TrialResult], wall_s: float, controller: str, world_name: str) -> TrialsSummary:
+    """The summary of any set of trials: one world's, or a campaign's across worlds."""
     ok = [r for r in results if r.docked]
     med = lambda xs: statistics.median(xs) if xs else math.nan  # noqa: E731
-    bounds = [r.lower_bound_s for r in ok if math.isfinite(r.lower_bound_s)]
+    bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
     return TrialsSummary(
         n=len(results),
         successes=len(ok),
         success_rate=len(ok) / len(results) if results else math.nan,
         median_dock_time_s=med([r.dock_time_s for r in ok]),
-        median_lower_bound_s=med(bounds),
+        median_lower_bound_s=med([r.lower_bound_s for r in bounded]),
+        median_time_ratio=med([r.dock_time_s / r.lower_bound_s for r in bounded]),
         median_lateral_error_m=med([r.lateral_error_m for r in ok]),
         p95_lateral_error_m=_percentile([r.lateral_error_m for r in ok], 0.95),
         median_yaw_error_rad=med([r.yaw_error_rad for r in ok]),
         collisions=sum(r.collisions for r in results),
         wall_s=wall_s,
         sim_s=sum(r.sim_s for r in results if math.isfinite(r.sim_s)),
-        controller=options.controller,
-        world=world.name,
+        controller=controller,
+        world=world_name,
     )
 
 
@@ -405,6 +418,32 @@ def run_trials(
     (run_dir / "trials.json").write_text(json.dumps(report, indent=2) + "\n")
     _histograms(results, run_dir / "histograms.png")
     return summary, results, run_dir
+
+
+def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller: str) -> TrialsSummary:
+    """One summary over several worlds' trials: medians over every trial, not medians of medians."""
+    results = [r for _, rs in per_world for r in rs]
+    wall_s = sum(s.wall_s for s, _ in per_world)
+    summary = summarise_results(results, wall_s, controller, ", ".join(s.world for s, _ in per_world))
+    for s, _ in per_world:
+        for name, mb in s.peak_rss_mb.items():
+            summary.peak_rss_mb[name] = max(mb, summary.peak_rss_mb.get(name, 0.0))
+    chaos = [s.chaos for s, _ in per_world if s.chaos]
+    if chaos:
+        summary.chaos = _combine_chaos(chaos)
+    return summary
+
+
+def _combine_chaos(reports: list[dict[str, Any]]) -> dict[str, Any]:
+    recovery = [t for report in reports for t in report.get("recovery_s", [])]
+    return {
+        "kills": sum(r["kills"] for r in reports),
+        "recovered": sum(r["recovered"] for r in reports),
+        "median_recovery_s": round(statistics.median(recovery), 2) if recovery else math.nan,
+        "max_recovery_s": round(max(recovery), 2) if recovery else math.nan,
+        "killed": [name for r in reports for name in r.get("killed", [])],
+        "recovery_s": recovery,
+    }
 
 
 class _Nothing:

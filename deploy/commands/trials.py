@@ -13,6 +13,9 @@ from rich.table import Table
 
 from shared.config_errors import ConfigError
 
+SHIPPED_WORLDS = Path(__file__).resolve().parents[1] / "worlds"
+DEFAULT_WORLD = "deploy/worlds/seed_room.yaml"
+
 
 def _count(text: str) -> int:
     value = int(text)
@@ -40,7 +43,8 @@ def _summary_table(summary: dict) -> Table:
         "p95_lateral_error_m": lambda v: f"{1000 * v:.1f} mm",
         "median_yaw_error_rad": lambda v: f"{math.degrees(v):.2f} deg",
     }
-    for key in ("successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_lateral_error_m",
+    for key in ("successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
+                "median_lateral_error_m",
                 "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s"):
         value = summary[key]
         text = fmt[key](value) if key in fmt else (f"{value:.1f}" if isinstance(value, float) else str(value))
@@ -50,42 +54,72 @@ def _summary_table(summary: dict) -> Table:
     return table
 
 
-def _run(args: argparse.Namespace) -> int:
-    from deploy.trials import TrialOptions, run_trials  # noqa: PLC0415 - heavy imports only when used
+def _worlds(args: argparse.Namespace) -> list[Path]:
+    names = args.world or [DEFAULT_WORLD]
+    if names == ["all"]:
+        worlds = sorted(SHIPPED_WORLDS.glob("*.yaml"))
+    else:
+        worlds = [Path(name) for name in names]
+    for world in worlds:
+        if not world.is_file():
+            raise ConfigError(f"--world {world}: no such file")
+    return [world.resolve() for world in worlds]
 
-    world = Path(args.world)
-    if not world.is_file():
-        raise ConfigError(f"--world {world}: no such file")
-    options = TrialOptions(world=world.resolve(), n=args.n, controller=args.controller, seed=args.seed,
-                           rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
-                           chaos_period_s=args.chaos)
+
+def _run(args: argparse.Namespace) -> int:
+    from deploy.trials import TrialOptions, combine, run_trials  # noqa: PLC0415 - heavy imports only when used
+
+    worlds = _worlds(args)
     console = Console(stderr=args.json)
-    with Progress(TextColumn("trials"), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[last]}"),
-                  TimeElapsedColumn(), console=console) as bar:
-        task = bar.add_task("trials", total=args.n, last="")
+    per_world = []
+    for number, world in enumerate(worlds):
+        # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
+        options = TrialOptions(world=world, n=args.n, controller=args.controller, seed=args.seed + 1000 * number,
+                               rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
+                               chaos_period_s=args.chaos)
+        summary, results, run_dir = _run_world(console, options, run_trials)
+        per_world.append((summary, results))
+        _print_summary(console, summary)
+        console.print(f"report and histograms in {run_dir}")
+    summary = per_world[0][0] if len(per_world) == 1 else combine(per_world, args.controller)
+    if len(per_world) > 1:
+        _print_summary(console, summary)
+    if args.json:
+        line = {**summary.headline(), **({"chaos": summary.chaos} if summary.chaos else {})}
+        if len(per_world) > 1:
+            line["worlds"] = {s.world: s.headline() for s, _ in per_world}
+        print(json.dumps(line))
+    return 0 if summary.successes == summary.n else 1
+
+
+def _run_world(console: Console, options, run_trials):  # type: ignore[no-untyped-def]
+    """One world's trials under a progress bar."""
+    with Progress(TextColumn(f"trials {options.world.stem}"), BarColumn(), MofNCompleteColumn(),
+                  TextColumn("{task.fields[last]}"), TimeElapsedColumn(), console=console) as bar:
+        task = bar.add_task("trials", total=options.n, last="")
 
         def advance(result) -> None:  # type: ignore[no-untyped-def]
             status = "docked" if result.docked else "FAILED"
             bar.update(task, advance=1, last=f"#{result.index} {status} {result.dock_time_s:.1f} s")
 
-        summary, _results, run_dir = run_trials(options, log=lambda t: console.print(f"[dim]trials:[/] {t}"),
-                                                progress=advance)
+        return run_trials(options, log=lambda t: console.print(f"[dim]trials:[/] {t}"), progress=advance)
+
+
+def _print_summary(console: Console, summary) -> None:  # type: ignore[no-untyped-def]
     data = {**summary.headline(), "controller": summary.controller, "world": summary.world,
             "peak_rss_mb": summary.peak_rss_mb}
     console.print(_summary_table(data))
     if summary.chaos:
         console.print(f"chaos: {summary.chaos['kills']} kill -9, {summary.chaos['recovered']} back healthy, "
                       f"median {summary.chaos['median_recovery_s']} s, max {summary.chaos['max_recovery_s']} s")
-    console.print(f"report and histograms in {run_dir}")
-    if args.json:
-        print(json.dumps({**summary.headline(), **({"chaos": summary.chaos} if summary.chaos else {})}))
-    return 0 if summary.successes == summary.n else 1
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("trials", help="Monte Carlo dockings from random starts on the full stack")
-    parser.add_argument("--world", default="deploy/worlds/seed_room.yaml")
-    parser.add_argument("--n", type=_count, default=10, help="number of dockings")
+    parser.add_argument("--world", action="append", metavar="FILE",
+                        help=f"world file (repeat for a campaign across worlds; 'all': every shipped world); "
+                             f"default {DEFAULT_WORLD}")
+    parser.add_argument("--n", type=_count, default=10, help="number of dockings (per world)")
     parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
     parser.add_argument("--seed", type=int, default=0, help="seed of the start poses and the simulator's noise")
     parser.add_argument("--rtf", type=_rtf, default="8", help="simulator real-time factor, or max")

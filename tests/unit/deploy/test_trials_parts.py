@@ -12,8 +12,10 @@ from deploy.trials import (
     TrialOptions,
     TrialResult,
     _distance_to_segment,
+    combine,
     random_starts,
     summarise,
+    summarise_results,
     trials_stack,
 )
 from shared.world import load_world
@@ -63,5 +65,33 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
     assert summary.median_dock_time_s == pytest.approx(15.0)
     assert summary.p95_lateral_error_m == pytest.approx(0.003)
     assert set(summary.headline()) == {
-        "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_lateral_error_m",
-        "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s"}
+        "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
+        "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s"}
+    assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
+
+
+def test_time_ratio_is_each_trials_own_ratio_and_skips_missing_bounds() -> None:
+    fast_short = _result(0, True, 6.0, 0.001)
+    fast_short.lower_bound_s = 5.0
+    slow_long = _result(1, True, 30.0, 0.001)
+    slow_long.lower_bound_s = 10.0
+    unbounded = _result(2, True, 99.0, 0.001)
+    unbounded.lower_bound_s = math.nan
+    summary = summarise_results([fast_short, slow_long, unbounded], 1.0, "graceful", "w")
+    assert summary.median_time_ratio == pytest.approx((1.2 + 3.0) / 2)
+    assert summary.median_lower_bound_s == pytest.approx(7.5)
+
+
+def test_a_campaign_combines_every_trial_not_the_medians() -> None:
+    a = [_result(0, True, 10.0, 0.001), _result(1, True, 11.0, 0.001), _result(2, True, 12.0, 0.001)]
+    b = [_result(0, True, 40.0, 0.004), _result(1, False, math.nan, math.nan, 2)]
+    sa = summarise_results(a, 3.0, "graceful", "a")
+    sb = summarise_results(b, 4.0, "graceful", "b")
+    sa.peak_rss_mb, sb.peak_rss_mb = {"planner_r0": 70.0}, {"planner_r0": 75.0, "simulator": 60.0}
+    sa.chaos = {"kills": 2, "recovered": 2, "killed": ["pose_r0", "docking_r0"], "recovery_s": [1.0, 3.0]}
+    both = combine([(sa, a), (sb, b)], "graceful")
+    assert (both.n, both.successes, both.collisions) == (5, 4, 2)
+    assert both.median_dock_time_s == pytest.approx(11.5)  # median of 10, 11, 12, 40
+    assert both.wall_s == pytest.approx(7.0) and both.world == "a, b"
+    assert both.peak_rss_mb == {"planner_r0": 75.0, "simulator": 60.0}
+    assert both.chaos["kills"] == 2 and both.chaos["median_recovery_s"] == pytest.approx(2.0)
