@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import pkgutil
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -32,9 +33,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _terminate_like_interrupt(signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    # SIGTERM (kill, a CI timeout, a supervisor) unwinds like Ctrl-C, so every ``with Launcher(...)`` brings
+    # its stack down instead of leaving the services it started running. Commands that handle signals
+    # themselves (``up`` in the foreground) install their own handlers over this one.
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminate_like_interrupt)
     try:
         return int(args.func(args) or 0)
     except ConfigError as exc:
