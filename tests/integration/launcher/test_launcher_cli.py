@@ -174,7 +174,7 @@ def test_router_serves_with_the_shipped_config_and_exits_0(endpoint: str, stop_s
         with open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
             assert session.info.routers_zid(), "the client sees no router"
         proc.send_signal(stop_signal)
-        assert proc.wait(timeout=10) == 0
+        assert proc.wait(timeout=30) == 0  # generous: closing the session is slow on a loaded machine
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
