@@ -31,7 +31,7 @@ from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
-from shared.interfaces.simulator import TELEPORT, TeleportRequest
+from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
 from shared.names import topic_key
 from shared.node import ServiceError, call_service
 from shared.session import SessionSpec, open_session
@@ -158,12 +158,16 @@ class TrialsSummary:
     sim_s: float
     controller: str = ""
     world: str = ""
+    #: Sim seconds the simulator's clock advanced per wall second while the trials ran (what the whole
+    #: stack sustained, waits for late drivers included; NaN when not measured).
+    achieved_rtf: float = math.nan
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
     chaos: dict[str, Any] = field(default_factory=dict)
 
     def headline(self) -> dict[str, Any]:
         keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
-                "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s")
+                "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
+                "achieved_rtf")
         return {k: getattr(self, k) for k in keys}
 
 
@@ -235,6 +239,15 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str]) -> dic
                         "-p", f"controller={options.controller}"],
         }
     return {"name": "trials", "namespace": "", "zenoh": {"connect": [endpoint]}, "services": services}
+
+
+def _sim_clock(session: Any, robot: str) -> float:
+    """The simulator's clock now (sim seconds), NaN when it does not answer."""
+    try:
+        state = call_service(session, "simulator/state", SIM_STATE, SimStateRequest(robot=robot))
+    except ServiceError:
+        return math.nan
+    return state.stamp.to_sec()
 
 
 def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[float]:
@@ -369,6 +382,8 @@ def run_trials(
         lock = threading.Lock()
         chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()):
+            clock_start = _sim_clock(session, robots[0])
+            wall_clock_start = time.monotonic()
 
             def worker(robot: str) -> None:
                 while True:
@@ -395,6 +410,8 @@ def run_trials(
                 t.start()
             for t in threads:
                 t.join()
+            clock_end = _sim_clock(session, robots[0])
+            achieved_rtf = (clock_end - clock_start) / max(time.monotonic() - wall_clock_start, 1e-9)
         for status in launcher.ps():
             (run_dir / f"{status.name}.log").write_text("\n".join(launcher.logs(status.name)) + "\n")
     wall_s = time.monotonic() - wall_start
@@ -410,6 +427,7 @@ def run_trials(
     except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
         log(f"lower bounds not computed: {exc}")
     summary = summarise(results, wall_s, options, world)
+    summary.achieved_rtf = round(achieved_rtf, 2)
     summary.peak_rss_mb = dict(sampler.peak_mb)
     if chaos is not None:
         summary.chaos = chaos.report.summary()
@@ -425,6 +443,9 @@ def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller
     results = [r for _, rs in per_world for r in rs]
     wall_s = sum(s.wall_s for s, _ in per_world)
     summary = summarise_results(results, wall_s, controller, ", ".join(s.world for s, _ in per_world))
+    rates = [(s.achieved_rtf, s.wall_s) for s, _ in per_world if math.isfinite(s.achieved_rtf)]
+    if rates:  # weighted by each world's wall time: the rate of the campaign as a whole
+        summary.achieved_rtf = round(sum(r * w for r, w in rates) / max(sum(w for _, w in rates), 1e-9), 2)
     for s, _ in per_world:
         for name, mb in s.peak_rss_mb.items():
             summary.peak_rss_mb[name] = max(mb, summary.peak_rss_mb.get(name, 0.0))

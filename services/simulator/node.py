@@ -23,6 +23,7 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from services.simulator.dock_contact import DockContactParams
+from services.simulator.pacing import Driver, DriverPacer, PacingParams
 from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld
 from services.simulator.robot_model import DiffDriveParams
 from services.simulator.sensors import FiducialCameraParams, LidarParams, UltrasonicParams
@@ -60,6 +61,9 @@ from shared.node import BLOCKING, RELIABLE, SENSOR_DATA, Node, Publisher, QoS, S
 from shared.runtime import ServiceParams, run_service
 from shared.world import load_world
 
+#: How often the simulator logs the real-time factor it achieves (wall seconds).
+RTF_REPORT_PERIOD_S = 30.0
+
 
 class Params(ServiceParams):
     """Simulator parameters (``-p name=value``)."""
@@ -80,6 +84,10 @@ class Params(ServiceParams):
     ground_truth_rate_hz: float = Field(20.0, gt=0)
     cmd_vel_timeout_s: float = Field(
         0.3, gt=0, description="watchdog: brake when no command for this long (standing still 0.5 s after the last)")
+    pace_to_drivers: bool = Field(
+        True, description="wait (briefly) for a moving robot's late command instead of driving it blind")
+    driver_gap_s: float = Field(0.15, gt=0, description="a moving robot's command older than this (sim) is late")
+    driver_wait_max_s: float = Field(0.1, ge=0, description="wait at most this long (wall) for one late command")
     # drive (Gazebo diff_drive / ros2_control names)
     wheel_separation_m: float = Field(0.26, gt=0)
     wheel_radius_m: float = Field(0.033, gt=0)
@@ -235,6 +243,9 @@ class SimulatorService:
         node.create_service(TELEPORT, topics.SIM_TELEPORT, self._on_teleport)
         node.create_service(SIM_STATE, topics.SIM_STATE, self._on_state)
         self.steps_run = 0
+        self._pacer = (
+            DriverPacer(PacingParams(params.driver_gap_s, params.driver_wait_max_s)) if params.pace_to_drivers else None
+        )
         self._running = True
         self._thread = threading.Thread(target=self._loop, name="sim-step", daemon=True)
         self._thread.start()
@@ -295,13 +306,28 @@ class SimulatorService:
     # --- stepping ------------------------------------------------------------------------------------
 
     def _loop(self) -> None:
-        """Step in real time times ``rtf`` (or flat out), publishing what is due after each step."""
+        """Step in real time times ``rtf`` (or flat out), publishing what is due after each step.
+
+        With ``pace_to_drivers`` the world also waits for late drivers (:mod:`services.simulator.pacing`)
+        and does not rush to catch up afterwards: the clock resumes at the target rate from there.
+        """
         rtf = self.params.rtf
         wall_per_step = 0.0 if rtf == "max" else self.dt_s / float(rtf)
         next_wall = time.monotonic()
+        held_since: float | None = None
+        reported_at = (time.monotonic(), self.time_s)
         while self._running:
+            now = time.monotonic()
+            if self._pacer is not None and self._pacer.hold(self.time_s, now, self._drivers()):
+                held_since = now if held_since is None else held_since
+                time.sleep(0.0005)
+                continue
+            if held_since is not None:
+                assert self._pacer is not None
+                self._pacer.note_held(now - held_since)
+                held_since = None
+                next_wall = now
             if wall_per_step > 0.0:
-                now = time.monotonic()
                 if now < next_wall:
                     time.sleep(min(next_wall - now, 0.05))
                     continue
@@ -310,6 +336,24 @@ class SimulatorService:
                 next_wall += wall_per_step
             with self.node.exclusive():
                 self._step_once()
+            if now - reported_at[0] >= RTF_REPORT_PERIOD_S:
+                reported_at = self._report_rate(now, reported_at)
+
+    def _drivers(self) -> list[Driver]:
+        return [
+            Driver(ns, robot.last_cmd_s, not robot.watchdog_tripped and (robot.cmd_v != 0.0 or robot.cmd_w != 0.0))
+            for ns, robot in self.robots.items()
+        ]
+
+    def _report_rate(self, wall_now: float, since: tuple[float, float]) -> tuple[float, float]:
+        """Log the real-time factor achieved since the last report, and the waits for late drivers."""
+        wall_then, sim_then = since
+        achieved = (self.time_s - sim_then) / max(wall_now - wall_then, 1e-9)
+        pacer = self._pacer
+        waits = f"; waited for late drivers {pacer.holds} times, {pacer.held_s:.1f} s in all" if pacer else ""
+        self.log.info("real-time factor %.1f over the last %.0f s (target %s)%s",
+                      achieved, wall_now - wall_then, self.params.rtf, waits)
+        return wall_now, self.time_s
 
     def _step_once(self) -> None:
         self.steps_run += 1

@@ -66,7 +66,8 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
     assert summary.p95_lateral_error_m == pytest.approx(0.003)
     assert set(summary.headline()) == {
         "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
-        "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s"}
+        "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
+        "achieved_rtf"}
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
 
 

@@ -1,0 +1,29 @@
+"""The world waits for a moving robot's late driver, within a wall-clock budget per command."""
+
+from __future__ import annotations
+
+from services.simulator.pacing import Driver, DriverPacer, PacingParams
+
+PARAMS = PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1)
+
+
+def test_no_wait_while_commands_are_on_time_or_the_robot_is_still() -> None:
+    pacer = DriverPacer(PARAMS)
+    assert not pacer.hold(1.0, 0.0, [Driver("r0", 0.9, moving=True)])  # 0.1 s old: on time
+    assert not pacer.hold(5.0, 0.0, [Driver("r0", 0.9, moving=False)])  # stopped: nothing to wait for
+    assert pacer.holds == 0
+
+
+def test_waits_for_a_late_command_until_the_budget_is_spent_then_steps_on() -> None:
+    pacer = DriverPacer(PARAMS)
+    late = [Driver("r0", 1.0, moving=True), Driver("r1", 1.19, moving=True)]
+    assert pacer.hold(1.2, 10.00, late)
+    assert pacer.hold(1.2, 10.05, late)
+    assert not pacer.hold(1.2, 10.11, late)  # 0.11 s of wall time for the same command: step on
+    assert not pacer.hold(1.3, 10.12, late)  # still the same command: no new wait
+    assert pacer.holds == 1
+    fresh = [Driver("r0", 1.3, moving=True), Driver("r1", 1.3, moving=True)]
+    assert not pacer.hold(1.31, 10.13, fresh)
+    again = [Driver("r0", 1.3, moving=True), Driver("r1", 1.3, moving=True)]
+    assert pacer.hold(1.5, 10.20, again)  # a new late command: a new budget
+    assert pacer.holds == 2
