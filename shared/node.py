@@ -42,6 +42,7 @@ ENCODING_PREFIX = "application/msgpack"
 MAX_PAYLOAD_BYTES = 8 * 1024 * 1024
 _callback_context = threading.local()
 _SEQ = struct.Struct("<Q")
+_PUT = zenoh.SampleKind.PUT
 
 
 def encoding_for(type_name: str) -> zenoh.Encoding:
@@ -125,12 +126,6 @@ class _Executor:
         self.run_lock = threading.Lock()
         #: The earliest sim time a sim-time timer is due; the clock wakes the executor only from then on.
         self.next_sim_due = 0.0
-
-    def try_enter(self) -> bool:
-        """Take the run lock if the executor is idle with nothing queued (for direct dispatch)."""
-        if self._ready or self._stop:
-            return False
-        return self.run_lock.acquire(blocking=False)
 
     def post(self, fn: Callable[..., Any], *args: Any) -> None:
         with self._cv:
@@ -262,29 +257,33 @@ class Publisher(Generic[M]):
             congestion_control=zenoh.CongestionControl.BLOCK if qos.block else zenoh.CongestionControl.DROP,
             express=qos.express,
         )
+        self._put = self._publisher.put
         self._seq = itertools.count(1)
         self._lock = threading.Lock()
         self._source_id = self._publisher.id
         self._token = node._declare_endpoint("pub", msg_type.TYPE_NAME, self.key)
 
     def publish(self, msg: M) -> None:
-        if not isinstance(msg, self.msg_type):
+        if type(msg) is not self.msg_type and not isinstance(msg, self.msg_type):
             raise MessageError(f"publisher expects {self.msg_type.TYPE_NAME}, got {type(msg).__name__}", key=self.key)
         try:
             payload = msg.encode()
         except MessageError as exc:
             raise exc.at(key=self.key) from None
-        self.publish_encoded(payload)
+        with self._lock:  # the put order is the sequence order, whichever threads publish
+            seq = next(self._seq)
+            self._put(payload, attachment=_SEQ.pack(seq), source_info=zenoh.SourceInfo(self._source_id, seq))
 
     def publish_encoded(self, payload: bytes) -> None:
         """Put an already validated payload (replay, relays).
 
         Every sample carries its sequence number twice: as the attachment (any client can read it) and in
-        Zenoh's source info with the publisher's id, so a recorder counts losses per publisher.
+        Zenoh's source info with the publisher's id, so a recorder counts losses per publisher. The
+        encoding was declared once with the publisher, so no put passes (or builds) it.
         """
         with self._lock:
             seq = next(self._seq)
-            self._publisher.put(payload, attachment=_SEQ.pack(seq), source_info=zenoh.SourceInfo(self._source_id, seq))
+            self._put(payload, attachment=_SEQ.pack(seq), source_info=zenoh.SourceInfo(self._source_id, seq))
 
     def undeclare(self) -> None:
         self._token.undeclare()
@@ -317,35 +316,56 @@ class Subscription(Generic[M]):
         self._queue: deque[tuple[str, M]] = deque(maxlen=max(1, qos.depth))
         self._scheduled = False
         self._lock = threading.Lock()
+        self._encoding = encoding_for(msg_type.TYPE_NAME)
+        self._decode = msg_type.decode
+        #: Without wildcards every sample's key is the subscription's own key: no need to read it back.
+        self._exact_key = "" if "*" in self.key else self.key
         self._subscriber = node.session.declare_subscriber(self.key, self._on_sample)
         self._token = node._declare_endpoint("sub", msg_type.TYPE_NAME, self.key)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
-        key = str(sample.key_expr)
-        node = self._node
-        if sample.kind != zenoh.SampleKind.PUT:
+        # The hot path of every message: each attribute read of a sample makes a new object, and on a busy
+        # machine this code runs with cold caches, so it reads each only once and skips what it can.
+        payload = sample.payload
+        size = len(payload)
+        if not size and sample.kind != _PUT:  # a DELETE (never a message): it has no payload
             return
+        key = self._exact_key or str(sample.key_expr)
+        node = self._node
         try:
-            mime, schema = schema_of(sample.encoding)
-            if schema and schema != self.msg_type.TYPE_NAME and mime == ENCODING_PREFIX:
-                raise MessageError(f"expected type {self.msg_type.TYPE_NAME}, got {schema}", key=key)
-            if len(sample.payload) > MAX_PAYLOAD_BYTES:
-                raise MessageError(f"payload of {len(sample.payload)} bytes exceeds {MAX_PAYLOAD_BYTES}", key=key)
-            msg = self.msg_type.decode(sample.payload.to_bytes())
+            encoding = sample.encoding
+            if encoding != self._encoding:  # one comparison in Rust for the common case
+                mime, schema = schema_of(encoding)
+                if schema and schema != self.msg_type.TYPE_NAME and mime == ENCODING_PREFIX:
+                    raise MessageError(f"expected type {self.msg_type.TYPE_NAME}, got {schema}", key=key)
+            if size > MAX_PAYLOAD_BYTES:
+                raise MessageError(f"payload of {size} bytes exceeds {MAX_PAYLOAD_BYTES}", key=key)
+            msg = self._decode(payload.to_bytes())
         except MessageError as exc:
             node._reject(key, exc.at(key=key))
             return
-        node._count(node.stats.received, key)
+        received = node.stats.received
+        received[key] = received.get(key, 0) + 1
         if self._inline:
             node._run_callback(self._deliver, key, msg)
             return
-        with self._lock:
-            idle = not self._scheduled and not self._queue
-        if idle and node._executor.try_enter():
+        executor = node._executor
+        # Direct dispatch when nothing is queued anywhere (so order is kept) and no callback runs.
+        # zenoh-python calls one subscription's callback from one thread, so our own state needs no lock.
+        if not (self._scheduled or self._queue or executor._ready or executor._stop) and executor.run_lock.acquire(False):
+            context = _callback_context
+            outer = getattr(context, "active", False)
+            context.active = True
             try:
-                node._run_callback(self._deliver, key, msg)
+                if self._with_key:
+                    self._callback(key, msg)
+                else:
+                    self._callback(msg)
+            except Exception as exc:
+                node._log_callback_error(exc)
             finally:
-                node._executor.run_lock.release()
+                context.active = outer
+                executor.run_lock.release()
             return
         with self._lock:
             if len(self._queue) == self._queue.maxlen:
@@ -354,7 +374,7 @@ class Subscription(Generic[M]):
             if self._scheduled:
                 return
             self._scheduled = True
-        node._executor.post(self._drain)
+        executor.post(self._drain)
 
     def _drain(self) -> None:
         while True:

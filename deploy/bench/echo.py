@@ -1,7 +1,8 @@
 """The far end of the bus benchmark: sends every ping straight back as a pong.
 
-``typed``: a zendock node (validated decode on the executor, validated re-encode). ``raw``: plain
-zenoh-python callbacks that copy the bytes. Run as ``python -m deploy.bench.echo MODE ENDPOINT``.
+``typed``: a zendock node (validated decode, the callback under the executor's rules, validated
+re-encode and a publish with sequence number). ``raw``: plain zenoh-python callbacks that pass the
+bytes on. Run as ``python -m deploy.bench.echo MODE ENDPOINT``.
 """
 
 from __future__ import annotations
@@ -24,10 +25,15 @@ def run_typed(endpoint: str, stop: threading.Event) -> None:
         pong = node.create_publisher(Twist, PONG_KEY, RELIABLE)
         node.create_subscription(Twist, PING_KEY, pong.publish, RELIABLE)
         node.declare_ready()
-        threading.Thread(target=lambda: (stop.wait(), node.shutdown()), daemon=True).start()
+        threading.Thread(target=_shutdown_on, args=(stop, node), daemon=True).start()
         print("ready", flush=True)
         node.spin()
         node.close()
+
+
+def _shutdown_on(stop: threading.Event, node: Node) -> None:
+    stop.wait()
+    node.shutdown()
 
 
 def run_raw(endpoint: str, stop: threading.Event) -> None:

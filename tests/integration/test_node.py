@@ -95,7 +95,7 @@ def test_sim_time_timer_follows_clock(node_pair: tuple[Node, Node]) -> None:
     assert all(b - a == pytest.approx(0.1, abs=0.021) for a, b in zip(ticks, ticks[1:])), ticks
 
 
-def test_callback_exception_does_not_stop_the_node(node_pair: tuple[Node, Node]) -> None:
+def test_callback_exception_does_not_stop_the_node(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
     talker, listener = node_pair
     survived = threading.Event()
 
@@ -105,6 +105,9 @@ def test_callback_exception_does_not_stop_the_node(node_pair: tuple[Node, Node])
         survived.set()
 
     listener.create_subscription(Bool, "flaky", flaky)
+    # the token follows the subscriber on the same session: once the router has it, puts are routed
+    wait_until(lambda: any("/sub/" in k and k.endswith("/flaky") for k in liveliness_keys(bus)), 5.0,
+               "the subscription's token never appeared")
     pub = talker.create_publisher(Bool, "flaky")
     pub.publish(Bool(True))
     pub.publish(Bool(False))
@@ -150,3 +153,34 @@ def test_publisher_refuses_invalid_message(node_pair: tuple[Node, Node]) -> None
         pub.publish(Twist.planar(float("nan"), 0.0))
     with pytest.raises(Exception, match="expects geometry_msgs/msg/Twist"):
         pub.publish(Bool(True))  # type: ignore[arg-type]
+
+
+def test_keys_deletes_and_declared_types(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
+    """Exact and wildcard keys reach the callback; a DELETE is ignored; an empty PUT or another type is rejected."""
+    talker, listener = node_pair
+    exact: list[Twist] = []
+    keyed: list[tuple[str, float]] = []
+    done = threading.Event()
+
+    def on_keyed(key: str, msg: Twist) -> None:
+        keyed.append((key, msg.linear.x))
+        if len(keyed) == 2:
+            done.set()
+
+    listener.create_subscription(Twist, "robot/cmd_vel", exact.append, RELIABLE)
+    listener.create_subscription(Twist, "*/cmd_vel", on_keyed, RELIABLE, with_key=True)
+    wait_until(lambda: sum("cmd_vel" in k for k in liveliness_keys(bus)) >= 2, 5.0, "the subscriptions' tokens")
+    key = talker.key("robot/cmd_vel")
+    bus.delete(key)
+    bus.put(key, b"")
+    bus.put(key, Twist.planar(9.0, 0.0).encode(), encoding=zenoh.Encoding("application/msgpack;geometry_msgs/msg/Point"))
+    talker.create_publisher(Twist, "robot/cmd_vel").publish(Twist.planar(1.0, 0.0))
+    talker.create_publisher(Twist, "other/cmd_vel").publish(Twist.planar(2.0, 0.0))
+    _wait(done, "two twists on the wildcard")
+    wait_until(lambda: len(exact) == 1, 5.0, lambda: f"exact subscription got {exact}")
+    assert exact == [Twist.planar(1.0, 0.0)]
+    assert sorted(keyed) == [(talker.key("other/cmd_vel"), 2.0), (key, 1.0)]
+    rejected = listener.stats.rejected
+    wait_until(lambda: rejected.get(key, 0) >= 4, 5.0, lambda: f"rejections so far: {dict(rejected)}")
+    assert rejected[key] == 4  # the empty PUT and the Point, once per subscription; never the DELETE
+    assert listener.stats.received[key] == 2 and listener.stats.received[talker.key("other/cmd_vel")] == 1
