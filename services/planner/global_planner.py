@@ -1,5 +1,11 @@
 """ComputePathToPose: A* on the costmap, then shortcutting and smoothing into poses ~0.05 m apart.
 
+Room to turn: the search keeps the robot's inscribed circle off obstacles, but the footprint is a
+rectangle, and a gap that only the circle fits through leaves the follower's footprint check refusing
+every move inside it. So when the path passes cells closer to an obstacle than the circumscribed
+radius (``preferred_clearance_cost`` and above), the planner also searches with those cells closed
+(except around the start and the goal) and takes that path unless it is much longer.
+
 Large grids are searched at half resolution (nav2 Smac planner's ``downsample_costmap``): the coarse
 grid is conservative (a coarse cell is as costly as the worst cell under it), and smoothing then runs
 against the full-resolution costmap. Small rooms are searched at full resolution.
@@ -9,12 +15,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from services.planner.astar import AStarParams, AStarPlanner
-from services.planner.costmap import CostGrid
+from services.planner.astar import AStarParams, AStarPlanner, PlanningError
+from services.planner.costmap import INSCRIBED_INFLATED_OBSTACLE, CostGrid
 from services.planner.smoothing import SmoothingParams, path_length_m, smooth_path
 from shared.geometry import Pose2D
 
@@ -31,6 +37,12 @@ class GlobalPlannerParams:
     #: Grids with more cells than this are searched at ``downsample_factor`` times coarser resolution.
     max_full_resolution_cells: int = 90_000
     downsample_factor: int = 2
+    #: Cells at or above this cost (closer to an obstacle than the circumscribed radius) are avoided when
+    #: a path without them is at most ``clearance_detour_factor`` times longer (0: off).
+    preferred_clearance_cost: int = 0
+    clearance_detour_factor: float = 2.0
+    #: Around the start and the goal the costs stay as they are, so a robot can leave a tight spot.
+    clearance_free_radius_m: float = 0.35
 
     def __post_init__(self) -> None:
         if self.downsample_factor < 1:
@@ -70,6 +82,18 @@ class GlobalPlanner:
         """
         t0 = time.perf_counter()
         start_pose, goal_pose = _pose(start), _pose(goal)
+        path = self._plan_on(grid, start_pose, goal_pose, t0)
+        roomy = self._with_clearance(grid, start_pose, goal_pose)
+        if roomy is not None and _passes_closed_cells(roomy, grid, path.grid_points):
+            try:
+                alternative = self._plan_on(roomy, start_pose, goal_pose, t0)
+            except PlanningError:
+                return path
+            if alternative.length_m <= self.params.clearance_detour_factor * path.length_m:
+                return replace(alternative, expansions=alternative.expansions + path.expansions)
+        return path
+
+    def _plan_on(self, grid: CostGrid, start_pose: Pose2D, goal_pose: Pose2D, t0: float) -> PlannedPath:
         search_grid = self._search_grid(grid)
         found = self._astar.plan(search_grid, (start_pose.x, start_pose.y), (goal_pose.x, goal_pose.y))
         points = found.points_xy
@@ -87,6 +111,27 @@ class GlobalPlanner:
             planning_time_s=time.perf_counter() - t0,
         )
 
+    def _with_clearance(self, grid: CostGrid, start: Pose2D, goal: Pose2D) -> CostGrid | None:
+        """The grid with the cells too tight to turn in closed, but around the two ends; None if none are."""
+        threshold = self.params.preferred_clearance_cost
+        if threshold <= 0:
+            return None
+        costs = grid.costs
+        tight = (costs >= threshold) & (costs < INSCRIBED_INFLATED_OBSTACLE)
+        frame = grid.frame
+        reach = int(math.ceil(self.params.clearance_free_radius_m / frame.resolution_m))
+        for end in (start, goal):
+            ix, iy = frame.world_to_cell(end.x, end.y)
+            x0, x1 = max(ix - reach, 0), min(ix + reach + 1, costs.shape[1])
+            y0, y1 = max(iy - reach, 0), min(iy + reach + 1, costs.shape[0])
+            if x0 < x1 and y0 < y1:
+                yy, xx = np.mgrid[y0:y1, x0:x1]
+                near = (xx - ix) ** 2 + (yy - iy) ** 2 <= reach * reach
+                tight[y0:y1, x0:x1] &= ~near
+        if not tight.any():
+            return None
+        return CostGrid(frame, np.where(tight, np.uint8(INSCRIBED_INFLATED_OBSTACLE), costs).astype(costs.dtype))
+
     def _search_grid(self, grid: CostGrid) -> CostGrid:
         if grid.costs.size <= self.params.max_full_resolution_cells or self.params.downsample_factor == 1:
             return grid
@@ -95,6 +140,17 @@ class GlobalPlanner:
             self._coarse_of = grid
         assert self._coarse is not None
         return self._coarse
+
+
+def _passes_closed_cells(roomy: CostGrid, grid: CostGrid, points_xy: np.ndarray) -> bool:
+    """Whether a path's points cross cells that ``roomy`` closes and ``grid`` leaves open."""
+    if len(points_xy) == 0:
+        return False
+    closed = (roomy.costs >= INSCRIBED_INFLATED_OBSTACLE) & (grid.costs < INSCRIBED_INFLATED_OBSTACLE)
+    cells = grid.frame.world_to_cells(np.asarray(points_xy, dtype=float))
+    ok = grid.frame.cells_in_bounds(cells)
+    cells = cells[ok]
+    return bool(np.any(closed[cells[:, 1], cells[:, 0]]))
 
 
 def _pose(pose: PoseLike) -> Pose2D:

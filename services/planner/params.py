@@ -13,7 +13,7 @@ import math
 from pydantic import Field, field_validator, model_validator
 
 from services.planner.astar import AStarParams
-from services.planner.costmap import CostmapParams
+from services.planner.costmap import CostmapParams, inflation_cost
 from services.planner.global_planner import GlobalPlannerParams
 from services.planner.occupancy_map import OccupancyMap, load_map
 from services.planner.pure_pursuit import PurePursuitParams
@@ -71,6 +71,8 @@ class Params(ServiceParams):
     # planning
     cost_weight: float = Field(3.0, ge=0.0, description="how strongly inflation cost lengthens a step")
     allow_unknown: bool = False
+    prefer_room_to_turn: bool = Field(
+        True, description="avoid gaps only the inscribed circle fits through when a path with room to turn exists")
     snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
     replan_period_s: float = Field(1.0, gt=0.0, description="replan this often while following (sim time)")
     min_replan_interval_s: float = Field(0.2, ge=0.0, description="urgent replans no more often than this")
@@ -134,9 +136,13 @@ class Params(ServiceParams):
 
     def planner_params(self) -> GlobalPlannerParams:
         """Search and smoothing share ``cost_weight`` and ``allow_unknown`` (see GlobalPlannerParams)."""
+        costmap = self.costmap_params()
+        room_to_turn = int(inflation_cost(costmap.circumscribed_radius_m, costmap.inscribed_radius_m,
+                                          costmap.cost_scaling_factor))
         return GlobalPlannerParams(
             astar=self.astar_params(),
             smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),
+            preferred_clearance_cost=room_to_turn if self.prefer_room_to_turn else 0,
         )
 
     def astar_params(self) -> AStarParams:

@@ -182,3 +182,40 @@ def test_bench_reports_medians() -> None:
     for key in ("inflation_ms", "astar_ms", "plan_ms", "plan_full_resolution_ms"):
         assert 0.0 < result[key] < 5000.0
     assert result["path_length_m"] > 15.0
+
+
+def _gap_room(detour_wall_to_m: float) -> CostGrid:
+    """A wall across a 4 m room at y = 0 with a 0.4 m gap at x = 0 (only the inscribed circle fits), and
+    open floor past the wall's east end at ``detour_wall_to_m``."""
+    n = 80  # 0.05 m cells, origin (-2, -2)
+    data = np.full((n, n), OCC_FREE, dtype=np.int8)
+    wall_row = 40
+    for ix in range(n):
+        x = -2.0 + (ix + 0.5) * 0.05
+        if abs(x) > 0.2 and x < detour_wall_to_m:
+            data[wall_row, ix] = OCC_OCCUPIED
+    return LayeredCostmap(OccupancyMap(0.05, (-2.0, -2.0, 0.0), data)).grid()
+
+
+def _min_clearance_cost_on(grid: CostGrid, path_poses: np.ndarray) -> int:
+    return int(grid.costs_at(path_poses[:, :2]).max())
+
+
+def test_a_gap_only_the_inscribed_circle_fits_is_avoided_when_a_fair_detour_exists() -> None:
+    grid = _gap_room(detour_wall_to_m=0.9)  # open past x = 0.9: a detour under twice the length
+    params = GlobalPlannerParams(preferred_clearance_cost=186)
+    through_gap = GlobalPlanner().compute_path(grid, (0.0, -1.0, math.pi / 2), (0.0, 1.0, math.pi / 2))
+    roomy = GlobalPlanner(params).compute_path(grid, (0.0, -1.0, math.pi / 2), (0.0, 1.0, math.pi / 2))
+    assert _min_clearance_cost_on(grid, through_gap.poses) >= 186  # squeezes through the gap
+    assert _min_clearance_cost_on(grid, roomy.poses) < 186  # goes round the wall's end instead
+    assert roomy.length_m > through_gap.length_m
+
+
+def test_the_gap_is_still_taken_when_the_way_round_is_too_long_or_missing() -> None:
+    params = GlobalPlannerParams(preferred_clearance_cost=186)
+    closed = _gap_room(detour_wall_to_m=9.0)  # no way round at all
+    path = GlobalPlanner(params).compute_path(closed, (0.0, -1.0, math.pi / 2), (0.0, 1.0, math.pi / 2))
+    assert _min_clearance_cost_on(closed, path.poses) >= 186
+    short_hop = GlobalPlanner(params).compute_path(
+        _gap_room(detour_wall_to_m=0.8), (0.0, -0.4, math.pi / 2), (0.0, 0.4, math.pi / 2))
+    assert short_hop.length_m < 1.2  # 0.8 m through the gap beats a detour of several metres
