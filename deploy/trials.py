@@ -191,6 +191,22 @@ def random_starts(world: World, n: int, seed: int) -> list[Pose2D]:
     return starts
 
 
+def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[Pose2D]:
+    """The first ``n`` of :func:`random_starts` from which the dock can be reached at all.
+
+    A world may hold closed pockets (behind the walls of ``corridor``): a start there tests nothing but
+    the harness. Reachability comes from the planner's own lower-bound tool (glass counted as solid);
+    a start it cannot connect to the dock is skipped, so the other starts stay what the seed made them.
+    """
+    candidates = random_starts(world, 2 * n + 10, seed)
+    dock = world.docks[0].pose2d
+    bounds = lower_bounds(world_path, [(start, dock) for start in candidates])
+    starts = [start for start, bound in zip(candidates, bounds) if math.isfinite(bound)][:n]
+    if len(starts) < n:
+        raise RuntimeError(f"{world.name}: only {len(starts)} of {len(candidates)} random starts can reach the dock")
+    return starts
+
+
 def _distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]) -> float:
     (ax, ay), (bx, by) = segment
     dx, dy = bx - ax, by - ay
@@ -363,7 +379,7 @@ def run_trials(
     run_dir.mkdir(parents=True, exist_ok=True)
     workers = max(1, min(options.workers, options.n))
     robots = [f"r{i}" for i in range(workers)]
-    starts = random_starts(world, options.n, options.seed)
+    starts = reachable_starts(options.world, world, options.n, options.seed)
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
     stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots), sort_keys=False))

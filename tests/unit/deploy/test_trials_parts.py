@@ -14,6 +14,7 @@ from deploy.trials import (
     _distance_to_segment,
     combine,
     random_starts,
+    reachable_starts,
     summarise,
     summarise_results,
     trials_stack,
@@ -96,3 +97,14 @@ def test_a_campaign_combines_every_trial_not_the_medians() -> None:
     assert both.wall_s == pytest.approx(7.0) and both.world == "a, b"
     assert both.peak_rss_mb == {"planner_r0": 75.0, "simulator": 60.0}
     assert both.chaos["kills"] == 2 and both.chaos["median_recovery_s"] == pytest.approx(2.0)
+
+
+def test_starts_in_a_closed_pocket_are_skipped_and_the_rest_keep_their_order() -> None:
+    path = next(w for w in WORLDS if w.stem == "corridor")
+    world = load_world(path)
+    starts = reachable_starts(path, world, 20, seed=1)
+    pockets = [s for s in starts if 1.8 < s.x < 5.6 and (s.y < 1.0 or s.y > 2.0)]  # walled off from the rooms
+    assert len(starts) == 20 and not pockets
+    candidates = random_starts(world, 50, seed=1)
+    assert any(1.8 < c.x < 5.6 and (c.y < 1.0 or c.y > 2.0) for c in candidates)  # the seed does make some
+    assert starts == [c for c in candidates if c in starts]  # same order as the seed made them
