@@ -257,6 +257,23 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str]) -> dic
     return {"name": "trials", "namespace": "", "zenoh": {"connect": [endpoint]}, "services": services}
 
 
+#: How long the harness keeps asking a service that does not answer (it may be restarting: ``--chaos``).
+SERVICE_PATIENCE_S = 60.0
+
+
+def _call_until_answered(session: Any, key: str, srv: Any, request: Any) -> Any:
+    """``call_service``, asked again while nothing answers: a killed service is back within seconds, and
+    a trial must not fail because the harness asked during those seconds."""
+    deadline = time.monotonic() + SERVICE_PATIENCE_S
+    while True:
+        try:
+            return call_service(session, key, srv, request)
+        except ServiceError as exc:
+            if "no service answered" not in str(exc) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.5)
+
+
 def _sim_clock(session: Any, robot: str) -> float:
     """The simulator's clock now (sim seconds), NaN when it does not answer."""
     try:
@@ -284,9 +301,9 @@ def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: Trial
     wall_start = time.monotonic()
     # Full battery first: leaving the dock with the last trial's low charge would trigger docking at
     # the moment of the teleport, before this trial's start is even in place.
-    call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
-                 SetBatteryStateRequest(percentage=1.0, drain_scale=options.drain_scale))
-    placed = call_service(session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot))
+    _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+                         SetBatteryStateRequest(percentage=1.0, drain_scale=options.drain_scale))
+    placed = _call_until_answered(session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot))
     if not placed.success:
         raise ServiceError(f"trial {index}: start {start}: {placed.message}")
     observer = RunObserver(session, robot)
@@ -296,7 +313,7 @@ def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: Trial
         if not observer.wait(lambda r: bool(r.battery) and not r.last_charging, timeout_s=30.0):
             raise ServiceError(f"trial {index}: the battery still reports charging after the robot left the dock")
         observer.arm()
-        call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+        _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
                      SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
         started_sim = None
         deadline_wall = time.monotonic() + options.timeout_sim_s * 3 + 120.0
