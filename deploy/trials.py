@@ -215,8 +215,11 @@ def _distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, flo
     return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy)
 
 
-def trials_stack(options: TrialOptions, endpoint: str, robots: list[str]) -> dict[str, Any]:
-    """A stack file (as data) with one simulator for all robots and each robot's own services."""
+def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_dir: Path | None = None) -> dict[str, Any]:
+    """A stack file (as data) with one simulator for all robots and each robot's own services.
+
+    ``state_dir``: where each robot's planner keeps its glass memory across restarts (``--chaos``).
+    """
     world = str(options.world)
     py = ["python", "-m"]
     services: dict[str, Any] = {
@@ -244,7 +247,8 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str]) -> dic
         services[f"planner_{robot}"] = {
             **common,
             **health("planner"),
-            "command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml"],
+            "command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
+                        *(["-p", f"glass_memory_file={state_dir / robot / 'glass_memory.npz'}"] if state_dir else [])],
             "depends_on": {"router": {"condition": "service_started"},
                            "map": {"condition": "service_completed_successfully"}},
         }
@@ -399,7 +403,7 @@ def run_trials(
     starts = reachable_starts(options.world, world, options.n, options.seed)
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
-    stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots), sort_keys=False))
+    stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False))
     stack = load_stack(stack_path, env={}, project_dir=REPO_ROOT)
     results: list[TrialResult] = []
     records: dict[int, RunRecord] = {}

@@ -66,6 +66,12 @@ class GlassMemory:
     def clear(self) -> None:
         self._sonar.clear()
 
+    def restore(self, layer: np.ndarray) -> None:
+        """Adopt a sonar layer kept from before (see :mod:`services.planner.glass_store`)."""
+        if layer.shape != self.frame.shape:
+            raise ValueError(f"a sonar layer of shape {layer.shape} does not fit the grid {self.frame.shape}")
+        self._sonar.range_layer[...] = layer
+
     def glass_mask(self) -> np.ndarray:
         """Boolean ``(height, width)``: marked by the sonar, or unlooked-at within the suspicion radius."""
         layer = self._sonar.range_layer

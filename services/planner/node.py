@@ -32,6 +32,7 @@ from __future__ import annotations
 import enum
 import math
 import os.path
+import pathlib
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -39,8 +40,9 @@ from typing import Any
 
 import numpy as np
 
-from services.planner.costmap import LayeredCostmap, laser_scan_points
+from services.planner.costmap import LETHAL_OBSTACLE, LayeredCostmap, laser_scan_points
 from services.planner.glass_memory import GlassMemory
+from services.planner.glass_store import GlassStore
 from services.planner.goal_check import check_goal_on_grid, goal_pose
 from services.planner.map_messages import costmap_message, occupancy_grid_message, path_message
 from services.planner.occupancy_map import OCC_OCCUPIED, OccupancyMap, load_map
@@ -106,6 +108,8 @@ CLOCK_RESET_S = 1.0
 #: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
 SONAR_MIN_TRAVEL_M = 0.05
 SONAR_MIN_TURN_RAD = 0.1
+#: Write the glass memory to its file (when it changed) at most this often (wall seconds).
+GLASS_SAVE_PERIOD_S = 1.0
 #: A scan this far in time from a sonar reading is too old to explain its echo.
 LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
 #: Feedback's time estimate uses the measured speed above this, else the speed limit.
@@ -205,6 +209,12 @@ class PlannerService:
         self._costmap: LayeredCostmap | None = None
         self._base_map: OccupancyMap | None = None
         self._glass: GlassMemory | None = None
+        self._glass_store = (
+            GlassStore(pathlib.Path(params.glass_memory_file))
+            if params.glass_memory_file and params.use_range_layer
+            else None
+        )
+        self._glass_saved_wall_s = 0.0
         self._applied_glass: np.ndarray | None = None
         self._map_msg: OccupancyGrid | None = None
         self._tracker = PoseTracker(odom_timeout_s=params.pose_timeout_s)
@@ -271,6 +281,11 @@ class PlannerService:
             self._glass = GlassMemory(
                 occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m
             )
+            kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
+            if kept is not None:
+                self._glass.restore(kept)
+                self._log.info("glass memory restored from %s (%d cells marked)",
+                               self._params.glass_memory_file, int(np.count_nonzero(kept == LETHAL_OBSTACLE)))
         self._applied_glass = None
         if self._costmap is None:
             self._costmap = LayeredCostmap(occupancy, self._params.costmap_params())
@@ -288,9 +303,15 @@ class PlannerService:
             self._request_plan(task, now, urgent=True)
 
     def _apply_glass(self) -> None:
-        """Fold the glass memory into the costmap's static layer, when it changed."""
+        """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
         if self._costmap is None or self._base_map is None or self._glass is None:
             return
+        if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
+            self._glass_saved_wall_s = time.monotonic()
+            try:
+                self._glass_store.save_if_changed(self._base_map, self._glass.sonar_layer)
+            except OSError as exc:
+                self._log.warning("glass memory not saved to %s: %s", self._params.glass_memory_file, exc)
         glass = self._glass.glass_mask()
         if self._applied_glass is not None and np.array_equal(glass, self._applied_glass):
             return

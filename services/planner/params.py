@@ -62,6 +62,8 @@ class Params(ServiceParams):
     idle_costmap_update_rate_hz: float = Field(1.0, gt=0.0, description="the same without an active goal")
     use_range_layer: bool = Field(
         True, description="fold the ultrasonic range into the costmap (off: glass is invisible, for experiments)")
+    glass_memory_file: str = Field(
+        "", description="keep the sonar's glass in this file across restarts (empty: forget it on exit)")
     glass_suspicion_radius_m: float = Field(
         0.3, ge=0.0, description="unlooked-at floor this close to sonar-only marks counts as glass (0: off)")
     lidar_mount: tuple[float, float, float] = Field(
