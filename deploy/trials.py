@@ -241,8 +241,9 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         def health(node: str) -> dict[str, Any]:
             return {"healthcheck": {"liveliness": node, "timeout": "30s"}}
 
+        keep_charge = ["-p", f"state_file={state_dir / robot / 'battery.json'}"] if state_dir else []
         services[f"battery_{robot}"] = {**common, **health("battery"),
-                                        "command": [*py, "services.battery", "-p", "use_sim_time=true"]}
+                                        "command": [*py, "services.battery", "-p", "use_sim_time=true", *keep_charge]}
         services[f"pose_{robot}"] = {**common, **health("pose"), "command": [*py, "services.pose", "-p", "use_sim_time=true"]}
         services[f"planner_{robot}"] = {
             **common,

@@ -12,10 +12,13 @@ contact means not mated, no odometry means standing still.
 from __future__ import annotations
 
 import math
+import time
+from pathlib import Path
 
 from pydantic import Field, model_validator
 
 from services.battery.model import BatteryModel, BatteryParams
+from services.battery.state_file import StoredCharge, load_charge, save_charge
 from services.battery.timekeeping import FreshValue, StepClock
 from shared import topics
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest, SetBatteryStateResponse
@@ -25,6 +28,8 @@ from shared.runtime import ServiceParams, run_service
 
 #: How often the node says it is still waiting for the simulator's clock.
 CLOCK_WAIT_LOG_PERIOD_S = 5.0
+#: Write the charge to the state file at most this often (wall seconds); a set_state request writes at once.
+STATE_SAVE_PERIOD_S = 0.5
 
 
 class Params(ServiceParams):
@@ -43,6 +48,7 @@ class Params(ServiceParams):
     internal_resistance_ohm: float = Field(0.05, ge=0.0, description="series resistance: voltage sag under load")
     drain_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge drains this many times faster")
     charge_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge fills this many times faster")
+    state_file: str = Field("", description="keep the charge in this file across restarts (empty: start from the parameters)")
     publish_rate_hz: float = Field(10.0, ge=1.0, le=100.0, description="battery_status rate on the node's clock")
     dock_contact_timeout_s: float = Field(1.0, gt=0.0, description="older dock_contact counts as not mated")
     odom_timeout_s: float = Field(1.0, gt=0.0, description="older odometry counts as standing still")
@@ -110,6 +116,13 @@ class BatteryService:
             drain_scale=params.drain_scale,
             charge_scale=params.charge_scale,
         )
+        self._state_path = Path(params.state_file) if params.state_file else None
+        self._state_saved_wall_s = 0.0
+        stored = load_charge(self._state_path) if self._state_path is not None else None
+        if stored is not None:
+            self._model.set_state(percentage=stored.percentage, drain_scale=stored.drain_scale,
+                                  charge_scale=stored.charge_scale, frozen=stored.frozen)
+            self._log.info("charge restored from %s: %.1f%%", params.state_file, 100.0 * stored.percentage)
         self._clock = StepClock(params.max_step_s)
         self._odom: FreshValue[tuple[float, float]] = FreshValue(params.odom_timeout_s)
         self._contact: FreshValue[bool] = FreshValue(params.dock_contact_timeout_s)
@@ -177,7 +190,19 @@ class BatteryService:
     def _publish(self) -> BatteryState:
         msg = battery_state_message(self._model, Header(self._node.now_msg(), self._params.frame_id))
         self._publisher.publish(msg)
+        self._keep_charge()
         return msg
+
+    def _keep_charge(self, force: bool = False) -> None:
+        """Write the charge to the state file, at most every ``STATE_SAVE_PERIOD_S`` unless ``force``."""
+        if self._state_path is None or (not force and time.monotonic() - self._state_saved_wall_s < STATE_SAVE_PERIOD_S):
+            return
+        self._state_saved_wall_s = time.monotonic()
+        model = self._model
+        try:
+            save_charge(self._state_path, StoredCharge(model.percentage, model.drain_scale, model.charge_scale, model.frozen))
+        except OSError as exc:
+            self._log.warning("charge not saved to %s: %s", self._state_path, exc)
 
     def _on_timer(self) -> None:
         self._advance()
@@ -205,6 +230,7 @@ class BatteryService:
             self._model.percentage, self._model.drain_scale, self._model.charge_scale,
             ", frozen" if self._model.frozen else "",
         )
+        self._keep_charge(force=True)
         state = self._publish()
         return SetBatteryStateResponse(
             state=state,
