@@ -67,6 +67,8 @@ def test_sequence_numbers_attached(node_pair: tuple[Node, Node], bus: zenoh.Sess
     done = threading.Event()
     sub = bus.declare_subscriber(talker.key("seq"), lambda s: (seqs.append(sequence_number(s.attachment)), len(seqs) == 3 and done.set()))
     pub = talker.create_publisher(Bool, "seq")
+    # the raw subscriber declares no token: wait until the publisher's route to it is up
+    wait_until(lambda: pub._publisher.matching_status.matching, 5.0, "the publisher never matched the subscriber")
     for _ in range(3):
         pub.publish(Bool(True))
     _wait(done, "three samples")

@@ -105,6 +105,16 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
                 received[str(sample.key_expr)].append((sample.payload.to_bytes(), str(sample.encoding), seq))
 
         subscriber = listener.declare_subscriber("replayed/**", on_sample)
+        # Declared after it: once the player reaches this one, it reaches the subscriber above too.
+        probed = threading.Event()
+        probe = listener.declare_subscriber("probe/route", lambda _s: probed.set())
+
+        def route_up() -> bool:
+            player.put("probe/route", b"")
+            return probed.wait(0.05)
+
+        wait_until(route_up, 10.0, "the player never reached the listener")
+        probe.undeclare()
         with Recording(path) as recording:
             recorded = defaultdict(list)
             for message in recording.raw_messages():
