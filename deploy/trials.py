@@ -33,7 +33,7 @@ from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
 from shared.names import topic_key
-from shared.node import ServiceError, call_service
+from shared.node import ServiceError, ServiceUnavailable, call_service
 from shared.session import SessionSpec, open_session
 from shared.world import World, load_world
 
@@ -273,8 +273,8 @@ def _call_until_answered(session: Any, key: str, srv: Any, request: Any) -> Any:
     while True:
         try:
             return call_service(session, key, srv, request)
-        except ServiceError as exc:
-            if "no service answered" not in str(exc) or time.monotonic() > deadline:
+        except ServiceUnavailable:
+            if time.monotonic() > deadline:
                 raise
             time.sleep(0.5)
 

@@ -94,6 +94,10 @@ class ServiceError(RuntimeError):
     """A request failed: nothing answered, it timed out, or the server rejected it (reason given)."""
 
 
+class ServiceUnavailable(ServiceError):
+    """Nothing answered the request in time: no server, or one restarting. Asking again may work."""
+
+
 @dataclass(frozen=True)
 class ServiceType(Generic[Req, Res]):
     """A request/response interface, e.g. ``zendock_msgs/srv/Teleport``."""
@@ -467,7 +471,7 @@ def call_service(
         )
     )
     if not replies:
-        raise ServiceError(f"{key}: no service answered within {timeout_s:g} s")
+        raise ServiceUnavailable(f"{key}: no service answered within {timeout_s:g} s")
     return _decode_reply(srv, key, replies[0])
 
 
@@ -575,7 +579,7 @@ class Node:
 
         def finished() -> None:
             if not replies:
-                self._executor.post(on_done, None, ServiceError(f"{key}: no service answered within {timeout_s:g} s"))
+                self._executor.post(on_done, None, ServiceUnavailable(f"{key}: no service answered within {timeout_s:g} s"))
                 return
             try:
                 response = _decode_reply(srv, key, replies[0])

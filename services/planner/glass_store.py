@@ -33,6 +33,13 @@ class GlassStore:
     def __init__(self, path: Path) -> None:
         self.path = path
         self._saved: np.ndarray | None = None
+        self._fingerprint: tuple[OccupancyMap, str] | None = None
+
+    def _fingerprint_of(self, occupancy: OccupancyMap) -> str:
+        """The map's fingerprint, hashed once per map rather than at every save."""
+        if self._fingerprint is None or self._fingerprint[0] is not occupancy:
+            self._fingerprint = (occupancy, map_fingerprint(occupancy))
+        return self._fingerprint[1]
 
     def load(self, occupancy: OccupancyMap) -> np.ndarray | None:
         """The stored layer when it was made on this very map; None when absent, foreign or unreadable."""
@@ -42,7 +49,7 @@ class GlassStore:
                 layer = np.array(stored["sonar"], dtype=np.uint8)
         except (OSError, KeyError, ValueError):
             return None
-        if fingerprint != map_fingerprint(occupancy) or layer.shape != occupancy.data.shape:
+        if fingerprint != self._fingerprint_of(occupancy) or layer.shape != occupancy.data.shape:
             return None
         self._saved = layer.copy()
         return layer
@@ -54,7 +61,7 @@ class GlassStore:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
         with open(tmp, "wb") as out:
-            np.savez(out, map=np.array(map_fingerprint(occupancy)), sonar=layer)
+            np.savez(out, map=np.array(self._fingerprint_of(occupancy)), sonar=layer)
         os.replace(tmp, self.path)
         self._saved = layer.copy()
         return True

@@ -83,6 +83,9 @@ class GlobalPlanner:
         t0 = time.perf_counter()
         start_pose, goal_pose = _pose(start), _pose(goal)
         path = self._plan_on(grid, start_pose, goal_pose, t0)
+        threshold = self.params.preferred_clearance_cost
+        if threshold <= 0 or not np.any(grid.costs_at(path.grid_points) >= threshold):
+            return path  # the usual case: nowhere too tight to turn, no second grid to build
         roomy = self._with_clearance(grid, start_pose, goal_pose)
         if roomy is not None and _passes_closed_cells(roomy, grid, path.grid_points):
             try:
@@ -114,8 +117,6 @@ class GlobalPlanner:
     def _with_clearance(self, grid: CostGrid, start: Pose2D, goal: Pose2D) -> CostGrid | None:
         """The grid with the cells too tight to turn in closed, but around the two ends; None if none are."""
         threshold = self.params.preferred_clearance_cost
-        if threshold <= 0:
-            return None
         costs = grid.costs
         tight = (costs >= threshold) & (costs < INSCRIBED_INFLATED_OBSTACLE)
         frame = grid.frame

@@ -13,12 +13,11 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from tests.support.processes import REPO_ROOT, ServiceProcess
+from tests.support.processes import ServiceProcess
 
 HOST_A_ADDRESS = "169.254.77.1"
 HOST_B_ADDRESS = "169.254.77.2"
@@ -104,14 +103,5 @@ class NetnsProcess(ServiceProcess):
         self.netns = netns
         super().__init__(module, args, log_path, env)
 
-    def start(self) -> None:
-        log = open(self.log_path, "ab")  # noqa: SIM115 - the child owns it
-        self.proc = subprocess.Popen(
-            ["ip", "netns", "exec", self.netns, sys.executable, "-m", self.module, *self.args],
-            cwd=REPO_ROOT,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            env=self._env,
-            start_new_session=True,
-        )
-        log.close()
+    def argv(self) -> list[str]:
+        return ["ip", "netns", "exec", self.netns, *super().argv()]

@@ -33,10 +33,14 @@ class ServiceProcess:
         self.proc: subprocess.Popen[bytes] | None = None
         self.start()
 
+    def argv(self) -> list[str]:
+        """The command line of the child."""
+        return [sys.executable, "-m", self.module, *self.args]
+
     def start(self) -> None:
         log = open(self.log_path, "ab")  # noqa: SIM115 - the child owns it
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", self.module, *self.args],
+            self.argv(),
             cwd=REPO_ROOT,
             stdout=log,
             stderr=subprocess.STDOUT,
