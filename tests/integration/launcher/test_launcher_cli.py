@@ -142,6 +142,18 @@ def test_down_cleans_up_after_a_supervisor_that_died(project: Path, mark: str) -
     up = zendock(project, mark, "up", "-d", "--wait", "--wait-timeout", "30")
     assert up.returncode == 0, up.stderr + up.stdout
     state_dir = project / ".zendock" / "clitest"
+    marked = lambda: {p.pid for p in marked_processes(mark)}  # noqa: E731
+
+    def recorded_pids() -> set[int]:
+        try:
+            rows = json.loads((state_dir / "state.json").read_text())["services"]
+        except (OSError, ValueError, KeyError):
+            return set()
+        return {row["pid"] for row in rows if row.get("pid")}
+
+    # the state the cleanup relies on must name every service's running process before the supervisor dies
+    wait_for(lambda: len(recorded_pids()) == 3 and recorded_pids() <= marked(), 15,
+             "state.json to record the three running services")
     supervisor_pid = json.loads((state_dir / "supervisor.json").read_text())["pid"]
     os.kill(supervisor_pid, signal.SIGKILL)
     wait_for(lambda: not any(p.pid == supervisor_pid for p in marked_processes(mark)), 10, "the supervisor to die")
