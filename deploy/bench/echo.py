@@ -15,15 +15,21 @@ from shared.messages import Twist
 from shared.node import RELIABLE, Node
 from shared.session import SessionSpec, open_session
 
-PING_KEY = "zendock_bench/ping"
-PONG_KEY = "zendock_bench/pong"
+
+def ping_key(mode: str) -> str:
+    """Each mode has its own keys, so a typed and a raw echo can run side by side."""
+    return f"zendock_bench/{mode}/ping"
+
+
+def pong_key(mode: str) -> str:
+    return f"zendock_bench/{mode}/pong"
 
 
 def run_typed(endpoint: str, stop: threading.Event) -> None:
     with open_session(SessionSpec(connect=(endpoint,))) as session:
         node = Node("bench_echo", session)
-        pong = node.create_publisher(Twist, PONG_KEY, RELIABLE)
-        node.create_subscription(Twist, PING_KEY, pong.publish, RELIABLE)
+        pong = node.create_publisher(Twist, pong_key("typed"), RELIABLE)
+        node.create_subscription(Twist, ping_key("typed"), pong.publish, RELIABLE)
         node.declare_ready()
         threading.Thread(target=_shutdown_on, args=(stop, node), daemon=True).start()
         print("ready", flush=True)
@@ -38,8 +44,8 @@ def _shutdown_on(stop: threading.Event, node: Node) -> None:
 
 def run_raw(endpoint: str, stop: threading.Event) -> None:
     with open_session(SessionSpec(connect=(endpoint,))) as session:
-        pong = session.declare_publisher(PONG_KEY)
-        sub = session.declare_subscriber(PING_KEY, lambda sample: pong.put(sample.payload))
+        pong = session.declare_publisher(pong_key("raw"))
+        sub = session.declare_subscriber(ping_key("raw"), lambda sample: pong.put(sample.payload))
         print("ready", flush=True)
         stop.wait()
         sub.undeclare()

@@ -27,7 +27,11 @@ def _print(result: dict, as_json: bool, title: str) -> None:
 def _bench_bus(args: argparse.Namespace) -> int:
     from deploy.bench.bus import run_bus_bench
 
-    result = run_bus_bench(rounds=args.rounds, blocks=args.blocks)
+    try:
+        result = run_bus_bench(rounds=args.rounds)
+    except (RuntimeError, ValueError) as exc:
+        print(f"zendock bench bus: {exc}", file=sys.stderr)
+        return 1
     _print(result.as_dict(), args.json, "bus round trip: zendock typed vs raw zenoh-python")
     return 0
 
@@ -87,8 +91,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     verbs = parser.add_subparsers(dest="bench", metavar="BENCH")
     verbs.required = True
     bus = verbs.add_parser("bus", help="typed pub/sub round trip vs raw zenoh-python, two processes")
-    bus.add_argument("--rounds", type=int, default=4000)
-    bus.add_argument("--blocks", type=int, default=4, help="alternate typed/raw blocks to share the noise")
+    bus.add_argument("--rounds", type=int, default=4000, help="round trips on each path, interleaved")
     bus.add_argument("--json", action="store_true")
     bus.set_defaults(func=_bench_bus)
     sim = verbs.add_parser("sim", help="simulator steps per second with all sensors, as a real-time factor")

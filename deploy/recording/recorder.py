@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import logging
 import queue
-import struct
 import threading
 import time
 from collections.abc import Sequence
@@ -27,11 +26,11 @@ from deploy.recording.mcap_log import McapLog, RecordedSample, split_encoding
 from deploy.recording.sequence import SequenceTracker
 from shared.foxglove_view import convert_key
 from shared.names import GRAPH_PREFIX, parse_token_key
+from shared.node import publisher_id, sequence_number
 from shared.schema import MessageError
 
 log = logging.getLogger(__name__)
 
-_SEQ = struct.Struct("<Q")
 _STOP = object()
 PUBLISHER_TOKENS = f"{GRAPH_PREFIX}/pub/**"
 #: Samples Zenoh may hold for a subscription before it waits for the reader (a burst of ~a minute at full stack rate).
@@ -136,13 +135,11 @@ class BusRecorder:
             stamp = sample.timestamp
             arrived = stamp.get_time_as_ntp64().as_nanos() if stamp is not None else self._clock.now_ns()
             attachment = sample.attachment
-            source = sample.source_info
             self._queue.put((
                 str(sample.key_expr),
                 str(sample.encoding),
                 sample.payload.to_bytes(),
                 attachment.to_bytes() if attachment is not None else None,
-                (str(source.source_id.zid), source.source_id.eid) if source is not None else None,
                 arrived,
             ))
 
@@ -162,10 +159,10 @@ class BusRecorder:
             self._writer_error = exc
             log.error("recording failed: %s", exc)
 
-    def _write(self, item: tuple[str, str, bytes, bytes | None, object, int]) -> None:
-        key, encoding, payload, attachment, source, arrived_ns = item
-        sequence = _SEQ.unpack(attachment)[0] if attachment is not None and len(attachment) == _SEQ.size else None
-        self.tracker.feed(key, sequence, source, arrived_ns / 1e9)
+    def _write(self, item: tuple[str, str, bytes, bytes | None, int]) -> None:
+        key, encoding, payload, attachment, arrived_ns = item
+        sequence = sequence_number(attachment)
+        self.tracker.feed(key, sequence, publisher_id(attachment), arrived_ns / 1e9)
         self._log.write_sample(RecordedSample(key, encoding, payload, arrived_ns, sequence))
         self.stats.written += 1
         _, type_name = split_encoding(encoding)

@@ -2,14 +2,14 @@
 
 Each recorded key gets a publisher with the recorded Zenoh encoding (``application/msgpack;<type>``), a
 fresh sequence number on every sample (a replay is a new publisher, so receivers count its samples as
-they count any other's; it also goes out as Zenoh source info, which names the publisher) and a liveliness token, so ``zendock keys list`` shows the replay. Samples go
-out reliably and block rather than drop: a replay is a test input, it must arrive whole. Timing follows
-the recorded arrival times, scaled by ``rate``; ``loop`` starts over at the end.
+they count any other's; the attachment also names the publisher) and a liveliness token, so
+``zendock keys list`` shows the replay. Samples go out reliably and block rather than drop: a replay
+is a test input, it must arrive whole. Timing follows the recorded arrival times, scaled by ``rate``;
+``loop`` starts over at the end.
 """
 
 from __future__ import annotations
 
-import struct
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -19,8 +19,8 @@ import zenoh
 
 from deploy.recording.reading import RawMessage, Recording
 from shared.names import endpoint_token_key, normalise_namespace, topic_key
+from shared.node import publisher_gid, sequence_attachment
 
-_SEQ = struct.Struct("<Q")
 REPLAY_NODE_NAME = "replay"
 #: Waits longer than this are split so a stop request is noticed quickly.
 MAX_WAIT_S = 0.1
@@ -62,11 +62,11 @@ class _KeyPublisher:
         self._token = session.liveliness().declare_token(
             endpoint_token_key("pub", namespace, REPLAY_NODE_NAME, type_name, key))
         self._sequence = 0
+        self._gid = publisher_gid(self._publisher.id)
 
     def put(self, payload: bytes) -> None:
         self._sequence += 1
-        self._publisher.put(payload, attachment=_SEQ.pack(self._sequence),
-                            source_info=zenoh.SourceInfo(self._publisher.id, self._sequence))
+        self._publisher.put(payload, attachment=sequence_attachment(self._sequence, self._gid))
 
     def close(self) -> None:
         self._token.undeclare()

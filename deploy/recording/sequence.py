@@ -1,7 +1,7 @@
 """Losses counted from sequence numbers: every zendock publisher numbers its samples 1, 2, 3, ...
 
 A recorder compares what was published (the numbers) with what arrived. Each stream is one publisher
-on one key. When a sample names its publisher (Zenoh source info) streams are exact; otherwise a key's
+on one key. When a sample names its publisher (its attachment's publisher id) streams are exact; otherwise a key's
 samples are matched to streams by continuity: a number continues the stream whose last number is one
 less; a ``1`` is a publisher that (re)started; a first sight of a publisher (the recorder joined late)
 starts a stream without counting a loss, as long as the key has fewer streams than publishers (the

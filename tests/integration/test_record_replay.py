@@ -8,7 +8,6 @@ the recorder's own account of gaps matches the numbers missing from the file.
 
 from __future__ import annotations
 
-import struct
 import threading
 from collections import defaultdict
 from pathlib import Path
@@ -21,6 +20,7 @@ from deploy.recording.reading import Recording
 from deploy.recording.replay import Replayer
 from deploy.recording.session import RecordRequest, record
 from shared.messages import BatteryState, Clock
+from shared.node import sequence_number
 from shared.session import SessionSpec, open_session
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, free_port, wait_until
@@ -46,7 +46,7 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
 
     def witness(sample: zenoh.Sample) -> None:
         if sample.attachment is not None:
-            witnessed[str(sample.key_expr)].add(struct.unpack("<Q", sample.attachment.to_bytes())[0])
+            witnessed[str(sample.key_expr)].add(sequence_number(sample.attachment))
 
     clock.close()
     battery.close()
@@ -100,7 +100,7 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
         lock = threading.Lock()
 
         def on_sample(sample: zenoh.Sample) -> None:
-            seq = struct.unpack("<Q", sample.attachment.to_bytes())[0] if sample.attachment is not None else 0
+            seq = sequence_number(sample.attachment) or 0
             with lock:
                 received[str(sample.key_expr)].append((sample.payload.to_bytes(), str(sample.encoding), seq))
 
