@@ -42,6 +42,7 @@ from shared.messages import (
     Clock,
     CollisionEvent,
     DockContact,
+    Float64MultiArray,
     Header,
     LaserScan,
     Odometry,
@@ -88,6 +89,9 @@ class Params(ServiceParams):
         True, description="wait (briefly) for a moving robot's late command instead of driving it blind")
     driver_gap_s: float = Field(0.15, gt=0, description="a moving robot's command older than this (sim) is late")
     driver_wait_max_s: float = Field(0.1, ge=0, description="wait at most this long (wall) for one late command")
+    pace_to_pose: bool = Field(
+        True, description="with pace_to_drivers: also wait (briefly) for a robot's late map_to_base_link_pose2d")
+    pose_gap_s: float = Field(0.3, gt=0, description="a robot's pose older than this (sim) is late")
     # drive (Gazebo diff_drive / ros2_control names)
     wheel_separation_m: float = Field(0.26, gt=0)
     wheel_radius_m: float = Field(0.033, gt=0)
@@ -201,6 +205,8 @@ class _Robot:
     cmd_v: float = 0.0
     cmd_w: float = 0.0
     last_cmd_s: float = -math.inf
+    #: Sim time of the last map_to_base_link_pose2d (the localisation the controllers steer on).
+    last_pose_s: float = -math.inf
     watchdog_tripped: bool = True
     pending_detections: deque[tuple[float, PoseStamped]] = field(default_factory=deque)
     collisions_total: int = 0
@@ -244,7 +250,8 @@ class SimulatorService:
         node.create_service(SIM_STATE, topics.SIM_STATE, self._on_state)
         self.steps_run = 0
         self._pacer = (
-            DriverPacer(PacingParams(params.driver_gap_s, params.driver_wait_max_s)) if params.pace_to_drivers else None
+            DriverPacer(PacingParams(params.driver_gap_s, params.driver_wait_max_s, params.pose_gap_s))
+            if params.pace_to_drivers else None
         )
         self._running = True
         self._thread = threading.Thread(target=self._loop, name="sim-step", daemon=True)
@@ -269,12 +276,19 @@ class SimulatorService:
             "ground_truth_pose": node.create_publisher(PoseStamped, t(topics.GROUND_TRUTH_POSE), RELIABLE),
         }
         node.create_subscription(Twist, t(topics.CMD_VEL), lambda msg, r=robot: self._on_cmd_vel(r, msg), QoS(depth=1))
+        if self.params.pace_to_drivers and self.params.pace_to_pose:
+            # Only the arrival time is kept: one float store, safe on Zenoh's thread (no executor hand-off).
+            node.create_subscription(Float64MultiArray, t(topics.POSE2D), lambda _msg, r=robot: self._on_pose(r),
+                                     QoS(depth=1), inline=True)
 
     def _on_cmd_vel(self, robot: _Robot, msg: Twist) -> None:
         robot.cmd_v = msg.linear.x
         robot.cmd_w = msg.angular.z
         robot.last_cmd_s = self.time_s
         robot.watchdog_tripped = False
+
+    def _on_pose(self, robot: _Robot) -> None:
+        robot.last_pose_s = self.time_s
 
     def _robot_for(self, name: str) -> _Robot:
         ns = normalise_namespace(name)
@@ -340,10 +354,13 @@ class SimulatorService:
                 reported_at = self._report_rate(now, reported_at)
 
     def _drivers(self) -> list[Driver]:
-        return [
-            Driver(ns, robot.last_cmd_s, not robot.watchdog_tripped and (robot.cmd_v != 0.0 or robot.cmd_w != 0.0))
-            for ns, robot in self.robots.items()
-        ]
+        drivers = []
+        for ns, robot in self.robots.items():
+            moving = not robot.watchdog_tripped and (robot.cmd_v != 0.0 or robot.cmd_w != 0.0)
+            drivers.append(Driver(ns, robot.last_cmd_s, moving))
+            if robot.last_pose_s > -math.inf:
+                drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, self.params.pose_gap_s))
+        return drivers
 
     def _report_rate(self, wall_now: float, since: tuple[float, float]) -> tuple[float, float]:
         """Log the real-time factor achieved since the last report, and the waits for late drivers."""

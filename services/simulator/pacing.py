@@ -4,9 +4,14 @@ At a high real-time factor on a busy machine the controllers fall behind the sim
 command computed for sim time ``t`` arrives when the world is already at ``t + 0.5 s``, and the robot
 drives blind in between. A lockstep simulator would wait for every controller at every step; this one
 waits only when it matters -- while a robot moves on a command older than ``driver_gap_s`` of sim
-time -- and never longer than ``driver_wait_max_s`` of wall time for the same command, so a driver
-that died cannot freeze the world (the ``cmd_vel`` watchdog then stops its robot as usual). The
-achieved real-time factor is then what the whole stack sustains, not what the physics alone could do.
+time, or while its localisation (``map_to_base_link_pose2d``) is older than ``pose_gap_s`` -- and
+never longer than ``driver_wait_max_s`` of wall time for the same late input, so a service that died
+cannot freeze the world (the ``cmd_vel`` watchdog then stops its robot as usual). The achieved
+real-time factor is then what the whole stack sustains, not what the physics alone could do.
+
+The pose matters as much as the command: a controller whose pose is stale holds its robot still,
+which stops the pacing on commands, and the world then runs flat out while the robot waits -- the
+pose falls further behind and sim-time deadlines (staging, recoveries) expire with nothing done.
 """
 
 from __future__ import annotations
@@ -22,15 +27,22 @@ class PacingParams:
     driver_gap_s: float = 0.15
     #: The longest wait for one late command (wall seconds).
     driver_wait_max_s: float = 0.1
+    #: A robot's pose is late once this old (sim seconds): three periods of the 10 Hz pose.
+    pose_gap_s: float = 0.3
 
 
 @dataclass(frozen=True)
 class Driver:
-    """What the pacer needs of one robot: who drives it, when it was last commanded, whether it moves."""
+    """One input the world may wait for: its name, when it last arrived, whether it is awaited now.
+
+    A robot's command is awaited while the robot moves; its pose once one has arrived (a world with no
+    pose service is never held for one). ``gap_s`` overrides the pacer's ``driver_gap_s``.
+    """
 
     name: str
     last_command_s: float
     moving: bool
+    gap_s: float | None = None
 
 
 class DriverPacer:
@@ -46,8 +58,10 @@ class DriverPacer:
 
     def hold(self, sim_now_s: float, wall_now_s: float, drivers: Iterable[Driver]) -> bool:
         """True: do not step yet. Call again (after a short sleep) until it says False."""
+        gap = self.params.driver_gap_s
         late = tuple(
-            (d.name, d.last_command_s) for d in drivers if d.moving and sim_now_s - d.last_command_s > self.params.driver_gap_s
+            (d.name, d.last_command_s) for d in drivers
+            if d.moving and sim_now_s - d.last_command_s > (gap if d.gap_s is None else d.gap_s)
         )
         if not late:
             self._awaited = ()

@@ -27,3 +27,13 @@ def test_waits_for_a_late_command_until_the_budget_is_spent_then_steps_on() -> N
     again = [Driver("r0", 1.3, moving=True), Driver("r1", 1.3, moving=True)]
     assert pacer.hold(1.5, 10.20, again)  # a new late command: a new budget
     assert pacer.holds == 2
+
+
+def test_a_late_pose_holds_the_world_on_its_own_gap_even_with_the_robot_still() -> None:
+    """A controller with a stale pose holds its robot still; the world must wait for the pose, not run on."""
+    pacer = DriverPacer(PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1, pose_gap_s=0.3))
+    still = Driver("r0", 0.0, moving=False)
+    assert not pacer.hold(2.0, 0.0, [still, Driver("r0:pose", 1.8, True, gap_s=0.3)])  # 0.2 s old: on time
+    assert pacer.hold(2.0, 0.0, [still, Driver("r0:pose", 1.6, True, gap_s=0.3)])  # 0.4 s old: wait
+    assert not pacer.hold(2.0, 0.2, [still, Driver("r0:pose", 1.6, True, gap_s=0.3)])  # budget spent: a dead
+    assert pacer.holds == 1  # pose service costs one wait, not a frozen world
