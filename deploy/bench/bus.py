@@ -1,8 +1,8 @@
 """Round-trip latency of zendock's typed publish/subscribe against raw zenoh-python, same run.
 
 Both echoes are separate processes on one loopback router. The typed path decodes and validates on
-arrival, runs the callback under the node's executor rules and validates again on publishing (with
-the encoding and the sequence-and-publisher attachment every zendock sample carries); the raw path passes
+arrival, runs the callback under the node's executor rules and validates again on publishing (with the
+encoding and the sequence-and-publisher attachment every zendock sample carries); the raw path passes
 bytes through zenoh-python callbacks. The report gives medians and p99 of each and their ratio.
 
 What makes the comparison fair: both sides use declared publishers with the same QoS and

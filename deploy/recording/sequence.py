@@ -1,12 +1,12 @@
 """Losses counted from sequence numbers: every zendock publisher numbers its samples 1, 2, 3, ...
 
-A recorder compares what was published (the numbers) with what arrived. Each stream is one publisher
-on one key. When a sample names its publisher (its attachment's publisher id) streams are exact; otherwise a key's
-samples are matched to streams by continuity: a number continues the stream whose last number is one
-less; a ``1`` is a publisher that (re)started; a first sight of a publisher (the recorder joined late)
-starts a stream without counting a loss, as long as the key has fewer streams than publishers (the
-graph's liveliness tokens say how many publishers a key has). Anything else is a gap in the stream
-whose last number is closest below it.
+A recorder compares what was published (the numbers) with what arrived. Each stream is one publisher on
+one key. When a sample names its publisher (its attachment's publisher id) streams are exact; otherwise
+a key's samples are matched to streams by continuity: a number continues the stream whose last number is
+one less; a ``1`` is a publisher that (re)started; a first sight of a publisher (the recorder joined
+late) starts a stream without counting a loss, as long as the key has fewer streams than publishers (the
+graph's liveliness tokens say how many publishers a key has). Anything else is a gap in the stream whose
+last number is closest below it.
 """
 
 from __future__ import annotations
