@@ -13,17 +13,17 @@ import pytest
 from deploy.bench.bus import run_bus_bench
 
 
-def _echo_processes() -> list[psutil.Process]:
-    found = []
-    for proc in psutil.process_iter(["cmdline"]):
-        cmdline = proc.info["cmdline"] or []
-        if "deploy.bench.echo" in cmdline:
-            found.append(proc)
+def _live_echo_pids() -> set[int]:
+    """Bench echo processes still running (a process that ends while being looked at does not count)."""
+    found = set()
+    for proc in psutil.process_iter(["cmdline", "status"]):
+        if "deploy.bench.echo" in (proc.info["cmdline"] or []) and proc.info["status"] != psutil.STATUS_ZOMBIE:
+            found.add(proc.pid)
     return found
 
 
 def test_bus_bench_times_every_round_on_both_paths_and_stops_its_echoes() -> None:
-    before = {p.pid for p in _echo_processes()}
+    before = _live_echo_pids()
     result = run_bus_bench(rounds=40)
     report = result.as_dict()
     assert result.rounds == 40
@@ -32,8 +32,8 @@ def test_bus_bench_times_every_round_on_both_paths_and_stops_its_echoes() -> Non
         assert math.isfinite(report[key]) and report[key] > 0, (key, report)
     assert report["rtt_p99_us"] >= report["rtt_p50_us"]
     assert report["ratio"] == pytest.approx(report["rtt_p50_us"] / report["raw_rtt_p50_us"], rel=0.01)
-    leftover = [p.pid for p in _echo_processes() if p.pid not in before and p.is_running() and p.status() != "zombie"]
-    assert not leftover, f"echo processes left running: {leftover}"
+    leftover = _live_echo_pids() - before
+    assert not leftover, f"echo processes left running: {sorted(leftover)}"
 
 
 def test_bus_bench_refuses_zero_rounds() -> None:
