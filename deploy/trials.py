@@ -218,7 +218,8 @@ def _distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, flo
 def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_dir: Path | None = None) -> dict[str, Any]:
     """A stack file (as data) with one simulator for all robots and each robot's own services.
 
-    ``state_dir``: where each robot's planner keeps its glass memory across restarts (``--chaos``).
+    ``state_dir``: where each robot's planner keeps its glass memory and its battery its charge across
+    restarts (``--chaos``).
     """
     world = str(options.world)
     py = ["python", "-m"]
@@ -319,7 +320,7 @@ def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: Trial
             raise ServiceError(f"trial {index}: the battery still reports charging after the robot left the dock")
         observer.arm()
         _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
-                     SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
+                             SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
         started_sim = None
         deadline_wall = time.monotonic() + options.timeout_sim_s * 3 + 120.0
 

@@ -299,8 +299,7 @@ class Publisher(Generic[M]):
             payload = msg.encode()
         except MessageError as exc:
             raise exc.at(key=self.key) from None
-        with self._lock:  # the put order is the sequence order, whichever threads publish
-            self._put(payload, attachment=_SEQ.pack(next(self._seq)) + self._gid)
+        self.publish_encoded(payload)
 
     def publish_encoded(self, payload: bytes) -> None:
         """Put an already validated payload (replay, relays).
@@ -309,8 +308,8 @@ class Publisher(Generic[M]):
         (:func:`sequence_attachment`), so a recorder counts losses per publisher. The encoding was
         declared once with the publisher, so no put passes (or builds) it.
         """
-        with self._lock:
-            self._put(payload, attachment=_SEQ.pack(next(self._seq)) + self._gid)
+        with self._lock:  # the put order is the sequence order, whichever threads publish
+            self._put(payload, attachment=sequence_attachment(next(self._seq), self._gid))
 
     def undeclare(self) -> None:
         self._token.undeclare()

@@ -24,6 +24,7 @@ import psutil
 
 from deploy.launcher.process import live_group_members, signal_group
 from deploy.launcher.status import ServiceStatus
+from shared.files import write_atomically
 
 RUNTIME_DIRNAME = ".zendock"
 _MAX_SOCKET_PATH = 100  # sockaddr_un holds 108 bytes
@@ -72,10 +73,7 @@ class RuntimePaths:
 
 
 def write_json_atomic(path: Path, data: Any) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    temporary.write_text(json.dumps(data, indent=1), encoding="utf-8")
-    os.replace(temporary, path)
+    write_atomically(path, json.dumps(data, indent=1).encode("utf-8"))
 
 
 def read_json(path: Path) -> Any:

@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
+
+from shared.files import write_atomically
 
 
 @dataclass(frozen=True)
@@ -37,7 +38,4 @@ def load_charge(path: Path) -> StoredCharge | None:
 
 
 def save_charge(path: Path, charge: StoredCharge) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(asdict(charge)), encoding="utf-8")
-    os.replace(tmp, path)
+    write_atomically(path, json.dumps(asdict(charge)).encode("utf-8"))

@@ -11,12 +11,13 @@ world or another map is ignored rather than trusted.
 from __future__ import annotations
 
 import hashlib
-import os
+import io
 from pathlib import Path
 
 import numpy as np
 
 from services.planner.occupancy_map import OccupancyMap
+from shared.files import write_atomically
 
 
 def map_fingerprint(occupancy: OccupancyMap) -> str:
@@ -58,10 +59,8 @@ class GlassStore:
         """Write ``layer`` unless it equals what was last written; True when written."""
         if self._saved is not None and np.array_equal(layer, self._saved):
             return False
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-        with open(tmp, "wb") as out:
-            np.savez(out, map=np.array(self._fingerprint_of(occupancy)), sonar=layer)
-        os.replace(tmp, self.path)
+        buffer = io.BytesIO()
+        np.savez(buffer, map=np.array(self._fingerprint_of(occupancy)), sonar=layer)
+        write_atomically(self.path, buffer.getvalue())
         self._saved = layer.copy()
         return True
