@@ -19,7 +19,13 @@ import math
 
 import numpy as np
 
-from services.planner.costmap import LETHAL_OBSTACLE, NO_INFORMATION, CostmapParams, LayeredCostmap
+from services.planner.costmap import (
+    FREE_SPACE,
+    LETHAL_OBSTACLE,
+    NO_INFORMATION,
+    CostmapParams,
+    LayeredCostmap,
+)
 from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.grid_frame import GridFrame
 from services.planner.occupancy_map import OCC_FREE, OccupancyMap
@@ -62,6 +68,33 @@ class GlassMemory:
     def observe_footprint(self, pose: tuple[float, float, float]) -> None:
         """Where the robot stands there is no glass."""
         self._sonar.clear_footprint(pose)
+
+    def observe_turning_circle(self, pose: tuple[float, float, float]) -> None:
+        """Within reach of the robot turning in place, suspect nothing unseen (marks stay marks).
+
+        A robot that stopped facing a pane has the pane's marks ahead and, beside the sonar's narrow cone,
+        cells it never looked at within ``suspicion_radius_m`` of them: suspected glass within reach of
+        its front corners. It could then neither turn (a corner sweeps into them) nor back away (the
+        outline the follower checks lies half a cell outside the cells its footprint cleared), and every
+        recovery ended the same way. The node calls this when a task starts, with the robot standing
+        still, and never while driving: suspicion keeps a moving robot off the unseen end of a pane.
+        """
+        x, y, _ = pose
+        frame = self.frame
+        reach = self._sonar.params.circumscribed_radius_m + 1.5 * frame.resolution_m
+        corners = frame.world_to_cells(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
+        lo = np.maximum(corners[0], 0)
+        hi = np.minimum(corners[1], [frame.width - 1, frame.height - 1])
+        if np.any(hi < lo):
+            return
+        iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
+        ix, iy = ix.ravel(), iy.ravel()
+        centres = frame.cells_to_world(np.stack([ix, iy], axis=1))
+        near = np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= reach
+        layer = self._sonar.range_layer
+        ix, iy = ix[near], iy[near]
+        unseen = layer[iy, ix] == NO_INFORMATION
+        layer[iy[unseen], ix[unseen]] = FREE_SPACE
 
     def clear(self) -> None:
         self._sonar.clear()

@@ -114,6 +114,9 @@ GLASS_SAVE_PERIOD_S = 1.0
 LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
 #: Feedback's time estimate uses the measured speed above this, else the speed limit.
 ETA_MIN_SPEED_MPS = 0.05
+#: A robot slower than this stands still: a task starting then may trust its turning circle (glass).
+STANDING_STILL_MPS = 0.02
+STANDING_STILL_RPS = 0.05
 
 
 class Phase(enum.Enum):
@@ -489,6 +492,7 @@ class PlannerService:
         self._follower.reset()
         handle.execute()
         self._log.info("goal (%.2f, %.2f, %.2f) accepted", task.goal.x, task.goal.y, task.goal.yaw)
+        self._trust_turning_circle(now)
         self._request_plan(task, now)
 
     def _on_cancel(self, handle: NavHandle) -> None:
@@ -704,6 +708,18 @@ class PlannerService:
             self._glass.clear()
             self._apply_glass()
         self._log.info("costmap cleared (%s)", "lidar" if keep_sonar else "lidar and glass memory")
+
+    def _trust_turning_circle(self, now: float) -> None:
+        """A task starts where the robot stands still: let it turn there (see
+        :meth:`GlassMemory.observe_turning_circle`). Not for a goal that arrives while driving."""
+        pose = self._tracker.current_pose(now)
+        velocity = self._tracker.velocity(now)
+        if pose is None or self._glass is None or velocity is None:
+            return
+        if abs(velocity[0]) > STANDING_STILL_MPS or abs(velocity[1]) > STANDING_STILL_RPS:
+            return
+        self._glass.observe_turning_circle(pose.as_tuple())
+        self._apply_glass()
 
     def _recover(self, task: _Task, pose: Pose2D, now: float, grid: Any) -> None:
         assert self._costmap is not None

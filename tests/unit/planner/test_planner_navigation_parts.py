@@ -342,6 +342,22 @@ def test_glass_memory_without_suspicion_keeps_only_the_marks() -> None:
         GlassMemory(memory.frame, CostmapParams(), suspicion_radius_m=-1.0)
 
 
+def test_a_robot_stopped_facing_glass_may_turn_where_it_stands_once_its_turning_circle_is_trusted() -> None:
+    """The glass room's stuck start: 0.46 m from a pane, facing it. Beside the sonar's cone the floor was
+    never looked at, so within the suspicion radius it counts as glass, within reach of the front corners."""
+    memory = _glass_memory(suspicion_m=0.5)
+    robot = (1.0, 1.5, 0.0)
+    sensor = (1.2, 1.5, 0.0)  # the sonar sits at the front of the footprint
+    memory.add_reading(sensor, 0.26, 0.5, 0.02, 3.0)  # the pane at x = 1.46
+    memory.observe_footprint(robot)
+    corner_sweep = (1.0 + 0.2, 1.5 + 0.2)  # where a front corner goes turning in place (radius 0.25 m)
+    assert _is_glass(memory, *corner_sweep)
+    memory.observe_turning_circle(robot)
+    assert not _is_glass(memory, *corner_sweep)
+    assert _is_glass(memory, 1.46, 1.5)  # the pane's marks stay
+    assert _is_glass(memory, 1.46, 1.5 + 0.4)  # and so does the suspicion beyond the turning circle
+
+
 def test_follower_settings_come_from_the_planner_parameters() -> None:
     follower = Params().follower_params()
     assert follower.approach_velocity_scaling_dist_m == pytest.approx(0.3)
