@@ -196,6 +196,11 @@ def _moved(before: Pose2D, after: Pose2D) -> bool:
     )
 
 
+def _is_echo(reading: Range) -> bool:
+    """A sonar reading that heard something (not the nothing-in-range reading)."""
+    return reading.min_range <= reading.range < reading.max_range
+
+
 def _result(code: NavigateErrorCode, message: str = "") -> NavigateToPoseResult:
     return NavigateToPoseResult(error_code=int(code), error_msg=message)
 
@@ -430,6 +435,11 @@ class PlannerService:
             last = self._last_range_pose
             if self._pending_ranges and last is not None and not _moved(last, sensor):
                 continue  # a reading from (almost) the same place as the last one adds nothing
+            if self._pending_ranges and _is_echo(reading) and not self._lidar_near_in_time(reading):
+                # Only a scan from about the same time can tell glass from a wall; a later reading will
+                # have one. (Between idle updates, 1 s apart, the first reading after a teleport was
+                # compared with no scan at all and marked the wall it saw as glass.)
+                continue
             self._last_range_pose = sensor
             self._fold_in_sonar(sensor, reading)
         pose = self._tracker.current_pose(now)
@@ -455,15 +465,21 @@ class PlannerService:
         glass = self._glass
         if glass is None:
             return
-        echo = reading.min_range <= reading.range < reading.max_range
-        hits_stamp_s, hits = self._lidar_hits
-        fresh = abs(reading.header.stamp.to_sec() - hits_stamp_s) <= LIDAR_FOR_SONAR_MAX_AGE_S
-        if echo and fresh and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits):
+        _, hits = self._lidar_hits
+        if (
+            _is_echo(reading)
+            and self._lidar_near_in_time(reading)
+            and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits)
+        ):
             glass.add_clear_view(
                 sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
             )
             return
         glass.add_reading(sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range)
+
+    def _lidar_near_in_time(self, reading: Range) -> bool:
+        """Whether the newest scan is close enough in time to a sonar reading to explain its echo."""
+        return abs(reading.header.stamp.to_sec() - self._lidar_hits[0]) <= LIDAR_FOR_SONAR_MAX_AGE_S
 
     # --- action -----------------------------------------------------------------------------------
 

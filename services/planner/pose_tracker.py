@@ -169,11 +169,17 @@ class PoseTracker:
         return self._map_to_odom.compose(advance(last.pose, last.linear_mps, last.angular_rps, ahead_s))
 
     def pose_at(self, stamp_s: float) -> Pose2D | None:
-        """The pose at a sensor stamp (the odometry clock); the last map pose when that is all there is."""
+        """The pose at a sensor stamp (the odometry clock); the last map pose when that is all there is.
+
+        ``None`` for a stamp from before the odometry history: after a teleport that is a reading taken
+        where the robot was, and placing it where the robot is now would put what it saw in the wrong place.
+        """
         if self._map_pose is None:
             return None
         if self._map_to_odom is None or not self._odom:
             return self._map_pose
+        if stamp_s < self._odom[0].stamp_s:
+            return None
         return self._map_to_odom.compose(self._odom_pose_at(stamp_s))
 
     def carried_by_odometry(self, now_s: float) -> bool:

@@ -29,7 +29,13 @@ from shared.interfaces.navigation import (
     NavigateErrorCode,
     NavigateToPoseGoal,
 )
-from shared.interfaces.simulator import SIM_STATE, SimStateRequest, SimStateResponse
+from shared.interfaces.simulator import (
+    SIM_STATE,
+    TELEPORT,
+    SimStateRequest,
+    SimStateResponse,
+    TeleportRequest,
+)
 from shared.messages import (
     Clock,
     CollisionEvent,
@@ -43,6 +49,7 @@ from shared.messages import (
 )
 from shared.navigation import NavigationClient, TaskResult
 from shared.node import Node, call_service
+from shared.topics import SIM_TELEPORT
 from shared.world import load_world
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, wait_until
@@ -256,6 +263,41 @@ def test_glass_absent_from_the_map_is_found_and_avoided(  # type: ignore[no-unty
     cells = occupancy.frame.world_to_cells(along)
     assert (occupancy.data[cells[:, 1], cells[:, 0]] == 0).all(), "the map should not show the glass"
     assert (costs[cells[:, 1], cells[:, 0]] >= 99).any(), "no glass cell was marked in the costmap"
+    _assert_no_errors(planner)
+
+
+def test_a_robot_put_down_facing_a_wall_finds_no_glass_there(  # type: ignore[no-untyped-def]
+    spawn, bus: zenoh.Session, namespace: str
+) -> None:
+    """Trials put the robot down anywhere between dockings. A sonar reading from before must not be
+    placed where the robot now stands, and an echo from the new place must be compared with a scan from
+    there: either way the wall it heard became glass, and the floor round it, suspected glass, boxed
+    the robot in."""
+    costmaps = KeyRecorder(bus, f"{namespace}/{COSTMAP_TOPIC}", OccupancyGrid, keep=3)
+    clock = KeyRecorder(bus, f"{namespace}/clock", Clock, keep=1)
+    # Idle costmap updates 2 s apart: sonar readings from the new place wait that long to be folded in.
+    planner = _start_stack(spawn, GLASS_ROOM, "-p", f"world={GLASS_ROOM}", "-p", "costmap_publish_period_s=0.5",
+                           "-p", "idle_costmap_update_rate_hz=0.5")
+    costmaps.wait_for(timeout_s=30.0)
+    occupancy = map_from_world(load_world(GLASS_ROOM))
+    frame = occupancy.frame
+    ys, xs = np.mgrid[0 : frame.height, 0 : frame.width]
+    centres = frame.cells_to_world(np.stack([xs.ravel(), ys.ravel()], axis=1))
+    occupied = centres[occupancy.data.ravel() > 50]
+    # 0.47 m from two walls, facing the corner between them: three corners of the room.
+    for put_down in (Pose2D(-2.53, 4.52, -2.57), Pose2D(2.53, 4.52, -0.57), Pose2D(2.53, 0.9, 0.57)):
+        reply = call_service(bus, f"{namespace}/{SIM_TELEPORT}", TELEPORT,
+                             TeleportRequest(x=put_down.x, y=put_down.y, yaw=put_down.yaw), timeout_s=5.0)
+        assert reply.success, reply.message
+        teleported_s = clock.wait_for(timeout_s=5.0, after=clock.count).clock.to_sec()
+        clock.wait_for(lambda m, t=teleported_s: m.clock.to_sec() > t + 5.0, timeout_s=30.0, after=clock.count)
+        costmap = costmaps.wait_for(timeout_s=10.0, after=costmaps.count)
+        costs = np.asarray(costmap.data).reshape(costmap.info.height, costmap.info.width)
+        near = centres[np.hypot(centres[:, 0] - put_down.x, centres[:, 1] - put_down.y) < 0.7]
+        floor = near[[np.hypot(*(occupied - c).T).min() >= 0.22 for c in near]]  # beyond walls' inflation
+        cells = frame.world_to_cells(floor)
+        blocked = floor[costs[cells[:, 1], cells[:, 0]] >= 99]
+        assert len(blocked) == 0, f"put down at {put_down}: open floor counted as an obstacle at {np.round(blocked, 2).tolist()}"
     _assert_no_errors(planner)
 
 

@@ -123,3 +123,7 @@ def test_odometry_that_jumps_waits_for_localisation_to_catch_up() -> None:
     tracker.add_odometry(OdometrySample(2.12, Pose2D(), 0.0, 0.0), received_s=2.12)
     pose = tracker.current_pose(2.12)
     assert pose is not None and _close(pose, placed)
+    # A reading taken before the teleport has no place now: it was taken where the robot was.
+    assert tracker.pose_at(1.0) is None
+    at_restart = tracker.pose_at(1.02)
+    assert at_restart is not None and _close(at_restart, placed)
