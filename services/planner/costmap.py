@@ -328,6 +328,19 @@ class LayeredCostmap:
             arc_points = np.stack([sx + range_m * np.cos(angles), sy + range_m * np.sin(angles)], axis=1)
             self._set_cells(self._range, self._frame.world_to_cells(arc_points), LETHAL_OBSTACLE)
 
+    def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
+        """Forget what the sensors said within ``radius_m`` of a point (nav2 ``ClearCostmapAroundRobot``)."""
+        x, y = xy
+        corners = np.array([[x - radius_m, y - radius_m], [x + radius_m, y - radius_m],
+                            [x - radius_m, y + radius_m], [x + radius_m, y + radius_m]])
+        cells = self._cells_around(corners)
+        if len(cells) == 0:
+            return
+        centres = self._frame.cells_to_world(cells)
+        inside = cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
+        self._set_cells(self._obstacle, inside, NO_INFORMATION)
+        self._set_cells(self._range, inside, NO_INFORMATION)
+
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
         """Free the cells under the robot in the dynamic layers (nav2 ``footprint_clearing_enabled``)."""
         x, y, yaw = pose

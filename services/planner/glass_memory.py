@@ -99,6 +99,10 @@ class GlassMemory:
     def clear(self) -> None:
         self._sonar.clear()
 
+    def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
+        """Forget marks and looks within ``radius_m`` of a point; glass found farther away stays known."""
+        self._sonar.clear_around(xy, radius_m)
+
     def restore(self, layer: np.ndarray) -> None:
         """Adopt a sonar layer kept from before (see :mod:`services.planner.glass_store`)."""
         if layer.shape != self.frame.shape:

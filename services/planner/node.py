@@ -713,17 +713,29 @@ class PlannerService:
         task.phase = Phase.BACKING_UP
         self._backup.start(pose, task.clock_s)
 
-    def _clear_sensor_layers(self, keep_sonar: bool) -> None:
+    def _clear_sensor_layers(self, keep_sonar: bool, glass_around: Pose2D | None = None) -> None:
         """Forget what the lidar saw (the next scan, all round, refills it) and, unless ``keep_sonar``,
-        the glass memory. Glass is known only from the forward-looking sonar and cannot be seen again
-        from beside it, so the first, third, ... recoveries keep it; the others clear it too, in case a
-        spurious echo is what blocks the way."""
+        the glass memory: all of it, or with ``glass_around`` only what lies within
+        ``recovery_glass_clear_radius_m`` of that pose.
+
+        Glass is known only from the forward-looking sonar and cannot be seen again from beside it, so the
+        first, third, ... recoveries keep it; the others clear it round the robot, in case a spurious echo
+        is what blocks the way. Farther glass stays known: forgetting a pane's end the sonar saw once, a
+        robot replanned past it and drove into it.
+        """
         assert self._costmap is not None
         self._costmap.clear()
+        what = "lidar"
         if not keep_sonar and self._glass is not None:
-            self._glass.clear()
+            if glass_around is None:
+                self._glass.clear()
+                what = "lidar and glass memory"
+            else:
+                radius = self._params.recovery_glass_clear_radius_m
+                self._glass.clear_around((glass_around.x, glass_around.y), radius)
+                what = f"lidar, and glass memory within {radius:g} m"
             self._apply_glass()
-        self._log.info("costmap cleared (%s)", "lidar" if keep_sonar else "lidar and glass memory")
+        self._log.info("costmap cleared (%s)", what)
 
     def _trust_turning_circle(self, now: float) -> None:
         """A task starts where the robot stands still: let it turn there (see
@@ -745,7 +757,7 @@ class PlannerService:
                 self._publish_cmd(speed, 0.0)
                 return
             self._publish_cmd(0.0, 0.0)
-            self._clear_sensor_layers(keep_sonar=task.recoveries % 2 == 1)
+            self._clear_sensor_layers(keep_sonar=task.recoveries % 2 == 1, glass_around=pose)
             task.phase = Phase.CLEARING
             task.wait_until_s = task.clock_s + self._params.recovery_wait_s
             return

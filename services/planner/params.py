@@ -96,6 +96,8 @@ class Params(ServiceParams):
     backup_distance_m: float = Field(0.15, gt=0.0)
     backup_speed_mps: float = Field(0.1, gt=0.0)
     recovery_wait_s: float = Field(0.5, ge=0.0, description="after clearing, let the sensors refill")
+    recovery_glass_clear_radius_m: float = Field(
+        1.0, gt=0.0, description="recoveries that clear glass memory forget it only this close to the robot")
 
     @field_validator("map_yaml")
     @classmethod

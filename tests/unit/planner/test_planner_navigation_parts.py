@@ -358,6 +358,16 @@ def test_a_robot_stopped_facing_glass_may_turn_where_it_stands_once_its_turning_
     assert _is_glass(memory, 1.46, 1.5 + 0.4)  # and so does the suspicion beyond the turning circle
 
 
+def test_clearing_glass_round_the_robot_keeps_a_pane_seen_farther_away() -> None:
+    memory = _glass_memory(suspicion_m=0.0)
+    memory.add_reading((1.0, 1.5, 0.0), 0.4, 0.5, 0.02, 3.0)  # an echo 0.4 m ahead: within reach of a clear
+    memory.add_reading((1.0, 1.0, 0.0), 1.6, 0.5, 0.02, 3.0)  # a pane seen 1.6 m away
+    assert _is_glass(memory, 1.4, 1.5) and _is_glass(memory, 2.6, 1.0)
+    memory.clear_around((1.0, 1.5), 1.0)
+    assert not _is_glass(memory, 1.4, 1.5)
+    assert _is_glass(memory, 2.6, 1.0)
+
+
 def test_follower_settings_come_from_the_planner_parameters() -> None:
     follower = Params().follower_params()
     assert follower.approach_velocity_scaling_dist_m == pytest.approx(0.3)
