@@ -330,16 +330,15 @@ class LayeredCostmap:
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
         """Forget what the sensors said within ``radius_m`` of a point (nav2 ``ClearCostmapAroundRobot``)."""
-        x, y = xy
-        corners = np.array([[x - radius_m, y - radius_m], [x + radius_m, y - radius_m],
-                            [x - radius_m, y + radius_m], [x + radius_m, y + radius_m]])
-        cells = self._cells_around(corners)
-        if len(cells) == 0:
-            return
-        centres = self._frame.cells_to_world(cells)
-        inside = cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
+        inside = self._cells_within(xy, radius_m)
         self._set_cells(self._obstacle, inside, NO_INFORMATION)
         self._set_cells(self._range, inside, NO_INFORMATION)
+
+    def free_unseen_range_around(self, xy: tuple[float, float], radius_m: float) -> None:
+        """In the range layer, cells never looked at within ``radius_m`` of a point become free."""
+        inside = self._cells_within(xy, radius_m)
+        unseen = inside[self._range[inside[:, 1], inside[:, 0]] == NO_INFORMATION]
+        self._set_cells(self._range, unseen, FREE_SPACE)
 
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
         """Free the cells under the robot in the dynamic layers (nav2 ``footprint_clearing_enabled``)."""
@@ -386,6 +385,14 @@ class LayeredCostmap:
             return np.zeros((0, 2), dtype=np.int64)
         iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
         return np.stack([ix.ravel(), iy.ravel()], axis=1)
+
+    def _cells_within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
+        """On-grid cells ``(N, 2)`` whose centres lie within ``radius_m`` of a point."""
+        x, y = xy
+        box = np.array([[x - radius_m, y - radius_m], [x + radius_m, y + radius_m]])
+        cells = self._cells_around(box)
+        centres = self._frame.cells_to_world(cells)
+        return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
 
     def _set_cells(self, layer: np.ndarray, cells: np.ndarray, value: int) -> None:
         cells = np.asarray(cells).reshape(-1, 2)

@@ -19,13 +19,7 @@ import math
 
 import numpy as np
 
-from services.planner.costmap import (
-    FREE_SPACE,
-    LETHAL_OBSTACLE,
-    NO_INFORMATION,
-    CostmapParams,
-    LayeredCostmap,
-)
+from services.planner.costmap import LETHAL_OBSTACLE, NO_INFORMATION, CostmapParams, LayeredCostmap
 from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.grid_frame import GridFrame
 from services.planner.occupancy_map import OCC_FREE, OccupancyMap
@@ -80,21 +74,8 @@ class GlassMemory:
         still, and never while driving: suspicion keeps a moving robot off the unseen end of a pane.
         """
         x, y, _ = pose
-        frame = self.frame
-        reach = self._sonar.params.circumscribed_radius_m + 1.5 * frame.resolution_m
-        corners = frame.world_to_cells(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
-        lo = np.maximum(corners[0], 0)
-        hi = np.minimum(corners[1], [frame.width - 1, frame.height - 1])
-        if np.any(hi < lo):
-            return
-        iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
-        ix, iy = ix.ravel(), iy.ravel()
-        centres = frame.cells_to_world(np.stack([ix, iy], axis=1))
-        near = np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= reach
-        layer = self._sonar.range_layer
-        ix, iy = ix[near], iy[near]
-        unseen = layer[iy, ix] == NO_INFORMATION
-        layer[iy[unseen], ix[unseen]] = FREE_SPACE
+        reach = self._sonar.params.circumscribed_radius_m + 1.5 * self.frame.resolution_m
+        self._sonar.free_unseen_range_around((x, y), reach)
 
     def clear(self) -> None:
         self._sonar.clear()
