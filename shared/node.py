@@ -76,18 +76,18 @@ def sequence_attachment(sequence: int, gid: bytes) -> bytes:
 
 def sequence_number(attachment: zenoh.ZBytes | bytes | None) -> int | None:
     """The per-publisher sequence number a zendock publisher attaches to every sample."""
-    if attachment is None:
-        return None
-    raw = attachment if isinstance(attachment, bytes) else attachment.to_bytes()
-    return _SEQ.unpack_from(raw)[0] if len(raw) in (_SEQ.size, ATTACHMENT_SIZE) else None
+    raw = _attachment_bytes(attachment)
+    return _SEQ.unpack_from(raw)[0] if raw is not None and len(raw) in (_SEQ.size, ATTACHMENT_SIZE) else None
 
 
 def publisher_id(attachment: zenoh.ZBytes | bytes | None) -> bytes | None:
     """The publisher's id from a zendock sample's attachment (``None`` when the sample has none)."""
-    if attachment is None:
-        return None
-    raw = attachment if isinstance(attachment, bytes) else attachment.to_bytes()
-    return raw[_SEQ.size:] if len(raw) == ATTACHMENT_SIZE else None
+    raw = _attachment_bytes(attachment)
+    return raw[_SEQ.size:] if raw is not None and len(raw) == ATTACHMENT_SIZE else None
+
+
+def _attachment_bytes(attachment: zenoh.ZBytes | bytes | None) -> bytes | None:
+    return attachment if attachment is None or isinstance(attachment, bytes) else attachment.to_bytes()
 
 
 @dataclass(frozen=True)

@@ -196,11 +196,6 @@ def _moved(before: Pose2D, after: Pose2D) -> bool:
     )
 
 
-def _is_echo(reading: Range) -> bool:
-    """A sonar reading that heard something (not the nothing-in-range reading)."""
-    return reading.min_range <= reading.range < reading.max_range
-
-
 def _result(code: NavigateErrorCode, message: str = "") -> NavigateToPoseResult:
     return NavigateToPoseResult(error_code=int(code), error_msg=message)
 
@@ -435,13 +430,8 @@ class PlannerService:
             last = self._last_range_pose
             if self._pending_ranges and last is not None and not _moved(last, sensor):
                 continue  # a reading from (almost) the same place as the last one adds nothing
-            if self._pending_ranges and _is_echo(reading) and not self._lidar_near_in_time(reading):
-                # Only a scan from about the same time can tell glass from a wall; a later reading will
-                # have one. (Between idle updates, 1 s apart, the first reading after a teleport was
-                # compared with no scan at all and marked the wall it saw as glass.)
-                continue
-            self._last_range_pose = sensor
-            self._fold_in_sonar(sensor, reading)
+            if self._fold_in_sonar(sensor, reading, may_wait=bool(self._pending_ranges)):
+                self._last_range_pose = sensor
         pose = self._tracker.current_pose(now)
         if pose is not None:
             costmap.clear_footprint(pose.as_tuple())
@@ -460,26 +450,30 @@ class PlannerService:
             self._log.info("an obstacle blocks the path: replanning")
             self._request_plan(task, now, urgent=True)
 
-    def _fold_in_sonar(self, sensor: Pose2D, reading: Range) -> None:
-        """Into glass memory: an echo the lidar cannot explain marks; one it explains only clears."""
+    def _fold_in_sonar(self, sensor: Pose2D, reading: Range, may_wait: bool) -> bool:
+        """Into glass memory: an echo the lidar cannot explain marks; one it explains only clears.
+
+        Only a scan from about the same time can tell glass from a wall. With ``may_wait`` (a later
+        reading is queued) an echo with no such scan is left out (False) for that later one: between idle
+        updates, 1 s apart, the first echo after a teleport was compared with no scan from the new place
+        and marked the wall it heard as glass. The last reading is judged even so: a dead lidar still
+        leaves the sonar's marks.
+        """
         glass = self._glass
         if glass is None:
-            return
-        _, hits = self._lidar_hits
-        if (
-            _is_echo(reading)
-            and self._lidar_near_in_time(reading)
-            and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits)
-        ):
+            return True
+        echo = reading.min_range <= reading.range < reading.max_range
+        hits_stamp_s, hits = self._lidar_hits
+        fresh = abs(reading.header.stamp.to_sec() - hits_stamp_s) <= LIDAR_FOR_SONAR_MAX_AGE_S
+        if echo and not fresh and may_wait:
+            return False
+        if echo and fresh and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits):
             glass.add_clear_view(
                 sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
             )
-            return
+            return True
         glass.add_reading(sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range)
-
-    def _lidar_near_in_time(self, reading: Range) -> bool:
-        """Whether the newest scan is close enough in time to a sonar reading to explain its echo."""
-        return abs(reading.header.stamp.to_sec() - self._lidar_hits[0]) <= LIDAR_FOR_SONAR_MAX_AGE_S
+        return True
 
     # --- action -----------------------------------------------------------------------------------
 
