@@ -130,7 +130,10 @@ async def run_check(argv: Sequence[str], *, cwd: Path, env: dict[str, str], time
     except OSError:
         return False
     try:
-        return await asyncio.wait_for(proc.wait(), timeout_s) == 0
+        # asyncio.timeout, not wait_for: on Python 3.11 wait_for swallows a cancellation that arrives as the
+        # test exits, and the supervisor's health loop would then never stop
+        async with asyncio.timeout(timeout_s):
+            return await proc.wait() == 0
     except TimeoutError:
         return False
     finally:

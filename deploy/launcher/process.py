@@ -181,7 +181,8 @@ class ServiceProcess:
         while True:
             self.remember_descendants()
             try:
-                returncode = await asyncio.wait_for(asyncio.shield(self._proc.wait()), DESCENDANT_SCAN_S)
+                async with asyncio.timeout(DESCENDANT_SCAN_S):
+                    returncode = await asyncio.shield(self._proc.wait())
                 break
             except TimeoutError:
                 continue
@@ -190,7 +191,8 @@ class ServiceProcess:
         elif not self._gone():
             await self._escalate([(signal.SIGTERM, 0.0), (signal.SIGKILL, ORPHAN_GRACE_S)])
         try:
-            await asyncio.wait_for(asyncio.shield(self._pump), timeout=1.0)
+            async with asyncio.timeout(1.0):
+                await asyncio.shield(self._pump)
         except TimeoutError:
             self._pump.cancel()
         return returncode

@@ -58,6 +58,7 @@ class ServiceRunner:
         self._wake = asyncio.Event()
         self._task: asyncio.Task[None] | None = None
         self._health_tasks: list[asyncio.Task[None]] = []
+        self._checks_stopped = False
         self._timers: list[asyncio.TimerHandle] = []
         self._log = RotatingLog(supervisor.log_dir / f"{plan.name}.log") if supervisor.log_dir else None
 
@@ -147,8 +148,10 @@ class ServiceRunner:
         check = self.plan.health
         assert check is not None and check.test_argv is not None
         failures = 0
-        while True:
+        while not self._checks_stopped:
             ok = await run_check(check.test_argv, cwd=self.plan.cwd, env=dict(self.plan.env), timeout_s=check.test_timeout_s)
+            if self._checks_stopped:  # the stop's cancellation can be lost inside the check (3.11's wait_for did)
+                return
             if ok:
                 failures = 0
                 self._exec_health = "healthy"
@@ -163,6 +166,7 @@ class ServiceRunner:
         check = self.plan.health
         self._token_seen = False
         self._exec_health = "starting"
+        self._checks_stopped = False
         if check is None:
             return
         if check.test_argv:
@@ -172,6 +176,7 @@ class ServiceRunner:
             self._timers.append(loop.call_later(check.liveliness_timeout_s + 0.01, self.refresh_health))
 
     async def _stop_health(self) -> None:
+        self._checks_stopped = True
         for timer in self._timers:
             timer.cancel()
         tasks, self._health_tasks, self._timers = self._health_tasks, [], []
@@ -252,8 +257,9 @@ class ServiceRunner:
             self.next_start_at = time.monotonic() + delay_s
             self.event(f"restarting in {delay_s:.1f}s (restart {self.restarts}, policy {self.plan.restart})")
             self._set_phase(Phase.RESTARTING, _describe_exit(code))
-            with contextlib.suppress(asyncio.TimeoutError):
-                await asyncio.wait_for(self._wake.wait(), delay_s)
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(delay_s):
+                    await self._wake.wait()
             self.next_start_at = None
         self._set_phase(Phase.STOPPED, f"stopped ({_describe_exit(self.exit_code)})" if self.exit_code is not None else "stopped")
         self.event("stopped")
@@ -467,6 +473,7 @@ class Supervisor:
             remaining = None if deadline is None else deadline - time.monotonic()
             if remaining is not None and remaining <= 0:
                 return False
-            with contextlib.suppress(asyncio.TimeoutError):
-                await asyncio.wait_for(self.changed(), None if remaining is None else min(remaining, 0.5))
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(None if remaining is None else min(remaining, 0.5)):
+                    await self.changed()
         return True

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import asyncio
 import os
 import signal
+import threading
 import time
 from pathlib import Path
 
@@ -83,6 +85,37 @@ def test_health_comes_from_liveliness_tokens_and_exec_checks(launch, tmp_path: P
     stack.wait_until(lambda st: st["robot1_talker"].health == "healthy", 15, "robot1's talker healthy")
     assert stack.status("robot2_talker").health == "starting"
     assert stack.status("silent").state == "running"
+
+
+def test_a_stop_ends_exec_checks_even_when_a_check_loses_its_cancellation(  # type: ignore[no-untyped-def]
+    launch, monkeypatch
+) -> None:
+    """On Python 3.11 ``asyncio.wait_for`` returns the result instead of raising when a cancellation lands
+    just as the awaited process exits; the health loop then ran on and ``down`` waited for it for ever."""
+    from deploy.launcher import supervisor
+
+    checking = threading.Event()
+
+    async def check_that_swallows_cancellation(*_args: object, **_kwargs: object) -> bool:
+        checking.set()
+        try:
+            await asyncio.sleep(3600)
+        except asyncio.CancelledError:
+            return True  # what wait_for did: a result, no CancelledError
+        return False
+
+    monkeypatch.setattr(supervisor, "run_check", check_that_swallows_cancellation)
+    stack = launch(
+        f"""\
+        services:
+          probed:
+            command: {fake("--name", "probed")}
+            healthcheck: {{test: "true", interval: 10s}}
+        """
+    )
+    wait_for(checking.is_set, 10, "the first health check to start")
+    assert stack.status("probed").state == "running"
+    stack.down(timeout_s=15)  # raises TimeoutError, naming probed, if the health loop outlives the stop
 
 
 def test_restart_policies(launch) -> None:  # type: ignore[no-untyped-def]
