@@ -23,6 +23,7 @@ import logging
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +38,20 @@ from shared.node import Node
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
 P = TypeVar("P", bound="ServiceParams")
+
+#: How often a main thread waiting for a stop signal comes back to the interpreter to run its handler.
+SIGNAL_CHECK_S = 0.2
+
+
+def wait_for_stop(stop: threading.Event) -> None:
+    """Block the main thread until a signal handler sets ``stop``.
+
+    The kernel may hand SIGINT to any thread, often one of Zenoh's: Python then only marks the handler
+    pending, and a main thread asleep in an untimed ``Event.wait`` never wakes to run it (the router hung
+    so after its stop). Waking every ``SIGNAL_CHECK_S`` lets the handler run.
+    """
+    while not stop.wait(SIGNAL_CHECK_S):
+        pass
 
 
 class ServiceParams(BaseModel):

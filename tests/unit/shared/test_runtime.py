@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -82,3 +85,36 @@ def test_run_service_exits_2_on_bad_parameter(capsys: pytest.CaptureFixture[str]
     assert run_service("demo", DemoParams, never_built, ["-p", "bogus=1"]) == 2
     err = capsys.readouterr().err
     assert "bogus: unknown key" in err and err.count("\n") == 1
+
+
+_STOPPED_BY_A_SIGNAL_ON_ANOTHER_THREAD = """
+import signal, sys, threading
+from shared.runtime import wait_for_stop
+stop = threading.Event()
+signal.signal(signal.SIGINT, lambda *_: stop.set())
+threading.Thread(target=threading.Event().wait, args=(60,), daemon=True).start()
+# the kernel now hands SIGINT to the other thread, as it may to one of Zenoh's
+signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+print("waiting", flush=True)
+wait_for_stop(stop)
+print("stopped", flush=True)
+"""
+
+
+def test_wait_for_stop_runs_a_handler_whose_signal_went_to_another_thread() -> None:
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _STOPPED_BY_A_SIGNAL_ON_ANOTHER_THREAD],
+        cwd=Path(__file__).resolve().parents[3],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().strip() == "waiting"
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=10)
+        assert out.strip() == "stopped" and proc.returncode == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
