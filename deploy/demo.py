@@ -187,7 +187,7 @@ def _plot(world: World, record: RunRecord, path: Path, log: Any) -> None:
     plot_run(
         world,
         path,
-        driven=[(x, y) for _, x, y, _ in record.driven],
+        driven=record.driven_since_placed(),
         plans=record.plans[:1] + record.plans[-1:] if record.plans else [],
         sonar_hits=record.sonar_hits,
         battery=record.battery,
