@@ -19,8 +19,9 @@ A goal's life: PLANNING (held still until the first path) -> FOLLOWING (regulate
 every ``replan_period_s``, and at once when the costmap blocks the path or the follower sees a collision
 ahead) -> SUCCEEDED inside the goal tolerances. A collision ahead that lasts ``blocked_timeout_s``, no
 progress for ``progress_timeout_s``, or a failed plan starts a recovery: BACKING_UP (only over free
-cells), then CLEARING (the lidar layer is cleared, on every second recovery the sonar layer too, and
-refills for ``recovery_wait_s``), then PLANNING again. After ``max_recoveries`` the goal is ABORTED with
+cells), then CLEARING (the lidar layer is cleared; every second recovery also forgets glass round the
+robot, or all glass once planning has failed past the fourth; the layers refill for ``recovery_wait_s``),
+then PLANNING again. After ``max_recoveries`` the goal is ABORTED with
 the error code of the last failure. These timeouts run on the control loop's own clock (sim time, each
 tick counting at most four periods), so a machine too busy to run the loop on time does not make the
 robot look stuck. A stale pose holds the robot still (a map pose carried forward by fresh odometry is
@@ -51,7 +52,7 @@ from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.pose_tracker import OdometrySample, PoseTracker
 from services.planner.pure_pursuit import FollowStatus, RegulatedPurePursuit
-from services.planner.recovery import BackUp, BackUpStatus
+from services.planner.recovery import BackUp, BackUpStatus, GlassClearing, glass_clearing
 from services.planner.sonar_fusion import echo_explained_by_lidar
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
@@ -126,6 +127,12 @@ class Phase(enum.Enum):
     CLEARING = "clearing"
 
 
+#: Failures to find a path, as against failures to follow one.
+PLANNING_FAILURES = frozenset(
+    {NavigateErrorCode.NO_VALID_PATH, NavigateErrorCode.START_OCCUPIED, NavigateErrorCode.GOAL_OCCUPIED}
+)
+
+
 @dataclass
 class _Task:
     """One navigation goal being worked on."""
@@ -139,6 +146,8 @@ class _Task:
     phase: Phase = Phase.PLANNING
     plan: ActivePlan | None = None
     recoveries: int = 0
+    #: The current recovery began because no path was found (not because following failed).
+    recovering_from_planning: bool = False
     last_plan_request_s: float = -math.inf
     replan_wanted: bool = False
     blocked_since_s: float | None = None
@@ -359,7 +368,7 @@ class PlannerService:
 
     def _on_clear_costmaps(self, request: ClearEntireCostmapRequest) -> ClearEntireCostmapResponse:
         if self._costmap is not None:
-            self._clear_sensor_layers(keep_sonar=False)
+            self._clear_sensor_layers(GlassClearing.ALL)
         return ClearEntireCostmapResponse()
 
     # --- sensors ----------------------------------------------------------------------------------
@@ -696,6 +705,7 @@ class PlannerService:
             self._finish(task, "aborted", code, f"{reason} (gave up after {task.recoveries} recoveries)")
             return
         task.recoveries += 1
+        task.recovering_from_planning = code in PLANNING_FAILURES
         self._log.warning("recovery %d of %d (%s): backing up, clearing, replanning",
                           task.recoveries, p.max_recoveries, reason)
         self._generation += 1
@@ -707,26 +717,20 @@ class PlannerService:
         task.phase = Phase.BACKING_UP
         self._backup.start(pose, task.clock_s)
 
-    def _clear_sensor_layers(self, keep_sonar: bool, glass_around: Pose2D | None = None) -> None:
-        """Forget what the lidar saw (the next scan, all round, refills it) and, unless ``keep_sonar``,
-        the glass memory: all of it, or with ``glass_around`` only what lies within
-        ``recovery_glass_clear_radius_m`` of that pose.
-
-        Glass is known only from the forward-looking sonar and cannot be seen again from beside it, so the
-        first, third, ... recoveries keep it; the others clear it round the robot, in case a spurious echo
-        is what blocks the way. Farther glass stays known: forgetting a pane's end the sonar saw once, a
-        robot replanned past it and drove into it.
-        """
+    def _clear_sensor_layers(self, glass: GlassClearing, robot: Pose2D | None = None) -> None:
+        """Forget what the lidar saw (the next scan, all round, refills it) and as much of the glass
+        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot``,
+        or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
         assert self._costmap is not None
         self._costmap.clear()
         what = "lidar"
-        if not keep_sonar and self._glass is not None:
-            if glass_around is None:
+        if glass is not GlassClearing.KEEP and self._glass is not None:
+            if glass is GlassClearing.ALL or robot is None:
                 self._glass.clear()
                 what = "lidar and glass memory"
             else:
                 radius = self._params.recovery_glass_clear_radius_m
-                self._glass.clear_around((glass_around.x, glass_around.y), radius)
+                self._glass.clear_around((robot.x, robot.y), radius)
                 what = f"lidar, and glass memory within {radius:g} m"
             self._apply_glass()
         self._log.info("costmap cleared (%s)", what)
@@ -751,7 +755,7 @@ class PlannerService:
                 self._publish_cmd(speed, 0.0)
                 return
             self._publish_cmd(0.0, 0.0)
-            self._clear_sensor_layers(keep_sonar=task.recoveries % 2 == 1, glass_around=pose)
+            self._clear_sensor_layers(glass_clearing(task.recoveries, task.recovering_from_planning), pose)
             task.phase = Phase.CLEARING
             task.wait_until_s = task.clock_s + self._params.recovery_wait_s
             return

@@ -25,7 +25,7 @@ from services.planner.params import Params
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.rasterize import map_from_world
-from services.planner.recovery import BackUp, BackUpParams, BackUpStatus
+from services.planner.recovery import BackUp, BackUpParams, BackUpStatus, GlassClearing, glass_clearing
 from services.planner.shortest_path import shortest_path_length_m
 from services.planner.sonar_fusion import echo_explained_by_lidar
 from shared.geometry import Pose2D
@@ -366,6 +366,16 @@ def test_clearing_glass_round_the_robot_keeps_a_pane_seen_farther_away() -> None
     memory.clear_around((1.0, 1.5), 1.0)
     assert not _is_glass(memory, 1.4, 1.5)
     assert _is_glass(memory, 2.6, 1.0)
+
+
+def test_recoveries_forget_glass_round_the_robot_and_all_of_it_only_when_no_path_is_found_again() -> None:
+    kept, around, everything = GlassClearing.KEEP, GlassClearing.AROUND_ROBOT, GlassClearing.ALL
+    # following failed (blocked, stuck): a pane's end seen once stays known however often it fails
+    assert [glass_clearing(n, planning_failed=False) for n in range(1, 7)] == [kept, around] * 3
+    # no path: round the robot first; glass farther off can block the only way, so then all of it
+    assert [glass_clearing(n, planning_failed=True) for n in range(1, 7)] == [
+        kept, around, kept, everything, kept, everything
+    ]
 
 
 def test_follower_settings_come_from_the_planner_parameters() -> None:
