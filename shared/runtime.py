@@ -24,6 +24,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,19 +40,24 @@ from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
 P = TypeVar("P", bound="ServiceParams")
 
-#: How often a main thread waiting for a stop signal comes back to the interpreter to run its handler.
+#: How often a main thread waiting on an event comes back to the interpreter to run signal handlers.
 SIGNAL_CHECK_S = 0.2
 
 
-def wait_for_stop(stop: threading.Event) -> None:
-    """Block the main thread until a signal handler sets ``stop``.
+def wait_interruptibly(event: threading.Event, timeout_s: float | None = None) -> bool:
+    """``event.wait(timeout_s)`` for a main thread that must still run its signal handlers.
 
     The kernel may hand SIGINT to any thread, often one of Zenoh's: Python then only marks the handler
-    pending, and a main thread asleep in an untimed ``Event.wait`` never wakes to run it (the router hung
-    so after its stop). Waking every ``SIGNAL_CHECK_S`` lets the handler run.
+    pending, and a main thread asleep in a long ``Event.wait`` does not wake to run it (the router hung
+    so after its stop). Waking every ``SIGNAL_CHECK_S`` lets the handler run (or Ctrl-C raise).
     """
-    while not stop.wait(SIGNAL_CHECK_S):
-        pass
+    deadline = None if timeout_s is None else time.monotonic() + timeout_s
+    while True:
+        step = SIGNAL_CHECK_S if deadline is None else min(SIGNAL_CHECK_S, deadline - time.monotonic())
+        if step <= 0:
+            return event.is_set()
+        if event.wait(step):
+            return True
 
 
 class ServiceParams(BaseModel):

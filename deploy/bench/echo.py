@@ -13,7 +13,7 @@ import threading
 
 from shared.messages import Twist
 from shared.node import RELIABLE, Node
-from shared.runtime import wait_for_stop
+from shared.runtime import wait_interruptibly
 from shared.session import SessionSpec, open_session
 
 
@@ -48,7 +48,7 @@ def run_raw(endpoint: str, stop: threading.Event) -> None:
         pong = session.declare_publisher(pong_key("raw"))
         sub = session.declare_subscriber(ping_key("raw"), lambda sample: pong.put(sample.payload))
         print("ready", flush=True)
-        wait_for_stop(stop)
+        wait_interruptibly(stop)
         sub.undeclare()
 
 

@@ -36,6 +36,7 @@ from shared.interfaces.docking import (
 from shared.messages import Header, Pose, PoseStamped
 from shared.names import normalise_namespace
 from shared.node import Node
+from shared.runtime import wait_interruptibly
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
 EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130
@@ -133,7 +134,7 @@ def run_action(
 
         handle = client.send_goal(goal, on_feedback=on_feedback, on_done=lambda _h: done.set())
         try:
-            finished = done.wait(timeout_s) if timeout_s is not None else _wait_forever(done)
+            finished = wait_interruptibly(done, timeout_s)
         except KeyboardInterrupt:
             print("interrupted: cancelling", file=sys.stderr)
             client.cancel_goal(handle)
@@ -149,12 +150,6 @@ def run_action(
         node.shutdown()
         thread.join(5.0)
         node.close()
-
-
-def _wait_forever(event: threading.Event) -> bool:
-    while not event.wait(0.2):  # short waits keep Ctrl-C responsive
-        pass
-    return True
 
 
 def _succeeded(handle: ClientGoal[Any, Any]) -> bool:

@@ -13,7 +13,7 @@ import threading
 from collections.abc import Sequence
 
 from shared.config_errors import ConfigError
-from shared.runtime import wait_for_stop
+from shared.runtime import wait_interruptibly
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
 #: A link whose send queue stays blocked this long (µs) is closed, instead of Zenoh's default 5 s: a cut
@@ -43,7 +43,7 @@ def run_router(spec: SessionSpec, stop: threading.Event) -> int:
     with session:
         where = ", ".join(spec.listen) if spec.listen else f"the endpoints of {spec.config_file}"
         print(f"zendock router: listening on {where} (zid {session.info.zid()})", flush=True)
-        wait_for_stop(stop)
+        wait_interruptibly(stop)
     return 0
 
 

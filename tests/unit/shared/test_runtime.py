@@ -5,6 +5,7 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,7 @@ from shared.runtime import (
     load_params,
     options_from_args,
     run_service,
+    wait_interruptibly,
 )
 
 
@@ -89,19 +91,27 @@ def test_run_service_exits_2_on_bad_parameter(capsys: pytest.CaptureFixture[str]
 
 _STOPPED_BY_A_SIGNAL_ON_ANOTHER_THREAD = """
 import signal, sys, threading
-from shared.runtime import wait_for_stop
+from shared.runtime import wait_interruptibly
 stop = threading.Event()
 signal.signal(signal.SIGINT, lambda *_: stop.set())
 threading.Thread(target=threading.Event().wait, args=(60,), daemon=True).start()
 # the kernel now hands SIGINT to the other thread, as it may to one of Zenoh's
 signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
 print("waiting", flush=True)
-wait_for_stop(stop)
+wait_interruptibly(stop)
 print("stopped", flush=True)
 """
 
 
-def test_wait_for_stop_runs_a_handler_whose_signal_went_to_another_thread() -> None:
+def test_wait_interruptibly_times_out_or_returns_once_set() -> None:
+    event = threading.Event()
+    assert wait_interruptibly(event, 0.05) is False
+    threading.Timer(0.05, event.set).start()
+    assert wait_interruptibly(event, 10.0) is True
+    assert wait_interruptibly(event) is True
+
+
+def test_wait_interruptibly_runs_a_handler_whose_signal_went_to_another_thread() -> None:
     proc = subprocess.Popen(
         [sys.executable, "-c", _STOPPED_BY_A_SIGNAL_ON_ANOTHER_THREAD],
         cwd=Path(__file__).resolve().parents[3],
