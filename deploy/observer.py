@@ -110,7 +110,8 @@ class RunObserver:
         return on_sample
 
     def arm(self) -> None:
-        """From now on, the first crossing below the threshold (or a reading already below it) is the trigger."""
+        """From now on, the first crossing below the threshold (or a reading already below it) is the trigger,
+        and sonar hits are kept for the picture."""
         with self._lock:
             self._armed = True
 
@@ -174,7 +175,7 @@ class RunObserver:
         if not (math.isfinite(msg.range) and msg.min_range <= msg.range < msg.max_range):
             return
         with self._lock:
-            if self._truth is None:
+            if self._truth is None or not self._armed:  # before arm(): maybe still where --start moves it from
                 return
             sensor = self._truth.compose(ULTRASONIC_MOUNT)
             hit = sensor.transform_point(msg.range, 0.0)
