@@ -130,8 +130,8 @@ async def run_check(argv: Sequence[str], *, cwd: Path, env: dict[str, str], time
     except OSError:
         return False
     try:
-        # asyncio.timeout, not wait_for: on Python 3.11 wait_for swallows a cancellation that arrives as the
-        # test exits, and the supervisor's health loop would then never stop
+        # asyncio.timeout, not wait_for: on Python 3.11 wait_for swallows a cancellation that arrives just as
+        # the test's process exits, and the supervisor's health loop then ran on after its stop
         async with asyncio.timeout(timeout_s):
             return await proc.wait() == 0
     except TimeoutError:
