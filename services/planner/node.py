@@ -20,12 +20,12 @@ every ``replan_period_s``, and at once when the costmap blocks the path or the f
 ahead) -> SUCCEEDED inside the goal tolerances. A collision ahead that lasts ``blocked_timeout_s``, no
 progress for ``progress_timeout_s``, or a failed plan starts a recovery: BACKING_UP (only over free
 cells), then CLEARING (the lidar layer is cleared; every second recovery also forgets glass round the
-robot, or all glass once planning has failed past the fourth; the layers refill for ``recovery_wait_s``),
-then PLANNING again. After ``max_recoveries`` the goal is ABORTED with
-the error code of the last failure. These timeouts run on the control loop's own clock (sim time, each
-tick counting at most four periods), so a machine too busy to run the loop on time does not make the
-robot look stuck. A stale pose holds the robot still (a map pose carried forward by fresh odometry is
-stale only after ``carried_pose_timeout_s``); NO_POSE after ``no_pose_timeout_s``.
+robot, or all glass once planning has failed past the fourth; the layers refill for
+``recovery_wait_s``), then PLANNING again. After ``max_recoveries`` the goal is ABORTED with the error
+code of the last failure. These timeouts run on the control loop's own clock (sim time, each tick
+counting at most four periods), so a machine too busy to run the loop on time does not make the robot
+look stuck. A stale pose holds the robot still (a map pose carried forward by fresh odometry is stale
+only after ``carried_pose_timeout_s``); NO_POSE after ``no_pose_timeout_s``.
 """
 
 from __future__ import annotations
