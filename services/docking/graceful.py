@@ -114,18 +114,6 @@ class VelocityCommand:
         return (self.linear_x_mps, self.angular_z_radps)
 
 
-def _drive(pose: Pose2D, v_mps: float, w_radps: float, dt_s: float) -> Pose2D:
-    """Unicycle motion at ``(v, w)`` for ``dt_s`` (exact arc)."""
-    if dt_s <= 0.0:
-        return pose
-    if abs(w_radps) < 1e-9:
-        return Pose2D(pose.x + v_mps * dt_s * math.cos(pose.yaw), pose.y + v_mps * dt_s * math.sin(pose.yaw), pose.yaw)
-    yaw = pose.yaw + w_radps * dt_s
-    r = v_mps / w_radps
-    return Pose2D(pose.x + r * (math.sin(yaw) - math.sin(pose.yaw)), pose.y - r * (math.cos(yaw) - math.cos(pose.yaw)),
-                  wrap_angle(yaw))
-
-
 def ego_polar(target: Pose2D, robot: Pose2D, backward: bool = False) -> EgoPolar:
     """Egocentric polar coordinates of ``target`` from ``robot`` (both in one frame)."""
     dx = target.x - robot.x
@@ -283,7 +271,8 @@ class GracefulDockController:
         items = list(self._in_flight)
         for i, (issued_s, v, w) in enumerate(items):
             until_s = items[i + 1][0] if i + 1 < len(items) else self._clock_s
-            pose = _drive(pose, v, w, until_s - issued_s)
+            if until_s > issued_s:
+                pose = pose.advance(v, w, until_s - issued_s)
         return pose
 
     @property

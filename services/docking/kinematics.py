@@ -76,16 +76,8 @@ class DiffDriveModel:
         dw = lim.alpha_max_radps2 * dt_s
         self.v_mps += min(max(target_v - self.v_mps, -dv), dv)
         self.w_radps += min(max(target_w - self.w_radps, -dw), dw)
-        v, w = self.v_mps, self.w_radps
-        if abs(w) < 1e-9:
-            self.x += v * dt_s * math.cos(self.yaw)
-            self.y += v * dt_s * math.sin(self.yaw)
-        else:
-            new_yaw = self.yaw + w * dt_s
-            self.x += v / w * (math.sin(new_yaw) - math.sin(self.yaw))
-            self.y -= v / w * (math.cos(new_yaw) - math.cos(self.yaw))
-            self.yaw = new_yaw
-        self.yaw = wrap_angle(self.yaw)
+        moved = Pose2D(self.x, self.y, self.yaw).advance(self.v_mps, self.w_radps, dt_s)
+        self.x, self.y, self.yaw = moved.x, moved.y, moved.yaw
 
 
 @dataclass(frozen=True)

@@ -55,6 +55,7 @@ from services.docking.task_io import (
 from services.docking.undocking_run import UndockConfig, UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
+from shared.frames import SensorMounts
 from shared.geometry import Pose2D
 from shared.interfaces.docking import (
     DOCK_ROBOT,
@@ -183,6 +184,7 @@ class DockingService:
         self._scan_received_s = -math.inf
         self._sonar_range_m = math.inf
         self._sonar_received_s = -math.inf
+        self._mounts = SensorMounts()
         self._lidar_mount: Pose2D | None = None
         self._ignore_poses_until_s = -math.inf
         #: The map -> odom correction the running docking run's detections were last moved to.
@@ -277,9 +279,8 @@ class DockingService:
         self._sonar_received_s = self.node.now()
 
     def _on_tf_static(self, msg: TFMessage) -> None:
-        for transform in msg.transforms:
-            if transform.header.frame_id == topics.BASE_FRAME and transform.child_frame_id == topics.LIDAR_FRAME:
-                self._lidar_mount = transform.transform.to_pose2d()
+        if topics.LIDAR_FRAME in self._mounts.update(msg):
+            self._lidar_mount = self._mounts.get(topics.LIDAR_FRAME)
 
     def _follow_correction(self) -> None:
         """Move the detected dock with every change of the localiser's map -> odom correction, so that it

@@ -20,12 +20,11 @@ import bisect
 import math
 from dataclasses import dataclass
 
+from shared.frames import CLOCK_RESET_S
 from shared.geometry import Pose2D, wrap_angle
 
 #: How much history is kept, seconds.
 HISTORY_S = 3.0
-#: A clock this much earlier than the newest sample is a reset (the simulator restarted).
-CLOCK_RESET_S = 1.0
 #: Odometry may be extrapolated with its last twist at most this far past its newest sample.
 MAX_EXTRAPOLATION_S = 0.2
 #: Without odometry, a localisation sample stands for the robot's pose at most this long after it.
@@ -42,32 +41,6 @@ class OdomSample:
     pose: Pose2D
     linear_mps: float
     angular_radps: float
-
-
-def interpolate_pose(a: Pose2D, b: Pose2D, fraction: float) -> Pose2D:
-    """The pose ``fraction`` of the way from ``a`` to ``b`` (yaw along the shorter arc)."""
-    return Pose2D(
-        a.x + fraction * (b.x - a.x),
-        a.y + fraction * (b.y - a.y),
-        wrap_angle(a.yaw + fraction * wrap_angle(b.yaw - a.yaw)),
-    )
-
-
-def _advance(pose: Pose2D, linear_mps: float, angular_radps: float, dt_s: float) -> Pose2D:
-    """Unicycle motion over ``dt_s`` (exact arc)."""
-    if abs(angular_radps) < 1e-9:
-        return Pose2D(
-            pose.x + linear_mps * dt_s * math.cos(pose.yaw),
-            pose.y + linear_mps * dt_s * math.sin(pose.yaw),
-            pose.yaw,
-        )
-    yaw = pose.yaw + angular_radps * dt_s
-    r = linear_mps / angular_radps
-    return Pose2D(
-        pose.x + r * (math.sin(yaw) - math.sin(pose.yaw)),
-        pose.y - r * (math.cos(yaw) - math.cos(pose.yaw)),
-        wrap_angle(yaw),
-    )
 
 
 class RobotPoseTrack:
@@ -218,9 +191,9 @@ class RobotPoseTrack:
             ahead = t_s - last.stamp_s
             if ahead > MAX_EXTRAPOLATION_S:
                 return None
-            return _advance(last.pose, last.linear_mps, last.angular_radps, ahead)
+            return last.pose.advance(last.linear_mps, last.angular_radps, ahead)
         a, b = self._odom[i - 1], self._odom[i]
-        return interpolate_pose(a.pose, b.pose, (t_s - a.stamp_s) / (b.stamp_s - a.stamp_s))
+        return a.pose.interpolate(b.pose, (t_s - a.stamp_s) / (b.stamp_s - a.stamp_s))
 
     def pose_at(self, t_s: float) -> Pose2D | None:
         """The robot's map pose at ``t_s``, or None when the history does not reach that far."""
@@ -236,7 +209,7 @@ class RobotPoseTrack:
             return anchor if anchor_t - t_s <= MAX_EXTRAPOLATION_S else None
         if i < len(self._poses):
             t1 = self._pose_times[i]
-            return interpolate_pose(anchor, self._poses[i], (t_s - anchor_t) / (t1 - anchor_t))
+            return anchor.interpolate(self._poses[i], (t_s - anchor_t) / (t1 - anchor_t))
         return anchor if t_s - anchor_t <= MAX_HOLD_S else None
 
     def pose_now_at(self, t_s: float) -> Pose2D | None:

@@ -57,6 +57,7 @@ from services.planner.sonar_fusion import echo_explained_by_lidar
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.config_errors import ConfigError
+from shared.frames import SensorMounts, clock_went_back
 from shared.geometry import Pose2D, wrap_angle
 from shared.interfaces.map_server import (
     COSTMAP_TOPIC,
@@ -105,7 +106,6 @@ BLOCKED_CHECK_SKIP_M = 0.15
 #: No periodic replanning this close to the goal (a new path would reset the follower's goal latch).
 NO_REPLAN_WITHIN_M = 0.3
 #: A clock reading this much earlier than the last tick is a reset (the simulator restarted).
-CLOCK_RESET_S = 1.0
 #: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
 SONAR_MIN_TRAVEL_M = 0.05
 SONAR_MIN_TURN_RAD = 0.1
@@ -237,10 +237,10 @@ class PlannerService:
         self._generation = 0
         self._task: _Task | None = None
         self._last_cmd = (0.0, 0.0)
-        self._mounts: dict[str, Pose2D] = {
+        self._mounts = SensorMounts({
             topics.LIDAR_FRAME: Pose2D(*params.lidar_mount),
             topics.ULTRASONIC_FRAME: Pose2D(*params.ultrasonic_mount),
-        }
+        })
         self._pending_scan: LaserScan | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
@@ -392,13 +392,11 @@ class PlannerService:
         self._pending_ranges.append(msg)
 
     def _on_tf_static(self, msg: TFMessage) -> None:
-        for item in msg.transforms:
-            if item.header.frame_id.strip("/") == topics.BASE_FRAME:
-                self._mounts[item.child_frame_id.strip("/")] = item.transform.to_pose2d()
+        self._mounts.update(msg)
 
     def _sensor_pose(self, header: Header) -> Pose2D | None:
         robot = self._tracker.pose_at(header.stamp.to_sec())
-        mount = self._mounts.get(header.frame_id.strip("/"))
+        mount = self._mounts.get(header.frame_id)
         if robot is None or mount is None:
             if mount is None:
                 self._say.warning(f"frame:{header.frame_id}", "no mount known for sensor frame %r", header.frame_id)
@@ -604,7 +602,7 @@ class PlannerService:
             return
         p = self._params
         now = self._node.now()
-        if task.last_tick_s is not None and now < task.last_tick_s - CLOCK_RESET_S:
+        if clock_went_back(now, task.last_tick_s):
             self._log.warning("clock jumped back to %.2f s (a simulator reset?): restarting the goal's timers", now)
             _restart_timers(task, now)
         period = 1.0 / p.controller_rate_hz

@@ -21,12 +21,11 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
+from shared.frames import CLOCK_RESET_S
 from shared.geometry import Pose2D, wrap_angle
 
 #: How many of the newest odometry samples may pair with a map pose.
 PAIRING_CANDIDATES = 5
-#: A clock reading this much earlier than the newest sample is a reset (the simulator restarted).
-CLOCK_RESET_S = 1.0
 #: Odometry that moves this much more between two samples than its twist allows has jumped (a reset, a
 #: teleport): metres, radians.
 ODOM_JUMP_M = 0.05
@@ -42,29 +41,6 @@ class OdometrySample:
     pose: Pose2D
     linear_mps: float
     angular_rps: float
-
-
-def advance(pose: Pose2D, linear_mps: float, angular_rps: float, dt_s: float) -> Pose2D:
-    """Where a constant twist takes ``pose`` after ``dt_s`` (exact arc)."""
-    if abs(angular_rps) < 1e-9:
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        return Pose2D(pose.x + linear_mps * dt_s * c, pose.y + linear_mps * dt_s * s, pose.yaw)
-    yaw = pose.yaw + angular_rps * dt_s
-    r = linear_mps / angular_rps
-    return Pose2D(
-        pose.x + r * (math.sin(yaw) - math.sin(pose.yaw)),
-        pose.y - r * (math.cos(yaw) - math.cos(pose.yaw)),
-        wrap_angle(yaw),
-    )
-
-
-def interpolate(a: Pose2D, b: Pose2D, fraction: float) -> Pose2D:
-    """Linear in position, shortest way round in yaw."""
-    return Pose2D(
-        a.x + (b.x - a.x) * fraction,
-        a.y + (b.y - a.y) * fraction,
-        wrap_angle(a.yaw + wrap_angle(b.yaw - a.yaw) * fraction),
-    )
 
 
 def _jumped(last: OdometrySample, sample: OdometrySample) -> bool:
@@ -166,7 +142,7 @@ class PoseTracker:
             return self._map_pose
         last = self._odom[-1]
         ahead_s = min(max(now_s - self._odom_received_s, 0.0), self.max_extrapolation_s)
-        return self._map_to_odom.compose(advance(last.pose, last.linear_mps, last.angular_rps, ahead_s))
+        return self._map_to_odom.compose(last.pose.advance(last.linear_mps, last.angular_rps, ahead_s))
 
     def pose_at(self, stamp_s: float) -> Pose2D | None:
         """The pose at a sensor stamp (the odometry clock); the last map pose when that is all there is.
@@ -203,11 +179,11 @@ class PoseTracker:
         first, last = samples[0], samples[-1]
         if stamp_s >= last.stamp_s:
             ahead_s = min(stamp_s - last.stamp_s, self.max_extrapolation_s)
-            return advance(last.pose, last.linear_mps, last.angular_rps, ahead_s)
+            return last.pose.advance(last.linear_mps, last.angular_rps, ahead_s)
         if stamp_s <= first.stamp_s:
             return first.pose
         stamps = [s.stamp_s for s in samples]
         i = bisect.bisect_right(stamps, stamp_s)
         before, after = samples[i - 1], samples[i]
         span = after.stamp_s - before.stamp_s
-        return interpolate(before.pose, after.pose, (stamp_s - before.stamp_s) / span if span > 0 else 1.0)
+        return before.pose.interpolate(after.pose, (stamp_s - before.stamp_s) / span if span > 0 else 1.0)

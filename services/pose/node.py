@@ -15,6 +15,7 @@ from pydantic import Field, field_validator
 
 from services.pose.tf_buffer import RigidTransform, StampedTransform, TfBuffer, TransformError
 from shared import topics
+from shared.frames import CLOCK_RESET_S, clock_went_back
 from shared.messages import (
     Float64MultiArray,
     MultiArrayDimension,
@@ -33,7 +34,6 @@ TF_STATIC_QOS = QoS(reliable=True, depth=20)
 #: How often the same complaint may be logged.
 LOG_INTERVAL_S = 2.0
 #: A clock reading this much earlier than the previous tick is a reset.
-CLOCK_RESET_S = 1.0
 
 
 class Params(ServiceParams):
@@ -116,7 +116,7 @@ class PoseService:
 
     def _on_timer(self) -> None:
         now_s = self._node.now()
-        if self._last_tick_s is not None and now_s < self._last_tick_s - CLOCK_RESET_S:
+        if clock_went_back(now_s, self._last_tick_s):
             self._log.warning("clock jumped back to %.3f s (a reset?): cleared the tf history", now_s)
             self._buffer.clear_dynamic()
         self._last_tick_s = now_s

@@ -17,6 +17,7 @@ import bisect
 import math
 from dataclasses import dataclass, field
 
+from shared.frames import frame_name
 from shared.geometry import Pose2D, quaternion_from_yaw, quaternion_multiply, wrap_angle, yaw_from_quaternion
 
 Vec3 = tuple[float, float, float]
@@ -189,7 +190,7 @@ class _Link:
 
 def _frame_name(name: str, role: str) -> str:
     """tf2 ignores a leading slash; an empty name is an error."""
-    stripped = name.lstrip("/")
+    stripped = frame_name(name)
     if not stripped:
         raise ValueError(f"{role} frame name is empty")
     return stripped

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from services.planner.pose_tracker import OdometrySample, PoseTracker, advance, interpolate
+from services.planner.pose_tracker import OdometrySample, PoseTracker
 from shared.geometry import Pose2D
 
 #: map -> odom of a localiser that is off by a fixed transform.
@@ -15,7 +15,7 @@ MAP_TO_ODOM = Pose2D(1.0, -2.0, 0.3)
 
 def _turning(t: float) -> Pose2D:
     """odom -> base_link of a robot driving a circle: 0.4 m/s, 1.2 rad/s from the odom origin."""
-    return advance(Pose2D(), 0.4, 1.2, t)
+    return Pose2D().advance(0.4, 1.2, t)
 
 
 def _feed(tracker: PoseTracker, until_s: float, map_every: int = 5) -> None:
@@ -29,15 +29,6 @@ def _feed(tracker: PoseTracker, until_s: float, map_every: int = 5) -> None:
 
 def _close(a: Pose2D, b: Pose2D, tol_m: float = 1e-6, tol_rad: float = 1e-6) -> bool:
     return a.distance_to(b) < tol_m and abs(math.remainder(a.yaw - b.yaw, 2 * math.pi)) < tol_rad
-
-
-def test_advance_and_interpolate_are_exact_arcs_and_shortest_turns() -> None:
-    quarter = advance(Pose2D(), 1.0, math.pi / 2, 1.0)  # a quarter circle of radius 2/pi
-    r = 2 / math.pi
-    assert _close(quarter, Pose2D(r, r, math.pi / 2))
-    assert _close(advance(Pose2D(0, 0, math.pi / 2), 2.0, 0.0, 0.5), Pose2D(0.0, 1.0, math.pi / 2))
-    mid = interpolate(Pose2D(0, 0, 3.0), Pose2D(2, 0, -3.0), 0.5)  # across +-pi, not through 0
-    assert _close(mid, Pose2D(1.0, 0.0, -math.pi), tol_rad=1e-9)
 
 
 def test_pose_at_a_sensor_stamp_between_map_poses_is_exact() -> None:

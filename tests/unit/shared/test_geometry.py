@@ -69,3 +69,28 @@ def test_transform_points() -> None:
     pose = Pose2D(1.0, 0.0, math.pi / 2)
     np.testing.assert_allclose(pose.transform_points(np.array([[1.0, 0.0], [0.0, 1.0]])), [[1.0, 1.0], [0.0, 0.0]], atol=1e-12)
     assert pose.transform_point(1.0, 0.0) == pytest.approx((1.0, 1.0))
+
+
+def _same_pose(a: Pose2D, b: Pose2D, tol_m: float = 1e-6, tol_rad: float = 1e-6) -> bool:
+    return a.distance_to(b) < tol_m and abs(math.remainder(a.yaw - b.yaw, 2 * math.pi)) < tol_rad
+
+
+def test_advance_follows_the_exact_arc_and_straight_lines() -> None:
+    radius_m = 2 / math.pi
+    quarter = Pose2D().advance(1.0, math.pi / 2, 1.0)  # a quarter circle
+    assert _same_pose(quarter, Pose2D(radius_m, radius_m, math.pi / 2))
+    assert _same_pose(Pose2D(0, 0, math.pi / 2).advance(2.0, 0.0, 0.5), Pose2D(0.0, 1.0, math.pi / 2))
+    # Many small steps along the arc land where one long step does: nothing is lost to integration.
+    pose = Pose2D(1.0, -2.0, 0.3)
+    stepped = pose
+    for _ in range(100):
+        stepped = stepped.advance(0.4, -1.1, 0.03)
+    assert _same_pose(stepped, pose.advance(0.4, -1.1, 3.0), tol_m=1e-9, tol_rad=1e-9)
+    assert _same_pose(pose.advance(0.4, 1.0, 0.0), pose)
+
+
+def test_interpolate_goes_the_shorter_way_round() -> None:
+    mid = Pose2D(0, 0, 3.0).interpolate(Pose2D(2, 0, -3.0), 0.5)  # across +-pi, not through 0
+    assert _same_pose(mid, Pose2D(1.0, 0.0, -math.pi), tol_rad=1e-9)
+    a, b = Pose2D(1, 2, 0.1), Pose2D(3, -2, 0.5)
+    assert _same_pose(a.interpolate(b, 0.0), a) and _same_pose(a.interpolate(b, 1.0), b)
