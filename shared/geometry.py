@@ -109,18 +109,18 @@ class Pose2D:
     def distance_to(self, other: Pose2D) -> float:
         return math.hypot(other.x - self.x, other.y - self.y)
 
-    def advance(self, linear_mps: float, angular_rps: float, dt_s: float) -> Pose2D:
-        """Where a constant body twist ``(linear_mps, angular_rps)`` takes this pose after ``dt_s``.
+    def advance(self, linear_mps: float, angular_radps: float, dt_s: float) -> Pose2D:
+        """Where a constant body twist ``(linear_mps, angular_radps)`` takes this pose after ``dt_s``.
 
         The exact arc of a unicycle (a straight segment when the turn rate is ~0), so a long step loses
         nothing to Euler integration: odometry extrapolation, controller prediction and the kinematic
         test robot all step this way.
         """
-        if abs(angular_rps) < 1e-9:
+        if abs(angular_radps) < 1e-9:
             c, s = math.cos(self.yaw), math.sin(self.yaw)
             return Pose2D(self.x + linear_mps * dt_s * c, self.y + linear_mps * dt_s * s, self.yaw)
-        yaw = self.yaw + angular_rps * dt_s
-        radius_m = linear_mps / angular_rps
+        yaw = self.yaw + angular_radps * dt_s
+        radius_m = linear_mps / angular_radps
         return Pose2D(
             self.x + radius_m * (math.sin(yaw) - math.sin(self.yaw)),
             self.y - radius_m * (math.cos(yaw) - math.cos(self.yaw)),

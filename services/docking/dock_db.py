@@ -14,7 +14,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from services.docking.errors import DockNotInDbError, DockNotValidError
+from services.docking.errors import DockingError, DockingErrorCode
 from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
 from shared.geometry import Pose2D
 from shared.world import Dock, World
@@ -51,21 +51,21 @@ class DockDatabase:
         return list(self._docks)
 
     def get(self, dock_id: str) -> Dock:
-        """The dock with this id; raises :class:`DockNotInDbError` (code 901) when there is none."""
+        """The dock with this id; raises :class:`DockingError` with ``DOCK_NOT_IN_DB`` (901) when there is none."""
         try:
             return self._docks[dock_id]
         except KeyError:
-            raise DockNotInDbError(f"dock {dock_id!r} is not in the dock database {self.source} (known: {self.ids})") from None
+            raise DockingError(DockingErrorCode.DOCK_NOT_IN_DB, f"dock {dock_id!r} is not in the dock database {self.source} (known: {self.ids})") from None
 
     def nearest(self, pose: Pose2D, dock_type: str | None = None) -> Dock:
         """The dock (of ``dock_type`` when given) whose pose is closest to ``pose``.
 
-        Raises :class:`DockNotValidError` (code 902) when no dock qualifies.
+        Raises :class:`DockingError` with ``DOCK_NOT_VALID`` (902) when no dock qualifies.
         """
         candidates = [d for d in self._docks.values() if dock_type is None or d.type == dock_type]
         if not candidates:
             what = f"of type {dock_type!r} " if dock_type is not None else ""
-            raise DockNotValidError(f"no dock {what}in the dock database {self.source}")
+            raise DockingError(DockingErrorCode.DOCK_NOT_VALID, f"no dock {what}in the dock database {self.source}")
         return min(candidates, key=lambda d: pose.distance_to(d.pose2d))
 
     def choose(self, dock_id: str | None = None, robot_pose: Pose2D | None = None, dock_type: str | None = None) -> Dock:
@@ -77,8 +77,9 @@ class DockDatabase:
         candidates = [d for d in self._docks.values() if dock_type is None or d.type == dock_type]
         if len(candidates) == 1:
             return candidates[0]
-        raise DockNotValidError(
-            f"no dock id given and no robot pose to pick the nearest of {len(candidates)} docks in {self.source}"
+        raise DockingError(
+            DockingErrorCode.DOCK_NOT_VALID,
+            f"no dock id given and no robot pose to pick the nearest of {len(candidates)} docks in {self.source}",
         )
 
 

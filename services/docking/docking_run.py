@@ -42,7 +42,7 @@ from services.docking.approach_control import (
 )
 from services.docking.dock_db import DockDatabase
 from services.docking.dock_tracker import DockEstimate, DockTracker
-from services.docking.errors import DockingError, DockingErrorCode, DockingState, DockNotValidError
+from services.docking.errors import DockingError, DockingErrorCode, DockingState
 from services.docking.graceful import GracefulGains
 from services.docking.task_io import STOP, Intent, Navigate, NavOutcome, Outcome, Task, TickInputs
 from shared.geometry import Pose2D
@@ -252,7 +252,7 @@ class DockingRun(Task[RunPhase]):
         if request.dock_pose is not None:
             pose = request.dock_pose
             if not all(math.isfinite(v) for v in pose.as_tuple()):
-                raise DockNotValidError(f"dock pose {pose.as_tuple()} is not finite")
+                raise DockingError(DockingErrorCode.DOCK_NOT_VALID, f"dock pose {pose.as_tuple()} is not finite")
             self.dock_id = ""
             return pose
         if request.dock_id:

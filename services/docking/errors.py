@@ -1,4 +1,4 @@
-"""Docking result codes, feedback states and the exceptions that carry them.
+"""Docking result codes, feedback states and the exception raised for an unusable dock.
 
 The numbers mirror Nav2's ``nav2_msgs/action/DockRobot.action`` so a client that knows Nav2's codes reads
 zendock's results unchanged. ``GOAL_REJECTED``, ``SEND_GOAL_FAILURE`` and ``TIMEOUT`` exist in recent
@@ -38,48 +38,13 @@ class DockingState(IntEnum):
 
 
 class DockingError(Exception):
-    """A docking failure; ``error_code`` is what the action result reports."""
+    """A dock the request cannot use (not in the database, not valid), raised where the dock is looked up.
 
-    error_code: DockingErrorCode = DockingErrorCode.UNKNOWN
+    It is the one exception of docking: the runs catch it where they choose the dock and end the action
+    through their single failure path (``_fail`` / ``_end``) with its ``error_code``; every other failure
+    is reported there directly with its code.
+    """
 
-
-class DockNotInDbError(DockingError, LookupError):
-    """The requested dock id is not in the dock database."""
-
-    error_code = DockingErrorCode.DOCK_NOT_IN_DB
-
-
-class DockNotValidError(DockingError):
-    """The request names no usable dock (unknown dock type, empty database, bad pose)."""
-
-    error_code = DockingErrorCode.DOCK_NOT_VALID
-
-
-class FailedToStageError(DockingError):
-    """Navigation to the staging pose failed."""
-
-    error_code = DockingErrorCode.FAILED_TO_STAGE
-
-
-class FailedToDetectDockError(DockingError):
-    """The dock was not seen in time (initial perception) or was lost while approaching."""
-
-    error_code = DockingErrorCode.FAILED_TO_DETECT_DOCK
-
-
-class FailedToControlError(DockingError):
-    """The approach did not reach the dock in time or the controller could not produce a command."""
-
-    error_code = DockingErrorCode.FAILED_TO_CONTROL
-
-
-class FailedToChargeError(DockingError):
-    """The robot is on the dock but charging did not start in time."""
-
-    error_code = DockingErrorCode.FAILED_TO_CHARGE
-
-
-class DockingTimeoutError(DockingError):
-    """The whole action exceeded its time budget."""
-
-    error_code = DockingErrorCode.TIMEOUT
+    def __init__(self, error_code: DockingErrorCode, message: str) -> None:
+        super().__init__(message)
+        self.error_code = error_code

@@ -40,7 +40,7 @@ from services.docking.errors import DockingState
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.patrol import Patrol
 from services.docking.pose_filter import PoseFilterParams
-from services.docking.robot_track import OdomSample, RobotPoseTrack
+from services.docking.robot_track import OdometrySample, RobotPoseTrack
 from services.docking.safety import ObstacleParams, lidar_blocked, scan_points, sonar_blocked
 from services.docking.task_io import (
     Intent,
@@ -55,7 +55,7 @@ from services.docking.task_io import (
 from services.docking.undocking_run import UndockConfig, UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
-from shared.frames import SensorMounts
+from shared.frames import SensorMounts, clock_went_back
 from shared.geometry import Pose2D
 from shared.interfaces.docking import (
     DOCK_ROBOT,
@@ -165,7 +165,7 @@ class DockingService:
     def __init__(self, node: Node, params: Params) -> None:
         self.node = node
         self.params = params
-        self.log = node.log
+        self._log = node.log
         self._say = RateLimitedLogger(node.log, interval_s=5.0)
         self.database: DockDatabase = load_dock_db(params.dock_database)
         self.track = RobotPoseTrack()
@@ -217,7 +217,7 @@ class DockingService:
         )
         self.period_s = CONTROL_PERIOD_S[params.controller]
         self.timer = node.create_timer(self.period_s, self._on_tick)
-        self.log.info(
+        self._log.info(
             "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time",
             params.controller, 1.0 / self.period_s, len(self.database), params.dock_database,
             "on" if params.use_detection else "off", len(params.patrol), "sim" if node.use_sim_time else "wall",
@@ -230,7 +230,7 @@ class DockingService:
         self._battery_received_s = self.node.now()
         charging = msg.power_supply_status in _CHARGING
         if self.mission.battery(msg.percentage, charging):
-            self.log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * msg.percentage,
+            self._log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * msg.percentage,
                           100.0 * self.params.low_battery_threshold)
 
     def _on_pose(self, msg: Float64MultiArray) -> None:
@@ -246,7 +246,7 @@ class DockingService:
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
         resets = self.track.odom_resets
-        self.track.add_odom(OdomSample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x,
+        self.track.add_odom(OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x,
                                        twist.angular.z))
         if self.track.odom_resets != resets:
             # Odometry restarted (the robot was moved): the localiser may still report where it was.
@@ -344,8 +344,8 @@ class DockingService:
 
     def _on_tick(self) -> None:
         now = self.node.now()
-        if now < self._last_now_s - 1.0:
-            self.log.warning("clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs", now)
+        if clock_went_back(now, self._last_now_s):
+            self._log.warning("clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs", now)
             self.track.clear()
             self.mission.trigger.reset()  # a low battery after the reset sends the robot home again
             if self.task is not None:
@@ -359,9 +359,9 @@ class DockingService:
             intent = task.step(inputs)
             if task.holding and task.holding != self._holding:
                 self._say.info(f"hold:{task.holding}", "holding still: %s", task.holding)
-            if task.holding and self.log.isEnabledFor(logging.DEBUG):
+            if task.holding and self._log.isEnabledFor(logging.DEBUG):
                 odom = self.track.latest_odom
-                self.log.debug("hold t=%.3f %s: localisation %.3f s old, odometry %s", now, task.holding,
+                self._log.debug("hold t=%.3f %s: localisation %.3f s old, odometry %s", now, task.holding,
                                now - self.track.last_pose_received_s,
                                f"{now - odom.stamp_s:.3f} s old" if odom else "none")
             self._holding = task.holding
@@ -378,10 +378,10 @@ class DockingService:
                                                       max_staging_time_s=self.params.max_staging_time_s)),
                         TaskKind.DOCK)
         elif order is MissionOrder.UNDOCK:
-            self.log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
+            self._log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
             self._start(self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK)
         elif order is MissionOrder.PATROL:
-            self.log.info("patrolling from waypoint %d", self.mission.next_waypoint)
+            self._log.info("patrolling from waypoint %d", self.mission.next_waypoint)
             self._start(Patrol(self.mission.patrol, self.mission.next_waypoint), TaskKind.PATROL)
 
     def _carry_out(self, intent: Intent, inputs: TickInputs) -> None:
@@ -453,7 +453,7 @@ class DockingService:
         if old_handle is not None and old_handle.active:
             old_handle.canceled(self._result_message(old_handle, None))
         if old is not None:
-            self.log.info("%s replaced by %s", type(old).__name__, type(task).__name__)
+            self._log.info("%s replaced by %s", type(old).__name__, type(task).__name__)
         self.task, self.task_kind, self.task_handle = task, kind, handle
         self._feedback_key = None
 
@@ -469,7 +469,7 @@ class DockingService:
         self.mission.finished(kind, result.success, handle is not None, self.node.now())
         level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
         took = f" after {task.docking_time_s(self.node.now()):.1f} s" if isinstance(task, DockingRun) else ""
-        self.log.log(level, "%s %s%s (code %d, %d retries)%s", kind.value, result.outcome.value, took,
+        self._log.log(level, "%s %s%s (code %d, %d retries)%s", kind.value, result.outcome.value, took,
                      int(result.error_code), result.num_retries, f": {result.message}" if result.message else "")
         if handle is None or not handle.active:
             return
@@ -510,7 +510,7 @@ class DockingService:
             navigate_to_staging_pose=goal.navigate_to_staging_pose,
             max_staging_time_s=goal.max_staging_time,
         )
-        self.log.info("dock_robot: %s", f"dock {goal.dock_id!r}" if goal.use_dock_id and goal.dock_id
+        self._log.info("dock_robot: %s", f"dock {goal.dock_id!r}" if goal.use_dock_id and goal.dock_id
                       else "the nearest dock" if goal.use_dock_id else "a given pose")
         self._start(self._docking_run(request), TaskKind.DOCK, handle)
 
@@ -522,13 +522,13 @@ class DockingService:
         if not handle.active:
             return
         handle.execute()
-        self.log.info("undock_robot")
+        self._log.info("undock_robot")
         self._start(self._undocking_run(handle.goal.max_undocking_time, handle.goal.dock_type), TaskKind.UNDOCK,
                     handle)
 
     def _on_cancel(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
         if handle is self.task_handle and self.task is not None:
-            self.log.info("%s: cancel requested", type(self.task).__name__)
+            self._log.info("%s: cancel requested", type(self.task).__name__)
             self.task.cancel()
         elif handle.active:
             handle.canceled(self._result_message(handle, None))
@@ -567,7 +567,7 @@ class DockingService:
         if name == self._last_state and now - self._state_published_s < STATE_PERIOD_S:
             return
         if name != self._last_state:
-            self.log.info("state %s (clock %.2f s)", name, now)
+            self._log.info("state %s (clock %.2f s)", name, now)
         self._last_state, self._state_published_s = name, now
         self.state_pub.publish(String(name))
 

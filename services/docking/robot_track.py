@@ -36,7 +36,7 @@ PAIRING_METRES_PER_RAD = 0.3
 
 
 @dataclass(frozen=True, slots=True)
-class OdomSample:
+class OdometrySample:
     stamp_s: float
     pose: Pose2D
     linear_mps: float
@@ -54,7 +54,7 @@ class RobotPoseTrack:
         #: map -> odom of each localisation sample (None when there was no odometry to pair it with).
         self._corrections: list[Pose2D | None] = []
         self._odom_times: list[float] = []
-        self._odom: list[OdomSample] = []
+        self._odom: list[OdometrySample] = []
         #: Clock time at which the newest localisation sample arrived (-inf before any).
         self.last_pose_received_s = -math.inf
         self.odom_resets = 0
@@ -100,7 +100,7 @@ class RobotPoseTrack:
 
         return min(reversed(estimates), key=change)
 
-    def add_odom(self, sample: OdomSample) -> None:
+    def add_odom(self, sample: OdometrySample) -> None:
         """An odometry sample (odom -> base_link and the body twist), stamped at capture."""
         if self._odom:
             last = self._odom[-1]
@@ -123,7 +123,7 @@ class RobotPoseTrack:
             # The newest localisation sample came before the odometry of its time.
             self._corrections[-1] = self._pair(self._poses[-1], self._pose_times[-1])
 
-    def _is_jump(self, last: OdomSample, sample: OdomSample) -> bool:
+    def _is_jump(self, last: OdometrySample, sample: OdometrySample) -> bool:
         dt = sample.stamp_s - last.stamp_s
         speed = max(abs(last.linear_mps), abs(sample.linear_mps))
         turn = max(abs(last.angular_radps), abs(sample.angular_radps))
@@ -171,7 +171,7 @@ class RobotPoseTrack:
         return carried and age <= carried_age_s
 
     @property
-    def latest_odom(self) -> OdomSample | None:
+    def latest_odom(self) -> OdometrySample | None:
         return self._odom[-1] if self._odom else None
 
     def twist(self, now_s: float, max_age_s: float) -> tuple[float, float] | None:

@@ -40,14 +40,14 @@ def turns_rad(points: np.ndarray, start_yaw: float, goal_yaw: float) -> float:
     return total
 
 
-def lower_bound(grid: CostGrid, start: Pose2D, goal: Pose2D, max_linear_mps: float, max_angular_rps: float) -> dict:
+def lower_bound(grid: CostGrid, start: Pose2D, goal: Pose2D, max_linear_mps: float, max_angular_radps: float) -> dict:
     points = shortest_path(grid, (start.x, start.y), (goal.x, goal.y))
     length = path_length_m(points)
     turn = turns_rad(points, start.yaw, goal.yaw)
     return {
         "path_length_m": round(length, 4),
         "turn_rad": round(turn, 4),
-        "lower_bound_s": round(length / max_linear_mps + turn / max_angular_rps, 4),
+        "lower_bound_s": round(length / max_linear_mps + turn / max_angular_radps, 4),
     }
 
 

@@ -582,9 +582,9 @@ class PlannerService:
 
     # --- control ----------------------------------------------------------------------------------
 
-    def _publish_cmd(self, linear_mps: float, angular_rps: float) -> None:
-        self._last_cmd = (linear_mps, angular_rps)
-        self._cmd_pub.publish(Twist.planar(linear_mps, angular_rps))
+    def _publish_cmd(self, linear_mps: float, angular_radps: float) -> None:
+        self._last_cmd = (linear_mps, angular_radps)
+        self._cmd_pub.publish(Twist.planar(linear_mps, angular_radps))
 
     def _on_control_tick(self) -> None:
         if self._task is None:
@@ -659,7 +659,7 @@ class PlannerService:
         reference = self._last_cmd if p.open_loop_acceleration else velocity
         command = self._follower.compute_velocity_command(pose, reference, dt, grid)
         if command.status is FollowStatus.GOAL_REACHED and (
-            abs(velocity[0]) > p.trans_stopped_velocity_mps or abs(velocity[1]) > p.rot_stopped_velocity_rps
+            abs(velocity[0]) > p.trans_stopped_velocity_mps or abs(velocity[1]) > p.rot_stopped_velocity_radps
         ):
             # nav2's StoppedGoalChecker: inside the tolerances while still turning is not arrived. Brake
             # and judge again once stopped; an overshoot out of tolerance is then turned back.
@@ -682,7 +682,7 @@ class PlannerService:
                 self._request_plan(task, now, urgent=True)
             return
         task.blocked_since_s = None
-        self._publish_cmd(command.linear_mps, command.angular_rps)
+        self._publish_cmd(command.linear_mps, command.angular_radps)
         if not task.progress.check(pose, task.clock_s):
             self._start_recovery(task, pose, NavigateErrorCode.STUCK,
                                  f"no progress for {p.progress_timeout_s:g} s")

@@ -37,7 +37,7 @@ class Params(ServiceParams):
     robot_length_m: float = Field(ROBOT_LENGTH_M, gt=0.0, description="footprint length along x")
     robot_width_m: float = Field(ROBOT_WIDTH_M, gt=0.0, description="footprint width along y")
     max_linear_vel_mps: float = Field(0.5, gt=0.0)
-    max_angular_vel_rps: float = Field(1.5, gt=0.0)
+    max_angular_vel_radps: float = Field(1.5, gt=0.0)
     max_linear_accel_mps2: float = Field(1.0, gt=0.0)
     max_linear_decel_mps2: float = Field(1.5, gt=0.0)
     max_angular_accel_rps2: float = Field(3.0, gt=0.0)
@@ -51,7 +51,7 @@ class Params(ServiceParams):
     yaw_goal_tolerance_rad: float = Field(0.05, gt=0.0)
     trans_stopped_velocity_mps: float = Field(
         0.05, gt=0.0, description="the goal counts as reached only when moving slower than this ...")
-    rot_stopped_velocity_rps: float = Field(0.1, gt=0.0, description="... and turning slower than this")
+    rot_stopped_velocity_radps: float = Field(0.1, gt=0.0, description="... and turning slower than this")
     # costmap
     inflation_radius_m: float = Field(0.55, ge=0.0)
     cost_scaling_factor: float = Field(3.0, gt=0.0)
@@ -160,11 +160,11 @@ class Params(ServiceParams):
         costmap = self.costmap_params()
         return PurePursuitParams(
             desired_linear_vel_mps=self.max_linear_vel_mps,
-            max_angular_vel_rps=self.max_angular_vel_rps,
+            max_angular_vel_radps=self.max_angular_vel_radps,
             max_linear_accel_mps2=self.max_linear_accel_mps2,
             max_linear_decel_mps2=self.max_linear_decel_mps2,
             max_angular_accel_rps2=self.max_angular_accel_rps2,
-            rotate_to_heading_angular_vel_rps=self.max_angular_vel_rps,
+            rotate_to_heading_angular_vel_radps=self.max_angular_vel_radps,
             regulated_linear_scaling_min_radius_m=self.regulated_linear_scaling_min_radius_m,
             approach_velocity_scaling_dist_m=self.approach_velocity_scaling_dist_m,
             inflation_cost_scaling_factor=costmap.cost_scaling_factor,

@@ -40,14 +40,14 @@ class OdometrySample:
     #: odom -> base_link.
     pose: Pose2D
     linear_mps: float
-    angular_rps: float
+    angular_radps: float
 
 
 def _jumped(last: OdometrySample, sample: OdometrySample) -> bool:
     """Whether odometry moved between two samples by more than its own twist can explain."""
     dt = sample.stamp_s - last.stamp_s
     speed = max(abs(last.linear_mps), abs(sample.linear_mps))
-    turn = max(abs(last.angular_rps), abs(sample.angular_rps))
+    turn = max(abs(last.angular_radps), abs(sample.angular_radps))
     moved = last.pose.distance_to(sample.pose)
     turned = abs(wrap_angle(sample.pose.yaw - last.pose.yaw))
     return moved > ODOM_JUMP_M + 2.0 * speed * dt or turned > ODOM_JUMP_RAD + 2.0 * turn * dt
@@ -142,7 +142,7 @@ class PoseTracker:
             return self._map_pose
         last = self._odom[-1]
         ahead_s = min(max(now_s - self._odom_received_s, 0.0), self.max_extrapolation_s)
-        return self._map_to_odom.compose(last.pose.advance(last.linear_mps, last.angular_rps, ahead_s))
+        return self._map_to_odom.compose(last.pose.advance(last.linear_mps, last.angular_radps, ahead_s))
 
     def pose_at(self, stamp_s: float) -> Pose2D | None:
         """The pose at a sensor stamp (the odometry clock); the last map pose when that is all there is.
@@ -167,7 +167,7 @@ class PoseTracker:
         if not self._odom_fresh(now_s):
             return None
         last = self._odom[-1]
-        return last.linear_mps, last.angular_rps
+        return last.linear_mps, last.angular_radps
 
     # --- internals ------------------------------------------------------------------------------
 
@@ -179,7 +179,7 @@ class PoseTracker:
         first, last = samples[0], samples[-1]
         if stamp_s >= last.stamp_s:
             ahead_s = min(stamp_s - last.stamp_s, self.max_extrapolation_s)
-            return last.pose.advance(last.linear_mps, last.angular_rps, ahead_s)
+            return last.pose.advance(last.linear_mps, last.angular_radps, ahead_s)
         if stamp_s <= first.stamp_s:
             return first.pose
         stamps = [s.stamp_s for s in samples]

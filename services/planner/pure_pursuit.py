@@ -41,7 +41,7 @@ class PurePursuitParams:
     """Limits, lookahead and regulation settings; names follow the Nav2 controller's parameters."""
 
     desired_linear_vel_mps: float = 0.5
-    max_angular_vel_rps: float = 1.5
+    max_angular_vel_radps: float = 1.5
     max_linear_accel_mps2: float = 1.0
     max_linear_decel_mps2: float = 1.5
     max_angular_accel_rps2: float = 3.2
@@ -67,7 +67,7 @@ class PurePursuitParams:
     min_approach_linear_velocity_mps: float = 0.05
     # Rotate in place.
     use_rotate_to_heading: bool = True
-    rotate_to_heading_angular_vel_rps: float = 1.5
+    rotate_to_heading_angular_vel_radps: float = 1.5
     rotate_to_heading_min_angle_rad: float = 0.785
     # Goal tolerances.
     xy_goal_tolerance_m: float = 0.05
@@ -86,7 +86,7 @@ class PurePursuitParams:
                 raise ValueError(f"{name} must be a non-negative number, got {value}")
         for name in (
             "desired_linear_vel_mps",
-            "max_angular_vel_rps",
+            "max_angular_vel_radps",
             "min_lookahead_dist_m",
             "regulated_linear_scaling_min_radius_m",
             "cost_scaling_dist_m",
@@ -106,7 +106,7 @@ class PurePursuitParams:
 @dataclass(frozen=True)
 class VelocityCommand:
     linear_mps: float
-    angular_rps: float
+    angular_radps: float
     status: FollowStatus
     #: Where the robot is steering to, in the map frame (``None`` when not following).
     lookahead_point: tuple[float, float] | None = None
@@ -144,15 +144,15 @@ def cost_regulated_speed(cost: int, desired_mps: float, params: PurePursuitParam
     return desired_mps * params.cost_scaling_gain * max(0.0, min_distance_m) / params.cost_scaling_dist_m
 
 
-def project_arc(pose: Pose2D, linear_mps: float, angular_rps: float, times_s: np.ndarray) -> np.ndarray:
+def project_arc(pose: Pose2D, linear_mps: float, angular_radps: float, times_s: np.ndarray) -> np.ndarray:
     """Poses ``(N, 3)`` reached after each of ``times_s`` driving the constant twist (exact arcs)."""
     t = np.asarray(times_s, dtype=float)
-    yaw = pose.yaw + angular_rps * t
-    if abs(angular_rps) < 1e-9:
+    yaw = pose.yaw + angular_radps * t
+    if abs(angular_radps) < 1e-9:
         x = pose.x + linear_mps * t * math.cos(pose.yaw)
         y = pose.y + linear_mps * t * math.sin(pose.yaw)
     else:
-        r = linear_mps / angular_rps
+        r = linear_mps / angular_radps
         x = pose.x + r * (np.sin(yaw) - math.sin(pose.yaw))
         y = pose.y - r * (np.cos(yaw) - math.cos(pose.yaw))
     return np.stack([x, y, yaw], axis=1)
@@ -245,15 +245,15 @@ class RegulatedPurePursuit:
         curvature = curvature_to(float(carrot_local[0]), float(carrot_local[1]))
         v = self._regulated_speed(pose, curvature, costmap)
         w = v * curvature
-        if abs(w) > p.max_angular_vel_rps:
-            w = math.copysign(p.max_angular_vel_rps, w)
+        if abs(w) > p.max_angular_vel_radps:
+            w = math.copysign(p.max_angular_vel_radps, w)
             v = abs(w / curvature)
         # Acceleration limits against the measured twist (a velocity smoother's job, done here too).
         v = min(max(v, v_now - p.max_linear_decel_mps2 * dt_s), v_now + p.max_linear_accel_mps2 * dt_s)
         v = min(max(v, 0.0), p.desired_linear_vel_mps)
         w = v * curvature
         w = min(max(w, w_now - p.max_angular_accel_rps2 * dt_s), w_now + p.max_angular_accel_rps2 * dt_s)
-        w = min(max(w, -p.max_angular_vel_rps), p.max_angular_vel_rps)
+        w = min(max(w, -p.max_angular_vel_radps), p.max_angular_vel_radps)
         return self._checked(
             pose, v, w, FollowStatus.FOLLOWING, carrot_map, curvature, costmap, max_distance_m=carrot_dist
         )
@@ -262,7 +262,7 @@ class RegulatedPurePursuit:
         """Nav2 ``rotateToHeading``: full rotation speed, accel-limited, slowed to stop at the heading."""
         p = self.params
         sign = 1.0 if angle_rad > 0.0 else -1.0
-        w = sign * min(p.rotate_to_heading_angular_vel_rps, p.max_angular_vel_rps)
+        w = sign * min(p.rotate_to_heading_angular_vel_radps, p.max_angular_vel_radps)
         w = min(max(w, w_now - p.max_angular_accel_rps2 * dt_s), w_now + p.max_angular_accel_rps2 * dt_s)
         max_to_stop = math.sqrt(2.0 * p.max_angular_accel_rps2 * abs(angle_rad))
         if abs(w) > max_to_stop:

@@ -96,7 +96,7 @@ class Params(ServiceParams):
     wheel_separation_m: float = Field(0.26, gt=0)
     wheel_radius_m: float = Field(0.033, gt=0)
     max_linear_mps: float = Field(0.5, gt=0)
-    max_angular_rps: float = Field(1.5, gt=0)
+    max_angular_radps: float = Field(1.5, gt=0)
     max_linear_accel: float = Field(1.0, gt=0)
     max_angular_accel: float = Field(3.0, gt=0)
     max_linear_decel: float = Field(2.5, gt=0)
@@ -172,7 +172,7 @@ class Params(ServiceParams):
             wheel_separation_m=self.wheel_separation_m,
             wheel_radius_m=self.wheel_radius_m,
             max_linear_mps=self.max_linear_mps,
-            max_angular_rps=self.max_angular_rps,
+            max_angular_radps=self.max_angular_radps,
             max_linear_accel=self.max_linear_accel,
             max_angular_accel=self.max_angular_accel,
             max_linear_decel=self.max_linear_decel,
@@ -219,7 +219,7 @@ class SimulatorService:
     def __init__(self, node: Node, params: Params) -> None:
         self.node = node
         self.params = params
-        self.log = node.log
+        self._log = node.log
         self.world = load_world(params.world)
         namespaces = params.robots or [""]
         self.robots: dict[str, _Robot] = {}
@@ -257,7 +257,7 @@ class SimulatorService:
         self._thread = threading.Thread(target=self._loop, name="sim-step", daemon=True)
         self._thread.start()
         rtf = params.rtf
-        self.log.info("world %s, %d robot(s), rtf %s", self.world.name, len(self.robots), rtf)
+        self._log.info("world %s, %d robot(s), rtf %s", self.world.name, len(self.robots), rtf)
 
     # --- endpoints -----------------------------------------------------------------------------------
 
@@ -368,7 +368,7 @@ class SimulatorService:
         achieved = (self.time_s - sim_then) / max(wall_now - wall_then, 1e-9)
         pacer = self._pacer
         waits = f"; waited for late drivers {pacer.holds} times, {pacer.held_s:.1f} s in all" if pacer else ""
-        self.log.info("real-time factor %.1f over the last %.0f s (target %s)%s",
+        self._log.info("real-time factor %.1f over the last %.0f s (target %s)%s",
                       achieved, wall_now - wall_then, self.params.rtf, waits)
         return wall_now, self.time_s
 
@@ -385,7 +385,7 @@ class SimulatorService:
                 robot.collisions_total += 1
                 robot.pubs["collisions"].publish(CollisionEvent(
                     Header.at(event.time_s, topics.MAP_FRAME), event.kind, robot.collisions_total, event.x_m, event.y_m))
-                self.log.warning("collision with %s at (%.2f, %.2f), %.2f m/s", event.kind, event.x_m, event.y_m, event.speed_mps)
+                self._log.warning("collision with %s at (%.2f, %.2f), %.2f m/s", event.kind, event.x_m, event.y_m, event.speed_mps)
         self._publish_due(now)
 
     def _publish_due(self, now: float) -> None:
@@ -442,7 +442,7 @@ class SimulatorService:
             Header(stamp, topics.ODOM_FRAME),
             topics.BASE_FRAME,
             PoseWithCovariance(Pose.from_pose2d(robot.sim.odom_pose)),
-            TwistWithCovariance(Twist.planar(twist.linear_mps, twist.angular_rps)),
+            TwistWithCovariance(Twist.planar(twist.linear_mps, twist.angular_radps)),
         ))
 
     def _publish_scan(self, robot: _Robot, stamp: Time) -> None:

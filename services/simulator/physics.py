@@ -187,11 +187,11 @@ class SimWorld:
         body in a straight line; aiming that chord along the arc the twist describes keeps free motion exact.
         """
         twist = self.drive.delivered
-        turn = twist.angular_rps * dt
+        turn = twist.angular_radps * dt
         chord_speed = twist.linear_mps * _sinc(0.5 * turn)
         mid = body.angle + 0.5 * turn
         body.velocity = (chord_speed * math.cos(mid), chord_speed * math.sin(mid))
-        body.angular_velocity = twist.angular_rps
+        body.angular_velocity = twist.angular_radps
 
     # ----------------------------------------------------------------------------------------- state
     @property

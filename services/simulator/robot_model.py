@@ -21,7 +21,7 @@ class DiffDriveParams:
     wheel_separation_m: float = 0.26
     wheel_radius_m: float = 0.033
     max_linear_mps: float = 0.5
-    max_angular_rps: float = 1.5
+    max_angular_radps: float = 1.5
     max_linear_accel: float = 1.0  # m/s^2
     max_angular_accel: float = 3.0  # rad/s^2
     #: Braking is harder than speeding up (diff_drive_controller's max_deceleration): the watchdog's stop
@@ -37,7 +37,7 @@ class DiffDriveParams:
             "wheel_separation_m",
             "wheel_radius_m",
             "max_linear_mps",
-            "max_angular_rps",
+            "max_angular_radps",
             "max_linear_accel",
             "max_angular_accel",
             "max_linear_decel",
@@ -61,7 +61,7 @@ class Twist2D:
     """Body velocity in base_link: forward speed and yaw rate (no lateral component: non-holonomic)."""
 
     linear_mps: float = 0.0
-    angular_rps: float = 0.0
+    angular_radps: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,8 +76,8 @@ def wheel_speeds_from_twist(twist: Twist2D, params: DiffDriveParams) -> WheelSpe
     """Inverse kinematics of a differential drive."""
     half = 0.5 * params.wheel_separation_m
     return WheelSpeeds(
-        (twist.linear_mps - twist.angular_rps * half) / params.wheel_radius_m,
-        (twist.linear_mps + twist.angular_rps * half) / params.wheel_radius_m,
+        (twist.linear_mps - twist.angular_radps * half) / params.wheel_radius_m,
+        (twist.linear_mps + twist.angular_radps * half) / params.wheel_radius_m,
     )
 
 
@@ -107,11 +107,11 @@ def limit_twist(command: Twist2D, previous: Twist2D, dt_s: float, params: DiffDr
     per-wheel saturation with a common scale factor. A non-finite command counts as a stop.
     """
     v_cmd = command.linear_mps if math.isfinite(command.linear_mps) else 0.0
-    w_cmd = command.angular_rps if math.isfinite(command.angular_rps) else 0.0
+    w_cmd = command.angular_radps if math.isfinite(command.angular_radps) else 0.0
     v = _clamp(v_cmd, params.max_linear_mps)
-    w = _clamp(w_cmd, params.max_angular_rps)
+    w = _clamp(w_cmd, params.max_angular_radps)
     v = _rate_limit(v, previous.linear_mps, params.max_linear_accel, params.max_linear_decel, dt_s)
-    w = _rate_limit(w, previous.angular_rps, params.max_angular_accel, params.max_angular_decel, dt_s)
+    w = _rate_limit(w, previous.angular_radps, params.max_angular_accel, params.max_angular_decel, dt_s)
     wheels = wheel_speeds_from_twist(Twist2D(v, w), params)
     fastest = max(abs(wheels.left_radps), abs(wheels.right_radps))
     if fastest > params.max_wheel_speed_radps:

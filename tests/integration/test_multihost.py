@@ -219,7 +219,7 @@ def hosts(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Hosts]:
 
 
 def _speed_stopped(status: dict[str, Any]) -> bool:
-    linear, angular = status.get("linear_mps"), status.get("angular_rps")
+    linear, angular = status.get("linear_mps"), status.get("angular_radps")
     return linear is not None and abs(linear) < STOPPED_LINEAR_MPS and abs(angular or 0.0) < STOPPED_ANGULAR_RPS
 
 

@@ -40,7 +40,7 @@ class RobotWatch:
         self._emit = emit
         self.state: dict[str, Any] = {
             "sim_time_s": None, "odom_time_s": None, "x_m": None, "y_m": None, "linear_mps": None,
-            "angular_rps": None, "odom_count": 0,
+            "angular_radps": None, "odom_count": 0,
             "battery_percentage": None, "power_supply_status": None, "mated": None, "contact_count": 0,
             "collisions": 0, "pose2d_count": 0, "nodes": [],
         }
@@ -76,7 +76,7 @@ class RobotWatch:
             self.state["x_m"] = msg.pose.pose.position.x
             self.state["y_m"] = msg.pose.pose.position.y
             self.state["linear_mps"] = msg.twist.twist.linear.x
-            self.state["angular_rps"] = msg.twist.twist.angular.z
+            self.state["angular_radps"] = msg.twist.twist.angular.z
             self.state["odom_count"] += 1
 
     def _on_battery(self, msg: BatteryState) -> None:

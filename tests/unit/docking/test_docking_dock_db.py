@@ -4,7 +4,7 @@ from pathlib import Path
 import pytest
 
 from services.docking.dock_db import DockDatabase, load_dock_db, parse_dock_db
-from services.docking.errors import DockingErrorCode, DockNotInDbError, DockNotValidError
+from services.docking.errors import DockingError, DockingErrorCode
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
 from shared.world import load_world
@@ -37,7 +37,7 @@ def test_dock_file_loads(tmp_path: Path) -> None:
 
 def test_unknown_id_is_dock_not_in_db() -> None:
     db = parse_dock_db(TWO_DOCKS, "docks.yaml")
-    with pytest.raises(DockNotInDbError) as info:
+    with pytest.raises(DockingError) as info:
         db.get("kitchen")
     assert info.value.error_code == DockingErrorCode.DOCK_NOT_IN_DB
     assert "kitchen" in str(info.value) and "home" in str(info.value)
@@ -49,10 +49,10 @@ def test_choose_by_id_or_nearest() -> None:
     assert db.choose(robot_pose=Pose2D(2.0, 2.0, 0.0)).id == "lab"
     assert db.choose(robot_pose=Pose2D(0.0, 0.0, 0.0)).id == "home"
     assert db.nearest(Pose2D(2.5, 2.0, 0.0), dock_type="charger").id == "home"
-    with pytest.raises(DockNotValidError):
-        db.nearest(Pose2D(), dock_type="conveyor")
-    with pytest.raises(DockNotValidError):
-        db.choose()
+    for no_dock in (lambda: db.nearest(Pose2D(), dock_type="conveyor"), db.choose):
+        with pytest.raises(DockingError) as info:
+            no_dock()
+        assert info.value.error_code == DockingErrorCode.DOCK_NOT_VALID
     single = parse_dock_db({"docks": TWO_DOCKS["docks"][:1]})
     assert single.choose().id == "home"
 

@@ -9,7 +9,7 @@ import pytest
 
 from services.docking.approach import dock_frame_error, graceful_staging_pose, offset_along
 from services.docking.dock_tracker import DockTracker
-from services.docking.robot_track import OdomSample, RobotPoseTrack
+from services.docking.robot_track import OdometrySample, RobotPoseTrack
 from services.docking.safety import (
     ObstacleParams,
     expected_sonar_range,
@@ -61,7 +61,7 @@ def test_localisation_samples_are_carried_forward_by_odometry() -> None:
         t = i * 0.02
         true = arc(start, v, w, t)
         odom = start.inverse().compose(true)  # odometry starts at the identity
-        track.add_odom(OdomSample(t, odom, v, w))
+        track.add_odom(OdometrySample(t, odom, v, w))
         if i % 5 == 0:
             track.add_pose(t, true.compose(error))
     for t in (0.55, 1.23, 1.999):
@@ -75,11 +75,11 @@ def test_localisation_samples_are_carried_forward_by_odometry() -> None:
 
 def test_an_odometry_jump_drops_what_cannot_be_carried_across_it() -> None:
     track = RobotPoseTrack()
-    track.add_odom(OdomSample(0.0, Pose2D(), 0.0, 0.0))
+    track.add_odom(OdometrySample(0.0, Pose2D(), 0.0, 0.0))
     track.add_pose(0.0, Pose2D(2.0, 2.0, 0.0))
-    track.add_odom(OdomSample(0.02, Pose2D(0.001, 0.0, 0.0), 0.05, 0.0))
+    track.add_odom(OdometrySample(0.02, Pose2D(0.001, 0.0, 0.0), 0.05, 0.0))
     assert track.has_pose
-    track.add_odom(OdomSample(0.04, Pose2D(1.5, 0.3, 1.0), 0.0, 0.0))  # a teleport
+    track.add_odom(OdometrySample(0.04, Pose2D(1.5, 0.3, 1.0), 0.0, 0.0))  # a teleport
     assert not track.has_pose and track.odom_resets == 1
     track.add_pose(0.05, Pose2D(5.0, 1.0, 1.0))
     assert close(track.pose_at(0.05), Pose2D(5.0, 1.0, 1.0), 1e-6)
@@ -205,7 +205,7 @@ def test_a_late_localisation_sample_pairs_with_the_odometry_it_was_made_from() -
     track = RobotPoseTrack()
     for i in range(0, 60):
         t = i * 0.02
-        track.add_odom(OdomSample(t, arc(start, v, w, t), v, w))
+        track.add_odom(OdometrySample(t, arc(start, v, w, t), v, w))
         if i % 5 == 0 and i >= 10:
             late_by = 0.1 if i % 10 == 0 else 0.0  # computed 0.1 s before it arrives, or on time
             track.add_pose(t, correction.compose(arc(start, v, w, t - late_by)))
@@ -213,7 +213,7 @@ def test_a_late_localisation_sample_pairs_with_the_odometry_it_was_made_from() -
     # A sample computed from odometry that has not arrived yet is paired once that odometry comes.
     t_next = 60 * 0.02
     track.add_pose(t_next, correction.compose(arc(start, v, w, t_next)))
-    track.add_odom(OdomSample(t_next, arc(start, v, w, t_next), v, w))
+    track.add_odom(OdometrySample(t_next, arc(start, v, w, t_next), v, w))
     assert close(track.map_to_odom, correction, 1e-9)
     stamp, latest = track.latest()  # type: ignore[misc]
     assert stamp == pytest.approx(t_next) and close(latest, correction.compose(arc(start, v, w, t_next)), 1e-9)
@@ -222,10 +222,10 @@ def test_a_late_localisation_sample_pairs_with_the_odometry_it_was_made_from() -
 
 def test_odometry_carries_a_late_localisation_sample_forward() -> None:
     track = RobotPoseTrack()
-    track.add_odom(OdomSample(0.0, Pose2D(), 0.0, 0.0))
+    track.add_odom(OdometrySample(0.0, Pose2D(), 0.0, 0.0))
     track.add_pose(0.0, Pose2D(1.0, 1.0, 0.0))
     for i in range(1, 51):
-        track.add_odom(OdomSample(0.02 * i, Pose2D(0.01 * i, 0.0, 0.0), 0.5, 0.0))
+        track.add_odom(OdometrySample(0.02 * i, Pose2D(0.01 * i, 0.0, 0.0), 0.5, 0.0))
     assert not track.pose_fresh(1.0, 0.5)  # localisation alone is a second old ...
     assert track.pose_fresh(1.0, 0.5, carried_age_s=2.0)  # ... but fresh odometry carries it
     assert not track.pose_fresh(3.5, 0.5, carried_age_s=2.0)  # and not for ever

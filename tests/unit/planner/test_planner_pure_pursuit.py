@@ -68,7 +68,7 @@ def test_straight_path_drives_straight() -> None:
     command = _follower(_straight()).compute_velocity_command(Pose2D(0.0, 0.0, 0.0), (0.5, 0.0), DT)
     assert command.status is FollowStatus.FOLLOWING
     assert command.linear_mps == pytest.approx(0.5)
-    assert command.angular_rps == pytest.approx(0.0, abs=1e-9)
+    assert command.angular_radps == pytest.approx(0.0, abs=1e-9)
     assert command.lookahead_point == pytest.approx((0.75, 0.0))  # 0.5 m/s * 1.5 s
 
 
@@ -76,14 +76,14 @@ def test_path_curving_left_turns_left_and_right_turns_right() -> None:
     for left in (True, False):
         command = _follower(_arc(1.5, 2.0, left)).compute_velocity_command(Pose2D(0, 0, 0), (0.4, 0.0), DT)
         assert command.status is FollowStatus.FOLLOWING
-        assert (command.angular_rps > 0.1) if left else (command.angular_rps < -0.1)
+        assert (command.angular_radps > 0.1) if left else (command.angular_radps < -0.1)
         # On an arc of radius 1.5 the pursuit arc has about the same curvature.
         assert abs(command.curvature) == pytest.approx(1 / 1.5, rel=0.05)
 
 
 def test_robot_beside_the_path_steers_back_onto_it() -> None:
     command = _follower(_straight()).compute_velocity_command(Pose2D(0.0, 0.3, 0.0), (0.3, 0.0), DT)
-    assert command.angular_rps < 0.0
+    assert command.angular_radps < 0.0
 
 
 def test_lookahead_grows_with_speed_within_limits() -> None:
@@ -100,7 +100,7 @@ def test_tight_curves_are_taken_slower() -> None:
     tight = _follower(_arc(0.4, 1.5)).compute_velocity_command(Pose2D(0, 0, 0), (0.5, 0.0), DT)
     assert gentle.linear_mps == pytest.approx(0.5)
     assert 0.25 <= tight.linear_mps < 0.45
-    assert abs(tight.angular_rps) <= 1.5
+    assert abs(tight.angular_radps) <= 1.5
 
 
 def test_cost_regulation_slows_near_obstacles() -> None:
@@ -137,9 +137,9 @@ def test_rotates_in_place_when_facing_away() -> None:
     command = follower.compute_velocity_command(Pose2D(0.0, 0.0, math.pi / 2), (0.0, 0.0), DT)
     assert command.status is FollowStatus.ROTATING_TO_PATH
     assert command.linear_mps == 0.0
-    assert command.angular_rps == pytest.approx(-3.2 * DT)  # clockwise, accel-limited from rest
+    assert command.angular_radps == pytest.approx(-3.2 * DT)  # clockwise, accel-limited from rest
     spinning = follower.compute_velocity_command(Pose2D(0.0, 0.0, math.pi / 2), (0.0, -1.5), DT)
-    assert spinning.angular_rps == pytest.approx(-1.5)
+    assert spinning.angular_radps == pytest.approx(-1.5)
 
 
 def test_reaches_the_goal_then_turns_to_its_yaw_and_stops() -> None:
@@ -153,14 +153,14 @@ def test_reaches_the_goal_then_turns_to_its_yaw_and_stops() -> None:
         statuses.append(command.status)
         if command.status is FollowStatus.GOAL_REACHED:
             break
-        v, w = command.linear_mps, command.angular_rps
+        v, w = command.linear_mps, command.angular_radps
         assert abs(w) <= 1.5 + 1e-9 and 0.0 <= v <= 0.5 + 1e-9
         pose = _drive(pose, v, w)
     assert statuses[-1] is FollowStatus.GOAL_REACHED
     assert FollowStatus.ROTATING_TO_GOAL in statuses
     assert math.hypot(pose.x - 1.0, pose.y) <= 0.05
     assert abs(wrap_angle(pose.yaw - math.pi / 2)) <= 0.05
-    assert (command.linear_mps, command.angular_rps) == (0.0, 0.0)
+    assert (command.linear_mps, command.angular_radps) == (0.0, 0.0)
     # Goal reached latches: drifting a little outside the xy tolerance does not restart the approach.
     assert follower.compute_velocity_command(Pose2D(1.06, 0.0, math.pi / 2), (0, 0), DT).status is (
         FollowStatus.GOAL_REACHED
@@ -176,7 +176,7 @@ def test_follows_a_curved_path_to_the_end() -> None:
         command = follower.compute_velocity_command(pose, (v, w), DT)
         if command.status is FollowStatus.GOAL_REACHED:
             break
-        v, w = command.linear_mps, command.angular_rps
+        v, w = command.linear_mps, command.angular_radps
         pose = _drive(pose, v, w)
         worst_offset = max(worst_offset, float(np.min(np.hypot(path[:, 0] - pose.x, path[:, 1] - pose.y))))
     assert command.status is FollowStatus.GOAL_REACHED
@@ -190,7 +190,7 @@ def test_stops_for_an_obstacle_ahead_but_not_one_beyond_reach() -> None:
     costmap.update_with_scan((0.0, 0.0), np.array([[0.55, 0.0]]))  # footprint front at 0.2 m: 0.35 m to go
     blocked = follower.compute_velocity_command(Pose2D(0, 0, 0), (0.5, 0.0), DT, costmap.grid())
     assert blocked.status is FollowStatus.COLLISION_AHEAD
-    assert (blocked.linear_mps, blocked.angular_rps) == (0.0, 0.0)
+    assert (blocked.linear_mps, blocked.angular_radps) == (0.0, 0.0)
     costmap.clear()
     costmap.update_with_scan((0.0, 0.0), np.array([[1.6, 0.0]]))  # more than 1 s at 0.5 m/s away
     clear = follower.compute_velocity_command(Pose2D(0, 0, 0), (0.5, 0.0), DT, costmap.grid())

@@ -64,11 +64,11 @@ def test_acceleration_limits_hold_in_the_body_motion(
     for command in [(0.5, 1.5)] * 80 + [(-0.5, -1.5)] * 120:
         sim.step(*command)
         dv = abs(sim.twist.linear_mps - previous.linear_mps)
-        dw = abs(sim.twist.angular_rps - previous.angular_rps)
+        dw = abs(sim.twist.angular_radps - previous.angular_radps)
         assert dv <= 1.0 * 0.01 + 1e-9
         assert dw <= 3.0 * 0.01 + 1e-9
         previous = sim.twist
-    assert previous.linear_mps < 0 and previous.angular_rps < 0
+    assert previous.linear_mps < 0 and previous.angular_radps < 0
 
 
 @pytest.mark.parametrize("kind", ["walls", "glass"])

@@ -27,7 +27,7 @@ def test_wheel_speeds_round_trip_and_signs() -> None:
     assert wheels.right_radps - wheels.left_radps == pytest.approx(0.5 * 0.26 / 0.033)
     assert 0.5 * (wheels.right_radps + wheels.left_radps) * 0.033 == pytest.approx(0.2)
     back = twist_from_wheel_speeds(wheels, PARAMS)
-    assert back.linear_mps == pytest.approx(0.2) and back.angular_rps == pytest.approx(0.5)
+    assert back.linear_mps == pytest.approx(0.2) and back.angular_radps == pytest.approx(0.5)
     assert twist_from_wheel_speeds(WheelSpeeds(-10.0, 10.0), PARAMS).linear_mps == pytest.approx(0.0)
 
 
@@ -35,8 +35,8 @@ def test_velocity_clamped_to_limits() -> None:
     fast = Twist2D(PARAMS.max_linear_mps, 0.0)
     out = limit_twist(Twist2D(3.0, 0.0), fast, 0.01, PARAMS)
     assert out.linear_mps == pytest.approx(PARAMS.max_linear_mps)
-    spin = Twist2D(0.0, -PARAMS.max_angular_rps)
-    assert limit_twist(Twist2D(0.0, -9.0), spin, 0.01, PARAMS).angular_rps == pytest.approx(-1.5)
+    spin = Twist2D(0.0, -PARAMS.max_angular_radps)
+    assert limit_twist(Twist2D(0.0, -9.0), spin, 0.01, PARAMS).angular_radps == pytest.approx(-1.5)
 
 
 def test_acceleration_limited_both_ways() -> None:
@@ -45,7 +45,7 @@ def test_acceleration_limited_both_ways() -> None:
     for _ in range(200):
         out = drive.step(Twist2D(0.5, 1.5), 0.01)
         assert abs(out.linear_mps - previous.linear_mps) <= PARAMS.max_linear_accel * 0.01 + 1e-12
-        assert abs(out.angular_rps - previous.angular_rps) <= PARAMS.max_angular_accel * 0.01 + 1e-12
+        assert abs(out.angular_radps - previous.angular_radps) <= PARAMS.max_angular_accel * 0.01 + 1e-12
         previous = out
     for _ in range(200):
         out = drive.step(Twist2D(-0.5, -1.5), 0.01)
@@ -60,7 +60,7 @@ def test_saturated_wheel_keeps_curvature() -> None:
     wheels = wheel_speeds_from_twist(out, PARAMS)
     assert max(abs(wheels.left_radps), abs(wheels.right_radps)) == pytest.approx(PARAMS.max_wheel_speed_radps)
     assert out.linear_mps < 0.5
-    assert out.angular_rps / out.linear_mps == pytest.approx(1.5 / 0.5)
+    assert out.angular_radps / out.linear_mps == pytest.approx(1.5 / 0.5)
 
 
 def test_non_finite_command_stops() -> None:
