@@ -1,68 +1,15 @@
 """zendock's common kit: what every service, tool and test may use.
 
-The public surface is what this module exports; the submodules are the implementation.
+Each module is public and has one job; import what you need from it (``from shared.geometry import
+Pose2D``). The package itself re-exports nothing on purpose: importing ``shared`` must stay free, so that
+the pure modules (geometry, frames, world, messages) load without Zenoh and algorithm modules that use
+them stay bus-free, as ``tests/unit/shared/test_kit_layers.py`` checks.
+
+- bus: :mod:`shared.session` (open a session), :mod:`shared.node` (publishers, subscriptions, timers,
+  services), :mod:`shared.action` (actions), :mod:`shared.runtime` (a service's ``main``),
+  :mod:`shared.navigation` (the navigation client), :mod:`shared.names` (key expressions, tokens).
+- data: :mod:`shared.messages` and :mod:`shared.schema` (ROS-named message types), :mod:`shared.topics`,
+  :mod:`shared.interfaces` (action and service types), :mod:`shared.world` (world files).
+- pure helpers: :mod:`shared.geometry` (SE(2)), :mod:`shared.frames` (frame names, sensor mounts, clock
+  resets), :mod:`shared.ratelimit`, :mod:`shared.config_errors`, :mod:`shared.files`.
 """
-
-from shared.config_errors import ConfigError
-from shared.geometry import (
-    Pose2D,
-    euler_from_quaternion,
-    quaternion_from_yaw,
-    wrap_angle,
-    yaw_from_quaternion,
-)
-from shared.names import node_token_key, parse_token_key, topic_key
-from shared.node import (
-    BLOCKING,
-    RELIABLE,
-    SENSOR_DATA,
-    Node,
-    Publisher,
-    QoS,
-    ServiceError,
-    ServiceType,
-    Subscription,
-    Timer,
-    call_service,
-)
-from shared.ratelimit import RateLimitedLogger
-from shared.runtime import ServiceOptions, ServiceParams, run_service, serve
-from shared.schema import Message, MessageError, message
-from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
-from shared.world import World, load_world
-
-__all__ = [
-    "BLOCKING",
-    "DEFAULT_ROUTER_ENDPOINT",
-    "RELIABLE",
-    "SENSOR_DATA",
-    "ConfigError",
-    "Message",
-    "MessageError",
-    "Node",
-    "Pose2D",
-    "Publisher",
-    "QoS",
-    "RateLimitedLogger",
-    "ServiceError",
-    "ServiceOptions",
-    "ServiceParams",
-    "ServiceType",
-    "SessionSpec",
-    "Subscription",
-    "Timer",
-    "World",
-    "call_service",
-    "euler_from_quaternion",
-    "load_world",
-    "message",
-    "node_token_key",
-    "open_session",
-    "parse_token_key",
-    "quaternion_from_yaw",
-    "run_service",
-    "serve",
-    "topic_key",
-    "wrap_angle",
-    "yaw_from_quaternion",
-]

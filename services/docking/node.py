@@ -19,25 +19,17 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import replace
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
 
-from services.docking.approach import GRACEFUL_STAGING_OFFSET_M
-from services.docking.approach_control import (
-    ApproachController,
-    GracefulApproach,
-    SeedApproach,
-    back_off_gains,
-    graceful_params_with_speed,
-)
 from services.docking.dock_db import DockDatabase, load_dock_db
 from services.docking.dock_tracker import DockTracker
-from services.docking.docking_run import DockingConfig, DockingRun, DockRequest
+from services.docking.docking_run import DockingRun, DockRequest
 from services.docking.drive_arbiter import DriveArbiter, DriveOrders
 from services.docking.errors import DockingState
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
+from services.docking.params import Params
 from services.docking.patrol import Patrol
 from services.docking.pose_filter import PoseFilterParams
 from services.docking.robot_track import OdometrySample, RobotPoseTrack
@@ -52,7 +44,7 @@ from services.docking.task_io import (
     TickInputs,
     Velocity,
 )
-from services.docking.undocking_run import UndockConfig, UndockingRun
+from services.docking.undocking_run import UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.frames import SensorMounts, clock_went_back
@@ -82,7 +74,7 @@ from shared.messages import (
 from shared.navigation import NavigationClient, TaskResult
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
 from shared.ratelimit import RateLimitedLogger
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import run_service
 
 #: std_msgs/String with the service's state name, for tools (published on change and every second).
 DOCKING_STATE = "docking/state"
@@ -95,68 +87,6 @@ STATE_PERIOD_S = 1.0
 #: still place the robot where it was.
 RELOCALISE_SETTLE_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
-
-
-class Params(ServiceParams):
-    """Parameters of ``python -m services.docking`` (``-p name=value`` or a YAML file)."""
-
-    dock_database: str = Field(
-        description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
-    )
-    controller: Literal["graceful", "seed"] = Field("graceful", description="final approach controller")
-    dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
-    auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
-    low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
-    resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
-    patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw]")
-    max_retries: int = Field(3, ge=0)
-    use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
-    allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")
-    min_detections: int = Field(3, ge=1)
-    initial_perception_timeout_s: float = Field(2.0, gt=0.0)
-    detection_filter_coef: float = Field(0.1, gt=0.0, le=1.0)
-    max_detection_offset_m: float = Field(0.5, gt=0.0, description="detections farther from the database pose are ignored")
-    max_staging_time_s: float = Field(120.0, gt=0.0, description="staging time limit of battery-triggered runs")
-    approach_timeout_s: float = Field(120.0, gt=0.0)
-    obstacle_timeout_s: float = Field(20.0, gt=0.0, description="held by an obstacle this long, the attempt fails")
-    wait_charge_timeout_s: float = Field(5.0, gt=0.0)
-    max_docking_time_s: float = Field(600.0, gt=0.0)
-    staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
-    handover_distance_m: float = Field(
-        0.45, ge=0.0, description="graceful: the approach takes over from navigation this close to the staging "
-        "pose, with the dock in view (0: navigation always stops at the staging pose first)")
-    max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed")
-    undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5)
-    max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
-    max_localisation_age_s: float = Field(
-        2.0, gt=0.0, description="... unless odometry no older than max_pose_age_s carries a pose this old forward")
-    pose_latency_s: float = Field(0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives")
-    max_control_pose_age_s: float = Field(
-        0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)")
-    command_delay_s: float = Field(
-        0.15, ge=0.0, le=1.0, description="graceful: dead time from cmd_vel to the base's response, predicted "
-        "through with the commands still on their way")
-    pose_correction_gain: float = Field(
-        1.0, gt=0.0, le=1.0, description="graceful: how far each pose moves the approach's pose estimate "
-        "(1: the odometry-carried pose as it is, compensated for its age)")
-    battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
-    obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
-    use_lidar: bool = True
-    use_sonar: bool = True
-    feedback_period_s: float = Field(0.5, gt=0.0)
-
-    @field_validator("dock_database")
-    @classmethod
-    def _database_loads(cls, value: str) -> str:
-        load_dock_db(value)  # a ConfigError names the file and the field
-        return value
-
-    @model_validator(mode="after")
-    def _consistent(self) -> Params:
-        if self.resume_at <= self.low_battery_threshold:
-            raise ValueError(f"resume_at ({self.resume_at}) must be above low_battery_threshold "
-                             f"({self.low_battery_threshold})")
-        return self
 
 
 class DockingService:
@@ -406,43 +336,13 @@ class DockingService:
 
     # --- tasks -------------------------------------------------------------------------------------
 
-    def _approach(self) -> ApproachController:
-        if self.params.controller == "seed":
-            return SeedApproach()
-        params = graceful_params_with_speed(self.params.max_approach_speed_mps)
-        params = replace(params, command_delay_s=self.params.command_delay_s)
-        if params.pose_estimator is not None:
-            # The pose comes carried by odometry, smooth and fresh: trust it, only compensate its age.
-            estimator = replace(params.pose_estimator, correction_gain=self.params.pose_correction_gain)
-            params = replace(params, pose_estimator=estimator)
-        return GracefulApproach(params, self.params.staging_offset_m)
-
     def _docking_run(self, request: DockRequest) -> DockingRun:
         p = self.params
-        config = DockingConfig(
-            max_retries=p.max_retries,
-            use_detection=p.use_detection,
-            allow_blind_docking=p.allow_blind_docking,
-            wait_for_detection=p.controller == "graceful",
-            continuous_perception=p.controller == "graceful",
-            max_control_pose_age_s=p.max_control_pose_age_s if p.controller == "graceful" else None,
-            handover_distance_m=p.handover_distance_m if p.controller == "graceful" and p.handover_distance_m > 0 else None,
-            min_detections=p.min_detections,
-            initial_perception_timeout_s=p.initial_perception_timeout_s,
-            approach_timeout_s=p.approach_timeout_s,
-            obstacle_timeout_s=p.obstacle_timeout_s,
-            wait_charge_timeout_s=p.wait_charge_timeout_s,
-            max_docking_time_s=p.max_docking_time_s,
-            staging_offset_m=p.staging_offset_m,
-            back_off_gains=back_off_gains(p.undock_speed_mps),
-        )
         tracker = DockTracker(replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m)
-        return DockingRun(request, self.database, self._approach(), config, tracker)
+        return DockingRun(request, self.database, p.approach_controller(), p.docking_config(), tracker)
 
     def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
-        config = UndockConfig(staging_offset_m=self.params.staging_offset_m,
-                              gains=back_off_gains(self.params.undock_speed_mps))
-        return UndockingRun(self.database, max_time_s, dock_type, config)
+        return UndockingRun(self.database, max_time_s, dock_type, self.params.undock_config())
 
     def _start(self, task: Task[Any], kind: TaskKind,
                handle: ServerGoalHandle[Any, Any, Any] | None = None) -> None:

@@ -40,7 +40,7 @@ class Params(ServiceParams):
     max_angular_vel_radps: float = Field(1.5, gt=0.0)
     max_linear_accel_mps2: float = Field(1.0, gt=0.0)
     max_linear_decel_mps2: float = Field(1.5, gt=0.0)
-    max_angular_accel_rps2: float = Field(3.0, gt=0.0)
+    max_angular_accel_radps2: float = Field(3.0, gt=0.0)
     regulated_linear_scaling_min_radius_m: float = Field(
         0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower")
     approach_velocity_scaling_dist_m: float = Field(
@@ -163,7 +163,7 @@ class Params(ServiceParams):
             max_angular_vel_radps=self.max_angular_vel_radps,
             max_linear_accel_mps2=self.max_linear_accel_mps2,
             max_linear_decel_mps2=self.max_linear_decel_mps2,
-            max_angular_accel_rps2=self.max_angular_accel_rps2,
+            max_angular_accel_radps2=self.max_angular_accel_radps2,
             rotate_to_heading_angular_vel_radps=self.max_angular_vel_radps,
             regulated_linear_scaling_min_radius_m=self.regulated_linear_scaling_min_radius_m,
             approach_velocity_scaling_dist_m=self.approach_velocity_scaling_dist_m,

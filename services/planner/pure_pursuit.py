@@ -44,7 +44,7 @@ class PurePursuitParams:
     max_angular_vel_radps: float = 1.5
     max_linear_accel_mps2: float = 1.0
     max_linear_decel_mps2: float = 1.5
-    max_angular_accel_rps2: float = 3.2
+    max_angular_accel_radps2: float = 3.2
     # Lookahead: |v| * lookahead_time_s clamped to [min, max] when velocity-scaled, else lookahead_dist_m.
     use_velocity_scaled_lookahead_dist: bool = True
     lookahead_dist_m: float = 0.6
@@ -252,7 +252,7 @@ class RegulatedPurePursuit:
         v = min(max(v, v_now - p.max_linear_decel_mps2 * dt_s), v_now + p.max_linear_accel_mps2 * dt_s)
         v = min(max(v, 0.0), p.desired_linear_vel_mps)
         w = v * curvature
-        w = min(max(w, w_now - p.max_angular_accel_rps2 * dt_s), w_now + p.max_angular_accel_rps2 * dt_s)
+        w = min(max(w, w_now - p.max_angular_accel_radps2 * dt_s), w_now + p.max_angular_accel_radps2 * dt_s)
         w = min(max(w, -p.max_angular_vel_radps), p.max_angular_vel_radps)
         return self._checked(
             pose, v, w, FollowStatus.FOLLOWING, carrot_map, curvature, costmap, max_distance_m=carrot_dist
@@ -263,8 +263,8 @@ class RegulatedPurePursuit:
         p = self.params
         sign = 1.0 if angle_rad > 0.0 else -1.0
         w = sign * min(p.rotate_to_heading_angular_vel_radps, p.max_angular_vel_radps)
-        w = min(max(w, w_now - p.max_angular_accel_rps2 * dt_s), w_now + p.max_angular_accel_rps2 * dt_s)
-        max_to_stop = math.sqrt(2.0 * p.max_angular_accel_rps2 * abs(angle_rad))
+        w = min(max(w, w_now - p.max_angular_accel_radps2 * dt_s), w_now + p.max_angular_accel_radps2 * dt_s)
+        max_to_stop = math.sqrt(2.0 * p.max_angular_accel_radps2 * abs(angle_rad))
         if abs(w) > max_to_stop:
             w = sign * max_to_stop
         return w

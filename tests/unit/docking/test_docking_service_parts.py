@@ -18,7 +18,7 @@ from services.docking.approach_control import (
 )
 from services.docking.errors import DockingErrorCode, DockingState
 from services.docking.kinematics import DiffDriveModel
-from services.docking.node import Params
+from services.docking.params import Params
 from services.docking.task_io import Velocity
 from shared.interfaces.docking import DockRobotFeedback
 from shared.messages import Duration

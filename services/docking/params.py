@@ -1,0 +1,130 @@
+"""The docking service's parameters: one validated set, mapped onto the runs' and controllers' settings.
+
+Which controller runs decides several settings at once (the graceful approach waits for a detection,
+keeps perceiving while it drives, and takes over from navigation near the staging pose; the line
+approach does none of these): that choice is made here once, not tested again at each use.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from services.docking.approach import GRACEFUL_STAGING_OFFSET_M
+from services.docking.approach_control import (
+    ApproachController,
+    GracefulApproach,
+    SeedApproach,
+    back_off_gains,
+    graceful_params_with_speed,
+)
+from services.docking.dock_db import load_dock_db
+from services.docking.docking_run import DockingConfig
+from services.docking.undocking_run import UndockConfig
+from shared.runtime import ServiceParams
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.docking`` (``-p name=value`` or a YAML file)."""
+
+    dock_database: str = Field(
+        description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
+    )
+    controller: Literal["graceful", "seed"] = Field("graceful", description="final approach controller")
+    dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
+    auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
+    low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
+    resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
+    patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw]")
+    max_retries: int = Field(3, ge=0)
+    use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
+    allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")
+    min_detections: int = Field(3, ge=1)
+    initial_perception_timeout_s: float = Field(2.0, gt=0.0)
+    detection_filter_coef: float = Field(0.1, gt=0.0, le=1.0)
+    max_detection_offset_m: float = Field(0.5, gt=0.0, description="detections farther from the database pose are ignored")
+    max_staging_time_s: float = Field(120.0, gt=0.0, description="staging time limit of battery-triggered runs")
+    approach_timeout_s: float = Field(120.0, gt=0.0)
+    obstacle_timeout_s: float = Field(20.0, gt=0.0, description="held by an obstacle this long, the attempt fails")
+    wait_charge_timeout_s: float = Field(5.0, gt=0.0)
+    max_docking_time_s: float = Field(600.0, gt=0.0)
+    staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
+    handover_distance_m: float = Field(
+        0.45, ge=0.0, description="graceful: the approach takes over from navigation this close to the staging "
+        "pose, with the dock in view (0: navigation always stops at the staging pose first)")
+    max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed")
+    undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5)
+    max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
+    max_localisation_age_s: float = Field(
+        2.0, gt=0.0, description="... unless odometry no older than max_pose_age_s carries a pose this old forward")
+    pose_latency_s: float = Field(0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives")
+    max_control_pose_age_s: float = Field(
+        0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)")
+    command_delay_s: float = Field(
+        0.15, ge=0.0, le=1.0, description="graceful: dead time from cmd_vel to the base's response, predicted "
+        "through with the commands still on their way")
+    pose_correction_gain: float = Field(
+        1.0, gt=0.0, le=1.0, description="graceful: how far each pose moves the approach's pose estimate "
+        "(1: the odometry-carried pose as it is, compensated for its age)")
+    battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
+    obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
+    use_lidar: bool = True
+    use_sonar: bool = True
+    feedback_period_s: float = Field(0.5, gt=0.0)
+
+    @field_validator("dock_database")
+    @classmethod
+    def _database_loads(cls, value: str) -> str:
+        load_dock_db(value)  # a ConfigError names the file and the field
+        return value
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Params:
+        if self.resume_at <= self.low_battery_threshold:
+            raise ValueError(f"resume_at ({self.resume_at}) must be above low_battery_threshold "
+                             f"({self.low_battery_threshold})")
+        return self
+
+    @property
+    def graceful(self) -> bool:
+        """Whether the graceful approach runs (else the line approach)."""
+        return self.controller == "graceful"
+
+    def approach_controller(self) -> ApproachController:
+        """A fresh final-approach controller as these parameters configure it."""
+        if not self.graceful:
+            return SeedApproach()
+        params = graceful_params_with_speed(self.max_approach_speed_mps)
+        params = replace(params, command_delay_s=self.command_delay_s)
+        if params.pose_estimator is not None:
+            # The pose comes carried by odometry, smooth and fresh: trust it, only compensate its age.
+            estimator = replace(params.pose_estimator, correction_gain=self.pose_correction_gain)
+            params = replace(params, pose_estimator=estimator)
+        return GracefulApproach(params, self.staging_offset_m)
+
+    def docking_config(self) -> DockingConfig:
+        """The docking run's settings."""
+        graceful = self.graceful
+        return DockingConfig(
+            max_retries=self.max_retries,
+            use_detection=self.use_detection,
+            allow_blind_docking=self.allow_blind_docking,
+            wait_for_detection=graceful,
+            continuous_perception=graceful,
+            max_control_pose_age_s=self.max_control_pose_age_s if graceful else None,
+            handover_distance_m=self.handover_distance_m if graceful and self.handover_distance_m > 0 else None,
+            min_detections=self.min_detections,
+            initial_perception_timeout_s=self.initial_perception_timeout_s,
+            approach_timeout_s=self.approach_timeout_s,
+            obstacle_timeout_s=self.obstacle_timeout_s,
+            wait_charge_timeout_s=self.wait_charge_timeout_s,
+            max_docking_time_s=self.max_docking_time_s,
+            staging_offset_m=self.staging_offset_m,
+            back_off_gains=back_off_gains(self.undock_speed_mps),
+        )
+
+    def undock_config(self) -> UndockConfig:
+        """The undocking run's settings."""
+        return UndockConfig(staging_offset_m=self.staging_offset_m, gains=back_off_gains(self.undock_speed_mps))

@@ -1,0 +1,27 @@
+"""The kit's pure modules load without the bus, so algorithm modules built on them stay bus-free."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+PURE_MODULES = ["shared.geometry", "shared.frames", "shared.world", "shared.messages", "shared.topics"]
+ALGORITHM_MODULES = [
+    "services.docking.graceful",
+    "services.docking.docking_run",
+    "services.docking.robot_track",
+    "services.planner.astar",
+    "services.planner.costmap",
+    "services.planner.pose_tracker",
+    "services.battery.model",
+]
+
+
+@pytest.mark.parametrize("module", PURE_MODULES + ALGORITHM_MODULES)
+def test_module_imports_without_zenoh(module: str) -> None:
+    probe = f"import sys, {module}; print('zenoh' in sys.modules)"
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "False", f"importing {module} loads zenoh"
