@@ -11,7 +11,7 @@ Pure logic, no bus (each module unit-tested on its own):
 - :mod:`~services.docking.errors` -- result codes, feedback states and docking exceptions (Nav2's numbers);
 - :mod:`~services.docking.kinematics` and :mod:`~services.docking.bench` -- a kinematic robot to test and
   compare controllers on;
-- :mod:`~services.docking.robot_track` -- localisation carried forward by odometry, queryable at any time;
+- :mod:`~shared.pose_tracking` (from the kit) -- localisation carried forward by odometry, queryable at any time;
 - :mod:`~services.docking.dock_tracker` -- detections placed in the map and filtered, per expected dock;
 - :mod:`~services.docking.safety` -- lidar and sonar obstacle checks that excuse the dock;
 - :mod:`~services.docking.approach_control` -- the two approach controllers behind one interface, backing off;

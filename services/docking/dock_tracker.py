@@ -1,7 +1,7 @@
 """The dock pose refined from detections, in the map frame, for the dock a docking run is heading to.
 
 Each detection is the dock pose in base_link at the camera's capture time. Composed with the robot's
-map pose *at that time* (:class:`~services.docking.robot_track.RobotPoseTrack`: odometry at the stamp
+map pose *at that time* (:class:`~shared.pose_tracking.PoseTrack`: odometry at the stamp
 through the localiser's current correction) it becomes a dock pose in the map frame, which
 :class:`~services.docking.pose_filter.DockPoseFilter` smooths. When the localiser's correction moves, the
 estimate moves with it (:meth:`DockTracker.shift`), so in effect the dock is tracked in the odometry

@@ -32,7 +32,6 @@ from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKin
 from services.docking.params import Params
 from services.docking.patrol import Patrol
 from services.docking.pose_filter import PoseFilterParams
-from services.docking.robot_track import OdometrySample, RobotPoseTrack
 from services.docking.safety import ObstacleParams, lidar_blocked, scan_points, sonar_blocked
 from services.docking.task_io import (
     Intent,
@@ -73,6 +72,7 @@ from shared.messages import (
 )
 from shared.navigation import NavigationClient, TaskResult
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import run_service
 
@@ -83,9 +83,6 @@ CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1}
 #: A sensor reading older than this is ignored by the obstacle checks.
 SENSOR_MAX_AGE_S = 0.5
 STATE_PERIOD_S = 1.0
-#: After odometry restarts, localisation is ignored this long: the localiser's own inputs may run late and
-#: still place the robot where it was.
-RELOCALISE_SETTLE_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
 
 
@@ -98,7 +95,7 @@ class DockingService:
         self._log = node.log
         self._say = RateLimitedLogger(node.log, interval_s=5.0)
         self.database: DockDatabase = load_dock_db(params.dock_database)
-        self.track = RobotPoseTrack()
+        self.track = PoseTrack()
         self.arbiter = DriveArbiter()
         self.obstacles = ObstacleParams(stop_distance_m=params.obstacle_stop_distance_m)
         self.mission = Mission(
@@ -116,7 +113,6 @@ class DockingService:
         self._sonar_received_s = -math.inf
         self._mounts = SensorMounts()
         self._lidar_mount: Pose2D | None = None
-        self._ignore_poses_until_s = -math.inf
         #: The map -> odom correction the running docking run's detections were last moved to.
         self._applied_correction: Pose2D | None = None
         self._last_now_s = -math.inf
@@ -168,19 +164,16 @@ class DockingService:
         if len(data) < 3 or not np.all(np.isfinite(data[:3])):
             self._say.warning("pose", "ignored a %s message without a finite [x, y, yaw]", topics.POSE2D)
             return
-        now = self.node.now()
-        if now < self._ignore_poses_until_s:
-            return
-        self.track.add_pose(now, Pose2D.from_seq(data[:3]), self.params.pose_latency_s)
+        self.track.add_pose(self.node.now(), Pose2D.from_seq(data[:3]), self.params.pose_latency_s)
 
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
-        resets = self.track.odom_resets
-        self.track.add_odom(OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x,
-                                       twist.angular.z))
-        if self.track.odom_resets != resets:
-            # Odometry restarted (the robot was moved): the localiser may still report where it was.
-            self._ignore_poses_until_s = self.node.now() + RELOCALISE_SETTLE_S
+        # An odometry jump (the robot was moved) makes the track ignore localisation for a while: the
+        # localiser may still report where the robot was.
+        self.track.add_odom(
+            OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z),
+            self.node.now(),
+        )
 
     def _on_detection(self, msg: PoseStamped) -> None:
         task = self.task

@@ -2,7 +2,7 @@
 the ``navigate_to_pose`` action (the navigation stack's role).
 
 In: ``map_to_base_link_pose2d`` (the robot's map pose), ``odom`` (twist, and stamped poses that place
-sensor readings at their own instant, see :mod:`services.planner.pose_tracker`), ``scan`` (the
+sensor readings at their own instant, see :mod:`shared.pose_tracking`), ``scan`` (the
 costmap's obstacle layer), ``ultrasonic`` (glass: echoes the lidar cannot explain, kept in
 :mod:`services.planner.glass_memory` and folded into the static layer), ``tf_static`` (sensor mounts).
 Out: ``cmd_vel`` (only while a goal is active, then one zero), ``plan``, ``map`` (every
@@ -50,7 +50,6 @@ from services.planner.occupancy_map import OCC_OCCUPIED, OccupancyMap, load_map
 from services.planner.params import Params, load_initial_map
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
-from services.planner.pose_tracker import OdometrySample, PoseTracker
 from services.planner.pure_pursuit import FollowStatus, RegulatedPurePursuit
 from services.planner.recovery import BackUp, BackUpStatus, GlassClearing, glass_clearing
 from services.planner.sonar_fusion import echo_explained_by_lidar
@@ -96,6 +95,7 @@ from shared.messages import (
     Twist,
 )
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError
+from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import run_service
 
@@ -103,6 +103,8 @@ NavHandle = ServerGoalHandle[NavigateToPoseGoal, NavigateToPoseResult, NavigateT
 
 #: The path ahead this close to the robot is the follower's business, not a reason to replan.
 BLOCKED_CHECK_SKIP_M = 0.15
+#: Odometry carries the pose forward along its twist at most this far: a few odometry periods.
+POSE_EXTRAPOLATION_S = 0.1
 #: No periodic replanning this close to the goal (a new path would reset the follower's goal latch).
 NO_REPLAN_WITHIN_M = 0.3
 #: A clock reading this much earlier than the last tick is a reset (the simulator restarted).
@@ -117,7 +119,7 @@ LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
 ETA_MIN_SPEED_MPS = 0.05
 #: A robot slower than this stands still: a task starting then may trust its turning circle (glass).
 STANDING_STILL_MPS = 0.02
-STANDING_STILL_RPS = 0.05
+STANDING_STILL_RADPS = 0.05
 
 
 class Phase(enum.Enum):
@@ -229,7 +231,7 @@ class PlannerService:
         self._glass_saved_wall_s = 0.0
         self._applied_glass: np.ndarray | None = None
         self._map_msg: OccupancyGrid | None = None
-        self._tracker = PoseTracker(odom_timeout_s=params.pose_timeout_s)
+        self._tracker = PoseTrack(max_extrapolation_s=POSE_EXTRAPOLATION_S)
         self._follower = RegulatedPurePursuit(params.follower_params())
         self._backup = BackUp(params.backup_params())
         self._worker = PlanningWorker(params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome))
@@ -378,12 +380,12 @@ class PlannerService:
         if len(data) < 3 or not all(math.isfinite(v) for v in data[:3]):
             self._say.warning("bad-pose", "ignored a %s message without three finite numbers", topics.POSE2D)
             return
-        self._tracker.add_map_pose(Pose2D.from_seq(data[:3]), self._node.now())
+        self._tracker.add_pose(self._node.now(), Pose2D.from_seq(data[:3]))
 
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
         sample = OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z)
-        self._tracker.add_odometry(sample, self._node.now())
+        self._tracker.add_odom(sample, self._node.now())
 
     def _on_scan(self, msg: LaserScan) -> None:
         self._pending_scan = msg
@@ -395,7 +397,7 @@ class PlannerService:
         self._mounts.update(msg)
 
     def _sensor_pose(self, header: Header) -> Pose2D | None:
-        robot = self._tracker.pose_at(header.stamp.to_sec())
+        robot = self._tracker.pose_now_at(header.stamp.to_sec())
         mount = self._mounts.get(header.frame_id)
         if robot is None or mount is None:
             if mount is None:
@@ -439,7 +441,7 @@ class PlannerService:
                 continue  # a reading from (almost) the same place as the last one adds nothing
             if self._fold_in_sonar(sensor, reading, may_wait=bool(self._pending_ranges)):
                 self._last_range_pose = sensor
-        pose = self._tracker.current_pose(now)
+        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
         if pose is not None:
             costmap.clear_footprint(pose.as_tuple())
             if self._glass is not None:
@@ -541,7 +543,7 @@ class PlannerService:
         if self._planning_in_flight or (urgent and now - task.last_plan_request_s < self._params.min_replan_interval_s):
             task.replan_wanted = True
             return
-        pose = self._tracker.current_pose(now)
+        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
         if pose is None or self._costmap is None:
             task.replan_wanted = True
             return
@@ -562,7 +564,7 @@ class PlannerService:
             code = {
                 "goal": NavigateErrorCode.GOAL_OCCUPIED, "start": NavigateErrorCode.START_OCCUPIED,
             }.get(outcome.blocked_end, NavigateErrorCode.NO_VALID_PATH)
-            pose = self._tracker.current_pose(now)
+            pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
             self._log.warning("planning failed: %s", outcome.error)
             if pose is None:
                 task.replan_wanted = True
@@ -631,14 +633,14 @@ class PlannerService:
     def _fresh_pose(self, task: _Task, now: float) -> Pose2D | None:
         """The robot's pose, or ``None`` (robot held, maybe goal aborted) when the pose is stale."""
         p = self._params
-        age = self._tracker.map_pose_age_s(now)
+        age = self._tracker.pose_age_s(now)
         # map -> odom changes slowly: while fresh odometry carries the pose, a localiser running late
         # (a busy machine) is no reason to stop.
-        if age <= p.pose_timeout_s or (age <= p.carried_pose_timeout_s and self._tracker.carried_by_odometry(now)):
+        if age <= p.pose_timeout_s or (age <= p.carried_pose_timeout_s and self._tracker.carried_by_odometry(now, p.pose_timeout_s)):
             if task.pose_lost_since_s is not None:
                 self._log.info("pose is back: resuming")
             task.pose_lost_since_s = None
-            return self._tracker.current_pose(now)
+            return self._tracker.current_pose(now, self._params.pose_timeout_s)
         if task.pose_lost_since_s is None:
             task.pose_lost_since_s = now
             task.pose_lost_since_wall_s = time.monotonic()
@@ -653,7 +655,7 @@ class PlannerService:
 
     def _follow(self, task: _Task, pose: Pose2D, now: float, dt: float, grid: Any) -> None:
         p = self._params
-        velocity = self._tracker.velocity(now) or self._last_cmd
+        velocity = self._tracker.twist(now, self._params.pose_timeout_s) or self._last_cmd
         # Acceleration limits (and the lookahead) start from the last command, as Nav2's velocity smoother
         # does in open loop: measured odometry lags the base, and ramping from it would slow every start.
         reference = self._last_cmd if p.open_loop_acceleration else velocity
@@ -736,11 +738,11 @@ class PlannerService:
     def _trust_turning_circle(self, now: float) -> None:
         """A task starts where the robot stands still: let it turn there (see
         :meth:`GlassMemory.observe_turning_circle`). Not for a goal that arrives while driving."""
-        pose = self._tracker.current_pose(now)
-        velocity = self._tracker.velocity(now)
+        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
+        velocity = self._tracker.twist(now, self._params.pose_timeout_s)
         if pose is None or self._glass is None or velocity is None:
             return
-        if abs(velocity[0]) > STANDING_STILL_MPS or abs(velocity[1]) > STANDING_STILL_RPS:
+        if abs(velocity[0]) > STANDING_STILL_MPS or abs(velocity[1]) > STANDING_STILL_RADPS:
             return
         self._glass.observe_turning_circle(pose.as_tuple())
         self._apply_glass()
@@ -772,7 +774,7 @@ class PlannerService:
             remaining = task.plan.remaining_m(self._follower.closest_index, pose)
         else:
             remaining = pose.distance_to(task.goal)
-        velocity = self._tracker.velocity(now) or self._last_cmd
+        velocity = self._tracker.twist(now, self._params.pose_timeout_s) or self._last_cmd
         speed = abs(velocity[0])
         eta = remaining / (speed if speed > ETA_MIN_SPEED_MPS else self._params.max_linear_vel_mps)
         task.handle.publish_feedback(NavigateToPoseFeedback(

@@ -11,10 +11,9 @@ PURE_MODULES = ["shared.geometry", "shared.frames", "shared.world", "shared.mess
 ALGORITHM_MODULES = [
     "services.docking.graceful",
     "services.docking.docking_run",
-    "services.docking.robot_track",
+    "shared.pose_tracking",
     "services.planner.astar",
     "services.planner.costmap",
-    "services.planner.pose_tracker",
     "services.battery.model",
 ]
 
