@@ -1,5 +1,6 @@
-"""The planner service's wiring: map server, layered costmap, global planner and path follower behind
-the ``navigate_to_pose`` action (the navigation stack's role).
+"""The planner service's wiring: the map server (:mod:`services.planner.map_server`), the layered
+costmap (:mod:`services.planner.costmap_updater`), the global planner and the path follower behind the
+``navigate_to_pose`` action (the navigation stack's role).
 
 In: ``map_to_base_link_pose2d`` (the robot's map pose), ``odom`` (twist, and stamped poses that place
 sensor readings at their own instant, see :mod:`shared.pose_tracking`), ``scan`` (the
@@ -12,7 +13,7 @@ and ``map_server/map``.
 
 Threads and cost per tick: every callback runs on the node's executor, one at a time. Sensor callbacks
 only keep the newest data; a costmap timer (``costmap_update_rate_hz`` on sim time, slower when idle)
-folds it into the layers and re-inflates, so the 20 Hz control tick finds a cached snapshot. A* runs on
+folds it into the layers and re-inflates (:class:`~services.planner.costmap_updater.CostmapUpdater`), so the 20 Hz control tick finds a cached snapshot. A* runs on
 a worker thread against that read-only snapshot and its result comes back through ``node.post``.
 
 A goal's life: PLANNING (held still until the first path) -> FOLLOWING (regulated pure pursuit; replan
@@ -32,49 +33,34 @@ from __future__ import annotations
 
 import enum
 import math
-import os.path
-import pathlib
 import time
 from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
-from services.planner.costmap import LETHAL_OBSTACLE, LayeredCostmap, laser_scan_points
-from services.planner.glass_memory import GlassMemory
-from services.planner.glass_store import GlassStore
+from services.planner.costmap_updater import CostmapUpdater
 from services.planner.goal_check import check_goal_on_grid, goal_pose
-from services.planner.map_messages import costmap_message, occupancy_grid_message, path_message
-from services.planner.occupancy_map import OCC_OCCUPIED, OccupancyMap, load_map
+from services.planner.map_messages import costmap_message, path_message
+from services.planner.map_server import MapServer
+from services.planner.occupancy_map import OccupancyMap
 from services.planner.params import Params, load_initial_map
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.pure_pursuit import FollowStatus, RegulatedPurePursuit
 from services.planner.recovery import BackUp, BackUpStatus, GlassClearing, glass_clearing
-from services.planner.sonar_fusion import echo_explained_by_lidar
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
-from shared.config_errors import ConfigError
-from shared.frames import SensorMounts, clock_went_back
-from shared.geometry import Pose2D, wrap_angle
+from shared.frames import clock_went_back
+from shared.geometry import Pose2D
 from shared.interfaces.map_server import (
     COSTMAP_TOPIC,
-    GET_MAP,
-    GET_MAP_SERVICE,
-    GetMapRequest,
-    GetMapResponse,
 )
 from shared.interfaces.navigation import (
     CLEAR_COSTMAPS_SERVICE,
     CLEAR_ENTIRE_COSTMAP,
-    LOAD_MAP,
-    LOAD_MAP_SERVICE,
     NAVIGATE_TO_POSE,
     ClearEntireCostmapRequest,
     ClearEntireCostmapResponse,
-    LoadMapRequest,
-    LoadMapResponse,
     NavigateErrorCode,
     NavigateToPoseFeedback,
     NavigateToPoseGoal,
@@ -94,7 +80,7 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import run_service
@@ -107,14 +93,6 @@ BLOCKED_CHECK_SKIP_M = 0.15
 POSE_EXTRAPOLATION_S = 0.1
 #: No periodic replanning this close to the goal (a new path would reset the follower's goal latch).
 NO_REPLAN_WITHIN_M = 0.3
-#: A clock reading this much earlier than the last tick is a reset (the simulator restarted).
-#: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
-SONAR_MIN_TRAVEL_M = 0.05
-SONAR_MIN_TURN_RAD = 0.1
-#: Write the glass memory to its file (when it changed) at most this often (wall seconds).
-GLASS_SAVE_PERIOD_S = 1.0
-#: A scan this far in time from a sonar reading is too old to explain its echo.
-LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
 #: Feedback's time estimate uses the measured speed above this, else the speed limit.
 ETA_MIN_SPEED_MPS = 0.05
 #: A robot slower than this stands still: a task starting then may trust its turning circle (glass).
@@ -199,14 +177,6 @@ def _restart_timers(task: _Task, now: float) -> None:
     task.progress.reset()
 
 
-def _moved(before: Pose2D, after: Pose2D) -> bool:
-    """Far enough apart for a sonar reading to say something new."""
-    return (
-        before.distance_to(after) >= SONAR_MIN_TRAVEL_M
-        or abs(wrap_angle(after.yaw - before.yaw)) >= SONAR_MIN_TURN_RAD
-    )
-
-
 def _result(code: NavigateErrorCode, message: str = "") -> NavigateToPoseResult:
     return NavigateToPoseResult(error_code=int(code), error_msg=message)
 
@@ -220,18 +190,8 @@ class PlannerService:
         self._log = node.log
         self._say = RateLimitedLogger(node.log, interval_s=5.0)
         occupancy, source = load_initial_map(params)
-        self._costmap: LayeredCostmap | None = None
-        self._base_map: OccupancyMap | None = None
-        self._glass: GlassMemory | None = None
-        self._glass_store = (
-            GlassStore(pathlib.Path(params.glass_memory_file))
-            if params.glass_memory_file and params.use_range_layer
-            else None
-        )
-        self._glass_saved_wall_s = 0.0
-        self._applied_glass: np.ndarray | None = None
-        self._map_msg: OccupancyGrid | None = None
         self._tracker = PoseTrack(max_extrapolation_s=POSE_EXTRAPOLATION_S)
+        self._layers = CostmapUpdater(params, self._tracker, node.log)
         self._follower = RegulatedPurePursuit(params.follower_params())
         self._backup = BackUp(params.backup_params())
         self._worker = PlanningWorker(params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome))
@@ -239,32 +199,20 @@ class PlannerService:
         self._generation = 0
         self._task: _Task | None = None
         self._last_cmd = (0.0, 0.0)
-        self._mounts = SensorMounts({
-            topics.LIDAR_FRAME: Pose2D(*params.lidar_mount),
-            topics.ULTRASONIC_FRAME: Pose2D(*params.ultrasonic_mount),
-        })
-        self._pending_scan: LaserScan | None = None
-        self._pending_ranges: deque[Range] = deque(maxlen=16)
-        self._last_range_pose: Pose2D | None = None
-        #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
-        self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
         self._last_costmap_update_s = -math.inf
         self._control_time = _Durations()
         self._costmap_time = _Durations()
 
         self._cmd_pub = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self._plan_pub = node.create_publisher(Path, topics.PLAN, RELIABLE)
-        self._map_pub = node.create_publisher(OccupancyGrid, topics.MAP, RELIABLE)
         self._costmap_pub = node.create_publisher(OccupancyGrid, COSTMAP_TOPIC, QoS(reliable=False, depth=1))
         node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_pose, QoS(depth=1))
         node.create_subscription(Odometry, topics.ODOM, self._on_odom, QoS(depth=5))
-        node.create_subscription(LaserScan, topics.SCAN, self._on_scan, SENSOR_DATA)
+        node.create_subscription(LaserScan, topics.SCAN, self._layers.add_scan, SENSOR_DATA)
         if params.use_range_layer:
-            node.create_subscription(Range, topics.ULTRASONIC, self._on_range, SENSOR_DATA)
-        node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=5))
+            node.create_subscription(Range, topics.ULTRASONIC, self._layers.add_range, SENSOR_DATA)
+        node.create_subscription(TFMessage, topics.TF_STATIC, self._layers.add_mounts, QoS(depth=5))
         node.create_service(CLEAR_ENTIRE_COSTMAP, CLEAR_COSTMAPS_SERVICE, self._on_clear_costmaps)
-        node.create_service(LOAD_MAP, LOAD_MAP_SERVICE, self._on_load_map)
-        node.create_service(GET_MAP, GET_MAP_SERVICE, self._on_get_map)
         self._action = ActionServer(
             node, NAVIGATE_TO_POSE, topics.NAVIGATE_TO_POSE,
             on_goal=self._on_goal, on_accepted=self._on_accepted, on_cancel=self._on_cancel,
@@ -273,12 +221,12 @@ class PlannerService:
         self._timers = [
             node.create_timer(1.0 / params.controller_rate_hz, self._on_control_tick),
             node.create_timer(1.0 / params.costmap_update_rate_hz, self._on_costmap_tick),
-            node.create_timer(params.map_publish_period_s, self._publish_map, wall=True),
         ]
+        self._map_server = MapServer(node, params.map_publish_period_s, self._on_map)
         if params.costmap_publish_period_s > 0:
             self._timers.append(node.create_timer(params.costmap_publish_period_s, self._publish_costmap, wall=True))
         if occupancy is not None:
-            self._set_map(occupancy, source)
+            self._map_server.set_map(occupancy, source)
         else:
             self._log.warning("no map_yaml or world given: goals are refused until map_server/load_map loads one")
         self._log.info(
@@ -289,88 +237,19 @@ class PlannerService:
 
     # --- map --------------------------------------------------------------------------------------
 
-    def _set_map(self, occupancy: OccupancyMap, source: str) -> None:
-        self._base_map = occupancy
-        if self._glass is None or self._glass.frame != occupancy.frame:
-            self._glass = GlassMemory(
-                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m
-            )
-            kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
-            if kept is not None:
-                self._glass.restore(kept)
-                self._log.info("glass memory restored from %s (%d cells marked)",
-                               self._params.glass_memory_file, int(np.count_nonzero(kept == LETHAL_OBSTACLE)))
-        self._applied_glass = None
-        if self._costmap is None:
-            self._costmap = LayeredCostmap(occupancy, self._params.costmap_params())
-        self._apply_glass()
-        now = self._node.now()
-        self._map_msg = occupancy_grid_message(occupancy, now, topics.MAP_FRAME, load_time_s=now)
-        frame = occupancy.frame
-        self._log.info(
-            "map from %s: %d x %d cells at %g m, origin (%.2f, %.2f)",
-            source, frame.width, frame.height, frame.resolution_m, frame.origin[0], frame.origin[1],
-        )
-        self._publish_map()
+    def _on_map(self, occupancy: OccupancyMap) -> None:
+        """A new static map (at start or from ``load_map``): the layers take it; a goal replans on it."""
+        self._layers.set_map(occupancy)
         task = self._task
         if task is not None and task.phase is Phase.FOLLOWING:
-            self._request_plan(task, now, urgent=True)
-
-    def _apply_glass(self) -> None:
-        """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
-        if self._costmap is None or self._base_map is None or self._glass is None:
-            return
-        if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
-            self._glass_saved_wall_s = time.monotonic()
-            try:
-                self._glass_store.save_if_changed(self._base_map, self._glass.sonar_layer)
-            except OSError as exc:
-                self._log.warning("glass memory not saved to %s: %s", self._params.glass_memory_file, exc)
-        glass = self._glass.glass_mask()
-        if self._applied_glass is not None and np.array_equal(glass, self._applied_glass):
-            return
-        self._applied_glass = glass
-        base = self._base_map
-        if glass.any():
-            data = base.data.copy()
-            data[glass] = OCC_OCCUPIED
-            base = OccupancyMap(base.resolution_m, base.origin, data)
-        self._costmap.set_static_map(base)
-
-    def _publish_map(self) -> None:
-        if self._map_msg is not None:
-            self._map_msg.header.stamp = self._node.now_msg()
-            self._map_pub.publish(self._map_msg)
+            self._request_plan(task, self._node.now(), urgent=True)
 
     def _publish_costmap(self) -> None:
-        if self._costmap is not None:
-            self._costmap_pub.publish(costmap_message(self._costmap.grid(), self._node.now(), topics.MAP_FRAME))
-
-    def _on_get_map(self, request: GetMapRequest) -> GetMapResponse:
-        if self._map_msg is None:
-            raise ServiceError("no map loaded")
-        return GetMapResponse(map=self._map_msg)
-
-    def _on_load_map(self, request: LoadMapRequest) -> LoadMapResponse:
-        url = request.map_url.strip()
-        url = url.removeprefix("file://")
-        if not url or not os.path.isfile(url):
-            self._log.warning("load_map: no map file %r", request.map_url)
-            return LoadMapResponse(result=LoadMapResponse.RESULT_MAP_DOES_NOT_EXIST)
-        try:
-            occupancy = load_map(url)
-        except ConfigError as exc:
-            self._log.warning("load_map: %s", exc)
-            image_problem = "image" in str(exc) or "PGM" in str(exc)
-            code = LoadMapResponse.RESULT_INVALID_MAP_DATA if image_problem else LoadMapResponse.RESULT_INVALID_MAP_METADATA
-            return LoadMapResponse(result=code)
-        self._set_map(occupancy, url)
-        assert self._map_msg is not None
-        return LoadMapResponse(map=self._map_msg, result=LoadMapResponse.RESULT_SUCCESS)
+        if self._layers.costmap is not None:
+            self._costmap_pub.publish(costmap_message(self._layers.costmap.grid(), self._node.now(), topics.MAP_FRAME))
 
     def _on_clear_costmaps(self, request: ClearEntireCostmapRequest) -> ClearEntireCostmapResponse:
-        if self._costmap is not None:
-            self._clear_sensor_layers(GlassClearing.ALL)
+        self._layers.clear(GlassClearing.ALL)
         return ClearEntireCostmapResponse()
 
     # --- sensors ----------------------------------------------------------------------------------
@@ -387,27 +266,9 @@ class PlannerService:
         sample = OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z)
         self._tracker.add_odom(sample, self._node.now())
 
-    def _on_scan(self, msg: LaserScan) -> None:
-        self._pending_scan = msg
-
-    def _on_range(self, msg: Range) -> None:
-        self._pending_ranges.append(msg)
-
-    def _on_tf_static(self, msg: TFMessage) -> None:
-        self._mounts.update(msg)
-
-    def _sensor_pose(self, header: Header) -> Pose2D | None:
-        robot = self._tracker.pose_now_at(header.stamp.to_sec())
-        mount = self._mounts.get(header.frame_id)
-        if robot is None or mount is None:
-            if mount is None:
-                self._say.warning(f"frame:{header.frame_id}", "no mount known for sensor frame %r", header.frame_id)
-            return None
-        return robot.compose(mount)
-
     def _on_costmap_tick(self) -> None:
         """Fold the newest scan and the sonar readings since the last update into the costmap."""
-        costmap = self._costmap
+        costmap = self._layers.costmap
         now = self._node.now()
         if costmap is None:
             return
@@ -416,38 +277,12 @@ class PlannerService:
             return
         self._last_costmap_update_s = now
         t0 = time.thread_time()
-        self._update_costmap(costmap, now)
+        self._layers.update(now)
+        self._replan_if_blocked(costmap.grid(), now)
         self._costmap_time.add(time.thread_time() - t0)
 
-    def _update_costmap(self, costmap: LayeredCostmap, now: float) -> None:
-        scan, self._pending_scan = self._pending_scan, None
-        if scan is not None:
-            sensor = self._sensor_pose(scan.header)
-            if sensor is not None:
-                stride = self._params.scan_beam_stride
-                endpoints, hits = laser_scan_points(
-                    sensor.as_tuple(), scan.angle_min, scan.angle_increment * stride, scan.ranges[::stride],
-                    scan.range_min, scan.range_max,
-                )
-                costmap.update_with_scan((sensor.x, sensor.y), endpoints, hits)
-                self._lidar_hits = (scan.header.stamp.to_sec(), endpoints[hits])
-        while self._pending_ranges:
-            reading = self._pending_ranges.popleft()
-            sensor = self._sensor_pose(reading.header)
-            if sensor is None:
-                continue
-            last = self._last_range_pose
-            if self._pending_ranges and last is not None and not _moved(last, sensor):
-                continue  # a reading from (almost) the same place as the last one adds nothing
-            if self._fold_in_sonar(sensor, reading, may_wait=bool(self._pending_ranges)):
-                self._last_range_pose = sensor
-        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
-        if pose is not None:
-            costmap.clear_footprint(pose.as_tuple())
-            if self._glass is not None:
-                self._glass.observe_footprint(pose.as_tuple())
-        self._apply_glass()
-        grid = costmap.grid()
+    def _replan_if_blocked(self, grid: Any, now: float) -> None:
+        """Replan at once when the updated costmap blocks the path ahead."""
         task = self._task
         if (
             task is not None
@@ -459,40 +294,15 @@ class PlannerService:
             self._log.info("an obstacle blocks the path: replanning")
             self._request_plan(task, now, urgent=True)
 
-    def _fold_in_sonar(self, sensor: Pose2D, reading: Range, may_wait: bool) -> bool:
-        """Into glass memory: an echo the lidar cannot explain marks; one it explains only clears.
-
-        Only a scan from about the same time can tell glass from a wall. With ``may_wait`` (a later
-        reading is queued) an echo with no such scan is left out (False) for that later one: between idle
-        updates, 1 s apart, the first echo after a teleport was compared with no scan from the new place
-        and marked the wall it heard as glass. The last reading is judged even so: a dead lidar still
-        leaves the sonar's marks.
-        """
-        glass = self._glass
-        if glass is None:
-            return True
-        echo = reading.min_range <= reading.range < reading.max_range
-        hits_stamp_s, hits = self._lidar_hits
-        fresh = abs(reading.header.stamp.to_sec() - hits_stamp_s) <= LIDAR_FOR_SONAR_MAX_AGE_S
-        if echo and not fresh and may_wait:
-            return False
-        if echo and fresh and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits):
-            glass.add_clear_view(
-                sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
-            )
-            return True
-        glass.add_reading(sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range)
-        return True
-
     # --- action -----------------------------------------------------------------------------------
 
     def _on_goal(self, goal: NavigateToPoseGoal) -> None:
         """Refuse what cannot be planned for; the ``ValueError``'s text is the client's reason."""
         try:
             pose = goal_pose(goal.pose)
-            if self._costmap is None:
+            if self._layers.costmap is None:
                 raise ValueError("no map loaded: load one with map_server/load_map first")
-            check_goal_on_grid(self._costmap.grid(), pose.x, pose.y, self._params.astar_params())
+            check_goal_on_grid(self._layers.grid(), pose.x, pose.y, self._params.astar_params())
         except ValueError as exc:
             self._log.info("goal refused: %s", exc)
             raise
@@ -544,13 +354,13 @@ class PlannerService:
             task.replan_wanted = True
             return
         pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
-        if pose is None or self._costmap is None:
+        if pose is None or self._layers.costmap is None:
             task.replan_wanted = True
             return
         task.replan_wanted = False
         task.last_plan_request_s = now
         self._planning_in_flight = True
-        self._worker.submit(PlanRequest(task.generation, self._costmap.grid(), pose, task.goal))
+        self._worker.submit(PlanRequest(task.generation, self._layers.grid(), pose, task.goal))
 
     def _on_plan_outcome(self, outcome: PlanOutcome) -> None:
         self._planning_in_flight = False
@@ -616,9 +426,9 @@ class PlannerService:
                          f"goal not reached within navigation_timeout_s={p.navigation_timeout_s:g} s")
             return
         pose = self._fresh_pose(task, now)
-        if pose is None or self._costmap is None:
+        if pose is None or self._layers.costmap is None:
             return
-        grid = self._costmap.grid()
+        grid = self._layers.grid()
         if task.phase is Phase.FOLLOWING and task.plan is not None:
             self._follow(task, pose, now, dt, grid)
         elif task.phase in (Phase.BACKING_UP, Phase.CLEARING):
@@ -717,45 +527,25 @@ class PlannerService:
         task.phase = Phase.BACKING_UP
         self._backup.start(pose, task.clock_s)
 
-    def _clear_sensor_layers(self, glass: GlassClearing, robot: Pose2D | None = None) -> None:
-        """Forget what the lidar saw (the next scan, all round, refills it) and as much of the glass
-        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot``,
-        or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
-        assert self._costmap is not None
-        self._costmap.clear()
-        what = "lidar"
-        if glass is not GlassClearing.KEEP and self._glass is not None:
-            if glass is GlassClearing.ALL or robot is None:
-                self._glass.clear()
-                what = "lidar and glass memory"
-            else:
-                radius = self._params.recovery_glass_clear_radius_m
-                self._glass.clear_around((robot.x, robot.y), radius)
-                what = f"lidar, and glass memory within {radius:g} m"
-            self._apply_glass()
-        self._log.info("costmap cleared (%s)", what)
-
     def _trust_turning_circle(self, now: float) -> None:
         """A task starts where the robot stands still: let it turn there (see
         :meth:`GlassMemory.observe_turning_circle`). Not for a goal that arrives while driving."""
         pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
         velocity = self._tracker.twist(now, self._params.pose_timeout_s)
-        if pose is None or self._glass is None or velocity is None:
+        if pose is None or velocity is None:
             return
         if abs(velocity[0]) > STANDING_STILL_MPS or abs(velocity[1]) > STANDING_STILL_RADPS:
             return
-        self._glass.observe_turning_circle(pose.as_tuple())
-        self._apply_glass()
+        self._layers.observe_turning_circle(pose)
 
     def _recover(self, task: _Task, pose: Pose2D, now: float, grid: Any) -> None:
-        assert self._costmap is not None
         if task.phase is Phase.BACKING_UP:
             speed, status = self._backup.step(pose, task.clock_s, grid)
             if status is BackUpStatus.RUNNING:
                 self._publish_cmd(speed, 0.0)
                 return
             self._publish_cmd(0.0, 0.0)
-            self._clear_sensor_layers(glass_clearing(task.recoveries, task.recovering_from_planning), pose)
+            self._layers.clear(glass_clearing(task.recoveries, task.recovering_from_planning), pose)
             task.phase = Phase.CLEARING
             task.wait_until_s = task.clock_s + self._params.recovery_wait_s
             return

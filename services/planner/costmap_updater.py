@@ -1,0 +1,230 @@
+"""The planner's layered costmap kept current: the static map with remembered glass, lidar and sonar.
+
+Sensor callbacks only hand their newest data over (:meth:`CostmapUpdater.add_scan`,
+:meth:`CostmapUpdater.add_range`); :meth:`CostmapUpdater.update`, run by the node's costmap timer, places
+each reading with the robot's pose at its own stamp (:class:`~shared.pose_tracking.PoseTrack`) and the
+sensor's mount from ``tf_static``, folds it in and re-inflates, so the control tick finds a cached
+snapshot. Sonar echoes the lidar cannot explain are glass: they go into the glass memory
+(:mod:`services.planner.glass_memory`), which is folded into the static layer and kept on file. No bus
+here: the node wires it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import pathlib
+import time
+from collections import deque
+
+import numpy as np
+
+from services.planner.costmap import LETHAL_OBSTACLE, CostGrid, LayeredCostmap, laser_scan_points
+from services.planner.glass_memory import GlassMemory
+from services.planner.glass_store import GlassStore
+from services.planner.occupancy_map import OCC_OCCUPIED, OccupancyMap
+from services.planner.params import Params
+from services.planner.recovery import GlassClearing
+from services.planner.sonar_fusion import echo_explained_by_lidar
+from shared import topics
+from shared.frames import SensorMounts
+from shared.geometry import Pose2D, wrap_angle
+from shared.messages import Header, LaserScan, Range, TFMessage
+from shared.pose_tracking import PoseTrack
+from shared.ratelimit import RateLimitedLogger
+
+#: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
+SONAR_MIN_TRAVEL_M = 0.05
+SONAR_MIN_TURN_RAD = 0.1
+#: Write the glass memory to its file (when it changed) at most this often (wall seconds).
+GLASS_SAVE_PERIOD_S = 1.0
+#: A scan this far in time from a sonar reading is too old to explain its echo.
+LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
+
+
+def _moved(before: Pose2D, after: Pose2D) -> bool:
+    """Far enough apart for a sonar reading to say something new."""
+    return (
+        before.distance_to(after) >= SONAR_MIN_TRAVEL_M
+        or abs(wrap_angle(after.yaw - before.yaw)) >= SONAR_MIN_TURN_RAD
+    )
+
+
+class CostmapUpdater:
+    """The costmap, the glass memory behind it, and the sensor data waiting to be folded in."""
+
+    def __init__(self, params: Params, tracker: PoseTrack, log: logging.Logger) -> None:
+        self._params = params
+        self._tracker = tracker
+        self._log = log
+        self._say = RateLimitedLogger(log, interval_s=5.0)
+        self.costmap: LayeredCostmap | None = None
+        self._base_map: OccupancyMap | None = None
+        self.glass: GlassMemory | None = None
+        self._glass_store = (
+            GlassStore(pathlib.Path(params.glass_memory_file))
+            if params.glass_memory_file and params.use_range_layer
+            else None
+        )
+        self._glass_saved_wall_s = 0.0
+        self._applied_glass: np.ndarray | None = None
+        self._mounts = SensorMounts({
+            topics.LIDAR_FRAME: Pose2D(*params.lidar_mount),
+            topics.ULTRASONIC_FRAME: Pose2D(*params.ultrasonic_mount),
+        })
+        self._pending_scan: LaserScan | None = None
+        self._pending_ranges: deque[Range] = deque(maxlen=16)
+        self._last_range_pose: Pose2D | None = None
+        #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
+        self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
+
+    # --- inputs -------------------------------------------------------------------------------------
+
+    def set_map(self, occupancy: OccupancyMap) -> None:
+        """A new static map: the glass memory follows it (restored from file for a new frame)."""
+        self._base_map = occupancy
+        if self.glass is None or self.glass.frame != occupancy.frame:
+            self.glass = GlassMemory(
+                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m
+            )
+            kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
+            if kept is not None:
+                self.glass.restore(kept)
+                self._log.info("glass memory restored from %s (%d cells marked)",
+                               self._params.glass_memory_file, int(np.count_nonzero(kept == LETHAL_OBSTACLE)))
+        self._applied_glass = None
+        if self.costmap is None:
+            self.costmap = LayeredCostmap(occupancy, self._params.costmap_params())
+        self.apply_glass()
+
+    def add_scan(self, msg: LaserScan) -> None:
+        self._pending_scan = msg
+
+    def add_range(self, msg: Range) -> None:
+        self._pending_ranges.append(msg)
+
+    def add_mounts(self, msg: TFMessage) -> None:
+        self._mounts.update(msg)
+
+    def grid(self) -> CostGrid:
+        """The inflated cost grid the planner and the follower read (a snapshot, cached between updates)."""
+        assert self.costmap is not None, "no map yet"
+        return self.costmap.grid()
+
+    # --- updates ------------------------------------------------------------------------------------
+
+    def update(self, now: float) -> None:
+        """Fold the newest scan and the sonar readings since the last update in, clear the footprint."""
+        costmap = self.costmap
+        if costmap is None:
+            return
+        scan, self._pending_scan = self._pending_scan, None
+        if scan is not None:
+            sensor = self._sensor_pose(scan.header)
+            if sensor is not None:
+                stride = self._params.scan_beam_stride
+                endpoints, hits = laser_scan_points(
+                    sensor.as_tuple(), scan.angle_min, scan.angle_increment * stride, scan.ranges[::stride],
+                    scan.range_min, scan.range_max,
+                )
+                costmap.update_with_scan((sensor.x, sensor.y), endpoints, hits)
+                self._lidar_hits = (scan.header.stamp.to_sec(), endpoints[hits])
+        while self._pending_ranges:
+            reading = self._pending_ranges.popleft()
+            sensor = self._sensor_pose(reading.header)
+            if sensor is None:
+                continue
+            last = self._last_range_pose
+            if self._pending_ranges and last is not None and not _moved(last, sensor):
+                continue  # a reading from (almost) the same place as the last one adds nothing
+            if self._fold_in_sonar(sensor, reading, may_wait=bool(self._pending_ranges)):
+                self._last_range_pose = sensor
+        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
+        if pose is not None:
+            costmap.clear_footprint(pose.as_tuple())
+            if self.glass is not None:
+                self.glass.observe_footprint(pose.as_tuple())
+        self.apply_glass()
+
+    def apply_glass(self) -> None:
+        """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
+        if self.costmap is None or self._base_map is None or self.glass is None:
+            return
+        if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
+            self._glass_saved_wall_s = time.monotonic()
+            try:
+                self._glass_store.save_if_changed(self._base_map, self.glass.sonar_layer)
+            except OSError as exc:
+                self._log.warning("glass memory not saved to %s: %s", self._params.glass_memory_file, exc)
+        glass = self.glass.glass_mask()
+        if self._applied_glass is not None and np.array_equal(glass, self._applied_glass):
+            return
+        self._applied_glass = glass
+        base = self._base_map
+        if glass.any():
+            data = base.data.copy()
+            data[glass] = OCC_OCCUPIED
+            base = OccupancyMap(base.resolution_m, base.origin, data)
+        self.costmap.set_static_map(base)
+
+    def clear(self, glass: GlassClearing, robot: Pose2D | None = None) -> None:
+        """Forget what the lidar saw (the next scan, all round, refills it) and as much of the glass
+        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot``,
+        or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
+        if self.costmap is None:
+            return
+        self.costmap.clear()
+        what = "lidar"
+        if glass is not GlassClearing.KEEP and self.glass is not None:
+            if glass is GlassClearing.ALL or robot is None:
+                self.glass.clear()
+                what = "lidar and glass memory"
+            else:
+                radius = self._params.recovery_glass_clear_radius_m
+                self.glass.clear_around((robot.x, robot.y), radius)
+                what = f"lidar, and glass memory within {radius:g} m"
+            self.apply_glass()
+        self._log.info("costmap cleared (%s)", what)
+
+    def observe_turning_circle(self, pose: Pose2D) -> None:
+        """The robot stands still here: let it turn (see :meth:`GlassMemory.observe_turning_circle`)."""
+        if self.glass is None:
+            return
+        self.glass.observe_turning_circle(pose.as_tuple())
+        self.apply_glass()
+
+    # --- internals ----------------------------------------------------------------------------------
+
+    def _sensor_pose(self, header: Header) -> Pose2D | None:
+        robot = self._tracker.pose_now_at(header.stamp.to_sec())
+        mount = self._mounts.get(header.frame_id)
+        if robot is None or mount is None:
+            if mount is None:
+                self._say.warning(f"frame:{header.frame_id}", "no mount known for sensor frame %r", header.frame_id)
+            return None
+        return robot.compose(mount)
+
+    def _fold_in_sonar(self, sensor: Pose2D, reading: Range, may_wait: bool) -> bool:
+        """Into glass memory: an echo the lidar cannot explain marks; one it explains only clears.
+
+        Only a scan from about the same time can tell glass from a wall. With ``may_wait`` (a later
+        reading is queued) an echo with no such scan is left out (False) for that later one: between idle
+        updates, 1 s apart, the first echo after a teleport was compared with no scan from the new place
+        and marked the wall it heard as glass. The last reading is judged even so: a dead lidar still
+        leaves the sonar's marks.
+        """
+        glass = self.glass
+        if glass is None:
+            return True
+        echo = reading.min_range <= reading.range < reading.max_range
+        hits_stamp_s, hits = self._lidar_hits
+        fresh = abs(reading.header.stamp.to_sec() - hits_stamp_s) <= LIDAR_FOR_SONAR_MAX_AGE_S
+        if echo and not fresh and may_wait:
+            return False
+        if echo and fresh and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits):
+            glass.add_clear_view(
+                sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
+            )
+            return True
+        glass.add_reading(sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range)
+        return True
