@@ -1,0 +1,414 @@
+"""One navigation goal's life, as a pure state machine: a snapshot in, orders out.
+
+PLANNING (held still until the first path) -> FOLLOWING (regulated pure pursuit; replan every
+``replan_period_s``, and at once when the costmap blocks the path or the follower sees a collision
+ahead) -> SUCCEEDED inside the goal tolerances, once stopped. A collision ahead that lasts
+``blocked_timeout_s``, no progress for ``progress_timeout_s``, or a failed plan starts a recovery:
+BACKING_UP (only over free cells), then CLEARING (the lidar layer is cleared; every second recovery also
+forgets glass round the robot, or all glass once planning has failed past the fourth; the layers refill
+for ``recovery_wait_s``), then PLANNING again. After ``max_recoveries`` the goal is ABORTED with the
+error code of the last failure. These timeouts run on the control loop's own clock (sim time, each tick
+counting at most four periods), so a machine too busy to run the loop on time does not make the robot
+look stuck. A stale pose holds the robot still (a map pose carried forward by fresh odometry is stale
+only after ``carried_pose_timeout_s``); NO_POSE after ``no_pose_timeout_s``.
+
+The run reads nothing from the bus and writes nothing to it: the planner's node gives it a
+:class:`NavSnapshot` (the pose, the measured twist, the cost grid, the clocks) and carries out the
+:class:`NavOrders` it returns (publish a command, submit a plan, publish a path, clear the layers, send
+feedback, end the action), so the goal's life is unit-tested without a bus, as docking's runs are.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from services.planner.costmap import CostGrid
+from services.planner.params import Params
+from services.planner.plan_monitor import ActivePlan, ProgressChecker
+from services.planner.planning_worker import PlanOutcome
+from services.planner.pure_pursuit import FollowStatus, RegulatedPurePursuit
+from services.planner.recovery import BackUp, BackUpStatus, GlassClearing, glass_clearing
+from shared import topics
+from shared.frames import clock_went_back
+from shared.geometry import Pose2D
+from shared.interfaces.navigation import NavigateErrorCode
+
+log = logging.getLogger(__name__)
+
+#: The path ahead this close to the robot is the follower's business, not a reason to replan.
+BLOCKED_CHECK_SKIP_M = 0.15
+#: No periodic replanning this close to the goal (a new path would reset the follower's goal latch).
+NO_REPLAN_WITHIN_M = 0.3
+#: Feedback's time estimate uses the measured speed above this, else the speed limit.
+ETA_MIN_SPEED_MPS = 0.05
+
+#: Failures to find a path, as against failures to follow one.
+PLANNING_FAILURES = frozenset(
+    {NavigateErrorCode.NO_VALID_PATH, NavigateErrorCode.START_OCCUPIED, NavigateErrorCode.GOAL_OCCUPIED}
+)
+
+
+class Phase(enum.Enum):
+    PLANNING = "planning"
+    FOLLOWING = "following"
+    BACKING_UP = "backing_up"
+    CLEARING = "clearing"
+
+
+class Ending(enum.Enum):
+    SUCCEEDED = "succeeded"
+    CANCELED = "canceled"
+    ABORTED = "aborted"
+
+
+@dataclass(frozen=True, slots=True)
+class NavSnapshot:
+    """What the run sees at one instant."""
+
+    #: The node's clock (sim time).
+    now_s: float
+    #: A monotonic wall clock: a pose pipeline lagging under load is judged on it too.
+    wall_s: float
+    #: The robot's pose now (localisation carried by odometry), or None before any.
+    pose: Pose2D | None
+    #: Time since the last localisation sample arrived.
+    pose_age_s: float
+    #: Whether fresh odometry carries that sample forward.
+    pose_carried: bool
+    #: The measured ``(linear, angular)`` twist, or None when odometry is stale.
+    velocity: tuple[float, float] | None
+    #: The inflated cost grid, or None before a map.
+    grid: CostGrid | None
+    #: Whether a plan request (this goal's or an earlier one's) is still on the worker.
+    planning_in_flight: bool
+    #: The last command published on cmd_vel (by any goal).
+    last_cmd: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True, slots=True)
+class NavEnd:
+    """How the goal ended: the action's outcome and result."""
+
+    ending: Ending
+    code: NavigateErrorCode
+    message: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class NavFeedback:
+    pose: Pose2D
+    navigation_time_s: float
+    estimated_time_remaining_s: float
+    number_of_recoveries: int
+    distance_remaining_m: float
+
+
+@dataclass(slots=True)
+class NavOrders:
+    """What the node is to do, in this order: publish, plan, clear, feed back, end."""
+
+    #: ``(linear, angular)`` to publish on cmd_vel.
+    cmd: tuple[float, float] | None = None
+    #: Submit a plan request from this pose (with the snapshot's grid and :attr:`NavigationRun.generation`).
+    plan_from: Pose2D | None = None
+    #: A new path to publish on ``plan`` (``(N, 3)`` poses).
+    path: np.ndarray | None = None
+    #: Clear the sensor layers, and as much glass as this says, around :attr:`clear_around`.
+    clear: GlassClearing | None = None
+    clear_around: Pose2D | None = None
+    feedback: NavFeedback | None = None
+    end: NavEnd | None = None
+
+
+class NavigationRun:
+    """One goal, from acceptance to its end; see the module docstring."""
+
+    def __init__(self, goal: Pose2D, params: Params, now_s: float, next_generation: Callable[[], int]) -> None:
+        self.goal = goal
+        self.params = params
+        #: Numbers attempts uniquely across goals (a goal's stale plan must not reach the next goal).
+        self._next_generation = next_generation
+        #: Identifies the plan requests of the current attempt; outcomes of others are stale.
+        self.generation = next_generation()
+        self.started_s = now_s
+        self.phase = Phase.PLANNING
+        self.plan: ActivePlan | None = None
+        self.recoveries = 0
+        #: The current recovery began because no path was found (not because following failed).
+        self.recovering_from_planning = False
+        self.ended: NavEnd | None = None
+        self.follower = RegulatedPurePursuit(params.follower_params())
+        self._backup = BackUp(params.backup_params())
+        self._progress = ProgressChecker(params.required_movement_m, params.required_rotation_rad,
+                                         params.progress_timeout_s)
+        self._last_plan_request_s = -math.inf
+        self._replan_wanted = False
+        self._blocked_since_s: float | None = None
+        self._pose_lost_since_s: float | None = None
+        self._pose_lost_since_wall_s = 0.0
+        self._wait_until_s = 0.0
+        self._last_feedback_s = -math.inf
+        self._last_tick_s: float | None = None
+        #: Control time: sim time as the control loop lived it, each tick counting at most four periods.
+        #: The stuck, blocked and recovery timeouts run on it, so a machine too busy to run the loop on
+        #: time stretches them instead of blaming the robot.
+        self.clock_s = 0.0
+
+    @property
+    def active(self) -> bool:
+        return self.ended is None
+
+    # --- events -------------------------------------------------------------------------------------
+
+    def start(self, snap: NavSnapshot) -> NavOrders:
+        """The goal was accepted: ask for the first plan."""
+        orders = NavOrders()
+        self._request_plan(snap, orders)
+        return orders
+
+    def cancel(self) -> NavOrders:
+        orders = NavOrders()
+        self._end(orders, Ending.CANCELED, NavigateErrorCode.CANCELED, "canceled on request")
+        return orders
+
+    def abort(self, code: NavigateErrorCode, message: str) -> NavOrders:
+        orders = NavOrders()
+        self._end(orders, Ending.ABORTED, code, message)
+        return orders
+
+    def plan_outcome(self, outcome: PlanOutcome, snap: NavSnapshot) -> NavOrders:
+        """A plan came back from the worker (``planning_in_flight`` already counts it as back)."""
+        orders = NavOrders()
+        if not self.active or outcome.request.generation != self.generation:
+            return orders
+        if self.phase not in (Phase.PLANNING, Phase.FOLLOWING):
+            return orders
+        if outcome.path is None:
+            code = {
+                "goal": NavigateErrorCode.GOAL_OCCUPIED, "start": NavigateErrorCode.START_OCCUPIED,
+            }.get(outcome.blocked_end, NavigateErrorCode.NO_VALID_PATH)
+            log.warning("planning failed: %s", outcome.error)
+            if snap.pose is None:
+                self._replan_wanted = True
+                return orders
+            self._start_recovery(snap.pose, code, outcome.error, orders)
+            return orders
+        path = outcome.path
+        self.plan = ActivePlan.from_poses(path.poses, outcome.request.grid, snap.now_s)
+        self.follower.set_path(path.poses)
+        orders.path = path.poses
+        log.debug("plan: %.2f m in %.1f ms", path.length_m, 1000.0 * path.planning_time_s)
+        if self.phase is Phase.PLANNING:
+            self.phase = Phase.FOLLOWING
+            self._blocked_since_s = None
+            self._progress.reset()
+            log.info("following a %.2f m path (planned in %.0f ms)", path.length_m, 1000.0 * path.planning_time_s)
+        return orders
+
+    def replan(self, snap: NavSnapshot) -> NavOrders:
+        """Plan again now (a new map), or as soon as the request in flight is back."""
+        orders = NavOrders()
+        if self.active:
+            self._request_plan(snap, orders, urgent=True)
+        return orders
+
+    def costmap_updated(self, snap: NavSnapshot) -> NavOrders:
+        """Replan at once when the updated costmap blocks the path ahead."""
+        orders = NavOrders()
+        if (
+            self.active
+            and snap.grid is not None
+            and self.phase is Phase.FOLLOWING
+            and self.plan is not None
+            and not self.follower.xy_goal_reached
+            and self.plan.newly_blocked(snap.grid, self.follower.closest_index, BLOCKED_CHECK_SKIP_M)
+        ):
+            log.info("an obstacle blocks the path: replanning")
+            self._request_plan(snap, orders, urgent=True)
+        return orders
+
+    def tick(self, snap: NavSnapshot) -> NavOrders:
+        """One control period."""
+        orders = NavOrders()
+        if not self.active:
+            return orders
+        p = self.params
+        now = snap.now_s
+        if clock_went_back(now, self._last_tick_s):
+            log.warning("clock jumped back to %.2f s (a simulator reset?): restarting the goal's timers", now)
+            self._restart_timers(now)
+        period = 1.0 / p.controller_rate_hz
+        dt = period if self._last_tick_s is None else min(max(now - self._last_tick_s, period), 4.0 * period)
+        self._last_tick_s = now
+        self.clock_s += dt
+        if p.navigation_timeout_s > 0 and now - self.started_s > p.navigation_timeout_s:
+            self._end(orders, Ending.ABORTED, NavigateErrorCode.TIMEOUT,
+                      f"goal not reached within navigation_timeout_s={p.navigation_timeout_s:g} s")
+            return orders
+        pose = self._fresh_pose(snap, orders)
+        if pose is None or snap.grid is None:
+            return orders
+        if self.phase is Phase.FOLLOWING and self.plan is not None:
+            self._follow(snap, pose, dt, orders)
+        elif self.phase in (Phase.BACKING_UP, Phase.CLEARING):
+            self._recover(snap, pose, orders)
+        else:
+            orders.cmd = (0.0, 0.0)  # no path yet: hold still
+        if self.active:
+            in_flight = snap.planning_in_flight or orders.plan_from is not None
+            if self._replan_wanted and not in_flight and self.phase in (Phase.PLANNING, Phase.FOLLOWING):
+                self._request_plan(snap, orders, urgent=True)
+            self._feedback(snap, pose, orders)
+        return orders
+
+    # --- the parts ----------------------------------------------------------------------------------
+
+    def _end(self, orders: NavOrders, ending: Ending, code: NavigateErrorCode, message: str) -> None:
+        """End the goal: one zero command, then silence on cmd_vel."""
+        orders.cmd = (0.0, 0.0)
+        orders.end = self.ended = NavEnd(ending, code, message)
+        self.follower.reset()
+        if ending is Ending.ABORTED:
+            log.warning("goal aborted (%s): %s", code.name, message)
+
+    def _restart_timers(self, now: float) -> None:
+        """After the clock jumped back: every deadline of the goal counts from ``now``."""
+        self.started_s = now
+        self._last_plan_request_s = -math.inf
+        self._blocked_since_s = None
+        self._pose_lost_since_s = None
+        self._last_feedback_s = -math.inf
+        self._last_tick_s = None
+        self._progress.reset()
+
+    def _request_plan(self, snap: NavSnapshot, orders: NavOrders, urgent: bool = False) -> None:
+        """Plan from the current pose, or remember to once the request in flight is back."""
+        in_flight = snap.planning_in_flight or orders.plan_from is not None
+        if in_flight or (urgent and snap.now_s - self._last_plan_request_s < self.params.min_replan_interval_s):
+            self._replan_wanted = True
+            return
+        if snap.pose is None or snap.grid is None:
+            self._replan_wanted = True
+            return
+        self._replan_wanted = False
+        self._last_plan_request_s = snap.now_s
+        orders.plan_from = snap.pose
+
+    def _fresh_pose(self, snap: NavSnapshot, orders: NavOrders) -> Pose2D | None:
+        """The robot's pose, or ``None`` (robot held, maybe goal aborted) when the pose is stale."""
+        p = self.params
+        age = snap.pose_age_s
+        # map -> odom changes slowly: while fresh odometry carries the pose, a localiser running late
+        # (a busy machine) is no reason to stop.
+        if age <= p.pose_timeout_s or (age <= p.carried_pose_timeout_s and snap.pose_carried):
+            if self._pose_lost_since_s is not None:
+                log.info("pose is back: resuming")
+            self._pose_lost_since_s = None
+            return snap.pose
+        if self._pose_lost_since_s is None:
+            self._pose_lost_since_s = snap.now_s
+            self._pose_lost_since_wall_s = snap.wall_s
+            log.warning("no fresh %s (%.2f s old): holding still", topics.POSE2D, age)
+        orders.cmd = (0.0, 0.0)
+        # Also on the wall clock: at 30x real time a pose pipeline lagging under load is not a lost pose.
+        lost_s = min(snap.now_s - self._pose_lost_since_s, snap.wall_s - self._pose_lost_since_wall_s)
+        if lost_s > p.no_pose_timeout_s:
+            self._end(orders, Ending.ABORTED, NavigateErrorCode.NO_POSE,
+                      f"no robot pose on {topics.POSE2D} for {p.no_pose_timeout_s:g} s")
+        return None
+
+    def _follow(self, snap: NavSnapshot, pose: Pose2D, dt: float, orders: NavOrders) -> None:
+        p = self.params
+        assert snap.grid is not None and self.plan is not None
+        velocity = snap.velocity or snap.last_cmd
+        # Acceleration limits (and the lookahead) start from the last command, as Nav2's velocity smoother
+        # does in open loop: measured odometry lags the base, and ramping from it would slow every start.
+        reference = snap.last_cmd if p.open_loop_acceleration else velocity
+        command = self.follower.compute_velocity_command(pose, reference, dt, snap.grid)
+        if command.status is FollowStatus.GOAL_REACHED and (
+            abs(velocity[0]) > p.trans_stopped_velocity_mps or abs(velocity[1]) > p.rot_stopped_velocity_radps
+        ):
+            # nav2's StoppedGoalChecker: inside the tolerances while still turning is not arrived. Brake
+            # and judge again once stopped; an overshoot out of tolerance is then turned back.
+            orders.cmd = (0.0, 0.0)
+            return
+        if command.status is FollowStatus.GOAL_REACHED:
+            log.info("goal reached at (%.3f, %.3f, %.3f) after %.1f s",
+                     pose.x, pose.y, pose.yaw, snap.now_s - self.started_s)
+            self._end(orders, Ending.SUCCEEDED, NavigateErrorCode.NONE, "")
+            return
+        if command.status is FollowStatus.COLLISION_AHEAD:
+            orders.cmd = (0.0, 0.0)
+            if self._blocked_since_s is None:
+                self._blocked_since_s = self.clock_s
+                log.info("collision ahead: stopped, replanning")
+            if self.clock_s - self._blocked_since_s > p.blocked_timeout_s:
+                self._start_recovery(pose, NavigateErrorCode.STUCK,
+                                     f"an obstacle blocked the way for {p.blocked_timeout_s:g} s", orders)
+            elif not self.follower.xy_goal_reached:
+                self._request_plan(snap, orders, urgent=True)
+            return
+        self._blocked_since_s = None
+        orders.cmd = (command.linear_mps, command.angular_radps)
+        if not self._progress.check(pose, self.clock_s):
+            self._start_recovery(pose, NavigateErrorCode.STUCK, f"no progress for {p.progress_timeout_s:g} s", orders)
+            return
+        if (
+            snap.now_s - self._last_plan_request_s >= p.replan_period_s
+            and not self.follower.xy_goal_reached
+            and self.plan.remaining_m(self.follower.closest_index, pose) > NO_REPLAN_WITHIN_M
+        ):
+            self._request_plan(snap, orders)
+
+    def _start_recovery(self, pose: Pose2D, code: NavigateErrorCode, reason: str, orders: NavOrders) -> None:
+        p = self.params
+        if self.recoveries >= p.max_recoveries:
+            self._end(orders, Ending.ABORTED, code, f"{reason} (gave up after {self.recoveries} recoveries)")
+            return
+        self.recoveries += 1
+        self.recovering_from_planning = code in PLANNING_FAILURES
+        log.warning("recovery %d of %d (%s): backing up, clearing, replanning", self.recoveries, p.max_recoveries, reason)
+        self.generation = self._next_generation()
+        self.plan = None
+        self._replan_wanted = False
+        self._blocked_since_s = None
+        self.follower.reset()
+        self.phase = Phase.BACKING_UP
+        self._backup.start(pose, self.clock_s)
+
+    def _recover(self, snap: NavSnapshot, pose: Pose2D, orders: NavOrders) -> None:
+        assert snap.grid is not None
+        if self.phase is Phase.BACKING_UP:
+            speed, status = self._backup.step(pose, self.clock_s, snap.grid)
+            if status is BackUpStatus.RUNNING:
+                orders.cmd = (speed, 0.0)
+                return
+            orders.cmd = (0.0, 0.0)
+            orders.clear = glass_clearing(self.recoveries, self.recovering_from_planning)
+            orders.clear_around = pose
+            self.phase = Phase.CLEARING
+            self._wait_until_s = self.clock_s + self.params.recovery_wait_s
+            return
+        orders.cmd = (0.0, 0.0)
+        if self.clock_s >= self._wait_until_s:
+            self.phase = Phase.PLANNING
+            self._request_plan(snap, orders)
+
+    def _feedback(self, snap: NavSnapshot, pose: Pose2D, orders: NavOrders) -> None:
+        if snap.now_s - self._last_feedback_s < 1.0 / self.params.feedback_rate_hz - 1e-6:
+            return
+        self._last_feedback_s = snap.now_s
+        if self.plan is not None:
+            remaining = self.plan.remaining_m(self.follower.closest_index, pose)
+        else:
+            remaining = pose.distance_to(self.goal)
+        velocity = snap.velocity or snap.last_cmd
+        speed = abs(velocity[0])
+        eta = remaining / (speed if speed > ETA_MIN_SPEED_MPS else self.params.max_linear_vel_mps)
+        orders.feedback = NavFeedback(pose, max(0.0, snap.now_s - self.started_s), eta, self.recoveries, remaining)

@@ -1,0 +1,128 @@
+"""The goal's life without a bus: a kinematic robot follows the run's commands to the goal, and the run
+fails with the right code when it cannot get there."""
+
+from __future__ import annotations
+
+import itertools
+
+from services.planner.astar import PlanningError
+from services.planner.costmap import CostmapParams, LayeredCostmap
+from services.planner.global_planner import GlobalPlanner
+from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
+from services.planner.params import Params
+from services.planner.planning_worker import PlanOutcome, PlanRequest, blocked_end_of
+from services.planner.rasterize import map_from_world
+from services.planner.recovery import GlassClearing
+from shared.geometry import Pose2D
+from shared.interfaces.navigation import NavigateErrorCode
+from shared.world import World
+
+DT_S = 0.05
+
+
+def _grid(walls: list | None = None):  # type: ignore[no-untyped-def]
+    world = World.model_validate(
+        {"name": "room", "bounds": [0.0, 0.0, 5.0, 3.0], "walls": walls or [], "robot": {"start": [0.6, 1.5, 0.0]}}
+    )
+    return LayeredCostmap(map_from_world(world), CostmapParams()).grid()
+
+
+class KinematicWorld:
+    """Carries out a run's orders: a unicycle that does what it is told, and a planner that answers at once."""
+
+    def __init__(self, grid, pose: Pose2D, params: Params | None = None) -> None:  # type: ignore[no-untyped-def]
+        self.grid = grid
+        self.pose = pose
+        self.params = params or Params()
+        self.planner = GlobalPlanner(self.params.planner_params())
+        self.now_s = 0.0
+        self.cmd = (0.0, 0.0)
+        self.pose_age_s = 0.0
+        self.ends: list = []
+        self.feedback: list = []
+        self.clears: list[GlassClearing] = []
+        self.plans = 0
+
+    def snapshot(self, **overrides: object) -> NavSnapshot:
+        values = {
+            "now_s": self.now_s, "wall_s": self.now_s, "pose": self.pose, "pose_age_s": self.pose_age_s,
+            "pose_carried": True, "velocity": self.cmd, "grid": self.grid, "planning_in_flight": False,
+            "last_cmd": self.cmd,
+        } | overrides
+        return NavSnapshot(**values)  # type: ignore[arg-type]
+
+    def carry_out(self, run: NavigationRun, orders: NavOrders) -> None:
+        if orders.cmd is not None:
+            self.cmd = orders.cmd
+        if orders.clear is not None:
+            self.clears.append(orders.clear)
+        if orders.feedback is not None:
+            self.feedback.append(orders.feedback)
+        if orders.end is not None:
+            self.ends.append(orders.end)
+        if orders.plan_from is not None:
+            self.plans += 1
+            request = PlanRequest(run.generation, self.grid, orders.plan_from, run.goal)
+            try:
+                outcome = PlanOutcome(request, self.planner.compute_path(self.grid, orders.plan_from, run.goal))
+            except PlanningError as exc:
+                outcome = PlanOutcome(request, None, str(exc), blocked_end_of(exc))
+            self.carry_out(run, run.plan_outcome(outcome, self.snapshot()))
+
+    def drive(self, run: NavigationRun, until_s: float) -> None:
+        while run.active and self.now_s < until_s:
+            self.now_s += DT_S
+            self.pose = self.pose.advance(self.cmd[0], self.cmd[1], DT_S)
+            self.carry_out(run, run.tick(self.snapshot()))
+
+
+def _run(world: KinematicWorld, goal: Pose2D) -> NavigationRun:
+    run = NavigationRun(goal, world.params, world.now_s, itertools.count(1).__next__)
+    world.carry_out(run, run.start(world.snapshot()))
+    return run
+
+
+def test_the_robot_follows_the_plan_to_the_goal_and_stops_there() -> None:
+    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0))
+    goal = Pose2D(4.2, 1.0, 0.5)
+    run = _run(world, goal)
+    assert run.phase is Phase.FOLLOWING  # the first plan came back at once
+    world.drive(run, until_s=60.0)
+    assert [end.ending for end in world.ends] == [Ending.SUCCEEDED]
+    params = world.params
+    assert world.pose.distance_to(goal) <= params.xy_goal_tolerance_m + 0.02
+    assert world.cmd == (0.0, 0.0) and run.recoveries == 0
+    assert world.feedback and world.feedback[-1].distance_remaining_m < world.feedback[0].distance_remaining_m
+
+
+def test_an_unreachable_goal_recovers_then_aborts_with_the_planning_error() -> None:
+    wall = [[[2.5, 0.0], [2.5, 3.0]]]  # splits the room in two
+    params = Params.model_validate({"max_recoveries": 2, "recovery_wait_s": 0.2})
+    world = KinematicWorld(_grid(wall), Pose2D(0.8, 1.5, 0.0), params)
+    run = _run(world, Pose2D(4.0, 1.5, 0.0))
+    world.drive(run, until_s=60.0)
+    assert len(world.ends) == 1 and world.ends[0].ending is Ending.ABORTED
+    assert world.ends[0].code is NavigateErrorCode.NO_VALID_PATH
+    assert run.recoveries == 2 and len(world.clears) == 2 and world.cmd == (0.0, 0.0)
+
+
+def test_a_stale_pose_holds_the_robot_then_aborts_with_no_pose() -> None:
+    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0))
+    run = _run(world, Pose2D(4.0, 1.5, 0.0))
+    world.drive(run, until_s=1.0)
+    world.pose_age_s = 10.0  # the localiser went quiet
+    orders = run.tick(world.snapshot(pose_carried=False, now_s=1.05, wall_s=1.05))
+    assert orders.cmd == (0.0, 0.0) and orders.end is None
+    late = 1.05 + world.params.no_pose_timeout_s + 0.1
+    orders = run.tick(world.snapshot(pose_carried=False, now_s=late, wall_s=late))
+    assert orders.end is not None and orders.end.code is NavigateErrorCode.NO_POSE
+
+
+def test_cancel_stops_the_robot_and_a_stale_plan_is_ignored() -> None:
+    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0))
+    run = _run(world, Pose2D(4.0, 1.5, 0.0))
+    stale = PlanOutcome(PlanRequest(run.generation - 1, world.grid, world.pose, run.goal), None, "old")
+    assert run.plan_outcome(stale, world.snapshot()) == NavOrders()
+    orders = run.cancel()
+    assert orders.cmd == (0.0, 0.0) and orders.end is not None and orders.end.ending is Ending.CANCELED
+    assert run.tick(world.snapshot()) == NavOrders()  # ended: silence on cmd_vel
