@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -21,6 +20,8 @@ from typing import Any
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
+from deploy.paths import REPO_ROOT
+from deploy.service_tools import run_tool
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.simulator import TELEPORT, TeleportRequest
@@ -29,7 +30,6 @@ from shared.node import ServiceError, call_service
 from shared.session import SessionSpec, open_session
 from shared.world import World, load_world
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
 DEFAULT_WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
 DOCK_SERVICES = ("router", "map", "simulator", "battery", "pose", "planner", "docking")
@@ -78,14 +78,15 @@ def lower_bound(world_path: Path, start: Pose2D, goal: Pose2D) -> dict[str, floa
     Run as a process (``python -m services.planner.lower_bound``) so the launcher floor stays apart
     from the services' code.
     """
-    command = [
-        sys.executable, "-m", "services.planner.lower_bound", "--world", str(world_path),
-        "--start", *map(str, start.as_tuple()), "--goal", *map(str, goal.as_tuple()),
-    ]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=120, cwd=REPO_ROOT)
-    if done.returncode != 0:
-        raise RuntimeError(f"lower bound failed: {done.stderr.strip().splitlines()[-1:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    done = run_tool(
+        "services.planner.lower_bound",
+        ["--world", str(world_path), "--start", *map(str, start.as_tuple()), "--goal", *map(str, goal.as_tuple())],
+        timeout_s=120.0,
+    )
+    try:
+        return dict(done.last_json())
+    except RuntimeError as exc:
+        raise RuntimeError(f"lower bound failed: {exc}") from None
 
 
 def stack_environment(options: DemoOptions, endpoint: str) -> dict[str, str]:

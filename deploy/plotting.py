@@ -8,9 +8,11 @@ planned path dashed, the driven trajectory coloured by time, sonar hits as small
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol
 
 import matplotlib
 
@@ -204,3 +206,32 @@ def plot_run(
         title=title,
     )
     return plot_picture(picture, output, dpi)
+
+
+class TrialOutcome(Protocol):
+    """What the histograms read of a trial (``deploy.trials.TrialResult`` has it)."""
+
+    docked: bool
+    dock_time_s: float
+    lateral_error_m: float
+    yaw_error_rad: float
+
+
+def plot_trial_histograms(results: Sequence[TrialOutcome], path: Path) -> None:
+    """Dock time, lateral and yaw error of the docked trials, one panel each."""
+    ok = [r for r in results if r.docked]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    panels = [
+        ("dock time (s, sim)", [r.dock_time_s for r in ok], "#4472c4"),
+        ("lateral error at contact (mm)", [1000 * r.lateral_error_m for r in ok], "#ed7d31"),
+        ("yaw error at contact (deg)", [math.degrees(r.yaw_error_rad) for r in ok], "#70ad47"),
+    ]
+    for ax, (title, values, colour) in zip(axes, panels):
+        if values:
+            ax.hist(values, bins=min(30, max(5, len(values) // 3)), color=colour, edgecolor="white")
+        ax.set_title(title)
+        ax.set_ylabel("trials")
+    fig.suptitle(f"{len(ok)}/{len(results)} docked")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from deploy.paths import REPO_ROOT
 from deploy.service_tools import run_tool
 from shared.action import spin_in_background
 from shared.geometry import Pose2D
@@ -32,7 +33,6 @@ from shared.node import RELIABLE, Node, call_service
 from shared.session import SessionSpec, open_session
 from shared.world import load_world
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
 #: Routes per world: goals ``(x, y, yaw)`` driven in order from the world's start pose.
 ROUTES: dict[str, tuple[tuple[float, float, float], ...]] = {
     "deploy/worlds/seed_room.yaml": ((2.2, 2.5, 0.0), (0.0, 2.0, -math.pi / 2)),

@@ -11,7 +11,6 @@ from deploy.trials import (
     START_CLEARANCE_M,
     TrialOptions,
     TrialResult,
-    _distance_to_segment,
     combine,
     random_starts,
     reachable_starts,
@@ -19,6 +18,7 @@ from deploy.trials import (
     summarise_results,
     trials_stack,
 )
+from deploy.trials.starts import _distance_to_segment
 from shared.world import load_world
 
 WORLDS = sorted((Path(__file__).resolve().parents[3] / "deploy" / "worlds").glob("*.yaml"))

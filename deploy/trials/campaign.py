@@ -1,0 +1,216 @@
+"""``zendock trials``: many dockings from random starts on the full distributed stack, measured.
+
+One stack serves ``workers`` robots at once: a single simulator process steps one copy of the room per
+robot (namespaces ``r0``, ``r1``, …), and each robot has its own battery, pose, planner and docking
+services, exactly the processes the default stack runs. Each trial places its robot at a random
+collision-free start (seeded, reproducible), sets the battery just above the low threshold and waits
+for ``CHARGING``; the :class:`~deploy.observer.RunObserver` measures it on ground truth. Noise and a
+map->odom localisation error are on, as on a real robot.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import queue
+import subprocess
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.memory import PeakRssSampler
+from deploy.observer import RunObserver, RunRecord
+from deploy.paths import REPO_ROOT
+from deploy.trials.chaos import ChaosMonkey
+from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
+from deploy.trials.stack import trials_stack
+from deploy.trials.starts import lower_bounds, reachable_starts
+from deploy.trials.summary import summarise
+from shared.geometry import Pose2D
+from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
+from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
+from shared.names import topic_key
+from shared.node import ServiceError, ServiceUnavailable, call_service
+from shared.session import SessionSpec, open_session
+from shared.world import load_world
+
+#: How long the harness keeps asking a service that does not answer (it may be restarting: ``--chaos``).
+SERVICE_PATIENCE_S = 60.0
+
+
+def _call_until_answered(session: Any, key: str, srv: Any, request: Any) -> Any:
+    """``call_service``, asked again while nothing answers: a killed service is back within seconds, and
+    a trial must not fail because the harness asked during those seconds."""
+    deadline = time.monotonic() + SERVICE_PATIENCE_S
+    while True:
+        try:
+            return call_service(session, key, srv, request)
+        except ServiceUnavailable:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.5)
+
+
+def _sim_clock(session: Any, robot: str) -> float:
+    """The simulator's clock now (sim seconds), NaN when it does not answer."""
+    try:
+        state = call_service(session, "simulator/state", SIM_STATE, SimStateRequest(robot=robot))
+    except ServiceError:
+        return math.nan
+    return state.stamp.to_sec()
+
+
+def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: TrialOptions) -> tuple[TrialResult, RunRecord]:
+    wall_start = time.monotonic()
+    # Full battery first: leaving the dock with the last trial's low charge would trigger docking at
+    # the moment of the teleport, before this trial's start is even in place.
+    _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+                         SetBatteryStateRequest(percentage=1.0, drain_scale=options.drain_scale))
+    placed = _call_until_answered(session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot))
+    if not placed.success:
+        raise ServiceError(f"trial {index}: start {start}: {placed.message}")
+    observer = RunObserver(session, robot)
+    try:
+        # The robot may have been charging at the dock a moment ago: start only once the battery has
+        # seen it leave, or the old CHARGING would end the new trial at once.
+        if not observer.wait(lambda r: bool(r.battery) and not r.last_charging, timeout_s=30.0):
+            raise ServiceError(f"trial {index}: the battery still reports charging after the robot left the dock")
+        observer.arm()
+        _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+                             SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
+        started_sim = None
+        deadline_wall = time.monotonic() + options.timeout_sim_s * 3 + 120.0
+
+        def finished(record: RunRecord) -> bool:
+            nonlocal started_sim
+            if started_sim is None and record.sim_time_s > 0:
+                started_sim = record.sim_time_s
+            return record.charging or (started_sim is not None and record.sim_time_s - started_sim > options.timeout_sim_s)
+
+        while not observer.wait(finished, timeout_s=1.0) and time.monotonic() < deadline_wall:
+            pass
+        observer.settle()
+        record = observer.snapshot()
+    finally:
+        observer.close()
+    contact = record.contact_at_charging
+    trigger = record.trigger_s if record.trigger_s is not None else math.nan
+    result = TrialResult(
+        index=index,
+        robot=robot,
+        start=start.as_tuple(),
+        docked=bool(record.charging and contact is not None and contact.mated),
+        charging=record.charging,
+        dock_time_s=(record.charging_s - trigger) if record.charging_s is not None else math.nan,
+        lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
+        yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,
+        collisions=record.collisions,
+        path_length_m=record.driven_length_m(since_s=record.trigger_s),
+        wall_s=time.monotonic() - wall_start,
+        sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
+    )
+    return result, record
+
+
+class _Nothing:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def run_trials(
+    options: TrialOptions,
+    log: Callable[[str], None] = print,
+    progress: Callable[[TrialResult], None] | None = None,
+) -> tuple[TrialsSummary, list[TrialResult], Path]:
+    """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs)."""
+    world = load_world(options.world)
+    if not world.docks:
+        raise ValueError(f"{options.world}: the world has no dock")
+    run_dir = options.runs_dir / f"trials-{time.strftime('%Y%m%d-%H%M%S')}"
+    run_dir.mkdir(parents=True, exist_ok=True)
+    workers = max(1, min(options.workers, options.n))
+    robots = [f"r{i}" for i in range(workers)]
+    starts = reachable_starts(options.world, world, options.n, options.seed)
+    endpoint = free_endpoint()
+    stack_path = run_dir / "stack.yaml"
+    stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False))
+    stack = load_stack(stack_path, env={}, project_dir=REPO_ROOT)
+    results: list[TrialResult] = []
+    records: dict[int, RunRecord] = {}
+    errors: list[str] = []
+    wall_start = time.monotonic()
+    log(f"{options.n} trials in {world.name} with {workers} robot(s), controller {options.controller}, rtf {options.rtf}")
+    with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
+        launcher.wait_healthy(timeout_s=120.0)
+        sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
+        todo: queue.Queue[tuple[int, Pose2D]] = queue.Queue()
+        for i, start in enumerate(starts):
+            todo.put((i, start))
+        lock = threading.Lock()
+        chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
+        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()):
+            clock_start = _sim_clock(session, robots[0])
+            wall_clock_start = time.monotonic()
+
+            def worker(robot: str) -> None:
+                while True:
+                    try:
+                        index, start = todo.get_nowait()
+                    except queue.Empty:
+                        return
+                    try:
+                        result, record = _run_one(session, robot, index, start, options)
+                    except (ServiceError, OSError) as exc:
+                        with lock:
+                            errors.append(f"trial {index} ({robot}): {exc}")
+                        result = TrialResult(index, robot, start.as_tuple(), False, False, math.nan, math.nan,
+                                             math.nan, 0, 0.0)
+                        record = RunRecord()
+                    with lock:
+                        results.append(result)
+                        records[index] = record
+                    if progress is not None:
+                        progress(result)
+
+            threads = [threading.Thread(target=worker, args=(robot,), daemon=True) for robot in robots]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+            clock_end = _sim_clock(session, robots[0])
+            achieved_rtf = (clock_end - clock_start) / max(time.monotonic() - wall_clock_start, 1e-9)
+        for status in launcher.ps():
+            (run_dir / f"{status.name}.log").write_text("\n".join(launcher.logs(status.name)) + "\n")
+    wall_s = time.monotonic() - wall_start
+    results.sort(key=lambda r: r.index)
+    pairs = []
+    for r in results:
+        record = records.get(r.index)
+        pose = record.pose_at(record.trigger_s) if record is not None and record.trigger_s is not None else None
+        pairs.append((pose or Pose2D(*r.start), world.docks[0].pose2d))
+    try:
+        for r, bound in zip(results, lower_bounds(options.world, pairs)):
+            r.lower_bound_s = bound
+    except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
+        log(f"lower bounds not computed: {exc}")
+    summary = summarise(results, wall_s, options, world)
+    summary.achieved_rtf = round(achieved_rtf, 2)
+    summary.peak_rss_mb = dict(sampler.peak_mb)
+    if chaos is not None:
+        summary.chaos = chaos.report.summary()
+    report = {"summary": asdict(summary), "trials": [asdict(r) for r in results], "errors": errors,
+              "options": {k: str(v) for k, v in asdict(options).items()}}
+    (run_dir / "trials.json").write_text(json.dumps(report, indent=2) + "\n")
+    from deploy.plotting import plot_trial_histograms  # noqa: PLC0415 - matplotlib is slow to import
+
+    plot_trial_histograms(results, run_dir / "histograms.png")
+    return summary, results, run_dir

@@ -1,0 +1,75 @@
+"""What a trials campaign is asked to do, and what each trial and the campaign measured."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from deploy.paths import REPO_ROOT
+
+
+@dataclass(frozen=True)
+class TrialOptions:
+    world: Path
+    n: int = 10
+    controller: str = "graceful"
+    seed: int = 0
+    rtf: str = "8"
+    workers: int = 1
+    timeout_sim_s: float = 240.0
+    localisation_error: tuple[float, float, float] = (0.03, -0.02, 0.02)
+    battery_start: float = 0.255
+    drain_scale: float = 20.0
+    runs_dir: Path = REPO_ROOT / "runs"
+    #: Fault injection: every ``chaos_period_s`` wall seconds on average, kill -9 a random robot service
+    #: (battery, pose, planner or docking; never the simulator) and let the launcher restart it. 0: off.
+    chaos_period_s: float = 0.0
+
+
+@dataclass
+class TrialResult:
+    index: int
+    robot: str
+    start: tuple[float, float, float]
+    docked: bool
+    charging: bool
+    dock_time_s: float
+    lateral_error_m: float
+    yaw_error_rad: float
+    collisions: int
+    path_length_m: float
+    lower_bound_s: float = math.nan
+    wall_s: float = 0.0
+    sim_s: float = 0.0
+
+
+@dataclass
+class TrialsSummary:
+    n: int
+    successes: int
+    success_rate: float
+    median_dock_time_s: float
+    median_lower_bound_s: float
+    #: Median over docked trials of each trial's own dock time over its own lower bound.
+    median_time_ratio: float
+    median_lateral_error_m: float
+    p95_lateral_error_m: float
+    median_yaw_error_rad: float
+    collisions: int
+    wall_s: float
+    sim_s: float
+    controller: str = ""
+    world: str = ""
+    #: Sim seconds the simulator's clock advanced per wall second while the trials ran (what the whole
+    #: stack sustained, waits for late drivers included; NaN when not measured).
+    achieved_rtf: float = math.nan
+    peak_rss_mb: dict[str, float] = field(default_factory=dict)
+    chaos: dict[str, Any] = field(default_factory=dict)
+
+    def headline(self) -> dict[str, Any]:
+        keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
+                "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
+                "achieved_rtf")
+        return {k: getattr(self, k) for k in keys}

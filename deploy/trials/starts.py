@@ -1,0 +1,74 @@
+"""Where trials start: seeded, collision-free, and connected to the dock (by the planner's own tool)."""
+
+from __future__ import annotations
+
+import json
+import math
+import random
+from pathlib import Path
+
+from deploy.service_tools import run_tool
+from shared.geometry import Pose2D
+from shared.world import World
+
+#: The robot's circumscribed radius plus a margin: starts this far from every surface can always turn.
+START_CLEARANCE_M = 0.45
+#: Starts at least this far from the dock, so each trial navigates before it docks.
+MIN_START_DISTANCE_TO_DOCK_M = 1.2
+
+
+def random_starts(world: World, n: int, seed: int) -> list[Pose2D]:
+    """``n`` start poses with clearance from every surface (glass included) and away from the docks."""
+    rng = random.Random(seed)
+    xmin, ymin, xmax, ymax = world.bounds
+    segments = world.opaque_segments() + list(world.glass)
+    starts: list[Pose2D] = []
+    attempts = 0
+    while len(starts) < n:
+        attempts += 1
+        if attempts > 200_000:
+            raise RuntimeError(f"{world.name}: could not find {n} collision-free starts")
+        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+        if min(_distance_to_segment((x, y), s) for s in segments) < START_CLEARANCE_M:
+            continue
+        if any(math.dist((x, y), d.pose[:2]) < MIN_START_DISTANCE_TO_DOCK_M for d in world.docks):
+            continue
+        starts.append(Pose2D(x, y, rng.uniform(-math.pi, math.pi)))
+    return starts
+
+
+def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[Pose2D]:
+    """The first ``n`` of :func:`random_starts` from which the dock can be reached at all.
+
+    A world may hold closed pockets (behind the walls of ``corridor``): a start there tests nothing but
+    the harness. Reachability comes from the planner's own lower-bound tool (glass counted as solid);
+    a start it cannot connect to the dock is skipped, so the other starts stay what the seed made them.
+    """
+    candidates = random_starts(world, 2 * n + 10, seed)
+    dock = world.docks[0].pose2d
+    bounds = lower_bounds(world_path, [(start, dock) for start in candidates])
+    starts = [start for start, bound in zip(candidates, bounds) if math.isfinite(bound)][:n]
+    if len(starts) < n:
+        raise RuntimeError(f"{world.name}: only {len(starts)} of {len(candidates)} random starts can reach the dock")
+    return starts
+
+
+def _distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]) -> float:
+    (ax, ay), (bx, by) = segment
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / length2))
+    return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy)
+
+
+def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[float]:
+    """Shortest collision-free times for ``(start, goal)`` pairs, from the planner's own tool (one process);
+    NaN where a pair is not connected."""
+    if not pairs:
+        return []
+    lines = "\n".join(json.dumps({"start": list(s.as_tuple()), "goal": list(g.as_tuple())}) for s, g in pairs)
+    done = run_tool("services.planner.lower_bound", ["--world", str(world_path), "--batch"], input_text=lines)
+    if done.returncode != 0:
+        raise RuntimeError(f"lower bounds failed: {done.stderr.strip()[-300:]}")
+    bounds = [json.loads(line).get("lower_bound_s") for line in done.stdout.strip().splitlines()]
+    return [math.nan if bound is None else float(bound) for bound in bounds]

@@ -1,0 +1,61 @@
+"""Statistics of a set of trials: one world's, or a campaign's across worlds."""
+
+from __future__ import annotations
+
+import math
+import statistics
+
+from deploy.trials.chaos import combine_chaos
+from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
+from shared.world import World
+
+
+def _percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    if not ordered:
+        return math.nan
+    return ordered[min(len(ordered) - 1, max(0, math.ceil(q * len(ordered)) - 1))]
+
+
+def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, world: World) -> TrialsSummary:
+    return summarise_results(results, wall_s, options.controller, world.name)
+
+
+def summarise_results(results: list[TrialResult], wall_s: float, controller: str, world_name: str) -> TrialsSummary:
+    """The summary of any set of trials: one world's, or a campaign's across worlds."""
+    ok = [r for r in results if r.docked]
+    med = lambda xs: statistics.median(xs) if xs else math.nan  # noqa: E731
+    bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
+    return TrialsSummary(
+        n=len(results),
+        successes=len(ok),
+        success_rate=len(ok) / len(results) if results else math.nan,
+        median_dock_time_s=med([r.dock_time_s for r in ok]),
+        median_lower_bound_s=med([r.lower_bound_s for r in bounded]),
+        median_time_ratio=med([r.dock_time_s / r.lower_bound_s for r in bounded]),
+        median_lateral_error_m=med([r.lateral_error_m for r in ok]),
+        p95_lateral_error_m=_percentile([r.lateral_error_m for r in ok], 0.95),
+        median_yaw_error_rad=med([r.yaw_error_rad for r in ok]),
+        collisions=sum(r.collisions for r in results),
+        wall_s=wall_s,
+        sim_s=sum(r.sim_s for r in results if math.isfinite(r.sim_s)),
+        controller=controller,
+        world=world_name,
+    )
+
+
+def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller: str) -> TrialsSummary:
+    """One summary over several worlds' trials: medians over every trial, not medians of medians."""
+    results = [r for _, rs in per_world for r in rs]
+    wall_s = sum(s.wall_s for s, _ in per_world)
+    summary = summarise_results(results, wall_s, controller, ", ".join(s.world for s, _ in per_world))
+    rates = [(s.achieved_rtf, s.wall_s) for s, _ in per_world if math.isfinite(s.achieved_rtf)]
+    if rates:  # weighted by each world's wall time: the rate of the campaign as a whole
+        summary.achieved_rtf = round(sum(r * w for r, w in rates) / max(sum(w for _, w in rates), 1e-9), 2)
+    for s, _ in per_world:
+        for name, mb in s.peak_rss_mb.items():
+            summary.peak_rss_mb[name] = max(mb, summary.peak_rss_mb.get(name, 0.0))
+    chaos = [s.chaos for s, _ in per_world if s.chaos]
+    if chaos:
+        summary.chaos = combine_chaos(chaos)
+    return summary
