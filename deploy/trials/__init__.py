@@ -1,11 +1,5 @@
-"""``zendock trials``: many dockings from random starts on the full distributed stack, measured.
-
-One stack serves ``workers`` robots at once: a single simulator process steps one copy of the room per
-robot (namespaces ``r0``, ``r1``, …), and each robot has its own battery, pose, planner and docking
-services, exactly the processes the default stack runs. Each trial places its robot at a random
-collision-free start (seeded, reproducible), sets the battery just above the low threshold and waits
-for ``CHARGING``; the :class:`~deploy.observer.RunObserver` measures it on ground truth. Noise and a
-map->odom localisation error are on, as on a real robot.
+"""``zendock trials``: many dockings from random starts on the full distributed stack, measured
+(see :mod:`.campaign` for how a campaign runs).
 
 Modules: :mod:`.records` (options and results), :mod:`.starts` (where trials start),
 :mod:`.stack` (the stack file), :mod:`.campaign` (running it), :mod:`.summary` (statistics),
