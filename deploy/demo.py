@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from deploy import strict_json
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
@@ -62,9 +63,11 @@ class DemoReport:
     collisions: int
     path_length_m: float
     lower_bound_s: float
-    wall_s: float
-    sim_s: float
-    trigger_s: float
+    #: Why there is no lower bound ("" when there is one).
+    lower_bound_s_reason: str = ""
+    wall_s: float = 0.0
+    sim_s: float = 0.0
+    trigger_s: float = 0.0
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
     run_dir: str = ""
 
@@ -165,16 +168,20 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
             (run_dir / f"{name}.log").write_text("\n".join(launcher.logs(name)) + "\n")
     wall_s = time.monotonic() - wall_start
     start_pose = record.pose_at(record.trigger_s) if record.trigger_s is not None else None
-    bound_s = math.nan
+    bound_s, bound_reason = math.nan, "the run never triggered docking" if start_pose is None else "no dock"
     if start_pose is not None and world.docks:
         try:
-            bound_s = lower_bound(options.world, start_pose, world.docks[0].pose2d)["lower_bound_s"]
+            answer = lower_bound(options.world, start_pose, world.docks[0].pose2d)
+            bound_s = float(answer["lower_bound_s"]) if answer.get("lower_bound_s") is not None else math.nan
+            bound_reason = str(answer.get("error", ""))
         except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
-            log(f"lower bound not computed: {exc}")
+            bound_reason = f"lower bound not computed: {exc}"
+            log(bound_reason)
     report = build_report(record, options, world, wall_s, bound_s)
+    report.lower_bound_s_reason = "" if math.isfinite(bound_s) else bound_reason
     report.run_dir = str(run_dir)
     report.peak_rss_mb = dict(sampler.peak_mb)
-    (run_dir / "report.json").write_text(json.dumps(report.as_dict(), indent=2) + "\n")
+    (run_dir / "report.json").write_text(strict_json.dumps(report.as_dict(), indent=2) + "\n")
     _plot(world, record, run_dir / "trajectory.png", log)
     return report
 

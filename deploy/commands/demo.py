@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
 
+from deploy import strict_json
 from shared.config_errors import ConfigError
 
 
@@ -66,7 +66,7 @@ def _run(args: argparse.Namespace) -> int:
     report = run_demo(options, log=lambda text: console.print(f"[dim]demo:[/] {text}")).as_dict()
     _print_report(report, console)
     if args.json:
-        print(json.dumps(report))
+        print(strict_json.dumps(report))
     return 0 if report["docked"] and report["charging"] else 1
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -11,6 +10,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from deploy import strict_json
 from shared.config_errors import ConfigError
 
 SHIPPED_WORLDS = Path(__file__).resolve().parents[1] / "worlds"
@@ -68,6 +68,7 @@ def _worlds(args: argparse.Namespace) -> list[Path]:
 
 def _run(args: argparse.Namespace) -> int:
     from deploy.trials import TrialOptions, combine, run_trials  # noqa: PLC0415 - heavy imports only when used
+    from deploy.trials.summary import summary_reasons  # noqa: PLC0415
 
     worlds = _worlds(args)
     console = Console(stderr=args.json)
@@ -77,7 +78,10 @@ def _run(args: argparse.Namespace) -> int:
         options = TrialOptions(world=world, n=args.n, controller=args.controller, seed=args.seed + 1000 * number,
                                rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
                                chaos_period_s=args.chaos)
-        summary, results, run_dir = _run_world(console, options, run_trials)
+        try:
+            summary, results, run_dir = _run_world(console, options, run_trials)
+        except (RuntimeError, ValueError) as exc:  # a world the campaign cannot run (no reachable start, no dock)
+            raise ConfigError(f"trials in {world}: {exc}") from None
         per_world.append((summary, results))
         _print_summary(console, summary)
         console.print(f"report and histograms in {run_dir}")
@@ -88,7 +92,7 @@ def _run(args: argparse.Namespace) -> int:
         line = {**summary.headline(), **({"chaos": summary.chaos} if summary.chaos else {})}
         if len(per_world) > 1:
             line["worlds"] = {s.world: s.headline() for s, _ in per_world}
-        print(json.dumps(line))
+        print(strict_json.dumps(line, reasons=summary_reasons(summary)))
     return 0 if summary.successes == summary.n else 1
 
 

@@ -10,7 +10,6 @@ map->odom localisation error are on, as on a real robot.
 
 from __future__ import annotations
 
-import json
 import math
 import queue
 import subprocess
@@ -23,6 +22,7 @@ from typing import Any
 
 import yaml
 
+from deploy import strict_json
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
@@ -31,7 +31,7 @@ from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import trials_stack
 from deploy.trials.starts import lower_bounds, reachable_starts
-from deploy.trials.summary import summarise
+from deploy.trials.summary import summarise, summary_reasons
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
@@ -201,7 +201,8 @@ def run_trials(
         for r, bound in zip(results, lower_bounds(options.world, pairs)):
             r.lower_bound_s = bound
     except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
-        log(f"lower bounds not computed: {exc}")
+        errors.append(f"lower bounds not computed: {exc}")
+        log(errors[-1])
     summary = summarise(results, wall_s, options, world)
     summary.achieved_rtf = round(achieved_rtf, 2)
     summary.peak_rss_mb = dict(sampler.peak_mb)
@@ -209,7 +210,7 @@ def run_trials(
         summary.chaos = chaos.report.summary()
     report = {"summary": asdict(summary), "trials": [asdict(r) for r in results], "errors": errors,
               "options": {k: str(v) for k, v in asdict(options).items()}}
-    (run_dir / "trials.json").write_text(json.dumps(report, indent=2) + "\n")
+    (run_dir / "trials.json").write_text(strict_json.dumps(report, summary_reasons(summary), indent=2) + "\n")
     from deploy.plotting import plot_trial_histograms  # noqa: PLC0415 - matplotlib is slow to import
 
     plot_trial_histograms(results, run_dir / "histograms.png")

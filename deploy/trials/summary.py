@@ -59,3 +59,23 @@ def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller
     if chaos:
         summary.chaos = combine_chaos(chaos)
     return summary
+
+
+def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
+    """Why a summary's measures may be missing (for :func:`deploy.strict_json.dumps`)."""
+    none_docked = "no trial docked" if summary.successes == 0 else ""
+    return {
+        "median_dock_time_s": none_docked or "not measured",
+        "median_lateral_error_m": none_docked or "not measured",
+        "p95_lateral_error_m": none_docked or "not measured",
+        "median_yaw_error_rad": none_docked or "not measured",
+        "median_lower_bound_s": none_docked or "no docked trial has a lower bound (see errors in trials.json)",
+        "median_time_ratio": none_docked or "no docked trial has a lower bound (see errors in trials.json)",
+        "success_rate": "no trials",
+        "achieved_rtf": "the simulator's clock did not answer",
+        "lower_bound_s": "no lower bound for this trial's start (see errors in trials.json)",
+        "dock_time_s": "the trial did not dock",
+        "lateral_error_m": "the contacts never touched",
+        "yaw_error_rad": "the contacts never touched",
+        "sim_s": "the trial never triggered docking",
+    }

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from collections.abc import Sequence
 
@@ -27,11 +26,17 @@ from shared.config_errors import ConfigError
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import load_world
 
+#: Legs shorter than this are left out of the turns: a last leg of a few centimetres into a docking
+#: pose (see :data:`services.planner.shortest_path.END_SNAP_RADIUS_M`) points wherever the nearest free
+#: cell happened to be, and turning onto it and off again is no turn the robot must make. Leaving turns
+#: out only lowers the bound, which stays a bound.
+MIN_TURNING_LEG_M = 0.11
+
 
 def turns_rad(points: np.ndarray, start_yaw: float, goal_yaw: float) -> float:
     """Total heading change along a polyline driven forward, from ``start_yaw`` to ``goal_yaw``."""
     legs = np.diff(np.asarray(points, dtype=float), axis=0)
-    legs = legs[np.hypot(legs[:, 0], legs[:, 1]) > 1e-9]
+    legs = legs[np.hypot(legs[:, 0], legs[:, 1]) >= MIN_TURNING_LEG_M]
     if len(legs) == 0:
         return abs(wrap_angle(goal_yaw - start_yaw))
     headings = np.arctan2(legs[:, 1], legs[:, 0])
@@ -75,8 +80,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             result = lower_bound(grid, Pose2D(*query["start"]), Pose2D(*query["goal"]), args.max_linear, args.max_angular)
         except (PlanningError, KeyError, TypeError, ValueError) as exc:
             failed += 1
-            result = {"error": str(exc), "lower_bound_s": math.nan}
-        print(json.dumps(result), flush=True)
+            result = {"error": str(exc), "lower_bound_s": None}
+        print(json.dumps(result, allow_nan=False), flush=True)
     return 1 if failed and not args.batch else 0
 
 

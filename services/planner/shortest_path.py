@@ -31,10 +31,24 @@ def solid_grid(
     return LayeredCostmap(occupancy, params).grid()
 
 
+#: How far an end may lie inside the inscribed zone of the grid's rasterised surfaces. A docking pose
+#: puts the robot's centre as close to the dock as its own front allows, and the dock's rasterised cells
+#: reach up to a cell's diagonal past its true outline (more at angles that are no multiple of 90
+#: degrees): the ends are joined to the nearest free cell this close, by a straight last leg.
+END_SNAP_RADIUS_M = 0.1
+
+
 def shortest_path(grid: CostGrid, start_xy: tuple[float, float], goal_xy: tuple[float, float]) -> np.ndarray:
-    """The shortest path's corner points ``(N, 2)`` on a :func:`solid_grid`; ``PlanningError`` if none."""
-    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=0.0)).plan(grid, start_xy, goal_xy)
-    return shortcut_path(grid, found.points_xy, SmoothingParams(max_cost=252, cost_weight=0.0))
+    """The shortest path's corner points ``(N, 2)`` on a :func:`solid_grid`; ``PlanningError`` if none.
+
+    An end inside the inscribed zone (a docking pose, see :data:`END_SNAP_RADIUS_M`) is reached from the
+    nearest free cell by a straight leg; the path's other points all lie in free space.
+    """
+    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=END_SNAP_RADIUS_M)).plan(grid, start_xy, goal_xy)
+    points = shortcut_path(grid, found.points_xy, SmoothingParams(max_cost=252, cost_weight=0.0))
+    if found.goal_snapped:
+        points = np.concatenate([points, np.asarray(goal_xy, dtype=float)[None, :]])
+    return points
 
 
 def shortest_path_length_m(

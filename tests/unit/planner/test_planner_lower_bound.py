@@ -30,3 +30,28 @@ def test_glass_counts_as_solid_for_the_bound() -> None:
     straight = start.distance_to(goal)
     assert bound["path_length_m"] > straight + 1.0  # around the glass, not through it
     assert bound["lower_bound_s"] >= bound["path_length_m"] / 0.5
+
+
+def _room_with_dock(x: float, y: float, yaw: float):  # type: ignore[no-untyped-def]
+    from shared.world import World  # noqa: PLC0415
+
+    return World.model_validate({
+        "name": "room", "bounds": [0.0, 0.0, 16.0, 12.0], "walls": [], "glass": [], "boxes": [],
+        "docks": [{"id": "home", "pose": [x, y, yaw], "type": "charger"}], "robot": {"start": [1.0, 1.0, 0.0]},
+    })
+
+
+@pytest.mark.parametrize("case", range(12))
+def test_the_bound_exists_for_docks_at_any_angle(case: int) -> None:
+    """A dock at any yaw (0.35 rad failed once: its rasterised cells reached the docking pose's cell)."""
+    rng = np.random.default_rng(case)
+    yaw = 0.35 if case == 0 else float(rng.uniform(-math.pi, math.pi))
+    dock = Pose2D(float(rng.uniform(4.0, 12.0)), float(rng.uniform(3.0, 9.0)), yaw)
+    world = _room_with_dock(dock.x, dock.y, dock.yaw)
+    start = Pose2D(1.0, 1.0, float(rng.uniform(-math.pi, math.pi)))
+    bound = lower_bound(solid_grid(world), start, world.docks[0].pose2d, 0.5, 1.5)
+    straight = start.distance_to(dock)
+    assert math.isfinite(bound["lower_bound_s"]) and bound["lower_bound_s"] > 0
+    # No path is shorter than the straight line; in an empty room the shortest goes round the dock at most.
+    assert straight - 1e-3 <= bound["path_length_m"] <= straight + 1.5  # (rounded to 0.1 mm)
+    assert bound["lower_bound_s"] >= bound["path_length_m"] / 0.5 - 1e-3
