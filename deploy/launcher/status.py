@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
 from enum import StrEnum
 from typing import Any
 
@@ -46,8 +47,16 @@ class ServiceStatus:
     pid_create_time: float | None = None
 
     def ps_json(self) -> dict[str, Any]:
-        """Exactly the keys ``zendock ps --json`` promises."""
-        return {"name": self.name, "state": self.state, "pid": self.pid, "restarts": self.restarts, "health": self.health}
+        """Exactly the keys ``zendock ps --json`` promises, as ``docker compose ps --format json`` users
+        expect them: ``exit_code`` of the last run (null while the first run lasts), ``started_at`` of the
+        current process (ISO 8601, UTC; null while no process runs)."""
+        started_at = (
+            datetime.fromtimestamp(self.started_at, tz=UTC).isoformat(timespec="milliseconds")
+            if self.started_at is not None
+            else None
+        )
+        return {"name": self.name, "state": self.state, "pid": self.pid, "restarts": self.restarts,
+                "health": self.health, "exit_code": self.exit_code, "started_at": started_at}
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
