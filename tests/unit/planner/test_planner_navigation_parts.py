@@ -319,7 +319,9 @@ def test_glass_memory_marks_echoes_and_suspects_only_floor_the_sonar_never_saw()
     memory.add_reading((1.0, 1.5, 0.0), 1.0, 0.5, 0.02, 3.0)
     assert _is_glass(memory, 2.0, 1.5)  # the echo itself
     assert not _is_glass(memory, 1.5, 1.5)  # looked through on the way
-    assert _is_glass(memory, 2.0, 1.5 + 0.45)  # the pane may go on beyond what the cone covered ...
+    # One echo marks the middle of the arc (its edges are less likely the echo's source) ...
+    assert _is_glass(memory, 1.0 + math.sqrt(1.0 - 0.15**2), 1.5 + 0.15)  # on the arc, 0.15 rad off the axis
+    assert _is_glass(memory, 2.0, 1.5 + 0.4)  # ... the pane may go on beyond what the cone covered ...
     assert _is_glass(memory, 2.2, 1.5)  # ... and behind it the sonar cannot look
     assert not _is_glass(memory, 2.0, 1.5 + 0.7)  # but not further than the suspicion radius
     # Looking along the suspected continuation from elsewhere clears it.
