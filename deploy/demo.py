@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from deploy import strict_json
+from deploy.glass_report import read_glass_memory
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
@@ -65,6 +66,9 @@ class DemoReport:
     lower_bound_s: float
     #: Why there is no lower bound ("" when there is one).
     lower_bound_s_reason: str = ""
+    #: The planner's glass memory at the end, against the world's panes (see :mod:`deploy.glass_report`).
+    false_glass_cells: float = math.nan
+    glass_coverage: float = math.nan
     wall_s: float = 0.0
     sim_s: float = 0.0
     trigger_s: float = 0.0
@@ -92,7 +96,7 @@ def lower_bound(world_path: Path, start: Pose2D, goal: Pose2D) -> dict[str, floa
         raise RuntimeError(f"lower bound failed: {exc}") from None
 
 
-def stack_environment(options: DemoOptions, endpoint: str) -> dict[str, str]:
+def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dict[str, str]:
     return {
         "ZENOH_LISTEN": endpoint,
         "ZENOH_CONNECT": endpoint,
@@ -101,6 +105,7 @@ def stack_environment(options: DemoOptions, endpoint: str) -> dict[str, str]:
         "ZENDOCK_RTF": options.rtf,
         "ZENDOCK_SEED": str(options.seed),
         "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(options.localisation_error)),
+        "ZENDOCK_GLASS_MEMORY": str(run_dir / "glass_memory.npz"),
     }
 
 
@@ -131,7 +136,7 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
     run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)
     endpoint = free_endpoint()
-    stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint), project_dir=REPO_ROOT)
+    stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint, run_dir), project_dir=REPO_ROOT)
     wall_start = time.monotonic()
     log(f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}")
     with Launcher(stack, services=DOCK_SERVICES, project_dir=run_dir / "stack", working_dir=REPO_ROOT,
@@ -179,6 +184,9 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
             log(bound_reason)
     report = build_report(record, options, world, wall_s, bound_s)
     report.lower_bound_s_reason = "" if math.isfinite(bound_s) else bound_reason
+    glass = read_glass_memory(run_dir / "glass_memory.npz", world)
+    if glass is not None:
+        report.false_glass_cells, report.glass_coverage = float(glass.false_glass_cells), glass.glass_coverage
     report.run_dir = str(run_dir)
     report.peak_rss_mb = dict(sampler.peak_mb)
     (run_dir / "report.json").write_text(strict_json.dumps(report.as_dict(), indent=2) + "\n")

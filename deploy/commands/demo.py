@@ -39,6 +39,9 @@ def _print_report(report: dict, console: Console) -> None:
         ("yaw error at contact", f"{math.degrees(report['final_yaw_error_rad']):.2f} deg"),
         ("collisions", str(report["collisions"])),
         ("path driven", f"{report['path_length_m']:.2f} m"),
+        ("false glass cells (>10 cm from a pane)", str(report.get("false_glass_cells"))),
+        ("glass length found", "no glass" if report.get("glass_coverage") is None
+         else f"{100 * report['glass_coverage']:.0f} %"),
         ("wall time", f"{report['wall_s']:.1f} s"),
     ]
     rows += [(f"peak RSS {name}", f"{mb:.0f} MB") for name, mb in sorted(report.get("peak_rss_mb", {}).items())]

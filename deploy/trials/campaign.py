@@ -23,13 +23,14 @@ from typing import Any
 import yaml
 
 from deploy import strict_json
+from deploy.glass_report import read_glass_memory
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT
 from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
-from deploy.trials.stack import trials_stack
+from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
 from deploy.trials.starts import lower_bounds, reachable_starts
 from deploy.trials.summary import summarise, summary_reasons
 from shared.geometry import Pose2D
@@ -38,7 +39,7 @@ from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, Te
 from shared.names import topic_key
 from shared.node import ServiceError, ServiceUnavailable, call_service
 from shared.session import SessionSpec, open_session
-from shared.world import load_world
+from shared.world import World, load_world
 
 #: How long the harness keeps asking a service that does not answer (it may be restarting: ``--chaos``).
 SERVICE_PATIENCE_S = 60.0
@@ -66,7 +67,9 @@ def _sim_clock(session: Any, robot: str) -> float:
     return state.stamp.to_sec()
 
 
-def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: TrialOptions) -> tuple[TrialResult, RunRecord]:
+def _run_one(
+    session: Any, robot: str, index: int, start: Pose2D, options: TrialOptions, world: World, state_dir: Path
+) -> tuple[TrialResult, RunRecord]:
     wall_start = time.monotonic()
     # Full battery first: leaving the dock with the last trial's low charge would trigger docking at
     # the moment of the teleport, before this trial's start is even in place.
@@ -115,6 +118,11 @@ def _run_one(session: Any, robot: str, index: int, start: Pose2D, options: Trial
         wall_s=time.monotonic() - wall_start,
         sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
     )
+    # The planner writes its glass memory at most once a second: this is it within a second of the end.
+    glass = read_glass_memory(state_dir / robot / GLASS_MEMORY_FILE, world)
+    if glass is not None:
+        result.false_glass_cells = float(glass.false_glass_cells)
+        result.glass_coverage = glass.glass_coverage
     return result, record
 
 
@@ -168,7 +176,7 @@ def run_trials(
                     except queue.Empty:
                         return
                     try:
-                        result, record = _run_one(session, robot, index, start, options)
+                        result, record = _run_one(session, robot, index, start, options, world, run_dir / "state")
                     except (ServiceError, OSError) as exc:
                         with lock:
                             errors.append(f"trial {index} ({robot}): {exc}")

@@ -43,6 +43,9 @@ class TrialResult:
     lower_bound_s: float = math.nan
     wall_s: float = 0.0
     sim_s: float = 0.0
+    #: The planner's glass memory after the trial (see :mod:`deploy.glass_report`; NaN: none written yet).
+    false_glass_cells: float = math.nan
+    glass_coverage: float = math.nan
 
 
 @dataclass
@@ -67,9 +70,13 @@ class TrialsSummary:
     achieved_rtf: float = math.nan
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
     chaos: dict[str, Any] = field(default_factory=dict)
+    #: Glass memory against the world's panes, over every trial (see :mod:`deploy.glass_report`).
+    median_false_glass_cells: float = math.nan
+    p95_false_glass_cells: float = math.nan
+    median_glass_coverage: float = math.nan
 
     def headline(self) -> dict[str, Any]:
         keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
                 "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
-                "achieved_rtf")
+                "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage")
         return {k: getattr(self, k) for k in keys}

@@ -8,6 +8,9 @@ from typing import Any
 
 from deploy.trials.records import TrialOptions
 
+#: Each robot's planner keeps its glass memory in ``<state_dir>/<robot>/`` under this name.
+GLASS_MEMORY_FILE = "glass_memory.npz"
+
 
 def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_dir: Path | None = None) -> dict[str, Any]:
     """A stack file (as data) with one simulator for all robots and each robot's own services.
@@ -44,7 +47,7 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
             **common,
             **health("planner"),
             "command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
-                        *(["-p", f"glass_memory_file={state_dir / robot / 'glass_memory.npz'}"] if state_dir else [])],
+                        *(["-p", f"glass_memory_file={state_dir / robot / GLASS_MEMORY_FILE}"] if state_dir else [])],
             "depends_on": {"router": {"condition": "service_started"},
                            "map": {"condition": "service_completed_successfully"}},
         }

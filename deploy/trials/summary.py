@@ -25,6 +25,8 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
     """The summary of any set of trials: one world's, or a campaign's across worlds."""
     ok = [r for r in results if r.docked]
     med = lambda xs: statistics.median(xs) if xs else math.nan  # noqa: E731
+    false_glass = [r.false_glass_cells for r in results if math.isfinite(r.false_glass_cells)]
+    coverage = [r.glass_coverage for r in results if math.isfinite(r.glass_coverage)]
     bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
     return TrialsSummary(
         n=len(results),
@@ -41,6 +43,9 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
         sim_s=sum(r.sim_s for r in results if math.isfinite(r.sim_s)),
         controller=controller,
         world=world_name,
+        median_false_glass_cells=med(false_glass),
+        p95_false_glass_cells=_percentile(false_glass, 0.95),
+        median_glass_coverage=med(coverage),
     )
 
 
@@ -78,4 +83,9 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "lateral_error_m": "the contacts never touched",
         "yaw_error_rad": "the contacts never touched",
         "sim_s": "the trial never triggered docking",
+        "median_false_glass_cells": "no planner wrote its glass memory",
+        "p95_false_glass_cells": "no planner wrote its glass memory",
+        "false_glass_cells": "the planner had written no glass memory",
+        "median_glass_coverage": "the world has no glass, or no planner wrote its glass memory",
+        "glass_coverage": "the world has no glass, or the planner had written no glass memory",
     }

@@ -68,7 +68,7 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
     assert set(summary.headline()) == {
         "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
         "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
-        "achieved_rtf"}
+        "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage"}
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
 
 
