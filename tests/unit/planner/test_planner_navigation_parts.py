@@ -118,8 +118,8 @@ def test_only_new_obstacles_ahead_block_a_plan() -> None:
     costmap = LayeredCostmap(map_from_world(room), CostmapParams())
     plan = _straight_plan(costmap.grid())
     assert not plan.newly_blocked(costmap.grid(), 0, skip_m=0.15)
-    # A glass pane across the path, seen by the sonar from (1.0, 1.5) facing +x at 1.5 m.
-    costmap.update_with_range((1.0, 1.5, 0.0), 1.5, 0.5, 0.02, 3.0)
+    # A new obstacle across the path 1.5 m ahead of (1.0, 1.5), seen by the lidar.
+    costmap.update_with_scan((1.0, 1.5), np.array([[2.5, 1.5 + dy] for dy in np.arange(-0.2, 0.21, 0.05)]))
     assert plan.newly_blocked(costmap.grid(), 0, skip_m=0.15)
     # Once the robot is past it, it no longer counts.
     assert not plan.newly_blocked(costmap.grid(), 50, skip_m=0.15)
