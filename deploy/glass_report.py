@@ -32,20 +32,28 @@ class GlassReport:
     marked_cells: int
 
 
+def mark_centres(layer: np.ndarray, resolution_m: float, origin_xy: tuple[float, float]) -> np.ndarray:
+    """World ``(x, y)`` of the marked cells of a sonar layer (``(height, width)``, row ``iy`` column ``ix``)."""
+    iy, ix = np.nonzero(np.asarray(layer) == GLASS_MARK)
+    return np.stack([origin_xy[0] + (ix + 0.5) * resolution_m, origin_xy[1] + (iy + 0.5) * resolution_m], axis=1)
+
+
 def glass_report(
     layer: np.ndarray, resolution_m: float, origin_xy: tuple[float, float], world: World,
     tolerance_m: float = TOLERANCE_M,
 ) -> GlassReport:
-    """Compare a sonar layer (``(height, width)``, row ``iy`` column ``ix``) with ``world``'s glass."""
-    iy, ix = np.nonzero(np.asarray(layer) == GLASS_MARK)
-    marks = np.stack([origin_xy[0] + (ix + 0.5) * resolution_m, origin_xy[1] + (iy + 0.5) * resolution_m], axis=1)
+    """Compare a sonar layer with ``world``'s glass."""
+    marks = mark_centres(layer, resolution_m, origin_xy)
+    return glass_report_of_marks(marks, _distance_to_panes(marks, world) > tolerance_m, world, tolerance_m)
+
+
+def glass_report_of_marks(
+    marks: np.ndarray, false: np.ndarray, world: World, tolerance_m: float = TOLERANCE_M
+) -> GlassReport:
     panes = [(np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in world.glass]
+    false_cells = int(np.count_nonzero(false))
     if not panes:
-        return GlassReport(len(marks), math.nan, len(marks))
-    nearest = np.full(len(marks), np.inf)
-    for a, b in panes:
-        nearest = np.minimum(nearest, _distance_to_segment(marks, a, b))
-    false_cells = int(np.count_nonzero(nearest > tolerance_m))
+        return GlassReport(false_cells, math.nan, len(marks))
     found = total = 0
     for a, b in panes:
         samples = max(2, math.ceil(float(np.hypot(*(b - a))) * SAMPLES_PER_M))
@@ -59,6 +67,15 @@ def glass_report(
 
 def read_glass_memory(path: Path, world: World) -> GlassReport | None:
     """The report of a planner's glass memory file; None when there is none (yet) or it is unreadable."""
+    marks = read_glass_marks(path, world)
+    if marks is None:
+        return None
+    xy, false = marks
+    return glass_report_of_marks(xy, false, world)
+
+
+def read_glass_marks(path: Path, world: World) -> tuple[np.ndarray, np.ndarray] | None:
+    """The marks ``(N, 2)`` of a planner's glass memory file and which are false (``N`` booleans)."""
     try:
         with np.load(path, allow_pickle=False) as stored:
             layer = np.array(stored["sonar"])
@@ -66,7 +83,16 @@ def read_glass_memory(path: Path, world: World) -> GlassReport | None:
             origin = tuple(float(v) for v in stored["origin"][:2])
     except (OSError, KeyError, ValueError):
         return None
-    return glass_report(layer, resolution, (origin[0], origin[1]), world)
+    xy = mark_centres(layer, resolution, (origin[0], origin[1]))
+    return xy, _distance_to_panes(xy, world) > TOLERANCE_M
+
+
+def _distance_to_panes(points: np.ndarray, world: World) -> np.ndarray:
+    """Each point's distance to the nearest pane (inf without glass)."""
+    nearest = np.full(len(points), np.inf)
+    for a, b in world.glass:
+        nearest = np.minimum(nearest, _distance_to_segment(points, np.asarray(a, float), np.asarray(b, float)))
+    return nearest
 
 
 def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

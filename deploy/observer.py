@@ -41,6 +41,8 @@ class RunRecord:
     contact_at_charging: DockContact | None = None
     collisions: int = 0
     collision_kinds: list[str] = field(default_factory=list)
+    #: Where each collision happened (x, y), for the picture.
+    collision_points: list[tuple[float, float]] = field(default_factory=list)
     driven: list[tuple[float, float, float, float]] = field(default_factory=list)  # (t, x, y, yaw)
     plans: list[list[tuple[float, float]]] = field(default_factory=list)
     sonar_hits: list[tuple[float, float]] = field(default_factory=list)
@@ -155,6 +157,7 @@ class RunObserver:
         with self._changed:
             self._record.collisions += 1
             self._record.collision_kinds.append(msg.kind)
+            self._record.collision_points.append((msg.x, msg.y))
             self._changed.notify_all()
 
     def _on_truth(self, msg: PoseStamped) -> None:
@@ -177,11 +180,22 @@ class RunObserver:
         with self._lock:
             if self._truth is None or not self._armed:  # before arm(): maybe still where --start moves it from
                 return
-            sensor = self._truth.compose(ULTRASONIC_MOUNT)
+            # Where the robot was when the sonar listened, not where it is now the message has arrived.
+            sensor = self._truth_at(msg.header.stamp.to_sec()).compose(ULTRASONIC_MOUNT)
             hit = sensor.transform_point(msg.range, 0.0)
             hits = self._record.sonar_hits
             if not hits or math.dist(hits[-1], hit) > 0.02:
                 hits.append(hit)
+
+    def _truth_at(self, stamp_s: float) -> Pose2D:
+        """The ground-truth pose at (or just before) ``stamp_s`` among the recent samples (lock held)."""
+        driven = self._record.driven
+        for i in range(len(driven) - 1, max(-1, len(driven) - 200), -1):
+            t, x, y, yaw = driven[i]
+            if t <= stamp_s:
+                return Pose2D(x, y, yaw)
+        assert self._truth is not None
+        return self._truth
 
     # --- reading ----------------------------------------------------------------------------------------
 
@@ -190,7 +204,7 @@ class RunObserver:
             r = self._record
             contact = self._contact_at(r.charging_s) if r.charging_s is not None else None
             return RunRecord(
-                r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds),
+                r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds), list(r.collision_points),
                 list(r.driven), [list(p) for p in r.plans], list(r.sonar_hits), list(r.battery), r.sim_time_s,
                 r.last_charging,
             )

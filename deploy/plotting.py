@@ -33,6 +33,8 @@ DOCK_COLOR = "#1a9e3a"
 STAGING_COLOR = "#ff9900"
 PLAN_COLOR = "#d62728"
 SONAR_COLOR = "#e41a1c"
+GLASS_MEMORY_COLOR = "#1f5fa8"
+FALSE_GLASS_COLOR = "#ff00c8"
 BATTERY_COLOR = "#1f77b4"
 TRAJECTORY_CMAP = "viridis"
 
@@ -53,8 +55,11 @@ class RunPicture:
 
     ``trajectory``: ``(N, 2)`` driven positions, with ``trajectory_times_s`` (``N``) to colour them by time
     (else by progress along the run); ``planned_paths``: each ``(K, 2)`` in the map frame, in the order
-    planned: the first is drawn as the planned path, later replans faintly; ``sonar_hits``: ``(M, 2)``
-    points on the sonar's axis at the measured range (the echo may come from anywhere in its cone);
+    planned: every plan is drawn faintly, the last (the one the robot finished on) bold; ``sonar_hits``:
+    ``(M, 2)`` points on the sonar's axis at the measured range, placed with the pose the robot had when
+    the reading was taken (the echo may come from anywhere in its cone); ``collisions``: ``(C, 2)``
+    where the robot touched something; ``glass_marks`` and ``false_glass_marks``: the planner's glass
+    memory at the end, the marks near a real pane and those more than 10 cm from every pane;
     ``battery``: rows ``(t_s, percentage 0..1)``.
     """
 
@@ -64,6 +69,9 @@ class RunPicture:
     trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     trajectory_times_s: np.ndarray | None = None
     sonar_hits: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    collisions: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    glass_marks: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    false_glass_marks: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     battery: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     title: str = ""
     staging_offset_m: float = DEFAULT_STAGING_OFFSET_M
@@ -104,12 +112,20 @@ def _draw_map(ax: plt.Axes, image: MapImage) -> None:
 
 
 def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
-    for path in picture.planned_paths[1:]:
+    for path in picture.planned_paths[:-1]:
         if len(path) >= 2:
             ax.plot(path[:, 0], path[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=1, alpha=0.25, zorder=6)
-    if picture.planned_paths and len(picture.planned_paths[0]) >= 2:
-        first = picture.planned_paths[0]
-        ax.plot(first[:, 0], first[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=2, label="planned path", zorder=7)
+    if picture.planned_paths and len(picture.planned_paths[-1]) >= 2:
+        last = picture.planned_paths[-1]
+        label = "last plan" if len(picture.planned_paths) > 1 else "planned path"
+        ax.plot(last[:, 0], last[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=2, label=label, zorder=7)
+    for marks, colour, label in ((picture.glass_marks, GLASS_MEMORY_COLOR, "glass memory"),
+                                 (picture.false_glass_marks, FALSE_GLASS_COLOR, "false glass")):
+        if len(marks):
+            ax.scatter(marks[:, 0], marks[:, 1], s=9, marker="s", color=colour, alpha=0.7, label=label, zorder=5)
+    if len(picture.collisions):
+        ax.scatter(picture.collisions[:, 0], picture.collisions[:, 1], s=90, marker="X", color="black",
+                   label="collision", zorder=10)
     hits = picture.sonar_hits
     if len(hits):
         ax.scatter(hits[:, 0], hits[:, 1], s=4, color=SONAR_COLOR, alpha=0.5, label="sonar hits", zorder=6)
@@ -187,13 +203,17 @@ def plot_run(
     plans: Sequence[Sequence[Sequence[float]] | np.ndarray] = (),
     sonar_hits: Sequence[Sequence[float]] | np.ndarray = (),
     battery: Sequence[Sequence[float]] | np.ndarray = (),
+    collisions: Sequence[Sequence[float]] | np.ndarray = (),
+    glass_marks: Sequence[Sequence[float]] | np.ndarray = (),
+    false_glass_marks: Sequence[Sequence[float]] | np.ndarray = (),
     title: str = "",
     map_image: MapImage | None = None,
     dpi: int = 120,
 ) -> Path:
     """Draw a run from plain lists: ``driven`` ``(x, y)`` points (``driven_times_s`` to colour them by time),
-    ``plans`` as lists of ``(x, y)`` (the first drawn as the planned path), ``sonar_hits`` ``(x, y)``,
-    ``battery`` ``(t_s, percentage 0..1)``. Returns the PNG's path.
+    ``plans`` as lists of ``(x, y)`` in planning order (the last bold), ``sonar_hits``, ``collisions``,
+    ``glass_marks`` and ``false_glass_marks`` ``(x, y)``, ``battery`` ``(t_s, percentage 0..1)``.
+    Returns the PNG's path.
     """
     picture = RunPicture(
         world=world,
@@ -202,6 +222,9 @@ def plot_run(
         trajectory=_points(driven, 2),
         trajectory_times_s=None if driven_times_s is None else np.asarray(driven_times_s, dtype=np.float64),
         sonar_hits=_points(sonar_hits, 2),
+        collisions=_points(collisions, 2),
+        glass_marks=_points(glass_marks, 2),
+        false_glass_marks=_points(false_glass_marks, 2),
         battery=_points(battery, 2),
         title=title,
     )
