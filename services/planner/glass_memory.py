@@ -25,6 +25,9 @@ from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.grid_frame import GridFrame
 from services.planner.range_sensor_model import RangeSensorModel, reading_evidence
 
+#: Evidence above this (log-odds; P = 0.55) and below the mark threshold is suspected glass.
+SUSPECTED_LOG_ODDS = 0.2
+
 
 class GlassMemory:
     """The sonar's evidence on one grid, and the glass it implies."""
@@ -160,6 +163,14 @@ class GlassMemory:
         self._seen[...] = layer != NO_INFORMATION
         self._log_odds[...] = 0.0
         self._log_odds[marked] = min(self.model.mark_log_odds + 0.5, self.model.max_log_odds)
+
+    def suspected_cells_xy(self) -> np.ndarray:
+        """Centres ``(N, 2)`` of cells with evidence of glass below the mark threshold: glass the sonar
+        has heard but not confirmed (the robot slows near them rather than stopping)."""
+        model = self.model
+        suspected = (self._log_odds > SUSPECTED_LOG_ODDS) & (self._log_odds < model.mark_log_odds)
+        iy, ix = np.nonzero(suspected)
+        return self.frame.cells_to_world(np.stack([ix, iy], axis=1))
 
     def glass_mask(self) -> np.ndarray:
         """Boolean ``(height, width)``: marked by the sonar, or unlooked-at within the suspicion radius."""

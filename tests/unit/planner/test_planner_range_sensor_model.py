@@ -91,3 +91,31 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
     assert final_false <= 2, f"{final_false} cells marked more than 10 cm in front of the pane"
     assert final_false < most_false, "looks from further along should clear the early false marks"
     assert _coverage(memory, pane) >= 0.6, f"only {_coverage(memory, pane):.0%} of the pane is marked"
+
+
+def test_glass_heard_but_not_confirmed_slows_the_robot_near_it() -> None:
+    import logging  # noqa: PLC0415
+
+    from services.planner.costmap_updater import CostmapUpdater  # noqa: PLC0415
+    from services.planner.occupancy_map import OCC_FREE, OccupancyMap  # noqa: PLC0415
+    from services.planner.params import Params  # noqa: PLC0415
+    from shared.geometry import Pose2D  # noqa: PLC0415
+    from shared.pose_tracking import PoseTrack  # noqa: PLC0415
+
+    params = Params.model_validate({"glass_slowdown_radius_m": 0.8, "glass_slowdown_min_speed_mps": 0.1})
+    layers = CostmapUpdater(params, PoseTrack(), logging.getLogger("test"))
+    layers.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    assert layers.glass is not None
+    assert layers.glass_speed_limit_mps(Pose2D(2.0, 2.0, 0.0)) is None  # nothing heard yet
+    # An echo at 1 m: the arc's middle is marked, its flanks (weaker evidence) are only suspected.
+    layers.glass.add_reading((1.0, 2.0, 0.0), 1.0, 0.5, 0.02, 3.0)
+    layers.apply_glass()
+    suspected = layers.glass.suspected_cells_xy()
+    assert len(suspected) > 0
+    marked = layers.glass.sonar_layer == 254
+    ix, iy = layers.glass.frame.world_to_cells(suspected).T
+    assert not marked[iy, ix].any()
+    far = layers.glass_speed_limit_mps(Pose2D(0.5, 0.5, 0.0))
+    near = layers.glass_speed_limit_mps(Pose2D(1.6, 2.0, 0.0))
+    assert far is None
+    assert near is not None and 0.1 <= near < params.max_linear_vel_mps
