@@ -281,7 +281,7 @@ class LayeredCostmap:
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
         """Forget what the sensors said within ``radius_m`` of a point (nav2 ``ClearCostmapAroundRobot``)."""
-        inside = self._cells_within(xy, radius_m)
+        inside = self._frame.cells_within(xy, radius_m)
         self._set_cells(self._obstacle, inside, NO_INFORMATION)
 
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
@@ -292,7 +292,7 @@ class LayeredCostmap:
         corners = np.array(
             [[x - reach, y - reach], [x + reach, y - reach], [x - reach, y + reach], [x + reach, y + reach]]
         )
-        cells = self._cells_around(corners)
+        cells = self._frame.cells_around(corners)
         if len(cells) == 0:
             return
         centres = self._frame.cells_to_world(cells)
@@ -318,24 +318,6 @@ class LayeredCostmap:
             costs.flags.writeable = False
             self._cached = CostGrid(self._frame, costs)
         return self._cached
-
-    def _cells_around(self, points_xy: np.ndarray) -> np.ndarray:
-        """On-grid cells ``(N, 2)`` of the box bounding some world points, one cell of margin."""
-        cells = self._frame.world_to_cells(points_xy)
-        lo = np.maximum(cells.min(axis=0) - 1, 0)
-        hi = np.minimum(cells.max(axis=0) + 1, [self._frame.width - 1, self._frame.height - 1])
-        if np.any(hi < lo):
-            return np.zeros((0, 2), dtype=np.int64)
-        iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
-        return np.stack([ix.ravel(), iy.ravel()], axis=1)
-
-    def _cells_within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
-        """On-grid cells ``(N, 2)`` whose centres lie within ``radius_m`` of a point."""
-        x, y = xy
-        box = np.array([[x - radius_m, y - radius_m], [x + radius_m, y + radius_m]])
-        cells = self._cells_around(box)
-        centres = self._frame.cells_to_world(cells)
-        return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
 
     def _set_cells(self, layer: np.ndarray, cells: np.ndarray, value: int) -> None:
         cells = np.asarray(cells).reshape(-1, 2)

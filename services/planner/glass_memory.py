@@ -91,7 +91,7 @@ class GlassMemory:
         outer = reach_m + band_m
         arc = syaw + np.linspace(-half_fov, half_fov, 9)
         span = np.concatenate([[[sx, sy]], np.stack([sx + outer * np.cos(arc), sy + outer * np.sin(arc)], 1)])
-        cells = self._cells_around(span)
+        cells = self.frame.cells_around(span)
         if len(cells) == 0:
             return
         centres = self.frame.cells_to_world(cells)
@@ -118,7 +118,7 @@ class GlassMemory:
         """Where the robot stands there is no glass."""
         x, y, yaw = pose
         reach = self.params.circumscribed_radius_m + self.frame.resolution_m
-        cells = self._cells_around(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
+        cells = self.frame.cells_around(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
         if len(cells) == 0:
             return
         centres = self.frame.cells_to_world(cells)
@@ -141,7 +141,7 @@ class GlassMemory:
         """
         x, y, _ = pose
         reach = self.params.circumscribed_radius_m + 1.5 * self.frame.resolution_m
-        inside = self._cells_within((x, y), reach)
+        inside = self.frame.cells_within((x, y), reach)
         self._seen[inside[:, 1], inside[:, 0]] = True
 
     def clear(self) -> None:
@@ -150,7 +150,7 @@ class GlassMemory:
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
         """Forget evidence and looks within ``radius_m`` of a point; glass found farther away stays known."""
-        inside = self._cells_within(xy, radius_m)
+        inside = self.frame.cells_within(xy, radius_m)
         self._log_odds[inside[:, 1], inside[:, 0]] = 0.0
         self._seen[inside[:, 1], inside[:, 0]] = False
 
@@ -180,22 +180,3 @@ class GlassMemory:
         radius_cells = self.suspicion_radius_m / self.frame.resolution_m
         near = squared_distance_to_marks(marks, radius_cells) <= radius_cells * radius_cells
         return marks | (near & ~self._seen)
-
-    # --- cells ----------------------------------------------------------------------------------
-
-    def _cells_around(self, points_xy: np.ndarray) -> np.ndarray:
-        """On-grid cells ``(N, 2)`` of the box bounding some world points, one cell of margin."""
-        frame = self.frame
-        cells = frame.world_to_cells(points_xy)
-        lo = np.maximum(cells.min(axis=0) - 1, 0)
-        hi = np.minimum(cells.max(axis=0) + 1, [frame.width - 1, frame.height - 1])
-        if np.any(hi < lo):
-            return np.zeros((0, 2), dtype=np.int64)
-        iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
-        return np.stack([ix.ravel(), iy.ravel()], axis=1)
-
-    def _cells_within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
-        x, y = xy
-        cells = self._cells_around(np.array([[x - radius_m, y - radius_m], [x + radius_m, y + radius_m]]))
-        centres = self.frame.cells_to_world(cells)
-        return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
