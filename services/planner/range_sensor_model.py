@@ -7,7 +7,7 @@ marked too. This model follows Nav2's RangeSensorLayer (after Thrun et al., *Pro
 ch. 6, and the sonar model of Elfes, 1989): each reading adds log-odds evidence per cell,
 
 - occupied evidence in the band ``|d - r| <= band`` around the echo's range, strongest on the beam's axis
-  and falling off with the angle from it (``1 - (theta / half_fov)^2``) and across the band;
+  and falling off with the angle from it (``1 - (theta / half_fov)^n``) and in the band's outer half;
 - free evidence inside the measured range (the sonar looked through those cells), also weighted by angle;
 - nothing beyond the echo (the sonar cannot see behind what it heard).
 
@@ -74,10 +74,17 @@ class RangeSensorModel:
         return log_odds(self.clear_threshold)
 
 
+#: The angular falloff's exponent: ``1 - (theta / half_fov)^n``. Nav2 uses 2; a flatter top (8) lets one
+#: echo mark 90 % of the arc's width, as a pane straight ahead fills it, so a pane's end is marked the first
+#: time it is heard (with 2, the robot once reached the end of a pane before its flank was marked); the
+#: falloff still leaves the cone's very edge, where oblique echoes come from, to accumulated evidence.
+ANGULAR_FALLOFF_EXPONENT = 8
+
+
 def angular_weight(bearing_rad: np.ndarray, half_fov_rad: float) -> np.ndarray:
     """How much a reading says about a cell at ``bearing_rad`` off the axis: 1 on it, 0 at the cone's edge."""
     ratio = np.abs(np.asarray(bearing_rad, dtype=float)) / half_fov_rad
-    return np.where(ratio < 1.0, 1.0 - ratio * ratio, 0.0)
+    return np.where(ratio < 1.0, 1.0 - ratio**ANGULAR_FALLOFF_EXPONENT, 0.0)
 
 
 def reading_evidence(
