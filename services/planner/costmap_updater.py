@@ -75,8 +75,6 @@ class CostmapUpdater:
         self._pending_scan: LaserScan | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
-        #: Cells of suspected glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
-        self._suspected_xy: np.ndarray | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
 
@@ -107,24 +105,6 @@ class CostmapUpdater:
 
     def add_mounts(self, msg: TFMessage) -> None:
         self._mounts.update(msg)
-
-    def glass_speed_limit_mps(self, pose: Pose2D | None) -> float | None:
-        """The speed allowed near glass the sonar suspects but has not confirmed (Nav2's regulated pure
-        pursuit slows near obstacles the same way): the top speed times the distance to the nearest such
-        evidence over ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when
-        nothing suspected is that close."""
-        p = self._params
-        if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
-            return None
-        if self._suspected_xy is None:
-            self._suspected_xy = self.glass.suspected_cells_xy()
-        cells = self._suspected_xy
-        if len(cells) == 0:
-            return None
-        distance_m = float(np.min(np.hypot(cells[:, 0] - pose.x, cells[:, 1] - pose.y)))
-        if distance_m >= p.glass_slowdown_radius_m:
-            return None
-        return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)
 
     def grid(self) -> CostGrid:
         """The inflated cost grid the planner and the follower read (a snapshot, cached between updates)."""
@@ -168,7 +148,6 @@ class CostmapUpdater:
 
     def apply_glass(self) -> None:
         """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
-        self._suspected_xy = None
         if self.costmap is None or self._base_map is None or self.glass is None:
             return
         if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
