@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from deploy import strict_json
-from deploy.glass_report import read_glass_marks, read_glass_memory
+from deploy.glass_report import GlassMarks, read_glass_marks
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
@@ -184,24 +184,23 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
             log(bound_reason)
     report = build_report(record, options, world, wall_s, bound_s)
     report.lower_bound_s_reason = "" if math.isfinite(bound_s) else bound_reason
-    glass = read_glass_memory(run_dir / "glass_memory.npz", world)
+    glass = read_glass_marks(run_dir / "glass_memory.npz", world)
     if glass is not None:
-        report.false_glass_cells, report.glass_coverage = float(glass.false_glass_cells), glass.glass_coverage
+        counted = glass.report()
+        report.false_glass_cells, report.glass_coverage = float(counted.false_glass_cells), counted.glass_coverage
     report.run_dir = str(run_dir)
     report.peak_rss_mb = dict(sampler.peak_mb)
     (run_dir / "report.json").write_text(strict_json.dumps(report.as_dict(), indent=2) + "\n")
-    _plot(world, record, run_dir / "trajectory.png", log, run_dir / "glass_memory.npz")
+    _plot(world, record, run_dir / "trajectory.png", log, glass)
     return report
 
 
-def _plot(world: World, record: RunRecord, path: Path, log: Any, glass_memory: Path | None = None) -> None:
+def _plot(world: World, record: RunRecord, path: Path, log: Any, glass: GlassMarks | None = None) -> None:
     try:
         from deploy.plotting import plot_run  # noqa: PLC0415 - matplotlib is slow to import
     except ImportError:
         log("plotting is not available; no trajectory picture")
         return
-    glass = read_glass_marks(glass_memory, world) if glass_memory is not None else None
-    glass_xy, false_glass = glass if glass is not None else (None, None)
     plot_run(
         world,
         path,
@@ -209,7 +208,7 @@ def _plot(world: World, record: RunRecord, path: Path, log: Any, glass_memory: P
         plans=record.plans,
         sonar_hits=record.sonar_hits,
         collisions=record.collision_points,
-        glass_marks=glass_xy[~false_glass] if glass_xy is not None and false_glass is not None else (),
-        false_glass_marks=glass_xy[false_glass] if glass_xy is not None and false_glass is not None else (),
+        glass_marks=glass.true_xy if glass is not None else (),
+        false_glass_marks=glass.false_xy if glass is not None else (),
         battery=record.battery,
     )

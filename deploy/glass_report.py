@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shared.geometry import distances_to_segment
 from shared.world import World
 
 #: The sonar layer's value for a cell marked as glass.
@@ -32,10 +33,54 @@ class GlassReport:
     marked_cells: int
 
 
-def mark_centres(layer: np.ndarray, resolution_m: float, origin_xy: tuple[float, float]) -> np.ndarray:
-    """World ``(x, y)`` of the marked cells of a sonar layer (``(height, width)``, row ``iy`` column ``ix``)."""
+@dataclass(frozen=True)
+class GlassMarks:
+    """The marked cells of a glass memory, in the world, judged against the world's panes."""
+
+    world: World
+    #: ``(N, 2)`` centres of the marked cells.
+    xy: np.ndarray
+    #: ``N`` booleans: the mark lies more than the tolerance from every pane.
+    false: np.ndarray
+    tolerance_m: float = TOLERANCE_M
+
+    @property
+    def true_xy(self) -> np.ndarray:
+        return self.xy[~self.false]
+
+    @property
+    def false_xy(self) -> np.ndarray:
+        return self.xy[self.false]
+
+    def report(self) -> GlassReport:
+        marks = self.xy
+        panes = [(np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in self.world.glass]
+        false_cells = int(np.count_nonzero(self.false))
+        if not panes:
+            return GlassReport(false_cells, math.nan, len(marks))
+        found = total = 0
+        for a, b in panes:
+            samples = max(2, math.ceil(float(np.hypot(*(b - a))) * SAMPLES_PER_M))
+            points = a + np.linspace(0.0, 1.0, samples)[:, None] * (b - a)
+            total += samples
+            if len(marks):
+                gaps = np.min(np.hypot(points[:, None, 0] - marks[None, :, 0], points[:, None, 1] - marks[None, :, 1]),
+                              axis=1)
+                found += int(np.count_nonzero(gaps <= self.tolerance_m))
+        return GlassReport(false_cells, found / total, len(marks))
+
+
+def glass_marks(
+    layer: np.ndarray, resolution_m: float, origin_xy: tuple[float, float], world: World,
+    tolerance_m: float = TOLERANCE_M,
+) -> GlassMarks:
+    """The marks of a sonar layer (``(height, width)``, row ``iy`` column ``ix``) against ``world``'s glass."""
     iy, ix = np.nonzero(np.asarray(layer) == GLASS_MARK)
-    return np.stack([origin_xy[0] + (ix + 0.5) * resolution_m, origin_xy[1] + (iy + 0.5) * resolution_m], axis=1)
+    xy = np.stack([origin_xy[0] + (ix + 0.5) * resolution_m, origin_xy[1] + (iy + 0.5) * resolution_m], axis=1)
+    nearest = np.full(len(xy), np.inf)
+    for a, b in world.glass:
+        nearest = np.minimum(nearest, distances_to_segment(xy, np.asarray(a), np.asarray(b)))
+    return GlassMarks(world, xy, nearest > tolerance_m, tolerance_m)
 
 
 def glass_report(
@@ -43,39 +88,11 @@ def glass_report(
     tolerance_m: float = TOLERANCE_M,
 ) -> GlassReport:
     """Compare a sonar layer with ``world``'s glass."""
-    marks = mark_centres(layer, resolution_m, origin_xy)
-    return glass_report_of_marks(marks, _distance_to_panes(marks, world) > tolerance_m, world, tolerance_m)
+    return glass_marks(layer, resolution_m, origin_xy, world, tolerance_m).report()
 
 
-def glass_report_of_marks(
-    marks: np.ndarray, false: np.ndarray, world: World, tolerance_m: float = TOLERANCE_M
-) -> GlassReport:
-    panes = [(np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in world.glass]
-    false_cells = int(np.count_nonzero(false))
-    if not panes:
-        return GlassReport(false_cells, math.nan, len(marks))
-    found = total = 0
-    for a, b in panes:
-        samples = max(2, math.ceil(float(np.hypot(*(b - a))) * SAMPLES_PER_M))
-        points = a + np.linspace(0.0, 1.0, samples)[:, None] * (b - a)
-        total += samples
-        if len(marks):
-            gaps = np.min(np.hypot(points[:, None, 0] - marks[None, :, 0], points[:, None, 1] - marks[None, :, 1]), axis=1)
-            found += int(np.count_nonzero(gaps <= tolerance_m))
-    return GlassReport(false_cells, found / total, len(marks))
-
-
-def read_glass_memory(path: Path, world: World) -> GlassReport | None:
-    """The report of a planner's glass memory file; None when there is none (yet) or it is unreadable."""
-    marks = read_glass_marks(path, world)
-    if marks is None:
-        return None
-    xy, false = marks
-    return glass_report_of_marks(xy, false, world)
-
-
-def read_glass_marks(path: Path, world: World) -> tuple[np.ndarray, np.ndarray] | None:
-    """The marks ``(N, 2)`` of a planner's glass memory file and which are false (``N`` booleans)."""
+def read_glass_marks(path: Path, world: World) -> GlassMarks | None:
+    """The marks of a planner's glass memory file; None when there is none (yet) or it is unreadable."""
     try:
         with np.load(path, allow_pickle=False) as stored:
             layer = np.array(stored["sonar"])
@@ -83,21 +100,4 @@ def read_glass_marks(path: Path, world: World) -> tuple[np.ndarray, np.ndarray] 
             origin = tuple(float(v) for v in stored["origin"][:2])
     except (OSError, KeyError, ValueError):
         return None
-    xy = mark_centres(layer, resolution, (origin[0], origin[1]))
-    return xy, _distance_to_panes(xy, world) > TOLERANCE_M
-
-
-def _distance_to_panes(points: np.ndarray, world: World) -> np.ndarray:
-    """Each point's distance to the nearest pane (inf without glass)."""
-    nearest = np.full(len(points), np.inf)
-    for a, b in world.glass:
-        nearest = np.minimum(nearest, _distance_to_segment(points, np.asarray(a, float), np.asarray(b, float)))
-    return nearest
-
-
-def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    ab = b - a
-    length2 = float(ab @ ab)
-    t = np.zeros(len(points)) if length2 == 0 else np.clip(((points - a) @ ab) / length2, 0.0, 1.0)
-    closest = a + t[:, None] * ab
-    return np.hypot(points[:, 0] - closest[:, 0], points[:, 1] - closest[:, 1])
+    return glass_marks(layer, resolution, (origin[0], origin[1]), world)

@@ -63,6 +63,17 @@ def quaternion_multiply(
     )
 
 
+def distances_to_segment(points_xy: np.ndarray, a_xy: np.ndarray, b_xy: np.ndarray) -> np.ndarray:
+    """Distance from each of ``(N, 2)`` points to the segment from ``a_xy`` to ``b_xy``."""
+    points = np.asarray(points_xy, dtype=float).reshape(-1, 2)
+    a, b = np.asarray(a_xy, dtype=float), np.asarray(b_xy, dtype=float)
+    ab = b - a
+    length2 = float(ab @ ab)
+    t = np.zeros(len(points)) if length2 == 0 else np.clip(((points - a) @ ab) / length2, 0.0, 1.0)
+    closest = a + t[:, None] * ab
+    return np.hypot(points[:, 0] - closest[:, 0], points[:, 1] - closest[:, 1])
+
+
 @dataclass(frozen=True, slots=True)
 class Pose2D:
     """A rigid transform in the plane: the pose of a child frame in its parent frame."""

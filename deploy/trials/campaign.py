@@ -23,7 +23,7 @@ from typing import Any
 import yaml
 
 from deploy import strict_json
-from deploy.glass_report import read_glass_memory
+from deploy.glass_report import read_glass_marks
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
@@ -119,10 +119,10 @@ def _run_one(
         sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
-    glass = read_glass_memory(state_dir / robot / GLASS_MEMORY_FILE, world)
+    glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)
     if glass is not None:
-        result.false_glass_cells = float(glass.false_glass_cells)
-        result.glass_coverage = glass.glass_coverage
+        counted = glass.report()
+        result.false_glass_cells, result.glass_coverage = float(counted.false_glass_cells), counted.glass_coverage
     return result, record
 
 

@@ -7,8 +7,10 @@ import math
 import random
 from pathlib import Path
 
+import numpy as np
+
 from deploy.service_tools import run_tool
-from shared.geometry import Pose2D
+from shared.geometry import Pose2D, distances_to_segment
 from shared.world import World
 
 #: The robot's circumscribed radius plus a margin: starts this far from every surface can always turn.
@@ -54,11 +56,7 @@ def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[
 
 
 def _distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]) -> float:
-    (ax, ay), (bx, by) = segment
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
-    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / length2))
-    return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy)
+    return float(distances_to_segment(np.array([p]), np.array(segment[0]), np.array(segment[1]))[0])
 
 
 def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[float]:

@@ -112,7 +112,6 @@ class DockingService:
         self._sonar_range_m = math.inf
         self._sonar_received_s = -math.inf
         self._mounts = SensorMounts()
-        self._lidar_mount: Pose2D | None = None
         #: The map -> odom correction the running docking run's detections were last moved to.
         self._applied_correction: Pose2D | None = None
         self._last_now_s = -math.inf
@@ -192,9 +191,10 @@ class DockingService:
         task.add_detection(msg.pose.to_pose2d(), robot_at_stamp, stamp_s)
 
     def _on_scan(self, msg: LaserScan) -> None:
-        if self._lidar_mount is None:
+        lidar_mount = self._mounts.get(topics.LIDAR_FRAME)
+        if lidar_mount is None:
             return
-        self._scan_points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, self._lidar_mount)
+        self._scan_points = scan_points(msg.ranges, msg.angle_min, msg.angle_increment, lidar_mount)
         self._scan_received_s = self.node.now()
 
     def _on_sonar(self, msg: Range) -> None:
@@ -202,8 +202,7 @@ class DockingService:
         self._sonar_received_s = self.node.now()
 
     def _on_tf_static(self, msg: TFMessage) -> None:
-        if topics.LIDAR_FRAME in self._mounts.update(msg):
-            self._lidar_mount = self._mounts.get(topics.LIDAR_FRAME)
+        self._mounts.update(msg)
 
     def _follow_correction(self) -> None:
         """Move the detected dock with every change of the localiser's map -> odom correction, so that it
