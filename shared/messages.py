@@ -24,6 +24,7 @@ from shared.schema import (
     Int32,
     Message,
     UInt8,
+    UInt8Array,
     UInt32,
     message,
 )
@@ -326,6 +327,45 @@ class BatteryState(Message):
     serial_number: str = ""
 
 
+@message("sensor_msgs/msg/Image")
+class Image(Message):
+    """An uncompressed image: ``height`` rows of ``step`` bytes (``mono8``: one byte a pixel; ``rgb8``: three)."""
+
+    header: Header = field(default_factory=Header)
+    height: UInt32 = 0
+    width: UInt32 = 0
+    encoding: str = ""
+    is_bigendian: UInt8 = 0
+    step: UInt32 = 0
+    data: UInt8Array = field(default_factory=lambda: np.zeros(0, dtype=np.uint8))
+
+
+@message("sensor_msgs/msg/RegionOfInterest")
+class RegionOfInterest(Message):
+    x_offset: UInt32 = 0
+    y_offset: UInt32 = 0
+    height: UInt32 = 0
+    width: UInt32 = 0
+    do_rectify: bool = False
+
+
+@message("sensor_msgs/msg/CameraInfo")
+class CameraInfo(Message):
+    """A pinhole camera's calibration, as ROS 2 gives it: ``k`` (3x3), ``r`` (3x3), ``p`` (3x4) row-major."""
+
+    header: Header = field(default_factory=Header)
+    height: UInt32 = 0
+    width: UInt32 = 0
+    distortion_model: str = ""
+    d: Float64Array = field(default_factory=_zeros)
+    k: Float64Array = field(default_factory=lambda: np.zeros(9))
+    r: Float64Array = field(default_factory=lambda: np.zeros(9))
+    p: Float64Array = field(default_factory=lambda: np.zeros(12))
+    binning_x: UInt32 = 0
+    binning_y: UInt32 = 0
+    roi: RegionOfInterest = field(default_factory=RegionOfInterest)
+
+
 # --- zendock's own -------------------------------------------------------------------------------
 
 
@@ -358,13 +398,30 @@ class CollisionEvent(Message):
     y: float = 0.0
 
 
+@message("zendock_msgs/msg/DockDetection")
+class DockDetection(Message):
+    """A dock found by its marker: its pose (the docked base_link pose) in ``header.frame_id``, and how well.
+
+    ``reprojection_error_px`` is the RMS distance between the marker's detected corners and the corners of
+    the chosen pose reprojected; ``marker_range_m`` is the camera-to-marker distance.
+    """
+
+    header: Header = field(default_factory=Header)
+    dock_id: str = ""
+    marker_id: UInt32 = 0
+    pose: Pose = field(default_factory=Pose)
+    reprojection_error_px: float = 0.0
+    marker_range_m: float = 0.0
+
+
 def now_header(frame_id: str, seconds: float | None = None) -> Header:
     """A header stamped ``seconds`` (wall clock when omitted)."""
     return Header.at(_time.time() if seconds is None else seconds, frame_id)
 
 
 __all__ = [
-    "BatteryState", "Bool", "Clock", "CollisionEvent", "DockContact", "Duration", "Float64",
+    "BatteryState", "Bool", "CameraInfo", "Clock", "CollisionEvent", "DockContact", "DockDetection", "Duration",
+    "Float64", "Image", "RegionOfInterest",
     "Float64MultiArray", "Header", "LaserScan", "MapMetaData", "MultiArrayDimension", "MultiArrayLayout",
     "OccupancyGrid", "Odometry", "Path", "Point", "Pose", "PoseStamped", "PoseWithCovariance", "Quaternion",
     "Range", "String", "TFMessage", "Time", "Transform", "TransformStamped", "Twist", "TwistWithCovariance",

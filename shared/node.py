@@ -311,6 +311,12 @@ class Publisher(Generic[M]):
         with self._lock:  # the put order is the sequence order, whichever threads publish
             self._put(payload, attachment=sequence_attachment(next(self._seq), self._gid))
 
+    def has_subscribers(self) -> bool:
+        """Whether any subscriber matches this key now (Zenoh's matching status), so costly messages such as
+        images are made only while someone listens."""
+        status: Any = self._publisher.matching_status  # a MatchingStatus (the stub says bool)
+        return bool(status.matching)
+
     def undeclare(self) -> None:
         self._token.undeclare()
         self._publisher.undeclare()

@@ -9,6 +9,10 @@ The schema (``deploy/worlds/*.yaml``)::
     boxes: [{pose: [x, y, yaw], size: [w, d]}, ...]
     docks: [{id: home, pose: [x, y, yaw], type: charger}, ...]
     robot: {start: [x, y, yaw]}
+    aruco_dictionary: DICT_4X4_50             # the docks' marker family (optional)
+
+A dock may name its ArUco marker: ``marker_id`` (default: the dock's index in ``docks``) and
+``marker_size_m`` (the printed square's side, default 0.12 m); see :func:`dock_markers`.
 
 A dock's pose is the robot's base_link pose when docked with contacts mated; the dock body and its
 charging plate stand directly ahead of it (see :data:`ROBOT_FRONT_M` and :class:`DockGeometry`).
@@ -19,6 +23,8 @@ from __future__ import annotations
 
 import logging
 import math
+import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -80,6 +86,9 @@ class Dock(_Lenient):
     id: str = Field(min_length=1)
     pose: tuple[float, float, float]
     type: str = "charger"
+    #: The ArUco marker on the dock's face: its id in the world's dictionary (None: the dock's index).
+    marker_id: int | None = Field(None, ge=0, le=999)
+    marker_size_m: float = Field(0.12, gt=0.02, le=0.30)
 
     @field_validator("pose")
     @classmethod
@@ -110,8 +119,9 @@ class DockGeometry(BaseModel):
     model_config = ConfigDict(frozen=True)
     body_depth_m: float = 0.20
     body_width_m: float = 0.40
-    #: The marker (ARTag) is on the body's face, centred, facing the robot.
+    #: The marker (ARTag) is on the body's face, centred, facing the robot, its centre this high (at least).
     marker_height_m: float = 0.10
+    body_height_m: float = 0.30
 
     def body_box(self, dock: Dock) -> Box:
         centre = dock.pose2d.compose(Pose2D(ROBOT_FRONT_M + self.body_depth_m / 2, 0.0, 0.0))
@@ -133,6 +143,14 @@ class World(_Lenient):
     boxes: list[Box] = Field(default_factory=list)
     docks: list[Dock] = Field(default_factory=list)
     robot: RobotSpec = Field(default_factory=RobotSpec)
+    aruco_dictionary: str = "DICT_4X4_50"
+
+    @field_validator("aruco_dictionary")
+    @classmethod
+    def _dictionary_name(cls, v: str) -> str:
+        if not re.fullmatch(r"DICT_(4X4|5X5|6X6|7X7)_(50|100|250|1000)", v):
+            raise ValueError(f"aruco_dictionary must be one of DICT_4X4_50 ... DICT_7X7_1000, got {v!r}")
+        return v
 
     @field_validator("bounds")
     @classmethod
@@ -201,6 +219,37 @@ class World(_Lenient):
             found += [f"docks.{i}.{k}" for k in (dock.model_extra or {})]
         found += [f"robot.{k}" for k in (self.robot.model_extra or {})]
         return found
+
+
+@dataclass(frozen=True, slots=True)
+class DockMarker:
+    """The ArUco marker printed on a dock's face, where perception and the camera agree it is.
+
+    ``pose`` is the marker's centre on the floor plane with its normal (x axis) pointing out of the dock,
+    towards an approaching robot; the centre stands ``centre_height_m`` above the floor.
+    """
+
+    dock_id: str
+    marker_id: int
+    size_m: float
+    pose: Pose2D
+    centre_height_m: float
+    dictionary: str
+
+
+def dock_markers(world: World) -> list[DockMarker]:
+    """Every dock's marker; raises :class:`ConfigError` when two docks share a marker id."""
+    markers: list[DockMarker] = []
+    seen: dict[int, str] = {}
+    for i, dock in enumerate(world.docks):
+        marker_id = i if dock.marker_id is None else dock.marker_id
+        if marker_id in seen:
+            raise ConfigError(f"world {world.name!r}: docks {seen[marker_id]!r} and {dock.id!r} share marker id {marker_id}")
+        seen[marker_id] = dock.id
+        centre_height = max(DOCK_GEOMETRY.marker_height_m, dock.marker_size_m / 2 + 0.02)
+        markers.append(DockMarker(dock.id, marker_id, dock.marker_size_m, DOCK_GEOMETRY.marker_pose(dock),
+                                  centre_height, world.aruco_dictionary))
+    return markers
 
 
 def parse_world(data: Any, source: str | Path = "<world>") -> World:

@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 from pydantic import Field, field_validator
 
+from services.simulator.camera import CameraParams, CameraRenderer, Motion, build_scene
+from services.simulator.camera_frames import camera_info, camera_mount_transforms
 from services.simulator.dock_contact import DockContactParams
 from services.simulator.pacing import Driver, DriverPacer, PacingParams
 from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld
@@ -39,11 +41,13 @@ from shared.interfaces.simulator import (
     TeleportResponse,
 )
 from shared.messages import (
+    CameraInfo,
     Clock,
     CollisionEvent,
     DockContact,
     Float64MultiArray,
     Header,
+    Image,
     LaserScan,
     Odometry,
     Pose,
@@ -110,9 +114,20 @@ class Params(ServiceParams):
     detection_latency_s: float = Field(0.05, ge=0)
     detection_position_noise_m: float = Field(0.003, ge=0)
     detection_yaw_noise_rad: float = Field(0.01, ge=0)
-    camera_fov_rad: float = Field(1.2, gt=0, lt=math.pi)
-    camera_range_m: float = Field(2.5, gt=0)
-    camera_min_range_m: float = Field(0.02, ge=0)
+    detection_fov_rad: float = Field(1.2, gt=0, lt=math.pi)
+    detection_range_m: float = Field(2.5, gt=0)
+    detection_min_range_m: float = Field(0.02, ge=0)
+    # the rendered camera (camera/image_raw, camera/camera_info): frames are made only while someone subscribes
+    camera_enabled: bool = True
+    camera_width: int = Field(640, ge=16, le=4096)
+    camera_height: int = Field(480, ge=16, le=4096)
+    camera_hfov_rad: float = Field(math.radians(70.0), gt=0.1, lt=2.6)
+    camera_rate_hz: float = Field(15.0, gt=0)
+    camera_mount_z_m: float = Field(0.10, gt=0)
+    camera_pitch_rad: float = Field(0.0, gt=-1.04, lt=1.04)
+    camera_noise: float = Field(2.0, ge=0, description="read noise, grey levels (sigma)")
+    camera_exposure_s: float = Field(0.008, ge=0, description="exposure time: sets motion blur")
+    camera_gain: float = Field(1.0, gt=0)
     # localisation: map->odom is off by this much (in base_link at the start), like a drifting localiser
     localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
     odom_noise: float = Field(0.0, ge=0)
@@ -157,14 +172,22 @@ class Params(ServiceParams):
                 range_max_m=self.ultrasonic_max_range_m,
             ),
             camera=FiducialCameraParams(
-                horizontal_fov_rad=self.camera_fov_rad,
-                range_max_m=self.camera_range_m,
-                range_min_m=self.camera_min_range_m,
+                horizontal_fov_rad=self.detection_fov_rad,
+                range_max_m=self.detection_range_m,
+                range_min_m=self.detection_min_range_m,
                 position_sigma_m=self.detection_position_noise_m,
                 yaw_sigma_rad=self.detection_yaw_noise_rad,
             ),
             contact=DockContactParams(),
             localisation_error=Pose2D(*self.localisation_error),
+        )
+
+    def camera_params(self) -> CameraParams:
+        return CameraParams(
+            width=self.camera_width, height=self.camera_height, horizontal_fov_rad=self.camera_hfov_rad,
+            rate_hz=self.camera_rate_hz, mount_x_m=FiducialCameraParams().mount_x_m, mount_z_m=self.camera_mount_z_m,
+            pitch_rad=self.camera_pitch_rad, noise_sigma=self.camera_noise, exposure_s=self.camera_exposure_s,
+            gain=self.camera_gain,
         )
 
     def drive_params(self) -> DiffDriveParams:
@@ -210,6 +233,8 @@ class _Robot:
     watchdog_tripped: bool = True
     pending_detections: deque[tuple[float, PoseStamped]] = field(default_factory=deque)
     collisions_total: int = 0
+    camera: CameraRenderer | None = None
+    frames_rendered: int = 0
 
     def topic(self, name: str) -> str:
         return f"{self.prefix}{name}"
@@ -223,6 +248,8 @@ class SimulatorService:
         self.world = load_world(params.world)
         namespaces = params.robots or [""]
         self.robots: dict[str, _Robot] = {}
+        camera_params = params.camera_params()
+        scene = build_scene(self.world) if params.camera_enabled else None
         for i, ns in enumerate(namespaces):
             sim_params = dataclasses.replace(params.sim_params(), seed=params.seed + i)
             try:
@@ -230,6 +257,8 @@ class SimulatorService:
             except PoseInCollisionError as exc:
                 raise ConfigError(f"{params.world}: {exc}") from None
             robot = _Robot(ns, sim, f"{ns}/" if ns else "")
+            if scene is not None:
+                robot.camera = CameraRenderer(scene, camera_params, np.random.default_rng([params.seed, i, 7]))
             self._declare(robot)
             self.robots[ns] = robot
         dt = params.dt_s
@@ -242,6 +271,8 @@ class SimulatorService:
         self._scan = _Every(1.0 / params.scan_rate_hz)
         self._sonar = _Every(1.0 / params.ultrasonic_rate_hz)
         self._detect = _Every(1.0 / params.detection_rate_hz)
+        self._camera = _Every(1.0 / params.camera_rate_hz)
+        self._camera_info = camera_info(camera_params)
         self._contact = _Every(1.0 / params.contact_rate_hz)
         self._truth = _Every(1.0 / params.ground_truth_rate_hz)
         self._clock_pubs = [node.create_publisher(Clock, r.topic(topics.CLOCK), QoS(reliable=True, depth=1))
@@ -275,6 +306,9 @@ class SimulatorService:
             "collisions": node.create_publisher(CollisionEvent, t(topics.COLLISIONS), BLOCKING),
             "ground_truth_pose": node.create_publisher(PoseStamped, t(topics.GROUND_TRUTH_POSE), RELIABLE),
         }
+        if self.params.camera_enabled:
+            robot.pubs["image"] = node.create_publisher(Image, t(topics.CAMERA_IMAGE), SENSOR_DATA)
+            robot.pubs["camera_info"] = node.create_publisher(CameraInfo, t(topics.CAMERA_INFO), SENSOR_DATA)
         node.create_subscription(Twist, t(topics.CMD_VEL), lambda msg, r=robot: self._on_cmd_vel(r, msg), QoS(depth=1))
         if self.params.pace_to_drivers and self.params.pace_to_pose:
             # Only the arrival time is kept: one float store, safe on Zenoh's thread (no executor hand-off).
@@ -393,6 +427,7 @@ class SimulatorService:
         odom, tf, tf_static = self._odom.due(now), self._tf.due(now), self._tf_static.due(now)
         scan, sonar, detect = self._scan.due(now), self._sonar.due(now), self._detect.due(now)
         contact, truth = self._contact.due(now), self._truth.due(now)
+        camera = self._camera.due(now)
         stamp = Time.from_sec(now)
         for i, robot in enumerate(self.robots.values()):
             if clock:
@@ -410,6 +445,8 @@ class SimulatorService:
             if detect and self.params.detection_enabled:
                 self._capture_detection(robot, now)
             self._release_detections(robot, now)
+            if camera and robot.camera is not None:
+                self._publish_camera(robot, stamp)
             if contact:
                 robot.pubs["dock_contact"].publish(self._contact_msg(robot, now))
             if truth:
@@ -430,11 +467,28 @@ class SimulatorService:
         mounts = [
             (topics.LIDAR_FRAME, Pose2D(p.lidar.mount_x_m, p.lidar.mount_y_m, 0.0)),
             (topics.ULTRASONIC_FRAME, Pose2D(p.ultrasonic.mount_x_m, 0.0, 0.0)),
-            (topics.CAMERA_FRAME, Pose2D(p.camera.mount_x_m, 0.0, 0.0)),
         ]
-        robot.pubs["tf_static"].publish(TFMessage([
-            TransformStamped(Header(stamp, topics.BASE_FRAME), child, Transform.from_pose2d(mount)) for child, mount in mounts
-        ]))
+        transforms = [TransformStamped(Header(stamp, topics.BASE_FRAME), child, Transform.from_pose2d(mount))
+                      for child, mount in mounts]
+        transforms += camera_mount_transforms(self.params.camera_params(), stamp)
+        robot.pubs["tf_static"].publish(TFMessage(transforms))
+
+    def _publish_camera(self, robot: _Robot, stamp: Time) -> None:
+        """A rendered frame and its calibration, each only while someone subscribes to it."""
+        assert robot.camera is not None
+        info_pub, image_pub = robot.pubs["camera_info"], robot.pubs["image"]
+        if info_pub.has_subscribers():
+            info = self._camera_info
+            info.header = Header(stamp, topics.CAMERA_OPTICAL_FRAME)
+            info_pub.publish(info)
+        if not image_pub.has_subscribers():
+            return
+        twist = robot.sim.twist
+        pixels = robot.camera.render(robot.sim.pose, Motion(twist.linear_mps, twist.angular_radps))
+        robot.frames_rendered += 1
+        height, width = pixels.shape
+        image_pub.publish(Image(Header(stamp, topics.CAMERA_OPTICAL_FRAME), height, width, "mono8", 0, width,
+                                pixels.reshape(-1)))
 
     def _publish_odom(self, robot: _Robot, stamp: Time) -> None:
         twist = robot.sim.twist

@@ -1,0 +1,1 @@
+"""The perception service: ArUco markers in camera images become dock poses."""

@@ -1,0 +1,5 @@
+import sys
+
+from services.perception.node import main
+
+sys.exit(main())

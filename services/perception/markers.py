@@ -1,0 +1,231 @@
+"""From pixels to dock poses: ArUco detection, the marker's pose by IPPE, and the dock it stands for.
+
+Steps, each one OpenCV's well-kept implementation where one exists:
+
+1. :class:`MarkerFinder` finds markers with ``cv2.aruco.ArucoDetector`` (corners refined to sub-pixel).
+2. :func:`marker_poses` solves the perspective-n-point problem for the square (``solvePnPGeneric`` with
+   ``SOLVEPNP_IPPE_SQUARE``), which returns both poses a planar square admits: at a distance the two differ
+   mainly in the marker's tilt and one of them is the mirror image of the truth.
+3. What the robot knows about its docks settles the rest: the marker stands upright on a vertical face at
+   a known height, so only its floor position and heading are unknown. A solution that cannot be made
+   upright is refused (a reflection, a marker lying down, a bad detection); each upright one seeds a
+   three-unknown refinement (:func:`refine_upright`) and the better fit wins.
+4. The marker's pose in base_link becomes the dock's pose (the docked base_link pose) through the dock
+   geometry: the marker is on the dock's face, ``ROBOT_FRONT_M`` ahead of the docked robot, facing it.
+
+Nothing here touches the bus; the perception service and the perception benchmark share it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from shared.geometry import Pose2D
+from shared.rigid3 import Rigid3
+from shared.world import ROBOT_FRONT_M, DockMarker
+
+#: A solution whose normal tilts further than this from horizontal is not an upright marker.
+MAX_TILT_RAD = math.radians(25.0)
+#: The dock pose (docked base_link) seen from the marker's frame on the dock's face.
+_DOCK_FROM_MARKER = Pose2D(ROBOT_FRONT_M, 0.0, math.pi)
+
+
+@dataclass(frozen=True, slots=True)
+class MarkerSighting:
+    """One marker found in an image: its id and its four corners (pixels, ArUco's order)."""
+
+    marker_id: int
+    corners: np.ndarray  # (4, 2) float64: top-left, top-right, bottom-right, bottom-left
+
+
+@dataclass(frozen=True, slots=True)
+class MarkerPose:
+    """One solution for the marker's pose: marker frame (x right, y up, z out of the face) in base_link."""
+
+    base_from_marker: Rigid3
+    reprojection_error_px: float
+
+    @property
+    def normal(self) -> np.ndarray:
+        return self.base_from_marker.rotation[:, 2]
+
+    @property
+    def tilt_rad(self) -> float:
+        """How far the marker's normal leans out of the horizontal plane."""
+        return abs(math.asin(max(-1.0, min(1.0, float(self.normal[2])))))
+
+
+@dataclass(frozen=True, slots=True)
+class DockSighting:
+    """A dock found by its marker: the dock pose in base_link, and how it was found."""
+
+    dock_id: str
+    marker_id: int
+    dock_in_base: Pose2D
+    marker_range_m: float
+    reprojection_error_px: float
+    tilt_rad: float
+
+
+class MarkerFinder:
+    """ArUco detection for one dictionary, with sub-pixel corner refinement."""
+
+    def __init__(self, dictionary: str) -> None:
+        try:
+            family = getattr(cv2.aruco, dictionary)
+        except AttributeError:
+            raise ValueError(f"unknown ArUco dictionary {dictionary!r}") from None
+        self.dictionary = dictionary
+        params = cv2.aruco.DetectorParameters()
+        params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+        params.cornerRefinementWinSize = 4
+        params.cornerRefinementMaxIterations = 50
+        params.cornerRefinementMinAccuracy = 0.01
+        self._detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(family), params)
+
+    def find(self, grey: np.ndarray) -> list[MarkerSighting]:
+        corners, ids, _rejected = self._detector.detectMarkers(grey)
+        if ids is None:
+            return []
+        return [MarkerSighting(int(i), np.asarray(c, dtype=np.float64).reshape(4, 2)) for i, c in zip(ids.ravel(), corners, strict=True)]
+
+
+def marker_object_points(size_m: float) -> np.ndarray:
+    """The square's corners in its own frame, in the order IPPE_SQUARE requires (and ArUco reports)."""
+    h = size_m / 2.0
+    return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
+
+
+def marker_poses(sighting: MarkerSighting, size_m: float, camera_matrix: np.ndarray, distortion: np.ndarray,
+                 base_from_optical: Rigid3) -> list[MarkerPose]:
+    """Both IPPE solutions for the marker, in base_link, best reprojection first."""
+    ok, rvecs, tvecs, errors = cv2.solvePnPGeneric(
+        marker_object_points(size_m), sighting.corners, camera_matrix, distortion, flags=cv2.SOLVEPNP_IPPE_SQUARE)
+    if not ok:
+        return []
+    poses = []
+    for rvec, tvec, err in zip(rvecs, tvecs, np.asarray(errors).ravel(), strict=True):
+        rotation, _ = cv2.Rodrigues(rvec)
+        optical_from_marker = Rigid3(rotation, np.asarray(tvec, dtype=np.float64).ravel())
+        poses.append(MarkerPose(base_from_optical.compose(optical_from_marker), float(err)))
+    poses.sort(key=lambda p: p.reprojection_error_px)
+    return poses
+
+
+def choose_pose(poses: Sequence[MarkerPose]) -> MarkerPose | None:
+    """Of the solutions that stand the marker upright, the one that reprojects best; None when neither is
+    upright enough (a reflection, a marker lying down, or a bad detection)."""
+    upright = [p for p in poses if p.tilt_rad <= MAX_TILT_RAD]
+    return min(upright, key=lambda p: p.reprojection_error_px) if upright else None
+
+
+def upright_marker(pose: MarkerPose) -> Pose2D:
+    """The marker's floor-plane pose: where it stands, and its normal's heading."""
+    n = pose.normal
+    t = pose.base_from_marker.translation
+    return Pose2D(float(t[0]), float(t[1]), math.atan2(float(n[1]), float(n[0])))
+
+
+def upright_corners(marker: Pose2D, size_m: float, centre_height_m: float) -> np.ndarray:
+    """The corners (base_link, ArUco's order) of an upright marker of this size standing at ``marker``."""
+    rx, ry = -math.sin(marker.yaw), math.cos(marker.yaw)  # the viewer's right, facing the marker
+    h = size_m / 2.0
+    return np.array([[marker.x + u * rx, marker.y + u * ry, centre_height_m + v]
+                     for u, v in ((-h, h), (h, h), (h, -h), (-h, -h))])
+
+
+def refine_upright(start: Pose2D, observed_norm: np.ndarray, size_m: float, centre_height_m: float,
+                   base_from_optical: Rigid3, iterations: int = 30) -> tuple[Pose2D, float]:
+    """Levenberg-Marquardt on the marker's three planar unknowns (x, y, heading), its height and uprightness known.
+
+    ``observed_norm`` are the corners in normalised image coordinates (undistorted). Eight residuals for
+    three unknowns: far better conditioned than six unknowns for a small marker at a distance, which is
+    where a free pose's heading wanders. Returns the pose and the RMS residual in normalised units.
+    """
+    R_ob = base_from_optical.rotation.T
+    t_b = base_from_optical.translation
+
+    def residuals(q: np.ndarray) -> np.ndarray:
+        pts = upright_corners(Pose2D(float(q[0]), float(q[1]), float(q[2])), size_m, centre_height_m)
+        cam = (pts - t_b) @ R_ob.T
+        z = np.maximum(cam[:, 2], 1e-6)
+        return (cam[:, :2] / z[:, None] - observed_norm).ravel()
+
+    q = np.array([start.x, start.y, start.yaw])
+    r = residuals(q)
+    cost = float(r @ r)
+    damping = 1e-3
+    for _ in range(iterations):
+        J = np.empty((r.size, 3))
+        for i in range(3):
+            dq = np.zeros(3)
+            dq[i] = 1e-6
+            J[:, i] = (residuals(q + dq) - residuals(q - dq)) / 2e-6
+        JtJ, Jtr = J.T @ J, J.T @ r
+        while damping < 1e8:  # Levenberg-Marquardt: shorten the step until it helps
+            delta = np.linalg.solve(JtJ + damping * np.diag(np.diag(JtJ) + 1e-12), -Jtr)
+            r_new = residuals(q + delta)
+            if float(r_new @ r_new) < cost:
+                q, r, cost = q + delta, r_new, float(r_new @ r_new)
+                damping = max(damping / 10.0, 1e-9)
+                break
+            damping *= 10.0
+        else:
+            break
+        if float(np.max(np.abs(delta))) < 1e-8:
+            break
+    return Pose2D(float(q[0]), float(q[1]), float(q[2])), float(np.sqrt(np.mean(r.reshape(-1, 2) ** 2) * 2))
+
+
+def facing_seed(observed_norm: np.ndarray, size_m: float, base_from_optical: Rigid3) -> Pose2D:
+    """A starting guess that needs no PnP: the marker straight along its centre's ray, at the range its
+    apparent size gives, facing the camera. IPPE's two solutions degenerate for a marker seen face-on,
+    where this guess is at its best."""
+    side = float(np.mean(np.linalg.norm(observed_norm - np.roll(observed_norm, 1, axis=0), axis=1)))
+    ray = np.append(observed_norm.mean(axis=0), 1.0)
+    centre = base_from_optical.apply(ray * (size_m / max(side, 1e-9)))
+    camera = base_from_optical.translation
+    return Pose2D(float(centre[0]), float(centre[1]), math.atan2(camera[1] - centre[1], camera[0] - centre[0]))
+
+
+def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.ndarray, distortion: np.ndarray,
+                base_from_optical: Rigid3) -> DockSighting | None:
+    """The dock a sighted marker belongs to, in base_link; None when no upright pose explains the corners.
+
+    Each upright IPPE solution, and a face-on guess (:func:`facing_seed`), seeds a planar refinement
+    (:func:`refine_upright`); the one that ends with the smaller residual wins, which also settles the
+    mirror ambiguity of a square seen from the side.
+    """
+    poses = [p for p in marker_poses(sighting, marker.size_m, camera_matrix, distortion, base_from_optical)
+             if p.tilt_rad <= MAX_TILT_RAD]
+    if not poses:
+        return None
+    observed = cv2.undistortPoints(sighting.corners.reshape(-1, 1, 2), camera_matrix, distortion).reshape(-1, 2)
+    focal = float(camera_matrix[0, 0])
+    seeds = [upright_marker(p) for p in poses] + [facing_seed(observed, marker.size_m, base_from_optical)]
+    best: tuple[float, Pose2D] | None = None
+    for seed in seeds:
+        fitted, residual = refine_upright(seed, observed, marker.size_m, marker.centre_height_m, base_from_optical)
+        if best is None or residual < best[0]:
+            best = (residual, fitted)
+    assert best is not None
+    residual, fitted = best
+    pose = poses[0]
+    centre = np.array([fitted.x, fitted.y, marker.centre_height_m])
+    return DockSighting(
+        dock_id=marker.dock_id,
+        marker_id=marker.marker_id,
+        dock_in_base=fitted.compose(_DOCK_FROM_MARKER),
+        marker_range_m=float(np.linalg.norm(centre - base_from_optical.translation)),
+        reprojection_error_px=residual * focal,
+        tilt_rad=pose.tilt_rad,
+    )
+
+
+__all__ = ["DockSighting", "MarkerFinder", "MarkerPose", "MarkerSighting", "choose_pose", "facing_seed", "locate_dock",
+           "marker_object_points", "marker_poses", "refine_upright", "upright_corners", "upright_marker"]

@@ -1,0 +1,207 @@
+"""The perception service: camera images in, dock poses out.
+
+Subscribes to ``camera/image_raw``, ``camera/camera_info`` and ``tf_static`` (where the camera's optical
+frame sits on base_link); finds ArUco markers and turns each known one into its dock's pose in base_link
+(:mod:`services.perception.markers`). The nearest dock seen goes out on ``detected_dock_pose``
+(geometry_msgs/PoseStamped in base_link, stamped with the image's time: what the docking service
+consumes), and every dock seen on ``dock_detections`` with its id and fit. ``aruco/debug_image`` (the
+frame with the markers and their axes drawn) is drawn only while someone subscribes.
+
+Frames the detector cannot use (bad encoding or size, no calibration yet, no camera mount yet), markers
+not in the dock database and markers no upright pose explains are counted and logged at most once per
+interval per kind; nothing that arrives stops the service. Images queue one deep: when detection is
+slower than the camera, the newest frame is the one processed.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import Counter
+
+import cv2
+import numpy as np
+from pydantic import Field
+
+from services.perception.images import ImageError, grey_pixels
+from services.perception.markers import DockSighting, MarkerFinder, MarkerSighting, locate_dock
+from shared import topics
+from shared.geometry import Pose2D
+from shared.messages import (
+    CameraInfo,
+    DockDetection,
+    Header,
+    Image,
+    Pose,
+    PoseStamped,
+    TFMessage,
+)
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.ratelimit import RateLimitedLogger
+from shared.rigid3 import Rigid3, StaticTransforms
+from shared.runtime import ServiceParams, run_service
+from shared.world import ROBOT_FRONT_M, DockMarker, dock_markers, load_world
+
+#: Images: the newest only (a late frame is worth less than the next one).
+IMAGE_QOS = QoS(reliable=False, block=False, depth=1)
+STATS_PERIOD_S = 30.0
+#: The marker's pose in the dock pose's frame: on the dock's face, facing the docked robot.
+_MARKER_ON_DOCK = Pose2D(ROBOT_FRONT_M, 0.0, math.pi)
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.perception``."""
+
+    dock_database: str = Field(description="dock database or world file: docks with their marker ids and sizes")
+    max_range_m: float = Field(3.5, gt=0, description="markers farther than this are not reported")
+    max_reprojection_error_px: float = Field(2.0, gt=0, description="fits worse than this are refused")
+
+
+class PerceptionService:
+    def __init__(self, node: Node, params: Params) -> None:
+        self.node = node
+        self.params = params
+        self._say = RateLimitedLogger(node.log, interval_s=5.0)
+        world = load_world(params.dock_database)
+        self.markers: dict[int, DockMarker] = {m.marker_id: m for m in dock_markers(world)}
+        self.finder = MarkerFinder(world.aruco_dictionary)
+        self.frames = StaticTransforms()
+        self._camera_matrix: np.ndarray | None = None
+        self._distortion = np.zeros(5)
+        self.counts: Counter[str] = Counter()
+        self._stats_at = time.monotonic()
+        self.detected_pub = node.create_publisher(PoseStamped, topics.DETECTED_DOCK_POSE, SENSOR_DATA)
+        self.detections_pub = node.create_publisher(DockDetection, topics.DOCK_DETECTIONS, RELIABLE)
+        self.debug_pub = node.create_publisher(Image, topics.ARUCO_DEBUG_IMAGE, IMAGE_QOS)
+        node.create_subscription(CameraInfo, topics.CAMERA_INFO, self._on_camera_info, QoS(depth=1))
+        node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
+        node.create_subscription(Image, topics.CAMERA_IMAGE, self._on_image, IMAGE_QOS)
+        node.log.info("%d dock marker(s) (%s) from %s", len(self.markers), world.aruco_dictionary,
+                      params.dock_database)
+
+    # --- inputs --------------------------------------------------------------------------------------
+
+    def _on_camera_info(self, msg: CameraInfo) -> None:
+        K = np.asarray(msg.k, dtype=np.float64).reshape(3, 3) if msg.k.size == 9 else None
+        if K is None or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0 or K[2, 2] != 1.0:
+            self._refuse("camera-info", "ignored camera_info with an unusable K %s", list(msg.k))
+            return
+        if msg.distortion_model not in ("", "plumb_bob", "rational_polynomial") or not np.all(np.isfinite(msg.d)):
+            self._refuse("camera-info", "ignored camera_info with distortion model %r", msg.distortion_model)
+            return
+        self._camera_matrix = K
+        self._distortion = np.asarray(msg.d, dtype=np.float64) if msg.d.size else np.zeros(5)
+
+    def _on_tf_static(self, msg: TFMessage) -> None:
+        for item in msg.transforms:
+            t, q = item.transform.translation, item.transform.rotation
+            try:
+                transform = Rigid3.from_parts((t.x, t.y, t.z), (q.x, q.y, q.z, q.w))
+            except ValueError as exc:
+                self._refuse("tf", "ignored a tf_static entry %s -> %s: %s", item.header.frame_id,
+                             item.child_frame_id, exc)
+                continue
+            self.frames.set(item.header.frame_id, item.child_frame_id, transform)
+
+    def _on_image(self, msg: Image) -> None:
+        self.counts["frames"] += 1
+        try:
+            grey = grey_pixels(msg)
+        except ImageError as exc:
+            self._refuse(f"image-{exc.reason}", "ignored an image: %s", exc)
+            return
+        if self._camera_matrix is None:
+            self._refuse("no-camera-info", "no camera_info yet: images wait for the calibration")
+            return
+        base_from_camera = self.frames.lookup(topics.BASE_FRAME, msg.header.frame_id)
+        if base_from_camera is None:
+            self._refuse("no-mount", "no tf_static chain from %s to %s yet", msg.header.frame_id, topics.BASE_FRAME)
+            return
+        sightings = self.finder.find(grey)
+        found = self._locate(sightings, base_from_camera)
+        self._publish(msg.header, found)
+        if self.debug_pub.has_subscribers():
+            self._publish_debug(msg.header, grey, sightings, found, base_from_camera)
+        self._report_stats()
+
+    # --- work ----------------------------------------------------------------------------------------
+
+    def _locate(self, sightings: list[MarkerSighting], base_from_camera: Rigid3) -> list[DockSighting]:
+        assert self._camera_matrix is not None
+        found = []
+        for sighting in sightings:
+            marker = self.markers.get(sighting.marker_id)
+            if marker is None:
+                self._refuse("unknown-marker", "marker %d is not in the dock database (known: %s)",
+                             sighting.marker_id, sorted(self.markers))
+                continue
+            dock = locate_dock(sighting, marker, self._camera_matrix, self._distortion, base_from_camera)
+            if dock is None:
+                self._refuse("not-upright", "marker %d: no upright pose fits its corners", sighting.marker_id)
+                continue
+            if dock.reprojection_error_px > self.params.max_reprojection_error_px:
+                self._refuse("poor-fit", "marker %d: fit error %.2f px", sighting.marker_id, dock.reprojection_error_px)
+                continue
+            if dock.marker_range_m > self.params.max_range_m:
+                self.counts["too-far"] += 1
+                continue
+            found.append(dock)
+        found.sort(key=lambda d: d.marker_range_m)
+        return found
+
+    def _publish(self, header: Header, found: list[DockSighting]) -> None:
+        if not found:
+            self.counts["no-marker"] += 1
+            return
+        self.counts["detected"] += 1
+        out_header = Header(header.stamp, topics.BASE_FRAME)
+        self.detected_pub.publish(PoseStamped(out_header, Pose.from_pose2d(found[0].dock_in_base)))
+        for dock in found:
+            self.detections_pub.publish(DockDetection(
+                out_header, dock.dock_id, dock.marker_id, Pose.from_pose2d(dock.dock_in_base),
+                dock.reprojection_error_px, dock.marker_range_m))
+
+    def _publish_debug(self, header: Header, grey: np.ndarray, sightings: list[MarkerSighting],
+                       found: list[DockSighting], base_from_camera: Rigid3) -> None:
+        assert self._camera_matrix is not None
+        canvas = cv2.cvtColor(grey, cv2.COLOR_GRAY2RGB)
+        if sightings:
+            corners = [s.corners.reshape(1, 4, 2).astype(np.float32) for s in sightings]
+            ids = np.array([[s.marker_id] for s in sightings], dtype=np.int32)
+            cv2.aruco.drawDetectedMarkers(canvas, corners, ids, borderColor=(0, 255, 0))
+        for dock in found:
+            marker = self.markers[dock.marker_id]
+            # The marker's frame from the dock pose, drawn back into the image: what perception believes.
+            pose = dock.dock_in_base.compose(_MARKER_ON_DOCK)
+            camera_from_base = _invert(base_from_camera)
+            rotation = np.array([[-np.sin(pose.yaw), 0.0, np.cos(pose.yaw)], [np.cos(pose.yaw), 0.0, np.sin(pose.yaw)],
+                                 [0.0, 1.0, 0.0]])
+            marker_in_camera = camera_from_base.compose(Rigid3(rotation, np.array([pose.x, pose.y, marker.centre_height_m])))
+            rvec, _ = cv2.Rodrigues(marker_in_camera.rotation)
+            cv2.drawFrameAxes(canvas, self._camera_matrix, self._distortion, rvec, marker_in_camera.translation,
+                              marker.size_m * 0.75, 2)
+        height, width = grey.shape
+        self.debug_pub.publish(Image(header, height, width, "rgb8", 0, width * 3, canvas.reshape(-1)))
+
+    def _refuse(self, kind: str, fmt: str, *args: object) -> None:
+        self.counts[kind] += 1
+        self._say.warning(kind, fmt, *args)
+
+    def _report_stats(self) -> None:
+        now = time.monotonic()
+        if now - self._stats_at < STATS_PERIOD_S:
+            return
+        self._stats_at = now
+        self.node.log.info("frames %s", dict(sorted(self.counts.items())))
+
+    def close(self) -> None:
+        self.node.log.info("frames %s", dict(sorted(self.counts.items())))
+
+
+def _invert(t: Rigid3) -> Rigid3:
+    return Rigid3(t.rotation.T, -t.rotation.T @ t.translation)
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_service("perception", Params, PerceptionService, argv,
+                       description="zendock perception: ArUco markers in camera images -> dock poses")

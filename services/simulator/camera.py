@@ -1,0 +1,441 @@
+"""The forward camera: a pinhole image of the world, rendered from its geometry.
+
+The world is a floor plane with vertical surfaces standing on it (walls, box sides, the docks' bodies, glass
+panes), each of a stated height. With the camera level, a vertical surface is a vertical strip in the image,
+so one ray per image column finds every surface the column crosses (:func:`~services.simulator.raycast`'s
+segment tests, vectorised over columns and surfaces). A pixel shows the nearest surface whose top is above
+it, or the floor below the nearest surface's foot: occlusion, perspective and the horizon follow from the
+geometry. Each dock's face carries its ArUco marker, warped into the image by the homography of the marker's
+four projected corners from a texture of about the size it appears (no aliasing at a distance, sharp near).
+Glass is nearly transparent: a faint sheen over whatever lies behind. A pitched camera is the level image
+rotated about the optical centre, a homography as well (``K R K^-1``).
+
+After the geometry comes the sensor: exposure gain, motion blur along the image rows for the camera's turn
+during the exposure, and Gaussian read noise. Nothing here knows where the marker "should" be detected: the
+perception service must find it in the pixels.
+
+The module imports numpy and OpenCV only (no bus); it is the simulator's and the perception benchmark's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from shared.geometry import Pose2D
+from shared.world import DOCK_GEOMETRY, Dock, DockMarker, World, dock_markers
+
+#: OpenCV's pixel convention: pixel centres sit at integer coordinates, the image spans [-0.5, n - 0.5].
+_OPAQUE_LAYERS = 8
+#: Marker pixels are the average of this many samples a side (area coverage at the edges).
+_SUPERSAMPLE = 3
+
+
+@dataclass(frozen=True, slots=True)
+class CameraParams:
+    """A pinhole camera on ``camera_link``, ``mount_x_m`` ahead of base_link and ``mount_z_m`` above the floor.
+
+    ``pitch_rad`` tilts it down (REP 103: a positive rotation about camera_link's y axis). ``noise_sigma``
+    is read noise in grey levels; ``exposure_s`` sets motion blur; ``gain`` scales brightness.
+    """
+
+    width: int = 640
+    height: int = 480
+    horizontal_fov_rad: float = math.radians(70.0)
+    rate_hz: float = 15.0
+    mount_x_m: float = 0.15
+    mount_z_m: float = 0.10
+    pitch_rad: float = 0.0
+    noise_sigma: float = 2.0
+    exposure_s: float = 0.008
+    gain: float = 1.0
+    near_m: float = 0.01
+
+    def __post_init__(self) -> None:
+        if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
+            raise ValueError(f"camera resolution must be 16..4096 pixels a side, got {self.width}x{self.height}")
+        if not (0.1 < self.horizontal_fov_rad < math.radians(150.0)):
+            raise ValueError(f"camera horizontal_fov_rad must be in (0.1, 2.6), got {self.horizontal_fov_rad}")
+        if not abs(self.pitch_rad) < math.radians(60.0):
+            raise ValueError(f"camera pitch_rad must be within +-1.04 rad, got {self.pitch_rad}")
+        if self.rate_hz <= 0 or self.mount_z_m <= 0:
+            raise ValueError("camera rate_hz and mount_z_m must be positive")
+        if self.noise_sigma < 0 or self.exposure_s < 0 or self.gain <= 0:
+            raise ValueError("camera noise_sigma and exposure_s must be >= 0 and gain > 0")
+
+    @property
+    def focal_px(self) -> float:
+        return 0.5 * self.width / math.tan(0.5 * self.horizontal_fov_rad)
+
+    @property
+    def centre_px(self) -> tuple[float, float]:
+        return (self.width - 1) / 2.0, (self.height - 1) / 2.0
+
+    def intrinsics(self) -> np.ndarray:
+        """K, the 3x3 camera matrix (square pixels, no skew, no distortion)."""
+        f = self.focal_px
+        cx, cy = self.centre_px
+        return np.array([[f, 0.0, cx], [0.0, f, cy], [0.0, 0.0, 1.0]])
+
+    @property
+    def mount(self) -> Pose2D:
+        """camera_link on base_link, in the floor plane."""
+        return Pose2D(self.mount_x_m, 0.0, 0.0)
+
+
+@dataclass(frozen=True, slots=True)
+class Surface:
+    """A vertical rectangle standing on the floor from ``a`` to ``b`` (seen from either side)."""
+
+    a: tuple[float, float]
+    b: tuple[float, float]
+    height_m: float
+    albedo: float
+    glass: bool = False
+    #: The index into the scene's markers when this is a dock's face carrying its marker.
+    marker: int | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """What the camera can see of a world, prepared once: surfaces as arrays, markers with textures."""
+
+    surfaces: tuple[Surface, ...]
+    markers: tuple[DockMarker, ...]
+    a: np.ndarray = field(repr=False)
+    d: np.ndarray = field(repr=False)  # b - a
+    heights: np.ndarray = field(repr=False)
+    albedo: np.ndarray = field(repr=False)
+    normal_angle: np.ndarray = field(repr=False)
+    opaque: np.ndarray = field(repr=False)
+    marker_faces: np.ndarray = field(repr=False)
+
+    @classmethod
+    def from_surfaces(cls, surfaces: list[Surface], markers: list[DockMarker]) -> Scene:
+        a = np.array([s.a for s in surfaces], dtype=np.float64).reshape(-1, 2)
+        b = np.array([s.b for s in surfaces], dtype=np.float64).reshape(-1, 2)
+        d = b - a
+        return cls(
+            tuple(surfaces), tuple(markers), a, d,
+            np.array([s.height_m for s in surfaces], dtype=np.float64),
+            np.array([s.albedo for s in surfaces], dtype=np.float64),
+            np.arctan2(d[:, 0], -d[:, 1]) if len(surfaces) else np.zeros(0),
+            np.array([not s.glass for s in surfaces], dtype=bool),
+            np.array([s.marker is not None for s in surfaces], dtype=bool),
+        )
+
+
+#: Heights (m) and brightness (0..1) of what the world file describes.
+WALL_HEIGHT_M = 0.60
+BOX_HEIGHT_M = 0.45
+GLASS_HEIGHT_M = 1.00
+WALL_ALBEDO = 0.72
+BOX_ALBEDO = 0.50
+DOCK_BODY_ALBEDO = 0.30
+DOCK_FACE_ALBEDO = 0.92
+MARKER_BLACK = 0.06
+FLOOR_ALBEDO = 0.40
+BACKGROUND_GREY = 35.0
+
+
+def build_scene(world: World) -> Scene:
+    """The world as the camera sees it: bounds and walls, box sides, dock bodies with marked faces, glass."""
+    surfaces: list[Surface] = []
+    xmin, ymin, xmax, ymax = world.bounds
+    ring = [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax)]
+    for i in range(4):
+        surfaces.append(Surface(ring[i], ring[(i + 1) % 4], WALL_HEIGHT_M, WALL_ALBEDO))
+    for a, b in world.walls:
+        surfaces.append(Surface(a, b, WALL_HEIGHT_M, WALL_ALBEDO))
+    for box in world.boxes:
+        c = box.corners()
+        surfaces += [Surface(c[i], c[(i + 1) % 4], BOX_HEIGHT_M, BOX_ALBEDO) for i in range(4)]
+    markers = dock_markers(world)
+    for index, (dock, marker) in enumerate(zip(world.docks, markers, strict=True)):
+        surfaces += _dock_surfaces(dock, marker, index)
+    for a, b in world.glass:
+        surfaces.append(Surface(a, b, GLASS_HEIGHT_M, 0.0, glass=True))
+    return Scene.from_surfaces(surfaces, markers)
+
+
+def _dock_surfaces(dock: Dock, marker: DockMarker, index: int) -> list[Surface]:
+    height = max(DOCK_GEOMETRY.body_height_m, marker.centre_height_m + marker.size_m / 2 + 0.03)
+    c = DOCK_GEOMETRY.body_box(dock).corners()
+    # Box corners run counter-clockwise from (-depth/2, -width/2): the face towards the robot joins the
+    # last corner to the first.
+    sides = [Surface(c[i], c[i + 1], height, DOCK_BODY_ALBEDO) for i in range(3)]
+    return [*sides, Surface(c[3], c[0], height, DOCK_FACE_ALBEDO, marker=index)]
+
+
+@dataclass(frozen=True, slots=True)
+class Motion:
+    """The camera's motion during the exposure: forward speed (m/s) and turn rate (rad/s)."""
+
+    linear_mps: float = 0.0
+    angular_radps: float = 0.0
+
+
+class CameraRenderer:
+    """Renders ``scene`` through a camera with ``params``: :meth:`render` gives a mono8 image."""
+
+    def __init__(self, scene: Scene, params: CameraParams, rng: np.random.Generator | None = None) -> None:
+        self.scene = scene
+        self.params = params
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self._K = params.intrinsics()
+        self._level = _LevelView.for_params(params)
+        self._noise_bank = np.zeros(0, dtype=np.float32)
+
+    def _noise(self, n: int) -> np.ndarray:
+        """Read noise for ``n`` pixels: a window at a random offset into a bank of two frames' worth.
+
+        Drawing fresh normals costs more than the rest of the sensor model; a shifted window is as good
+        for a detector (independent per pixel within a frame, different from frame to frame).
+        """
+        if len(self._noise_bank) < 2 * n:
+            self._noise_bank = self.rng.normal(0.0, self.params.noise_sigma, 2 * n).astype(np.float32)
+        start = int(self.rng.integers(0, n))
+        return self._noise_bank[start:start + n]
+
+    def camera_pose(self, robot_pose: Pose2D) -> Pose2D:
+        return robot_pose.compose(self.params.mount)
+
+    def render(self, robot_pose: Pose2D, motion: Motion = Motion()) -> np.ndarray:
+        """The camera's image (uint8, height x width) with the robot's base_link at ``robot_pose``."""
+        p = self.params
+        level = self._level
+        radiance = self._render_level(self.camera_pose(robot_pose), level)
+        if level.warp is not None:
+            radiance = cv2.warpPerspective(radiance, level.warp, (p.width, p.height), flags=cv2.INTER_LINEAR,
+                                           borderMode=cv2.BORDER_REPLICATE)
+        image = radiance * np.float32(p.gain)
+        blur_px = abs(motion.angular_radps) * p.exposure_s * p.focal_px
+        if blur_px >= 1.0:
+            k = int(round(blur_px)) | 1
+            image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
+        if p.noise_sigma > 0:
+            image += self._noise(image.size).reshape(image.shape)
+        return np.clip(image, 0, 255).astype(np.uint8)
+
+    # --- geometry ------------------------------------------------------------------------------------
+
+    def _render_level(self, camera: Pose2D, view: _LevelView) -> np.ndarray:
+        """Radiance (float32 grey levels) of a level camera at ``camera`` on ``view``'s canvas."""
+        p, scene = self.params, self.scene
+        f, cy = view.focal_px, view.cy
+        h_cam = p.mount_z_m
+        cos_y, sin_y = math.cos(camera.yaw), math.sin(camera.yaw)
+        forward = np.array([cos_y, sin_y])
+        right = np.array([sin_y, -cos_y])
+        a = view.column_slopes  # (W,): X/Z of each column
+        rays = forward[None, :] + a[:, None] * right[None, :]  # (W, 2): Z-depth 1 along each
+        W, H = view.width, view.height
+        image = np.empty((H, W), dtype=np.float32)
+        # Floor and background, row by row (below the horizon the floor's depth is f h / (row - cy)).
+        rows = view.rows
+        below = rows > cy + 1e-6
+        floor_depth = np.where(below, f * h_cam / np.maximum(rows - cy, 1e-6), np.inf)
+        floor_grey = 255.0 * FLOOR_ALBEDO * (0.55 + 0.45 * np.exp(-floor_depth / 4.0))
+        floor_grey = np.where(below, floor_grey, BACKGROUND_GREY).astype(np.float32)
+        image[:] = floor_grey[:, None]
+        if not len(scene.surfaces):
+            return image
+        depth, along = _intersect(np.array([camera.x, camera.y]), rays, scene.a, scene.d, p.near_m)  # (W, S)
+        tops = cy - f * (scene.heights[None, :] - h_cam) / depth  # row of each surface's top edge
+        # Flat shading per surface and column: brighter when seen face-on.
+        ray_angle = np.arctan2(rays[:, 1], rays[:, 0])
+        facing = np.abs(np.cos(ray_angle[:, None] - scene.normal_angle[None, :]))
+        shade = (255.0 * scene.albedo[None, :] * (0.35 + 0.65 * facing)).astype(np.float32)
+
+        opaque = scene.opaque
+        o_depth = np.where(opaque[None, :], depth, np.inf)
+        k = min(_OPAQUE_LAYERS, int(opaque.sum()))
+        col = np.arange(W)
+        nearest_depth = np.full(W, np.inf)
+        if k:
+            order = np.argsort(o_depth, axis=1)[:, :k]  # (W, k) surfaces by depth
+            layer_depth = np.take_along_axis(o_depth, order, axis=1)
+            hit = np.isfinite(layer_depth)  # a prefix of each row: misses sort last
+            layer_top = np.where(hit, np.take_along_axis(tops, order, axis=1), np.inf)
+            running_top = np.minimum.accumulate(layer_top, axis=1)  # non-increasing along the prefix
+            # A pixel shows the first (nearest) layer whose top is above it, so its layer index is the number
+            # of layers whose running top is below it: rows r < ceil(top). Count those by a histogram of
+            # thresholds and a cumulative sum down the rows (misses count nowhere).
+            q = np.where(hit, np.clip(np.ceil(running_top), 0, H), 0).astype(np.int64)
+            thresholds = np.bincount((q * W + col[:, None]).ravel(), minlength=(H + 1) * W).reshape(H + 1, W)
+            idx = k - np.cumsum(thresholds, axis=0, dtype=np.int16)[:H]  # (H, W) in 0..k
+            table = np.full((k + 1, W), np.nan, dtype=np.float32)
+            table[:k] = np.where(hit, np.take_along_axis(shade, order, axis=1), np.nan).T
+            flat = idx.astype(np.int64) * W + col[None, :]
+            value = table.ravel()[flat]
+            nearest_depth = layer_depth[:, 0]
+            floor_row = cy + f * h_cam / nearest_depth  # inf depth: the horizon, and no surface there anyway
+            shown = ~np.isnan(value) & (rows[:, None] <= floor_row[None, :])
+            image = np.where(shown, value, image)
+            layer_face = scene.marker_faces[order] & hit
+            if layer_face.any():
+                faces = np.zeros((k + 1, W), dtype=np.int64)
+                faces[:k] = np.where(layer_face, order, -1).T
+                faces[k] = -1
+                surf = faces.ravel()[flat]
+                for surface_index in np.unique(surf[shown & (surf >= 0)]):
+                    marker_index = scene.surfaces[int(surface_index)].marker
+                    assert marker_index is not None
+                    self._paint_marker(image, shown & (surf == surface_index), camera, scene, marker_index, view)
+        self._paint_glass(image, depth, tops, nearest_depth, cy, f, h_cam)
+        return image
+
+    def _paint_glass(self, image: np.ndarray, depth: np.ndarray, tops: np.ndarray, nearest_opaque: np.ndarray,
+                     cy: float, f: float, h_cam: float) -> None:
+        glass = ~self.scene.opaque
+        if not glass.any():
+            return
+        rows = self._level.rows
+        for s in np.flatnonzero(glass):
+            d = depth[:, s]
+            seen = np.isfinite(d) & (d < nearest_opaque)
+            if not seen.any():
+                continue
+            cols = np.flatnonzero(seen)
+            top = tops[cols, s]
+            bottom = cy + f * h_cam / d[cols]
+            mask = (rows[:, None] >= top[None, :]) & (rows[:, None] <= bottom[None, :])
+            sub = image[:, cols]
+            image[:, cols] = np.where(mask, 0.88 * sub + 0.12 * 235.0, sub)
+
+    def _paint_marker(self, image: np.ndarray, face_mask: np.ndarray, camera: Pose2D, scene: Scene,
+                      marker_index: int, view: _LevelView) -> None:
+        """Replace the face's flat white with the marker, warped by the homography of its corners."""
+        marker = scene.markers[marker_index]
+        corners = marker_corners_world(marker)  # (4, 3): TL, TR, BR, BL
+        pts = _project(corners, camera, self.params.mount_z_m, view)
+        if pts is None:
+            return
+        ss = _SUPERSAMPLE
+        side_px = float(np.max(np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1)))
+        texture = marker_texture(marker.dictionary, marker.marker_id, _texture_size(ss * side_px))
+        n = texture.shape[0]
+        src = np.array([[-0.5, -0.5], [n - 0.5, -0.5], [n - 0.5, n - 0.5], [-0.5, n - 0.5]], dtype=np.float32)
+        ys, xs = np.nonzero(face_mask)
+        x0, x1, y0, y1 = xs.min(), xs.max() + 1, ys.min(), ys.max() + 1
+        # Warp onto a grid ``ss`` times finer over the face's bounding box, then average each ss x ss block:
+        # every pixel gets the ink's area coverage, so the marker's edges fall where its corners project.
+        # Fine pixel (i, j) has its centre at image ((i + 0.5) / ss - 0.5 + x0, ...).
+        to_fine = np.array([[ss, 0, ss * (0.5 - x0) - 0.5], [0, ss, ss * (0.5 - y0) - 0.5], [0, 0, 1]], dtype=np.float64)
+        H = to_fine @ cv2.getPerspectiveTransform(src, pts.astype(np.float32))
+        fine = cv2.warpPerspective(texture, H, (int(x1 - x0) * ss, int(y1 - y0) * ss), flags=cv2.INTER_LINEAR,
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+        ink = cv2.resize(fine, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_AREA)
+        region = image[y0:y1, x0:x1]
+        face_shade = region / DOCK_FACE_ALBEDO  # the lit white of the face, per pixel
+        painted = face_shade * (MARKER_BLACK + (DOCK_FACE_ALBEDO - MARKER_BLACK) * ink)
+        image[y0:y1, x0:x1] = np.where(face_mask[y0:y1, x0:x1], painted, region)
+
+
+@dataclass(frozen=True)
+class _LevelView:
+    """The level camera's canvas: tall enough that a pitched view warps from it without gaps."""
+
+    width: int
+    height: int
+    focal_px: float
+    cx: float
+    cy: float
+    warp: np.ndarray | None
+    rows: np.ndarray
+    column_slopes: np.ndarray
+
+    @classmethod
+    def for_params(cls, p: CameraParams) -> _LevelView:
+        f = p.focal_px
+        cx, cy = p.centre_px
+        if p.pitch_rad == 0.0:
+            return cls(p.width, p.height, f, cx, cy, None, np.arange(p.height, dtype=np.float64),
+                       (np.arange(p.width) - cx) / f)
+        K = p.intrinsics()
+        # The pitched camera's rays in the level camera's frame (optical axes: x right, y down, z ahead).
+        c, s = math.cos(p.pitch_rad), math.sin(p.pitch_rad)
+        R = np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])  # pitched optical -> level optical
+        corners = np.array([[-0.5, -0.5, 1], [p.width - 0.5, -0.5, 1], [p.width - 0.5, p.height - 0.5, 1],
+                            [-0.5, p.height - 0.5, 1]], dtype=np.float64).T
+        level = R @ np.linalg.inv(K) @ corners
+        rows = f * level[1] / level[2] + cy
+        cols = f * level[0] / level[2] + cx
+        top, bottom = math.floor(rows.min()) - 2, math.ceil(rows.max()) + 2
+        left, right = math.floor(min(cols.min(), -0.5)) - 2, math.ceil(max(cols.max(), p.width - 0.5)) + 2
+        width, height = right - left, bottom - top
+        Kc = np.array([[f, 0.0, cx - left], [0.0, f, cy - top], [0.0, 0.0, 1.0]])
+        warp = Kc @ R @ np.linalg.inv(K)  # output pixel -> canvas pixel
+        return cls(width, height, f, cx - left, cy - top, np.linalg.inv(warp) / 1.0,
+                   np.arange(height, dtype=np.float64), (np.arange(width) - (cx - left)) / f)
+
+
+def _intersect(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, d: np.ndarray,
+               near: float) -> tuple[np.ndarray, np.ndarray]:
+    """Depth along each ray (in units of the ray vector) to each segment, inf when it misses; and where along."""
+    # origin + t r = a + u d  ->  t r - u d = a - origin
+    rx, ry = rays[:, 0:1], rays[:, 1:2]
+    dx, dy = d[None, :, 0], d[None, :, 1]
+    wx, wy = (a[:, 0] - origin[0])[None, :], (a[:, 1] - origin[1])[None, :]
+    den = -rx * dy + ry * dx
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (-wx * dy + wy * dx) / den
+        u = (rx * wy - ry * wx) / den
+    hit = (np.abs(den) > 1e-12) & (t > near) & (u >= 0.0) & (u <= 1.0)
+    return np.where(hit, t, np.inf), np.where(hit, u, np.nan)
+
+
+def marker_corners_world(marker: DockMarker) -> np.ndarray:
+    """The marker's corners in the world (x, y, z), in ArUco's order: top-left, top-right, bottom-right,
+    bottom-left as seen facing the marker."""
+    half = marker.size_m / 2.0
+    m = marker.pose  # x axis out of the dock, towards the viewer
+    # Facing the marker, the viewer's right is the marker frame's +y (its x axis points at the viewer).
+    rx, ry = -math.sin(m.yaw), math.cos(m.yaw)
+    z = marker.centre_height_m
+    out = []
+    for right, up in ((-half, half), (half, half), (half, -half), (-half, -half)):
+        out.append((m.x + right * rx, m.y + right * ry, z + up))
+    return np.array(out)
+
+
+def _project(points: np.ndarray, camera: Pose2D, h_cam: float, view: _LevelView) -> np.ndarray | None:
+    """Image points of world points on the level canvas; None when any is behind the camera."""
+    dx, dy = points[:, 0] - camera.x, points[:, 1] - camera.y
+    c, s = math.cos(camera.yaw), math.sin(camera.yaw)
+    ahead = c * dx + s * dy
+    left = -s * dx + c * dy
+    if np.any(ahead <= 1e-3):
+        return None
+    u = view.cx + view.focal_px * (-left) / ahead
+    v = view.cy + view.focal_px * (-(points[:, 2] - h_cam)) / ahead
+    return np.stack([u, v], axis=1)
+
+
+def _texture_size(side_px: float) -> int:
+    """A texture a little larger than the marker appears (bilinear sampling then neither aliases nor blurs)."""
+    size = 12
+    while size < 1.5 * side_px and size < 768:
+        size *= 2
+    return size
+
+
+@lru_cache(maxsize=64)
+def marker_texture(dictionary: str, marker_id: int, size_px: int) -> np.ndarray:
+    """The marker's ink, float32 in [0, 1] (1 is white), ``size_px`` a side, border cells included."""
+    d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
+    cells = d.markerSize + 2
+    # Draw at a whole number of pixels per cell, then resample with area averaging to the size asked.
+    per_cell = max(1, math.ceil(size_px / cells))
+    img = cv2.aruco.generateImageMarker(d, marker_id, cells * per_cell)
+    if img.shape[0] != size_px:
+        img = cv2.resize(img, (size_px, size_px), interpolation=cv2.INTER_AREA)
+    return (img.astype(np.float32) / 255.0)
+
+
+__all__ = ["CameraParams", "CameraRenderer", "Motion", "Scene", "Surface", "build_scene", "marker_corners_world",
+           "marker_texture"]
