@@ -34,13 +34,15 @@ from shared.world import World, load_world
 
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
 DEFAULT_WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
-DOCK_SERVICES = ("router", "map", "simulator", "battery", "pose", "planner", "docking")
+DOCK_SERVICES = ("router", "map", "simulator", "perception", "battery", "pose", "planner", "docking")
 
 
 @dataclass(frozen=True)
 class DemoOptions:
     world: Path = DEFAULT_WORLD
     controller: str = "graceful"
+    #: aruco: the dock is found in camera images by the perception service; synthetic: the simulator's truth
+    detector: str = "aruco"
     rtf: str = "1.0"
     seed: int = 0
     start: tuple[float, float, float] | None = None
@@ -102,6 +104,7 @@ def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dic
         "ZENOH_CONNECT": endpoint,
         "ZENDOCK_WORLD": str(options.world),
         "ZENDOCK_CONTROLLER": options.controller,
+        "ZENDOCK_DETECTOR": options.detector,
         "ZENDOCK_RTF": options.rtf,
         "ZENDOCK_SEED": str(options.seed),
         "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(options.localisation_error)),

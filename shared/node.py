@@ -424,8 +424,10 @@ class Subscription(Generic[M]):
             self._callback(msg)
 
     def undeclare(self) -> None:
+        """Stop receiving (a subscription a node declares and drops as its needs change)."""
         self._token.undeclare()
         self._subscriber.undeclare()
+        self._node._forget(self, self._token)
 
 
 class ServiceServer(Generic[Req, Res]):
@@ -650,6 +652,11 @@ class Node:
         )
         self._tokens.append(token)
         return token
+
+    def _forget(self, entity: Any, token: zenoh.LivelinessToken) -> None:
+        """Drop an undeclared entity and its endpoint token, so declaring and dropping never accumulates."""
+        self._entities = [e for e in self._entities if e is not entity]
+        self._tokens = [t for t in self._tokens if t is not token]
 
     def declare_ready(self) -> None:
         """Announce the node (its liveliness token): launchers treat this as healthy."""

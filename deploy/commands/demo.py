@@ -61,6 +61,7 @@ def _run(args: argparse.Namespace) -> int:
     options = DemoOptions(
         world=world.resolve(),
         controller=args.controller,
+        detector=args.detector,
         rtf=args.rtf,
         seed=args.seed,
         start=tuple(args.start) if args.start else None,
@@ -77,6 +78,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("demo", help="dock once on the full stack and report (what `make run` runs)")
     parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file")
     parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
+    parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
+                        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
     parser.add_argument("--rtf", type=_rtf, default="1.0", help="real-time factor of the simulator, or max")
     parser.add_argument("--seed", type=int, default=0, help="simulator noise seed")
     parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"), help="start pose (map frame)")

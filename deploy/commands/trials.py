@@ -77,7 +77,8 @@ def _run(args: argparse.Namespace) -> int:
     per_world = []
     for number, world in enumerate(worlds):
         # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
-        options = TrialOptions(world=world, n=args.n, controller=args.controller, seed=args.seed + 1000 * number,
+        options = TrialOptions(world=world, n=args.n, controller=args.controller, detector=args.detector,
+                               seed=args.seed + 1000 * number,
                                rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
                                chaos_period_s=args.chaos)
         try:
@@ -127,6 +128,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              f"default {DEFAULT_WORLD}")
     parser.add_argument("--n", type=_count, default=10, help="number of dockings (per world)")
     parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
+    parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
+                        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
     parser.add_argument("--seed", type=int, default=0, help="seed of the start poses and the simulator's noise")
     parser.add_argument("--rtf", type=_rtf, default="8", help="simulator real-time factor, or max")
     parser.add_argument("--workers", type=_count, default=1, help="robots docking side by side in one simulator")

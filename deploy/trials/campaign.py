@@ -156,7 +156,8 @@ def run_trials(
     records: dict[int, RunRecord] = {}
     errors: list[str] = []
     wall_start = time.monotonic()
-    log(f"{options.n} trials in {world.name} with {workers} robot(s), controller {options.controller}, rtf {options.rtf}")
+    log(f"{options.n} trials in {world.name} with {workers} robot(s), controller {options.controller}, "
+        f"detector {options.detector}, rtf {options.rtf}")
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
         launcher.wait_healthy(timeout_s=120.0)
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])

@@ -15,6 +15,9 @@ class TrialOptions:
     world: Path
     n: int = 10
     controller: str = "graceful"
+    #: How the robot finds its dock: ``aruco`` (camera images through the perception service) or
+    #: ``synthetic`` (the simulator's true dock pose plus noise).
+    detector: str = "aruco"
     seed: int = 0
     rtf: str = "8"
     workers: int = 1

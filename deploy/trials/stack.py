@@ -26,7 +26,8 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         "simulator": {
             "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
                         "-p", f"seed={options.seed}", "-p", f"robots={json.dumps(robots)}",
-                        "-p", f"localisation_error={json.dumps(list(options.localisation_error))}"],
+                        "-p", f"localisation_error={json.dumps(list(options.localisation_error))}",
+                        "-p", f"dock_detector={options.detector}"],
             "depends_on": {"router": {"condition": "service_started"}},
             "healthcheck": {"liveliness": True, "timeout": "30s"},
             "restart": "on-failure",
@@ -51,6 +52,9 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
             "depends_on": {"router": {"condition": "service_started"},
                            "map": {"condition": "service_completed_successfully"}},
         }
+        if options.detector == "aruco":
+            services[f"perception_{robot}"] = {**common, **health("perception"),
+                                               "command": [*py, "services.perception", "-p", f"dock_database={world}"]}
         services[f"docking_{robot}"] = {
             **common,
             **health("docking"),

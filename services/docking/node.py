@@ -71,7 +71,7 @@ from shared.messages import (
     Twist,
 )
 from shared.navigation import NavigationClient, TaskResult
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import run_service
@@ -127,7 +127,9 @@ class DockingService:
         node.create_subscription(BatteryState, topics.BATTERY_STATUS, self._on_battery, QoS(depth=5))
         node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_pose, QoS(depth=5))
         node.create_subscription(Odometry, topics.ODOM, self._on_odom, SENSOR_DATA)
-        node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE, self._on_detection, SENSOR_DATA)
+        #: Declared only while a docking run wants detections: the perception service sees no subscriber
+        #: otherwise, stops reading images, and the simulator stops rendering them.
+        self._detection_sub: Subscription[PoseStamped] | None = None
         node.create_subscription(LaserScan, topics.SCAN, self._on_scan, SENSOR_DATA)
         node.create_subscription(Range, topics.ULTRASONIC, self._on_sonar, SENSOR_DATA)
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
@@ -173,6 +175,14 @@ class DockingService:
             OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z),
             self.node.now(),
         )
+
+    def _want_detections(self, wanted: bool) -> None:
+        if wanted and self._detection_sub is None:
+            self._detection_sub = self.node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE,
+                                                                self._on_detection, SENSOR_DATA)
+        elif not wanted and self._detection_sub is not None:
+            self._detection_sub.undeclare()
+            self._detection_sub = None
 
     def _on_detection(self, msg: PoseStamped) -> None:
         task = self.task
@@ -275,6 +285,7 @@ class DockingService:
         self._last_now_s = now
         self._follow_mission(now)
         task = self.task
+        self._want_detections(isinstance(task, DockingRun) and self.params.use_detection)
         if task is not None:
             self._follow_correction()
             inputs = self._inputs(now)

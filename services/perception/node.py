@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
+from typing import Literal
 
 import cv2
 import numpy as np
@@ -27,6 +28,7 @@ from services.perception.images import ImageError, grey_pixels
 from services.perception.markers import DockSighting, MarkerFinder, MarkerSighting, locate_dock
 from shared import topics
 from shared.geometry import Pose2D
+from shared.memory import return_large_blocks
 from shared.messages import (
     CameraInfo,
     DockDetection,
@@ -36,7 +38,7 @@ from shared.messages import (
     PoseStamped,
     TFMessage,
 )
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
 from shared.ratelimit import RateLimitedLogger
 from shared.rigid3 import Rigid3, StaticTransforms
 from shared.runtime import ServiceParams, run_service
@@ -45,6 +47,8 @@ from shared.world import ROBOT_FRONT_M, DockMarker, dock_markers, load_world
 #: Images: the newest only (a late frame is worth less than the next one).
 IMAGE_QOS = QoS(reliable=False, block=False, depth=1)
 STATS_PERIOD_S = 30.0
+#: How often the service checks whether anyone subscribes to its detections (wall seconds).
+DEMAND_PERIOD_S = 0.2
 #: The marker's pose in the dock pose's frame: on the dock's face, facing the docked robot.
 _MARKER_ON_DOCK = Pose2D(ROBOT_FRONT_M, 0.0, math.pi)
 
@@ -55,6 +59,8 @@ class Params(ServiceParams):
     dock_database: str = Field(description="dock database or world file: docks with their marker ids and sizes")
     max_range_m: float = Field(3.5, gt=0, description="markers farther than this are not reported")
     max_reprojection_error_px: float = Field(2.0, gt=0, description="fits worse than this are refused")
+    dock_detector: Literal["aruco", "synthetic"] = Field(
+        "aruco", description="synthetic: the simulator reports docks itself and this service stays idle")
 
 
 class PerceptionService:
@@ -75,9 +81,28 @@ class PerceptionService:
         self.debug_pub = node.create_publisher(Image, topics.ARUCO_DEBUG_IMAGE, IMAGE_QOS)
         node.create_subscription(CameraInfo, topics.CAMERA_INFO, self._on_camera_info, QoS(depth=1))
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
-        node.create_subscription(Image, topics.CAMERA_IMAGE, self._on_image, IMAGE_QOS)
+        #: Images are read only while someone wants what comes of them (Zenoh's matching status on this
+        #: service's outputs), so the simulator renders no frame that nobody uses.
+        self._image_sub: Subscription[Image] | None = None
+        if params.dock_detector == "aruco":
+            self._follow_demand()
+            node.create_timer(DEMAND_PERIOD_S, self._follow_demand, wall=True)
+        else:
+            node.log.info("dock_detector is %s: the simulator reports docks, this service stays idle",
+                          params.dock_detector)
         node.log.info("%d dock marker(s) (%s) from %s", len(self.markers), world.aruco_dictionary,
                       params.dock_database)
+
+    def _follow_demand(self) -> None:
+        wanted = any(pub.has_subscribers() for pub in (self.detected_pub, self.detections_pub, self.debug_pub))
+        if wanted and self._image_sub is None:
+            self._image_sub = self.node.create_subscription(Image, topics.CAMERA_IMAGE, self._on_image, IMAGE_QOS)
+            self.node.log.info("someone wants dock detections: reading %s", topics.CAMERA_IMAGE)
+        elif not wanted and self._image_sub is not None:
+            self._image_sub.undeclare()
+            self._image_sub = None
+            self.node.log.info("no one wants dock detections: no longer reading images; frames so far %s",
+                               dict(sorted(self.counts.items())))
 
     # --- inputs --------------------------------------------------------------------------------------
 
@@ -203,5 +228,6 @@ def _invert(t: Rigid3) -> Rigid3:
 
 
 def main(argv: list[str] | None = None) -> int:
+    return_large_blocks()  # camera frames: image-sized temporaries at 15 Hz
     return run_service("perception", Params, PerceptionService, argv,
                        description="zendock perception: ArUco markers in camera images -> dock poses")

@@ -197,7 +197,8 @@ class CameraRenderer:
         for a detector (independent per pixel within a frame, different from frame to frame).
         """
         if len(self._noise_bank) < 2 * n:
-            self._noise_bank = self.rng.normal(0.0, self.params.noise_sigma, 2 * n).astype(np.float32)
+            self._noise_bank = self.rng.standard_normal(2 * n, dtype=np.float32)
+            self._noise_bank *= np.float32(self.params.noise_sigma)
         start = int(self.rng.integers(0, n))
         return self._noise_bank[start:start + n]
 
@@ -212,14 +213,17 @@ class CameraRenderer:
         if level.warp is not None:
             radiance = cv2.warpPerspective(radiance, level.warp, (p.width, p.height), flags=cv2.INTER_LINEAR,
                                            borderMode=cv2.BORDER_REPLICATE)
-        image = radiance * np.float32(p.gain)
+        image = radiance  # a fresh array: scaled, blurred and clipped in place
+        if p.gain != 1.0:
+            image *= np.float32(p.gain)
         blur_px = abs(motion.angular_radps) * p.exposure_s * p.focal_px
         if blur_px >= 1.0:
             k = int(round(blur_px)) | 1
             image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
         if p.noise_sigma > 0:
             image += self._noise(image.size).reshape(image.shape)
-        return np.clip(image, 0, 255).astype(np.uint8)
+        np.clip(image, 0, 255, out=image)
+        return image.astype(np.uint8)
 
     # --- geometry ------------------------------------------------------------------------------------
 
@@ -262,23 +266,30 @@ class CameraRenderer:
             hit = np.isfinite(layer_depth)  # a prefix of each row: misses sort last
             layer_top = np.where(hit, np.take_along_axis(tops, order, axis=1), np.inf)
             running_top = np.minimum.accumulate(layer_top, axis=1)  # non-increasing along the prefix
-            # A pixel shows the first (nearest) layer whose top is above it, so its layer index is the number
-            # of layers whose running top is below it: rows r < ceil(top). Count those by a histogram of
-            # thresholds and a cumulative sum down the rows (misses count nowhere).
-            q = np.where(hit, np.clip(np.ceil(running_top), 0, H), 0).astype(np.int64)
-            thresholds = np.bincount((q * W + col[:, None]).ravel(), minlength=(H + 1) * W).reshape(H + 1, W)
-            idx = k - np.cumsum(thresholds, axis=0, dtype=np.int16)[:H]  # (H, W) in 0..k
+            # A pixel shows the first (nearest) layer whose top is above it: row r shows layer
+            # k - #{layers with ceil(top) <= r}. A miss counts on every row (threshold 0), so a column with
+            # h hits ends at layer h, whose table entry is NaN (the floor). One (H, W) int16 for all k layers.
+            q = np.where(hit, np.clip(np.ceil(running_top), 0, H), 0).astype(np.int32)
+            row_index = np.arange(H, dtype=np.int32)[:, None]
+            idx = np.full((H, W), k, dtype=np.int16)
+            for j in range(k):
+                idx -= row_index >= q[None, :, j]
             table = np.full((k + 1, W), np.nan, dtype=np.float32)
             table[:k] = np.where(hit, np.take_along_axis(shade, order, axis=1), np.nan).T
-            flat = idx.astype(np.int64) * W + col[None, :]
+            flat = idx.astype(np.int32)
+            flat *= W
+            flat += col[None, :].astype(np.int32)
             value = table.ravel()[flat]
             nearest_depth = layer_depth[:, 0]
             floor_row = cy + f * h_cam / nearest_depth  # inf depth: the horizon, and no surface there anyway
-            shown = ~np.isnan(value) & (rows[:, None] <= floor_row[None, :])
-            image = np.where(shown, value, image)
+            shown = np.isnan(value)
+            np.logical_not(shown, out=shown)
+            shown &= rows[:, None] <= floor_row[None, :]
+            np.copyto(image, value, where=shown)
+            del value
             layer_face = scene.marker_faces[order] & hit
             if layer_face.any():
-                faces = np.zeros((k + 1, W), dtype=np.int64)
+                faces = np.zeros((k + 1, W), dtype=np.int32)
                 faces[:k] = np.where(layer_face, order, -1).T
                 faces[k] = -1
                 surf = faces.ravel()[flat]
@@ -315,25 +326,36 @@ class CameraRenderer:
         pts = _project(corners, camera, self.params.mount_z_m, view)
         if pts is None:
             return
-        ss = _SUPERSAMPLE
         side_px = float(np.max(np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1)))
+        # A large marker needs no supersampling to put its edges right; a whole-image one would cost 9x.
+        ss = _SUPERSAMPLE if side_px < 120 else (2 if side_px < 240 else 1)
         texture = marker_texture(marker.dictionary, marker.marker_id, _texture_size(ss * side_px))
         n = texture.shape[0]
         src = np.array([[-0.5, -0.5], [n - 0.5, -0.5], [n - 0.5, n - 0.5], [-0.5, n - 0.5]], dtype=np.float32)
         ys, xs = np.nonzero(face_mask)
-        x0, x1, y0, y1 = xs.min(), xs.max() + 1, ys.min(), ys.max() + 1
+        # Only the marker's own box (within the face's) changes: the rest of the face stays plain white.
+        x0 = max(int(xs.min()), math.floor(float(pts[:, 0].min())) - 1)
+        x1 = min(int(xs.max()) + 1, math.ceil(float(pts[:, 0].max())) + 2)
+        y0 = max(int(ys.min()), math.floor(float(pts[:, 1].min())) - 1)
+        y1 = min(int(ys.max()) + 1, math.ceil(float(pts[:, 1].max())) + 2)
+        if x1 <= x0 or y1 <= y0:
+            return
         # Warp onto a grid ``ss`` times finer over the face's bounding box, then average each ss x ss block:
         # every pixel gets the ink's area coverage, so the marker's edges fall where its corners project.
         # Fine pixel (i, j) has its centre at image ((i + 0.5) / ss - 0.5 + x0, ...).
         to_fine = np.array([[ss, 0, ss * (0.5 - x0) - 0.5], [0, ss, ss * (0.5 - y0) - 0.5], [0, 0, 1]], dtype=np.float64)
         H = to_fine @ cv2.getPerspectiveTransform(src, pts.astype(np.float32))
         fine = cv2.warpPerspective(texture, H, (int(x1 - x0) * ss, int(y1 - y0) * ss), flags=cv2.INTER_LINEAR,
-                                   borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
-        ink = cv2.resize(fine, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_AREA)
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=255)
+        if ss > 1:
+            fine = cv2.resize(fine, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_AREA)
+        # The face's lit white times the ink's reflectance, one float32 temporary for the whole box.
+        shade = fine.astype(np.float32)
+        shade *= np.float32((DOCK_FACE_ALBEDO - MARKER_BLACK) / (255.0 * DOCK_FACE_ALBEDO))
+        shade += np.float32(MARKER_BLACK / DOCK_FACE_ALBEDO)
         region = image[y0:y1, x0:x1]
-        face_shade = region / DOCK_FACE_ALBEDO  # the lit white of the face, per pixel
-        painted = face_shade * (MARKER_BLACK + (DOCK_FACE_ALBEDO - MARKER_BLACK) * ink)
-        image[y0:y1, x0:x1] = np.where(face_mask[y0:y1, x0:x1], painted, region)
+        shade *= region
+        np.copyto(region, shade, where=face_mask[y0:y1, x0:x1])
 
 
 @dataclass(frozen=True)
@@ -426,7 +448,7 @@ def _texture_size(side_px: float) -> int:
 
 @lru_cache(maxsize=64)
 def marker_texture(dictionary: str, marker_id: int, size_px: int) -> np.ndarray:
-    """The marker's ink, float32 in [0, 1] (1 is white), ``size_px`` a side, border cells included."""
+    """The marker's ink, uint8 (255 is white), ``size_px`` a side, border cells included."""
     d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
     cells = d.markerSize + 2
     # Draw at a whole number of pixels per cell, then resample with area averaging to the size asked.
@@ -434,7 +456,7 @@ def marker_texture(dictionary: str, marker_id: int, size_px: int) -> np.ndarray:
     img = cv2.aruco.generateImageMarker(d, marker_id, cells * per_cell)
     if img.shape[0] != size_px:
         img = cv2.resize(img, (size_px, size_px), interpolation=cv2.INTER_AREA)
-    return (img.astype(np.float32) / 255.0)
+    return img
 
 
 __all__ = ["CameraParams", "CameraRenderer", "Motion", "Scene", "Surface", "build_scene", "marker_corners_world",

@@ -17,7 +17,7 @@ import threading
 import time
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator
@@ -40,6 +40,7 @@ from shared.interfaces.simulator import (
     TeleportRequest,
     TeleportResponse,
 )
+from shared.memory import return_large_blocks
 from shared.messages import (
     CameraInfo,
     Clock,
@@ -110,7 +111,9 @@ class Params(ServiceParams):
     ultrasonic_noise_m: float = Field(0.005, ge=0)
     ultrasonic_fov_rad: float = Field(0.5, gt=0, lt=math.pi)
     ultrasonic_max_range_m: float = Field(3.0, gt=0)
-    detection_enabled: bool = True
+    #: Who tells the docking service where the dock is: ``aruco`` leaves it to the perception service
+    #: (which reads camera/image_raw); ``synthetic`` publishes detected_dock_pose from the true pose plus noise.
+    dock_detector: Literal["aruco", "synthetic"] = "synthetic"
     detection_latency_s: float = Field(0.05, ge=0)
     detection_position_noise_m: float = Field(0.003, ge=0)
     detection_yaw_noise_rad: float = Field(0.01, ge=0)
@@ -442,7 +445,7 @@ class SimulatorService:
                 self._publish_scan(robot, stamp)
             if sonar:
                 self._publish_sonar(robot, stamp)
-            if detect and self.params.detection_enabled:
+            if detect and self.params.dock_detector == "synthetic":
                 self._capture_detection(robot, now)
             self._release_detections(robot, now)
             if camera and robot.camera is not None:
@@ -555,6 +558,7 @@ def _add_flags(parser: Any) -> dict[str, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    return_large_blocks()  # camera frames: image-sized temporaries at 15 Hz
     return run_service("simulator", Params, SimulatorService, argv,
                        description="zendock simulator: physics, clock, odometry, tf and sensors",
                        add_flags=_add_flags)

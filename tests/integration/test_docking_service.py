@@ -281,7 +281,8 @@ LARGE_LOCALISATION_ERROR = "[0.03,0.06,0.03]"
 
 @pytest.mark.parametrize("detection", [True, False], ids=["detection", "blind"])
 def test_detection_is_what_docks_a_mislocalised_robot(stack, detection: bool) -> None:  # type: ignore[no-untyped-def]
-    s: Stack = stack(sim=(f"localisation_error={LARGE_LOCALISATION_ERROR}", f"detection_enabled={str(detection).lower()}"),
+    # Blind: the simulator leaves detection to a perception service, and none runs.
+    s: Stack = stack(sim=(f"localisation_error={LARGE_LOCALISATION_ERROR}", f"dock_detector={'synthetic' if detection else 'aruco'}"),
                      battery=("initial_percentage=0.2",))
     s.start_docking("max_retries=1", "wait_charge_timeout_s=2")
     after = s.wait_state("CONTROLLING", timeout_s=30.0)

@@ -23,7 +23,7 @@ from tests.support.processes import REPO_ROOT, free_port
 
 SECURE = REPO_ROOT / "deploy/zenoh/secure"
 SEED_ROOM = str(REPO_ROOT / "deploy/worlds/seed_room.yaml")
-USERS = ("simulator", "battery", "pose", "planner", "docking", "viz", "operator", "viewer")
+USERS = ("simulator", "battery", "pose", "planner", "docking", "perception", "viz", "operator", "viewer")
 CONNECT_TIMEOUT_MS = 1000
 
 

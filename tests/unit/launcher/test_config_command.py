@@ -32,7 +32,8 @@ def test_config_prints_the_interpolated_default_stack(monkeypatch, capsys) -> No
 def test_config_lists_services_and_profiles(monkeypatch, capsys) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.chdir(REPO_ROOT)
     assert main(["config", "--services"]) == 0
-    assert capsys.readouterr().out.split() == ["router", "map", "simulator", "battery", "pose", "planner", "docking", "viz"]
+    assert capsys.readouterr().out.split() == ["router", "map", "simulator", "perception", "battery", "pose", "planner",
+                                              "docking", "viz"]
     assert main(["config", "--profiles"]) == 0
     assert capsys.readouterr().out.split() == ["viz"]
 

@@ -235,7 +235,8 @@ def test_the_default_stack_validates_with_its_services() -> None:
     assert stack.project_name == "zendock"
     assert stack.namespace == ""
     assert stack.connect == ("tcp/127.0.0.1:7447",)
-    assert stack.select() == ["router", "map", "simulator", "battery", "pose", "planner", "docking"]
+    assert stack.select() == ["router", "map", "simulator", "perception", "battery", "pose", "planner",
+                              "docking"]
     assert stack.services["viz"].profiles == ["viz"]
     assert "viz" in stack.select(profiles=["viz"])
     assert stack.services["router"].command == ["zendock", "router", "--listen", "tcp/127.0.0.1:7447"]
@@ -246,7 +247,7 @@ def test_zendock_world_alone_switches_the_default_stack() -> None:
     world = "deploy/worlds/glass_room.yaml"
     stack = load_stack(DEFAULT_STACK, env={"ZENDOCK_WORLD": world}, project_dir=REPO_ROOT)
     mentions = {name: " ".join(spec.command) for name, spec in stack.services.items() if world in " ".join(spec.command)}
-    assert set(mentions) == {"map", "simulator", "docking", "viz"}
+    assert set(mentions) == {"map", "simulator", "perception", "docking", "viz"}
     assert "seed_room" not in " ".join(" ".join(spec.command) for spec in stack.services.values())
     map_file = stack.services["map"].command[stack.services["map"].command.index("-o") + 1]
     assert f"map_yaml={map_file}" in stack.services["planner"].command
@@ -257,3 +258,12 @@ def test_router_endpoints_follow_the_variables() -> None:
     stack = load_stack(DEFAULT_STACK, env=env, project_dir=REPO_ROOT)
     assert stack.services["router"].command[-1] == "tcp/127.0.0.1:7500"
     assert stack.connect == ("tcp/127.0.0.1:7500",)
+
+
+def test_zendock_detector_switches_who_reports_the_dock() -> None:
+    for detector in ("aruco", "synthetic"):
+        stack = load_stack(DEFAULT_STACK, env={"ZENDOCK_DETECTOR": detector}, project_dir=REPO_ROOT)
+        assert f"dock_detector={detector}" in stack.services["simulator"].command
+        assert f"dock_detector={detector}" in stack.services["perception"].command
+    default = load_stack(DEFAULT_STACK, env={}, project_dir=REPO_ROOT)
+    assert "dock_detector=aruco" in default.services["simulator"].command
