@@ -11,17 +11,13 @@ cost, and in the glass room what discovering the glass costs.
 from __future__ import annotations
 
 import math
-import os
-import signal
-import socket
-import subprocess
-import sys
 import tempfile
 import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from deploy.bench.processes import ServiceGroup, free_port
 from deploy.paths import REPO_ROOT
 from deploy.service_tools import run_tool
 from shared.action import spin_in_background
@@ -71,51 +67,6 @@ class RouteResult:
         }
 
 
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-class _Stack:
-    """Simulator, pose and planner processes, each in its own process group, logs in a temp dir."""
-
-    def __init__(self, endpoint: str, namespace: str, world: str, rtf: float, log_dir: Path) -> None:
-        common = ["--connect", endpoint, "--namespace", namespace]
-        commands = {
-            "simulator": ["--world", world, "-p", f"rtf={rtf}"],
-            "pose": ["-p", "use_sim_time=true"],
-            "planner": ["-p", "use_sim_time=true", "-p", f"world={world}"],
-        }
-        self.log_dir = log_dir
-        self.procs: dict[str, subprocess.Popen[bytes]] = {}
-        for name, args in commands.items():
-            with open(log_dir / f"{name}.log", "wb") as log:
-                self.procs[name] = subprocess.Popen(
-                    [sys.executable, "-m", f"services.{name}", *common, *args],
-                    cwd=REPO_ROOT, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
-                )
-
-    def tails(self, lines: int = 15) -> str:
-        """The last lines of every log, for an error message (the log directory is temporary)."""
-        parts = []
-        for name in self.procs:
-            text = (self.log_dir / f"{name}.log").read_text(errors="replace").splitlines()[-lines:]
-            parts.append(f"--- {name} ---\n" + "\n".join(text))
-        return "\n".join(parts)
-
-    def close(self) -> None:
-        for proc in self.procs.values():
-            for sig, wait_s in ((signal.SIGINT, 5.0), (signal.SIGKILL, 5.0)):
-                if proc.poll() is not None:
-                    break
-                try:
-                    os.killpg(proc.pid, sig)
-                    proc.wait(wait_s)
-                except (ProcessLookupError, subprocess.TimeoutExpired):
-                    continue
-
-
 class _Odometer:
     """Sums the ground-truth distance driven while ``running``."""
 
@@ -152,10 +103,15 @@ def _shortest_path_length_m(world_file: str, start: Pose2D, goal: tuple[float, f
 def _drive_world(world_file: str, goals: tuple[tuple[float, float, float], ...], rtf: float,
                  timeout_s: float, log_dir: Path) -> list[RouteResult]:
     world = load_world(REPO_ROOT / world_file)
-    endpoint, namespace = f"tcp/127.0.0.1:{_free_port()}", "bench"
+    endpoint, namespace = f"tcp/127.0.0.1:{free_port()}", "bench"
     results = []
     with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))):
-        stack = _Stack(endpoint, namespace, str(REPO_ROOT / world_file), rtf, log_dir)
+        world_path = str(REPO_ROOT / world_file)
+        stack = ServiceGroup(endpoint, namespace, {
+            "simulator": ["--world", world_path, "-p", f"rtf={rtf}"],
+            "pose": ["-p", "use_sim_time=true"],
+            "planner": ["-p", "use_sim_time=true", "-p", f"world={world_path}"],
+        }, log_dir)
         try:
             with open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
                 node = Node("bench_navigation", session, namespace)

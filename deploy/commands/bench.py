@@ -9,6 +9,7 @@ import sys
 from rich.console import Console
 from rich.table import Table
 
+from deploy import strict_json
 from deploy.service_tools import run_tool
 
 
@@ -86,6 +87,29 @@ def _bench_planner(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_perception(args: argparse.Namespace) -> int:
+    from deploy.bench.perception import run_perception_bench  # noqa: PLC0415 - starts a stack
+
+    try:
+        report = run_perception_bench(frames_per_point=args.frames)
+    except RuntimeError as exc:
+        print(f"zendock bench perception: {exc}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title=f"dock from pixels: detection rate and error by distance (angles {report['angles_deg']} deg)")
+    for column in ("distance", "detected", "position median", "position p95", "yaw median"):
+        table.add_column(column, justify="right")
+    for distance, row in report["by_range"].items():
+        table.add_row(distance, f"{100 * row['detection_rate']:.0f} %", f"{row['median_position_error_mm']} mm",
+                      f"{row['p95_position_error_mm']} mm", f"{row['median_yaw_error_deg']} deg")
+    Console().print(table)
+    print(f"all viewpoints: {100 * report['detection_rate']:.0f} % of frames; image to dock pose "
+          f"{report['median_latency_ms']} ms (median)")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("bench", help="benchmarks (latency, throughput, planning, docking)")
     verbs = parser.add_subparsers(dest="bench", metavar="BENCH")
@@ -99,6 +123,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sim.add_argument("--seconds", type=float, default=60.0, help="simulated seconds to run")
     sim.add_argument("--json", action="store_true")
     sim.set_defaults(func=_bench_sim)
+
+    perception = verbs.add_parser("perception", help="dock detection from rendered camera images: rate, error, latency")
+    perception.add_argument("--frames", type=int, default=12, help="frames per viewpoint")
+    perception.add_argument("--json", action="store_true")
+    perception.set_defaults(func=_bench_perception)
     planner = verbs.add_parser(
         "planner", help="planning time on a 20 m room; time to goal with the real stack vs the shortest path")
     planner.add_argument("--repeats", type=int, default=5, help="planning repeats per route (medians)")

@@ -16,6 +16,7 @@ import foxglove
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener
 
 from shared.foxglove_view import ViewMessage
+from shared.foxglove_view.encoding import ViewSchema
 
 log = logging.getLogger(__name__)
 
@@ -93,18 +94,29 @@ class LiveView:
         """Tell viewers the robot's time (so a sim-time run shows sim time on their timeline)."""
         self._server.broadcast_time(now_ns)
 
-    def _log(self, message: ViewMessage, log_time_ns: int) -> None:
-        channel = self._channels.get(message.topic)
+    def advertise(self, topic: str, schema: ViewSchema) -> None:
+        """Offer ``topic`` before any message exists (an on-demand stream starts when someone subscribes)."""
+        self._channel(topic, schema)
+
+    def has_viewer(self, topic: str) -> bool:
+        channel = self._channels.get(topic)
+        return channel is not None and channel.has_sinks()
+
+    def _channel(self, topic: str, schema: ViewSchema) -> foxglove.Channel:
+        channel = self._channels.get(topic)
         if channel is None:
-            schema = message.schema
             channel = foxglove.Channel(
-                message.topic,
+                topic,
                 schema=foxglove.Schema(name=schema.name, encoding=schema.encoding, data=schema.data),
                 message_encoding=schema.message_encoding,
                 context=self._context,
             )
-            self._channels[message.topic] = channel
-            log.info("advertising %s (%s)", message.topic, schema.name)
+            self._channels[topic] = channel
+            log.info("advertising %s (%s)", topic, schema.name)
+        return channel
+
+    def _log(self, message: ViewMessage, log_time_ns: int) -> None:
+        channel = self._channel(message.topic, message.schema)
         channel.log(message.data, log_time=max(0, log_time_ns))
         self.sent += 1
 

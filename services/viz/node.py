@@ -33,7 +33,7 @@ from shared.foxglove_view import (
 )
 from shared.interfaces.map_server import GET_MAP, GET_MAP_SERVICE, GetMapRequest, GetMapResponse
 from shared.messages import OccupancyGrid
-from shared.node import SENSOR_DATA, Node, QoS, ServiceError
+from shared.node import SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.runtime import ServiceParams, run_service
 from shared.schema import Message
 from shared.topics import MAP
@@ -44,6 +44,8 @@ LATCHED_QOS = QoS(depth=2)
 #: Everything else that is reliable (tf, poses, battery): a short queue, the view only shows the latest.
 STATE_QOS = QoS(depth=10)
 MAP_REQUEST_PERIOD_S = 5.0
+#: How often the live view checks whether a viewer watches an on-demand stream (wall seconds).
+ON_DEMAND_CHECK_S = 0.5
 #: The view's default Zenoh settings: no shared memory (see the file), which keeps its RSS under 100 MB.
 ZENOH_CONFIG = Path(__file__).with_name("zenoh.json5")
 MAP_VIEW = next(v for v in VIEWS if v.topic == MAP and v.msg_type is OccupancyGrid)
@@ -83,10 +85,16 @@ class VizService:
         self._robot_topic = view_topic(node.namespace, ROBOT_VIEW_TOPIC)
         self._map_received = False
         self._publish_scenes()
+        #: On-demand views (camera frames): the Foxglove topic, and the bus subscription while a viewer watches.
+        self._on_demand: dict[str, tuple[View, Subscription[Any] | None]] = {}
         for view in VIEWS:
-            qos = SENSOR_DATA if view.sensor else LATCHED_QOS if view.latched else STATE_QOS
-            node.create_subscription(view.msg_type, view.topic, lambda key, msg, v=view: self._on_message(v, key, msg),
-                                     qos, with_key=True)
+            if view.on_demand and view.schema is not None:
+                topic = view_topic(node.namespace, view.topic)
+                self._view.advertise(topic, view.schema)
+                self._on_demand[topic] = (view, None)
+            else:
+                self._subscribe(view)
+        self._demand_timer = node.create_timer(ON_DEMAND_CHECK_S, self._follow_viewers, wall=True)
         self._time_timer = node.create_timer(1.0 / params.time_broadcast_hz, self._broadcast_time, wall=True)
         self._map_timer = node.create_timer(MAP_REQUEST_PERIOD_S, self._request_map, wall=True)
         self._request_map()
@@ -111,6 +119,23 @@ class VizService:
             self._view.broadcast_time(self._now_ns())
 
     # --- inputs ----------------------------------------------------------------------------------
+
+    def _subscribe(self, view: View) -> Subscription[Any]:
+        qos = SENSOR_DATA if view.sensor else LATCHED_QOS if view.latched else STATE_QOS
+        return self._node.create_subscription(view.msg_type, view.topic,
+                                              lambda key, msg, v=view: self._on_message(v, key, msg), qos, with_key=True)
+
+    def _follow_viewers(self) -> None:
+        """Subscribe to an on-demand stream while a viewer watches it, so frames are made only then."""
+        for topic, (view, sub) in self._on_demand.items():
+            watched = self._view.has_viewer(topic)
+            if watched and sub is None:
+                self._on_demand[topic] = (view, self._subscribe(view))
+                self._log.info("a viewer watches %s: subscribing", topic)
+            elif not watched and sub is not None:
+                sub.undeclare()
+                self._on_demand[topic] = (view, None)
+                self._log.info("no viewer on %s: unsubscribed", topic)
 
     def _on_message(self, view: View, key: str, msg: Message) -> None:
         if view.topic == MAP:
@@ -152,6 +177,7 @@ class VizService:
     def close(self) -> None:
         self._time_timer.cancel()
         self._map_timer.cancel()
+        self._demand_timer.cancel()
         self._view.close()
 
 

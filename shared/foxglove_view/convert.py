@@ -18,6 +18,7 @@ from shared.foxglove_view.encoding import (
     ViewMessage,
     json_schema,
     json_view,
+    protobuf_schema,
     protobuf_view,
     stamp_ns,
     timestamp,
@@ -27,6 +28,7 @@ from shared.messages import (
     CollisionEvent,
     DockContact,
     Float64MultiArray,
+    Image,
     LaserScan,
     OccupancyGrid,
     Path,
@@ -229,6 +231,17 @@ def pose_stamped(topic: str, msg: PoseStamped) -> list[ViewMessage]:
     pose = fg.PoseInFrame(timestamp=timestamp(msg.header.stamp), frame_id=msg.header.frame_id,
                           pose=foxglove_pose(msg.pose))
     return [protobuf_view(topic, pose, stamp_ns(msg.header.stamp))]
+
+
+#: What an on-demand image channel is advertised with before its first frame.
+RAW_IMAGE_SCHEMA = protobuf_schema(fg.RawImage)
+
+
+def raw_image(topic: str, msg: Image) -> list[ViewMessage]:
+    """A camera frame as Foxglove's RawImage (mono8, rgb8, ... as they come: the same encodings)."""
+    image = fg.RawImage(timestamp=timestamp(msg.header.stamp), frame_id=msg.header.frame_id, width=msg.width,
+                        height=msg.height, encoding=msg.encoding, step=msg.step, data=msg.data.tobytes())
+    return [protobuf_view(topic, image, stamp_ns(msg.header.stamp))]
 
 
 def pose2d_array(topic: str, msg: Float64MultiArray) -> list[ViewMessage]:

@@ -13,13 +13,14 @@ from typing import Any
 
 from shared import topics
 from shared.foxglove_view import convert
-from shared.foxglove_view.encoding import ViewMessage
+from shared.foxglove_view.encoding import ViewMessage, ViewSchema
 from shared.interfaces.map_server import COSTMAP_TOPIC
 from shared.messages import (
     BatteryState,
     CollisionEvent,
     DockContact,
     Float64MultiArray,
+    Image,
     LaserScan,
     OccupancyGrid,
     Path,
@@ -41,6 +42,8 @@ class View:
 
     ``sensor``: a best-effort stream, subscribed with ``SENSOR_DATA``. ``latched``: rare and lasting
     (maps, the plan, static transforms): a viewer that subscribes late gets the latest at once.
+    ``on_demand``: costly to make (camera frames are rendered only while someone subscribes): the live
+    view subscribes on the bus only while a viewer watches it.
     """
 
     topic: str
@@ -48,6 +51,9 @@ class View:
     convert: Callable[[str, Any], list[ViewMessage]]
     sensor: bool = False
     latched: bool = False
+    on_demand: bool = False
+    #: The channel's schema, for on-demand views advertised before their first message.
+    schema: ViewSchema | None = None
 
 
 VIEWS: tuple[View, ...] = (
@@ -64,8 +70,10 @@ VIEWS: tuple[View, ...] = (
     View(topics.BATTERY_STATUS, BatteryState, convert.battery_status),
     View(topics.DOCK_CONTACT, DockContact, convert.dock_contact),
     View(topics.COLLISIONS, CollisionEvent, convert.collision, latched=True),
+    View(topics.CAMERA_IMAGE, Image, convert.raw_image, sensor=True, on_demand=True, schema=convert.RAW_IMAGE_SCHEMA),
+    View(topics.ARUCO_DEBUG_IMAGE, Image, convert.raw_image, sensor=True, on_demand=True,
+         schema=convert.RAW_IMAGE_SCHEMA),
 )
-_BY_TOPIC = {view.topic: view for view in VIEWS}
 
 
 def view_topic(namespace: str, topic: str) -> str:
@@ -75,9 +83,12 @@ def view_topic(namespace: str, topic: str) -> str:
 
 def view_for_key(key: str) -> tuple[View, str] | None:
     """The view of a Zenoh key and the namespace it is in, e.g. ``robot1/scan`` -> (scan view, ``robot1``)."""
-    namespace, _, topic = key.rpartition("/")
-    view = _BY_TOPIC.get(topic)
-    return (view, namespace) if view is not None else None
+    for view in VIEWS:  # topics may have several segments (camera/image_raw)
+        if key == view.topic:
+            return view, ""
+        if key.endswith("/" + view.topic):
+            return view, key[: -len(view.topic) - 1]
+    return None
 
 
 def convert_key(key: str, type_name: str, payload: bytes) -> list[ViewMessage]:

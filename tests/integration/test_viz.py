@@ -70,3 +70,23 @@ def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namesp
         assert client.pump_until(lambda c: f"{ns}/scan" in c.topics(), 20.0)
     finally:
         client.__exit__()
+
+
+def test_the_camera_is_rendered_only_while_a_viewer_watches_it(spawn, bus: zenoh.Session,
+                                                               namespace: str) -> None:  # type: ignore[no-untyped-def]
+    port = free_port()
+    spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=1")
+    viz = spawn("viz", "--world", GLASS_ROOM, "--port", str(port))
+    camera = f"/{namespace}/camera/image_raw"
+    client = _connect(f"ws://127.0.0.1:{port}", viz)
+    try:
+        assert client.pump_until(lambda c: camera in c.topics(), 20.0), sorted(client.topics())
+        assert client.topics()[camera]["schemaName"] == "foxglove.RawImage"
+        assert "subscribing" not in viz.output()  # advertised, but nothing asked of the bus yet
+        client.subscribe(camera)
+        assert client.pump_until(lambda c: c.received(camera), 20.0), viz.output()[-1500:]
+        frame = client.received(camera)[-1].payload
+        assert len(frame) > 640 * 480 and b"mono8" in frame
+    finally:
+        client.__exit__()
+    wait_until(lambda: "no viewer on" in viz.output(), 10.0, lambda: viz.output()[-1500:])
