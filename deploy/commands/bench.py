@@ -105,8 +105,9 @@ def _bench_perception(args: argparse.Namespace) -> int:
         table.add_row(distance, f"{100 * row['detection_rate']:.0f} %", f"{row['median_position_error_mm']} mm",
                       f"{row['p95_position_error_mm']} mm", f"{row['median_yaw_error_deg']} deg")
     Console().print(table)
-    print(f"all viewpoints: {100 * report['detection_rate']:.0f} % of frames; image to dock pose "
-          f"{report['median_latency_ms']} ms (median)")
+    print(f"all viewpoints: {100 * report['detection_rate']:.1f} % of frames; image to dock pose "
+          f"{report['median_latency_ms']} ms (median); render {report['render_ms_per_frame']} ms per frame; "
+          f"perception {report['perception_cpu_ms_per_frame']} ms CPU per frame")
     return 0
 
 

@@ -115,6 +115,11 @@ class DockingConfig:
     back_off_gains: GracefulGains = field(default_factory=back_off_gains)
 
 
+#: Where a dock could be in a forward camera's view (its range, and half its field of view plus a margin).
+DETECTION_VIEW_RANGE_M = 3.5
+DETECTION_VIEW_BEARING_RAD = math.radians(50.0)
+
+
 class RunPhase(enum.Enum):
     STARTING = "starting"
     RETREAT = "retreat"
@@ -199,6 +204,23 @@ class DockingRun(Task[RunPhase]):
     def relocalised(self, correction: Pose2D) -> None:
         """The localiser's map -> odom correction moved by ``correction``: detections move with odometry."""
         self.tracker.shift(correction)
+
+    def wants_detections(self, robot_pose: Pose2D | None) -> bool:
+        """Whether detections could help now: from staging on, or on the way once the dock could be in view.
+
+        Detections cost a rendered and analysed camera frame each, so the run asks for them only when the
+        dock is within ``DETECTION_VIEW_RANGE_M`` and ``DETECTION_VIEW_BEARING_RAD`` of the robot's heading.
+        """
+        if not self.config.use_detection or self.done:
+            return False
+        if self.phase in (RunPhase.INITIAL_PERCEPTION, RunPhase.CONTROLLING, RunPhase.WAIT_FOR_CHARGE):
+            return True
+        dock = self.dock_pose
+        if robot_pose is None or dock is None:
+            return False
+        seen = dock.relative_to(robot_pose)
+        return (math.hypot(seen.x, seen.y) < DETECTION_VIEW_RANGE_M
+                and abs(math.atan2(seen.y, seen.x)) < DETECTION_VIEW_BEARING_RAD)
 
     def docking_time_s(self, now_s: float) -> float:
         return 0.0 if self.started_s is None else now_s - self.started_s

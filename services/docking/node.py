@@ -83,6 +83,8 @@ CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1}
 #: A sensor reading older than this is ignored by the obstacle checks.
 SENSOR_MAX_AGE_S = 0.5
 STATE_PERIOD_S = 1.0
+#: Detections stay subscribed this long (sim seconds) after the run last wanted them.
+DETECTION_LINGER_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
 
 
@@ -130,6 +132,7 @@ class DockingService:
         #: Declared only while a docking run wants detections: the perception service sees no subscriber
         #: otherwise, stops reading images, and the simulator stops rendering them.
         self._detection_sub: Subscription[PoseStamped] | None = None
+        self._detections_wanted_s = -math.inf
         node.create_subscription(LaserScan, topics.SCAN, self._on_scan, SENSOR_DATA)
         node.create_subscription(Range, topics.ULTRASONIC, self._on_sonar, SENSOR_DATA)
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
@@ -176,11 +179,15 @@ class DockingService:
             self.node.now(),
         )
 
-    def _want_detections(self, wanted: bool) -> None:
+    def _want_detections(self, wanted: bool, now_s: float) -> None:
+        """Subscribe to detections while the run wants them (and a little longer, so no flapping)."""
+        if wanted:
+            self._detections_wanted_s = now_s
         if wanted and self._detection_sub is None:
             self._detection_sub = self.node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE,
                                                                 self._on_detection, SENSOR_DATA)
-        elif not wanted and self._detection_sub is not None:
+        elif (not wanted and self._detection_sub is not None
+              and not 0.0 <= now_s - self._detections_wanted_s < DETECTION_LINGER_S):
             self._detection_sub.undeclare()
             self._detection_sub = None
 
@@ -285,7 +292,11 @@ class DockingService:
         self._last_now_s = now
         self._follow_mission(now)
         task = self.task
-        self._want_detections(isinstance(task, DockingRun) and self.params.use_detection)
+        if isinstance(task, DockingRun):
+            latest = self.track.latest()
+            self._want_detections(task.wants_detections(latest[1] if latest is not None else None), now)
+        else:
+            self._want_detections(False, now)
         if task is not None:
             self._follow_correction()
             inputs = self._inputs(now)

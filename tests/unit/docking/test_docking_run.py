@@ -327,3 +327,14 @@ def test_a_pose_too_old_to_steer_by_holds_the_approach() -> None:
     assert run.result is not None and run.result.success
     during = [c for t, c in world.log.published if late[0] <= t < late[0] + 0.5]
     assert during and all(c.is_zero for c in during)
+
+
+def test_detections_are_wanted_only_where_the_dock_could_be_in_view() -> None:
+    run = graceful_run()
+    run.step(TickInputs(now_s=0.0, robot_pose=FAR))
+    assert run.phase is RunPhase.NAV_TO_STAGING
+    assert not run.wants_detections(FAR)  # far, and the dock is behind
+    near_facing = SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0))
+    assert run.wants_detections(near_facing)
+    assert not run.wants_detections(near_facing.compose(Pose2D(0.0, 0.0, math.pi)))  # turned away
+    assert not graceful_run(use_detection=False).wants_detections(near_facing)
