@@ -205,6 +205,15 @@ class CameraRenderer:
     def camera_pose(self, robot_pose: Pose2D) -> Pose2D:
         return robot_pose.compose(self.params.mount)
 
+    def marker_pixels(self, marker: DockMarker, robot_pose: Pose2D) -> np.ndarray | None:
+        """Where the marker's corners (ArUco's order) fall in the image, exactly; None when behind the camera.
+        The yardstick for corner accuracy."""
+        level = self._level
+        pts = _project(marker_corners_world(marker), self.camera_pose(robot_pose), self.params.mount_z_m, level)
+        if pts is None or level.warp is None:
+            return pts
+        return cv2.perspectiveTransform(pts.reshape(-1, 1, 2), level.warp).reshape(-1, 2)
+
     def render(self, robot_pose: Pose2D, motion: Motion = Motion()) -> np.ndarray:
         """The camera's image (uint8, height x width) with the robot's base_link at ``robot_pose``."""
         p = self.params
