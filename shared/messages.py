@@ -414,13 +414,30 @@ class DockDetection(Message):
     marker_range_m: float = 0.0
 
 
+@message("kobuki_ros_interfaces/msg/DockInfraRed")
+class DockInfraRed(Message):
+    """What the robot's infrared receivers see of the dock's beacon: ``data`` is ``[right, central, left]``,
+    each a bit field of the constants below (Kobuki's message, field for field)."""
+
+    NEAR_LEFT: ClassVar[int] = 1
+    NEAR_CENTER: ClassVar[int] = 2
+    NEAR_RIGHT: ClassVar[int] = 4
+    FAR_CENTER: ClassVar[int] = 8
+    FAR_LEFT: ClassVar[int] = 16
+    FAR_RIGHT: ClassVar[int] = 32
+
+    header: Header = field(default_factory=Header)
+    data: UInt8Array = field(default_factory=lambda: np.zeros(3, dtype=np.uint8))
+
+
 def now_header(frame_id: str, seconds: float | None = None) -> Header:
     """A header stamped ``seconds`` (wall clock when omitted)."""
     return Header.at(_time.time() if seconds is None else seconds, frame_id)
 
 
 __all__ = [
-    "BatteryState", "Bool", "CameraInfo", "Clock", "CollisionEvent", "DockContact", "DockDetection", "Duration",
+    "BatteryState", "Bool", "CameraInfo", "Clock", "CollisionEvent", "DockContact", "DockDetection", "DockInfraRed",
+    "Duration",
     "Float64", "Image", "RegionOfInterest",
     "Float64MultiArray", "Header", "LaserScan", "MapMetaData", "MultiArrayDimension", "MultiArrayLayout",
     "OccupancyGrid", "Odometry", "Path", "Point", "Pose", "PoseStamped", "PoseWithCovariance", "Quaternion",

@@ -17,6 +17,8 @@ COLLISIONS = "collisions"
 GROUND_TRUTH_POSE = "ground_truth_pose"
 DETECTED_DOCK_POSE = "detected_dock_pose"
 DOCK_DETECTIONS = "dock_detections"
+#: The robot's infrared receivers (Kobuki's DockInfraRed): which of the dock's beacon fields each sees.
+IR_DOCK = "ir_dock"
 CAMERA_IMAGE = "camera/image_raw"
 CAMERA_INFO = "camera/camera_info"
 ARUCO_DEBUG_IMAGE = "aruco/debug_image"

@@ -77,7 +77,8 @@ def _run(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("demo", help="dock once on the full stack and report (what `make run` runs)")
     parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file")
-    parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
+    parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
+                        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
                         help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
     parser.add_argument("--rtf", type=_rtf, default="1.0", help="real-time factor of the simulator, or max")

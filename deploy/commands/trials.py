@@ -77,7 +77,8 @@ def _run(args: argparse.Namespace) -> int:
     per_world = []
     for number, world in enumerate(worlds):
         # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
-        options = TrialOptions(world=world, n=args.n, controller=args.controller, detector=args.detector,
+        starts = args.starts or ("beacon" if args.controller == "ir" else "room")
+        options = TrialOptions(world=world, n=args.n, controller=args.controller, detector=args.detector, starts=starts,
                                seed=args.seed + 1000 * number,
                                rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
                                chaos_period_s=args.chaos)
@@ -127,7 +128,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"world file (repeat for a campaign across worlds; 'all': every shipped world); "
                              f"default {DEFAULT_WORLD}")
     parser.add_argument("--n", type=_count, default=10, help="number of dockings (per world)")
-    parser.add_argument("--controller", choices=["graceful", "seed"], default="graceful")
+    parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
+                        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
+    parser.add_argument("--starts", choices=["room", "beacon"], default=None,
+                        help="room: anywhere reachable, away from the dock; beacon: within 2 m in front of it "
+                             "(default: beacon for --controller ir, room otherwise)")
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
                         help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
     parser.add_argument("--seed", type=int, default=0, help="seed of the start poses and the simulator's noise")

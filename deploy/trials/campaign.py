@@ -31,7 +31,7 @@ from deploy.paths import REPO_ROOT
 from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
-from deploy.trials.starts import lower_bounds, reachable_starts
+from deploy.trials.starts import beacon_starts, lower_bounds, reachable_starts
 from deploy.trials.summary import summarise, summary_reasons
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
@@ -147,7 +147,10 @@ def run_trials(
     run_dir.mkdir(parents=True, exist_ok=True)
     workers = max(1, min(options.workers, options.n))
     robots = [f"r{i}" for i in range(workers)]
-    starts = reachable_starts(options.world, world, options.n, options.seed)
+    if options.starts == "beacon":
+        starts = beacon_starts(world, options.n, options.seed)
+    else:
+        starts = reachable_starts(options.world, world, options.n, options.seed)
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
     stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False))
@@ -157,7 +160,7 @@ def run_trials(
     errors: list[str] = []
     wall_start = time.monotonic()
     log(f"{options.n} trials in {world.name} with {workers} robot(s), controller {options.controller}, "
-        f"detector {options.detector}, rtf {options.rtf}")
+        f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}")
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
         launcher.wait_healthy(timeout_s=120.0)
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])

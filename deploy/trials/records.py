@@ -18,6 +18,9 @@ class TrialOptions:
     #: How the robot finds its dock: ``aruco`` (camera images through the perception service) or
     #: ``synthetic`` (the simulator's true dock pose plus noise).
     detector: str = "aruco"
+    #: Where trials start: ``room`` (anywhere reachable, away from the dock) or ``beacon`` (within 2 m in
+    #: front of the dock, where infrared docking can start).
+    starts: str = "room"
     seed: int = 0
     rtf: str = "8"
     workers: int = 1

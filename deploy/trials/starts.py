@@ -11,7 +11,7 @@ import numpy as np
 
 from deploy.service_tools import run_tool
 from shared.geometry import Pose2D, distances_to_segment
-from shared.world import World
+from shared.world import ROBOT_FRONT_M, World
 
 #: The robot's circumscribed radius plus a margin: starts this far from every surface can always turn.
 START_CLEARANCE_M = 0.45
@@ -36,6 +36,36 @@ def random_starts(world: World, n: int, seed: int) -> list[Pose2D]:
         if any(math.dist((x, y), d.pose[:2]) < MIN_START_DISTANCE_TO_DOCK_M for d in world.docks):
             continue
         starts.append(Pose2D(x, y, rng.uniform(-math.pi, math.pi)))
+    return starts
+
+
+#: Beacon starts: this far from the dock's face (m) and this far off its axis, as infrared docking needs.
+BEACON_DISTANCE_M = (0.7, 2.0)
+BEACON_BEARING_RAD = math.radians(45.0)
+
+
+def beacon_starts(world: World, n: int, seed: int) -> list[Pose2D]:
+    """``n`` starts in front of the first dock, within its infrared beacon's reach, facing anywhere.
+
+    Clear of every surface as :func:`random_starts`' are; every start sees the dock's face in a straight
+    line, so each is connected to the dock without asking the planner.
+    """
+    rng = random.Random(seed)
+    dock = world.docks[0].pose2d
+    face = dock.compose(Pose2D(ROBOT_FRONT_M, 0.0, math.pi))  # x out of the dock
+    segments = world.opaque_segments() + list(world.glass)
+    starts: list[Pose2D] = []
+    attempts = 0
+    while len(starts) < n:
+        attempts += 1
+        if attempts > 200_000:
+            raise RuntimeError(f"{world.name}: could not find {n} collision-free starts in front of the dock")
+        distance = rng.uniform(*BEACON_DISTANCE_M)
+        bearing = rng.uniform(-BEACON_BEARING_RAD, BEACON_BEARING_RAD)
+        spot = face.compose(Pose2D(distance * math.cos(bearing), distance * math.sin(bearing), 0.0))
+        if min(_distance_to_segment((spot.x, spot.y), s) for s in segments) < START_CLEARANCE_M:
+            continue
+        starts.append(Pose2D(spot.x, spot.y, rng.uniform(-math.pi, math.pi)))
     return starts
 
 

@@ -27,7 +27,8 @@ from services.docking.dock_db import DockDatabase, load_dock_db
 from services.docking.dock_tracker import DockTracker
 from services.docking.docking_run import DockingRun, DockRequest
 from services.docking.drive_arbiter import DriveArbiter, DriveOrders
-from services.docking.errors import DockingState
+from services.docking.errors import DockingError, DockingState
+from services.docking.ir_run import IR_MAX_AGE_S, IrDockingRun
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.params import Params
 from services.docking.patrol import Patrol
@@ -60,6 +61,7 @@ from shared.interfaces.docking import (
 )
 from shared.messages import (
     BatteryState,
+    DockInfraRed,
     Duration,
     Float64MultiArray,
     LaserScan,
@@ -79,7 +81,7 @@ from shared.runtime import run_service
 #: std_msgs/String with the service's state name, for tools (published on change and every second).
 DOCKING_STATE = "docking/state"
 #: Control rates fixed by the controllers: graceful 20 Hz, seed (line approach) 10 Hz.
-CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1}
+CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1, "ir": 0.05}
 #: A sensor reading older than this is ignored by the obstacle checks.
 SENSOR_MAX_AGE_S = 0.5
 STATE_PERIOD_S = 1.0
@@ -136,6 +138,10 @@ class DockingService:
         node.create_subscription(LaserScan, topics.SCAN, self._on_scan, SENSOR_DATA)
         node.create_subscription(Range, topics.ULTRASONIC, self._on_sonar, SENSOR_DATA)
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
+        self._ir_dock: tuple[int, int, int] | None = None
+        self._ir_received_s = -math.inf
+        if params.controller == "ir":
+            node.create_subscription(DockInfraRed, topics.IR_DOCK, self._on_ir_dock, SENSOR_DATA)
         self.dock_server = ActionServer(
             node, DOCK_ROBOT, topics.DOCK_ROBOT, on_goal=self._check_dock_goal, on_accepted=self._on_dock_goal,
             on_cancel=self._on_cancel, preempt_result=lambda: DockRobotResult(success=False),
@@ -218,6 +224,14 @@ class DockingService:
         self._sonar_range_m = float(msg.range)
         self._sonar_received_s = self.node.now()
 
+    def _on_ir_dock(self, msg: DockInfraRed) -> None:
+        if msg.data.size != 3:
+            self._say.warning("ir-dock", "ignored an ir_dock message with %d readings (expected right, central, left)",
+                              msg.data.size)
+            return
+        self._ir_dock = (int(msg.data[0]), int(msg.data[1]), int(msg.data[2]))
+        self._ir_received_s = self.node.now()
+
     def _on_tf_static(self, msg: TFMessage) -> None:
         self._mounts.update(msg)
 
@@ -266,6 +280,7 @@ class DockingService:
             nav=self._nav_status(),
             blocked_ahead=blocked_ahead,
             blocked_behind=blocked_behind,
+            ir_dock=self._ir_dock if now_s - self._ir_received_s <= IR_MAX_AGE_S else None,
         )
 
     def _blocked(self, now_s: float, dock_in_base: Pose2D | None) -> tuple[bool, bool]:
@@ -350,8 +365,18 @@ class DockingService:
 
     # --- tasks -------------------------------------------------------------------------------------
 
-    def _docking_run(self, request: DockRequest) -> DockingRun:
+    def _docking_run(self, request: DockRequest) -> DockingRun | IrDockingRun:
         p = self.params
+        if p.controller == "ir":
+            latest = self.track.latest()
+            robot = latest[1] if latest is not None else None
+            try:
+                dock = request.dock_pose or self.database.choose(request.dock_id or None, robot,
+                                                                 request.dock_type or None).pose2d
+            except DockingError:
+                dock = None  # no such dock in the database: infrared docking needs none
+            return IrDockingRun(max_time_s=min(p.max_docking_time_s, p.approach_timeout_s + 60.0), dock_pose=dock,
+                                staging_offset_m=p.staging_offset_m, max_staging_time_s=request.max_staging_time_s)
         tracker = DockTracker(replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m)
         return DockingRun(request, self.database, p.approach_controller(), p.docking_config(), tracker)
 
@@ -382,7 +407,8 @@ class DockingService:
             self.mission.next_waypoint = task.next_index
         self.mission.finished(kind, result.success, handle is not None, self.node.now())
         level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
-        took = f" after {task.docking_time_s(self.node.now()):.1f} s" if isinstance(task, DockingRun) else ""
+        took = (f" after {task.docking_time_s(self.node.now()):.1f} s" if isinstance(task, (DockingRun, IrDockingRun))
+                else "")
         self._log.log(level, "%s %s%s (code %d, %d retries)%s", kind.value, result.outcome.value, took,
                      int(result.error_code), result.num_retries, f": {result.message}" if result.message else "")
         if handle is None or not handle.active:
@@ -451,7 +477,7 @@ class DockingService:
 
     def _publish_feedback(self, now: float) -> None:
         task, handle = self.task, self.task_handle
-        if not isinstance(task, DockingRun) or handle is None or not handle.active:
+        if not isinstance(task, (DockingRun, IrDockingRun)) or handle is None or not handle.active:
             return
         key = (int(task.feedback_state), task.num_retries)
         if key == self._feedback_key and now - self._feedback_published_s < self.params.feedback_period_s:
@@ -466,7 +492,7 @@ class DockingService:
     def state_name(self) -> str:
         """What the service is doing, for ``docking/state``."""
         task = self.task
-        if isinstance(task, DockingRun):
+        if isinstance(task, (DockingRun, IrDockingRun)):
             return task.feedback_state.name if task.feedback_state is not DockingState.NONE else "STARTING"
         if isinstance(task, UndockingRun):
             return "UNDOCKING"

@@ -32,7 +32,8 @@ class Params(ServiceParams):
     dock_database: str = Field(
         description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
     )
-    controller: Literal["graceful", "seed"] = Field("graceful", description="final approach controller")
+    controller: Literal["graceful", "seed", "ir"] = Field(
+        "graceful", description="final approach controller (ir: Kobuki's infrared docking, no map pose or camera)")
     dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
     auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
     low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)

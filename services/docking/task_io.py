@@ -59,6 +59,8 @@ class TickInputs:
     #: Something that is not the dock is in the robot's way ahead / behind.
     blocked_ahead: bool = False
     blocked_behind: bool = False
+    #: The infrared receivers' latest readings ``(right, central, left)`` when fresh, else None.
+    ir_dock: tuple[int, int, int] | None = None
 
 
 @dataclass(frozen=True, slots=True)

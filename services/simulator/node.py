@@ -46,6 +46,7 @@ from shared.messages import (
     Clock,
     CollisionEvent,
     DockContact,
+    DockInfraRed,
     Float64MultiArray,
     Header,
     Image,
@@ -87,6 +88,7 @@ class Params(ServiceParams):
     ultrasonic_rate_hz: float = Field(20.0, gt=0)
     detection_rate_hz: float = Field(15.0, gt=0)
     contact_rate_hz: float = Field(20.0, gt=0)
+    ir_rate_hz: float = Field(20.0, gt=0, description="the infrared receivers' readings (ir_dock), while subscribed")
     ground_truth_rate_hz: float = Field(20.0, gt=0)
     cmd_vel_timeout_s: float = Field(
         0.3, gt=0, description="watchdog: brake when no command for this long (standing still 0.5 s after the last)")
@@ -277,6 +279,7 @@ class SimulatorService:
         self._camera = _Every(1.0 / params.camera_rate_hz)
         self._camera_info = camera_info(camera_params)
         self._contact = _Every(1.0 / params.contact_rate_hz)
+        self._ir = _Every(1.0 / params.ir_rate_hz)
         self._truth = _Every(1.0 / params.ground_truth_rate_hz)
         self._clock_pubs = [node.create_publisher(Clock, r.topic(topics.CLOCK), QoS(reliable=True, depth=1))
                             for r in self.robots.values()]
@@ -306,6 +309,7 @@ class SimulatorService:
             "ultrasonic": node.create_publisher(Range, t(topics.ULTRASONIC), SENSOR_DATA),
             "detected_dock_pose": node.create_publisher(PoseStamped, t(topics.DETECTED_DOCK_POSE), SENSOR_DATA),
             "dock_contact": node.create_publisher(DockContact, t(topics.DOCK_CONTACT), RELIABLE),
+            "ir_dock": node.create_publisher(DockInfraRed, t(topics.IR_DOCK), SENSOR_DATA),
             "collisions": node.create_publisher(CollisionEvent, t(topics.COLLISIONS), BLOCKING),
             "ground_truth_pose": node.create_publisher(PoseStamped, t(topics.GROUND_TRUTH_POSE), RELIABLE),
         }
@@ -431,6 +435,7 @@ class SimulatorService:
         scan, sonar, detect = self._scan.due(now), self._sonar.due(now), self._detect.due(now)
         contact, truth = self._contact.due(now), self._truth.due(now)
         camera = self._camera.due(now)
+        ir = self._ir.due(now)
         stamp = Time.from_sec(now)
         for i, robot in enumerate(self.robots.values()):
             if clock:
@@ -452,6 +457,10 @@ class SimulatorService:
                 self._publish_camera(robot, stamp)
             if contact:
                 robot.pubs["dock_contact"].publish(self._contact_msg(robot, now))
+            if ir and robot.pubs["ir_dock"].has_subscribers():
+                readings = robot.sim.dock_infrared()
+                robot.pubs["ir_dock"].publish(DockInfraRed(Header(stamp, topics.BASE_FRAME),
+                                                           np.array(readings, dtype=np.uint8)))
             if truth:
                 robot.pubs["ground_truth_pose"].publish(
                     PoseStamped(Header(stamp, topics.MAP_FRAME), Pose.from_pose2d(robot.sim.pose)))

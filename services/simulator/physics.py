@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pymunk
 
-from services.simulator import sensors
+from services.simulator import infrared, sensors
 from services.simulator.dock_contact import DockContact, DockContactParams, dock_contact
 from services.simulator.footprint import footprint_corners, separated
 from services.simulator.localisation import map_to_odom
@@ -45,6 +45,7 @@ class SimParams:
     lidar: sensors.LidarParams = field(default_factory=sensors.LidarParams)
     ultrasonic: sensors.UltrasonicParams = field(default_factory=sensors.UltrasonicParams)
     camera: sensors.FiducialCameraParams = field(default_factory=sensors.FiducialCameraParams)
+    infrared: infrared.InfraredParams = field(default_factory=infrared.InfraredParams)
     contact: DockContactParams = field(default_factory=DockContactParams)
     #: Localisation error (in base_link) of the simulated localiser; see services.simulator.localisation.
     localisation_error: Pose2D = field(default_factory=Pose2D)
@@ -330,6 +331,11 @@ class SimWorld:
         """The front ultrasonic reading from ``pose`` (default: true pose); sees opaque surfaces and glass."""
         at = self.pose if pose is None else pose
         return sensors.ultrasonic_range(at, self.sonar_visible, self.params.ultrasonic, self.rng)
+
+    def dock_infrared(self, pose: Pose2D | None = None) -> tuple[int, int, int]:
+        """The right, central and left infrared receivers' readings from ``pose`` (default: true pose)."""
+        at = self.pose if pose is None else pose
+        return infrared.receiver_readings(at, self.world.docks, self.opaque, self.params.infrared, self.rng)
 
     def detect_docks(self, pose: Pose2D | None = None) -> list[sensors.DockDetection]:
         """Every dock the camera reads from ``pose`` (default: true pose), nearest first; glass hides none."""

@@ -47,6 +47,7 @@ from shared.names import topic_key
 from shared.node import Node, ServiceError, call_service
 from shared.schema import Message
 from shared.session import SessionSpec, open_session
+from shared.world import load_world
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, ServiceProcess, wait_until
 
@@ -436,3 +437,16 @@ def test_patrol_docks_when_low_and_resumes_when_charged(stack) -> None:  # type:
     assert any(g.distance_to(Pose2D(*p)) < 1e-6 for g in s.navigator.goals_sent()[resumed - 1:] for p in patrol)
     truth = s.sim_state()
     assert truth.collisions == 0 and not truth.contact.mated
+
+
+def test_infrared_docking_needs_no_map_pose_and_no_camera(stack) -> None:  # type: ignore[no-untyped-def]
+    """controller=ir from 1.2 m in front of the dock, turned away: Kobuki's scan, stream and approach."""
+    s: Stack = stack(sim=("dock_detector=aruco",), battery=("initial_percentage=0.2",))
+    dock = load_world(SEED_ROOM).docks[0].pose2d
+    s.teleport(dock.compose(Pose2D(-1.2, 0.3, 2.0)))
+    started_s = s.sim_time()
+    s.start_docking("controller=ir")  # starts below the threshold: the first reading triggers
+    s.wait_charging(timeout_s=120.0)
+    truth = s.docked_cleanly()
+    assert s.navigator.goals == [], "infrared docking from within the beacon's reach asked the planner for a goal"
+    print(f"\nir: charging {s.sim_time() - started_s:.1f} s (sim) after the start; {_contact_report(truth)}")

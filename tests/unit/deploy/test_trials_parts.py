@@ -18,7 +18,8 @@ from deploy.trials import (
     summarise_results,
     trials_stack,
 )
-from deploy.trials.starts import _distance_to_segment
+from deploy.trials.starts import _distance_to_segment, beacon_starts
+from services.docking.ir_run import within_beacon_reach
 from shared.world import load_world
 
 WORLDS = sorted((Path(__file__).resolve().parents[3] / "deploy" / "worlds").glob("*.yaml"))
@@ -37,6 +38,17 @@ def test_starts_are_reproducible_clear_and_away_from_the_dock(path: Path) -> Non
         assert math.dist((pose.x, pose.y), world.docks[0].pose[:2]) >= 1.2
 
 
+@pytest.mark.parametrize("path", WORLDS, ids=lambda p: p.stem)
+def test_beacon_starts_are_clear_and_within_the_infrared_beacons_reach(path: Path) -> None:
+    world = load_world(path)
+    starts = beacon_starts(world, 20, seed=5)
+    assert starts == beacon_starts(world, 20, seed=5)
+    segments = world.opaque_segments() + list(world.glass)
+    for pose in starts:
+        assert min(_distance_to_segment((pose.x, pose.y), s) for s in segments) >= START_CLEARANCE_M
+        assert within_beacon_reach(pose, world.docks[0].pose2d)
+
+
 def test_distance_to_segment() -> None:
     assert _distance_to_segment((0.0, 1.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(1.0)
     assert _distance_to_segment((3.0, 0.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(2.0)
@@ -48,10 +60,14 @@ def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:
     names = set(stack["services"])
     assert {"router", "map", "simulator"} <= names
     for robot in ("r0", "r1"):
-        for service in ("battery", "pose", "planner", "docking"):
+        for service in ("battery", "pose", "planner", "perception", "docking"):
             spec = stack["services"][f"{service}_{robot}"]
             assert spec["namespace"] == robot and spec["healthcheck"]["liveliness"] == service
     assert 'robots=["r0", "r1"]' in stack["services"]["simulator"]["command"]
+    assert "dock_detector=aruco" in stack["services"]["simulator"]["command"]
+    synthetic = trials_stack(TrialOptions(world=WORLDS[0], workers=2, detector="synthetic"), "tcp/127.0.0.1:7999", ["r0"])
+    assert "perception_r0" not in synthetic["services"]
+    assert "dock_detector=synthetic" in synthetic["services"]["simulator"]["command"]
 
 
 def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: int = 0) -> TrialResult:

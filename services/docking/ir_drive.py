@@ -1,0 +1,201 @@
+"""Infrared docking: Kobuki's auto-docking state machine on three receivers' bit fields.
+
+The reference is Yujin Robot's ``kobuki_dock_drive`` (kobuki_core, ``dock_drive_states.cpp``): no map,
+no camera, only what the right, central and left receivers see of the dock's six beacon fields (left,
+centre, right; near and far; see :mod:`shared.messages.DockInfraRed`), and how far the robot has turned
+(odometry). The states, as there:
+
+- SCAN: turn on the spot (counter-clockwise). The central receiver seeing the centre field means the
+  robot faces the dock from its axis: ALIGNED. Seeing a side field counts which side of the dock the
+  robot is on. After a whole turn without the centre: FIND_STREAM.
+- FIND_STREAM: turn to face across the dock's axis (clockwise on the dock's right, counter-clockwise
+  on its left) until the receiver on the dock's side sees that side's field, then GET_STREAM.
+- GET_STREAM: drive across the axis until the receiver on that side sees the other side's field (the
+  axis is crossed), then SCAN (slowly) to face the dock.
+- ALIGNED (near or far): drive at the dock on the central receiver alone, steering back towards the
+  axis whenever it sees a side field, until contact (charging). Losing the beacon in the near field, it
+  scans towards the side it last saw, where the beacon went.
+
+Differences from the reference, each a choice of this implementation: the speeds are parameters
+(faster far from the dock than Kobuki's 0.1 m/s, as slow near it); a scan that sees nothing at all in
+``max_blind_turns`` turns reports that no dock is in sight instead of turning for ever; a drive for the
+axis that loses the beacon or lasts ``max_get_stream_s`` scans again instead of driving on; readings are
+OR-ed over ``filter_window`` ticks, as the reference filters its raw signals, so a flickering bit does
+not throw the robot out of ALIGNED. No bumper here: the run ends on charging.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections import deque
+from dataclasses import dataclass
+
+NEAR_LEFT = 1
+NEAR_CENTER = 2
+NEAR_RIGHT = 4
+FAR_CENTER = 8
+FAR_LEFT = 16
+FAR_RIGHT = 32
+LEFT = NEAR_LEFT | FAR_LEFT
+CENTER = NEAR_CENTER | FAR_CENTER
+RIGHT = NEAR_RIGHT | FAR_RIGHT
+NEAR = NEAR_LEFT | NEAR_CENTER | NEAR_RIGHT
+FAR = FAR_LEFT | FAR_CENTER | FAR_RIGHT
+
+
+class IrState(enum.Enum):
+    SCAN = "scan"
+    FIND_STREAM = "find_stream"
+    GET_STREAM = "get_stream"
+    ALIGNED_FAR = "aligned_far"
+    ALIGNED_NEAR = "aligned_near"
+    LOST = "lost"
+
+
+@dataclass(frozen=True, slots=True)
+class IrDriveParams:
+    scan_turn_radps: float = 0.66
+    slow_scan_turn_radps: float = 0.10
+    find_turn_radps: float = 0.33
+    get_stream_mps: float = 0.10
+    far_mps: float = 0.15
+    far_turn_radps: float = 0.3
+    near_mps: float = 0.05
+    near_turn_radps: float = 0.1
+    filter_window: int = 3
+    max_blind_turns: float = 2.0
+    #: Driving for the axis this long (s) without crossing it, or losing the beacon on the way: scan again.
+    max_get_stream_s: float = 15.0
+
+    def __post_init__(self) -> None:
+        if self.filter_window < 1:
+            raise ValueError("filter_window must be at least 1")
+
+
+@dataclass(frozen=True, slots=True)
+class IrCommand:
+    linear_mps: float
+    angular_radps: float
+    state: IrState
+
+
+class IrDockDrive:
+    """Steps the state machine once per control tick: receivers' readings and turn in, a command out."""
+
+    def __init__(self, params: IrDriveParams = IrDriveParams()) -> None:
+        self.params = params
+        self.state = IrState.SCAN
+        #: Side of the dock the robot is on, from the scan: > 0 its right, < 0 its left, 0 unknown.
+        self.dock_detector = 0
+        #: Turns made in this scan (counter-clockwise positive).
+        self.rotated_turns = 0.0
+        self._blind_turns = 0.0
+        #: Which way the scan turns: counter-clockwise (+1) unless a crossing or a loss near the dock set it
+        #: to turn back (-1); the first tick of such a scan is slow, as the reference's.
+        self._scan_direction = 1.0
+        self._timed_state = self.state
+        self._last_side = 0
+        #: Time spent in the current state (s).
+        self._state_s = 0.0
+
+        self._history: deque[tuple[int, int, int]] = deque(maxlen=params.filter_window)
+
+    def _filtered(self, readings: tuple[int, int, int]) -> tuple[int, int, int]:
+        self._history.append(readings)
+        right = mid = left = 0
+        for r, m, lf in self._history:
+            right, mid, left = right | r, mid | m, left | lf
+        return right, mid, left
+
+    def step(self, readings: tuple[int, int, int], turned_rad: float, dt_s: float = 0.05) -> IrCommand:
+        """``readings``: ``(right, central, left)`` bit fields; ``turned_rad``: heading change since the last
+        step, ``dt_s`` the time since it."""
+        right, mid, left = self._filtered(readings)
+        self._state_s = self._state_s + dt_s if self.state is self._timed_state else 0.0
+        self._timed_state = self.state
+        p = self.params
+        if right or mid or left:
+            self._blind_turns = 0.0
+        else:
+            self._blind_turns += abs(turned_rad) / (2.0 * math.pi)
+        if self._blind_turns > p.max_blind_turns:
+            self.state = IrState.LOST
+            return IrCommand(0.0, 0.0, IrState.LOST)
+        if self.state is IrState.LOST:
+            self.state = IrState.SCAN
+        if self.state is IrState.SCAN:
+            return self._scan(mid, turned_rad)
+        if self.state is IrState.FIND_STREAM:
+            return self._find_stream(right, left)
+        if self.state is IrState.GET_STREAM:
+            if not (right or mid or left) or self._state_s > p.max_get_stream_s:
+                return self._restart_scan(p.scan_turn_radps)  # drifted off, or driving away: look again
+            return self._get_stream(right, left)
+        return self._aligned(mid)
+
+    def _to(self, state: IrState, linear: float, angular: float) -> IrCommand:
+        self.state = state
+        return IrCommand(linear, angular, state)
+
+    def _restart_scan(self, angular: float) -> IrCommand:
+        self.dock_detector = 0
+        self.rotated_turns = 0.0
+        self._scan_direction = 1.0 if angular >= 0 else -1.0
+        return self._to(IrState.SCAN, 0.0, angular)
+
+    def _scan(self, mid: int, turned_rad: float) -> IrCommand:
+        p = self.params
+        self.rotated_turns += turned_rad / (2.0 * math.pi)
+        if mid & CENTER:
+            return self._to(IrState.ALIGNED_FAR, p.near_mps, 0.0)
+        turn = self._scan_direction * p.scan_turn_radps
+        if mid & LEFT:
+            self.dock_detector -= 1
+            return self._to(IrState.SCAN, 0.0, turn)
+        if mid & RIGHT:
+            self.dock_detector += 1
+            return self._to(IrState.SCAN, 0.0, turn)
+        if abs(self.rotated_turns) > 1.0 and self.dock_detector != 0:
+            return self._to(IrState.FIND_STREAM, 0.0, 0.0)
+        return self._to(IrState.SCAN, 0.0, turn)
+
+    def _find_stream(self, right: int, left: int) -> IrCommand:
+        p = self.params
+        if self.dock_detector > 0:  # on the dock's right: turn clockwise until the left receiver sees the right field
+            if left & RIGHT:
+                return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
+            return self._to(IrState.FIND_STREAM, 0.0, -p.find_turn_radps)
+        if right & LEFT:  # on the dock's left: counter-clockwise until the right receiver sees the left field
+            return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
+        return self._to(IrState.FIND_STREAM, 0.0, p.find_turn_radps)
+
+    def _get_stream(self, right: int, left: int) -> IrCommand:
+        p = self.params
+        crossed = (left & LEFT) if self.dock_detector > 0 else (right & RIGHT)
+        if crossed:
+            # past the axis: turn back towards the dock until the central receiver sees the centre
+            return self._restart_scan(p.slow_scan_turn_radps if self.dock_detector > 0 else -p.slow_scan_turn_radps)
+        return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
+
+    def _aligned(self, mid: int) -> IrCommand:
+        p = self.params
+        if not mid:
+            if self.state is IrState.ALIGNED_NEAR:  # slowly, towards the side last seen: no corner swept fast
+                return self._restart_scan((self._last_side or 1) * p.slow_scan_turn_radps)
+            return self._restart_scan(p.scan_turn_radps)
+        near = bool(mid & NEAR)
+        bits = mid & (NEAR if near else FAR)
+        side = (1 if bits & LEFT else 0) - (1 if bits & RIGHT else 0)  # +1: the dock's left, -1: its right
+        if side:
+            self._last_side = side
+        state, speed, turn = ((IrState.ALIGNED_NEAR, p.near_mps, p.near_turn_radps) if near
+                              else (IrState.ALIGNED_FAR, p.far_mps, p.far_turn_radps))
+        if side:
+            return self._to(state, speed, side * turn)  # on the dock's left, turn left: towards the axis
+        if bits & CENTER:
+            return self._to(state, speed, 0.0)
+        return self._restart_scan(p.scan_turn_radps)
+
+
+__all__ = ["CENTER", "FAR", "LEFT", "NEAR", "RIGHT", "IrCommand", "IrDockDrive", "IrDriveParams", "IrState"]

@@ -1,0 +1,117 @@
+"""One dock_robot request docked by infrared alone: :class:`~services.docking.ir_drive.IrDockDrive` until charging.
+
+The docking itself uses no map pose and no camera: it drives on the receivers' readings and odometry's
+turn rate from wherever the robot is within the beacon's reach (about 2 m in front of the dock). A robot
+that starts out of reach (farther, or beside or behind the dock) is first taken to the dock's staging pose
+by the planner, as the robot would be sent home on a real floor; that leg is the only one that uses the
+map. The run succeeds when the battery reports charging, fails with FAILED_TO_STAGE (903) when the
+planner does, FAILED_TO_DETECT_DOCK (904) when the receivers see nothing for ``max_blind_turns`` turns of
+scanning, and TIMEOUT (907) after ``max_time_s``. Like the reference it has no obstacle check of its own
+(Kobuki stops on its bumper): it is for the last couple of metres.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+
+from services.docking.approach import graceful_staging_pose
+from services.docking.errors import DockingErrorCode, DockingState
+from services.docking.ir_drive import IrDockDrive, IrDriveParams, IrState
+from services.docking.task_io import Intent, Navigate, NavOutcome, Outcome, Task, TickInputs, Velocity
+from shared.geometry import Pose2D
+from shared.world import ROBOT_FRONT_M
+
+#: Readings older than this (sim seconds) count as none: the robot stops rather than drive on old news.
+IR_MAX_AGE_S = 0.3
+#: Where infrared docking can start without the planner: this far from the dock's face, this far off its axis.
+IR_REACH_M = 2.0
+IR_REACH_BEARING_RAD = math.radians(45.0)
+
+
+class IrPhase(enum.Enum):
+    NAV_TO_STAGING = "nav_to_staging"
+    DOCKING = "docking"
+    DONE = "done"
+
+
+def within_beacon_reach(robot_pose: Pose2D, dock_pose: Pose2D) -> bool:
+    """Whether the robot stands where the beacon's fields reach: in front of the dock's face, near its axis."""
+    face = dock_pose.compose(Pose2D(ROBOT_FRONT_M, 0.0, math.pi))  # x out of the dock
+    local = robot_pose.relative_to(face)
+    return local.x > 0.0 and math.hypot(local.x, local.y) <= IR_REACH_M and abs(math.atan2(local.y, local.x)) <= IR_REACH_BEARING_RAD
+
+
+class IrDockingRun(Task[IrPhase]):
+    def __init__(self, params: IrDriveParams | None = None, max_time_s: float = 180.0, dock_pose: Pose2D | None = None,
+                 staging_offset_m: float = 0.7, max_staging_time_s: float = 120.0) -> None:
+        super().__init__(IrPhase.DOCKING)
+        self.drive = IrDockDrive(params or IrDriveParams())
+        self.max_time_s = max_time_s
+        #: The dock's map pose, for the planner's leg only (None: the robot is known to be within reach).
+        self.dock_pose = dock_pose
+        self.staging_offset_m = staging_offset_m
+        self.max_staging_time_s = max_staging_time_s
+        self._nav_key: object | None = None
+        self._began = False
+        self.num_retries = 0
+        self.feedback_state = DockingState.INITIAL_PERCEPTION
+        self._last_tick_s: float | None = None
+
+    def docking_time_s(self, now_s: float) -> float:
+        return 0.0 if self.started_s is None else now_s - self.started_s
+
+    def tick(self, inputs: TickInputs) -> Intent:
+        now = inputs.now_s
+        assert self.started_s is not None
+        dt = 0.0 if self._last_tick_s is None else max(0.0, now - self._last_tick_s)
+        self._last_tick_s = now
+        if inputs.charging:
+            self.enter(IrPhase.DONE, now)
+            self.finish(Outcome.SUCCEEDED, message="charging")
+            return Velocity(0.0, 0.0)
+        if now - self.started_s > self.max_time_s:
+            self.finish(Outcome.FAILED, DockingErrorCode.TIMEOUT, f"not charging after {self.max_time_s:.0f} s")
+            return Velocity(0.0, 0.0)
+        if not self._began:
+            self._began = True
+            if self.dock_pose is not None and inputs.robot_pose is not None \
+                    and not within_beacon_reach(inputs.robot_pose, self.dock_pose):
+                self._nav_key = self.new_nav_key()
+                self.enter(IrPhase.NAV_TO_STAGING, now)
+                self.feedback_state = DockingState.NAV_TO_STAGING_POSE
+        if self.phase is IrPhase.NAV_TO_STAGING:
+            return self._nav_to_staging(inputs)
+        if inputs.ir_dock is None:
+            return self.hold("no fresh infrared readings")
+        turned = inputs.base_twist[1] * dt if inputs.base_twist is not None else 0.0
+        command = self.drive.step(inputs.ir_dock, turned, dt)
+        if command.state is IrState.LOST:
+            self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_DETECT_DOCK,
+                        f"no dock beacon seen in {self.drive.params.max_blind_turns:g} turns")
+            return Velocity(0.0, 0.0)
+        aligned = command.state in (IrState.ALIGNED_FAR, IrState.ALIGNED_NEAR)
+        self.feedback_state = DockingState.CONTROLLING if aligned else DockingState.INITIAL_PERCEPTION
+        return Velocity(command.linear_mps, command.angular_radps)
+
+    def _nav_to_staging(self, inputs: TickInputs) -> Intent:
+        now = inputs.now_s
+        assert self.dock_pose is not None and self._nav_key is not None
+        outcome = inputs.nav.finished(self._nav_key)
+        if outcome is None:
+            if self.phase_time_s(now) > self.max_staging_time_s:
+                self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_STAGE,
+                            f"staging took longer than {self.max_staging_time_s:g} s")
+                return Velocity(0.0, 0.0)
+            return Navigate(graceful_staging_pose(self.dock_pose, self.staging_offset_m), self._nav_key)
+        if outcome is NavOutcome.SUCCEEDED:
+            self.enter(IrPhase.DOCKING, now)
+            self.feedback_state = DockingState.INITIAL_PERCEPTION
+            self._last_tick_s = now
+            return Velocity(0.0, 0.0)
+        self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_STAGE,
+                    f"navigation to the staging pose {outcome.value}: {inputs.nav.reason or outcome.value}")
+        return Velocity(0.0, 0.0)
+
+
+__all__ = ["IR_MAX_AGE_S", "IR_REACH_BEARING_RAD", "IR_REACH_M", "IrDockingRun", "IrPhase", "within_beacon_reach"]
