@@ -65,8 +65,23 @@ def beacon_starts(world: World, n: int, seed: int) -> list[Pose2D]:
         spot = face.compose(Pose2D(distance * math.cos(bearing), distance * math.sin(bearing), 0.0))
         if min(_distance_to_segment((spot.x, spot.y), s) for s in segments) < START_CLEARANCE_M:
             continue
+        if any(_crosses((spot.x, spot.y), (face.x, face.y), s) for s in world.opaque_segments()):
+            continue  # a box or a wall between the start and the beacon
         starts.append(Pose2D(spot.x, spot.y, rng.uniform(-math.pi, math.pi)))
     return starts
+
+
+def _crosses(a: tuple[float, float], b: tuple[float, float],
+             segment: tuple[tuple[float, float], tuple[float, float]]) -> bool:
+    """Whether the open segment a-b crosses ``segment`` (touching at b, the beacon on its own face, does not)."""
+    (px, py), (qx, qy) = segment
+    dx, dy, sx, sy = b[0] - a[0], b[1] - a[1], qx - px, qy - py
+    denom = dx * sy - dy * sx
+    if denom == 0.0:
+        return False
+    t = ((px - a[0]) * sy - (py - a[1]) * sx) / denom
+    u = ((px - a[0]) * dy - (py - a[1]) * dx) / denom
+    return 1e-6 < t < 1.0 - 1e-6 and 0.0 <= u <= 1.0
 
 
 def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[Pose2D]:
