@@ -259,13 +259,31 @@ def facing_seed(observed_norm: np.ndarray, size_m: float, base_from_optical: Rig
     return Pose2D(float(centre[0]), float(centre[1]), math.atan2(camera[1] - centre[1], camera[0] - centre[0]))
 
 
+#: Two fits this close in residual explain the corners about equally well: the marker's pose is ambiguous.
+AMBIGUOUS_RESIDUAL_RATIO = 2.0
+
+
+def choose_fit(fits: Sequence[tuple[float, Pose2D]], previous: Pose2D | None) -> tuple[float, Pose2D]:
+    """The fit to believe among ``(residual, marker pose)`` fits: the best residual, unless another explains
+    the corners nearly as well (within ``AMBIGUOUS_RESIDUAL_RATIO``) and a recent ``previous`` pose says
+    which of them is the marker: then the one whose heading is closer to it (continuity, since a planar
+    square's mirror solution differs mostly in heading)."""
+    ranked = sorted(fits, key=lambda f: f[0])
+    best = ranked[0]
+    if previous is None:
+        return best
+    rivals = [f for f in ranked if f[0] <= AMBIGUOUS_RESIDUAL_RATIO * max(best[0], 1e-6)]
+    return min(rivals, key=lambda f: abs(math.remainder(f[1].yaw - previous.yaw, math.tau)))
+
+
 def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.ndarray, distortion: np.ndarray,
-                base_from_optical: Rigid3) -> DockSighting | None:
+                base_from_optical: Rigid3, previous: Pose2D | None = None) -> DockSighting | None:
     """The dock a sighted marker belongs to, in base_link; None when no upright pose explains the corners.
 
     Each upright IPPE solution, and a face-on guess (:func:`facing_seed`), seeds a planar refinement
-    (:func:`refine_upright`); the one that ends with the smaller residual wins, which also settles the
-    mirror ambiguity of a square seen from the side.
+    (:func:`refine_upright`); the fit with the smaller residual wins, which settles the mirror ambiguity of
+    a square seen from the side, unless the fits are nearly as good: then ``previous`` (the dock's pose in
+    base_link a moment ago, when known) picks the one that continues it (:func:`choose_fit`).
     """
     poses = [p for p in marker_poses(sighting, marker.size_m, camera_matrix, distortion, base_from_optical)
              if p.tilt_rad <= MAX_TILT_RAD]
@@ -274,13 +292,12 @@ def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.
     observed = cv2.undistortPoints(sighting.corners.reshape(-1, 1, 2), camera_matrix, distortion).reshape(-1, 2)
     focal = float(camera_matrix[0, 0])
     seeds = [upright_marker(p) for p in poses] + [facing_seed(observed, marker.size_m, base_from_optical)]
-    best: tuple[float, Pose2D] | None = None
+    fits = []
     for seed in seeds:
         fitted, residual = refine_upright(seed, observed, marker.size_m, marker.centre_height_m, base_from_optical)
-        if best is None or residual < best[0]:
-            best = (residual, fitted)
-    assert best is not None
-    residual, fitted = best
+        fits.append((residual, fitted))
+    previous_marker = previous.compose(_DOCK_FROM_MARKER.inverse()) if previous is not None else None
+    residual, fitted = choose_fit(fits, previous_marker)
     pose = poses[0]
     centre = np.array([fitted.x, fitted.y, marker.centre_height_m])
     return DockSighting(
@@ -293,5 +310,5 @@ def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.
     )
 
 
-__all__ = ["DockSighting", "MarkerFinder", "MarkerPose", "MarkerSighting", "choose_pose", "facing_seed", "locate_dock",
+__all__ = ["DockSighting", "MarkerFinder", "MarkerPose", "MarkerSighting", "choose_fit", "choose_pose", "facing_seed", "locate_dock",
            "marker_object_points", "marker_poses", "refine_corners", "refine_upright", "upright_corners", "upright_marker"]

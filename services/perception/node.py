@@ -47,6 +47,8 @@ from shared.world import ROBOT_FRONT_M, DockMarker, dock_markers, load_world
 #: Images: the newest only (a late frame is worth less than the next one).
 IMAGE_QOS = QoS(reliable=False, block=False, depth=1)
 STATS_PERIOD_S = 30.0
+#: A marker's last pose helps choose between ambiguous fits for this long (image stamps, s).
+CONTINUITY_S = 0.5
 #: How often the service checks whether anyone subscribes to its detections (wall seconds).
 DEMAND_PERIOD_S = 0.2
 #: The marker's pose in the dock pose's frame: on the dock's face, facing the docked robot.
@@ -75,6 +77,8 @@ class PerceptionService:
         self._camera_matrix: np.ndarray | None = None
         self._distortion = np.zeros(5)
         self.counts: Counter[str] = Counter()
+        #: Each marker's last dock pose in base_link and its image stamp: what an ambiguous fit continues.
+        self._previous: dict[int, tuple[float, Pose2D]] = {}
         self._stats_at = time.monotonic()
         self.detected_pub = node.create_publisher(PoseStamped, topics.DETECTED_DOCK_POSE, SENSOR_DATA)
         self.detections_pub = node.create_publisher(DockDetection, topics.DOCK_DETECTIONS, RELIABLE)
@@ -143,7 +147,7 @@ class PerceptionService:
             self._refuse("no-mount", "no tf_static chain from %s to %s yet", msg.header.frame_id, topics.BASE_FRAME)
             return
         sightings = self.finder.find(grey)
-        found = self._locate(sightings, base_from_camera)
+        found = self._locate(sightings, base_from_camera, msg.header.stamp.to_sec())
         self._publish(msg.header, found)
         if self.debug_pub.has_subscribers():
             self._publish_debug(msg.header, grey, sightings, found, base_from_camera)
@@ -151,7 +155,7 @@ class PerceptionService:
 
     # --- work ----------------------------------------------------------------------------------------
 
-    def _locate(self, sightings: list[MarkerSighting], base_from_camera: Rigid3) -> list[DockSighting]:
+    def _locate(self, sightings: list[MarkerSighting], base_from_camera: Rigid3, stamp_s: float) -> list[DockSighting]:
         assert self._camera_matrix is not None
         found = []
         for sighting in sightings:
@@ -160,7 +164,9 @@ class PerceptionService:
                 self._refuse("unknown-marker", "marker %d is not in the dock database (known: %s)",
                              sighting.marker_id, sorted(self.markers))
                 continue
-            dock = locate_dock(sighting, marker, self._camera_matrix, self._distortion, base_from_camera)
+            last = self._previous.get(sighting.marker_id)
+            previous = last[1] if last is not None and 0.0 <= stamp_s - last[0] <= CONTINUITY_S else None
+            dock = locate_dock(sighting, marker, self._camera_matrix, self._distortion, base_from_camera, previous)
             if dock is None:
                 self._refuse("not-upright", "marker %d: no upright pose fits its corners", sighting.marker_id)
                 continue
@@ -170,6 +176,7 @@ class PerceptionService:
             if dock.marker_range_m > self.params.max_range_m:
                 self.counts["too-far"] += 1
                 continue
+            self._previous[sighting.marker_id] = (stamp_s, dock.dock_in_base)
             found.append(dock)
         found.sort(key=lambda d: d.marker_range_m)
         return found

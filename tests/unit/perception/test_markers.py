@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from services.perception.markers import MarkerFinder, locate_dock
+from services.perception.markers import MarkerFinder, choose_fit, locate_dock
 from services.simulator.camera import CameraParams, CameraRenderer, build_scene
 from services.simulator.camera_frames import camera_mount_transforms
 from shared.geometry import Pose2D
@@ -119,3 +119,12 @@ def test_refined_corners_are_unbiased_where_the_detectors_are_pulled_inwards(pit
     assert found
     errors = np.linalg.norm(found[0].corners - truth, axis=1)
     assert float(np.max(errors)) < 0.2, errors
+
+
+def test_an_ambiguous_fit_is_settled_by_the_previous_pose_and_a_clear_one_is_not() -> None:
+    truth, mirror = Pose2D(1.0, 0.1, math.pi), Pose2D(1.0, 0.1, math.pi - 0.5)
+    ambiguous = [(0.0011, mirror), (0.0012, truth)]
+    assert choose_fit(ambiguous, None)[1] == mirror  # alone, the better residual wins
+    assert choose_fit(ambiguous, Pose2D(1.02, 0.1, math.pi - 0.03))[1] == truth  # continuity breaks the tie
+    clear = [(0.0005, truth), (0.0030, mirror)]
+    assert choose_fit(clear, Pose2D(1.0, 0.1, math.pi - 0.5))[1] == truth  # a clear fit is not overruled
