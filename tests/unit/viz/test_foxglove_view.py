@@ -14,6 +14,7 @@ from shared.geometry import Pose2D
 from shared.messages import (
     BatteryState,
     Header,
+    Image,
     LaserScan,
     MapMetaData,
     OccupancyGrid,
@@ -33,6 +34,18 @@ def test_views_are_found_by_the_last_part_of_the_key() -> None:
     assert found is not None and found[0].msg_type is LaserScan and found[1] == "robot1"
     assert view_for_key("cmd_vel") is None
     assert view_topic("robot1", "scan") == "/robot1/scan" and view_topic("", "tf") == "/tf"
+
+
+def test_camera_frames_are_raw_images_under_their_two_part_topic() -> None:
+    found = view_for_key("robot1/camera/image_raw")
+    assert found is not None and found[0].on_demand and found[1] == "robot1"
+    assert view_for_key("camera/image_raw") is not None and view_for_key("robot1/image_raw") is None
+    pixels = np.arange(12, dtype=np.uint8)
+    frame = Image(Header(Time(sec=3), "camera_optical_frame"), 3, 4, "mono8", 0, 4, pixels)
+    views = convert_key("robot1/camera/image_raw", Image.TYPE_NAME, frame.encode())
+    assert [v.topic for v in views] == ["/robot1/camera/image_raw"]
+    assert views[0].schema.name == "foxglove.RawImage" and views[0].stamp_ns == 3_000_000_000
+    assert pixels.tobytes() in views[0].data and b"mono8" in views[0].data
 
 
 def test_a_payload_of_another_type_gets_no_view() -> None:
