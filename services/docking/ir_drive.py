@@ -14,7 +14,10 @@ centre, right; near and far; see :mod:`shared.messages.DockInfraRed`), and how f
   axis is crossed), then SCAN (slowly) to face the dock.
 - ALIGNED (near or far): drive at the dock on the central receiver alone, steering back towards the
   axis whenever it sees a side field, until contact (charging). Losing the beacon in the near field, it
-  scans towards the side it last saw, where the beacon went.
+  scans towards the side it last saw, where the beacon went, slowly at first.
+
+The lidar's obstacle check stops a drive for the axis that heads into a wall or a box (the reference has
+only its bumper); the approach is not checked, since the dock it drives at is an obstacle to the lidar.
 
 Differences from the reference, each a choice of this implementation: the speeds are parameters
 (faster far from the dock than Kobuki's 0.1 m/s, as slow near it); a scan that sees nothing at all in
@@ -67,6 +70,9 @@ class IrDriveParams:
     max_blind_turns: float = 2.0
     #: Driving for the axis this long (s) without crossing it, or losing the beacon on the way: scan again.
     max_get_stream_s: float = 15.0
+    #: Losing the beacon near the dock, the scan turns slowly for this much of a turn first: a fast turn
+    #: there sweeps the robot's corners into the dock.
+    near_slow_scan_turns: float = 0.1
 
     def __post_init__(self) -> None:
         if self.filter_window < 1:
@@ -96,6 +102,7 @@ class IrDockDrive:
         self._scan_direction = 1.0
         self._timed_state = self.state
         self._last_side = 0
+        self._slow_turns = 0.0
         #: Time spent in the current state (s).
         self._state_s = 0.0
 
@@ -107,6 +114,13 @@ class IrDockDrive:
         for r, m, lf in self._history:
             right, mid, left = right | r, mid | m, left | lf
         return right, mid, left
+
+    def obstacle_ahead(self) -> IrCommand | None:
+        """Something other than the dock blocks the way: driving for the axis, turn and look again (the
+        approach itself drives at the dock, which the obstacle check cannot tell from a wall)."""
+        if self.state is IrState.GET_STREAM:
+            return self._restart_scan(self.params.scan_turn_radps)
+        return None
 
     def step(self, readings: tuple[int, int, int], turned_rad: float, dt_s: float = 0.05) -> IrCommand:
         """``readings``: ``(right, central, left)`` bit fields; ``turned_rad``: heading change since the last
@@ -138,9 +152,11 @@ class IrDockDrive:
         self.state = state
         return IrCommand(linear, angular, state)
 
-    def _restart_scan(self, angular: float) -> IrCommand:
+    def _restart_scan(self, angular: float, slow_turns: float = 0.0) -> IrCommand:
+        """Scan again, first turning ``angular``; the first ``slow_turns`` of the scan turn slowly."""
         self.dock_detector = 0
         self.rotated_turns = 0.0
+        self._slow_turns = slow_turns
         self._scan_direction = 1.0 if angular >= 0 else -1.0
         return self._to(IrState.SCAN, 0.0, angular)
 
@@ -149,7 +165,8 @@ class IrDockDrive:
         self.rotated_turns += turned_rad / (2.0 * math.pi)
         if mid & CENTER:
             return self._to(IrState.ALIGNED_FAR, p.near_mps, 0.0)
-        turn = self._scan_direction * p.scan_turn_radps
+        slow = abs(self.rotated_turns) < self._slow_turns
+        turn = self._scan_direction * (p.slow_scan_turn_radps if slow else p.scan_turn_radps)
         if mid & LEFT:
             self.dock_detector -= 1
             return self._to(IrState.SCAN, 0.0, turn)
@@ -182,7 +199,7 @@ class IrDockDrive:
         p = self.params
         if not mid:
             if self.state is IrState.ALIGNED_NEAR:  # slowly, towards the side last seen: no corner swept fast
-                return self._restart_scan((self._last_side or 1) * p.slow_scan_turn_radps)
+                return self._restart_scan((self._last_side or 1) * p.slow_scan_turn_radps, p.near_slow_scan_turns)
             return self._restart_scan(p.scan_turn_radps)
         near = bool(mid & NEAR)
         bits = mid & (NEAR if near else FAR)

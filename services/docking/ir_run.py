@@ -6,8 +6,8 @@ that starts out of reach (farther, or beside or behind the dock) is first taken 
 by the planner, as the robot would be sent home on a real floor; that leg is the only one that uses the
 map. The run succeeds when the battery reports charging, fails with FAILED_TO_STAGE (903) when the
 planner does, FAILED_TO_DETECT_DOCK (904) when the receivers see nothing for ``max_blind_turns`` turns of
-scanning, and TIMEOUT (907) after ``max_time_s``. Like the reference it has no obstacle check of its own
-(Kobuki stops on its bumper): it is for the last couple of metres.
+scanning, and TIMEOUT (907) after ``max_time_s``. An obstacle ahead (the lidar's check, without the dock's
+exemption since the map pose is not used) turns a drive for the axis into a new scan.
 """
 
 from __future__ import annotations
@@ -85,6 +85,10 @@ class IrDockingRun(Task[IrPhase]):
         if inputs.ir_dock is None:
             return self.hold("no fresh infrared readings")
         turned = inputs.base_twist[1] * dt if inputs.base_twist is not None else 0.0
+        if inputs.blocked_ahead:
+            avoided = self.drive.obstacle_ahead()
+            if avoided is not None:
+                return Velocity(avoided.linear_mps, avoided.angular_radps)
         command = self.drive.step(inputs.ir_dock, turned, dt)
         if command.state is IrState.LOST:
             self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_DETECT_DOCK,

@@ -271,6 +271,8 @@ class DockingService:
             dock = self.task.dock_pose
             dock_in_base = dock.relative_to(robot_pose) if dock is not None else None
             blocked_ahead, blocked_behind = self._blocked(now_s, dock_in_base)
+        elif isinstance(self.task, IrDockingRun):
+            blocked_ahead, blocked_behind = self._blocked(now_s, None)  # no map pose: nothing is the dock
         return TickInputs(
             now_s=now_s,
             robot_pose=robot_pose,
