@@ -17,7 +17,9 @@ centre, right; near and far; see :mod:`shared.messages.DockInfraRed`), and how f
   scans towards the side it last saw, where the beacon went, slowly at first.
 
 The lidar's obstacle check stops a drive for the axis that heads into a wall or a box (the reference has
-only its bumper); the approach is not checked, since the dock it drives at is an obstacle to the lidar.
+only its bumper); the robot then homes in from where it is: the next scan takes the first field the
+central receiver sees as the way in, and the approach's side corrections curve it onto the axis. The
+approach is not checked, since the dock it drives at is an obstacle to the lidar.
 
 Differences from the reference, each a choice of this implementation: the speeds are parameters
 (faster far from the dock than Kobuki's 0.1 m/s, as slow near it); a scan that sees nothing at all in
@@ -103,6 +105,8 @@ class IrDockDrive:
         self._timed_state = self.state
         self._last_side = 0
         self._slow_turns = 0.0
+        #: Set when the way to the axis is blocked: the next scan takes any field as a heading to follow.
+        self._home_in = False
         #: Time spent in the current state (s).
         self._state_s = 0.0
 
@@ -119,6 +123,7 @@ class IrDockDrive:
         """Something other than the dock blocks the way: driving for the axis, turn and look again (the
         approach itself drives at the dock, which the obstacle check cannot tell from a wall)."""
         if self.state is IrState.GET_STREAM:
+            self._home_in = True  # the way across the axis is blocked: home in on the beacon from here
             return self._restart_scan(self.params.scan_turn_radps)
         return None
 
@@ -163,7 +168,8 @@ class IrDockDrive:
     def _scan(self, mid: int, turned_rad: float) -> IrCommand:
         p = self.params
         self.rotated_turns += turned_rad / (2.0 * math.pi)
-        if mid & CENTER:
+        if mid & CENTER or (self._home_in and mid):
+            self._home_in = False
             return self._to(IrState.ALIGNED_FAR, p.near_mps, 0.0)
         slow = abs(self.rotated_turns) < self._slow_turns
         turn = self._scan_direction * (p.slow_scan_turn_radps if slow else p.scan_turn_radps)

@@ -8,7 +8,7 @@ import random
 import numpy as np
 import pytest
 
-from services.docking.ir_drive import IrDockDrive, IrState
+from services.docking.ir_drive import FAR_RIGHT, IrDockDrive, IrState
 from services.docking.ir_run import within_beacon_reach
 from services.simulator.infrared import InfraredParams, receiver_readings
 from services.simulator.raycast import SegmentSet
@@ -69,3 +69,15 @@ def test_beside_or_behind_the_dock_is_out_of_the_beacons_reach() -> None:
     assert not within_beacon_reach(FACE.compose(Pose2D(1.0, 1.5, 0.0)), DOCK)  # far off the axis
     assert not within_beacon_reach(DOCK.compose(Pose2D(1.0, 0.0, 0.0)), DOCK)  # behind the dock
     assert not within_beacon_reach(FACE.compose(Pose2D(2.5, 0.0, 0.0)), DOCK)  # too far
+
+
+def test_a_blocked_way_to_the_axis_homes_in_on_the_first_field_seen() -> None:
+    drive = IrDockDrive()
+    drive.state, drive.dock_detector = IrState.GET_STREAM, 1  # on the dock's right, driving for the axis
+    assert drive.step((0, 0, FAR_RIGHT), 0.0).state is IrState.GET_STREAM
+    turn = drive.obstacle_ahead()
+    assert turn is not None and turn.state is IrState.SCAN and turn.linear_mps == 0.0
+    command = drive.step((0, FAR_RIGHT, 0), 0.02)
+    assert command.state is IrState.ALIGNED_FAR  # not the centre, but followed: side corrections bring it in
+    assert drive.step((0, FAR_RIGHT, 0), 0.0).angular_radps < 0  # on the dock's right: turn right, to the axis
+    assert IrDockDrive().obstacle_ahead() is None  # scanning on the spot: nothing to avoid
