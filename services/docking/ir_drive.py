@@ -13,8 +13,10 @@ centre, right; near and far; see :mod:`shared.messages.DockInfraRed`), and how f
 - GET_STREAM: drive across the axis until the receiver on that side sees the other side's field (the
   axis is crossed), then SCAN (slowly) to face the dock.
 - ALIGNED (near or far): drive at the dock on the central receiver alone, steering back towards the
-  axis whenever it sees a side field, until contact (charging). Losing the beacon in the near field, it
-  scans towards the side it last saw, where the beacon went, slowly at first.
+  axis whenever it sees a side field, until contact (charging). Losing the beacon in the near field (a
+  robot off the axis close to the dock has the emitter outside its central receiver's view), it backs
+  away on the same line until the beacon is back in view, instead of scanning: a turn on the spot next to
+  the dock sweeps a corner into it.
 
 The lidar's obstacle check stops a drive for the axis that heads into a wall or a box (the reference has
 only its bumper); the robot then homes in from where it is: the next scan takes the first field the
@@ -55,6 +57,7 @@ class IrState(enum.Enum):
     GET_STREAM = "get_stream"
     ALIGNED_FAR = "aligned_far"
     ALIGNED_NEAR = "aligned_near"
+    BACK_OFF = "back_off"
     LOST = "lost"
 
 
@@ -72,9 +75,11 @@ class IrDriveParams:
     max_blind_turns: float = 2.0
     #: Driving for the axis this long (s) without crossing it, or losing the beacon on the way: scan again.
     max_get_stream_s: float = 15.0
-    #: Losing the beacon near the dock, the scan turns slowly for this much of a turn first: a fast turn
-    #: there sweeps the robot's corners into the dock.
-    near_slow_scan_turns: float = 0.1
+    #: Losing the beacon near the dock, back away on the same line (a turn there sweeps the robot's
+    #: corners into the dock) until the central receiver sees it again, for at most this long (s).
+    max_back_off_s: float = 6.0
+    #: ... and at least this long (s), so that the approach has room to bring the robot onto the axis.
+    min_back_off_s: float = 3.0
 
     def __post_init__(self) -> None:
         if self.filter_window < 1:
@@ -104,7 +109,6 @@ class IrDockDrive:
         self._scan_direction = 1.0
         self._timed_state = self.state
         self._last_side = 0
-        self._slow_turns = 0.0
         #: Set when the way to the axis is blocked: the next scan takes any field as a heading to follow.
         self._home_in = False
         #: Time spent in the current state (s).
@@ -147,6 +151,12 @@ class IrDockDrive:
             return self._scan(mid, turned_rad)
         if self.state is IrState.FIND_STREAM:
             return self._find_stream(right, left)
+        if self.state is IrState.BACK_OFF:
+            if mid and self._state_s >= p.min_back_off_s:  # back in view, with room to correct: approach again
+                return self._aligned(mid)
+            if self._state_s < p.max_back_off_s:
+                return self._to(IrState.BACK_OFF, -p.near_mps, 0.0)
+            return self._restart_scan(p.scan_turn_radps)
         if self.state is IrState.GET_STREAM:
             if not (right or mid or left) or self._state_s > p.max_get_stream_s:
                 return self._restart_scan(p.scan_turn_radps)  # drifted off, or driving away: look again
@@ -157,11 +167,10 @@ class IrDockDrive:
         self.state = state
         return IrCommand(linear, angular, state)
 
-    def _restart_scan(self, angular: float, slow_turns: float = 0.0) -> IrCommand:
-        """Scan again, first turning ``angular``; the first ``slow_turns`` of the scan turn slowly."""
+    def _restart_scan(self, angular: float) -> IrCommand:
+        """Scan again, first turning ``angular`` (then at the scan's rate, the same way)."""
         self.dock_detector = 0
         self.rotated_turns = 0.0
-        self._slow_turns = slow_turns
         self._scan_direction = 1.0 if angular >= 0 else -1.0
         return self._to(IrState.SCAN, 0.0, angular)
 
@@ -171,8 +180,7 @@ class IrDockDrive:
         if mid & CENTER or (self._home_in and mid):
             self._home_in = False
             return self._to(IrState.ALIGNED_FAR, p.near_mps, 0.0)
-        slow = abs(self.rotated_turns) < self._slow_turns
-        turn = self._scan_direction * (p.slow_scan_turn_radps if slow else p.scan_turn_radps)
+        turn = self._scan_direction * p.scan_turn_radps
         if mid & LEFT:
             self.dock_detector -= 1
             return self._to(IrState.SCAN, 0.0, turn)
@@ -204,8 +212,8 @@ class IrDockDrive:
     def _aligned(self, mid: int) -> IrCommand:
         p = self.params
         if not mid:
-            if self.state is IrState.ALIGNED_NEAR:  # slowly, towards the side last seen: no corner swept fast
-                return self._restart_scan((self._last_side or 1) * p.slow_scan_turn_radps, p.near_slow_scan_turns)
+            if self.state is IrState.ALIGNED_NEAR:  # back away on the same line: the beacon comes back in view
+                return self._to(IrState.BACK_OFF, -p.near_mps, 0.0)
             return self._restart_scan(p.scan_turn_radps)
         near = bool(mid & NEAR)
         bits = mid & (NEAR if near else FAR)

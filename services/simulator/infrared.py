@@ -56,14 +56,14 @@ class Receiver:
 class InfraredParams:
     near_range_m: float = 0.6
     far_range_m: float = 2.5
-    centre_half_angle_rad: float = math.radians(10.0)
+    centre_half_angle_rad: float = math.radians(5.0)
     centre_min_half_width_m: float = 0.012
     side_inner_angle_rad: float = math.radians(0.5)
     side_outer_angle_rad: float = math.radians(75.0)
     #: Kobuki's order: right, central, left.
     receivers: tuple[Receiver, Receiver, Receiver] = (
         Receiver(0.10, -0.10, -math.radians(60.0), math.radians(55.0)),
-        Receiver(0.13, 0.0, 0.0, math.radians(16.0)),
+        Receiver(0.13, 0.0, 0.0, math.radians(25.0)),
         Receiver(0.10, 0.10, math.radians(60.0), math.radians(55.0)),
     )
     dropout: float = 0.03

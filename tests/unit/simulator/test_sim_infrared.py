@@ -34,7 +34,7 @@ def test_fields_split_the_front_of_the_dock_into_centre_sides_near_and_far() -> 
     assert fields_at(1.0, 0.5, QUIET) == FAR_LEFT
     assert fields_at(0.4, 0.2, QUIET) == FAR_LEFT | NEAR_LEFT
     assert fields_at(1.0, -0.5, QUIET) == FAR_RIGHT
-    assert fields_at(1.0, 0.1, QUIET) == FAR_CENTER | FAR_LEFT  # just off the axis: both, as on the real dock
+    assert fields_at(1.0, 0.05, QUIET) == FAR_CENTER | FAR_LEFT  # just off the axis: both, as on the real dock
     assert fields_at(-0.5, 0.0, QUIET) == 0  # behind the face
     assert fields_at(3.0, 0.0, QUIET) == 0  # out of reach
 
