@@ -104,16 +104,14 @@ class IrDockDrive:
         #: Turns made in this scan (counter-clockwise positive).
         self.rotated_turns = 0.0
         self._blind_turns = 0.0
-        #: Which way the scan turns: counter-clockwise (+1) unless a crossing or a loss near the dock set it
-        #: to turn back (-1); the first tick of such a scan is slow, as the reference's.
+        #: Which way the scan turns: counter-clockwise (+1) unless a crossing set it to turn back (-1); the
+        #: first tick of such a scan is slow, as the reference's.
         self._scan_direction = 1.0
         self._timed_state = self.state
-        self._last_side = 0
         #: Set when the way to the axis is blocked: the next scan takes any field as a heading to follow.
         self._home_in = False
         #: Time spent in the current state (s).
         self._state_s = 0.0
-
         self._history: deque[tuple[int, int, int]] = deque(maxlen=params.filter_window)
 
     def _filtered(self, readings: tuple[int, int, int]) -> tuple[int, int, int]:
@@ -218,8 +216,6 @@ class IrDockDrive:
         near = bool(mid & NEAR)
         bits = mid & (NEAR if near else FAR)
         side = (1 if bits & LEFT else 0) - (1 if bits & RIGHT else 0)  # +1: the dock's left, -1: its right
-        if side:
-            self._last_side = side
         state, speed, turn = ((IrState.ALIGNED_NEAR, p.near_mps, p.near_turn_radps) if near
                               else (IrState.ALIGNED_FAR, p.far_mps, p.far_turn_radps))
         if side:
