@@ -1,0 +1,295 @@
+"""The ROS 2 bridge: zendock's keys as a ROS 2 (rmw_zenoh, Jazzy) graph on the same router.
+
+A ROS 2 machine running rmw_zenoh that connects to zendock's router sees a node per zendock service
+(``simulator``, ``battery``, ``pose``, ``planner``, ``perception``) with its publishers and
+subscriptions, announced by liveliness tokens in rmw_zenoh's form (:mod:`shared.ros2.wire`), and
+exchanges CDR samples with them on rmw_zenoh's data keys:
+
+* zendock -> ROS 2 (:data:`~services.ros2_bridge.routes.OUTBOUND`): a key is read and forwarded only
+  while a ROS 2 subscription for its topic exists (the peer's token says so); transient-local topics
+  (``/map``, ``/tf_static``) are always read, and their last message goes out again whenever a ROS 2
+  subscription appears, as a late joiner expects.
+* ROS 2 -> zendock: ``/cmd_vel`` (Twist or TwistStamped) drives the robot; ``/goal_pose`` (what RViz's
+  goal tool sends) becomes a ``navigate_to_pose`` goal.
+
+zendock's own keys and msgpack payloads are untouched: the bridge is one more service on the bus.
+Anything malformed from ROS 2 (bytes that are not CDR of the type, a type hash that is not Jazzy's, a
+goal in a frame zendock does not plan in) is counted and logged at most once per interval per kind.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import uuid
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any
+
+import zenoh
+from pydantic import Field
+
+from services.ros2_bridge.demand import PeerSubscriptions
+from services.ros2_bridge.routes import GOAL_POSE, INBOUND, OUTBOUND, TWIST_STAMPED, Inbound, Route
+from shared import topics
+from shared.messages import PoseStamped, Twist
+from shared.navigation import NavigationClient
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
+from shared.ratelimit import RateLimitedLogger
+from shared.ros2 import types as ros_types
+from shared.ros2.wire import (
+    ADMIN_SPACE,
+    Attachment,
+    Endpoint,
+    EntityKind,
+    GraphNode,
+    QosProfile,
+    Reliability,
+    data_key,
+    dds_type_name,
+    qualified_name,
+)
+from shared.ros2.wire import RELIABLE as ROS_RELIABLE
+from shared.runtime import ServiceParams, run_service
+from shared.schema import MessageError
+
+STATS_PERIOD_S = 30.0
+BRIDGE_NODE = "ros2_bridge"
+
+
+def _default_domain() -> int:
+    raw = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    return int(raw) if raw.isdigit() else 0
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.ros2_bridge``."""
+
+    domain_id: int = Field(default_factory=_default_domain, ge=0, le=232,
+                           description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
+    ros_namespace: str = Field("/", pattern=r"^/?([A-Za-z_][A-Za-z0-9_]*/?)*$",
+                               description="ROS 2 namespace the zendock robot's topics and nodes appear in")
+
+
+@dataclass
+class _Outlet:
+    """One outbound route's ROS 2 side: its publisher, gid and sequence, and what feeds it."""
+
+    route: Route
+    topic: str
+    type_hash: str
+    publisher: Any
+    gid: bytes
+    sequence: int = 0
+    feed: Subscription[Any] | None = None
+    last: Any = None
+
+
+class Ros2Bridge:
+    def __init__(self, node: Node, params: Params) -> None:
+        self.node = node
+        self.params = params
+        self.session = node.session
+        self.session_id = str(node.session.info.zid())
+        self.counts: Counter[str] = Counter()
+        self._say = RateLimitedLogger(node.log, interval_s=5.0)
+        self._stats_at = time.monotonic()
+        self._tokens: list[zenoh.LivelinessToken] = []
+        self._subscribers: list[Any] = []
+        self.peers = PeerSubscriptions(self.session_id, params.domain_id)
+        self._graph_nodes = self._declare_graph_nodes()
+        self._entity_ids = iter(range(len(self._graph_nodes) + 1, 1 << 30))
+        self.outlets: dict[str, _Outlet] = {}
+        for route in OUTBOUND:
+            self._open_outlet(route)
+        self._cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        self._navigation = NavigationClient(node)
+        for inbound in INBOUND:
+            self._open_inlet(inbound)
+        # Peers' subscriptions, past and future: what to forward.
+        self._graph_watch = self.session.liveliness().declare_subscriber(
+            f"{ADMIN_SPACE}/{params.domain_id}/**", self._on_graph_token, history=True)
+        node.create_timer(STATS_PERIOD_S, self._report_stats, wall=True)
+        node.log.info("ROS 2 domain %d, namespace %s: %d topics out, %d in, session %s", params.domain_id,
+                      params.ros_namespace, len(OUTBOUND), len(INBOUND), self.session_id)
+
+    # --- the graph zendock shows to ROS 2 ---------------------------------------------------------
+
+    def _declare_graph_nodes(self) -> dict[str, GraphNode]:
+        owners = [BRIDGE_NODE, *dict.fromkeys(r.owner for r in OUTBOUND), *dict.fromkeys(i.owner for i in INBOUND)]
+        nodes: dict[str, GraphNode] = {}
+        for name in dict.fromkeys(owners):
+            graph_node = GraphNode(self.params.domain_id, self.session_id, len(nodes), name, self.params.ros_namespace)
+            nodes[name] = graph_node
+            self._tokens.append(self.session.liveliness().declare_token(graph_node.token_key()))
+        return nodes
+
+    def _declare_endpoint(self, owner: str, kind: EntityKind, topic: str, ros_type: str, type_hash: str,
+                          qos: QosProfile) -> Endpoint:
+        endpoint = Endpoint(self._graph_nodes[owner], next(self._entity_ids), kind, topic, ros_type, type_hash, qos)
+        self._tokens.append(self.session.liveliness().declare_token(endpoint.token_key()))
+        return endpoint
+
+    def ros_topic(self, name: str) -> str:
+        return qualified_name(self.params.ros_namespace, name)
+
+    # --- zendock -> ROS 2 -------------------------------------------------------------------------
+
+    def _open_outlet(self, route: Route) -> None:
+        topic = self.ros_topic(route.ros_topic)
+        type_hash = ros_types.type_hash(route.ros_type)
+        best_effort = route.qos.reliability is Reliability.BEST_EFFORT
+        key = data_key(self.params.domain_id, topic, route.ros_type, type_hash)
+        publisher = self.session.declare_publisher(
+            key,
+            reliability=zenoh.Reliability.BEST_EFFORT if best_effort else zenoh.Reliability.RELIABLE,
+            congestion_control=zenoh.CongestionControl.DROP if best_effort else zenoh.CongestionControl.BLOCK,
+        )
+        outlet = _Outlet(route, topic, type_hash, publisher, uuid.uuid4().bytes)
+        self.outlets[topic] = outlet
+        endpoint = self._declare_endpoint(route.owner, EntityKind.PUBLISHER, topic, route.ros_type, type_hash,
+                                          route.qos)
+        if route.latched:
+            self._feed(outlet)
+            # A transient-local subscriber asks publishers' caches for history where rmw_zenoh keeps them.
+            cache_key = f"{key}/@adv/pub/{self.session_id}/{endpoint.entity_id}/_"
+            self._subscribers.append(self.session.declare_queryable(
+                cache_key, lambda query: self._answer_history(outlet, cache_key, query)))
+
+    def _feed(self, outlet: _Outlet) -> None:
+        qos = SENSOR_DATA if outlet.route.qos.reliability is Reliability.BEST_EFFORT else QoS(depth=10)
+        outlet.feed = self.node.create_subscription(
+            outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos)
+
+    def _forward(self, outlet: _Outlet, msg: Any) -> None:
+        if outlet.route.latched:
+            outlet.last = msg
+        if not self.peers.wanted(outlet.topic):
+            return
+        try:
+            payload = ros_types.to_cdr(msg, outlet.route.ros_type)
+        except ros_types.Ros2TypeError as exc:
+            self._refuse(f"encode-{outlet.topic}", "could not put %s on ROS 2: %s", outlet.topic, exc)
+            return
+        attachment = Attachment(outlet.sequence, time.time_ns(), outlet.gid).encode()
+        outlet.sequence += 1
+        outlet.publisher.put(payload, attachment=attachment)
+        self.counts[f"out {outlet.topic}"] += 1
+
+    def _answer_history(self, outlet: _Outlet, cache_key: str, query: zenoh.Query) -> None:
+        # Zenoh's thread; reads one reference, and a map asked for by a late joiner is rare.
+        last = outlet.last
+        if last is None:
+            return
+        try:
+            payload = ros_types.to_cdr(last, outlet.route.ros_type)
+        except ros_types.Ros2TypeError:
+            return  # counted when forwarding
+        attachment = Attachment(max(0, outlet.sequence - 1), time.time_ns(), outlet.gid).encode()
+        query.reply(cache_key, payload, attachment=attachment)
+        self.counts[f"history {outlet.topic}"] += 1
+
+    def _on_graph_token(self, sample: zenoh.Sample) -> None:
+        # Zenoh's thread: hand the token to the executor, where the subscriptions it changes live.
+        self.node.post(self._graph_changed, str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT)
+
+    def _graph_changed(self, key: str, alive: bool) -> None:
+        try:
+            endpoint = self.peers.appeared(key) if alive else self.peers.vanished(key)
+        except ValueError as exc:
+            self._refuse("graph-token", "ignored a graph token: %s", exc)
+            return
+        if endpoint is None:
+            return
+        outlet = self.outlets.get(endpoint.topic)
+        if outlet is None:
+            return
+        if alive:
+            self._check_type(outlet, endpoint)
+        wanted = self.peers.wanted(outlet.topic)
+        if wanted and outlet.feed is None:
+            self._feed(outlet)
+            self.node.log.info("a ROS 2 node subscribes to %s: forwarding %s", outlet.topic,
+                               self.node.key(outlet.route.zendock_topic))
+        elif not wanted and outlet.feed is not None and not outlet.route.latched:
+            outlet.feed.undeclare()
+            outlet.feed = None
+            self.node.log.info("no ROS 2 subscription to %s left: no longer forwarding it", outlet.topic)
+        if alive and outlet.last is not None:
+            self._forward(outlet, outlet.last)  # transient local: the late joiner gets the last message
+
+    def _check_type(self, outlet: _Outlet, endpoint: Endpoint) -> None:
+        if endpoint.ros_type != outlet.route.ros_type or endpoint.type_hash != outlet.type_hash:
+            self._refuse("type-mismatch", "node %s subscribes to %s as %s (%s); zendock publishes %s (%s): "
+                         "their samples will not match", endpoint.node.name, outlet.topic, endpoint.ros_type,
+                         endpoint.type_hash, outlet.route.ros_type, outlet.type_hash)
+
+    # --- ROS 2 -> zendock -------------------------------------------------------------------------
+
+    def _open_inlet(self, inbound: Inbound) -> None:
+        topic = self.ros_topic(inbound.ros_topic)
+        type_hash = ros_types.type_hash(inbound.ros_type)
+        self._declare_endpoint(inbound.owner, EntityKind.SUBSCRIPTION, topic, inbound.ros_type, type_hash,
+                               ROS_RELIABLE)
+        # Any hash: a sample under the wrong one is refused by name rather than silently never seen.
+        key = f"{self.params.domain_id}/{topic.strip('/')}/{dds_type_name(inbound.ros_type)}/*"
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            self.node.post(self._receive, inbound, topic, type_hash, str(sample.key_expr), sample.payload.to_bytes())
+
+        self._subscribers.append(self.session.declare_subscriber(key, on_sample))
+
+    def _receive(self, inbound: Inbound, topic: str, type_hash: str, key: str, payload: bytes) -> None:
+        sent_hash = key.rsplit("/", 1)[-1]
+        if sent_hash != type_hash:
+            self._refuse(f"hash-{topic}", "refused %s: type hash %s is not Jazzy's %s for %s", topic, sent_hash,
+                         type_hash, inbound.ros_type)
+            return
+        try:
+            ros_msg = ros_types.from_cdr(payload, inbound.ros_type)
+            if inbound.ros_type == TWIST_STAMPED:
+                ros_msg = ros_msg.twist
+            msg = ros_types.from_ros(ros_msg, inbound.zendock_type)
+        except (ros_types.Ros2TypeError, MessageError) as exc:
+            self._refuse(f"malformed-{topic}", "refused a message on %s: %s", topic, exc)
+            return
+        self.counts[f"in {topic}"] += 1
+        if isinstance(msg, Twist):
+            self._cmd_vel.publish(msg)
+        elif inbound.ros_topic == GOAL_POSE and isinstance(msg, PoseStamped):
+            self._navigate(msg)
+
+    def _navigate(self, goal: PoseStamped) -> None:
+        frame = goal.header.frame_id.lstrip("/")
+        if frame not in ("", topics.MAP_FRAME):
+            self._refuse("goal-frame", "refused a goal in frame %r: zendock plans in %r", goal.header.frame_id,
+                         topics.MAP_FRAME)
+            return
+        target = goal.pose.to_pose2d()
+        self.node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
+        self._navigation.go_to_pose(target)
+
+    # --- bookkeeping ------------------------------------------------------------------------------
+
+    def _refuse(self, kind: str, fmt: str, *args: object) -> None:
+        self.counts[f"refused {kind}"] += 1
+        self._say.warning(kind, fmt, *args)
+
+    def _report_stats(self) -> None:
+        if self.counts:
+            self.node.log.info("samples %s", dict(sorted(self.counts.items())))
+
+    def close(self) -> None:
+        self._report_stats()
+        self._graph_watch.undeclare()
+        for subscriber in self._subscribers:
+            subscriber.undeclare()
+        for outlet in self.outlets.values():
+            outlet.publisher.undeclare()
+        for token in self._tokens:
+            token.undeclare()
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_service("ros2_bridge", Params, Ros2Bridge, argv,
+                       description="zendock ROS 2 bridge: zendock's keys on rmw_zenoh's wire (ROS 2 Jazzy)")

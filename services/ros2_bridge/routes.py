@@ -1,0 +1,92 @@
+"""What the ROS 2 bridge carries: each zendock key, its ROS 2 topic and type, who owns it, its QoS.
+
+The owner is the zendock service that publishes (or, for commands, consumes) the key; the bridge
+announces it to ROS 2 as a node of that name, so ``ros2 node list`` shows zendock's services and
+``ros2 topic info -v`` names the service behind each topic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from shared import topics
+from shared.messages import (
+    BatteryState,
+    CameraInfo,
+    Clock,
+    Float64MultiArray,
+    Image,
+    LaserScan,
+    OccupancyGrid,
+    Odometry,
+    Path,
+    PoseStamped,
+    Range,
+    TFMessage,
+    Twist,
+)
+from shared.ros2.wire import LATCHED, RELIABLE, SENSOR_DATA, QosProfile
+from shared.schema import Message
+
+
+@dataclass(frozen=True)
+class Route:
+    """One zendock key on one ROS 2 topic (``ros_topic`` is relative to the bridge's ROS namespace)."""
+
+    zendock_topic: str
+    ros_topic: str
+    zendock_type: type[Message]
+    ros_type: str
+    owner: str
+    qos: QosProfile = RELIABLE
+
+    @property
+    def latched(self) -> bool:
+        """Transient local in ROS 2: a subscriber that joins late gets the last message at once."""
+        return self.qos == LATCHED
+
+
+def _out(topic: str, zendock_type: type[Message], owner: str, qos: QosProfile = RELIABLE,
+         ros_type: str | None = None) -> Route:
+    return Route(topic, topic, zendock_type, ros_type or zendock_type.TYPE_NAME, owner, qos)
+
+
+#: zendock -> ROS 2, forwarded only while a ROS 2 subscription for the topic exists.
+OUTBOUND: tuple[Route, ...] = (
+    _out(topics.CLOCK, Clock, "simulator"),
+    _out(topics.TF, TFMessage, "simulator"),
+    _out(topics.TF_STATIC, TFMessage, "simulator", LATCHED),
+    _out(topics.ODOM, Odometry, "simulator"),
+    _out(topics.SCAN, LaserScan, "simulator", SENSOR_DATA),
+    _out(topics.ULTRASONIC, Range, "simulator", SENSOR_DATA),
+    _out(topics.CAMERA_IMAGE, Image, "simulator", SENSOR_DATA),
+    _out(topics.CAMERA_INFO, CameraInfo, "simulator", SENSOR_DATA),
+    _out(topics.BATTERY_STATUS, BatteryState, "battery"),
+    _out(topics.POSE2D, Float64MultiArray, "pose"),
+    _out(topics.MAP, OccupancyGrid, "planner", LATCHED),
+    _out(topics.PLAN, Path, "planner"),
+    _out(topics.DETECTED_DOCK_POSE, PoseStamped, "perception", SENSOR_DATA),
+)
+
+#: What a ROS 2 command on cmd_vel may be: Twist, or TwistStamped as Jazzy's controllers publish.
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+#: RViz's "2D Goal Pose": navigate there.
+GOAL_POSE = "goal_pose"
+
+
+@dataclass(frozen=True)
+class Inbound:
+    """A ROS 2 topic the bridge subscribes to and what it becomes on zendock's side."""
+
+    ros_topic: str
+    ros_type: str
+    owner: str
+    zendock_type: type[Message]
+
+
+INBOUND: tuple[Inbound, ...] = (
+    Inbound(topics.CMD_VEL, TWIST, "simulator", Twist),
+    Inbound(topics.CMD_VEL, TWIST_STAMPED, "simulator", Twist),
+    Inbound(GOAL_POSE, "geometry_msgs/msg/PoseStamped", "planner", PoseStamped),
+)

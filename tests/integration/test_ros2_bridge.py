@@ -1,0 +1,115 @@
+"""ROS 2 peers zendock did not write (zenoh-ros2-sdk, rmw_zenoh's wire) list, echo and drive a zendock robot."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import zenoh
+
+from shared.messages import BatteryState, PoseStamped, TFMessage
+from shared.ros2 import types as ros_types
+from shared.ros2.wire import data_key
+from tests.support.bus import KeyRecorder
+from tests.support.processes import REPO_ROOT, wait_until
+
+SEED_ROOM = str(REPO_ROOT / "deploy/worlds/seed_room.yaml")
+
+
+def _peer(router: str, *args: str, timeout_s: float = 60.0) -> list[Any]:
+    """Run the peer to the end; its JSON lines (failing with its output when it fails)."""
+    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", router, *args],
+                          capture_output=True, text=True, timeout=timeout_s, cwd=REPO_ROOT, check=False)
+    assert done.returncode == 0, f"ros2_peer {' '.join(args)} failed:\n{done.stdout}\n{done.stderr[-3000:]}"
+    return [json.loads(line) for line in done.stdout.splitlines() if line.strip()]
+
+
+@contextmanager
+def _publishing(router: str, *args: str) -> Iterator[subprocess.Popen[str]]:
+    proc = subprocess.Popen([sys.executable, "-m", "tests.support.ros2_peer", "--router", router, "pub", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO_ROOT)
+    try:
+        yield proc
+    finally:
+        proc.kill()
+        proc.communicate(timeout=10)
+
+
+def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zenoh.Session, namespace: str,
+                                                                  router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
+    ours = KeyRecorder(bus, f"{namespace}/battery_status", BatteryState)
+    spawn("battery")
+    bridge = spawn("ros2_bridge")
+    ours.wait_for(timeout_s=30.0)
+    listed = _peer(router_endpoint, "topics", "--wait-for", "/battery_status")[0]
+    assert listed["/battery_status"] == ["sensor_msgs/msg/BatteryState"]
+    assert listed["/scan"] == ["sensor_msgs/msg/LaserScan"] and listed["/map"] == ["nav_msgs/msg/OccupancyGrid"]
+    assert set(listed["/cmd_vel"]) == {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
+    info = _peer(router_endpoint, "info", "/battery_status")[0]
+    assert info["publishers"] == [{"node": "battery", "namespace": "/", "qos": "::,10:,:,:,,"}]
+
+    echoed = _peer(router_endpoint, "echo", "/battery_status", "sensor_msgs/msg/BatteryState", "--count", "3")
+    assert len(echoed) == 3
+    for msg in echoed:
+        stamp = (msg["header"]["stamp"]["sec"], msg["header"]["stamp"]["nanosec"])
+        same = [m for m in ours.messages if (m.header.stamp.sec, m.header.stamp.nanosec) == stamp]
+        assert same, f"no zendock battery message stamped {stamp}"
+        assert math.isclose(msg["percentage"], same[0].percentage, rel_tol=1e-6)
+        assert msg["power_supply_status"] == same[0].power_supply_status
+    wait_until(lambda: "no ROS 2 subscription to /battery_status left" in bridge.output(), 10.0,
+               lambda: bridge.output()[-2000:])
+
+
+def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh.Session, namespace: str,
+                                                                router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
+    truth = KeyRecorder(bus, f"{namespace}/ground_truth_pose", PoseStamped)
+    tf_static = KeyRecorder(bus, f"{namespace}/tf_static", TFMessage)
+    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1")
+    bridge = spawn("ros2_bridge")
+    start = truth.wait_for(timeout_s=30.0).pose.to_pose2d()
+    wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+
+    def moved(msg: PoseStamped) -> bool:
+        pose = msg.pose.to_pose2d()
+        return math.hypot(pose.x - start.x, pose.y - start.y) > 0.05
+
+    with _publishing(router_endpoint, "/cmd_vel", "geometry_msgs/msg/Twist", '{"linear": {"x": 0.2}}',
+                     "--seconds", "20"):
+        truth.wait_for(moved, timeout_s=30.0, after=truth.count)
+
+    # TwistStamped, as Jazzy's controllers send it: turn on the spot.
+    heading = truth.wait_for(timeout_s=10.0, after=truth.count).pose.to_pose2d().yaw
+    with _publishing(router_endpoint, "/cmd_vel", "geometry_msgs/msg/TwistStamped",
+                     '{"twist": {"angular": {"z": 0.8}}}', "--seconds", "20"):
+        truth.wait_for(lambda m: abs(math.remainder(m.pose.to_pose2d().yaw - heading, math.tau)) > 0.2,
+                       timeout_s=30.0, after=truth.count)
+
+    # A type hash that is not Jazzy's, and bytes that are not CDR: refused by name, the bridge lives on.
+    with _publishing(router_endpoint, "/cmd_vel", "geometry_msgs/msg/Twist", '{"linear": {"x": 0.2}}',
+                     "--type-hash", "RIHS01_" + "00" * 32, "--seconds", "20"):
+        wait_until(lambda: "is not Jazzy's" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    twist_hash = ros_types.type_hash("geometry_msgs/msg/Twist")
+    bus.put(data_key(0, "/cmd_vel", "geometry_msgs/msg/Twist", twist_hash), b"\x00\x01\x00\x00\x01")
+    bus.put(data_key(0, "/goal_pose", "geometry_msgs/msg/PoseStamped",
+                     ros_types.type_hash("geometry_msgs/msg/PoseStamped")), b"\x93garbage")
+    wait_until(lambda: "refused a message on /cmd_vel" in bridge.output()
+               and "refused a message on /goal_pose" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    assert bridge.alive(), "the bridge died on bad input"
+
+    # /tf_static is transient local: a late joiner's history query gets the last one.
+    tf_static.wait_for(timeout_s=10.0)
+    key = data_key(0, "/tf_static", "tf2_msgs/msg/TFMessage", ros_types.type_hash("tf2_msgs/msg/TFMessage"))
+
+    def history() -> list[Any]:
+        replies = bus.get(f"{key}/@adv/pub/**", timeout=5.0)
+        return [ros_types.from_cdr(r.ok.payload.to_bytes(), "tf2_msgs/msg/TFMessage") for r in replies if r.ok]
+
+    wait_until(lambda: bool(history()), 10.0, "no history reply for /tf_static")
+    frames = {t.child_frame_id for t in history()[0].transforms}
+    assert {t.child_frame_id for t in tf_static.messages[-1].transforms} == frames
+    assert "camera_optical_frame" in frames

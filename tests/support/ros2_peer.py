@@ -1,0 +1,161 @@
+"""A ROS 2 peer zendock did not write: zenoh-ros2-sdk (an rmw_zenoh client from PyPI) in its own process.
+
+    python -m tests.support.ros2_peer --router tcp/127.0.0.1:PORT topics
+    python -m tests.support.ros2_peer --router ... echo /battery_status sensor_msgs/msg/BatteryState --count 3
+    python -m tests.support.ros2_peer --router ... pub /cmd_vel geometry_msgs/msg/Twist '{"linear": {"x": 0.2}}'
+
+Output is one JSON document per line. The SDK is given Jazzy's definitions and type hashes from rosbags,
+so it needs no network; everything else (keys, tokens, attachments, CDR reading) is the SDK's own.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from typing import Any
+
+import numpy as np
+from rosbags.typesys import Stores, get_typestore
+
+
+def _sdk_session(router: str) -> Any:
+    from zenoh_ros2_sdk import ZenohSession
+
+    host, _, port = router.removeprefix("tcp/").rpartition(":")
+    session = ZenohSession.get_instance(host.strip("[]"), int(port))
+    jazzy = get_typestore(Stores.ROS2_JAZZY)
+    session.store.register(jazzy.fielddefs)
+    for name in jazzy.fielddefs:  # known to the SDK already: no definition lookup on the network
+        session._registered_types[name] = name
+    return session, jazzy
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return [None if isinstance(v, float) and not np.isfinite(v) else v for v in value.tolist()]
+    if hasattr(value, "__dataclass_fields__"):
+        return {name: _plain(getattr(value, name)) for name in value.__dataclass_fields__ if name != "__msgtype__"
+                and not name.isupper()}
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def _qos(name: str) -> Any:
+    from zenoh_ros2_sdk.qos import QosDurability, QosProfile, QosReliability
+
+    return {
+        "reliable": QosProfile(),
+        "best_effort": QosProfile(reliability=QosReliability.BEST_EFFORT, history_depth=5),
+        "latched": QosProfile(durability=QosDurability.TRANSIENT_LOCAL, history_depth=1),
+    }[name]
+
+
+def _fill(cls: Any, data: dict[str, Any], store: Any) -> Any:
+    """A rosbags message of ``cls`` from a partial dict (missing fields zero)."""
+    _, fields = store.fielddefs[cls.__msgtype__]
+    values = {}
+    for name, (kind, detail) in fields:
+        given = data.get(name)
+        if kind == 2:
+            values[name] = _fill(store.types[detail], given or {}, store)
+        elif kind == 1:
+            default: Any = "" if detail[0] == "string" else False if detail[0] == "bool" else 0
+            values[name] = given if given is not None else default
+        else:
+            values[name] = np.asarray(given or [], dtype=np.float64) if kind in (3, 4) else given
+    return cls(**values)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="ros2_peer")
+    parser.add_argument("--router", required=True)
+    parser.add_argument("--domain", type=int, default=0)
+    sub = parser.add_subparsers(dest="command", required=True)
+    topics = sub.add_parser("topics")
+    topics.add_argument("--wait-for", default="", help="keep listing until this topic shows up")
+    topics.add_argument("--timeout", type=float, default=20.0)
+    info = sub.add_parser("info")
+    info.add_argument("topic")
+    echo = sub.add_parser("echo")
+    echo.add_argument("topic")
+    echo.add_argument("type")
+    echo.add_argument("--count", type=int, default=1)
+    echo.add_argument("--qos", default="reliable", choices=["reliable", "best_effort", "latched"])
+    echo.add_argument("--timeout", type=float, default=30.0)
+    pub = sub.add_parser("pub")
+    pub.add_argument("topic")
+    pub.add_argument("type")
+    pub.add_argument("message", help="the message as JSON (missing fields are zero)")
+    pub.add_argument("--rate", type=float, default=10.0)
+    pub.add_argument("--seconds", type=float, default=3.0)
+    pub.add_argument("--type-hash", default="", help="announce and publish under this hash instead of Jazzy's")
+    args = parser.parse_args(argv)
+
+    session, jazzy = _sdk_session(args.router)
+    try:
+        if args.command == "topics":
+            from zenoh_ros2_sdk import get_topic_names_and_types
+
+            deadline = time.monotonic() + args.timeout
+            while True:
+                found = get_topic_names_and_types(domain_id=args.domain, router_ip=session.router_ip,
+                                                  router_port=session.router_port)
+                if not args.wait_for or any(t == args.wait_for for t, _ in found) or time.monotonic() > deadline:
+                    break
+                time.sleep(0.2)
+            print(json.dumps({topic: types for topic, types in found}), flush=True)
+        elif args.command == "info":
+            from zenoh_ros2_sdk import get_topic_info
+
+            topic_info = get_topic_info(args.topic, domain_id=args.domain, router_ip=session.router_ip,
+                                        router_port=session.router_port, verbose=True)
+            print(json.dumps(None if topic_info is None else {
+                "types": topic_info.topic_types, "publishers": [
+                    {"node": p.node_name, "namespace": p.node_namespace, "qos": p.qos} for p in topic_info.publishers]}),
+                flush=True)
+        elif args.command == "echo":
+            from zenoh_ros2_sdk import ROS2Subscriber
+
+            received: list[Any] = []
+            subscriber = ROS2Subscriber(args.topic, args.type, received.append, msg_definition="",
+                                        domain_id=args.domain, router_ip=session.router_ip,
+                                        router_port=session.router_port, type_hash=jazzy.hash_rihs01(args.type),
+                                        qos=_qos(args.qos), node_name="zendock_test_echo")
+            deadline = time.monotonic() + args.timeout
+            printed = 0
+            while printed < args.count and time.monotonic() < deadline:
+                while printed < len(received) and printed < args.count:
+                    print(json.dumps(_plain(received[printed])), flush=True)
+                    printed += 1
+                time.sleep(0.02)
+            subscriber.close()
+            if printed < args.count:
+                print(f"ros2_peer: {printed} of {args.count} messages on {args.topic} in {args.timeout} s",
+                      file=sys.stderr)
+                return 1
+        elif args.command == "pub":
+            from zenoh_ros2_sdk import ROS2Publisher
+
+            type_hash = args.type_hash or jazzy.hash_rihs01(args.type)
+            publisher = ROS2Publisher(args.topic, args.type, msg_definition="", domain_id=args.domain,
+                                      router_ip=session.router_ip, router_port=session.router_port,
+                                      type_hash=type_hash, node_name="zendock_test_pub")
+            message = _fill(jazzy.types[args.type], json.loads(args.message), jazzy)
+            end = time.monotonic() + args.seconds
+            while time.monotonic() < end:
+                publisher.publish(**{name: getattr(message, name) for name in message.__dataclass_fields__
+                                     if name != "__msgtype__" and not name.isupper()})
+                time.sleep(1.0 / args.rate)
+            publisher.close()
+        return 0
+    finally:
+        session.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
