@@ -10,6 +10,7 @@ import json
 import re
 import shutil
 import subprocess
+import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -19,11 +20,11 @@ import zenoh
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from shared.messages import LaserScan, Twist
 from tests.support.bus import KeyRecorder
-from tests.support.processes import REPO_ROOT, free_port
+from tests.support.processes import REPO_ROOT, free_port, wait_until
 
 SECURE = REPO_ROOT / "deploy/zenoh/secure"
 SEED_ROOM = str(REPO_ROOT / "deploy/worlds/seed_room.yaml")
-USERS = ("simulator", "battery", "pose", "planner", "docking", "perception", "viz", "operator", "viewer")
+USERS = ("simulator", "battery", "pose", "planner", "docking", "perception", "viz", "ros2_bridge", "operator", "viewer")
 CONNECT_TIMEOUT_MS = 1000
 
 
@@ -186,6 +187,27 @@ def test_only_the_planner_and_docking_users_can_drive(sessions: dict[str, zenoh.
     seen.wait_for(lambda m: m.linear.x == 0.3, timeout_s=5.0)
     assert seen.errors == []
     seen.close()
+
+
+def test_only_the_ros2_bridge_user_speaks_ros2(sessions: dict[str, zenoh.Session]) -> None:
+    """rmw_zenoh's data keys and graph tokens of domain 0 are the bridge's alone among zendock's users."""
+    key = f"0/{uuid.uuid4().hex[:8]}/std_msgs::msg::dds_::String_/RIHS01_x"
+    token_key = f"@ros2_lv/0/{uuid.uuid4().hex[:8]}/0/0/NN/%/%/bridge_probe"
+    seen: list[bytes] = []
+    tokens: list[str] = []
+    sub = sessions["viewer"].declare_subscriber(key, lambda s: seen.append(s.payload.to_bytes()))
+    watch = sessions["viewer"].liveliness().declare_subscriber("@ros2_lv/0/**", lambda s: tokens.append(str(s.key_expr)))
+    settle(sessions["viewer"])
+    sessions["battery"].put(key, b"forged")
+    forged_token = sessions["battery"].liveliness().declare_token(token_key + "_forged")
+    settle(sessions["battery"])
+    sessions["ros2_bridge"].put(key, b"bridged")
+    token = sessions["ros2_bridge"].liveliness().declare_token(token_key)
+    wait_until(lambda: seen == [b"bridged"] and tokens == [token_key], 5.0, lambda: (seen, tokens))
+    token.undeclare()
+    forged_token.undeclare()
+    watch.undeclare()
+    sub.undeclare()
 
 
 def test_only_the_owner_answers_requests(sessions: dict[str, zenoh.Session], namespace: str) -> None:

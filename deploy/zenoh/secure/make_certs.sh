@@ -13,7 +13,7 @@ set -eu
 
 DIR=${1:-deploy/zenoh/secure/certs}
 [ $# -gt 0 ] && shift
-CLIENTS=${*:-simulator battery pose planner docking perception viz operator viewer}
+CLIENTS=${*:-simulator battery pose planner docking perception viz ros2_bridge operator viewer}
 DAYS=${ZENDOCK_CERT_DAYS:-30}
 
 command -v openssl >/dev/null 2>&1 || { echo "make_certs.sh: openssl not found" >&2; exit 1; }
