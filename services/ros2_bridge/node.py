@@ -29,6 +29,7 @@ from typing import Any
 import zenoh
 from pydantic import Field
 
+from services.ros2_bridge.actions import ACTIONS, ActionRelay
 from services.ros2_bridge.demand import PeerSubscriptions
 from services.ros2_bridge.routes import GOAL_POSE, INBOUND, OUTBOUND, TWIST_STAMPED, Inbound, Route
 from shared import topics
@@ -106,17 +107,19 @@ class Ros2Bridge:
         self._navigation = NavigationClient(node)
         for inbound in INBOUND:
             self._open_inlet(inbound)
+        self.actions = [self._open_action(action) for action in ACTIONS]
         # Peers' subscriptions, past and future: what to forward.
         self._graph_watch = self.session.liveliness().declare_subscriber(
             f"{ADMIN_SPACE}/{params.domain_id}/**", self._on_graph_token, history=True)
         node.create_timer(STATS_PERIOD_S, self._report_stats, wall=True)
-        node.log.info("ROS 2 domain %d, namespace %s: %d topics out, %d in, session %s", params.domain_id,
-                      params.ros_namespace, len(OUTBOUND), len(INBOUND), self.session_id)
+        node.log.info("ROS 2 domain %d, namespace %s: %d topics out, %d in, %d actions, session %s",
+                      params.domain_id, params.ros_namespace, len(OUTBOUND), len(INBOUND), len(ACTIONS),
+                      self.session_id)
 
     # --- the graph zendock shows to ROS 2 ---------------------------------------------------------
 
     def _declare_graph_nodes(self) -> dict[str, GraphNode]:
-        owners = [BRIDGE_NODE, *dict.fromkeys(r.owner for r in OUTBOUND), *dict.fromkeys(i.owner for i in INBOUND)]
+        owners = [BRIDGE_NODE, *(r.owner for r in OUTBOUND), *(i.owner for i in INBOUND), *(a.owner for a in ACTIONS)]
         nodes: dict[str, GraphNode] = {}
         for name in dict.fromkeys(owners):
             graph_node = GraphNode(self.params.domain_id, self.session_id, len(nodes), name, self.params.ros_namespace)
@@ -269,6 +272,18 @@ class Ros2Bridge:
         self.node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
         self._navigation.go_to_pose(target)
 
+    # --- actions: ROS 2 goals for zendock's action servers ---------------------------------------
+
+    def _open_action(self, action: Any) -> ActionRelay:
+        name = self.ros_topic(action.name)
+        for service in action.services:
+            self._declare_endpoint(action.owner, EntityKind.SERVICE, f"{name}/_action/{service.part}",
+                                   service.ros_type, ros_types.type_hash(service.ros_type), ROS_RELIABLE)
+        return ActionRelay(self.node, action, self.params.domain_id, name, self._refuse, self._count)
+
+    def _count(self, what: str) -> None:
+        self.counts[what] += 1
+
     # --- bookkeeping ------------------------------------------------------------------------------
 
     def _refuse(self, kind: str, fmt: str, *args: object) -> None:
@@ -284,6 +299,8 @@ class Ros2Bridge:
         self._graph_watch.undeclare()
         for subscriber in self._subscribers:
             subscriber.undeclare()
+        for relay in self.actions:
+            relay.close()
         for outlet in self.outlets.values():
             outlet.publisher.undeclare()
         for token in self._tokens:

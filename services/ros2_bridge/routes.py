@@ -8,8 +8,12 @@ announces it to ROS 2 as a node of that name, so ``ros2 node list`` shows zendoc
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from shared import topics
+from shared.action import GoalStatusArray, action_key
+from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
+from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.messages import (
     BatteryState,
     CameraInfo,
@@ -25,6 +29,7 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
+from shared.ros2 import interfaces
 from shared.ros2.wire import LATCHED, RELIABLE, SENSOR_DATA, QosProfile
 from shared.schema import Message
 
@@ -51,6 +56,15 @@ def _out(topic: str, zendock_type: type[Message], owner: str, qos: QosProfile = 
     return Route(topic, topic, zendock_type, ros_type or zendock_type.TYPE_NAME, owner, qos)
 
 
+def _action_topics(name: str, ros_action: str, zendock_action: Any, owner: str) -> tuple[Route, ...]:
+    """An action's feedback and status topics (its services are relayed by :mod:`.actions`)."""
+    parts = interfaces.action_parts(ros_action)
+    return (
+        _out(action_key(name, "feedback"), zendock_action.feedback_message, owner, ros_type=parts["feedback"]),
+        _out(action_key(name, "status"), GoalStatusArray, owner, LATCHED, ros_type=parts["status"]),
+    )
+
+
 #: zendock -> ROS 2, forwarded only while a ROS 2 subscription for the topic exists.
 OUTBOUND: tuple[Route, ...] = (
     _out(topics.CLOCK, Clock, "simulator"),
@@ -66,6 +80,9 @@ OUTBOUND: tuple[Route, ...] = (
     _out(topics.MAP, OccupancyGrid, "planner", LATCHED),
     _out(topics.PLAN, Path, "planner"),
     _out(topics.DETECTED_DOCK_POSE, PoseStamped, "perception", SENSOR_DATA),
+    *_action_topics(topics.DOCK_ROBOT, interfaces.DOCK_ROBOT, DOCK_ROBOT, "docking"),
+    *_action_topics(topics.UNDOCK_ROBOT, interfaces.UNDOCK_ROBOT, UNDOCK_ROBOT, "docking"),
+    *_action_topics(topics.NAVIGATE_TO_POSE, interfaces.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE, "planner"),
 )
 
 #: What a ROS 2 command on cmd_vel may be: Twist, or TwistStamped as Jazzy's controllers publish.

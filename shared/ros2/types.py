@@ -18,6 +18,7 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from shared.ros2 import interfaces
 from shared.schema import Message
 
 M = TypeVar("M", bound=Message)
@@ -36,10 +37,22 @@ class Ros2TypeError(ValueError):
     """A type zendock cannot put on ROS 2's wire, or bytes that are not the type they claim."""
 
 
+#: rosbags keeps ``char`` where rosidl's type description has ``uint8`` (``char`` is uint8 in ROS 2's IDL);
+#: the CDR is the same, the type hash of every service (whose event carries this message) is not.
+_SERVICE_EVENT_INFO = "service_msgs/msg/ServiceEventInfo"
+
+
 @cache
 def typestore() -> Typestore:
-    """Jazzy's message definitions (one store per process)."""
-    return get_typestore(Stores.ROS2_JAZZY)
+    """Jazzy's message definitions and zendock's actions (:mod:`shared.ros2.interfaces`), one store per process."""
+    defs: dict[str, Any] = dict(get_typestore(Stores.ROS2_JAZZY).fielddefs)
+    consts, fields = defs[_SERVICE_EVENT_INFO]
+    defs[_SERVICE_EVENT_INFO] = (consts, [(name, (3, ((1, ("uint8", 0)), 16)) if name == "client_gid" else desc)
+                                          for name, desc in fields])
+    defs.update(interfaces.definitions())
+    store = get_typestore(Stores.EMPTY)
+    store.register(defs)
+    return store
 
 
 def knows(ros_type: str) -> bool:
@@ -48,7 +61,7 @@ def knows(ros_type: str) -> bool:
 
 @cache
 def type_hash(ros_type: str) -> str:
-    """``RIHS01_<sha256>`` of the type's description, as ROS 2 Jazzy announces it."""
+    """``RIHS01_<sha256>`` of the type's description, as ROS 2 Jazzy announces it (messages and services)."""
     _require(ros_type)
     return typestore().hash_rihs01(ros_type)
 

@@ -360,6 +360,38 @@ def test_zendock_dock_and_undock_from_the_command_line(stack) -> None:  # type: 
     assert truth.collisions == 0
 
 
+def _ros2_peer(s: Stack, *args: str, timeout_s: float = 120.0) -> list[dict[str, object]]:
+    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, *args],
+                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=timeout_s, check=False)
+    lines = [json.loads(line) for line in done.stdout.splitlines() if line.strip()]
+    assert lines, f"ros2_peer {' '.join(args)} printed nothing:\n{done.stderr[-3000:]}"
+    return lines
+
+
+def test_a_ros2_action_client_docks_the_robot_through_the_bridge(stack) -> None:  # type: ignore[no-untyped-def]
+    """``ros2 action send_goal /dock_robot ...`` from a ROS 2 client zendock did not write (rmw_zenoh's wire)."""
+    s: Stack = stack(battery=("initial_percentage=0.9",))
+    s.start_docking()
+    bridge = s.spawn("ros2_bridge")
+    s.wait_state("IDLE", timeout_s=20.0)
+    wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    action = ("action", "/dock_robot", "opennav_docking_msgs/action/DockRobot")
+
+    unknown = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "nowhere", "max_staging_time": 1000}')
+    assert unknown[0] == {"accepted": True}, unknown
+    assert unknown[1]["status"] == int(GoalStatusCode.ABORTED), unknown
+    assert unknown[1]["result"] == {"success": False, "error_code": DockRobotResult.DOCK_NOT_IN_DB, "num_retries": 0}
+
+    docked = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "home", "max_staging_time": 1000, '
+                                    '"navigate_to_staging_pose": true}')
+    assert docked[0] == {"accepted": True}, docked
+    assert docked[1]["status"] == int(GoalStatusCode.SUCCEEDED), docked
+    assert docked[1]["result"]["success"] is True and docked[1]["feedback"] > 0, docked
+    s.wait_charging(timeout_s=10.0)
+    s.docked_cleanly()
+    assert bridge.alive()
+
+
 def test_cancel_mid_approach_stops_with_a_zero_command(stack) -> None:  # type: ignore[no-untyped-def]
     s: Stack = stack(battery=("initial_percentage=0.9",))
     s.start_docking("max_approach_speed_mps=0.15")

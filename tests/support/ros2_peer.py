@@ -94,6 +94,11 @@ def main(argv: list[str] | None = None) -> int:
     pub.add_argument("--rate", type=float, default=10.0)
     pub.add_argument("--seconds", type=float, default=3.0)
     pub.add_argument("--type-hash", default="", help="announce and publish under this hash instead of Jazzy's")
+    act = sub.add_parser("action", help="send a goal, print the acceptance, the feedback count and the result")
+    act.add_argument("name")
+    act.add_argument("type")
+    act.add_argument("goal", help="the goal as JSON (missing fields are zero)")
+    act.add_argument("--timeout", type=float, default=120.0)
     args = parser.parse_args(argv)
 
     session, jazzy = _sdk_session(args.router)
@@ -152,9 +157,60 @@ def main(argv: list[str] | None = None) -> int:
                                      if name != "__msgtype__" and not name.isupper()})
                 time.sleep(1.0 / args.rate)
             publisher.close()
+        elif args.command == "action":
+            return _action(session, args)
         return 0
     finally:
         session.close()
+
+
+def _action(session: Any, args: argparse.Namespace) -> int:
+    """A ROS 2 action client from the SDK's parts: two service clients and a feedback subscription.
+
+    The action's types are not in Jazzy's common set and the SDK derives request names for ``srv``
+    packages only, so the types (and their hashes) come from zendock's definitions of Nav2's actions,
+    registered under the names the SDK looks up; keys, tokens, attachments and CDR stay the SDK's.
+    """
+    import uuid as uuidlib
+
+    from zenoh_ros2_sdk import ROS2ServiceClient, ROS2Subscriber
+
+    from shared.ros2 import types as zendock_types
+
+    ours = zendock_types.typestore()
+    package, _, name = args.type.partition("/action/")
+    aliases = {}
+    for part in ("SendGoal", "GetResult"):
+        for side in ("Request", "Response"):
+            aliases[f"{package}/srv/{name}_{part}_{side}"] = ours.fielddefs[f"{args.type}_{part}_{side}"]
+    needed = {n: d for n, d in ours.fielddefs.items() if n.startswith(args.type)}
+    session.store.register({**needed, **aliases})
+    for alias in (*aliases, *needed):
+        session._registered_types[alias] = alias
+    common = {"domain_id": args.domain, "router_ip": session.router_ip, "router_port": session.router_port}
+    feedback: list[Any] = []
+    feedback_sub = ROS2Subscriber(f"{args.name}/_action/feedback", f"{args.type}_FeedbackMessage", feedback.append,
+                                  msg_definition="", type_hash=zendock_types.type_hash(f"{args.type}_FeedbackMessage"),
+                                  node_name="zendock_test_action", **common)
+    services = {"SendGoal": "send_goal", "GetResult": "get_result"}
+    clients = {part: ROS2ServiceClient(f"{args.name}/_action/{services[part]}", f"{args.type}_{part}", request_definition="x", response_definition="x",
+                                       type_hash=zendock_types.type_hash(f"{args.type}_{part}"),
+                                       node_name="zendock_test_action", timeout=args.timeout, **common)
+               for part in ("SendGoal", "GetResult")}
+    goal_id = ours.types["unique_identifier_msgs/msg/UUID"](uuid=np.frombuffer(uuidlib.uuid4().bytes, dtype=np.uint8))
+    goal = _fill(ours.types[f"{args.type}_Goal"], json.loads(args.goal), ours)
+    accepted = clients["SendGoal"].call(goal_id=goal_id, goal=goal)
+    print(json.dumps({"accepted": None if accepted is None else bool(accepted.accepted)}), flush=True)
+    if accepted is None or not accepted.accepted:
+        return 1
+    result = clients["GetResult"].call(goal_id=goal_id)
+    print(json.dumps({"status": None if result is None else int(result.status),
+                      "result": None if result is None else _plain(result.result),
+                      "feedback": len(feedback)}), flush=True)
+    feedback_sub.close()
+    for client in clients.values():
+        client.close()
+    return 0 if result is not None else 1
 
 
 if __name__ == "__main__":

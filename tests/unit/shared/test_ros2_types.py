@@ -8,11 +8,29 @@ from typing import Any
 import numpy as np
 import pytest
 
+from services.ros2_bridge.actions import ACTIONS
 from services.ros2_bridge.routes import INBOUND, OUTBOUND
+from shared.action import UUID, CancelGoalRequest, CancelGoalResponse, GoalInfo, GoalStatus, GoalStatusArray
+from shared.interfaces.docking import (
+    DOCK_ROBOT,
+    UNDOCK_ROBOT,
+    DockRobotFeedback,
+    DockRobotGoal,
+    DockRobotResult,
+    UndockRobotFeedback,
+    UndockRobotGoal,
+)
+from shared.interfaces.navigation import (
+    NAVIGATE_TO_POSE,
+    NavigateToPoseFeedback,
+    NavigateToPoseGoal,
+    NavigateToPoseResult,
+)
 from shared.messages import (
     BatteryState,
     CameraInfo,
     Clock,
+    Duration,
     Float64MultiArray,
     Header,
     Image,
@@ -72,6 +90,34 @@ EXAMPLES: dict[str, Message] = {
     "geometry_msgs/msg/Twist": Twist(Vector3(0.25, 0.0, 0.0), Vector3(0.0, 0.0, -0.5)),
 }
 
+GOAL_ID = UUID(np.arange(16, dtype=np.uint8))
+GOAL_INFO = GoalInfo(GOAL_ID, Time(4, 5))
+#: The actions' parts: zendock's messages of the same names as rosidl's.
+ACTION_EXAMPLES: dict[str, Message] = {
+    "action_msgs/msg/GoalStatusArray": GoalStatusArray([GoalStatus(GOAL_INFO, 2), GoalStatus(GoalInfo(UUID(), Time()), 4)]),
+    "action_msgs/srv/CancelGoal_Request": CancelGoalRequest(GOAL_INFO),
+    "action_msgs/srv/CancelGoal_Response": CancelGoalResponse(0, [GOAL_INFO]),
+    "opennav_docking_msgs/action/DockRobot_SendGoal_Request": DOCK_ROBOT.send_goal_request(
+        goal_id=GOAL_ID, goal=DockRobotGoal(True, "home", PoseStamped(HEADER, POSE), "charger", 120.0, False)),
+    "opennav_docking_msgs/action/DockRobot_SendGoal_Response": DOCK_ROBOT.send_goal_response(accepted=True, stamp=Time(8, 9)),
+    "opennav_docking_msgs/action/DockRobot_GetResult_Request": DOCK_ROBOT.get_result_request(goal_id=GOAL_ID),
+    "opennav_docking_msgs/action/DockRobot_GetResult_Response": DOCK_ROBOT.get_result_response(
+        status=4, result=DockRobotResult(True, 0, 2)),
+    "opennav_docking_msgs/action/DockRobot_FeedbackMessage": DOCK_ROBOT.feedback_message(
+        goal_id=GOAL_ID, feedback=DockRobotFeedback(3, Duration(7, 100), 1)),
+    "opennav_docking_msgs/action/UndockRobot_SendGoal_Request": UNDOCK_ROBOT.send_goal_request(
+        goal_id=GOAL_ID, goal=UndockRobotGoal("charger", 15.0)),
+    "opennav_docking_msgs/action/UndockRobot_FeedbackMessage": UNDOCK_ROBOT.feedback_message(
+        goal_id=GOAL_ID, feedback=UndockRobotFeedback()),
+    "nav2_msgs/action/NavigateToPose_SendGoal_Request": NAVIGATE_TO_POSE.send_goal_request(
+        goal_id=GOAL_ID, goal=NavigateToPoseGoal(PoseStamped(HEADER, POSE), "")),
+    "nav2_msgs/action/NavigateToPose_GetResult_Response": NAVIGATE_TO_POSE.get_result_response(
+        status=6, result=NavigateToPoseResult(9002, "no valid path")),
+    "nav2_msgs/action/NavigateToPose_FeedbackMessage": NAVIGATE_TO_POSE.feedback_message(
+        goal_id=GOAL_ID, feedback=NavigateToPoseFeedback(PoseStamped(HEADER, POSE), Duration(3, 0), Duration(9, 0), 1, 2.5)),
+}
+EXAMPLES.update(ACTION_EXAMPLES)
+
 
 def _independent(value: Any, ros_type: str) -> Any:
     """The rosbags message built from zendock's msgpack map, field by field, without the converter."""
@@ -98,7 +144,11 @@ def _independent(value: Any, ros_type: str) -> Any:
 
 
 def test_every_bridged_type_has_an_example() -> None:
-    assert {r.ros_type for r in OUTBOUND} | {"geometry_msgs/msg/Twist"} == set(EXAMPLES)
+    """Every topic's type, and both sides of each of an action's services (DockRobot's; the others differ
+    only in goal, result and feedback, which have examples of their own)."""
+    dock = next(a for a in ACTIONS if a.name == "dock_robot")
+    services = {f"{s.ros_type}_{side}" for s in dock.services for side in ("Request", "Response")}
+    assert {r.ros_type for r in OUTBOUND} | {"geometry_msgs/msg/Twist"} | services <= set(EXAMPLES)
 
 
 @pytest.mark.parametrize("ros_type", sorted(EXAMPLES))
@@ -131,6 +181,23 @@ def test_type_hashes_are_jazzys_published_values() -> None:
         "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a")
     for route in (*OUTBOUND, *INBOUND):
         assert types.type_hash(route.ros_type).startswith("RIHS01_") and len(types.type_hash(route.ros_type)) == 71
+
+
+def test_service_hashes_describe_request_response_and_event() -> None:
+    """A service's hash is its description type's (request, response, event), not its request's: checked
+    against the published hash of example_interfaces/srv/AddTwoInts, built by the same rule."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from shared.ros2.interfaces import _service
+
+    store = get_typestore(Stores.EMPTY)
+    store.register(dict(types.typestore().fielddefs))
+    store.register(_service("example_interfaces/srv/AddTwoInts", "int64 a\nint64 b", "int64 sum"))
+    assert store.hash_rihs01("example_interfaces/srv/AddTwoInts") == (
+        "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a")
+    for action in ACTIONS:
+        for service in action.services:
+            assert types.type_hash(service.ros_type) != types.type_hash(f"{service.ros_type}_Request")
 
 
 def test_unknown_types_and_bad_bytes_are_named() -> None:

@@ -1,0 +1,140 @@
+"""ROS 2 actions on zendock's action servers: a goal sent from ROS 2 is a zendock goal, relayed.
+
+An action on rmw_zenoh is three services (``<action>/_action/send_goal``, ``cancel_goal``,
+``get_result``: queryables whose requests and replies are CDR with rmw_zenoh's attachment) and two
+topics (``feedback``, ``status``; forwarded as any other topic, see :mod:`.routes`). zendock's actions
+have the same parts under the same names with msgpack payloads (:mod:`shared.action`), so each ROS 2
+request becomes the zendock request of the same type, the reply comes back the same way, and a
+``get_result`` waits, as in ROS 2, until the goal ends. The relay holds no goal state of its own: the
+zendock server is the only authority on a goal.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import zenoh
+
+from shared.action import CANCEL_GOAL, action_key
+from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
+from shared.interfaces.navigation import NAVIGATE_TO_POSE
+from shared.node import Node, ServiceError, ServiceType
+from shared.ros2 import interfaces
+from shared.ros2 import types as ros_types
+from shared.ros2.wire import Attachment, data_key
+from shared.schema import MessageError
+from shared.topics import DOCK_ROBOT as DOCK_ROBOT_NAME
+from shared.topics import NAVIGATE_TO_POSE as NAVIGATE_TO_POSE_NAME
+from shared.topics import UNDOCK_ROBOT as UNDOCK_ROBOT_NAME
+
+#: A goal's result may take as long as the goal: docking from across the room, navigation with recoveries.
+RESULT_WAIT_S = 3600.0
+REQUEST_WAIT_S = 10.0
+
+
+@dataclass(frozen=True)
+class RelayedService:
+    """One of an action's three services: its ROS 2 type and the zendock service it is relayed to."""
+
+    part: str
+    ros_type: str
+    zendock: ServiceType[Any, Any]
+    wait_s: float
+
+
+@dataclass(frozen=True)
+class RelayedAction:
+    name: str
+    ros_type: str
+    owner: str
+    services: tuple[RelayedService, ...]
+
+
+def _relayed(name: str, ros_type: str, owner: str, zendock_action: Any) -> RelayedAction:
+    parts = interfaces.action_parts(ros_type)
+    return RelayedAction(name, ros_type, owner, (
+        RelayedService("send_goal", parts["send_goal"], zendock_action.send_goal, REQUEST_WAIT_S),
+        RelayedService("cancel_goal", parts["cancel_goal"], CANCEL_GOAL, REQUEST_WAIT_S),
+        RelayedService("get_result", parts["get_result"], zendock_action.get_result, RESULT_WAIT_S),
+    ))
+
+
+ACTIONS: tuple[RelayedAction, ...] = (
+    _relayed(DOCK_ROBOT_NAME, interfaces.DOCK_ROBOT, "docking", DOCK_ROBOT),
+    _relayed(UNDOCK_ROBOT_NAME, interfaces.UNDOCK_ROBOT, "docking", UNDOCK_ROBOT),
+    _relayed(NAVIGATE_TO_POSE_NAME, interfaces.NAVIGATE_TO_POSE, "planner", NAVIGATE_TO_POSE),
+)
+
+
+class ActionRelay:
+    """Serves one ROS 2 action's services by asking zendock's server of the same name."""
+
+    def __init__(self, node: Node, action: RelayedAction, domain_id: int, ros_name: str,
+                 refuse: Callable[..., None], count: Callable[[str], None]) -> None:
+        self.node = node
+        self.action = action
+        self.ros_name = ros_name
+        self._refuse = refuse
+        self._count = count
+        self._queryables: list[Any] = []
+        for service in action.services:
+            key = data_key(domain_id, f"{ros_name}/_action/{service.part}", service.ros_type,
+                           ros_types.type_hash(service.ros_type))
+            # complete: rmw_zenoh clients ask with target ALL_COMPLETE, as for any service
+            self._queryables.append(node.session.declare_queryable(key, self._handler(service), complete=True))
+
+    def _handler(self, service: RelayedService) -> Callable[[zenoh.Query], None]:
+        def on_query(query: zenoh.Query) -> None:
+            # Zenoh's thread: take the bytes, leave the work (and the reply, perhaps much later) to the executor.
+            payload = query.payload.to_bytes() if query.payload is not None else b""
+            attachment = query.attachment.to_bytes() if query.attachment is not None else b""
+            self.node.post(self._relay, service, query, payload, attachment)
+
+        return on_query
+
+    def _relay(self, service: RelayedService, query: zenoh.Query, payload: bytes, attachment: bytes) -> None:
+        where = f"{self.ros_name}/_action/{service.part}"
+        try:
+            caller = Attachment.decode(attachment)
+        except ValueError as exc:
+            self._fail(query, f"action-attachment-{service.part}", f"{where}: a request needs rmw_zenoh's attachment ({exc})")
+            return
+        request_type, response_type = interfaces.service_parts(service.ros_type)
+        try:
+            request = ros_types.from_ros(ros_types.from_cdr(payload, request_type), service.zendock.request)
+        except (ros_types.Ros2TypeError, MessageError) as exc:
+            self._fail(query, f"action-request-{service.part}", f"{where}: {exc}")
+            return
+        self._count(f"action {where}")
+
+        def answered(response: Any, error: ServiceError | None) -> None:
+            if error is not None or response is None:
+                self._fail(query, f"action-server-{service.part}", f"{where}: zendock's server: {error}")
+                return
+            try:
+                reply = ros_types.to_cdr(response, response_type)
+            except ros_types.Ros2TypeError as exc:
+                self._fail(query, f"action-response-{service.part}", f"{where}: {exc}")
+                return
+            try:
+                query.reply(query.key_expr, reply,
+                            attachment=Attachment(caller.sequence_number, time.time_ns(), caller.gid).encode())
+            finally:
+                query.drop()
+
+        self.node.call_async(service.zendock, action_key(self.action.name, service.part), request, answered,
+                             service.wait_s)
+
+    def _fail(self, query: zenoh.Query, kind: str, reason: str) -> None:
+        self._refuse(kind, "%s", reason)
+        try:
+            query.reply_err(reason.encode())
+        finally:
+            query.drop()
+
+    def close(self) -> None:
+        for queryable in self._queryables:
+            queryable.undeclare()
