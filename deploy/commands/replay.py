@@ -2,7 +2,7 @@
 
 Usage::
 
-    zendock replay FILE.mcap [--rate R] [--loop] [--keys KEY...] [--remap-namespace NS]
+    zendock replay FILE.mcap|ROS2_BAG_DIR [--rate R] [--loop] [--keys KEY...] [--remap-namespace NS]
 
 Publishes the recorded msgpack payloads on their keys (``application/msgpack;<type>``), spaced as they
 arrived, ``R`` times as fast. ``--remap-namespace`` moves the keys from the recording's namespace to NS.
@@ -20,8 +20,14 @@ from deploy.keys.errors import KeysError
 from deploy.recording.bus import add_bus_flags, options_from
 from deploy.recording.reading import Recording
 from deploy.recording.replay import Replayer
+from deploy.recording.ros2_bag import Ros2BagRecording, is_ros2_bag
 from shared.config_errors import ConfigError
 from shared.names import normalise_namespace
+
+
+def open_recording(path: str) -> Recording | Ros2BagRecording:
+    """zendock's MCAP file, or a ROS 2 bag directory (its CDR turned back into zendock's messages)."""
+    return Ros2BagRecording(path) if is_ros2_bag(path) else Recording(path)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -35,7 +41,7 @@ def _run(args: argparse.Namespace) -> int:
         return 2
     try:
         options = options_from(args)
-        with Recording(args.file) as recording, open_bus(options) as session:
+        with open_recording(args.file) as recording, open_bus(options) as session:
             replayer = Replayer(session, recording, rate=args.rate, loop=args.loop, keys=args.keys or (),
                                 namespace=target)
             if not replayer.keys:

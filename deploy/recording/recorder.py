@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import zenoh
 
 from deploy.recording.mcap_log import McapLog, RecordedSample, split_encoding
+from deploy.recording.ros2_bag import Ros2BagLog
 from deploy.recording.sequence import SequenceTracker
 from shared.foxglove_view import convert_key
 from shared.names import GRAPH_PREFIX, parse_token_key
@@ -99,7 +100,8 @@ class BusRecorder:
     ``views``: also write the Foxglove-schema channels (conversion runs on the writer thread).
     """
 
-    def __init__(self, session: zenoh.Session, selectors: Sequence[str], mcap_log: McapLog, views: bool = True) -> None:
+    def __init__(self, session: zenoh.Session, selectors: Sequence[str], mcap_log: McapLog | Ros2BagLog,
+                 views: bool = True) -> None:
         self._log = mcap_log
         self._views = views
         self._clock = _WallClock()

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import zenoh
 
 from deploy.recording.reading import RawMessage, Recording
+from deploy.recording.ros2_bag import Ros2BagRecording
 from shared.names import endpoint_token_key, normalise_namespace, topic_key
 from shared.node import publisher_gid, sequence_attachment
 
@@ -79,7 +80,7 @@ class Replayer:
     def __init__(
         self,
         session: zenoh.Session,
-        recording: Recording,
+        recording: Recording | Ros2BagRecording,
         *,
         rate: float = 1.0,
         loop: bool = False,

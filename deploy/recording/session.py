@@ -9,13 +9,14 @@ import datetime as _dt
 import socket
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import zenoh
 
 from deploy.recording.mcap_log import RECORDING_METADATA, SUMMARY_METADATA, WORLD_ATTACHMENT, McapLog
 from deploy.recording.recorder import BusRecorder, RecorderStats
+from deploy.recording.ros2_bag import Ros2BagLog
 from deploy.recording.summary import KeySummary, summarize, summary_metadata
 from shared.foxglove_view import WORLD_VIEW_TOPIC, view_topic, world_scene
 from shared.names import topic_key
@@ -35,6 +36,8 @@ class RecordRequest:
     world: Path | None = None
     views: bool = True
     compression: str = "zstd"
+    #: ``zendock`` (msgpack payloads and Foxglove views in one MCAP file) or ``ros2`` (a ROS 2 bag directory).
+    format: str = "zendock"
 
 
 @dataclass
@@ -44,6 +47,8 @@ class RecordResult:
     rows: list[KeySummary]
     stats: RecorderStats
     view_messages: int
+    #: Messages a ROS 2 bag could not carry (zendock's own types), by type.
+    skipped: dict[str, int] = field(default_factory=dict)
 
     @property
     def lost(self) -> int:
@@ -71,7 +76,8 @@ def record(
     """Record until ``stop`` is set or ``duration_s`` has passed; the file is complete when this returns."""
     world = load_world(request.world) if request.world is not None else None
     selectors = selectors_for(namespace, request.keys)
-    mcap_log = McapLog(request.output, compression=request.compression)
+    mcap_log: McapLog | Ros2BagLog = (Ros2BagLog(request.output, namespace) if request.format == "ros2"
+                                      else McapLog(request.output, compression=request.compression))
     started_ns = time.time_ns()
     mcap_log.add_metadata(RECORDING_METADATA, {
         "namespace": namespace,
@@ -100,4 +106,5 @@ def record(
         rows = summarize(recorder.tracker, recorder.type_of)
         mcap_log.add_metadata(SUMMARY_METADATA, summary_metadata(rows, duration_s))
         mcap_log.finish()
-    return RecordResult(request.output, duration_s, rows, recorder.stats, mcap_log.view_messages)
+    skipped = dict(mcap_log.skipped) if isinstance(mcap_log, Ros2BagLog) else {}
+    return RecordResult(request.output, duration_s, rows, recorder.stats, mcap_log.view_messages, skipped)
