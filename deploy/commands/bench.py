@@ -111,6 +111,32 @@ def _bench_perception(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_ros2(args: argparse.Namespace) -> int:
+    from deploy.bench.ros2 import run_ros2_bench, run_stack_rtf  # noqa: PLC0415 - starts a router and the bridge
+
+    try:
+        report = run_ros2_bench(messages=args.messages)
+        if args.rtf_seconds > 0:
+            report["stack_rtf"] = run_stack_rtf(args.world, seconds=args.rtf_seconds)
+    except RuntimeError as exc:
+        print(f"zendock bench ros2: {exc}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title="ROS 2 bridge: latency zendock key -> rmw_zenoh subscriber, against the direct path")
+    for column in ("topic", "bytes", "bridge p50", "bridge p99", "direct p50", "added p50", "CPU/msg", "max msg/s"):
+        table.add_column(column, justify="right")
+    for topic, row in report["cases"].items():
+        table.add_row(topic, str(row["payload_bytes"]), f"{row['bridge_p50_ms']} ms", f"{row['bridge_p99_ms']} ms",
+                      f"{row['direct_p50_ms']} ms", f"{row['added_p50_ms']} ms",
+                      f"{row['bridge_cpu_us_per_message']} us", str(row["burst_forwarded_per_s"]))
+    Console().print(table)
+    for label, rtf in report.get("stack_rtf", {}).items():
+        print(f"simulator, battery and pose flat out, {label}: {rtf}x real time")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("bench", help="benchmarks (latency, throughput, planning, docking)")
     verbs = parser.add_subparsers(dest="bench", metavar="BENCH")
@@ -129,6 +155,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     perception.add_argument("--frames", type=int, default=12, help="frames per viewpoint")
     perception.add_argument("--json", action="store_true")
     perception.set_defaults(func=_bench_perception)
+    ros2 = verbs.add_parser("ros2", help="the ROS 2 bridge: added latency, CPU per message, throughput by type")
+    ros2.add_argument("--messages", type=int, default=1000, help="paced messages per type")
+    ros2.add_argument("--rtf-seconds", type=float, default=10.0,
+                      help="wall seconds per condition of the stack's real-time factor (0: skip)")
+    ros2.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world of the real-time-factor runs")
+    ros2.add_argument("--json", action="store_true")
+    ros2.set_defaults(func=_bench_ros2)
     planner = verbs.add_parser(
         "planner", help="planning time on a 20 m room; time to goal with the real stack vs the shortest path")
     planner.add_argument("--repeats", type=int, default=5, help="planning repeats per route (medians)")
