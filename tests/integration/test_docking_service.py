@@ -392,6 +392,33 @@ def test_a_ros2_action_client_docks_the_robot_through_the_bridge(stack) -> None:
     assert bridge.alive()
 
 
+def test_a_ros2_goal_pose_navigates_the_robot(stack) -> None:  # type: ignore[no-untyped-def]
+    """RViz's goal tool publishes /goal_pose; the bridge makes it a navigate_to_pose goal."""
+    s: Stack = stack(battery=("initial_percentage=0.9",))
+    bridge = s.spawn("ros2_bridge")
+    wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    goal = Pose2D(0.5, 2.0, 1.2)
+    half = goal.yaw / 2
+    message = json.dumps({"header": {"frame_id": "map"}, "pose": {"position": {"x": goal.x, "y": goal.y},
+                                                                  "orientation": {"z": math.sin(half), "w": math.cos(half)}}})
+    odd_frame = message.replace('"map"', '"odom"')
+    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, "pub", "/goal_pose",
+                           "geometry_msgs/msg/PoseStamped", odd_frame, "--rate", "5", "--seconds", "2"],
+                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    wait_until(lambda: "refused a goal in frame 'odom'" in bridge.output(), 10.0, lambda: bridge.output()[-2000:])
+    assert s.navigator.goals == []
+    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, "pub", "/goal_pose",
+                           "geometry_msgs/msg/PoseStamped", message, "--rate", "2", "--seconds", "2"],
+                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    wait_until(lambda: bool(s.navigator.goals), 10.0, lambda: bridge.output()[-2000:])
+    reached = s.navigator.goals[-1]
+    assert abs(reached.x - goal.x) < 1e-6 and abs(reached.y - goal.y) < 1e-6 and abs(reached.yaw - goal.yaw) < 1e-6
+    pose = s.sim_state().pose.to_pose2d()
+    assert pose.distance_to(goal) < 0.05, pose
+
+
 def test_cancel_mid_approach_stops_with_a_zero_command(stack) -> None:  # type: ignore[no-untyped-def]
     s: Stack = stack(battery=("initial_percentage=0.9",))
     s.start_docking("max_approach_speed_mps=0.15")
