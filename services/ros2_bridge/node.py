@@ -105,8 +105,8 @@ class Ros2Bridge:
             self._open_outlet(route)
         self._cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self._navigation = NavigationClient(node)
-        for inbound in INBOUND:
-            self._open_inlet(inbound)
+        for ros_topic in dict.fromkeys(i.ros_topic for i in INBOUND):
+            self._open_inlet(ros_topic, [i for i in INBOUND if i.ros_topic == ros_topic])
         self.actions = [self._open_action(action) for action in ACTIONS]
         # Peers' subscriptions, past and future: what to forward.
         self._graph_watch = self.session.liveliness().declare_subscriber(
@@ -229,21 +229,28 @@ class Ros2Bridge:
 
     # --- ROS 2 -> zendock -------------------------------------------------------------------------
 
-    def _open_inlet(self, inbound: Inbound) -> None:
-        topic = self.ros_topic(inbound.ros_topic)
-        type_hash = ros_types.type_hash(inbound.ros_type)
-        self._declare_endpoint(inbound.owner, EntityKind.SUBSCRIPTION, topic, inbound.ros_type, type_hash,
-                               ROS_RELIABLE)
-        # Any hash: a sample under the wrong one is refused by name rather than silently never seen.
-        key = f"{self.params.domain_id}/{topic.strip('/')}/{dds_type_name(inbound.ros_type)}/*"
+    def _open_inlet(self, ros_topic: str, accepted: list[Inbound]) -> None:
+        """One subscription per topic, any type and hash: a sample of a type zendock does not take, or
+        under a hash that is not Jazzy's, is refused by name rather than silently never seen."""
+        topic = self.ros_topic(ros_topic)
+        by_dds_type = {dds_type_name(i.ros_type): (i, ros_types.type_hash(i.ros_type)) for i in accepted}
+        for inbound, type_hash in by_dds_type.values():
+            self._declare_endpoint(inbound.owner, EntityKind.SUBSCRIPTION, topic, inbound.ros_type, type_hash,
+                                   ROS_RELIABLE)
 
         def on_sample(sample: zenoh.Sample) -> None:
-            self.node.post(self._receive, inbound, topic, type_hash, str(sample.key_expr), sample.payload.to_bytes())
+            self.node.post(self._receive, topic, by_dds_type, str(sample.key_expr), sample.payload.to_bytes())
 
+        key = f"{self.params.domain_id}/{topic.strip('/')}/*/*"
         self._subscribers.append(self.session.declare_subscriber(key, on_sample))
 
-    def _receive(self, inbound: Inbound, topic: str, type_hash: str, key: str, payload: bytes) -> None:
-        sent_hash = key.rsplit("/", 1)[-1]
+    def _receive(self, topic: str, by_dds_type: dict[str, tuple[Inbound, str]], key: str, payload: bytes) -> None:
+        dds_type, sent_hash = key.rsplit("/", 2)[-2:]
+        if dds_type not in by_dds_type:
+            self._refuse(f"type-{topic}", "refused %s as %s: zendock takes %s there", topic, dds_type,
+                         " or ".join(i.ros_type for i, _ in by_dds_type.values()))
+            return
+        inbound, type_hash = by_dds_type[dds_type]
         if sent_hash != type_hash:
             self._refuse(f"hash-{topic}", "refused %s: type hash %s is not Jazzy's %s for %s", topic, sent_hash,
                          type_hash, inbound.ros_type)

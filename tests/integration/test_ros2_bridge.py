@@ -97,8 +97,11 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
     bus.put(data_key(0, "/cmd_vel", "geometry_msgs/msg/Twist", twist_hash), b"\x00\x01\x00\x00\x01")
     bus.put(data_key(0, "/goal_pose", "geometry_msgs/msg/PoseStamped",
                      ros_types.type_hash("geometry_msgs/msg/PoseStamped")), b"\x93garbage")
+    bus.put(f"0/cmd_vel/geometry_msgs::msg::dds_::Vector3_/{twist_hash}", b"\x00\x01\x00\x00" + bytes(24))
     wait_until(lambda: "refused a message on /cmd_vel" in bridge.output()
-               and "refused a message on /goal_pose" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+               and "refused a message on /goal_pose" in bridge.output()
+               and "refused /cmd_vel as geometry_msgs::msg::dds_::Vector3_" in bridge.output(), 30.0,
+               lambda: bridge.output()[-2000:])
     assert bridge.alive(), "the bridge died on bad input"
 
     # /tf_static is transient local: a late joiner's history query gets the last one.
