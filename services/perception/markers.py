@@ -261,19 +261,37 @@ def facing_seed(observed_norm: np.ndarray, size_m: float, base_from_optical: Rig
 
 #: Two fits this close in residual explain the corners about equally well: the marker's pose is ambiguous.
 AMBIGUOUS_RESIDUAL_RATIO = 2.0
+#: The previous pose settles an ambiguity only when it is this much nearer one fit's heading than the other's;
+#: a previous pose about as far from both (the view jumped, or the robot turned a lot) says nothing.
+CONTINUITY_MARGIN_RAD = math.radians(8.0)
+#: Fits whose headings differ by less than this are one solution (seeds that converged to the same fit).
+SAME_FIT_RAD = math.radians(1.0)
 
 
 def choose_fit(fits: Sequence[tuple[float, Pose2D]], previous: Pose2D | None) -> tuple[float, Pose2D]:
     """The fit to believe among ``(residual, marker pose)`` fits: the best residual, unless another explains
-    the corners nearly as well (within ``AMBIGUOUS_RESIDUAL_RATIO``) and a recent ``previous`` pose says
-    which of them is the marker: then the one whose heading is closer to it (continuity, since a planar
-    square's mirror solution differs mostly in heading)."""
+    the corners nearly as well (within ``AMBIGUOUS_RESIDUAL_RATIO``) and a recent ``previous`` pose is clearly
+    nearer one of them in heading (by ``CONTINUITY_MARGIN_RAD``): then that one (continuity, since a planar
+    square's mirror solution differs mostly in heading). A previous pose about equally far from both would
+    only lock in a coin toss, so the residual decides."""
     ranked = sorted(fits, key=lambda f: f[0])
     best = ranked[0]
     if previous is None:
         return best
-    rivals = [f for f in ranked if f[0] <= AMBIGUOUS_RESIDUAL_RATIO * max(best[0], 1e-6)]
-    return min(rivals, key=lambda f: abs(math.remainder(f[1].yaw - previous.yaw, math.tau)))
+    rivals: list[tuple[float, Pose2D]] = []
+    for fit in ranked:
+        if fit[0] > AMBIGUOUS_RESIDUAL_RATIO * max(best[0], 1e-6):
+            break
+        if all(abs(math.remainder(fit[1].yaw - r[1].yaw, math.tau)) >= SAME_FIT_RAD for r in rivals):
+            rivals.append(fit)
+    if len(rivals) < 2:
+        return best
+
+    def turn(fit: tuple[float, Pose2D]) -> float:
+        return abs(math.remainder(fit[1].yaw - previous.yaw, math.tau))
+
+    nearest, runner_up = sorted(rivals, key=turn)[:2]
+    return nearest if turn(runner_up) - turn(nearest) >= CONTINUITY_MARGIN_RAD else best
 
 
 def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.ndarray, distortion: np.ndarray,

@@ -128,3 +128,21 @@ def test_an_ambiguous_fit_is_settled_by_the_previous_pose_and_a_clear_one_is_not
     assert choose_fit(ambiguous, Pose2D(1.02, 0.1, math.pi - 0.03))[1] == truth  # continuity breaks the tie
     clear = [(0.0005, truth), (0.0030, mirror)]
     assert choose_fit(clear, Pose2D(1.0, 0.1, math.pi - 0.5))[1] == truth  # a clear fit is not overruled
+
+
+def test_a_previous_pose_as_far_from_both_fits_leaves_the_choice_to_the_residual() -> None:
+    """A view that jumped (the previous heading halfway between the mirror fits) must not lock in the wrong one,
+    and seeds that converged to the same fit count once."""
+    truth, mirror = Pose2D(2.5, 0.0, math.radians(165.7)), Pose2D(2.5, 0.0, math.radians(-165.8))
+    fits = [(0.00010, truth), (0.00018, mirror), (0.00010, Pose2D(2.5, 0.0, math.radians(165.75)))]
+    assert choose_fit(fits, Pose2D(2.5, 0.0, math.pi + 0.002))[1] == truth
+    assert choose_fit(fits, Pose2D(2.5, 0.0, math.radians(-167.0)))[1] == mirror  # clearly nearer: continuity
+
+
+def test_the_perception_bench_waits_out_the_marker_memory() -> None:
+    """Each viewpoint of ``zendock bench perception`` is a fresh sighting only if the bench waits as long as
+    the service remembers a marker's pose."""
+    from deploy.bench.perception import PERCEPTION_MEMORY_S
+    from services.perception.node import CONTINUITY_S
+
+    assert PERCEPTION_MEMORY_S == CONTINUITY_S
