@@ -1,9 +1,10 @@
 """The ROS 2 bridge: zendock's keys as a ROS 2 (rmw_zenoh, Jazzy) graph on the same router.
 
 A ROS 2 machine running rmw_zenoh that connects to zendock's router sees a node per zendock service
-(``simulator``, ``battery``, ``pose``, ``planner``, ``perception``) with its publishers and
-subscriptions, announced by liveliness tokens in rmw_zenoh's form (:mod:`shared.ros2.wire`), and
-exchanges CDR samples with them on rmw_zenoh's data keys:
+(``simulator``, ``battery``, ``pose``, ``planner``, ``perception``, ``docking``) with its publishers,
+subscriptions and action services, announced by liveliness tokens in rmw_zenoh's form
+(:mod:`shared.ros2.wire`) while the service itself is up (:mod:`.graph`), and exchanges CDR samples with
+them on rmw_zenoh's data keys:
 
 * zendock -> ROS 2 (:data:`~services.ros2_bridge.routes.OUTBOUND`): a key is read and forwarded only
   while a ROS 2 subscription for its topic exists (the peer's token says so); transient-local topics
@@ -31,9 +32,11 @@ from pydantic import Field
 
 from services.ros2_bridge.actions import ACTIONS, ActionRelay
 from services.ros2_bridge.demand import PeerSubscriptions
+from services.ros2_bridge.graph import GraphMirror
 from services.ros2_bridge.routes import GOAL_POSE, INBOUND, OUTBOUND, TWIST_STAMPED, Inbound, Route
 from shared import topics
 from shared.messages import PoseStamped, Twist
+from shared.names import node_token_key, parse_token_key
 from shared.navigation import NavigationClient
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
 from shared.ratelimit import RateLimitedLogger
@@ -95,11 +98,10 @@ class Ros2Bridge:
         self.counts: Counter[str] = Counter()
         self._say = RateLimitedLogger(node.log, interval_s=5.0)
         self._stats_at = time.monotonic()
-        self._tokens: list[zenoh.LivelinessToken] = []
         self._subscribers: list[Any] = []
         self.peers = PeerSubscriptions(self.session_id, params.domain_id)
-        self._graph_nodes = self._declare_graph_nodes()
-        self._entity_ids = iter(range(len(self._graph_nodes) + 1, 1 << 30))
+        self.graph = GraphMirror(self._graph_nodes(), self.session.liveliness().declare_token, BRIDGE_NODE)
+        self._entity_ids = iter(range(len(self.graph.nodes) + 1, 1 << 30))
         self.outlets: dict[str, _Outlet] = {}
         for route in OUTBOUND:
             self._open_outlet(route)
@@ -108,6 +110,9 @@ class Ros2Bridge:
         for ros_topic in dict.fromkeys(i.ros_topic for i in INBOUND):
             self._open_inlet(ros_topic, [i for i in INBOUND if i.ros_topic == ros_topic])
         self.actions = [self._open_action(action) for action in ACTIONS]
+        # zendock's services, past and future: which of them ROS 2 sees.
+        self._services_watch = self.session.liveliness().declare_subscriber(
+            node_token_key(node.namespace, "*"), self._on_service_token, history=True)
         # Peers' subscriptions, past and future: what to forward.
         self._graph_watch = self.session.liveliness().declare_subscriber(
             f"{ADMIN_SPACE}/{params.domain_id}/**", self._on_graph_token, history=True)
@@ -118,20 +123,27 @@ class Ros2Bridge:
 
     # --- the graph zendock shows to ROS 2 ---------------------------------------------------------
 
-    def _declare_graph_nodes(self) -> dict[str, GraphNode]:
+    def _graph_nodes(self) -> dict[str, GraphNode]:
         owners = [BRIDGE_NODE, *(r.owner for r in OUTBOUND), *(i.owner for i in INBOUND), *(a.owner for a in ACTIONS)]
-        nodes: dict[str, GraphNode] = {}
-        for name in dict.fromkeys(owners):
-            graph_node = GraphNode(self.params.domain_id, self.session_id, len(nodes), name, self.params.ros_namespace)
-            nodes[name] = graph_node
-            self._tokens.append(self.session.liveliness().declare_token(graph_node.token_key()))
-        return nodes
+        return {name: GraphNode(self.params.domain_id, self.session_id, i, name, self.params.ros_namespace)
+                for i, name in enumerate(dict.fromkeys(owners))}
 
     def _declare_endpoint(self, owner: str, kind: EntityKind, topic: str, ros_type: str, type_hash: str,
                           qos: QosProfile) -> Endpoint:
-        endpoint = Endpoint(self._graph_nodes[owner], next(self._entity_ids), kind, topic, ros_type, type_hash, qos)
-        self._tokens.append(self.session.liveliness().declare_token(endpoint.token_key()))
+        endpoint = Endpoint(self.graph.nodes[owner], next(self._entity_ids), kind, topic, ros_type, type_hash, qos)
+        self.graph.add(endpoint)
         return endpoint
+
+    def _on_service_token(self, sample: zenoh.Sample) -> None:
+        entry = parse_token_key(str(sample.key_expr))
+        if entry is not None:
+            self.node.post(self._service_changed, entry.node, sample.kind == zenoh.SampleKind.PUT)
+
+    def _service_changed(self, name: str, alive: bool) -> None:
+        if alive and self.graph.present(name):
+            self.node.log.info("zendock's %s is up: ROS 2 sees node %s", name, name)
+        elif not alive and self.graph.absent(name):
+            self.node.log.info("zendock's %s is gone: its ROS 2 node is withdrawn", name)
 
     def ros_topic(self, name: str) -> str:
         return qualified_name(self.params.ros_namespace, name)
@@ -304,14 +316,14 @@ class Ros2Bridge:
     def close(self) -> None:
         self._report_stats()
         self._graph_watch.undeclare()
+        self._services_watch.undeclare()
         for subscriber in self._subscribers:
             subscriber.undeclare()
         for relay in self.actions:
             relay.close()
         for outlet in self.outlets.values():
             outlet.publisher.undeclare()
-        for token in self._tokens:
-            token.undeclare()
+        self.graph.close()
 
 
 def main(argv: list[str] | None = None) -> int:

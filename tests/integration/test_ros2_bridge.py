@@ -43,13 +43,14 @@ def _publishing(router: str, *args: str) -> Iterator[subprocess.Popen[str]]:
 def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zenoh.Session, namespace: str,
                                                                   router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
     ours = KeyRecorder(bus, f"{namespace}/battery_status", BatteryState)
-    spawn("battery")
+    battery = spawn("battery")
     bridge = spawn("ros2_bridge")
     ours.wait_for(timeout_s=30.0)
     listed = _peer(router_endpoint, "topics", "--wait-for", "/battery_status")[0]
     assert listed["/battery_status"] == ["sensor_msgs/msg/BatteryState"]
-    assert listed["/scan"] == ["sensor_msgs/msg/LaserScan"] and listed["/map"] == ["nav_msgs/msg/OccupancyGrid"]
-    assert set(listed["/cmd_vel"]) == {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
+    # Only the services that are up are ROS 2 nodes: no simulator, no planner, so no /scan and no /map.
+    assert "/scan" not in listed and "/map" not in listed and "/cmd_vel" not in listed, listed
+    assert _peer(router_endpoint, "nodes")[0] == ["battery", "ros2_bridge"]
     info = _peer(router_endpoint, "info", "/battery_status")[0]
     assert info["publishers"] == [{"node": "battery", "namespace": "/", "qos": "::,10:,:,:,,"}]
 
@@ -63,6 +64,9 @@ def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zen
         assert msg["power_supply_status"] == same[0].power_supply_status
     wait_until(lambda: "no ROS 2 subscription to /battery_status left" in bridge.output(), 10.0,
                lambda: bridge.output()[-2000:])
+    battery.stop()
+    wait_until(lambda: "zendock's battery is gone" in bridge.output(), 10.0, lambda: bridge.output()[-2000:])
+    assert _peer(router_endpoint, "nodes")[0] == ["ros2_bridge"]
 
 
 def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh.Session, namespace: str,
@@ -72,7 +76,10 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
     spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1")
     bridge = spawn("ros2_bridge")
     start = truth.wait_for(timeout_s=30.0).pose.to_pose2d()
-    wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    wait_until(lambda: "zendock's simulator is up" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    listed = _peer(router_endpoint, "topics", "--wait-for", "/scan")[0]
+    assert listed["/scan"] == ["sensor_msgs/msg/LaserScan"]
+    assert set(listed["/cmd_vel"]) == {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
 
     def moved(msg: PoseStamped) -> bool:
         pose = msg.pose.to_pose2d()

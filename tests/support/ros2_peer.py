@@ -79,6 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     topics = sub.add_parser("topics")
     topics.add_argument("--wait-for", default="", help="keep listing until this topic shows up")
     topics.add_argument("--timeout", type=float, default=20.0)
+    nodes = sub.add_parser("nodes", help="the graph's nodes, from their liveliness tokens (ros2 node list)")
+    nodes.add_argument("--wait-for", default="", help="keep listing until this node shows up")
+    nodes.add_argument("--timeout", type=float, default=20.0)
     info = sub.add_parser("info")
     info.add_argument("topic")
     echo = sub.add_parser("echo")
@@ -114,6 +117,15 @@ def main(argv: list[str] | None = None) -> int:
                     break
                 time.sleep(0.2)
             print(json.dumps({topic: types for topic, types in found}), flush=True)
+        elif args.command == "nodes":
+            deadline = time.monotonic() + args.timeout
+            while True:
+                names = sorted({str(r.ok.key_expr).split("/")[8] for r in session.liveliness.get(
+                    f"@ros2_lv/{args.domain}/*/*/*/NN/**", timeout=0.5) if r.ok is not None})
+                if not args.wait_for or args.wait_for in names or time.monotonic() > deadline:
+                    break
+                time.sleep(0.2)
+            print(json.dumps(names), flush=True)
         elif args.command == "info":
             from zenoh_ros2_sdk import get_topic_info
 
