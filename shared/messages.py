@@ -187,6 +187,14 @@ class PoseWithCovariance(Message):
     covariance: Float64Array = field(default_factory=_cov36)
 
 
+@message("geometry_msgs/msg/PoseWithCovarianceStamped")
+class PoseWithCovarianceStamped(Message):
+    """What ``/initialpose`` carries (RViz's "2D Pose Estimate")."""
+
+    header: Header = field(default_factory=Header)
+    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
+
+
 @message("geometry_msgs/msg/Twist")
 class Twist(Message):
     linear: Vector3 = field(default_factory=Vector3)

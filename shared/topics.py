@@ -28,6 +28,7 @@ PLAN = "plan"
 # Services (request/response over Zenoh queryables)
 SIM_TELEPORT = "simulator/teleport"
 SIM_STATE = "simulator/state"
+SIM_SET_LOCALISATION = "simulator/set_localisation"
 BATTERY_SET_STATE = "battery/set_state"
 
 # Actions (shared.action)

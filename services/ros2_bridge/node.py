@@ -11,7 +11,8 @@ them on rmw_zenoh's data keys:
   (``/map``, ``/tf_static``) are always read, and their last message goes out again whenever a ROS 2
   subscription appears, as a late joiner expects.
 * ROS 2 -> zendock: ``/cmd_vel`` (Twist or TwistStamped) drives the robot; ``/goal_pose`` (what RViz's
-  goal tool sends) becomes a ``navigate_to_pose`` goal.
+  goal tool sends) becomes a ``navigate_to_pose`` goal; ``/initialpose`` (RViz's pose estimate) sets what
+  the simulated localiser believes (``simulator/set_localisation``).
 
 zendock's own keys and msgpack payloads are untouched: the bridge is one more service on the bus.
 Anything malformed from ROS 2 (bytes that are not CDR of the type, a type hash that is not Jazzy's, a
@@ -33,12 +34,21 @@ from pydantic import Field
 from services.ros2_bridge.actions import ACTIONS, ActionRelay
 from services.ros2_bridge.demand import PeerSubscriptions
 from services.ros2_bridge.graph import GraphMirror
-from services.ros2_bridge.routes import GOAL_POSE, INBOUND, OUTBOUND, TWIST_STAMPED, Inbound, Route
+from services.ros2_bridge.routes import (
+    GOAL_POSE,
+    INBOUND,
+    INITIAL_POSE,
+    OUTBOUND,
+    TWIST_STAMPED,
+    Inbound,
+    Route,
+)
 from shared import topics
-from shared.messages import PoseStamped, Twist
+from shared.interfaces.simulator import SET_LOCALISATION, SetLocalisationRequest, SetLocalisationResponse
+from shared.messages import PoseStamped, PoseWithCovarianceStamped, Twist
 from shared.names import node_token_key, parse_token_key
 from shared.navigation import NavigationClient
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2 import types as ros_types
 from shared.ros2.wire import (
@@ -280,6 +290,8 @@ class Ros2Bridge:
             self._cmd_vel.publish(msg)
         elif inbound.ros_topic == GOAL_POSE and isinstance(msg, PoseStamped):
             self._navigate(msg)
+        elif inbound.ros_topic == INITIAL_POSE and isinstance(msg, PoseWithCovarianceStamped):
+            self._set_localisation(msg)
 
     def _navigate(self, goal: PoseStamped) -> None:
         frame = goal.header.frame_id.lstrip("/")
@@ -290,6 +302,25 @@ class Ros2Bridge:
         target = goal.pose.to_pose2d()
         self.node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
         self._navigation.go_to_pose(target)
+
+    def _set_localisation(self, estimate: PoseWithCovarianceStamped) -> None:
+        frame = estimate.header.frame_id.lstrip("/")
+        if frame not in ("", topics.MAP_FRAME):
+            self._refuse("initialpose-frame", "refused an initial pose in frame %r: zendock localises in %r",
+                         estimate.header.frame_id, topics.MAP_FRAME)
+            return
+        belief = estimate.pose.pose.to_pose2d()
+
+        def done(reply: SetLocalisationResponse | None, error: ServiceError | None) -> None:
+            if error is not None or reply is None or not reply.success:
+                self._refuse("initialpose-failed", "the simulator's localiser did not take the initial pose: %s",
+                             error or (reply.message if reply else "no reply"))
+            else:
+                self.node.log.info("initial pose from ROS 2: the localiser now believes (%.2f, %.2f, %.2f)",
+                                   belief.x, belief.y, belief.yaw)
+
+        self.node.call_async(SET_LOCALISATION, topics.SIM_SET_LOCALISATION,
+                             SetLocalisationRequest(x=belief.x, y=belief.y, yaw=belief.yaw), done)
 
     # --- actions: ROS 2 goals for zendock's action servers ---------------------------------------
 

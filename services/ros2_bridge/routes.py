@@ -25,6 +25,7 @@ from shared.messages import (
     Odometry,
     Path,
     PoseStamped,
+    PoseWithCovarianceStamped,
     Range,
     TFMessage,
     Twist,
@@ -90,6 +91,8 @@ TWIST = "geometry_msgs/msg/Twist"
 TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 #: RViz's "2D Goal Pose": navigate there.
 GOAL_POSE = "goal_pose"
+#: RViz's "2D Pose Estimate": where the localiser should believe the robot is.
+INITIAL_POSE = "initialpose"
 
 
 @dataclass(frozen=True)
@@ -106,4 +109,6 @@ INBOUND: tuple[Inbound, ...] = (
     Inbound(topics.CMD_VEL, TWIST, "simulator", Twist),
     Inbound(topics.CMD_VEL, TWIST_STAMPED, "simulator", Twist),
     Inbound(GOAL_POSE, "geometry_msgs/msg/PoseStamped", "planner", PoseStamped),
+    # zendock's localiser is the simulator's (map -> odom): it takes the estimate.
+    Inbound(INITIAL_POSE, "geometry_msgs/msg/PoseWithCovarianceStamped", "simulator", PoseWithCovarianceStamped),
 )

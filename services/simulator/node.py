@@ -33,8 +33,11 @@ from shared import topics
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
 from shared.interfaces.simulator import (
+    SET_LOCALISATION,
     SIM_STATE,
     TELEPORT,
+    SetLocalisationRequest,
+    SetLocalisationResponse,
     SimStateRequest,
     SimStateResponse,
     TeleportRequest,
@@ -284,6 +287,7 @@ class SimulatorService:
         self._clock_pubs = [node.create_publisher(Clock, r.topic(topics.CLOCK), QoS(reliable=True, depth=1))
                             for r in self.robots.values()]
         node.create_service(TELEPORT, topics.SIM_TELEPORT, self._on_teleport)
+        node.create_service(SET_LOCALISATION, topics.SIM_SET_LOCALISATION, self._on_set_localisation)
         node.create_service(SIM_STATE, topics.SIM_STATE, self._on_state)
         self.steps_run = 0
         self._pacer = (
@@ -347,6 +351,16 @@ class SimulatorService:
         robot.pending_detections.clear()
         self._publish_tf(robot, self.time_s)
         return TeleportResponse(success=True, message="")
+
+    def _on_set_localisation(self, request: SetLocalisationRequest) -> SetLocalisationResponse:
+        robot = self._robot_for(request.robot)
+        belief = Pose2D.from_seq((request.x, request.y, request.yaw))
+        robot.sim.believe(belief)
+        self._publish_tf(robot, self.time_s)
+        error = robot.sim.params.localisation_error
+        self.node.log.info("localiser set to believe (%.3f, %.3f, %.3f): error now (%.3f m, %.3f m, %.3f rad)",
+                           belief.x, belief.y, belief.yaw, error.x, error.y, error.yaw)
+        return SetLocalisationResponse(success=True, message="")
 
     def _on_state(self, request: SimStateRequest) -> SimStateResponse:
         robot = self._robot_for(request.robot)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pymunk
@@ -205,6 +205,11 @@ class SimWorld:
     def odom_pose(self) -> Pose2D:
         """odom -> base_link from wheel odometry."""
         return self.odometry.pose
+
+    def believe(self, belief: Pose2D) -> None:
+        """Make the simulated localiser believe the robot stands at ``belief`` in the map (an initial pose
+        given to a localiser); the offset from the truth is its localisation error from now on."""
+        self.params = replace(self.params, localisation_error=self.pose.inverse().compose(belief))
 
     def map_to_odom(self) -> Pose2D:
         """The map -> odom transform of the simulated localiser (with the configured error)."""

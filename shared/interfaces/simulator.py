@@ -1,4 +1,4 @@
-"""The simulator's requests: place a robot (tests, trials) and read its ground truth."""
+"""The simulator's requests: place a robot (tests, trials), read its ground truth, set what its localiser believes."""
 
 from __future__ import annotations
 
@@ -44,5 +44,24 @@ class SimStateResponse(Message):
     contact: DockContact = field(default_factory=DockContact)
 
 
+@message("zendock_msgs/srv/SetLocalisation_Request")
+class SetLocalisationRequest(Message):
+    """Make the simulated localiser believe the robot stands at ``(x, y, yaw)`` in the map (what
+    ``/initialpose`` asks of a ROS 2 localiser). The robot does not move; the belief's offset from the
+    truth becomes the localisation error and stays (the simulated localiser does not converge back)."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+    robot: str = ""
+
+
+@message("zendock_msgs/srv/SetLocalisation_Response")
+class SetLocalisationResponse(Message):
+    success: bool = False
+    message: str = ""
+
+
 TELEPORT = ServiceType("zendock_msgs/srv/Teleport", TeleportRequest, TeleportResponse)
 SIM_STATE = ServiceType("zendock_msgs/srv/SimState", SimStateRequest, SimStateResponse)
+SET_LOCALISATION = ServiceType("zendock_msgs/srv/SetLocalisation", SetLocalisationRequest, SetLocalisationResponse)

@@ -12,7 +12,8 @@ from typing import Any
 
 import zenoh
 
-from shared.messages import BatteryState, PoseStamped, TFMessage
+from shared.geometry import Pose2D
+from shared.messages import BatteryState, Float64MultiArray, PoseStamped, TFMessage
 from shared.ros2 import types as ros_types
 from shared.ros2.wire import data_key
 from tests.support.bus import KeyRecorder
@@ -80,6 +81,20 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
     listed = _peer(router_endpoint, "topics", "--wait-for", "/scan")[0]
     assert listed["/scan"] == ["sensor_msgs/msg/LaserScan"]
     assert set(listed["/cmd_vel"]) == {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
+
+    # RViz's pose estimate: the localiser believes the robot is there, the robot does not move.
+    believed = KeyRecorder(bus, f"{namespace}/map_to_base_link_pose2d", Float64MultiArray)
+    spawn("pose", "-p", "use_sim_time=true")
+    believed.wait_for(timeout_s=30.0)
+    estimate = Pose2D(start.x + 0.3, start.y - 0.2, start.yaw + 0.4)
+    half = estimate.yaw / 2
+    _peer(router_endpoint, "pub", "/initialpose", "geometry_msgs/msg/PoseWithCovarianceStamped",
+          json.dumps({"header": {"frame_id": "map"}, "pose": {"pose": {
+              "position": {"x": estimate.x, "y": estimate.y},
+              "orientation": {"z": math.sin(half), "w": math.cos(half)}}}}), "--rate", "2", "--seconds", "1")
+    believed.wait_for(lambda m: math.hypot(m.data[0] - estimate.x, m.data[1] - estimate.y) < 0.01
+                      and abs(math.remainder(m.data[2] - estimate.yaw, math.tau)) < 0.01, timeout_s=20.0)
+    assert truth.latest().pose.to_pose2d().distance_to(start) < 0.01  # type: ignore[union-attr]
 
     def moved(msg: PoseStamped) -> bool:
         pose = msg.pose.to_pose2d()

@@ -66,8 +66,10 @@ def _fill(cls: Any, data: dict[str, Any], store: Any) -> Any:
         elif kind == 1:
             default: Any = "" if detail[0] == "string" else False if detail[0] == "bool" else 0
             values[name] = given if given is not None else default
+        elif kind == 3 and given is None:  # a fixed array (a covariance): zeros of its length
+            values[name] = np.zeros(detail[1], dtype=np.float64)
         else:
-            values[name] = np.asarray(given or [], dtype=np.float64) if kind in (3, 4) else given
+            values[name] = np.asarray(given or [], dtype=np.float64)
     return cls(**values)
 
 

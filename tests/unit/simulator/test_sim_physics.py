@@ -165,6 +165,18 @@ def test_localisation_absorbs_odometry_drift_but_keeps_its_error(open_world: Cal
     assert believed.as_tuple() == pytest.approx(sim.pose.compose(error).as_tuple(), abs=1e-9)
 
 
+def test_an_initial_pose_becomes_the_belief_and_its_offset_the_error(open_world: Callable[..., World]) -> None:
+    sim = SimWorld(open_world(), params=SimParams(odom_noise=0.05))
+    drive(sim, 0.3, 0.4, 2.0)
+    given = sim.pose.compose(Pose2D(0.2, -0.1, 0.3))
+    sim.believe(given)
+    believed = sim.map_to_odom().compose(sim.odom_pose)
+    assert believed.as_tuple() == pytest.approx(given.as_tuple(), abs=1e-9)
+    drive(sim, 0.3, 0.0, 1.0)  # the offset stays with the robot as it moves (the localiser does not converge)
+    believed = sim.map_to_odom().compose(sim.odom_pose)
+    assert believed.as_tuple() == pytest.approx(sim.pose.compose(Pose2D(0.2, -0.1, 0.3)).as_tuple(), abs=1e-9)
+
+
 def test_wiggling_against_a_wall_is_one_collision(quiet: SimParams, open_world: Callable[..., World]) -> None:
     sim = SimWorld(open_world(walls=[[[-3.0, 1.0], [3.0, 1.0]]]), params=quiet)
     sim.teleport(Pose2D(0.0, 0.75, math.pi / 2))
