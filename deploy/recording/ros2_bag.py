@@ -70,19 +70,20 @@ class Ros2BagLog:
 
     def write_sample(self, sample: RecordedSample) -> None:
         _, type_name = split_encoding(sample.encoding)
-        if not type_name or not ros_types.knows(type_name):
+        ros_type = ros_types.jazzy_name(type_name)
+        if not type_name or not ros_types.knows(ros_type):
             self.skipped[type_name or "untyped"] += 1
             return
         try:
-            payload = ros_types.to_cdr(message_type(type_name).decode(sample.payload), type_name)
+            payload = ros_types.to_cdr(message_type(type_name).decode(sample.payload), ros_type)
         except (KeyError, MessageError, ros_types.Ros2TypeError):
             self.skipped[f"{type_name} (undecodable)"] += 1
             return
         topic = ros_topic(sample.key, self._namespace)
-        connection = self._connections.get((topic, type_name))
+        connection = self._connections.get((topic, ros_type))
         if connection is None:
-            connection = self._writer.add_connection(topic, type_name, typestore=ros_types.typestore())
-            self._connections[(topic, type_name)] = connection
+            connection = self._writer.add_connection(topic, ros_type, typestore=ros_types.typestore())
+            self._connections[(topic, ros_type)] = connection
         self._writer.write(connection, sample.log_time_ns, payload)
         self.raw_messages += 1
         self.bytes_written += len(payload)
@@ -154,8 +155,9 @@ class Ros2BagRecording:
                 msg = ros_types.from_ros(ros_types.from_cdr(data, connection.msgtype), zendock_type)
             except (ros_types.Ros2TypeError, MessageError) as exc:
                 raise ConfigError(f"{self.path}: a {connection.msgtype} on {connection.topic} does not read: {exc}") from None
-            yield RawMessage(self._key(connection.topic), str(encoding_for(connection.msgtype)), connection.msgtype,
-                             msg.encode(), timestamp, 0)
+            type_name = msg.TYPE_NAME
+            yield RawMessage(self._key(connection.topic), str(encoding_for(type_name)), type_name, msg.encode(),
+                             timestamp, 0)
 
 
 def _custom_data(bag: Path) -> dict[str, str]:
@@ -168,8 +170,8 @@ def _custom_data(bag: Path) -> dict[str, str]:
     return {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
 
 
-def _zendock_type(type_name: str) -> Any:
+def _zendock_type(ros_type: str) -> Any:
     try:
-        return message_type(type_name)
+        return message_type(ros_types.zendock_name(ros_type))
     except KeyError:
         return None

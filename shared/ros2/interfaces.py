@@ -5,12 +5,14 @@ rosidl turns an action ``pkg/action/Name`` into messages (``Name_Goal``, ``Name_
 cancelling uses ``action_msgs/srv/CancelGoal``. A service ``S`` is itself described by a type with the
 fields ``request_message``, ``response_message`` and ``event_message`` (``S_Event``: the call's
 ``service_msgs/msg/ServiceEventInfo`` and at most one request and one response); its RIHS01 hash, the one
-rmw_zenoh puts in the service's key, is that type's hash. The definitions below are those of Nav2's
-``nav2_msgs`` and ``opennav_docking_msgs`` for Jazzy (field names and types; comments left out).
+rmw_zenoh puts in the service's key, is that type's hash. The actions are Nav2's for Jazzy, read from
+their ``.action`` files in ``definitions/`` (in Jazzy the docking actions live in ``nav2_msgs``).
 """
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
 from typing import Any
 
 from rosbags.typesys import get_types_from_msg
@@ -19,31 +21,25 @@ from rosbags.typesys import get_types_from_msg
 TypeDefs = dict[str, tuple[list[Any], list[Any]]]
 
 NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
-DOCK_ROBOT = "opennav_docking_msgs/action/DockRobot"
-UNDOCK_ROBOT = "opennav_docking_msgs/action/UndockRobot"
+DOCK_ROBOT = "nav2_msgs/action/DockRobot"
+UNDOCK_ROBOT = "nav2_msgs/action/UndockRobot"
 CANCEL_GOAL = "action_msgs/srv/CancelGoal"
+ACTIONS = (NAVIGATE_TO_POSE, DOCK_ROBOT, UNDOCK_ROBOT)
+#: Nav2's ``.action`` files, shipped with their licence notice (see the README there).
+DEFINITIONS = Path(__file__).parent / "definitions"
 
-#: goal, result, feedback of each action (``.action`` text split at ``---``).
-ACTIONS: dict[str, tuple[str, str, str]] = {
-    NAVIGATE_TO_POSE: (
-        "geometry_msgs/PoseStamped pose\nstring behavior_tree",
-        "uint16 error_code\nstring error_msg",
-        "geometry_msgs/PoseStamped current_pose\nbuiltin_interfaces/Duration navigation_time\n"
-        "builtin_interfaces/Duration estimated_time_remaining\nint16 number_of_recoveries\nfloat32 distance_remaining",
-    ),
-    DOCK_ROBOT: (
-        "bool use_dock_id\nstring dock_id\ngeometry_msgs/PoseStamped dock_pose\nstring dock_type\n"
-        "float32 max_staging_time\nbool navigate_to_staging_pose",
-        "bool success\nuint16 error_code\nuint16 num_retries",
-        "uint16 state\nbuiltin_interfaces/Duration docking_time\nuint16 num_retries",
-    ),
-    UNDOCK_ROBOT: (
-        "string dock_type\nfloat32 max_undocking_time",
-        "bool success\nuint16 error_code",
-        "",
-    ),
-}
 
+def action_text(action: str) -> tuple[str, str, str]:
+    """Goal, result and feedback of an action, from its ``.action`` file (split at the ``---`` lines)."""
+    package, _, name = action.partition("/action/")
+    path = DEFINITIONS / package / "action" / f"{name}.action"
+    sections = re.split(r"^---\s*$", path.read_text(encoding="utf-8"), flags=re.MULTILINE)
+    if len(sections) != 3:
+        raise ValueError(f"{path}: an action has goal, result and feedback separated by '---'")
+    return sections[0], sections[1], sections[2]
+
+
+#: action_msgs/srv/CancelGoal (rcl_interfaces), request and response.
 _CANCEL_REQUEST = "action_msgs/GoalInfo goal_info"
 _CANCEL_RESPONSE = "int8 return_code\naction_msgs/GoalInfo[] goals_canceling"
 #: rosidl's stand-in member of an empty structure.
@@ -70,7 +66,8 @@ def definitions() -> TypeDefs:
     """Every type above (and the services' description types), ready for a rosbags type store."""
     defs: TypeDefs = {}
     defs.update(_service(CANCEL_GOAL, _CANCEL_REQUEST, _CANCEL_RESPONSE))
-    for action, (goal, result, feedback) in ACTIONS.items():
+    for action in ACTIONS:
+        goal, result, feedback = action_text(action)
         defs.update(_messages(goal, f"{action}_Goal"))
         defs.update(_messages(result, f"{action}_Result"))
         defs.update(_messages(feedback, f"{action}_Feedback"))
@@ -95,7 +92,8 @@ def _service(service: str, request: str, response: str) -> TypeDefs:
 
 
 def _messages(text: str, name: str) -> TypeDefs:
-    parsed = get_types_from_msg(text.strip() or _EMPTY, name)
+    has_fields = any(line.split("#", 1)[0].strip() for line in text.splitlines())
+    parsed = get_types_from_msg(text if has_fields else _EMPTY, name)
     return {_own_name(n): (consts, [(f, _own_desc(d)) for f, d in fields]) for n, (consts, fields) in parsed.items()}
 
 

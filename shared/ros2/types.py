@@ -55,6 +55,30 @@ def typestore() -> Typestore:
     return store
 
 
+#: zendock names its docking actions' types after opennav_docking_msgs, where they began; Jazzy ships them
+#: in nav2_msgs. The ROS 2 side always uses Jazzy's names.
+_ZENDOCK_PREFIXES = (("opennav_docking_msgs/action/", "nav2_msgs/action/"),)
+
+
+def jazzy_name(zendock_type: str) -> str:
+    """The ROS 2 Jazzy name of a zendock message type (``opennav_docking_msgs/action/DockRobot_Goal`` ->
+    ``nav2_msgs/action/DockRobot_Goal``); other names are the same in both."""
+    for ours, theirs in _ZENDOCK_PREFIXES:
+        if zendock_type.startswith(ours):
+            return theirs + zendock_type[len(ours):]
+    return zendock_type
+
+
+def zendock_name(ros_type: str) -> str:
+    """The inverse of :func:`jazzy_name` for the types zendock has."""
+    from shared.schema import registered_types  # noqa: PLC0415 - the registry fills as interfaces load
+
+    for ours, theirs in _ZENDOCK_PREFIXES:
+        if ros_type.startswith(theirs) and ours + ros_type[len(theirs):] in registered_types():
+            return ours + ros_type[len(theirs):]
+    return ros_type
+
+
 def knows(ros_type: str) -> bool:
     return ros_type in typestore().types
 

@@ -375,12 +375,13 @@ def test_a_ros2_action_client_docks_the_robot_through_the_bridge(stack) -> None:
     bridge = s.spawn("ros2_bridge")
     s.wait_state("IDLE", timeout_s=20.0)
     wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
-    action = ("action", "/dock_robot", "opennav_docking_msgs/action/DockRobot")
+    action = ("action", "/dock_robot", "nav2_msgs/action/DockRobot")
 
     unknown = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "nowhere", "max_staging_time": 1000}')
     assert unknown[0] == {"accepted": True}, unknown
     assert unknown[1]["status"] == int(GoalStatusCode.ABORTED), unknown
-    assert unknown[1]["result"] == {"success": False, "error_code": DockRobotResult.DOCK_NOT_IN_DB, "num_retries": 0}
+    assert unknown[1]["result"] == {"success": False, "error_code": DockRobotResult.DOCK_NOT_IN_DB, "num_retries": 0,
+                                    "error_msg": ""}
 
     docked = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "home", "max_staging_time": 1000, '
                                     '"navigate_to_staging_pose": true}')

@@ -97,17 +97,17 @@ ACTION_EXAMPLES: dict[str, Message] = {
     "action_msgs/msg/GoalStatusArray": GoalStatusArray([GoalStatus(GOAL_INFO, 2), GoalStatus(GoalInfo(UUID(), Time()), 4)]),
     "action_msgs/srv/CancelGoal_Request": CancelGoalRequest(GOAL_INFO),
     "action_msgs/srv/CancelGoal_Response": CancelGoalResponse(0, [GOAL_INFO]),
-    "opennav_docking_msgs/action/DockRobot_SendGoal_Request": DOCK_ROBOT.send_goal_request(
+    "nav2_msgs/action/DockRobot_SendGoal_Request": DOCK_ROBOT.send_goal_request(
         goal_id=GOAL_ID, goal=DockRobotGoal(True, "home", PoseStamped(HEADER, POSE), "charger", 120.0, False)),
-    "opennav_docking_msgs/action/DockRobot_SendGoal_Response": DOCK_ROBOT.send_goal_response(accepted=True, stamp=Time(8, 9)),
-    "opennav_docking_msgs/action/DockRobot_GetResult_Request": DOCK_ROBOT.get_result_request(goal_id=GOAL_ID),
-    "opennav_docking_msgs/action/DockRobot_GetResult_Response": DOCK_ROBOT.get_result_response(
+    "nav2_msgs/action/DockRobot_SendGoal_Response": DOCK_ROBOT.send_goal_response(accepted=True, stamp=Time(8, 9)),
+    "nav2_msgs/action/DockRobot_GetResult_Request": DOCK_ROBOT.get_result_request(goal_id=GOAL_ID),
+    "nav2_msgs/action/DockRobot_GetResult_Response": DOCK_ROBOT.get_result_response(
         status=4, result=DockRobotResult(True, 0, 2)),
-    "opennav_docking_msgs/action/DockRobot_FeedbackMessage": DOCK_ROBOT.feedback_message(
+    "nav2_msgs/action/DockRobot_FeedbackMessage": DOCK_ROBOT.feedback_message(
         goal_id=GOAL_ID, feedback=DockRobotFeedback(3, Duration(7, 100), 1)),
-    "opennav_docking_msgs/action/UndockRobot_SendGoal_Request": UNDOCK_ROBOT.send_goal_request(
+    "nav2_msgs/action/UndockRobot_SendGoal_Request": UNDOCK_ROBOT.send_goal_request(
         goal_id=GOAL_ID, goal=UndockRobotGoal("charger", 15.0)),
-    "opennav_docking_msgs/action/UndockRobot_FeedbackMessage": UNDOCK_ROBOT.feedback_message(
+    "nav2_msgs/action/UndockRobot_FeedbackMessage": UNDOCK_ROBOT.feedback_message(
         goal_id=GOAL_ID, feedback=UndockRobotFeedback()),
     "nav2_msgs/action/NavigateToPose_SendGoal_Request": NAVIGATE_TO_POSE.send_goal_request(
         goal_id=GOAL_ID, goal=NavigateToPoseGoal(PoseStamped(HEADER, POSE), "")),
@@ -164,12 +164,11 @@ def test_cdr_bytes_equal_rosbags_for_the_same_message(ros_type: str) -> None:
 def test_cdr_reads_back_into_the_same_zendock_message(ros_type: str) -> None:
     msg = EXAMPLES[ros_type]
     back = types.from_ros(types.from_cdr(types.to_cdr(msg, ros_type), ros_type), type(msg))
-    assert back.encode() == _float32_rounded(msg).encode()  # bytes: NaN equals NaN
+    assert back.encode() == _float32_rounded(msg, ros_type).encode()  # bytes: NaN equals NaN
 
 
-def _float32_rounded(msg: Message) -> Message:
+def _float32_rounded(msg: Message, ros_type: str) -> Message:
     """ROS 2 carries some fields as float32 (BatteryState, Range, LaserScan): compare what survives."""
-    ros_type = msg.TYPE_NAME
     return types.from_ros(types.typestore().deserialize_cdr(
         types.typestore().serialize_cdr(_independent(msg, ros_type), ros_type), ros_type), type(msg))
 
@@ -198,6 +197,13 @@ def test_service_hashes_describe_request_response_and_event() -> None:
     for action in ACTIONS:
         for service in action.services:
             assert types.type_hash(service.ros_type) != types.type_hash(f"{service.ros_type}_Request")
+
+
+def test_zendock_docking_types_have_jazzy_names() -> None:
+    assert types.jazzy_name(DOCK_ROBOT.feedback_message.TYPE_NAME) == "nav2_msgs/action/DockRobot_FeedbackMessage"
+    assert types.zendock_name("nav2_msgs/action/DockRobot_FeedbackMessage") == DOCK_ROBOT.feedback_message.TYPE_NAME
+    assert types.jazzy_name("sensor_msgs/msg/Range") == types.zendock_name("sensor_msgs/msg/Range") == "sensor_msgs/msg/Range"
+    assert types.knows(types.jazzy_name(UNDOCK_ROBOT.feedback_message.TYPE_NAME))
 
 
 def test_unknown_types_and_bad_bytes_are_named() -> None:
