@@ -212,6 +212,38 @@ def serve(
     return 0
 
 
+@dataclass(frozen=True)
+class ServiceSpec:
+    """What makes a service, apart from running it: its name, parameters and how to build it on a node.
+
+    ``python -m services.<name>`` runs one alone (:meth:`run`); ``zendock container`` runs several in one
+    process on one session (:mod:`shared.composition`), each on its own node, from the same spec.
+    """
+
+    name: str
+    params_model: type[ServiceParams]
+    build: Callable[[Node, Any], Closeable | None]
+    description: str = ""
+    add_flags: Callable[[argparse.ArgumentParser], dict[str, str]] | None = None
+    #: Process-wide set-up before the service runs (e.g. allocator tuning for image-sized buffers).
+    prepare: Callable[[], None] | None = None
+
+    def parse(self, argv: Sequence[str] | None) -> tuple[ServiceOptions, ServiceParams]:
+        """Flags and parameters, validated; :class:`ConfigError` names what is wrong (argparse exits on
+        an unknown flag, as it does for the service alone)."""
+        parser = build_arg_parser(self.name, self.description)
+        flag_params = self.add_flags(parser) if self.add_flags else {}
+        args = parser.parse_args(argv)
+        options = options_from_args(args, flag_params)
+        return options, load_params(self.params_model, options)
+
+    def run(self, argv: Sequence[str] | None = None) -> int:
+        if self.prepare is not None:
+            self.prepare()
+        return run_service(self.name, self.params_model, self.build, argv, description=self.description,
+                           add_flags=self.add_flags)
+
+
 def run_service(
     service_name: str,
     params_model: type[P],

@@ -72,6 +72,8 @@ def _run(args: argparse.Namespace) -> int:
     from deploy.trials import TrialOptions, combine, run_trials  # noqa: PLC0415 - heavy imports only when used
     from deploy.trials.summary import summary_reasons  # noqa: PLC0415
 
+    if args.compose and args.chaos:
+        raise ConfigError("--chaos kills one service at a time; with --compose a robot's services are one process")
     worlds = _worlds(args)
     console = Console(stderr=args.json)
     per_world = []
@@ -81,7 +83,7 @@ def _run(args: argparse.Namespace) -> int:
         options = TrialOptions(world=world, n=args.n, controller=args.controller, detector=args.detector, starts=starts,
                                seed=args.seed + 1000 * number,
                                rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
-                               chaos_period_s=args.chaos)
+                               chaos_period_s=args.chaos, compose=args.compose)
         try:
             summary, results, run_dir = _run_world(console, options, run_trials)
         except (RuntimeError, ValueError) as exc:  # a world the campaign cannot run (no reachable start, no dock)
@@ -141,5 +143,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
     parser.add_argument("--chaos", type=float, default=0.0, metavar="PERIOD_S",
                         help="kill -9 a random robot service every PERIOD_S wall seconds on average (0: off)")
+    parser.add_argument("--compose", action="store_true",
+                        help="each robot's services in one process (zendock container) instead of one process each")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)

@@ -32,6 +32,8 @@ class TrialOptions:
     #: Fault injection: every ``chaos_period_s`` wall seconds on average, kill -9 a random robot service
     #: (battery, pose, planner or docking; never the simulator) and let the launcher restart it. 0: off.
     chaos_period_s: float = 0.0
+    #: Each robot's services in one process (``zendock container``) instead of one process each.
+    compose: bool = False
 
 
 @dataclass

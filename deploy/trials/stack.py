@@ -34,31 +34,34 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         },
     }
     for robot in robots:
-        common = {"depends_on": {"router": {"condition": "service_started"}}, "namespace": robot,
-                  "restart": "on-failure"}
-
-        def health(node: str) -> dict[str, Any]:
-            return {"healthcheck": {"liveliness": node, "timeout": "30s"}}
-
         keep_charge = ["-p", f"state_file={state_dir / robot / 'battery.json'}"] if state_dir else []
-        services[f"battery_{robot}"] = {**common, **health("battery"),
-                                        "command": [*py, "services.battery", "-p", "use_sim_time=true", *keep_charge]}
-        services[f"pose_{robot}"] = {**common, **health("pose"), "command": [*py, "services.pose", "-p", "use_sim_time=true"]}
-        services[f"planner_{robot}"] = {
-            **common,
-            **health("planner"),
-            "command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
+        members: dict[str, list[str]] = {
+            "battery": ["-p", "use_sim_time=true", *keep_charge],
+            "pose": ["-p", "use_sim_time=true"],
+            "planner": ["-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
                         *(["-p", f"glass_memory_file={state_dir / robot / GLASS_MEMORY_FILE}"] if state_dir else [])],
-            "depends_on": {"router": {"condition": "service_started"},
-                           "map": {"condition": "service_completed_successfully"}},
         }
         if options.detector == "aruco":
-            services[f"perception_{robot}"] = {**common, **health("perception"),
-                                               "command": [*py, "services.perception", "-p", f"dock_database={world}"]}
-        services[f"docking_{robot}"] = {
-            **common,
-            **health("docking"),
-            "command": [*py, "services.docking", "-p", "use_sim_time=true", "-p", f"dock_database={world}",
-                        "-p", f"controller={options.controller}"],
-        }
+            members["perception"] = ["-p", f"dock_database={world}"]
+        members["docking"] = ["-p", "use_sim_time=true", "-p", f"dock_database={world}",
+                              "-p", f"controller={options.controller}"]
+        common: dict[str, Any] = {"depends_on": {"router": {"condition": "service_started"}}, "namespace": robot,
+                                  "restart": "on-failure"}
+        after_map = {"depends_on": {"router": {"condition": "service_started"},
+                                    "map": {"condition": "service_completed_successfully"}}}
+        if options.compose:
+            # One process per robot: its services share a session (zendock container); the group is
+            # healthy once its last member, docking, is up.
+            command = ["zendock", "container"]
+            for i, (name, args) in enumerate(members.items()):
+                command += [*(["+"] if i else []), name, *args]
+            services[f"robot_{robot}"] = {**common, **after_map, "command": command,
+                                          "healthcheck": {"liveliness": "docking", "timeout": "60s"}}
+            continue
+        for name, args in members.items():
+            services[f"{name}_{robot}"] = {
+                **common, **(after_map if name == "planner" else {}),
+                "healthcheck": {"liveliness": name, "timeout": "30s"},
+                "command": [*py, f"services.{name}", *args],
+            }
     return {"name": "trials", "namespace": "", "zenoh": {"connect": [endpoint]}, "services": services}

@@ -24,7 +24,7 @@ from shared import topics
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest, SetBatteryStateResponse
 from shared.messages import BatteryState, DockContact, Header, Odometry
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import ServiceParams, ServiceSpec
 
 #: How often the node says it is still waiting for the simulator's clock.
 CLOCK_WAIT_LOG_PERIOD_S = 5.0
@@ -245,11 +245,9 @@ class BatteryService:
             self._clock_wait_timer.cancel()
 
 
+SERVICE = ServiceSpec("battery", Params, BatteryService,
+                      description="Simulated battery: publishes battery_status, drains with motion, charges on the dock.")
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_service(
-        "battery",
-        Params,
-        BatteryService,
-        argv,
-        description="Simulated battery: publishes battery_status, drains with motion, charges on the dock.",
-    )
+    return SERVICE.run(argv)

@@ -76,7 +76,7 @@ from shared.navigation import NavigationClient, TaskResult
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
-from shared.runtime import run_service
+from shared.runtime import ServiceSpec
 
 #: std_msgs/String with the service's state name, for tools (published on change and every second).
 DOCKING_STATE = "docking/state"
@@ -525,12 +525,11 @@ class DockingService:
         self.undock_server.close()
 
 
+SERVICE = ServiceSpec("docking", Params, DockingService,
+                      description="zendock docking: goes home to charge when the battery runs low; "
+                                  "dock_robot and undock_robot")
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_service(
-        "docking",
-        Params,
-        DockingService,
-        argv,
-        description="zendock docking: goes home to charge when the battery runs low; dock_robot and undock_robot",
-    )
+    return SERVICE.run(argv)
 

@@ -41,7 +41,7 @@ from shared.messages import (
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
 from shared.ratelimit import RateLimitedLogger
 from shared.rigid3 import Rigid3, StaticTransforms
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import ServiceParams, ServiceSpec
 from shared.world import ROBOT_FRONT_M, DockMarker, dock_markers, load_world
 
 #: Images: the newest only (a late frame is worth less than the next one).
@@ -234,7 +234,10 @@ def _invert(t: Rigid3) -> Rigid3:
     return Rigid3(t.rotation.T, -t.rotation.T @ t.translation)
 
 
+SERVICE = ServiceSpec("perception", Params, PerceptionService,
+                      description="zendock perception: ArUco markers in camera images -> dock poses",
+                      prepare=return_large_blocks)  # camera frames: image-sized temporaries at 15 Hz
+
+
 def main(argv: list[str] | None = None) -> int:
-    return_large_blocks()  # camera frames: image-sized temporaries at 15 Hz
-    return run_service("perception", Params, PerceptionService, argv,
-                       description="zendock perception: ArUco markers in camera images -> dock poses")
+    return SERVICE.run(argv)

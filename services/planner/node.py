@@ -73,7 +73,7 @@ from shared.messages import (
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
-from shared.runtime import run_service
+from shared.runtime import ServiceSpec
 
 NavHandle = ServerGoalHandle[NavigateToPoseGoal, NavigateToPoseResult, NavigateToPoseFeedback]
 
@@ -345,10 +345,11 @@ def _add_flags(parser: Any) -> dict[str, str]:
     return {"map": "map_yaml", "world": "world"}
 
 
+SERVICE = ServiceSpec("planner", Params, PlannerService,
+                      description="Navigation: map server, layered costmap, A* planner and regulated pure pursuit "
+                                  "behind the navigate_to_pose action.",
+                      add_flags=_add_flags)
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_service(
-        "planner", Params, PlannerService, argv,
-        description="Navigation: map server, layered costmap, A* planner and regulated pure pursuit "
-                    "behind the navigate_to_pose action.",
-        add_flags=_add_flags,
-    )
+    return SERVICE.run(argv)

@@ -25,7 +25,7 @@ from shared.messages import (
 )
 from shared.node import RELIABLE, Node, QoS
 from shared.ratelimit import RateLimitedLogger
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import ServiceParams, ServiceSpec
 
 #: tf is a high-rate stream: keep a deep queue so a busy moment loses no history.
 TF_QOS = QoS(reliable=False, depth=100)
@@ -161,11 +161,9 @@ class PoseService:
             self._clock_wait_timer.cancel()
 
 
+SERVICE = ServiceSpec("pose", Params, PoseService,
+                      description="Keeps a tf buffer and publishes the map -> target_frame pose as [x, y, yaw].")
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_service(
-        "pose",
-        Params,
-        PoseService,
-        argv,
-        description="Keeps a tf buffer and publishes the map -> target_frame pose as [x, y, yaw].",
-    )
+    return SERVICE.run(argv)

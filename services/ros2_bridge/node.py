@@ -64,7 +64,7 @@ from shared.ros2.wire import (
     qualified_name,
 )
 from shared.ros2.wire import RELIABLE as ROS_RELIABLE
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import ServiceParams, ServiceSpec
 from shared.schema import MessageError
 
 STATS_PERIOD_S = 30.0
@@ -357,6 +357,9 @@ class Ros2Bridge:
         self.graph.close()
 
 
+SERVICE = ServiceSpec("ros2_bridge", Params, Ros2Bridge,
+                      description="zendock ROS 2 bridge: zendock's keys on rmw_zenoh's wire (ROS 2 Jazzy)")
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_service("ros2_bridge", Params, Ros2Bridge, argv,
-                       description="zendock ROS 2 bridge: zendock's keys on rmw_zenoh's wire (ROS 2 Jazzy)")
+    return SERVICE.run(argv)

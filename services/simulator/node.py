@@ -68,7 +68,7 @@ from shared.messages import (
 )
 from shared.names import normalise_namespace
 from shared.node import BLOCKING, RELIABLE, SENSOR_DATA, Node, Publisher, QoS, ServiceError
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import ServiceParams, ServiceSpec
 from shared.world import load_world
 
 #: How often the simulator logs the real-time factor it achieves (wall seconds).
@@ -580,8 +580,11 @@ def _add_flags(parser: Any) -> dict[str, str]:
     return {"world": "world", "rtf": "rtf"}
 
 
+SERVICE = ServiceSpec("simulator", Params, SimulatorService,
+                      description="zendock simulator: physics, clock, odometry, tf and sensors",
+                      add_flags=_add_flags,
+                      prepare=return_large_blocks)  # camera frames: image-sized temporaries at 15 Hz
+
+
 def main(argv: list[str] | None = None) -> int:
-    return_large_blocks()  # camera frames: image-sized temporaries at 15 Hz
-    return run_service("simulator", Params, SimulatorService, argv,
-                       description="zendock simulator: physics, clock, odometry, tf and sensors",
-                       add_flags=_add_flags)
+    return SERVICE.run(argv)

@@ -34,7 +34,7 @@ from shared.foxglove_view import (
 from shared.interfaces.map_server import GET_MAP, GET_MAP_SERVICE, GetMapRequest, GetMapResponse
 from shared.messages import OccupancyGrid
 from shared.node import SENSOR_DATA, Node, QoS, ServiceError, Subscription
-from shared.runtime import ServiceParams, run_service
+from shared.runtime import ServiceParams, ServiceSpec
 from shared.schema import Message
 from shared.topics import MAP
 from shared.world import World, load_world
@@ -189,7 +189,10 @@ def _add_flags(parser: Any) -> dict[str, str]:
     return {"port": "port", "host": "host", "world": "world"}
 
 
+SERVICE = ServiceSpec("viz", Params, VizService,
+                      description="Live view: zendock topics on a Foxglove WebSocket server",
+                      add_flags=_add_flags)
+
+
 def main(argv: list[str] | None = None) -> int:
-    return run_service("viz", Params, VizService, argv,
-                       description="Live view: zendock topics on a Foxglove WebSocket server",
-                       add_flags=_add_flags)
+    return SERVICE.run(argv)

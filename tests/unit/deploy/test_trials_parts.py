@@ -70,6 +70,19 @@ def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:
     assert "dock_detector=synthetic" in synthetic["services"]["simulator"]["command"]
 
 
+def test_a_composed_campaign_runs_each_robots_services_in_one_container() -> None:
+    options = TrialOptions(world=WORLDS[0], workers=2, compose=True)
+    stack = trials_stack(options, "tcp/127.0.0.1:7999", ["r0", "r1"])
+    assert set(stack["services"]) == {"router", "map", "simulator", "robot_r0", "robot_r1"}
+    group = stack["services"]["robot_r0"]
+    assert group["namespace"] == "r0" and group["healthcheck"]["liveliness"] == "docking"
+    assert group["depends_on"]["map"] == {"condition": "service_completed_successfully"}
+    command = group["command"]
+    assert command[:2] == ["zendock", "container"]
+    members = [command[2]] + [command[i + 1] for i, word in enumerate(command) if word == "+"]
+    assert members == ["battery", "pose", "planner", "perception", "docking"]
+
+
 def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: int = 0) -> TrialResult:
     return TrialResult(i, "r0", (0.0, 0.0, 0.0), docked, docked, time_s, lateral_m, 0.01, collisions, 1.0, 4.0)
 
