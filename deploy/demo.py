@@ -35,6 +35,8 @@ from shared.world import World, load_world
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
 DEFAULT_WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
 DOCK_SERVICES = ("router", "map", "simulator", "perception", "battery", "pose", "planner", "docking")
+#: With ``--compose`` the robot's services run as one process, the group ``robot`` (zendock container).
+ROBOT_GROUP = {"robot": ["perception", "battery", "pose", "planner", "docking"]}
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,8 @@ class DemoOptions:
     runs_dir: Path = REPO_ROOT / "runs"
     #: map->odom error of the simulated localisation (x_m, y_m, yaw_rad); trials turn it on.
     localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: The robot's services in one process (``zendock container``) instead of one process each.
+    compose: bool = False
 
 
 @dataclass
@@ -133,16 +137,23 @@ def build_report(record: RunRecord, options: DemoOptions, world: World, wall_s: 
     )
 
 
+def _composed(names: tuple[str, ...]) -> tuple[str, ...]:
+    grouped = {m for members in ROBOT_GROUP.values() for m in members}
+    return (*(n for n in names if n not in grouped), *ROBOT_GROUP)
+
+
 def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
     """Bring the stack up, dock once, write the run's files; always brings the stack down."""
     world = load_world(options.world)
     run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)
     endpoint = free_endpoint()
-    stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint, run_dir), project_dir=REPO_ROOT)
+    stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint, run_dir), project_dir=REPO_ROOT,
+                       compose=ROBOT_GROUP if options.compose else None)
+    services = _composed(DOCK_SERVICES) if options.compose else DOCK_SERVICES
     wall_start = time.monotonic()
     log(f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}")
-    with Launcher(stack, services=DOCK_SERVICES, project_dir=run_dir / "stack", working_dir=REPO_ROOT,
+    with Launcher(stack, services=services, project_dir=run_dir / "stack", working_dir=REPO_ROOT,
                   project_name="demo") as launcher:
         launcher.wait_healthy(timeout_s=90.0)
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
@@ -172,7 +183,7 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
                 record = observer.snapshot()
             finally:
                 observer.close()
-        for name in DOCK_SERVICES:
+        for name in services:
             (run_dir / f"{name}.log").write_text("\n".join(launcher.logs(name)) + "\n")
     wall_s = time.monotonic() - wall_start
     start_pose = record.pose_at(record.trigger_s) if record.trigger_s is not None else None

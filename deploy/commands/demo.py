@@ -66,6 +66,7 @@ def _run(args: argparse.Namespace) -> int:
         seed=args.seed,
         start=tuple(args.start) if args.start else None,
         timeout_sim_s=args.timeout,
+        compose=args.compose,
     )
     report = run_demo(options, log=lambda text: console.print(f"[dim]demo:[/] {text}")).as_dict()
     _print_report(report, console)
@@ -77,6 +78,8 @@ def _run(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("demo", help="dock once on the full stack and report (what `make run` runs)")
     parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file")
+    parser.add_argument("--compose", action="store_true",
+                        help="the robot's services in one process (zendock container) instead of one process each")
     parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
                         help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",

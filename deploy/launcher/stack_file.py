@@ -26,6 +26,7 @@ from pydantic import (
     model_validator,
 )
 
+from deploy.launcher.composition import CompositionError, compose_groups
 from deploy.launcher.durations import format_duration, parse_duration
 from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
 from deploy.launcher.interpolation import InterpolationError, interpolate_tree, parse_env_file
@@ -345,8 +346,12 @@ def load_stack(
     env_file: str | Path | None = None,
     project_dir: str | Path | None = None,
     project_name: str | None = None,
+    compose: Mapping[str, list[str]] | None = None,
 ) -> Stack:
     """Read, interpolate and validate a stack file.
+
+    ``compose`` adds groups of services that run as one process, as the file's own ``x-compose`` does
+    (:mod:`deploy.launcher.composition`).
 
     ``env`` replaces the shell environment for interpolation (tests pass a dict); ``project_dir``
     (default: the current directory) is where ``.env`` is looked up and names the project when the file
@@ -365,6 +370,15 @@ def load_stack(
         document = interpolate_tree(document, variables)  # type: ignore[assignment]
     except InterpolationError as exc:
         raise ConfigError(f"{source}: {exc}") from None
+    declared = document.get("x-compose")
+    if declared is not None and not isinstance(declared, dict):
+        raise ConfigError(f"{source}: x-compose: expected a mapping of group names to lists of services")
+    groups = {**(declared or {}), **(compose or {})}
+    if groups:
+        try:
+            document = compose_groups(document, groups)
+        except CompositionError as exc:
+            raise ConfigError(f"{source}: {exc}") from None
     try:
         parsed = StackFile.model_validate(document)
     except ValidationError as exc:

@@ -1,4 +1,5 @@
-"""Whole-system docking runs: the default stack through the launcher, judged on the simulator's truth.
+"""Whole-system docking runs: the default stack through the launcher, judged on the simulator's truth,
+with each service its own process and with the robot's services composed into one (``--compose``).
 
 Each run is what ``zendock demo`` does: stack up on a free port, battery set just above the low
 threshold, then the trigger, the navigation, the approach and CHARGING, all across real processes.
@@ -30,17 +31,22 @@ def _assert_docked(report, run_dir: Path) -> None:  # type: ignore[no-untyped-de
     assert report.final_lateral_error_m < 0.04 and report.final_yaw_error_rad < 0.1, report.as_dict()
 
 
-def test_seed_controller_docks_in_seed_room(tmp_path: Path) -> None:
+COMPOSE = pytest.mark.parametrize("compose", [False, True], ids=["process-per-service", "composed"])
+
+
+@COMPOSE
+def test_seed_controller_docks_in_seed_room(tmp_path: Path, compose: bool) -> None:
     report = run_demo(DemoOptions(world=WORLDS[0].parent / "seed_room.yaml", controller="seed", rtf="5",
-                                  runs_dir=tmp_path, timeout_sim_s=400.0), log=lambda _t: None)
+                                  runs_dir=tmp_path, timeout_sim_s=400.0, compose=compose), log=lambda _t: None)
     _assert_docked(report, tmp_path)
     assert (Path(report.run_dir) / "trajectory.png").stat().st_size > 10_000
     _no_stack_left(tmp_path)
 
 
+@COMPOSE
 @pytest.mark.parametrize("world", WORLDS, ids=lambda p: p.stem)
-def test_graceful_controller_docks_in_every_shipped_world(world: Path, tmp_path: Path) -> None:
+def test_graceful_controller_docks_in_every_shipped_world(world: Path, tmp_path: Path, compose: bool) -> None:
     report = run_demo(DemoOptions(world=world, controller="graceful", rtf="4", runs_dir=tmp_path,
-                                  localisation_error=(0.03, -0.02, 0.02)), log=lambda _t: None)
+                                  localisation_error=(0.03, -0.02, 0.02), compose=compose), log=lambda _t: None)
     _assert_docked(report, tmp_path)
     _no_stack_left(tmp_path)
