@@ -107,7 +107,6 @@ class Ros2Bridge:
         self.session_id = str(node.session.info.zid())
         self.counts: Counter[str] = Counter()
         self._say = RateLimitedLogger(node.log, interval_s=5.0)
-        self._stats_at = time.monotonic()
         self._subscribers: list[Any] = []
         self.peers = PeerSubscriptions(self.session_id, params.domain_id)
         self.graph = GraphMirror(self._graph_nodes(), self.session.liveliness().declare_token, BRIDGE_NODE)
