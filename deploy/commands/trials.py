@@ -143,7 +143,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
     parser.add_argument("--chaos", type=float, default=0.0, metavar="PERIOD_S",
                         help="kill -9 a random robot service every PERIOD_S wall seconds on average (0: off)")
-    parser.add_argument("--compose", action="store_true",
-                        help="each robot's services in one process (zendock container) instead of one process each")
+    parser.add_argument("--compose", nargs="?", const="all", default="", choices=["all", "light"],
+                        help="each robot's services in one process (zendock container): all of them (the default "
+                             "with the flag), or only the light ones (battery, pose)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)

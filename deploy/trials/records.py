@@ -32,8 +32,9 @@ class TrialOptions:
     #: Fault injection: every ``chaos_period_s`` wall seconds on average, kill -9 a random robot service
     #: (battery, pose, planner or docking; never the simulator) and let the launcher restart it. 0: off.
     chaos_period_s: float = 0.0
-    #: Each robot's services in one process (``zendock container``) instead of one process each.
-    compose: bool = False
+    #: Each robot's services in one process (``zendock container``): ``all`` of them, or only the ``light``
+    #: ones (battery and pose), the planner, perception and docking each keeping a process; "" for none.
+    compose: str = ""
 
 
 @dataclass

@@ -8,6 +8,8 @@ from typing import Any
 
 from deploy.trials.records import TrialOptions
 
+#: What ``--compose light`` puts in one process: the services that do little per message.
+LIGHT_SERVICES = ("battery", "pose")
 #: Each robot's planner keeps its glass memory in ``<state_dir>/<robot>/`` under this name.
 GLASS_MEMORY_FILE = "glass_memory.npz"
 
@@ -50,14 +52,15 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         after_map = {"depends_on": {"router": {"condition": "service_started"},
                                     "map": {"condition": "service_completed_successfully"}}}
         if options.compose:
-            # One process per robot: its services share a session (zendock container); the group is
-            # healthy once its last member, docking, is up.
+            # The robot's services (all, or the light ones) share a process and a session (zendock
+            # container); the group is healthy once its last member is up.
+            grouped = {n: a for n, a in members.items() if options.compose == "all" or n in LIGHT_SERVICES}
             command = ["zendock", "container"]
-            for i, (name, args) in enumerate(members.items()):
+            for i, (name, args) in enumerate(grouped.items()):
                 command += [*(["+"] if i else []), name, *args]
-            services[f"robot_{robot}"] = {**common, **after_map, "command": command,
-                                          "healthcheck": {"liveliness": "docking", "timeout": "60s"}}
-            continue
+            services[f"robot_{robot}"] = {**common, **(after_map if "planner" in grouped else {}), "command": command,
+                                          "healthcheck": {"liveliness": list(grouped)[-1], "timeout": "60s"}}
+            members = {n: a for n, a in members.items() if n not in grouped}
         for name, args in members.items():
             services[f"{name}_{robot}"] = {
                 **common, **(after_map if name == "planner" else {}),

@@ -71,7 +71,7 @@ def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:
 
 
 def test_a_composed_campaign_runs_each_robots_services_in_one_container() -> None:
-    options = TrialOptions(world=WORLDS[0], workers=2, compose=True)
+    options = TrialOptions(world=WORLDS[0], workers=2, compose="all")
     stack = trials_stack(options, "tcp/127.0.0.1:7999", ["r0", "r1"])
     assert set(stack["services"]) == {"router", "map", "simulator", "robot_r0", "robot_r1"}
     group = stack["services"]["robot_r0"]
@@ -81,6 +81,9 @@ def test_a_composed_campaign_runs_each_robots_services_in_one_container() -> Non
     assert command[:2] == ["zendock", "container"]
     members = [command[2]] + [command[i + 1] for i, word in enumerate(command) if word == "+"]
     assert members == ["battery", "pose", "planner", "perception", "docking"]
+    light = trials_stack(TrialOptions(world=WORLDS[0], compose="light"), "tcp/127.0.0.1:7999", ["r0"])["services"]
+    assert {"robot_r0", "planner_r0", "perception_r0", "docking_r0"} <= set(light) and "battery_r0" not in light
+    assert light["robot_r0"]["command"][2:3] == ["battery"] and light["robot_r0"]["healthcheck"]["liveliness"] == "pose"
 
 
 def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: int = 0) -> TrialResult:
