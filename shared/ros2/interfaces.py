@@ -65,22 +65,23 @@ def action_parts(action: str) -> dict[str, str]:
 def definitions() -> TypeDefs:
     """Every type above (and the services' description types), ready for a rosbags type store."""
     defs: TypeDefs = {}
-    defs.update(_service(CANCEL_GOAL, _CANCEL_REQUEST, _CANCEL_RESPONSE))
+    defs.update(service_definitions(CANCEL_GOAL, _CANCEL_REQUEST, _CANCEL_RESPONSE))
     for action in ACTIONS:
         goal, result, feedback = action_text(action)
         defs.update(_messages(goal, f"{action}_Goal"))
         defs.update(_messages(result, f"{action}_Result"))
         defs.update(_messages(feedback, f"{action}_Feedback"))
-        defs.update(_service(f"{action}_SendGoal", f"unique_identifier_msgs/UUID goal_id\n{action}_Goal goal",
+        defs.update(service_definitions(f"{action}_SendGoal", f"unique_identifier_msgs/UUID goal_id\n{action}_Goal goal",
                              "bool accepted\nbuiltin_interfaces/Time stamp"))
-        defs.update(_service(f"{action}_GetResult", "unique_identifier_msgs/UUID goal_id",
+        defs.update(service_definitions(f"{action}_GetResult", "unique_identifier_msgs/UUID goal_id",
                              f"int8 status\n{action}_Result result"))
         defs.update(_messages(f"unique_identifier_msgs/UUID goal_id\n{action}_Feedback feedback",
                               f"{action}_FeedbackMessage"))
     return defs
 
 
-def _service(service: str, request: str, response: str) -> TypeDefs:
+def service_definitions(service: str, request: str, response: str) -> TypeDefs:
+    """A service's request, response, event and description types from its request and response text."""
     request_type, response_type = service_parts(service)
     defs = _messages(request, request_type)
     defs.update(_messages(response, response_type))

@@ -44,7 +44,8 @@ _SERVICE_EVENT_INFO = "service_msgs/msg/ServiceEventInfo"
 
 @cache
 def typestore() -> Typestore:
-    """Jazzy's message definitions and zendock's actions (:mod:`shared.ros2.interfaces`), one store per process."""
+    """Jazzy's message definitions and the Nav2 actions zendock serves (:mod:`shared.ros2.interfaces`), one store
+    per process."""
     defs: dict[str, Any] = dict(get_typestore(Stores.ROS2_JAZZY).fielddefs)
     consts, fields = defs[_SERVICE_EVENT_INFO]
     defs[_SERVICE_EVENT_INFO] = (consts, [(name, (3, ((1, ("uint8", 0)), 16)) if name == "client_gid" else desc)

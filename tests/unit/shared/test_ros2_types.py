@@ -187,11 +187,11 @@ def test_service_hashes_describe_request_response_and_event() -> None:
     against the published hash of example_interfaces/srv/AddTwoInts, built by the same rule."""
     from rosbags.typesys import Stores, get_typestore
 
-    from shared.ros2.interfaces import _service
+    from shared.ros2.interfaces import service_definitions
 
     store = get_typestore(Stores.EMPTY)
     store.register(dict(types.typestore().fielddefs))
-    store.register(_service("example_interfaces/srv/AddTwoInts", "int64 a\nint64 b", "int64 sum"))
+    store.register(service_definitions("example_interfaces/srv/AddTwoInts", "int64 a\nint64 b", "int64 sum"))
     assert store.hash_rihs01("example_interfaces/srv/AddTwoInts") == (
         "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a")
     for action in ACTIONS:
