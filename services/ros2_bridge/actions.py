@@ -21,7 +21,7 @@ import zenoh
 from shared.action import CANCEL_GOAL, action_key
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
-from shared.node import Node, ServiceError, ServiceType
+from shared.node import Node, ServiceError, ServiceType, ServiceUnavailable
 from shared.ros2 import interfaces
 from shared.ros2 import types as ros_types
 from shared.ros2.wire import Attachment, data_key
@@ -111,7 +111,12 @@ class ActionRelay:
         self._count(f"action {where}")
 
         def answered(response: Any, error: ServiceError | None) -> None:
-            if error is not None or response is None:
+            if service.part == "send_goal" and error is not None and not isinstance(error, ServiceUnavailable):
+                # The server answered but would not take the goal (e.g. a bad max_staging_time): to ROS 2
+                # that is a rejected goal, what ``ros2 action send_goal`` reports as "Goal was rejected".
+                self._refuse(f"action-rejected-{service.part}", "%s: goal rejected: %s", where, error)
+                response = service.zendock.response(accepted=False, stamp=self.node.now_msg())
+            elif error is not None or response is None:
                 self._fail(query, f"action-server-{service.part}", f"{where}: zendock's server: {error}")
                 return
             try:

@@ -377,6 +377,9 @@ def test_a_ros2_action_client_docks_the_robot_through_the_bridge(stack) -> None:
     wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
     action = ("action", "/dock_robot", "nav2_msgs/action/DockRobot")
 
+    # A goal the server will not take (no time to reach the staging pose) is rejected, as ROS 2 reports it.
+    rejected = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "home", "max_staging_time": 0}')
+    assert rejected == [{"accepted": False}], rejected
     unknown = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "nowhere", "max_staging_time": 1000}')
     assert unknown[0] == {"accepted": True}, unknown
     assert unknown[1]["status"] == int(GoalStatusCode.ABORTED), unknown
