@@ -238,10 +238,20 @@ class ServiceSpec:
         return options, load_params(self.params_model, options)
 
     def run(self, argv: Sequence[str] | None = None) -> int:
+        """The whole life of ``python -m services.<name>``: parse, validate, serve. Returns the exit code."""
+        prog = f"python -m services.{self.name}"
+        try:
+            options, params = self.parse(argv)
+        except ConfigError as exc:
+            print(f"{prog}: error: {exc}", file=sys.stderr)
+            return 2
         if self.prepare is not None:
             self.prepare()
-        return run_service(self.name, self.params_model, self.build, argv, description=self.description,
-                           add_flags=self.add_flags)
+        try:
+            return serve(options, params, self.build)
+        except ConfigError as exc:  # raised while building (a bad world file, a bad map)
+            print(f"{prog}: error: {exc}", file=sys.stderr)
+            return 2
 
 
 def run_service(
@@ -253,22 +263,9 @@ def run_service(
     description: str = "",
     add_flags: Callable[[argparse.ArgumentParser], dict[str, str]] | None = None,
 ) -> int:
-    """The whole life of ``python -m services.<name>``: parse, validate, serve. Returns the exit code.
+    """:meth:`ServiceSpec.run` for a service given by its parts.
 
     ``add_flags`` may add service-specific flags and returns which parameter each one sets
     (e.g. ``--world`` sets ``world``).
     """
-    parser = build_arg_parser(service_name, description)
-    flag_params = add_flags(parser) if add_flags else {}
-    args = parser.parse_args(argv)
-    try:
-        options = options_from_args(args, flag_params)
-        params = load_params(params_model, options)
-    except ConfigError as exc:
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-        return 2
-    try:
-        return serve(options, params, build)
-    except ConfigError as exc:  # raised while building (a bad world file, a bad map)
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-        return 2
+    return ServiceSpec(service_name, params_model, build, description, add_flags).run(argv)

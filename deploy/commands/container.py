@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import sys
 
 from shared.composition import Member, serve_group
 from shared.config_errors import ConfigError
@@ -85,12 +84,7 @@ def members_from(args: argparse.Namespace) -> list[Member]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    try:
-        members = members_from(args)
-        return serve_group(members)
-    except ConfigError as exc:
-        print(f"zendock container: {exc}", file=sys.stderr)
-        return 2
+    return serve_group(members_from(args))  # a ConfigError: one line and exit 2, from deploy.cli
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

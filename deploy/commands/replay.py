@@ -14,19 +14,24 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+from typing import TYPE_CHECKING
 
 from deploy.keys.connection import open_bus
 from deploy.keys.errors import KeysError
 from deploy.recording.bus import add_bus_flags, options_from
 from deploy.recording.reading import Recording
 from deploy.recording.replay import Replayer
-from deploy.recording.ros2_bag import Ros2BagRecording, is_ros2_bag
 from shared.config_errors import ConfigError
 from shared.names import normalise_namespace
+
+if TYPE_CHECKING:
+    from deploy.recording.ros2_bag import Ros2BagRecording
 
 
 def open_recording(path: str) -> Recording | Ros2BagRecording:
     """zendock's MCAP file, or a ROS 2 bag directory (its CDR turned back into zendock's messages)."""
+    from deploy.recording.ros2_bag import Ros2BagRecording, is_ros2_bag  # noqa: PLC0415 - rosbags only for bags
+
     return Ros2BagRecording(path) if is_ros2_bag(path) else Recording(path)
 
 

@@ -16,6 +16,8 @@ from __future__ import annotations
 import shlex
 from typing import Any
 
+from deploy.launcher.durations import parse_duration
+
 #: When two members depend on the same service with different conditions, the strictest holds.
 _STRICTNESS = {"service_started": 0, "service_healthy": 1, "service_completed_successfully": 2}
 
@@ -90,7 +92,7 @@ def _group_service(where: str, group: str, members: list[tuple[str, Any]], names
         service["environment"] = environment
     graces = [m["stop_grace_period"] for _, m in members if "stop_grace_period" in m]
     if graces:
-        service["stop_grace_period"] = max(graces, key=lambda g: _seconds(g))
+        service["stop_grace_period"] = max(graces, key=parse_duration)
     return service
 
 
@@ -110,7 +112,3 @@ def _merge_depends(all_depends: list[Any], grouped: dict[str, str], exclude: set
     return merged
 
 
-def _seconds(text: Any) -> float:
-    from deploy.launcher.durations import parse_duration  # noqa: PLC0415
-
-    return parse_duration(text)

@@ -19,16 +19,19 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import zenoh
 
 from deploy.recording.mcap_log import McapLog, RecordedSample, split_encoding
-from deploy.recording.ros2_bag import Ros2BagLog
 from deploy.recording.sequence import SequenceTracker
 from shared.foxglove_view import convert_key
 from shared.names import GRAPH_PREFIX, parse_token_key
 from shared.node import publisher_id, sequence_number
 from shared.schema import MessageError
+
+if TYPE_CHECKING:  # rosbags loads only when a ROS 2 bag is written
+    from deploy.recording.ros2_bag import Ros2BagLog
 
 log = logging.getLogger(__name__)
 

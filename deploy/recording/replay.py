@@ -14,13 +14,16 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import zenoh
 
 from deploy.recording.reading import RawMessage, Recording
-from deploy.recording.ros2_bag import Ros2BagRecording
 from shared.names import endpoint_token_key, normalise_namespace, topic_key
 from shared.node import publisher_gid, sequence_attachment
+
+if TYPE_CHECKING:  # rosbags loads only when a ROS 2 bag is replayed
+    from deploy.recording.ros2_bag import Ros2BagRecording
 
 REPLAY_NODE_NAME = "replay"
 #: Waits longer than this are split so a stop request is noticed quickly.

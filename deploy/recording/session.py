@@ -11,16 +11,19 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import zenoh
 
 from deploy.recording.mcap_log import RECORDING_METADATA, SUMMARY_METADATA, WORLD_ATTACHMENT, McapLog
 from deploy.recording.recorder import BusRecorder, RecorderStats
-from deploy.recording.ros2_bag import Ros2BagLog
 from deploy.recording.summary import KeySummary, summarize, summary_metadata
 from shared.foxglove_view import WORLD_VIEW_TOPIC, view_topic, world_scene
 from shared.names import topic_key
 from shared.world import load_world
+
+if TYPE_CHECKING:  # rosbags loads only when a ROS 2 bag is written
+    from deploy.recording.ros2_bag import Ros2BagLog
 
 #: How often the wait for the end looks at the stop flag.
 POLL_S = 0.1
@@ -76,8 +79,13 @@ def record(
     """Record until ``stop`` is set or ``duration_s`` has passed; the file is complete when this returns."""
     world = load_world(request.world) if request.world is not None else None
     selectors = selectors_for(namespace, request.keys)
-    mcap_log: McapLog | Ros2BagLog = (Ros2BagLog(request.output, namespace) if request.format == "ros2"
-                                      else McapLog(request.output, compression=request.compression))
+    mcap_log: McapLog | Ros2BagLog
+    if request.format == "ros2":
+        from deploy.recording.ros2_bag import Ros2BagLog  # noqa: PLC0415 - rosbags only for ROS 2 bags
+
+        mcap_log = Ros2BagLog(request.output, namespace)
+    else:
+        mcap_log = McapLog(request.output, compression=request.compression)
     started_ns = time.time_ns()
     mcap_log.add_metadata(RECORDING_METADATA, {
         "namespace": namespace,
@@ -106,5 +114,5 @@ def record(
         rows = summarize(recorder.tracker, recorder.type_of)
         mcap_log.add_metadata(SUMMARY_METADATA, summary_metadata(rows, duration_s))
         mcap_log.finish()
-    skipped = dict(mcap_log.skipped) if isinstance(mcap_log, Ros2BagLog) else {}
+    skipped = {} if isinstance(mcap_log, McapLog) else dict(mcap_log.skipped)
     return RecordResult(request.output, duration_s, rows, recorder.stats, mcap_log.view_messages, skipped)

@@ -41,9 +41,6 @@ class PeerSubscriptions:
     def wanted(self, topic: str) -> bool:
         return self._per_topic.get(topic, 0) > 0
 
-    def subscriptions(self, topic: str) -> list[Endpoint]:
-        return [e for e in self._endpoints.values() if e.topic == topic]
-
     def _peer_subscription(self, token_key: str) -> Endpoint | None:
         parts = token_key.split("/")
         if len(parts) < 6 or parts[5] != EntityKind.SUBSCRIPTION:

@@ -47,9 +47,6 @@ class GraphMirror:
             token.undeclare()
         return True
 
-    def shown(self) -> list[str]:
-        return sorted(self._live)
-
     def close(self) -> None:
         for tokens in self._live.values():
             for token in tokens:
