@@ -5,7 +5,7 @@ Every ``python -m services.<name>`` takes the same flags::
     --namespace NS          robot namespace (env ZENDOCK_NAMESPACE)
     --connect ENDPOINT      repeatable; default tcp/127.0.0.1:7447 (env ZENDOCK_CONNECT, comma-separated)
     --listen ENDPOINT       repeatable
-    --zenoh-config FILE     a Zenoh json5 config applied before the flags
+    --zenoh-config FILE     a Zenoh json5 config applied before the flags (env ZENDOCK_ZENOH_CONFIG)
     --config FILE           YAML parameters (flat, or ROS style ``node: {ros__parameters: {...}}``)
     -p NAME=VALUE           repeatable parameter override, value parsed as YAML
     --node-name NAME        default: the service's name
@@ -107,7 +107,8 @@ def build_arg_parser(service_name: str, description: str = "") -> argparse.Argum
     parser.add_argument("--connect", action="append", default=None, metavar="ENDPOINT",
                         help=f"Zenoh endpoint to connect to (repeatable; default {DEFAULT_ROUTER_ENDPOINT})")
     parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT", help="Zenoh endpoint to listen on")
-    parser.add_argument("--zenoh-config", default=None, metavar="FILE", help="Zenoh json5 configuration file")
+    parser.add_argument("--zenoh-config", default=os.environ.get("ZENDOCK_ZENOH_CONFIG") or None, metavar="FILE",
+                        help="Zenoh json5 configuration file (env ZENDOCK_ZENOH_CONFIG)")
     parser.add_argument("--config", default=None, metavar="FILE", help="YAML file of parameters")
     parser.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter")
     parser.add_argument("--node-name", default=service_name, help="name of the node on the bus")

@@ -66,22 +66,26 @@ class RouterUnreachable(Exception):
     """No Zenoh router answered at the endpoints within the connect timeout."""
 
 
-def _session(args: argparse.Namespace) -> zenoh.Session:
+def client_session(args: argparse.Namespace) -> zenoh.Session:
+    """A client session to the router at the command's endpoints (``RouterUnreachable`` when none answers)."""
     spec = SessionSpec(
         mode="client",
         connect=endpoints(args.connect),
+        config_file=getattr(args, "zenoh_config", None) or os.environ.get("ZENDOCK_ZENOH_CONFIG") or None,
         overrides=(("connect/timeout_ms", json.dumps(int(args.connect_timeout * 1000))),
                    ("connect/exit_on_failure", "true")),
     )
     try:
         return open_session(spec)
+    except ValueError as exc:  # the config file
+        raise ConfigError(f"--zenoh-config: {exc}") from None
     except zenoh.ZError as exc:
         detail = str(exc).split(" at /")[0]
         raise RouterUnreachable(f"cannot reach a Zenoh router at {', '.join(spec.connect)} ({detail}); "
                                 "is the stack up?") from None
 
 
-def _namespace(args: argparse.Namespace) -> str:
+def namespace_arg(args: argparse.Namespace) -> str:
     raw = os.environ.get("ZENDOCK_NAMESPACE", "") if args.namespace is None else args.namespace
     try:
         return normalise_namespace(raw)
@@ -168,7 +172,7 @@ def _outcome(handle: ClientGoal[Any, Any]) -> str:
 
 
 def dock_main(args: argparse.Namespace) -> int:
-    namespace = _namespace(args)
+    namespace = namespace_arg(args)
     goal = DockRobotGoal(
         use_dock_id=args.pose is None,
         dock_id=args.dock_id or "",
@@ -182,7 +186,7 @@ def dock_main(args: argparse.Namespace) -> int:
     target = f"dock {args.dock_id!r}" if args.dock_id else ("the given pose" if args.pose else "the nearest dock")
     print(f"docking at {target}", flush=True)
     try:
-        with _session(args) as session:
+        with client_session(args) as session:
             code, handle = run_action(session, namespace, DOCK_ROBOT, topics.DOCK_ROBOT, goal, sys.stdout,
                                       describe_feedback=describe_dock_feedback, server_timeout_s=args.server_timeout,
                                       timeout_s=args.timeout)
@@ -197,11 +201,11 @@ def dock_main(args: argparse.Namespace) -> int:
 
 
 def undock_main(args: argparse.Namespace) -> int:
-    namespace = _namespace(args)
+    namespace = namespace_arg(args)
     goal = UndockRobotGoal(dock_type=args.dock_type, max_undocking_time=args.max_undocking_time)
     print("undocking", flush=True)
     try:
-        with _session(args) as session:
+        with client_session(args) as session:
             code, handle = run_action(session, namespace, UNDOCK_ROBOT, topics.UNDOCK_ROBOT, goal, sys.stdout,
                                       server_timeout_s=args.server_timeout, timeout_s=args.timeout)
     except RouterUnreachable as exc:
@@ -220,6 +224,8 @@ def _bus_flags(parser: argparse.ArgumentParser) -> None:
                             f"default {DEFAULT_ROUTER_ENDPOINT})")
     group.add_argument("--connect-timeout", type=float, default=3.0, metavar="S",
                        help="give up reaching the router after S seconds (default 3)")
+    group.add_argument("--zenoh-config", default=None, metavar="FILE",
+                       help="Zenoh json5 config, e.g. a secure profile user's (env ZENDOCK_ZENOH_CONFIG)")
     group.add_argument("--server-timeout", type=float, default=10.0, metavar="S",
                        help="wait this long for the docking service to answer (default 10)")
     group.add_argument("--timeout", type=float, default=None, metavar="S",

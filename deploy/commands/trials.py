@@ -69,9 +69,10 @@ def _worlds(args: argparse.Namespace) -> list[Path]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from deploy.trials import TrialOptions, combine, run_trials  # noqa: PLC0415 - heavy imports only when used
-    from deploy.trials.summary import summary_reasons  # noqa: PLC0415
+    from deploy.trials import TrialOptions, run_trials  # noqa: PLC0415 - heavy imports only when used
 
+    if args.shard.count > args.n:
+        raise ConfigError(f"--shard {args.shard}: {args.n} trials cannot make {args.shard.count} shards")
     if args.compose and args.chaos:
         raise ConfigError("--chaos kills one service at a time; with --compose a robot's services are one process")
     worlds = _worlds(args)
@@ -83,7 +84,8 @@ def _run(args: argparse.Namespace) -> int:
         options = TrialOptions(world=world, n=args.n, controller=args.controller, detector=args.detector, starts=starts,
                                seed=args.seed + 1000 * number,
                                rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
-                               chaos_period_s=args.chaos, compose=args.compose)
+                               chaos_period_s=args.chaos, compose=args.compose, shard=args.shard,
+                               **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
         try:
             summary, results, run_dir = _run_world(console, options, run_trials)
         except (RuntimeError, ValueError) as exc:  # a world the campaign cannot run (no reachable start, no dock)
@@ -91,15 +93,51 @@ def _run(args: argparse.Namespace) -> int:
         per_world.append((summary, results))
         _print_summary(console, summary)
         console.print(f"report and histograms in {run_dir}")
-    summary = per_world[0][0] if len(per_world) == 1 else combine(per_world, args.controller)
+    return _report_campaign(console, per_world, args.controller, args.json)
+
+
+def _report_campaign(console: Console, per_world: list, controller: str, as_json: bool) -> int:  # type: ignore[type-arg]
+    """The campaign's summary across worlds (printed when there are several), the JSON line; the exit code."""
+    from deploy.trials import combine  # noqa: PLC0415
+    from deploy.trials.summary import summary_reasons  # noqa: PLC0415
+
+    summary = per_world[0][0] if len(per_world) == 1 else combine(per_world, controller)
     if len(per_world) > 1:
         _print_summary(console, summary)
-    if args.json:
+    if as_json:
         line = {**summary.headline(), **({"chaos": summary.chaos} if summary.chaos else {})}
         if len(per_world) > 1:
             line["worlds"] = {s.world: s.headline() for s, _ in per_world}
         print(strict_json.dumps(line, reasons=summary_reasons(summary)))
     return 0 if summary.successes == summary.n else 1
+
+
+def _merge(args: argparse.Namespace) -> int:
+    from deploy.paths import REPO_ROOT  # noqa: PLC0415
+    from deploy.trials.merge import MergeError, find_reports, merge_reports, read_shard, write_merged  # noqa: PLC0415
+
+    console = Console(stderr=args.json)
+    try:
+        reports = [read_shard(path) for path in find_reports(args.paths)]
+        merged = merge_reports(reports)
+    except MergeError as exc:
+        raise ConfigError(f"trials merge: {exc}") from None
+    out = write_merged(merged, args.runs_dir or REPO_ROOT / "runs")
+    per_world = []
+    for result in merged.values():
+        _print_summary(console, result.summary)
+        per_world.append((result.summary, result.trials))
+    console.print(f"merged {len(reports)} shard report(s); report and histograms in {out}")
+    return _report_campaign(console, per_world, per_world[0][0].controller, args.json)
+
+
+def _shard(text: str):  # type: ignore[no-untyped-def]
+    from deploy.trials.records import Shard  # noqa: PLC0415
+
+    try:
+        return Shard.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _run_world(console: Console, options, run_trials):  # type: ignore[no-untyped-def]
@@ -146,5 +184,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--compose", nargs="?", const="all", default="", choices=["all", "light"],
                         help="each robot's services in one process (zendock container): all of them (the default "
                              "with the flag), or only the light ones (battery, pose)")
+    parser.add_argument("--shard", type=_shard, default="1/1", metavar="K/N",
+                        help="run only the K-th of N disjoint slices of the campaign (the same starts as the "
+                             "whole run; combine them with `zendock trials merge`)")
+    parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
+                        help="where run directories go (default: runs/ in the repository)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)
+    verbs = parser.add_subparsers(dest="trials_verb", metavar="merge")
+    merge = verbs.add_parser("merge", help="combine shard runs into the campaign's one summary",
+                             description="Combine the reports of `zendock trials --shard K/N` runs into the one "
+                                         "summary, histograms and trials.json the unsharded campaign gives.")
+    merge.add_argument("paths", nargs="+", type=Path, metavar="PATH",
+                       help="a shard's trials.json, its run directory, or a directory holding shard runs")
+    merge.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
+                       help="where the merged run directory goes (default: runs/ in the repository)")
+    merge.add_argument("--json", action="store_true", help="print the merged summary as JSON on the last line")
+    merge.set_defaults(func=_merge)

@@ -16,7 +16,7 @@ import subprocess
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
 
@@ -143,14 +143,19 @@ def run_trials(
     world = load_world(options.world)
     if not world.docks:
         raise ValueError(f"{options.world}: the world has no dock")
-    run_dir = options.runs_dir / f"trials-{time.strftime('%Y%m%d-%H%M%S')}"
+    shard = f"-shard{options.shard.index}of{options.shard.count}" if options.shard.count > 1 else ""
+    run_dir = options.runs_dir / f"trials-{time.strftime('%Y%m%d-%H%M%S')}-{options.world.stem}{shard}"
     run_dir.mkdir(parents=True, exist_ok=True)
-    workers = max(1, min(options.workers, options.n))
-    robots = [f"r{i}" for i in range(workers)]
     if options.starts == "beacon":
         starts = beacon_starts(world, options.n, options.seed)
     else:
         starts = reachable_starts(options.world, world, options.n, options.seed)
+    # The whole campaign's starts, then this shard's slice of them, keeping the campaign's trial indices.
+    mine = options.shard.select(starts)
+    if not mine:
+        raise ValueError(f"shard {options.shard} of {options.n} trials has no trial")
+    workers = max(1, min(options.workers, len(mine)))
+    robots = [f"r{i}" for i in range(workers)]
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
     stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False))
@@ -159,13 +164,14 @@ def run_trials(
     records: dict[int, RunRecord] = {}
     errors: list[str] = []
     wall_start = time.monotonic()
-    log(f"{options.n} trials in {world.name} with {workers} robot(s), controller {options.controller}, "
+    sharded = f" (shard {options.shard}: {len(mine)} of {options.n})" if options.shard.count > 1 else ""
+    log(f"{options.n} trials{sharded} in {world.name} with {workers} robot(s), controller {options.controller}, "
         f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}")
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
         launcher.wait_healthy(timeout_s=120.0)
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
         todo: queue.Queue[tuple[int, Pose2D]] = queue.Queue()
-        for i, start in enumerate(starts):
+        for i, start in mine:
             todo.put((i, start))
         lock = threading.Lock()
         chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
@@ -221,7 +227,7 @@ def run_trials(
     if chaos is not None:
         summary.chaos = chaos.report.summary()
     report = {"summary": asdict(summary), "trials": [asdict(r) for r in results], "errors": errors,
-              "options": {k: str(v) for k, v in asdict(options).items()}}
+              "options": {f.name: str(getattr(options, f.name)) for f in fields(options)}}
     (run_dir / "trials.json").write_text(strict_json.dumps(report, summary_reasons(summary), indent=2) + "\n")
     from deploy.plotting import plot_trial_histograms  # noqa: PLC0415 - matplotlib is slow to import
 

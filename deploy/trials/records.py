@@ -3,11 +3,50 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from deploy.paths import REPO_ROOT
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Shard:
+    """The ``index``-th (1-based) of ``count`` disjoint slices of a campaign's trials.
+
+    Trial ``i`` (0-based, in the campaign's order of starts) belongs to shard ``i % count + 1``: round
+    robin, so every shard gets starts from the whole room rather than one stretch of the list, and the
+    union of the shards is exactly the unsharded campaign, trial indices included.
+    """
+
+    index: int = 1
+    count: int = 1
+
+    def __post_init__(self) -> None:
+        if not (self.count >= 1 and 1 <= self.index <= self.count):
+            raise ValueError(f"shard {self.index}/{self.count}: K/N needs 1 <= K <= N")
+
+    @classmethod
+    def parse(cls, text: str) -> Shard:
+        """``K/N`` (as ``--shard`` takes it)."""
+        try:
+            index, count = (int(part) for part in text.split("/"))
+        except ValueError:
+            raise ValueError(f"shard {text!r}: expected K/N, e.g. 1/4") from None
+        return cls(index, count)
+
+    def owns(self, trial_index: int) -> bool:
+        return trial_index % self.count == self.index - 1
+
+    def select(self, items: Sequence[T]) -> list[tuple[int, T]]:
+        """This shard's items of the whole campaign's list, each with its index in the whole list."""
+        return [(i, item) for i, item in enumerate(items) if self.owns(i)]
+
+    def __str__(self) -> str:
+        return f"{self.index}/{self.count}"
 
 
 @dataclass(frozen=True)
@@ -35,6 +74,8 @@ class TrialOptions:
     #: Each robot's services in one process (``zendock container``): ``all`` of them, or only the ``light``
     #: ones (battery and pose), the planner, perception and docking each keeping a process; "" for none.
     compose: str = ""
+    #: Which slice of the campaign this run does (``zendock trials --shard K/N``; merge with ``trials merge``).
+    shard: Shard = Shard()
 
 
 @dataclass

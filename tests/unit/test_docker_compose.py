@@ -1,25 +1,92 @@
-"""The multi-machine compose file stays in step with the default stack (no Docker engine needed)."""
+"""The container deployment stays in step with the default stack (checked without a container engine; the
+containers themselves run in `make test-containers`)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import yaml
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
+COMPOSE = yaml.safe_load((REPO_ROOT / "deploy" / "docker-compose.yml").read_text())
+SECURE = yaml.safe_load((REPO_ROOT / "deploy" / "docker-compose.secure.yml").read_text())
+STACK = yaml.safe_load((REPO_ROOT / "deploy" / "stack.yaml").read_text())
+#: Variables of the stack file that have no meaning in containers (host paths, the host's router endpoint).
+HOST_ONLY_VARIABLES = {"ZENOH_LISTEN", "ZENDOCK_GLASS_MEMORY"}
 
 
-def test_compose_runs_the_default_stack_services_from_one_image() -> None:
-    compose = yaml.safe_load((REPO_ROOT / "deploy" / "docker-compose.yml").read_text())
-    stack = yaml.safe_load((REPO_ROOT / "deploy" / "stack.yaml").read_text())
-    assert set(compose["services"]) == set(stack["services"])
-    for name, service in compose["services"].items():
+def _variables(command: list[str]) -> set[str]:
+    return set(re.findall(r"\$\{(\w+)", " ".join(command))) - HOST_ONLY_VARIABLES
+
+
+def _conditions(service: dict) -> dict[str, str]:
+    depends = service.get("depends_on") or {}
+    if isinstance(depends, list):
+        return {name: "service_started" for name in depends}
+    return {name: spec.get("condition", "service_started") for name, spec in depends.items()}
+
+
+def test_compose_and_the_stack_file_have_the_same_services() -> None:
+    only_compose = set(COMPOSE["services"]) - set(STACK["services"])
+    only_stack = set(STACK["services"]) - set(COMPOSE["services"])
+    assert not only_compose and not only_stack, f"only in compose: {only_compose}; only in the stack: {only_stack}"
+
+
+def test_each_service_has_the_stacks_dependencies_variables_and_profiles() -> None:
+    for name, service in COMPOSE["services"].items():
+        stack_service = STACK["services"][name]
+        assert _conditions(service) == _conditions(stack_service), name
+        assert _variables(service["command"]) == _variables(stack_service["command"]), name
+        assert service.get("profiles") == stack_service.get("profiles"), name
+        assert service.get("restart", "no") == stack_service.get("restart", "no"), name
+
+
+def test_every_service_runs_from_the_one_image_on_the_bridge_network() -> None:
+    for name, service in COMPOSE["services"].items():
         assert service.get("image") == "zendock:latest", name
+        assert service.get("networks") == ["bus"], name
+        assert service.get("init") is True, name  # SIGTERM and zombies handled even with a shell in between
         command = service["command"]
         if command[:2] == ["python", "-m"]:
             module = command[2].replace(".", "/")
             assert (REPO_ROOT / module).is_dir(), f"{name}: no {module}"
-    # published ports stay on loopback unless the operator says otherwise
-    for name, service in compose["services"].items():
+    assert COMPOSE["networks"]["bus"]["driver"] == "bridge"
+    assert "build" in COMPOSE["services"]["router"]
+
+
+def test_health_checks_watch_each_services_own_liveliness_token() -> None:
+    for name, service in COMPOSE["services"].items():
+        if "liveliness" in (STACK["services"][name].get("healthcheck") or {}):
+            assert service["healthcheck"]["test"] == ["CMD", "zendock", "health", "-q", name], name
+    assert "healthcheck" in COMPOSE["services"]["router"]
+
+
+def test_the_map_volume_reaches_the_planner() -> None:
+    map_service, planner = COMPOSE["services"]["map"], COMPOSE["services"]["planner"]
+    assert "maps:/maps" in map_service["volumes"] and "maps:/maps" in planner["volumes"]
+    out = map_service["command"][map_service["command"].index("-o") + 1]
+    assert f"map_yaml={out}" in planner["command"]
+
+
+def test_published_ports_stay_on_loopback_unless_the_operator_says_otherwise() -> None:
+    for name, service in COMPOSE["services"].items():
         for port in service.get("ports", []):
             assert port.startswith(("127.0.0.1:", "${ZENOH_PUBLISH_ADDR:-127.0.0.1}:")), f"{name}: {port}"
+
+
+def test_the_secure_override_gives_every_bus_service_its_own_user() -> None:
+    bus_services = {name for name, s in COMPOSE["services"].items() if name not in ("router", "map")}
+    assert set(SECURE["services"]) - {"router"} == bus_services
+    for name in bus_services:
+        config = SECURE["services"][name]["environment"]["ZENDOCK_ZENOH_CONFIG"]
+        assert config == f"deploy/zenoh/secure/{name}.json5" and (REPO_ROOT / config).is_file(), name
+    router = SECURE["services"]["router"]["command"]
+    assert router[router.index("--config") + 1] == "deploy/zenoh/secure/router.json5"
+
+
+def test_the_dockerfile_takes_its_base_as_an_argument_and_runs_as_a_user() -> None:
+    text = (REPO_ROOT / "deploy" / "docker" / "Dockerfile").read_text()
+    assert re.search(r"^ARG BASE=\S+", text, re.M) and re.search(r"^FROM \$\{BASE\}", text, re.M)
+    user = re.findall(r"^USER (\S+)", text, re.M)
+    assert user and user[-1] not in ("root", "0")
