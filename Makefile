@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test check lint clean
+.PHONY: run test test-containers check lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,11 @@ check: $(STAMP)
 
 test: $(STAMP) check
 	$(BIN)/python -m pytest -q
+
+# The container deployment for real (rootful podman, several minutes; outside `make test`): see README.
+test-containers: $(STAMP)
+	$(BIN)/python -m pip install --quiet 'podman-compose>=1.6'
+	$(BIN)/python -m tests.containers.check
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache
