@@ -262,6 +262,11 @@ def check_default_stack(steps: Steps, tag: str) -> None:
                        "the battery container restarting")
             project.wait_healthy(("battery",), 90.0)
             wait_charging(endpoint, 60.0, full_too=True)
+        with steps.step("SIGTERM stops every service cleanly (compose stop)"):
+            project.compose("stop", "-t", "10")
+            codes = {s: project.inspect(s)["State"]["ExitCode"] for s in ("router", *SERVICES)}
+            if any(codes.values()):
+                raise CheckFailed(f"exit codes after SIGTERM (0 expected; 137: killed at the timeout): {codes}")
     finally:
         with steps.step("stack down, nothing left"):
             project.down()

@@ -90,3 +90,29 @@ def test_the_dockerfile_takes_its_base_as_an_argument_and_runs_as_a_user() -> No
     assert re.search(r"^ARG BASE=\S+", text, re.M) and re.search(r"^FROM \$\{BASE\}", text, re.M)
     user = re.findall(r"^USER (\S+)", text, re.M)
     assert user and user[-1] not in ("root", "0")
+
+
+def test_the_shard_compose_file_runs_every_shard_once_without_a_network() -> None:
+    shards = yaml.safe_load((REPO_ROOT / "deploy" / "batch" / "trials-shards.compose.yml").read_text())["services"]
+    numbers = sorted(int(service["environment"]["SHARD"]) for service in shards.values())
+    command = " ".join(next(iter(shards.values()))["command"])
+    count = int(re.search(r"\$\{ZENDOCK_SHARDS:-(\d+)\}", command).group(1))  # type: ignore[union-attr]
+    assert numbers == list(range(1, count + 1))
+    assert '--shard "$$SHARD/' in command and "--runs-dir" in command and "--json" in command
+    for service in shards.values():
+        assert service["network_mode"] == "none" and service["image"] == "zendock:latest"
+
+
+def test_the_kubernetes_job_is_indexed_and_gives_each_pod_its_shard() -> None:
+    docs = list(yaml.safe_load_all((REPO_ROOT / "deploy" / "batch" / "trials-job.yaml").read_text()))
+    job = next(d for d in docs if d["kind"] == "Job")
+    spec = job["spec"]
+    container = spec["template"]["spec"]["containers"][0]
+    env = {e["name"]: e["value"] for e in container["env"]}
+    assert spec["completionMode"] == "Indexed"
+    assert spec["completions"] == spec["parallelism"] == int(env["ZENDOCK_SHARDS"])
+    script = " ".join(container["args"])
+    assert '--shard "$((JOB_COMPLETION_INDEX + 1))/$ZENDOCK_SHARDS"' in script
+    claim = spec["template"]["spec"]["volumes"][0]["persistentVolumeClaim"]["claimName"]
+    assert any(d["kind"] == "PersistentVolumeClaim" and d["metadata"]["name"] == claim for d in docs)
+    assert spec["template"]["spec"]["securityContext"]["runAsUser"] != 0
