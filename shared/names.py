@@ -52,6 +52,11 @@ def node_token_key(namespace: str, node_name: str) -> str:
     return f"{GRAPH_PREFIX}/node/{encode_chunk(normalise_namespace(namespace))}/{encode_chunk(node_name)}"
 
 
+def stats_key(namespace: str, node_name: str) -> str:
+    """Where a node answers with its message counters (``@zendock/stats/<ns>/<node>``; ``zendock bench messages``)."""
+    return f"{GRAPH_PREFIX}/stats/{encode_chunk(normalise_namespace(namespace))}/{encode_chunk(node_name)}"
+
+
 def endpoint_token_key(kind: str, namespace: str, node_name: str, type_name: str, key: str) -> str:
     if kind not in ENDPOINT_KINDS:
         raise ValueError(f"endpoint kind must be one of {ENDPOINT_KINDS}, got {kind!r}")

@@ -16,6 +16,7 @@ interval; an exception in a callback is logged with its traceback (rate-limited)
 from __future__ import annotations
 
 import itertools
+import json
 import logging
 import struct
 import threading
@@ -29,7 +30,7 @@ from typing import Any, Generic, TypeVar
 import zenoh
 
 from shared.messages import Clock, Time
-from shared.names import endpoint_token_key, node_token_key, normalise_namespace, topic_key
+from shared.names import endpoint_token_key, node_token_key, normalise_namespace, stats_key, topic_key
 from shared.ratelimit import RateLimitedLogger
 from shared.schema import Message, MessageError
 
@@ -137,6 +138,8 @@ class NodeStats:
     """Counters a test or a tool can read: what arrived, what was rejected, what failed."""
 
     received: dict[str, int] = field(default_factory=dict)
+    #: Samples put per key by this node's publishers.
+    published: dict[str, int] = field(default_factory=dict)
     rejected: dict[str, int] = field(default_factory=dict)
     dropped: dict[str, int] = field(default_factory=dict)
     callback_errors: int = 0
@@ -221,6 +224,12 @@ class _Executor:
         return max(wait, 0.0)
 
 
+#: A timer is due this close before its deadline: sim time is a count of steps times the step (1.05 may be
+#: 1.0499999999999998) while deadlines add up periods, so a tick that lands exactly on a deadline must count
+#: as on time, or a 20 Hz timer on a 20 Hz clock would fire on every other tick.
+TIMER_TOLERANCE_S = 1e-6
+
+
 class Timer:
     """Calls ``callback`` every ``period_s`` on the node's clock (sim time when the node uses it)."""
 
@@ -246,7 +255,7 @@ class Timer:
         if self._next is None or now < self._next - 2 * self.period_s - 1.0:
             self._next = now + self.period_s  # first tick, or the clock jumped back (simulator reset)
             return False
-        return now >= self._next
+        return now >= self._next - TIMER_TOLERANCE_S
 
     @property
     def next_due(self) -> float | None:
@@ -290,6 +299,7 @@ class Publisher(Generic[M]):
         self._seq = itertools.count(1)
         self._lock = threading.Lock()
         self._gid = publisher_gid(self._publisher.id)
+        self._published = node.stats.published
         self._token = node._declare_endpoint("pub", msg_type.TYPE_NAME, self.key)
 
     def publish(self, msg: M) -> None:
@@ -310,6 +320,7 @@ class Publisher(Generic[M]):
         """
         with self._lock:  # the put order is the sequence order, whichever threads publish
             self._put(payload, attachment=sequence_attachment(next(self._seq), self._gid))
+            self._published[self.key] = self._published.get(self.key, 0) + 1
 
     def has_subscribers(self) -> bool:
         """Whether any subscriber matches this key now (Zenoh's matching status), so costly messages such as
@@ -527,6 +538,7 @@ class Node:
         self._tokens: list[zenoh.LivelinessToken] = []
         self._entities: list[Any] = []
         self._node_token: zenoh.LivelinessToken | None = None
+        self._stats_queryable: Any = None
         self._sim_now = 0.0
         self.clock_started = False
         self._clock_sub: Subscription[Clock] | None = None
@@ -551,8 +563,8 @@ class Node:
         self._sim_now = now
         self.clock_started = True
         # Wake the executor only when a sim-time timer is due (or time jumped back: a simulator restart),
-        # not on every tick of a 100 Hz clock.
-        if now >= self._executor.next_sim_due or jumped_back:
+        # not on every tick of the clock.
+        if now >= self._executor.next_sim_due - TIMER_TOLERANCE_S or jumped_back:
             self._executor.wake()
 
     # --- entities ----------------------------------------------------------------------------------
@@ -659,9 +671,23 @@ class Node:
         self._tokens = [t for t in self._tokens if t is not token]
 
     def declare_ready(self) -> None:
-        """Announce the node (its liveliness token): launchers treat this as healthy."""
+        """Announce the node (its liveliness token): launchers treat this as healthy. From then on the node
+        also answers ``@zendock/stats/<ns>/<node>`` with its message counters (JSON)."""
         if self._node_token is None:
             self._node_token = self.session.liveliness().declare_token(node_token_key(self.namespace, self.name))
+            self._stats_queryable = self.session.declare_queryable(stats_key(self.namespace, self.name),
+                                                                   self._on_stats_query)
+
+    def _on_stats_query(self, query: zenoh.Query) -> None:
+        """Zenoh's thread: copies of the counters (dict copies are atomic enough under the GIL), one reply."""
+        stats = self.stats
+        body = {"node": self.name, "namespace": self.namespace, "published": dict(stats.published),
+                "received": dict(stats.received), "dropped": dict(stats.dropped), "rejected": dict(stats.rejected),
+                "callback_errors": stats.callback_errors, "now": self.now()}
+        try:
+            query.reply(query.key_expr, json.dumps(body))
+        except zenoh.ZError:  # the querier left
+            pass
 
     # --- running -----------------------------------------------------------------------------------
 
@@ -675,6 +701,12 @@ class Node:
 
     def close(self) -> None:
         self.shutdown()
+        if self._stats_queryable is not None:
+            try:
+                self._stats_queryable.undeclare()
+            except Exception:  # the session may already be closing
+                pass
+            self._stats_queryable = None
         for token in [self._node_token, *self._tokens]:
             if token is not None:
                 try:

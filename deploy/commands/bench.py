@@ -137,6 +137,41 @@ def _bench_ros2(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_messages(args: argparse.Namespace) -> int:
+    from pathlib import Path  # noqa: PLC0415
+
+    from deploy.bench.messages import MessageCount  # noqa: PLC0415 - starts a stack
+    from deploy.trials import TrialOptions, run_trials  # noqa: PLC0415
+
+    world = Path(args.world)
+    if not world.is_file():
+        print(f"zendock bench messages: --world {world}: no such file", file=sys.stderr)
+        return 2
+    count = MessageCount()
+    options = TrialOptions(world=world.resolve(), n=args.n, detector=args.detector, seed=args.seed, rtf=args.rtf,
+                           compose="all" if args.compose else "")
+    console = Console(stderr=True)
+    try:
+        summary, _, run_dir = run_trials(options, log=lambda t: console.print(f"[dim]bench:[/] {t}"), tap=count.tap)
+        report = count.report()
+    except (RuntimeError, ValueError) as exc:
+        print(f"zendock bench messages: {exc}", file=sys.stderr)
+        return 1
+    report.update({"docked": f"{summary.successes}/{summary.n}", "achieved_rtf": summary.achieved_rtf,
+                   "detector": args.detector, "composed": bool(args.compose), "run_dir": str(run_dir)})
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title=f"messages per simulated second, one robot ({report['sim_s']} sim s, {report['docked']} docked)")
+    for column in ("key", "published", "delivered", "subscribers"):
+        table.add_column(column, justify="left" if column in ("key", "subscribers") else "right")
+    for key, row in report["keys"].items():
+        table.add_row(key, f"{row['published_per_sim_s']}", f"{row['delivered_per_sim_s']}", ", ".join(row["subscribers"]))
+    table.add_row("all", f"{report['published_per_sim_s_per_robot']}", f"{report['delivered_per_sim_s_per_robot']}", "")
+    Console().print(table)
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("bench", help="benchmarks (latency, throughput, planning, docking)")
     verbs = parser.add_subparsers(dest="bench", metavar="BENCH")
@@ -155,6 +190,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     perception.add_argument("--frames", type=int, default=12, help="frames per viewpoint")
     perception.add_argument("--json", action="store_true")
     perception.set_defaults(func=_bench_perception)
+    messages = verbs.add_parser("messages", help="messages per simulated second per key and subscriber, docking")
+    messages.add_argument("--world", default="deploy/worlds/seed_room.yaml")
+    messages.add_argument("--n", type=int, default=5, help="dockings from random starts")
+    messages.add_argument("--rtf", default="8", help="simulator real-time factor, or max")
+    messages.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
+    messages.add_argument("--seed", type=int, default=0)
+    messages.add_argument("--compose", action="store_true", help="the robot's services in one process")
+    messages.add_argument("--json", action="store_true")
+    messages.set_defaults(func=_bench_messages)
     ros2 = verbs.add_parser("ros2", help="the ROS 2 bridge: added latency, CPU per message, throughput by type")
     ros2.add_argument("--messages", type=int, default=1000, help="paced messages per type")
     ros2.add_argument("--rtf-seconds", type=float, default=10.0,

@@ -16,6 +16,7 @@ import subprocess
 import threading
 import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
@@ -138,8 +139,13 @@ def run_trials(
     options: TrialOptions,
     log: Callable[[str], None] = print,
     progress: Callable[[TrialResult], None] | None = None,
+    tap: Callable[[Any, list[str]], AbstractContextManager[Any]] | None = None,
 ) -> tuple[TrialsSummary, list[TrialResult], Path]:
-    """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs)."""
+    """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs).
+
+    ``tap(session, robots)``, when given, is entered once the stack is healthy and left after the last trial,
+    before the stack goes down: a benchmark's way to watch the campaign's bus (``zendock bench messages``).
+    """
     world = load_world(options.world)
     if not world.docks:
         raise ValueError(f"{options.world}: the world has no dock")
@@ -175,7 +181,8 @@ def run_trials(
             todo.put((i, start))
         lock = threading.Lock()
         chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
-        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()):
+        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()), \
+                (tap(session, robots) if tap is not None else _Nothing()):
             clock_start = _sim_clock(session, robots[0])
             wall_clock_start = time.monotonic()
 

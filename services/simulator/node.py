@@ -83,7 +83,8 @@ class Params(ServiceParams):
     robots: list[str] = Field(default_factory=list, description="robot namespaces served (empty: the node's own)")
     seed: int = 0
     dt_s: float = Field(0.01, gt=0, le=0.05)
-    clock_rate_hz: float = Field(100.0, gt=0)
+    clock_rate_hz: float = Field(20.0, gt=0, description="sim-time clock rate: the stack's fastest sim-time timer "
+                                 "(planner and docking control, 20 Hz); every sim-time node receives every tick")
     odom_rate_hz: float = Field(50.0, gt=0)
     tf_rate_hz: float = Field(50.0, gt=0)
     tf_static_rate_hz: float = Field(1.0, gt=0)

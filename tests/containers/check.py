@@ -177,12 +177,18 @@ class Project:
             pending = [s for s in pending if not self.healthy(s)]
             if pending and time.monotonic() - said > 15.0:
                 said = time.monotonic()
-                print(f"   after {said - start:.0f} s still waiting for {', '.join(pending)}", flush=True)
+                print(f"   after {said - start:.0f} s still waiting for {', '.join(pending)} "
+                      f"({pending[0]}: {self.last_health_output(pending[0])})", flush=True)
             if pending and time.monotonic() > deadline:
                 raise CheckFailed(f"{self.name}: not healthy within {timeout_s:g} s: {', '.join(pending)}\n"
                                   + self.logs(pending[0]))
             if pending:
                 time.sleep(2.0)
+
+    def last_health_output(self, service: str) -> str:
+        health = self.inspect(service)["State"].get("Health") or self.inspect(service)["State"].get("Healthcheck") or {}
+        log = health.get("Log") or []
+        return log[-1].get("Output", "").strip()[-300:] if log else "no health check run yet"
 
     def logs(self, service: str) -> str:
         done = run(["podman", "logs", "--tail", "20", self.container(service)], check=False)

@@ -97,6 +97,59 @@ def test_sim_time_timer_follows_clock(node_pair: tuple[Node, Node]) -> None:
     assert all(b - a == pytest.approx(0.1, abs=0.021) for a, b in zip(ticks, ticks[1:])), ticks
 
 
+def test_a_timer_at_the_clocks_own_rate_fires_on_every_tick(node_pair: tuple[Node, Node]) -> None:
+    """Sim time is steps times the step (1.05 may be 1.0499999999999998) and deadlines add up periods: a tick
+    landing on a deadline is on time, so a 20 Hz timer on a 20 Hz clock fires on every tick, not every other."""
+    talker, listener = node_pair
+    ticks: list[float] = []
+    done = threading.Event()
+
+    def tick() -> None:
+        ticks.append(listener.now())
+        if len(ticks) == 30:
+            done.set()
+
+    listener.create_timer(0.05, tick)
+    clock = talker.create_publisher(Clock, "clock", QoS(depth=1))
+    for step in range(0, 2000, 5):  # a 0.01 s step, a clock every 5 steps
+        clock.publish(Clock(Time.from_sec(step * 0.01)))
+        if done.wait(0.004):
+            break
+    _wait(done, "thirty ticks")
+    gaps = [round(b - a, 6) for a, b in zip(ticks, ticks[1:])]
+    assert all(g == pytest.approx(0.05, abs=1e-6) for g in gaps), gaps
+
+
+def test_a_node_answers_with_its_counters(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
+    import json
+
+    talker, listener = node_pair
+    got = threading.Event()
+    listener.create_subscription(Bool, "counted", lambda _m: got.set(), RELIABLE)
+    pub = talker.create_publisher(Bool, "counted")
+    talker.declare_ready()
+    listener.declare_ready()
+    wait_until(lambda: pub._publisher.matching_status.matching, 5.0, "the publisher never matched the subscriber")
+    for _ in range(3):
+        pub.publish(Bool(True))
+    wait_until(lambda: listener.stats.received.get(talker.key("counted"), 0) == 3, 5.0,
+               lambda: f"received so far: {listener.stats.received}")
+    by_node: dict[tuple[str, str], dict] = {}
+
+    def both_answered() -> bool:
+        replies = bus.get("@zendock/stats/**", timeout=2.0, target=zenoh.QueryTarget.ALL,
+                          consolidation=zenoh.ConsolidationMode.NONE)
+        for reply in replies:
+            if reply.ok is not None:
+                body = json.loads(reply.ok.payload.to_bytes())
+                by_node[(body["namespace"], body["node"])] = body
+        return {(talker.namespace, "talker"), (listener.namespace, "listener")} <= set(by_node)
+
+    wait_until(both_answered, 10.0, lambda: f"answers so far: {sorted(by_node)}")
+    assert by_node[(talker.namespace, "talker")]["published"] == {talker.key("counted"): 3}
+    assert by_node[(listener.namespace, "listener")]["received"][talker.key("counted")] == 3
+
+
 def test_callback_exception_does_not_stop_the_node(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
     talker, listener = node_pair
     survived = threading.Event()
