@@ -39,6 +39,8 @@ def format_table(statuses: list[ServiceStatus]) -> str:
     rows = [("NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL")]
     for s in statuses:
         detail = s.detail or (f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else "")
+        if s.members:  # one process: its services start, crash and restart together
+            detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
         rows.append((s.name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail))
     widths = [max(len(row[i]) for row in rows) for i in range(5)]
     return "\n".join("  ".join([*(cell.ljust(w) for cell, w in zip(row[:5], widths, strict=True)), row[5]]).rstrip() for row in rows)
@@ -61,6 +63,6 @@ def main(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("ps", help="list the services and their state")
     add_project_options(parser)
-    parser.add_argument("--json", action="store_true", help='a JSON array of {"name","state","pid","restarts","health"}')
+    parser.add_argument("--json", action="store_true", help='a JSON array of {"name","state","pid","restarts","health","exit_code","started_at","members"}')
     parser.add_argument("services", nargs="*", metavar="SERVICE")
     parser.set_defaults(func=main)

@@ -56,6 +56,30 @@ def compose_groups(document: dict[str, Any], groups: dict[str, Any]) -> dict[str
     return {**document, "services": services}
 
 
+#: ``zendock container``'s own options that take a value (they may come before the first service).
+_CONTAINER_VALUE_OPTIONS = {"--namespace", "--connect", "--listen", "--zenoh-config", "--log-level"}
+
+
+def container_members(command: list[str] | tuple[str, ...]) -> tuple[str, ...]:
+    """The services a ``zendock container A ARGS + B ARGS ...`` command runs (empty for any other command),
+    so ``zendock ps`` can say which services a group's process carries and restarts with it."""
+    words = [str(w) for w in command]
+    if len(words) < 3 or words[1] != "container" or not words[0].endswith("zendock"):
+        return ()
+    members, expect_name, skip = [], True, False
+    for word in words[2:]:
+        if skip:
+            skip = False
+        elif word == "+":
+            expect_name = True
+        elif expect_name and word in _CONTAINER_VALUE_OPTIONS:
+            skip = True
+        elif expect_name and not word.startswith("-"):
+            members.append(word)
+            expect_name = False
+    return tuple(members)
+
+
 def _group_service(where: str, group: str, members: list[tuple[str, Any]], names: set[str]) -> dict[str, Any]:
     command = ["zendock", "container"]
     namespaces = set()

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import deploy
+from deploy.launcher.composition import container_members
 from deploy.launcher.restart import RestartPolicy
 from deploy.launcher.stack_file import (
     DEFAULT_CHECK_TIMEOUT_S,
@@ -72,6 +73,8 @@ class ServicePlan:
     stop_grace_s: float
     #: dependency name -> condition (service_started | service_healthy | service_completed_successfully)
     depends_on: Mapping[str, str]
+    #: For a composed group (``zendock container``): the services its one process runs.
+    members: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -170,6 +173,7 @@ def plan_launch(
             health=_health_plan(name, service_namespace, spec.healthcheck),
             stop_grace_s=spec.stop_grace_period,
             depends_on={dep: d.condition for dep, d in spec.depends_on.items()},
+            members=container_members(spec.command),
         )
     zenoh_config = str((root / stack.zenoh_config).resolve()) if stack.zenoh_config else None
     return LaunchPlan(

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from enum import StrEnum
 from typing import Any
@@ -45,6 +45,8 @@ class ServiceStatus:
     #: Wall-clock time (epoch seconds) the current process was launched.
     started_at: float | None = None
     pid_create_time: float | None = None
+    #: A composed group's services (one process: they start, crash and restart together); empty otherwise.
+    members: list[str] = field(default_factory=list)
 
     def ps_json(self) -> dict[str, Any]:
         """Exactly the keys ``zendock ps --json`` promises, as ``docker compose ps --format json`` users
@@ -56,7 +58,8 @@ class ServiceStatus:
             else None
         )
         return {"name": self.name, "state": self.state, "pid": self.pid, "restarts": self.restarts,
-                "health": self.health, "exit_code": self.exit_code, "started_at": started_at}
+                "health": self.health, "exit_code": self.exit_code, "started_at": started_at,
+                "members": list(self.members)}
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

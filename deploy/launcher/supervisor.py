@@ -103,6 +103,7 @@ class ServiceRunner:
             uptime_s=round(time.monotonic() - process.started_at, 3) if process else None,
             started_at=self._launched_wall if process else None,
             pid_create_time=process.create_time if process else None,
+            members=list(self.plan.members),
         )
 
     def _set_phase(self, phase: Phase, detail: str | None = None) -> None:

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from deploy.launcher import load_stack
-from deploy.launcher.composition import CompositionError, compose_groups
+from deploy.launcher.composition import CompositionError, compose_groups, container_members
 from shared.config_errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -66,3 +66,26 @@ def test_the_default_stack_composes_and_a_bad_x_compose_is_one_clear_error(tmp_p
                    encoding="utf-8")
     with pytest.raises(ConfigError, match="x-compose.g: unknown service 'b'"):
         load_stack(bad, env={}, project_dir=tmp_path)
+
+
+@pytest.mark.parametrize(("command", "members"), [
+    (["zendock", "container", "battery", "-p", "a=1", "+", "pose", "+", "planner", "-p", "m=x"],
+     ("battery", "pose", "planner")),
+    (["zendock", "container", "--namespace", "r1", "--log-level", "DEBUG", "battery", "+", "docking"],
+     ("battery", "docking")),
+    (["/venv/bin/zendock", "container", "pose"], ("pose",)),
+    (["python", "-m", "services.battery"], ()),
+    (["zendock", "router"], ()),
+])
+def test_a_groups_members_are_read_from_its_container_command(command: list[str], members: tuple[str, ...]) -> None:
+    assert container_members(command) == members
+
+
+def test_the_launch_plan_of_a_composed_stack_names_the_groups_services(tmp_path: Path) -> None:
+    from deploy.launcher.plan import plan_launch
+
+    stack = load_stack(REPO_ROOT / "deploy/stack.yaml", env={}, project_dir=tmp_path,
+                       compose={"robot": ["battery", "pose", "planner", "docking"]})
+    plan = plan_launch(stack, working_dir=tmp_path)
+    assert plan.services["robot"].members == ("battery", "pose", "planner", "docking")
+    assert plan.services["simulator"].members == ()

@@ -37,7 +37,10 @@ def test_ps_json_has_exactly_the_promised_keys() -> None:
     status = ServiceStatus("planner", "running", 42, 1, "healthy", phase="running", detail="up 3s", starts=2,
                            exit_code=-9, started_at=1_795_000_000.25)
     assert status.ps_json() == {"name": "planner", "state": "running", "pid": 42, "restarts": 1, "health": "healthy",
-                                "exit_code": -9, "started_at": "2026-11-18T11:06:40.250+00:00"}
+                                "exit_code": -9, "started_at": "2026-11-18T11:06:40.250+00:00", "members": []}
+    group = ServiceStatus("robot", "running", 43, 0, "healthy", members=["battery", "pose"])
+    assert group.ps_json()["members"] == ["battery", "pose"]
+    assert ServiceStatus.from_dict(group.to_dict()) == group
     never = ServiceStatus("docking", "stopped", None, 0, "none")
     assert never.ps_json()["exit_code"] is None and never.ps_json()["started_at"] is None
     assert ServiceStatus.from_dict({**status.to_dict(), "unknown": 1}) == status
