@@ -113,9 +113,11 @@ def test_foreground_up_prints_prefixed_output_and_stops_on_ctrl_c(project: Path,
     seen: list[str] = []
     try:
         assert proc.stdout is not None
+        # the services' lines interleave as the machine schedules them: read until both have been seen
         for line in proc.stdout:
             seen.append(line.rstrip("\n"))
-            if line.startswith("helper") and "helper up" in line:
+            if any(s.startswith("helper") and "helper up" in s for s in seen) and any(
+                    s.startswith("router | zendock router: listening on") for s in seen):
                 break
         assert any(line.startswith("router | zendock router: listening on") for line in seen), seen
         assert "talker | talker ready" in seen
