@@ -143,6 +143,8 @@ class NodeStats:
     rejected: dict[str, int] = field(default_factory=dict)
     dropped: dict[str, int] = field(default_factory=dict)
     callback_errors: int = 0
+    #: A service's own measures, reported with the counters (the simulator's waits for late drivers).
+    extra: dict[str, float] = field(default_factory=dict)
 
 
 class _Executor:
@@ -683,7 +685,7 @@ class Node:
         stats = self.stats
         body = {"node": self.name, "namespace": self.namespace, "published": dict(stats.published),
                 "received": dict(stats.received), "dropped": dict(stats.dropped), "rejected": dict(stats.rejected),
-                "callback_errors": stats.callback_errors, "now": self.now()}
+                "callback_errors": stats.callback_errors, "extra": dict(stats.extra), "now": self.now()}
         try:
             query.reply(query.key_expr, json.dumps(body))
         except zenoh.ZError:  # the querier left

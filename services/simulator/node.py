@@ -395,6 +395,7 @@ class SimulatorService:
             if held_since is not None:
                 assert self._pacer is not None
                 self._pacer.note_held(now - held_since)
+                self._publish_pacing_stats()
                 held_since = None
                 next_wall = now
             if wall_per_step > 0.0:
@@ -408,6 +409,14 @@ class SimulatorService:
                 self._step_once()
             if now - reported_at[0] >= RTF_REPORT_PERIOD_S:
                 reported_at = self._report_rate(now, reported_at)
+
+    def _publish_pacing_stats(self) -> None:
+        """The waits for late drivers in the node's counters (``@zendock/stats``: ``zendock bench messages``)."""
+        pacer = self._pacer
+        assert pacer is not None
+        extra = {"pacing_holds": float(pacer.holds), "pacing_held_s": pacer.held_s, "sim_s": self.time_s}
+        extra.update({f"pacing_held_s_{kind}": s for kind, s in pacer.held_by_kind.items()})
+        self.node.stats.extra = extra  # one assignment: the stats query reads a whole dict
 
     def _drivers(self) -> list[Driver]:
         drivers = []

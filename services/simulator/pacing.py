@@ -55,6 +55,8 @@ class DriverPacer:
         #: How many times the world waited, and for how long in all (wall seconds).
         self.holds = 0
         self.held_s = 0.0
+        #: Wall seconds held, by the kind of input awaited ("cmd_vel" or "pose"; both when both were late).
+        self.held_by_kind: dict[str, float] = {}
 
     def hold(self, sim_now_s: float, wall_now_s: float, drivers: Iterable[Driver]) -> bool:
         """True: do not step yet. Call again (after a short sleep) until it says False."""
@@ -76,4 +78,8 @@ class DriverPacer:
         return True
 
     def note_held(self, seconds: float) -> None:
-        self.held_s += max(0.0, seconds)
+        seconds = max(0.0, seconds)
+        self.held_s += seconds
+        kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._awaited}) or ["?"]
+        kind = "+".join(kinds)
+        self.held_by_kind[kind] = self.held_by_kind.get(kind, 0.0) + seconds
