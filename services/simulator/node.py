@@ -462,8 +462,6 @@ class SimulatorService:
         ir = self._ir.due(now)
         stamp = Time.from_sec(now)
         for i, robot in enumerate(self.robots.values()):
-            if clock:
-                self._clock_pubs[i].publish(Clock(stamp))
             if tf_static:
                 self._publish_tf_static(robot, stamp)
             if tf:
@@ -488,6 +486,10 @@ class SimulatorService:
             if truth:
                 robot.pubs["ground_truth_pose"].publish(
                     PoseStamped(Header(stamp, topics.MAP_FRAME), Pose.from_pose2d(robot.sim.pose)))
+            # The clock last: a sim-time timer it wakes then acts on this step's odometry, tf and sensors,
+            # which went out before it on the same link, not on the step before.
+            if clock:
+                self._clock_pubs[i].publish(Clock(stamp))
 
     def _publish_tf(self, robot: _Robot, now: float) -> None:
         stamp = Time.from_sec(now)
