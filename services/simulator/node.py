@@ -85,8 +85,8 @@ class Params(ServiceParams):
     dt_s: float = Field(0.01, gt=0, le=0.05)
     clock_rate_hz: float = Field(20.0, gt=0, description="sim-time clock rate: the stack's fastest sim-time timer "
                                  "(planner and docking control, 20 Hz); every sim-time node receives every tick")
-    odom_rate_hz: float = Field(50.0, gt=0)
-    tf_rate_hz: float = Field(50.0, gt=0)
+    odom_rate_hz: float = Field(20.0, gt=0, description="odometry rate: the control timers' 20 Hz (they read the latest)")
+    tf_rate_hz: float = Field(20.0, gt=0, description="tf rate: twice the pose service's 10 Hz, on the clock's ticks")
     tf_static_rate_hz: float = Field(1.0, gt=0)
     scan_rate_hz: float = Field(10.0, gt=0)
     ultrasonic_rate_hz: float = Field(20.0, gt=0)
