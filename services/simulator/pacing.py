@@ -57,6 +57,7 @@ class DriverPacer:
         self.held_s = 0.0
         #: Wall seconds held, by the kind of input awaited ("cmd_vel" or "pose"; both when both were late).
         self.held_by_kind: dict[str, float] = {}
+        self._last_late: tuple[tuple[str, float], ...] = ()
 
     def hold(self, sim_now_s: float, wall_now_s: float, drivers: Iterable[Driver]) -> bool:
         """True: do not step yet. Call again (after a short sleep) until it says False."""
@@ -70,6 +71,7 @@ class DriverPacer:
             return False
         if late != self._awaited:  # a new wait: the budget starts again
             self._awaited = late
+            self._last_late = late
             self._since_wall_s = wall_now_s
             self.holds += 1
         waited = wall_now_s - self._since_wall_s
@@ -80,6 +82,7 @@ class DriverPacer:
     def note_held(self, seconds: float) -> None:
         seconds = max(0.0, seconds)
         self.held_s += seconds
-        kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._awaited}) or ["?"]
+        # what the wait that just ended was for (``hold`` has already forgotten it: nothing is late now)
+        kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._last_late}) or ["?"]
         kind = "+".join(kinds)
         self.held_by_kind[kind] = self.held_by_kind.get(kind, 0.0) + seconds

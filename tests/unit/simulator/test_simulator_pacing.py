@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from services.simulator.pacing import Driver, DriverPacer, PacingParams
 
 PARAMS = PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1)
@@ -37,3 +39,16 @@ def test_a_late_pose_holds_the_world_on_its_own_gap_even_with_the_robot_still() 
     assert pacer.hold(2.0, 0.0, [still, Driver("r0:pose", 1.6, True, gap_s=0.3)])  # 0.4 s old: wait
     assert not pacer.hold(2.0, 0.2, [still, Driver("r0:pose", 1.6, True, gap_s=0.3)])  # budget spent: a dead
     assert pacer.holds == 1  # pose service costs one wait, not a frozen world
+
+
+def test_held_time_is_counted_by_what_was_late() -> None:
+    pacer = DriverPacer(PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1, pose_gap_s=0.3))
+    late_command = [Driver("r0", 0.0, True), Driver("r0:pose", 0.9, True, 0.3)]
+    assert pacer.hold(1.0, 10.0, late_command)
+    assert not pacer.hold(1.0, 10.02, [Driver("r0", 0.99, True), Driver("r0:pose", 0.9, True, 0.3)])
+    pacer.note_held(0.02)
+    assert pacer.hold(2.0, 11.0, [Driver("r0", 1.99, True), Driver("r0:pose", 1.0, True, 0.3)])
+    assert not pacer.hold(2.0, 11.05, [Driver("r0", 1.99, True), Driver("r0:pose", 1.95, True, 0.3)])
+    pacer.note_held(0.05)
+    assert pacer.held_by_kind == {"cmd_vel": pytest.approx(0.02), "pose": pytest.approx(0.05)}
+    assert pacer.held_s == pytest.approx(0.07) and pacer.holds == 2
