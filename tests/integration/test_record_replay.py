@@ -65,7 +65,7 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
 
     by_key = {row.key: row for row in result.rows}
     assert {f"{namespace}/{k}" for k in EXPECTED_KEYS} <= set(by_key), sorted(by_key)
-    assert by_key[f"{namespace}/clock"].received >= 100 * RECORD_S  # 200 Hz at rtf 2, on a busy machine
+    assert by_key[f"{namespace}/clock"].received >= 20 * RECORD_S  # 40 Hz (20 Hz at rtf 2), on a busy machine
 
     # read back with the mcap reader: channels, counts equal to the publishers' number ranges, time order
     with open(path, "rb") as f:
