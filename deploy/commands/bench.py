@@ -172,6 +172,30 @@ def _bench_messages(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_startup(args: argparse.Namespace) -> int:
+    from deploy.bench.startup import run_startup_bench  # noqa: PLC0415 - starts services
+
+    try:
+        report = run_startup_bench(repeats=args.repeats, services=args.services or None)
+    except (RuntimeError, ValueError) as exc:
+        print(f"zendock bench startup: {exc}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title=f"start-up, exec to liveliness token (median of {report['repeats']})")
+    for column in ("service", "interpreter", "imports", "session and ready", "to token", "max"):
+        table.add_column(column, justify="left" if column == "service" else "right")
+    for name, row in report["services"].items():
+        table.add_row(name, f"{row['interpreter_ms']} ms", f"{row['imports_ms']} ms", f"{row['session_and_ready_ms']} ms",
+                      f"{row['to_token_ms']} ms", f"{row['to_token_max_ms']} ms")
+    Console().print(table)
+    for name, row in report["services"].items():
+        heavy = ", ".join(f"{module} {ms:.0f} ms" for module, ms in row["top_imports_ms"].items())
+        print(f"{name}: heaviest imports {heavy}")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("bench", help="benchmarks (latency, throughput, planning, docking)")
     verbs = parser.add_subparsers(dest="bench", metavar="BENCH")
@@ -199,6 +223,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     messages.add_argument("--compose", action="store_true", help="the robot's services in one process")
     messages.add_argument("--json", action="store_true")
     messages.set_defaults(func=_bench_messages)
+    startup = verbs.add_parser("startup", help="where a service's start-up goes: interpreter, imports, session")
+    startup.add_argument("services", nargs="*", metavar="SERVICE", help="default: the stack's robot services")
+    startup.add_argument("--repeats", type=int, default=5, help="starts per service (medians)")
+    startup.add_argument("--json", action="store_true")
+    startup.set_defaults(func=_bench_startup)
     ros2 = verbs.add_parser("ros2", help="the ROS 2 bridge: added latency, CPU per message, throughput by type")
     ros2.add_argument("--messages", type=int, default=1000, help="paced messages per type")
     ros2.add_argument("--rtf-seconds", type=float, default=10.0,

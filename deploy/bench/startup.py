@@ -1,0 +1,136 @@
+"""``zendock bench startup``: where a service's start-up time goes, the time a killed service is down.
+
+For each service, several times over, on a router of its own: a bare interpreter (``python -c pass``),
+the import of the service's node module (timed inside the interpreter), and the whole service from
+``exec`` to its liveliness token on the bus (what the launcher's health check waits for). The differences are the phases: interpreter,
+imports, and the rest (parameters, session open, declarations, ready). ``-X importtime`` then names the
+imports that cost most, so a cut can aim at them.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from deploy.bench.processes import free_port
+from deploy.paths import REPO_ROOT
+from shared.names import node_token_key
+from shared.session import SessionSpec, open_session
+
+SEED_ROOM = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
+
+
+def _service_args(map_yaml: Path) -> dict[str, list[str]]:
+    world = str(SEED_ROOM)
+    return {
+        "battery": ["-p", "use_sim_time=true"],
+        "pose": ["-p", "use_sim_time=true"],
+        "planner": ["-p", "use_sim_time=true", "-p", f"map_yaml={map_yaml}"],
+        "docking": ["-p", "use_sim_time=true", "-p", f"dock_database={world}"],
+        "perception": ["-p", f"dock_database={world}"],
+        "simulator": ["--world", world],
+    }
+
+
+def _timed(argv: list[str]) -> float:
+    start = time.perf_counter()
+    subprocess.run(argv, cwd=REPO_ROOT, check=True, capture_output=True, timeout=120)
+    return time.perf_counter() - start
+
+
+def _import_s(module: str) -> float:
+    """Seconds the import itself takes, timed inside the interpreter (its exit, which unloads Zenoh and
+    numpy, is not part of a service's start)."""
+    code = f"import time; t = time.perf_counter(); import {module}; print(time.perf_counter() - t)"
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, check=True, capture_output=True,
+                          text=True, timeout=120)
+    return float(done.stdout.strip().splitlines()[-1])
+
+
+def _to_token(service: str, args: list[str], endpoint: str, namespace: str, session: Any) -> float:
+    """Wall seconds from starting ``python -m services.<service>`` to its node token reaching the router."""
+    key = node_token_key(namespace, service)
+    seen = threading.Event()
+    watcher = session.liveliness().declare_subscriber(key, lambda sample: seen.set())
+    try:
+        start = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", f"services.{service}", "--connect", endpoint,
+                                 "--namespace", namespace, *args],
+                                cwd=REPO_ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                start_new_session=True)
+        try:
+            if not seen.wait(60.0):
+                proc.kill()
+                raise RuntimeError(f"{service} never declared its token: {proc.communicate()[1].decode()[-500:]}")
+            elapsed = time.perf_counter() - start
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                try:
+                    proc.wait(10.0)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait()
+        return elapsed
+    finally:
+        watcher.undeclare()
+
+
+def top_imports(module: str, count: int = 5) -> list[tuple[str, float]]:
+    """The module's heaviest direct imports by cumulative time (ms), from ``python -X importtime``."""
+    done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"], cwd=REPO_ROOT,
+                          capture_output=True, text=True, timeout=120, check=True)
+    rows = []
+    for line in done.stderr.splitlines():
+        if not line.startswith("import time:") or "cumulative" in line:
+            continue
+        _, _, rest = line.partition("import time:")
+        parts = [p for p in rest.split("|")]
+        if len(parts) != 3:
+            continue
+        name = parts[2]
+        depth = (len(name) - len(name.lstrip(" "))) // 2
+        if depth <= 1 and not name.strip().startswith("_") and name.strip() != module:
+            rows.append((name.strip(), int(parts[1]) / 1000.0))
+    return sorted(rows, key=lambda r: -r[1])[:count]
+
+
+def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory(prefix="zendock-bench-startup-") as tmp:
+        map_yaml = Path(tmp) / "map.yaml"
+        subprocess.run([sys.executable, "-m", "services.planner.map_save", "--world", str(SEED_ROOM),
+                        "-o", str(map_yaml)], cwd=REPO_ROOT, check=True, capture_output=True, timeout=120)
+        commands = _service_args(map_yaml)
+        wanted = services or list(commands)
+        unknown = sorted(set(wanted) - set(commands))
+        if unknown:
+            raise ValueError(f"unknown service(s) {', '.join(unknown)}; choose from {', '.join(commands)}")
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        report: dict[str, Any] = {"repeats": repeats, "services": {}}
+        with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
+                open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
+            interpreter = statistics.median(_timed([sys.executable, "-c", "pass"]) for _ in range(repeats))
+            report["interpreter_ms"] = round(1000 * interpreter, 1)
+            for service in wanted:
+                module = f"services.{service}.node"
+                imports = statistics.median(_import_s(module) for _ in range(repeats))
+                ready = [_to_token(service, commands[service], endpoint, f"startup{i}", session)
+                         for i in range(repeats)]
+                report["services"][service] = {
+                    "interpreter_ms": round(1000 * interpreter, 1),
+                    "imports_ms": round(1000 * imports, 1),
+                    # parameters, the session, the node's declarations, the token's trip to the router
+                    "session_and_ready_ms": round(1000 * (statistics.median(ready) - interpreter - imports), 1),
+                    "to_token_ms": round(1000 * statistics.median(ready), 1),
+                    "to_token_max_ms": round(1000 * max(ready), 1),
+                    "top_imports_ms": dict(top_imports(module)),
+                }
+        return report

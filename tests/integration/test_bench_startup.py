@@ -1,0 +1,26 @@
+"""``zendock bench startup``: the phases of a real service's start, and the imports that cost most."""
+
+from __future__ import annotations
+
+import pytest
+
+from deploy.bench.startup import run_startup_bench, top_imports
+
+
+def test_a_services_start_splits_into_interpreter_imports_and_the_rest() -> None:
+    report = run_startup_bench(repeats=1, services=["battery"])
+    row = report["services"]["battery"]
+    assert row["interpreter_ms"] > 0 and row["imports_ms"] > 0
+    assert row["to_token_ms"] >= row["imports_ms"] and row["to_token_max_ms"] >= row["to_token_ms"]
+    assert row["top_imports_ms"] and "services.battery.node" not in row["top_imports_ms"]
+
+
+def test_the_heaviest_imports_are_named_with_their_cumulative_time() -> None:
+    heaviest = top_imports("services.pose.node", count=3)
+    assert len(heaviest) == 3 and all(ms > 0 for _, ms in heaviest)
+    assert [ms for _, ms in heaviest] == sorted((ms for _, ms in heaviest), reverse=True)
+
+
+def test_an_unknown_service_is_refused_by_name() -> None:
+    with pytest.raises(ValueError, match="unknown service.*nowhere"):
+        run_startup_bench(repeats=1, services=["nowhere"])
