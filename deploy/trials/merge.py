@@ -10,6 +10,7 @@ shards' (machine time); the real-time factor is weighted by each shard's wall ti
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from dataclasses import asdict, dataclass, fields
@@ -69,8 +70,6 @@ def _summary(data: dict[str, Any]) -> TrialsSummary:
 
 def read_shard(path: Path) -> ShardReport:
     """One world's ``trials.json`` (``MergeError`` naming the file when it is not one)."""
-    import json  # noqa: PLC0415
-
     try:
         data = json.loads(path.read_text())
         summary = _summary(data["summary"])
@@ -94,8 +93,7 @@ def find_reports(paths: list[Path]) -> list[Path]:
             found.extend(reports)
         else:
             raise MergeError(f"{path}: no such file or directory")
-    unique = list(dict.fromkeys(p.resolve() for p in found))
-    return unique
+    return list(dict.fromkeys(p.resolve() for p in found))
 
 
 def _check_one_campaign(world: str, reports: list[ShardReport]) -> list[TrialResult]:
