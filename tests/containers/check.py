@@ -190,8 +190,8 @@ class Project:
         log = health.get("Log") or []
         return log[-1].get("Output", "").strip()[-300:] if log else "no health check run yet"
 
-    def logs(self, service: str) -> str:
-        done = run(["podman", "logs", "--tail", "20", self.container(service)], check=False)
+    def logs(self, service: str, tail: int = 20) -> str:
+        done = run(["podman", "logs", "--tail", str(tail), self.container(service)], check=False)
         return f"last output of {service}:\n{done.stdout}{done.stderr}"
 
     def inspect(self, service: str) -> dict:
@@ -253,7 +253,7 @@ def check_default_stack(steps: Steps, tag: str) -> None:
             if len(set(addresses.values())) != len(addresses):
                 raise CheckFailed(f"services share addresses: {addresses}")
             run(["podman", "exec", project.container("planner"), "test", "-s", "/maps/map.yaml"])
-            if "map from /maps/map.yaml" not in project.logs("planner"):
+            if "map from /maps/map.yaml" not in project.logs("planner", tail=500):
                 raise CheckFailed("the planner did not load /maps/map.yaml:\n" + project.logs("planner"))
             user = run(["podman", "exec", project.container("docking"), "id", "-u"]).stdout.strip()
             if user != str(USER_UID):
@@ -284,13 +284,17 @@ def check_default_stack(steps: Steps, tag: str) -> None:
 def check_secure_stack(steps: Steps, tag: str) -> None:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    project = Project(f"zendocksecure{tag}", [COMPOSE, SECURE], {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4"})
+    # another world than the default one: ZENDOCK_WORLD switches the simulator, the map and the docks
+    project = Project(f"zendocksecure{tag}", [COMPOSE, SECURE], {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4",
+                                                                 "ZENDOCK_WORLD": "deploy/worlds/corridor.yaml"})
     secure = REPO_ROOT / "deploy" / "zenoh" / "secure"
     try:
         with steps.step("secure stack up and healthy"):
             project.compose("up", "-d")
             project.wait_healthy(SERVICES)
-        with steps.step("secure: no credentials refused, operator docks"):
+            if "world corridor" not in project.logs("simulator", tail=500):
+                raise CheckFailed("ZENDOCK_WORLD did not reach the simulator:\n" + project.logs("simulator"))
+        with steps.step("secure: no credentials refused, operator docks (corridor)"):
             network = f"{project.name}_bus"
             plain = run(["podman", "run", "--rm", "--network", network, IMAGE, "zendock", "health", "simulator",
                          "--connect", "tcp/router:7447", "--connect-timeout", "3"], check=False, timeout=120)
