@@ -73,8 +73,6 @@ def _run(args: argparse.Namespace) -> int:
 
     if args.shard.count > args.n:
         raise ConfigError(f"--shard {args.shard}: {args.n} trials cannot make {args.shard.count} shards")
-    if args.compose and args.chaos:
-        raise ConfigError("--chaos kills one service at a time; with --compose a robot's services are one process")
     worlds = _worlds(args)
     console = Console(stderr=args.json)
     per_world = []
@@ -180,7 +178,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--workers", type=_count, default=1, help="robots docking side by side in one simulator")
     parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
     parser.add_argument("--chaos", type=float, default=0.0, metavar="PERIOD_S",
-                        help="kill -9 a random robot service every PERIOD_S wall seconds on average (0: off)")
+                        help="kill -9 a random robot service (with --compose: a robot's group process) every "
+                             "PERIOD_S wall seconds on average (0: off)")
     parser.add_argument("--compose", nargs="?", const="all", default="", choices=["all", "light"],
                         help="each robot's services in one process (zendock container): all of them (the default "
                              "with the flag), or only the light ones (battery, pose)")

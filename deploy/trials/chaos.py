@@ -39,7 +39,7 @@ class ChaosMonkey:
 
     def __init__(self, launcher: Launcher, robots: list[str], period_s: float, seed: int) -> None:
         self._launcher = launcher
-        self._names = [f"{v}_{r}" for r in robots for v in self.VICTIMS]
+        self._names = chaos_victims([(s.name, s.members) for s in launcher.ps()], robots, self.VICTIMS)
         self._period_s = period_s
         self._rng = random.Random(seed + 1)
         self._stop = threading.Event()
@@ -73,6 +73,18 @@ class ChaosMonkey:
                     self.report.recovery_s.append(time.monotonic() - killed_at)
                     break
                 time.sleep(0.05)
+
+
+def chaos_victims(services: list[tuple[str, list[str]]], robots: list[str], victims: tuple[str, ...]) -> list[str]:
+    """The processes to kill: each robot's ``<service>_<robot>`` for the victim services, and a composed
+    group (``robot_<robot>``: one process) when it runs any of them, so a kill takes its members down together."""
+    names = []
+    for name, members in services:
+        for robot in robots:
+            base = name.removesuffix(f"_{robot}")
+            if base != name and (base in victims or set(members) & set(victims)):
+                names.append(name)
+    return names
 
 
 def combine_chaos(reports: list[dict[str, Any]]) -> dict[str, Any]:

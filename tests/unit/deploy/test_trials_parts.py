@@ -140,3 +140,14 @@ def test_starts_in_a_closed_pocket_are_skipped_and_the_rest_keep_their_order() -
     candidates = random_starts(world, 50, seed=1)
     assert any(1.8 < c.x < 5.6 and (c.y < 1.0 or c.y > 2.0) for c in candidates)  # the seed does make some
     assert starts == [c for c in candidates if c in starts]  # same order as the seed made them
+
+
+def test_chaos_kills_robot_services_or_a_composed_robots_one_process() -> None:
+    from deploy.trials.chaos import ChaosMonkey, chaos_victims
+
+    alone = [("router", []), ("simulator", []), ("map", []), ("battery_r0", []), ("planner_r0", []),
+             ("perception_r0", []), ("docking_r1", [])]
+    assert chaos_victims(alone, ["r0", "r1"], ChaosMonkey.VICTIMS) == ["battery_r0", "planner_r0", "docking_r1"]
+    composed = [("simulator", []), ("robot_r0", ["battery", "pose", "planner", "docking"]), ("perception_r0", []),
+                ("robot_r1", ["battery", "pose"]), ("planner_r1", [])]
+    assert chaos_victims(composed, ["r0", "r1"], ChaosMonkey.VICTIMS) == ["robot_r0", "robot_r1", "planner_r1"]
