@@ -36,7 +36,19 @@ if compgen -G "/usr/local/share/ca-certificates/*.crt" > /dev/null; then
     cp /usr/local/share/ca-certificates/*.crt "$root/usr/local/share/ca-certificates/"
     chroot "$root" update-ca-certificates > /dev/null
 fi
-# A smaller base: no apt lists or caches (the Dockerfile updates the lists when it installs anything).
+# A smaller base: no apt lists or caches (the Dockerfile updates the lists when it installs anything), and no
+# manuals, documentation or translations, now or from packages installed later (dpkg leaves them out).
 rm -rf "$root"/var/lib/apt/lists/* "$root"/var/cache/apt/*.bin "$root"/var/cache/apt/archives/*.deb
+cat > "$root/etc/dpkg/dpkg.cfg.d/01-zendock-nodoc" <<'NODOC'
+path-exclude=/usr/share/doc/*
+path-include=/usr/share/doc/*/copyright
+path-exclude=/usr/share/man/*
+path-exclude=/usr/share/info/*
+path-exclude=/usr/share/locale/*
+path-include=/usr/share/locale/locale.alias
+NODOC
+find "$root/usr/share/doc" -mindepth 1 -not -name copyright -not -type d -delete 2>/dev/null || true
+rm -rf "$root"/usr/share/man/* "$root"/usr/share/info/*
+find "$root/usr/share/locale" -mindepth 1 -maxdepth 1 -not -name locale.alias -exec rm -rf {} + 2>/dev/null || true
 tar -C "$root" -c . | "$ENGINE" import --change 'CMD ["/bin/bash"]' - "$IMAGE" > /dev/null
 echo "base image $IMAGE: made ($("$ENGINE" image inspect --format '{{.Size}}' "$IMAGE" | awk '{printf "%.0f MB", $1/1e6}'))"
