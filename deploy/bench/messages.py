@@ -74,7 +74,7 @@ def _thread_kind(pid: int, tid: int) -> str:
     return "python" if name.startswith(("python", "zendock")) else "zenoh"
 
 
-def cpu_by_thread_kind(processes: list[tuple[str, int]]) -> dict[str, dict[str, float]]:
+def cpu_by_thread_kind(processes: list[tuple[str, int | None]]) -> dict[str, dict[str, float]]:
     """CPU seconds used so far by each service's process, split into its Python and its Zenoh threads."""
     import psutil  # noqa: PLC0415
 
@@ -131,15 +131,18 @@ class MessageCount:
         per = self.sim_s * max(1, len(self.robots))
         keys: dict[str, dict[str, Any]] = {}
         nodes: dict[str, float] = {}
+
+        def row_of(key: str) -> dict[str, Any]:
+            return keys.setdefault(_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()})
+
         for label, body in self.after.items():
             old = self.before.get(label, {})
             node = _relative(label, self.robots)
             for key, n in _delta(body.get("published", {}), old.get("published", {})).items():
-                row = keys.setdefault(_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()})
-                row["published"] += n / per
+                row_of(key)["published"] += n / per
             received = _delta(body.get("received", {}), old.get("received", {}))
             for key, n in received.items():
-                row = keys.setdefault(_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()})
+                row = row_of(key)
                 row["delivered"] += n / per
                 row["by"].add(node)
             nodes[node] = nodes.get(node, 0.0) + sum(received.values()) / per

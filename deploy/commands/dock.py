@@ -216,8 +216,8 @@ def undock_main(args: argparse.Namespace) -> int:
     return code
 
 
-def _bus_flags(parser: argparse.ArgumentParser) -> None:
-    group = parser.add_argument_group("bus")
+def add_connection_flags(group: argparse._ActionsContainer) -> None:
+    """Where a command finds the bus: namespace, endpoints, connect timeout, Zenoh config (dock, health)."""
     group.add_argument("--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)")
     group.add_argument("--connect", action="append", metavar="ENDPOINT",
                        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
@@ -226,6 +226,11 @@ def _bus_flags(parser: argparse.ArgumentParser) -> None:
                        help="give up reaching the router after S seconds (default 3)")
     group.add_argument("--zenoh-config", default=None, metavar="FILE",
                        help="Zenoh json5 config, e.g. a secure profile user's (env ZENDOCK_ZENOH_CONFIG)")
+
+
+def _bus_flags(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("bus")
+    add_connection_flags(group)
     group.add_argument("--server-timeout", type=float, default=10.0, metavar="S",
                        help="wait this long for the docking service to answer (default 10)")
     group.add_argument("--timeout", type=float, default=None, metavar="S",

@@ -11,9 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from deploy.commands.dock import RouterUnreachable, client_session, namespace_arg
+from deploy.commands.dock import RouterUnreachable, add_connection_flags, client_session, namespace_arg
 from shared.names import node_token_key
-from shared.session import DEFAULT_ROUTER_ENDPOINT
 
 
 def alive_nodes(session, namespace: str, nodes: list[str], timeout_s: float) -> set[str]:  # type: ignore[no-untyped-def]
@@ -50,14 +49,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                                   "(a container health check)",
                                    description="Exit 0 when every named node's liveliness token is up on the bus.")
     parser.add_argument("nodes", nargs="+", metavar="NODE", help="node name (a service's node is named like it)")
-    parser.add_argument("--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)")
-    parser.add_argument("--connect", action="append", metavar="ENDPOINT",
-                        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-                             f"default {DEFAULT_ROUTER_ENDPOINT})")
-    parser.add_argument("--connect-timeout", type=float, default=3.0, metavar="S",
-                        help="give up reaching the router after S seconds (default 3)")
-    parser.add_argument("--zenoh-config", default=None, metavar="FILE",
-                        help="Zenoh json5 config, e.g. a secure profile user's (env ZENDOCK_ZENOH_CONFIG)")
+    add_connection_flags(parser)
     parser.add_argument("--timeout", type=float, default=2.0, metavar="S",
                         help="wait this long for the router's answer (default 2)")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing when healthy")

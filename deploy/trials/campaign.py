@@ -139,7 +139,7 @@ def run_trials(
     options: TrialOptions,
     log: Callable[[str], None] = print,
     progress: Callable[[TrialResult], None] | None = None,
-    tap: Callable[[Any, list[str], Callable[[], list[tuple[str, int]]]], AbstractContextManager[Any]] | None = None,
+    tap: Callable[[Any, list[str], Callable[[], list[tuple[str, int | None]]]], AbstractContextManager[Any]] | None = None,
 ) -> tuple[TrialsSummary, list[TrialResult], Path]:
     """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs).
 
@@ -175,15 +175,17 @@ def run_trials(
         f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}")
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
         launcher.wait_healthy(timeout_s=120.0)
-        sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
+        def processes() -> list[tuple[str, int | None]]:
+            return [(s.name, s.pid) for s in launcher.ps()]
+
+        sampler = PeakRssSampler(processes)
         todo: queue.Queue[tuple[int, Pose2D]] = queue.Queue()
         for i, start in mine:
             todo.put((i, start))
         lock = threading.Lock()
         chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()), \
-                (tap(session, robots, lambda: [(s.name, s.pid) for s in launcher.ps()]) if tap is not None
-                 else _Nothing()):
+                (tap(session, robots, processes) if tap is not None else _Nothing()):
             clock_start = _sim_clock(session, robots[0])
             wall_clock_start = time.monotonic()
 

@@ -166,6 +166,18 @@ class Project:
     def down(self) -> None:
         run([*self.base, "down", "-v", "-t", "5"], env=self.env, check=False, timeout=300)
 
+    @contextmanager
+    def up(self, steps: Steps, label: str) -> Iterator[None]:
+        """The project for the block's length: always brought down after it, then nothing of it may be left."""
+        try:
+            yield
+        finally:
+            with steps.step(f"{label} down, nothing left"):
+                self.down()
+                left = self.leftovers()
+        if left:
+            raise CheckFailed(f"left after down: {', '.join(left)}")
+
     def healthy(self, service: str) -> bool:
         return run(["podman", "healthcheck", "run", self.container(service)], check=False, timeout=60).returncode == 0
 
@@ -186,7 +198,8 @@ class Project:
                 time.sleep(2.0)
 
     def last_health_output(self, service: str) -> str:
-        health = self.inspect(service)["State"].get("Health") or self.inspect(service)["State"].get("Healthcheck") or {}
+        state = self.inspect(service)["State"]
+        health = state.get("Health") or state.get("Healthcheck") or {}
         log = health.get("Log") or []
         return log[-1].get("Output", "").strip()[-300:] if log else "no health check run yet"
 
@@ -238,7 +251,7 @@ def check_default_stack(steps: Steps, tag: str) -> None:
     endpoint = f"tcp/127.0.0.1:{port}"
     project = Project(f"zendock{tag}", [COMPOSE], {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4",
                                                    "ZENDOCK_CONTROLLER": "graceful"})
-    try:
+    with project.up(steps, "stack"):
         with steps.step("stack up (compose up -d)"):
             project.compose("up", "-d")
         with steps.step("every container healthy"):
@@ -273,12 +286,6 @@ def check_default_stack(steps: Steps, tag: str) -> None:
             codes = {s: project.inspect(s)["State"]["ExitCode"] for s in ("router", *SERVICES)}
             if any(codes.values()):
                 raise CheckFailed(f"exit codes after SIGTERM (0 expected; 137: killed at the timeout): {codes}")
-    finally:
-        with steps.step("stack down, nothing left"):
-            project.down()
-            left = project.leftovers()
-    if left:
-        raise CheckFailed(f"left after down: {', '.join(left)}")
 
 
 def check_secure_stack(steps: Steps, tag: str) -> None:
@@ -288,7 +295,7 @@ def check_secure_stack(steps: Steps, tag: str) -> None:
     project = Project(f"zendocksecure{tag}", [COMPOSE, SECURE], {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4",
                                                                  "ZENDOCK_WORLD": "deploy/worlds/corridor.yaml"})
     secure = REPO_ROOT / "deploy" / "zenoh" / "secure"
-    try:
+    with project.up(steps, "secure stack"):
         with steps.step("secure stack up and healthy"):
             project.compose("up", "-d")
             project.wait_healthy(SERVICES)
@@ -310,12 +317,6 @@ def check_secure_stack(steps: Steps, tag: str) -> None:
                 raise CheckFailed("the host got a session on the secure router without credentials")
             zendock("dock", "--connect", endpoint, "--zenoh-config", str(secure / "operator.json5"), "--timeout", "300")
             wait_charging(endpoint, 60.0, zenoh_config=str(secure / "viewer.json5"))
-    finally:
-        with steps.step("secure stack down, nothing left"):
-            project.down()
-            left = project.leftovers()
-    if left:
-        raise CheckFailed(f"left after down: {', '.join(left)}")
 
 
 def check_sharded_trials(steps: Steps, tag: str) -> None:
