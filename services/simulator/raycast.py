@@ -8,6 +8,7 @@ All rays against all segments is one ``(rays, segments)`` array operation.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -76,3 +77,46 @@ def segment_blocked(
     u = (qx * dy - qy * dx) / denom
     crossing = (t > end_margin) & (t < 1.0 - end_margin) & (u >= 0.0) & (u <= 1.0)
     return bool(crossing.any())
+
+
+def nearest_in_cone(
+    origin_xy: tuple[float, float], yaw_rad: float, half_angle_rad: float, segments: SegmentSet
+) -> float:
+    """Distance from ``origin_xy`` to the nearest point of any segment inside the cone; ``inf`` if none.
+
+    An ultrasonic ping fills its whole cone, and the first echo back comes from the nearest surface
+    anywhere in it. A fan of rays misses what lies between them: a pane seen end-on, 8 cm wide at 1 m
+    between seven rays across 0.5 rad, is open floor to such a fan until the robot is upon it. Here each
+    segment is clipped to the cone (for ``half_angle_rad`` below pi/2 the cone is the intersection of two
+    half-planes through the apex, so the clip is Liang-Barsky's on two edges), then the clipped part's
+    point nearest the apex is taken.
+    """
+    if len(segments) == 0:
+        return math.inf
+    if not 0.0 < half_angle_rad < 0.5 * math.pi:
+        raise ValueError(f"a cone's half angle must lie in (0, pi/2), got {half_angle_rad}")
+    ax = segments.start[:, 0] - origin_xy[0]  # (M,), apex at the origin
+    ay = segments.start[:, 1] - origin_xy[1]
+    dx, dy = segments.delta[:, 0], segments.delta[:, 1]
+    lo = np.zeros(len(segments))
+    hi = np.ones(len(segments))
+    # Inside the cone: left of its right edge (cross(right, p) >= 0), right of its left edge (cross(left, p) <= 0).
+    for edge_angle, sign in ((yaw_rad - half_angle_rad, 1.0), (yaw_rad + half_angle_rad, -1.0)):
+        ux, uy = math.cos(edge_angle), math.sin(edge_angle)
+        at_start = sign * (ux * ay - uy * ax)  # g(t) = at_start + t * rate must stay >= 0
+        rate = sign * (ux * dy - uy * dx)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            crossing = -at_start / rate
+        lo = np.where(rate > 0.0, np.maximum(lo, crossing), lo)
+        hi = np.where(rate < 0.0, np.minimum(hi, crossing), hi)
+        outside = (rate == 0.0) & (at_start < 0.0)  # parallel to the edge and on its far side
+        hi = np.where(outside, -1.0, hi)
+    inside = lo <= hi
+    if not inside.any():
+        return math.inf
+    length_sq = dx * dx + dy * dy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        closest = np.where(length_sq > 0.0, -(ax * dx + ay * dy) / length_sq, 0.0)
+    t = np.clip(closest, lo, hi)
+    distance = np.hypot(ax + t * dx, ay + t * dy)
+    return float(distance[inside].min())

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from services.simulator.raycast import SegmentSet, cast_rays, segment_blocked
+from services.simulator.raycast import SegmentSet, cast_rays, nearest_in_cone, segment_blocked
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import DOCK_GEOMETRY, Dock
 
@@ -36,14 +36,6 @@ def _check_non_negative(owner: object, *names: str) -> None:
 @functools.lru_cache(maxsize=8)
 def _beam_angles(num_rays: int) -> np.ndarray:
     angles = -math.pi + (2.0 * math.pi / num_rays) * np.arange(num_rays)
-    angles.flags.writeable = False
-    return angles
-
-
-@functools.lru_cache(maxsize=8)
-def _cone_angles(num_rays: int, field_of_view_rad: float) -> np.ndarray:
-    half = 0.5 * field_of_view_rad
-    angles = np.zeros(1) if num_rays == 1 else np.linspace(-half, half, num_rays)
     angles.flags.writeable = False
     return angles
 
@@ -106,7 +98,6 @@ class LidarScan:
 class UltrasonicParams:
     """A single ultrasonic ranger on ultrasonic_link, at the front centre, facing forward."""
 
-    num_rays: int = 7
     field_of_view_rad: float = 0.5
     range_min_m: float = 0.02
     range_max_m: float = 3.0
@@ -114,10 +105,10 @@ class UltrasonicParams:
     mount_x_m: float = 0.20
 
     def __post_init__(self) -> None:
-        if self.num_rays < 1:
-            raise ValueError(f"UltrasonicParams.num_rays must be >= 1, got {self.num_rays}")
         _check_positive(self, "field_of_view_rad", "range_min_m", "range_max_m")
         _check_non_negative(self, "noise_sigma_m")
+        if self.field_of_view_rad >= math.pi:
+            raise ValueError(f"UltrasonicParams.field_of_view_rad must be below pi, got {self.field_of_view_rad}")
         if self.range_max_m <= self.range_min_m:
             raise ValueError(
                 f"UltrasonicParams: range_max_m {self.range_max_m} must exceed range_min_m {self.range_min_m}"
@@ -127,10 +118,6 @@ class UltrasonicParams:
     def mount(self) -> Pose2D:
         """ultrasonic_link in base_link."""
         return Pose2D(self.mount_x_m, 0.0, 0.0)
-
-    def cone_angles_rad(self) -> np.ndarray:
-        """Ray directions spread evenly across the cone, in ultrasonic_link."""
-        return _cone_angles(self.num_rays, self.field_of_view_rad)
 
 
 @dataclass(frozen=True, slots=True)
@@ -203,7 +190,7 @@ def ultrasonic_range(
     ``range_min_m`` reads ``range_min_m``: the ranger reports "as close as I can tell", never "clear".
     """
     sensor = robot_pose.compose(params.mount)
-    nearest = float(cast_rays((sensor.x, sensor.y), sensor.yaw + params.cone_angles_rad(), segments).min())
+    nearest = nearest_in_cone((sensor.x, sensor.y), sensor.yaw, 0.5 * params.field_of_view_rad, segments)
     if nearest > params.range_max_m:
         return math.inf
     if params.noise_sigma_m > 0.0:

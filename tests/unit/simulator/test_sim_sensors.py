@@ -66,10 +66,10 @@ def test_lidar_out_of_range_reads_inf(open_world: Callable[..., World]) -> None:
 def test_sonar_reads_nearest_in_its_cone_and_inf_beyond_range(
     quiet: SimParams, open_world: Callable[..., World]
 ) -> None:
-    # A post 1 m ahead of the ranger and off to the left, caught only by the cone's edge ray (0.25 rad).
+    # A post 1 m ahead of the ranger and off to the left, its lower end inside the cone (edge at 0.25 rad).
     post = [[[1.2, 0.2], [1.2, 0.4]]]
     sim = SimWorld(open_world(walls=post), params=quiet)
-    assert sim.ultrasonic_range() == pytest.approx(1.0 / math.cos(0.25))
+    assert sim.ultrasonic_range() == pytest.approx(math.hypot(1.0, 0.2))
     sim_narrow = SimWorld(
         open_world(walls=post), params=SimParams(ultrasonic=UltrasonicParams(field_of_view_rad=0.3))
     )
