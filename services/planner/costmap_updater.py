@@ -75,6 +75,8 @@ class CostmapUpdater:
         self._pending_scan: LaserScan | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
+        #: Cells of suspected glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
+        self._suspected_xy: np.ndarray | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
 
@@ -85,7 +87,8 @@ class CostmapUpdater:
         self._base_map = occupancy
         if self.glass is None or self.glass.frame != occupancy.frame:
             self.glass = GlassMemory(
-                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m
+                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m,
+                echo_hold_s=self._params.glass_echo_hold_s,
             )
             kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
             if kept is not None:
@@ -105,6 +108,29 @@ class CostmapUpdater:
 
     def add_mounts(self, msg: TFMessage) -> None:
         self._mounts.update(msg)
+
+    def glass_speed_limit_mps(self, pose: Pose2D | None) -> float | None:
+        """The speed allowed near glass the sonar suspects but has not confirmed (Nav2's regulated pure
+        pursuit slows near obstacles the same way): the top speed times the distance to the nearest such
+        evidence over ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when
+        nothing suspected is that close. Only evidence ahead of the robot's rear axle counts: the limit
+        caps forward speed, and glass behind cannot be driven into going forward."""
+        p = self._params
+        if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
+            return None
+        if self._suspected_xy is None:
+            self._suspected_xy = self.glass.suspected_cells_xy()
+        cells = self._suspected_xy
+        if len(cells) == 0:
+            return None
+        dx, dy = cells[:, 0] - pose.x, cells[:, 1] - pose.y
+        ahead = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw) > 0.0
+        if not ahead.any():
+            return None
+        distance_m = float(np.min(np.hypot(dx[ahead], dy[ahead])))
+        if distance_m >= p.glass_slowdown_radius_m:
+            return None
+        return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)
 
     def grid(self) -> CostGrid:
         """The inflated cost grid the planner and the follower read (a snapshot, cached between updates)."""
@@ -144,10 +170,13 @@ class CostmapUpdater:
             costmap.clear_footprint(pose.as_tuple())
             if self.glass is not None:
                 self.glass.observe_footprint(pose.as_tuple())
+        if self.glass is not None:
+            self.glass.expire(now)
         self.apply_glass()
 
     def apply_glass(self) -> None:
         """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
+        self._suspected_xy = None
         if self.costmap is None or self._base_map is None or self.glass is None:
             return
         if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
@@ -226,5 +255,8 @@ class CostmapUpdater:
                 sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
             )
             return True
-        glass.add_reading(sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range)
+        glass.add_reading(
+            sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range,
+            stamp_s=reading.header.stamp.to_sec(),
+        )
         return True

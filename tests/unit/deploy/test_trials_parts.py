@@ -129,6 +129,7 @@ def test_a_campaign_combines_every_trial_not_the_medians() -> None:
     assert both.wall_s == pytest.approx(7.0) and both.world == "a, b"
     assert both.peak_rss_mb == {"planner_r0": 75.0, "simulator": 60.0}
     assert both.chaos["kills"] == 2 and both.chaos["median_recovery_s"] == pytest.approx(2.0)
+    assert both.chaos["p95_recovery_s"] == pytest.approx(3.0) and both.chaos["max_recovery_s"] == pytest.approx(3.0)
 
 
 def test_starts_in_a_closed_pocket_are_skipped_and_the_rest_keep_their_order() -> None:
