@@ -156,8 +156,9 @@ def _print_summary(console: Console, summary) -> None:  # type: ignore[no-untype
             "peak_rss_mb": summary.peak_rss_mb}
     console.print(_summary_table(data))
     if summary.chaos:
-        console.print(f"chaos: {summary.chaos['kills']} kill -9, {summary.chaos['recovered']} back healthy, "
-                      f"median {summary.chaos['median_recovery_s']} s, max {summary.chaos['max_recovery_s']} s")
+        chaos = summary.chaos
+        console.print(f"chaos: {chaos['kills']} kill -9, {chaos['recovered']} back healthy, recovery median "
+                      f"{chaos['median_recovery_s']} s, p95 {chaos['p95_recovery_s']} s, max {chaos['max_recovery_s']} s")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deploy.launcher import Launcher
+from deploy.trials.stats import percentile
 
 
 @dataclass
@@ -21,15 +22,24 @@ class ChaosReport:
     killed: list[str] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
-        times = sorted(self.recovery_s)
         return {
             "kills": self.kills,
             "recovered": self.recovered,
-            "median_recovery_s": round(statistics.median(times), 2) if times else math.nan,
-            "max_recovery_s": round(times[-1], 2) if times else math.nan,
+            **recovery_figures(self.recovery_s),
             "killed": self.killed,
             "recovery_s": [round(t, 3) for t in self.recovery_s],
         }
+
+
+def recovery_figures(times: list[float]) -> dict[str, float]:
+    """Median, p95 and max of the recovery times (NaN when nothing was killed: the report says why)."""
+    if not times:
+        return {"median_recovery_s": math.nan, "p95_recovery_s": math.nan, "max_recovery_s": math.nan}
+    return {
+        "median_recovery_s": round(statistics.median(times), 2),
+        "p95_recovery_s": round(percentile(times, 0.95), 2),
+        "max_recovery_s": round(max(times), 2),
+    }
 
 
 class ChaosMonkey:
@@ -92,8 +102,7 @@ def combine_chaos(reports: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "kills": sum(r["kills"] for r in reports),
         "recovered": sum(r["recovered"] for r in reports),
-        "median_recovery_s": round(statistics.median(recovery), 2) if recovery else math.nan,
-        "max_recovery_s": round(max(recovery), 2) if recovery else math.nan,
+        **recovery_figures(recovery),
         "killed": [name for r in reports for name in r.get("killed", [])],
         "recovery_s": recovery,
     }

@@ -7,14 +7,8 @@ import statistics
 
 from deploy.trials.chaos import combine_chaos
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
+from deploy.trials.stats import percentile
 from shared.world import World
-
-
-def _percentile(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    if not ordered:
-        return math.nan
-    return ordered[min(len(ordered) - 1, max(0, math.ceil(q * len(ordered)) - 1))]
 
 
 def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, world: World) -> TrialsSummary:
@@ -36,7 +30,7 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
         median_lower_bound_s=med([r.lower_bound_s for r in bounded]),
         median_time_ratio=med([r.dock_time_s / r.lower_bound_s for r in bounded]),
         median_lateral_error_m=med([r.lateral_error_m for r in ok]),
-        p95_lateral_error_m=_percentile([r.lateral_error_m for r in ok], 0.95),
+        p95_lateral_error_m=percentile([r.lateral_error_m for r in ok], 0.95),
         median_yaw_error_rad=med([r.yaw_error_rad for r in ok]),
         collisions=sum(r.collisions for r in results),
         wall_s=wall_s,
@@ -44,7 +38,7 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
         controller=controller,
         world=world_name,
         median_false_glass_cells=med(false_glass),
-        p95_false_glass_cells=_percentile(false_glass, 0.95),
+        p95_false_glass_cells=percentile(false_glass, 0.95),
         median_glass_coverage=med(coverage),
     )
 
