@@ -70,6 +70,8 @@ class DemoReport:
     collisions: int
     path_length_m: float
     lower_bound_s: float
+    #: Recoveries navigation began during the run (each marked on the picture).
+    recoveries: int = 0
     #: Why there is no lower bound ("" when there is one).
     lower_bound_s_reason: str = ""
     #: The planner's glass memory at the end, against the world's panes (see :mod:`deploy.glass_report`).
@@ -131,6 +133,7 @@ def build_report(record: RunRecord, options: DemoOptions, world: World, wall_s: 
         collisions=record.collisions,
         path_length_m=record.driven_length_m(since_s=record.trigger_s),
         lower_bound_s=bound_s,
+        recoveries=len(record.recovery_points),
         wall_s=wall_s,
         sim_s=record.sim_time_s,
         trigger_s=trigger,
@@ -222,6 +225,7 @@ def _plot(world: World, record: RunRecord, path: Path, log: Any, glass: GlassMar
         plans=record.plans,
         sonar_hits=record.sonar_hits,
         collisions=record.collision_points,
+        recoveries=record.recovery_points,
         glass_marks=glass.true_xy if glass is not None else (),
         false_glass_marks=glass.false_xy if glass is not None else (),
         battery=record.battery,

@@ -1,7 +1,8 @@
 """Watches one robot's docking run from the outside, on the bus, and measures it on ground truth.
 
 The observer never talks to a service's internals: it listens to the keys any tool could (battery,
-the simulator's ground truth, collisions, the plan, the ultrasonic range) and derives the run's numbers:
+the simulator's ground truth, collisions, the plan, the ultrasonic range, the navigation action's
+feedback, whose recovery count says where recoveries happened) and derives the run's numbers:
 when the battery crossed the low threshold (the trigger), when charging began, how far the robot
 drove, and the lateral and yaw error of its contacts at the moment charging began.
 
@@ -18,7 +19,9 @@ from typing import Any
 import zenoh
 
 from shared import topics
+from shared.action import action_key
 from shared.geometry import Pose2D
+from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, Path, PoseStamped, Range
 from shared.names import topic_key
 from shared.schema import Message, MessageError
@@ -50,6 +53,8 @@ class RunRecord:
     sim_time_s: float = 0.0
     #: Whether the latest battery message said CHARGING or FULL.
     last_charging: bool = False
+    #: Where the robot stood (x, y) each time navigation began a recovery, for the picture.
+    recovery_points: list[tuple[float, float]] = field(default_factory=list)
 
     @property
     def charging(self) -> bool:
@@ -98,7 +103,11 @@ class RunObserver:
             session.declare_subscriber(key(topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth)),
             session.declare_subscriber(key(topics.PLAN), self._decoder(Path, self._on_plan)),
             session.declare_subscriber(key(topics.ULTRASONIC), self._decoder(Range, self._on_range)),
+            session.declare_subscriber(key(action_key(topics.NAVIGATE_TO_POSE, "feedback")),
+                                       self._decoder(NAVIGATE_TO_POSE.feedback_message, self._on_nav_feedback)),
         ]
+        #: Per navigation goal (its id's bytes), the recovery count its feedback last gave.
+        self._recoveries_seen: dict[bytes, int] = {}
 
     @staticmethod
     def _decoder(msg_type: type[Message], handler: Any):  # type: ignore[no-untyped-def]
@@ -187,6 +196,21 @@ class RunObserver:
             if not hits or math.dist(hits[-1], hit) > 0.02:
                 hits.append(hit)
 
+    def _on_nav_feedback(self, msg: Any) -> None:
+        count = msg.feedback.number_of_recoveries
+        goal = bytes(msg.goal_id.uuid)
+        with self._lock:
+            seen = self._recoveries_seen.get(goal, 0)
+            if count <= seen:
+                return
+            if len(self._recoveries_seen) > 100:
+                self._recoveries_seen.clear()
+            self._recoveries_seen[goal] = count
+            if self._truth is None or not self._armed:
+                return
+            where = self._truth_at(msg.feedback.current_pose.header.stamp.to_sec())
+            self._record.recovery_points.extend([(where.x, where.y)] * (count - seen))
+
     def _truth_at(self, stamp_s: float) -> Pose2D:
         """The ground-truth pose at (or just before) ``stamp_s`` among the recent samples (lock held)."""
         driven = self._record.driven
@@ -206,7 +230,7 @@ class RunObserver:
             return RunRecord(
                 r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds), list(r.collision_points),
                 list(r.driven), [list(p) for p in r.plans], list(r.sonar_hits), list(r.battery), r.sim_time_s,
-                r.last_charging,
+                r.last_charging, list(r.recovery_points),
             )
 
     def settle(self, timeout_s: float = 2.0) -> None:

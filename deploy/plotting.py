@@ -35,6 +35,7 @@ PLAN_COLOR = "#d62728"
 SONAR_COLOR = "#e41a1c"
 GLASS_MEMORY_COLOR = "#1f5fa8"
 FALSE_GLASS_COLOR = "#ff00c8"
+RECOVERY_COLOR = "#8a2be2"
 BATTERY_COLOR = "#1f77b4"
 TRAJECTORY_CMAP = "viridis"
 
@@ -58,7 +59,7 @@ class RunPicture:
     planned: every plan is drawn faintly, the last (the one the robot finished on) bold; ``sonar_hits``:
     ``(M, 2)`` points on the sonar's axis at the measured range, placed with the pose the robot had when
     the reading was taken (the echo may come from anywhere in its cone); ``collisions``: ``(C, 2)``
-    where the robot touched something; ``glass_marks`` and ``false_glass_marks``: the planner's glass
+    where the robot touched something; ``recoveries``: ``(R, 2)`` where navigation began a recovery; ``glass_marks`` and ``false_glass_marks``: the planner's glass
     memory at the end, the marks near a real pane and those more than 10 cm from every pane;
     ``battery``: rows ``(t_s, percentage 0..1)``.
     """
@@ -70,6 +71,7 @@ class RunPicture:
     trajectory_times_s: np.ndarray | None = None
     sonar_hits: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     collisions: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    recoveries: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     glass_marks: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     false_glass_marks: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     battery: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
@@ -126,6 +128,9 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
     if len(picture.collisions):
         ax.scatter(picture.collisions[:, 0], picture.collisions[:, 1], s=90, marker="X", color="black",
                    label="collision", zorder=10)
+    if len(picture.recoveries):
+        ax.scatter(picture.recoveries[:, 0], picture.recoveries[:, 1], s=110, marker="o", facecolors="none",
+                   edgecolors=RECOVERY_COLOR, linewidths=2, label="recovery", zorder=10)
     hits = picture.sonar_hits
     if len(hits):
         ax.scatter(hits[:, 0], hits[:, 1], s=4, color=SONAR_COLOR, alpha=0.5, label="sonar hits", zorder=6)
@@ -204,6 +209,7 @@ def plot_run(
     sonar_hits: Sequence[Sequence[float]] | np.ndarray = (),
     battery: Sequence[Sequence[float]] | np.ndarray = (),
     collisions: Sequence[Sequence[float]] | np.ndarray = (),
+    recoveries: Sequence[Sequence[float]] | np.ndarray = (),
     glass_marks: Sequence[Sequence[float]] | np.ndarray = (),
     false_glass_marks: Sequence[Sequence[float]] | np.ndarray = (),
     title: str = "",
@@ -212,7 +218,7 @@ def plot_run(
 ) -> Path:
     """Draw a run from plain lists: ``driven`` ``(x, y)`` points (``driven_times_s`` to colour them by time),
     ``plans`` as lists of ``(x, y)`` in planning order (the last bold), ``sonar_hits``, ``collisions``,
-    ``glass_marks`` and ``false_glass_marks`` ``(x, y)``, ``battery`` ``(t_s, percentage 0..1)``.
+    ``recoveries``, ``glass_marks`` and ``false_glass_marks`` ``(x, y)``, ``battery`` ``(t_s, percentage 0..1)``.
     Returns the PNG's path.
     """
     picture = RunPicture(
@@ -223,6 +229,7 @@ def plot_run(
         trajectory_times_s=None if driven_times_s is None else np.asarray(driven_times_s, dtype=np.float64),
         sonar_hits=_points(sonar_hits, 2),
         collisions=_points(collisions, 2),
+        recoveries=_points(recoveries, 2),
         glass_marks=_points(glass_marks, 2),
         false_glass_marks=_points(false_glass_marks, 2),
         battery=_points(battery, 2),

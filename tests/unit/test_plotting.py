@@ -12,6 +12,7 @@ from deploy.plotting import (
     DOCK_COLOR,
     GLASS_COLOR,
     PLAN_COLOR,
+    RECOVERY_COLOR,
     STAGING_COLOR,
     RunPicture,
     plot_picture,
@@ -52,6 +53,15 @@ def test_the_picture_is_a_png_with_the_room_in_its_colours(tmp_path: Path) -> No
         assert _pixels_near(image, color) > 20, f"no {name} colour {color} in the picture"
     distinct = np.unique((image[:, :, :3] * 31).astype(np.int32).reshape(-1, 3), axis=0)
     assert len(distinct) > 50  # the trajectory's colour ramp, the battery fill, the room
+
+
+def test_recoveries_are_marked_where_they_happened(tmp_path: Path) -> None:
+    world = load_world(GLASS_ROOM)
+    plain = mpimg.imread(plot_run(world, tmp_path / "plain.png", driven=[(-1.0, 4.0), (0.0, 3.0)], dpi=80))
+    marked = mpimg.imread(plot_run(world, tmp_path / "marked.png", driven=[(-1.0, 4.0), (0.0, 3.0)],
+                                   recoveries=[(0.0, 3.0), (1.0, 4.0)], dpi=80))
+    assert _pixels_near(plain, RECOVERY_COLOR) == 0
+    assert _pixels_near(marked, RECOVERY_COLOR) > 40
 
 
 def test_an_empty_run_still_draws(tmp_path: Path) -> None:
