@@ -397,13 +397,15 @@ class DockContact(Message):
 
 @message("zendock_msgs/msg/CollisionEvent")
 class CollisionEvent(Message):
-    """One collision: the robot began touching something it should not. ``count`` is the total so far."""
+    """One collision: the robot began touching something it should not. ``count`` is the total so far;
+    ``other_robot`` names the robot it touched when ``kind`` is "robot" (robots sharing a room)."""
 
     header: Header = field(default_factory=Header)
-    kind: str = ""  # wall | glass | box | dock
+    kind: str = ""  # wall | glass | box | dock | robot
     count: UInt32 = 0
     x: float = 0.0
     y: float = 0.0
+    other_robot: str = ""
 
 
 @message("zendock_msgs/msg/DockDetection")

@@ -9,7 +9,12 @@ The schema (``deploy/worlds/*.yaml``)::
     boxes: [{pose: [x, y, yaw], size: [w, d]}, ...]
     docks: [{id: home, pose: [x, y, yaw], type: charger}, ...]
     robot: {start: [x, y, yaw]}
+    robots: [{name: r1, start: [x, y, yaw]}, ...]   # a fleet in one room (instead of robot)
     aruco_dictionary: DICT_4X4_50             # the docks' marker family (optional)
+
+A world that lists ``robots`` puts them all in one room: the simulator steps them in one physical space,
+where they collide with each other and see each other, each under its own namespace (its ``name``).
+Without ``robot``, the first of them is also ``robot`` (what single-robot tools read).
 
 A dock may name its ArUco marker: ``marker_id`` (default: the dock's index in ``docks``) and
 ``marker_size_m`` (the printed square's side, default 0.12 m); see :func:`dock_markers`.
@@ -100,7 +105,13 @@ class Dock(_Lenient):
         return Pose2D.from_seq(self.pose)
 
 
+#: A fleet robot's name is its namespace: a letter, then letters, digits or underscores.
+ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
+
+
 class RobotSpec(_Lenient):
+    #: The robot's namespace (required in ``robots``; the single ``robot`` has none).
+    name: str = ""
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @field_validator("start")
@@ -143,7 +154,32 @@ class World(_Lenient):
     boxes: list[Box] = Field(default_factory=list)
     docks: list[Dock] = Field(default_factory=list)
     robot: RobotSpec = Field(default_factory=RobotSpec)
+    robots: list[RobotSpec] = Field(default_factory=list)
     aruco_dictionary: str = "DICT_4X4_50"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _first_of_fleet_is_robot(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "robot" not in data and isinstance(data.get("robots"), list) and data["robots"]:
+            first = data["robots"][0]
+            if isinstance(first, dict) and "start" in first:
+                return {**data, "robot": {"start": first["start"]}}
+        return data
+
+    @model_validator(mode="after")
+    def _fleet_names_and_places(self) -> World:
+        seen: set[str] = set()
+        for i, robot in enumerate(self.robots):
+            if not ROBOT_NAME.fullmatch(robot.name):
+                raise ValueError(f"robots.{i}.name must be a namespace (a letter, then letters, digits or _), "
+                                 f"got {robot.name!r}")
+            if robot.name in seen:
+                raise ValueError(f"robot name {robot.name!r} appears twice in robots")
+            seen.add(robot.name)
+            if not self.contains(robot.start[0], robot.start[1]):
+                raise ValueError(f"robots.{i} ({robot.name}) start {list(robot.start[:2])} is outside bounds "
+                                 f"{list(self.bounds)}")
+        return self
 
     @field_validator("aruco_dictionary")
     @classmethod
@@ -218,6 +254,8 @@ class World(_Lenient):
         for i, dock in enumerate(self.docks):
             found += [f"docks.{i}.{k}" for k in (dock.model_extra or {})]
         found += [f"robot.{k}" for k in (self.robot.model_extra or {})]
+        for i, robot in enumerate(self.robots):
+            found += [f"robots.{i}.{k}" for k in (robot.model_extra or {})]
         return found
 
 

@@ -6,7 +6,9 @@ published so the other services follow it.
 
 One process can serve several robots (``robots: [r1, r2]``), each in its own copy of the room under its
 own namespace, so trials can run robots side by side without a simulator each. With no ``robots`` the
-one robot lives in the node's namespace.
+one robot lives in the node's namespace. A world that lists its own ``robots`` (a fleet) puts them all
+in one room instead: one physical space, robots colliding with and seeing each other, each under its
+name as namespace (``robots`` then picks some of them; by default all).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from services.simulator.camera import CameraParams, CameraRenderer, Motion, buil
 from services.simulator.camera_frames import camera_info, camera_mount_transforms
 from services.simulator.dock_contact import DockContactParams
 from services.simulator.pacing import Driver, DriverPacer, PacingParams
-from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld
+from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld, step_together
 from services.simulator.robot_model import DiffDriveParams
 from services.simulator.sensors import FiducialCameraParams, LidarParams, UltrasonicParams
 from shared import topics
@@ -255,14 +257,22 @@ class SimulatorService:
         self.params = params
         self._log = node.log
         self.world = load_world(params.world)
-        namespaces = params.robots or [""]
         self.robots: dict[str, _Robot] = {}
         camera_params = params.camera_params()
         scene = build_scene(self.world) if params.camera_enabled else None
-        for i, ns in enumerate(namespaces):
+        starts = self._starts(params)
+        #: Whether the robots share one room (a fleet world) and so step together.
+        self.shared_room = bool(self.world.robots)
+        room: SimWorld | None = None
+        for i, (ns, start) in enumerate(starts.items()):
             sim_params = dataclasses.replace(params.sim_params(), seed=params.seed + i)
             try:
-                sim = SimWorld(self.world, params.drive_params(), sim_params)
+                if not self.shared_room:
+                    sim = SimWorld(self.world, params.drive_params(), sim_params)
+                elif room is None:
+                    sim = room = SimWorld(self.world, params.drive_params(), sim_params, start=start, name=ns)
+                else:
+                    sim = room.join(ns, start, sim_params)
             except PoseInCollisionError as exc:
                 raise ConfigError(f"{params.world}: {exc}") from None
             robot = _Robot(ns, sim, f"{ns}/" if ns else "")
@@ -300,6 +310,17 @@ class SimulatorService:
         self._thread.start()
         rtf = params.rtf
         self._log.info("world %s, %d robot(s), rtf %s", self.world.name, len(self.robots), rtf)
+
+    def _starts(self, params: Params) -> dict[str, Pose2D | None]:
+        """Each robot's namespace and start: the world's fleet (those ``robots`` names, or all), else
+        ``robots`` (or the node's own namespace) each at the world's ``robot.start`` in a room of its own."""
+        fleet = {r.name: Pose2D.from_seq(r.start) for r in self.world.robots}
+        if not fleet:
+            return dict.fromkeys(params.robots or [""])
+        unknown = [name for name in params.robots if name not in fleet]
+        if unknown:
+            raise ConfigError(f"robots {unknown} are not in {params.world}'s robots {sorted(fleet)}")
+        return {name: fleet[name] for name in (params.robots or list(fleet))}
 
     # --- endpoints -----------------------------------------------------------------------------------
 
@@ -441,16 +462,25 @@ class SimulatorService:
         self.steps_run += 1
         self.time_s = self.steps_run * self.dt_s
         now = self.time_s
-        for robot in self.robots.values():
+        robots = list(self.robots.values())
+        for robot in robots:
             if not robot.watchdog_tripped and now - robot.last_cmd_s > self.params.cmd_vel_timeout_s:
                 robot.watchdog_tripped = True
                 robot.cmd_v = robot.cmd_w = 0.0
-            robot.sim.step(robot.cmd_v, robot.cmd_w)
+        if self.shared_room:
+            step_together([r.sim for r in robots], [(r.cmd_v, r.cmd_w) for r in robots])
+        else:
+            for robot in robots:
+                robot.sim.step(robot.cmd_v, robot.cmd_w)
+        for robot in robots:
             for event in robot.sim.drain_collisions():
                 robot.collisions_total += 1
                 robot.pubs["collisions"].publish(CollisionEvent(
-                    Header.at(event.time_s, topics.MAP_FRAME), event.kind, robot.collisions_total, event.x_m, event.y_m))
-                self._log.warning("collision with %s at (%.2f, %.2f), %.2f m/s", event.kind, event.x_m, event.y_m, event.speed_mps)
+                    Header.at(event.time_s, topics.MAP_FRAME), event.kind, robot.collisions_total, event.x_m, event.y_m,
+                    other_robot=event.other_robot or ""))
+                what = f"robot {event.other_robot}" if event.other_robot else event.kind
+                self._log.warning("%scollision with %s at (%.2f, %.2f), %.2f m/s", robot.prefix, what, event.x_m,
+                                  event.y_m, event.speed_mps)
         self._publish_due(now)
 
     def _publish_due(self, now: float) -> None:

@@ -1,5 +1,9 @@
 """The simulated room: a pymunk space with the world's walls, glass, boxes and docks, and the robot in it.
 
+Several robots can share one room (a fleet, :meth:`SimWorld.join`): one space, so they collide with
+each other, and each one's lidar, sonar, camera detections and infrared see the others' bodies. They
+are stepped together (:func:`step_together`); a robot alone in its room steps itself.
+
 The robot is a dynamic box whose velocity is set every step from the limited diff-drive twist (forward
 along its heading, no sideways slip), then pymunk's contact solver stops it at whatever it drives into.
 Every obstacle is solid, glass included. The space steps at a fixed ``dt_s``; nothing here knows about
@@ -27,7 +31,8 @@ from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, Dock, World
 
 ROBOT_COLLISION_TYPE = 1
 OBSTACLE_COLLISION_TYPE = 2
-COLLISION_KINDS = ("wall", "glass", "box", "dock")
+#: What a robot can run into; "robot" is another robot in the same room (the event names it).
+COLLISION_KINDS = ("wall", "glass", "box", "dock", "robot")
 
 
 class PoseInCollisionError(ValueError):
@@ -89,6 +94,8 @@ class CollisionEvent:
     y_m: float
     speed_mps: float
     dock_id: str | None = None
+    #: For kind "robot": the other robot's name.
+    other_robot: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,8 +114,20 @@ class SimWorld:
     Not thread-safe: step it and read its sensors from one thread.
     """
 
-    def __init__(self, world: World, drive: DiffDriveParams | None = None, params: SimParams | None = None):
+    def __init__(
+        self,
+        world: World,
+        drive: DiffDriveParams | None = None,
+        params: SimParams | None = None,
+        *,
+        start: Pose2D | None = None,
+        name: str = "",
+        room: SimWorld | None = None,
+    ):
+        """A robot at ``start`` (default: the world's ``robot.start``) in a room of its own, or in
+        ``room``'s (another robot's) as ``name``: use :meth:`join` for that."""
         self.world = world
+        self.name = name
         self.params = params or SimParams()
         self.drive = DiffDrive(drive)
         # Separate streams: how often sensors are read does not change the odometry's noise.
@@ -121,26 +140,52 @@ class SimWorld:
         self.twist = Twist2D()  # measured body twist of the last step
         self._events: list[CollisionEvent] = []
         self._last_separation_s: dict[pymunk.Shape, float] = {}
-        self._obstacles: dict[pymunk.Shape, _Obstacle] = {}
-        #: (label, outline) of every obstacle, for placement checks: segments as 2 points, boxes as 4.
-        self._outlines: list[tuple[str, np.ndarray]] = []
+        if room is None:
+            self._obstacles: dict[pymunk.Shape, _Obstacle] = {}
+            #: (label, outline) of every obstacle, for placement checks: segments as 2 points, boxes as 4.
+            self._outlines: list[tuple[str, np.ndarray]] = []
+            self.opaque = SegmentSet(world.opaque_segments())
+            self.glass = SegmentSet(world.glass)
+            self.sonar_visible = SegmentSet.concat(self.opaque, self.glass)
+            self.space = pymunk.Space()
+            self.space.gravity = (0.0, 0.0)
+            # Pymunk's defaults suit pixels; the room is in metres.
+            self.space.collision_slop = 0.0005
+            self.space.iterations = 10
+            #: Every robot in this room, and whose each robot shape is (a teleport makes a new shape).
+            self.members: list[SimWorld] = []
+            self._by_shape: dict[pymunk.Shape, SimWorld] = {}
+            self._add_obstacles()
+            self.space.on_collision(
+                ROBOT_COLLISION_TYPE, OBSTACLE_COLLISION_TYPE, begin=self._room_begin, separate=self._room_separate
+            )
+            self.space.on_collision(
+                ROBOT_COLLISION_TYPE, ROBOT_COLLISION_TYPE, begin=self._room_robots_begin,
+                separate=self._room_robots_separate,
+            )
+        else:
+            if room.world is not world:
+                raise ValueError("robots share a room only in the same world")
+            self._obstacles, self._outlines = room._obstacles, room._outlines
+            self.opaque, self.glass, self.sonar_visible = room.opaque, room.glass, room.sonar_visible
+            self.space, self.members, self._by_shape = room.space, room.members, room._by_shape
+            if any(m.name == name for m in self.members):
+                raise ValueError(f"a robot named {name!r} is already in this room")
+        pose = start if start is not None else Pose2D.from_seq(world.robot.start)
+        self._check_placement(pose, f"{name} start" if name else "robot.start")
+        self.body, self.shape = self._new_robot(pose)
+        self.members.append(self)
 
-        self.opaque = SegmentSet(world.opaque_segments())
-        self.glass = SegmentSet(world.glass)
-        self.sonar_visible = SegmentSet.concat(self.opaque, self.glass)
+    def join(
+        self, name: str, start: Pose2D, params: SimParams | None = None, drive: DiffDriveParams | None = None
+    ) -> SimWorld:
+        """Another robot, ``name``, in this robot's room at ``start``: the same space and obstacles."""
+        return SimWorld(self.world, drive or self.drive.params, params or self.params, start=start, name=name,
+                        room=self)
 
-        self.space = pymunk.Space()
-        self.space.gravity = (0.0, 0.0)
-        # Pymunk's defaults suit pixels; the room is in metres.
-        self.space.collision_slop = 0.0005
-        self.space.iterations = 10
-        self._add_obstacles()
-        start = Pose2D.from_seq(world.robot.start)
-        self._check_placement(start, "robot.start")
-        self.body, self.shape = self._new_robot(start)
-        self.space.on_collision(
-            ROBOT_COLLISION_TYPE, OBSTACLE_COLLISION_TYPE, begin=self._on_begin, separate=self._on_separate
-        )
+    @property
+    def shares_room(self) -> bool:
+        return len(self.members) > 1
 
     # ----------------------------------------------------------------------------------------- building
     def _add_static(
@@ -179,6 +224,7 @@ class SimWorld:
         shape.friction = self.params.friction
         shape.elasticity = 0.0
         self.space.add(body, shape)
+        self._by_shape[shape] = self
         return body, shape
 
     def _drive_velocity(self, body: pymunk.Body, gravity: object, damping: float, dt: float) -> None:
@@ -216,10 +262,34 @@ class SimWorld:
         return map_to_odom(self.pose, self.odometry.pose, self.params.localisation_error)
 
     def overlapping_obstacles(self, pose: Pose2D) -> list[str]:
-        """What the robot's footprint would overlap at ``pose`` by more than ``placement_tolerance_m``."""
+        """What the robot's footprint would overlap at ``pose`` by more than ``placement_tolerance_m``
+        (obstacles, and the other robots in the room)."""
         p, inset = self.drive.params, 2.0 * self.params.placement_tolerance_m
         footprint = footprint_corners(pose, p.footprint_length_m - inset, p.footprint_width_m - inset)
-        return [label for label, outline in self._outlines if not separated(footprint, outline)]
+        found = [label for label, outline in self._outlines if not separated(footprint, outline)]
+        for other in self._others():
+            if not separated(footprint, other.footprint()):
+                found.append(f"robot {other.name!r}")
+        return found
+
+    def footprint(self) -> np.ndarray:
+        """The robot's footprint where it stands, ``(4, 2)`` counter-clockwise."""
+        p = self.drive.params
+        return footprint_corners(self.pose, p.footprint_length_m, p.footprint_width_m)
+
+    def _others(self) -> list[SimWorld]:
+        return [m for m in self.members if m is not self]
+
+    def _with_others(self, segments: SegmentSet) -> SegmentSet:
+        """``segments`` plus the edges of every other robot in the room (what sensors see of them)."""
+        others = self._others()
+        if not others:
+            return segments
+        edges = []
+        for other in others:
+            c = other.footprint()
+            edges += [(tuple(c[i]), tuple(c[(i + 1) % 4])) for i in range(4)]
+        return SegmentSet.concat(segments, SegmentSet(edges))
 
     def _check_placement(self, pose: Pose2D, what: str) -> None:
         if not all(math.isfinite(v) for v in pose.as_tuple()):
@@ -244,6 +314,7 @@ class SimWorld:
         self._check_placement(pose, "pose")
         # A fresh body carries no velocity or solver state (penetration bias) over from the old place.
         self.space.remove(self.body, self.shape)
+        del self._by_shape[self.shape]
         self.body, self.shape = self._new_robot(pose)
         self.drive.stop()
         self.odometry.reset()
@@ -256,11 +327,21 @@ class SimWorld:
         The motion of a step follows the twist set in the previous step (pymunk integrates positions
         before velocities), so the base answers a command one step (``dt_s``) later.
         """
-        dt = self.params.dt_s
-        self.drive.step(Twist2D(cmd_v, cmd_w), dt)
+        if self.shares_room:
+            raise RuntimeError("robots that share a room step together: use step_together")
+        before = self._drive_step(cmd_v, cmd_w)
+        self.space.step(self.params.dt_s)
+        self._after_step(before)
+
+    def _drive_step(self, cmd_v: float, cmd_w: float) -> tuple[float, float, float]:
+        """The base answers the command; returns where the body stood before the space steps."""
+        self.drive.step(Twist2D(cmd_v, cmd_w), self.params.dt_s)
         x0, y0 = self.body.position
-        yaw0 = float(self.body.angle)
-        self.space.step(dt)
+        return float(x0), float(y0), float(self.body.angle)
+
+    def _after_step(self, before: tuple[float, float, float]) -> None:
+        dt = self.params.dt_s
+        x0, y0, yaw0 = before
         self.steps += 1
         self.time_s = self.steps * dt
         # What the wheels rolled: the displacement along the heading, not any sideways push by a contact.
@@ -272,7 +353,49 @@ class SimWorld:
         self.odometry.update(self.twist, dt)
 
     # ----------------------------------------------------------------------------------------- collisions
-    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+    def _room_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        """A robot touched an obstacle: the robot whose shape it is records it (one handler per room)."""
+        robot = self._robot_of(arbiter)
+        if robot is not None:
+            robot._on_begin(arbiter)
+
+    def _room_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        robot = self._robot_of(arbiter)
+        if robot is not None:
+            robot._on_separate(arbiter)
+
+    def _robot_of(self, arbiter: pymunk.Arbiter) -> SimWorld | None:
+        first, second = arbiter.shapes
+        return self._by_shape.get(first) or self._by_shape.get(second)
+
+    def _room_robots_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        """Two robots touched: each records a collision naming the other, at the same point."""
+        first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
+        if first is None or second is None:
+            return
+        points = arbiter.contact_point_set.points
+        if points:
+            cx = sum(0.5 * (p.point_a.x + p.point_b.x) for p in points) / len(points)
+            cy = sum(0.5 * (p.point_a.y + p.point_b.y) for p in points) / len(points)
+        else:
+            (ax, ay), (bx, by) = first.body.position, second.body.position
+            cx, cy = 0.5 * (ax + bx), 0.5 * (ay + by)
+        for robot, other in ((first, second), (second, first)):
+            last = robot._last_separation_s.get(other.shape)
+            if last is not None and robot.time_s - last < robot.params.collision_debounce_s:
+                continue
+            speed = float(abs(robot.body.velocity_at_world_point((cx, cy)) - other.body.velocity_at_world_point((cx, cy))))
+            robot.collision_counts["robot"] += 1
+            robot._events.append(CollisionEvent(kind="robot", time_s=robot.time_s, x_m=float(cx), y_m=float(cy),
+                                                speed_mps=speed, other_robot=other.name))
+
+    def _room_robots_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
+        if first is not None and second is not None:
+            first._last_separation_s[second.shape] = first.time_s
+            second._last_separation_s[first.shape] = second.time_s
+
+    def _on_begin(self, arbiter: pymunk.Arbiter) -> None:
         robot_shape, other = arbiter.shapes
         if robot_shape is not self.shape:
             robot_shape, other = other, robot_shape
@@ -303,7 +426,7 @@ class SimWorld:
             )
         )
 
-    def _on_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+    def _on_separate(self, arbiter: pymunk.Arbiter) -> None:
         for shape in arbiter.shapes:
             if shape in self._obstacles:
                 self._last_separation_s[shape] = self.time_s
@@ -330,22 +453,23 @@ class SimWorld:
     def lidar_scan(self, pose: Pose2D | None = None) -> sensors.LidarScan:
         """A lidar scan from ``pose`` (default: the robot's true pose); sees opaque surfaces, not glass."""
         at = self.pose if pose is None else pose
-        return sensors.lidar_scan(at, self.opaque, self.params.lidar, self.rng)
+        return sensors.lidar_scan(at, self._with_others(self.opaque), self.params.lidar, self.rng)
 
     def ultrasonic_range(self, pose: Pose2D | None = None) -> float:
         """The front ultrasonic reading from ``pose`` (default: true pose); sees opaque surfaces and glass."""
         at = self.pose if pose is None else pose
-        return sensors.ultrasonic_range(at, self.sonar_visible, self.params.ultrasonic, self.rng)
+        return sensors.ultrasonic_range(at, self._with_others(self.sonar_visible), self.params.ultrasonic, self.rng)
 
     def dock_infrared(self, pose: Pose2D | None = None) -> tuple[int, int, int]:
         """The right, central and left infrared receivers' readings from ``pose`` (default: true pose)."""
         at = self.pose if pose is None else pose
-        return infrared.receiver_readings(at, self.world.docks, self.opaque, self.params.infrared, self.rng)
+        return infrared.receiver_readings(at, self.world.docks, self._with_others(self.opaque), self.params.infrared,
+                                          self.rng)
 
     def detect_docks(self, pose: Pose2D | None = None) -> list[sensors.DockDetection]:
         """Every dock the camera reads from ``pose`` (default: true pose), nearest first; glass hides none."""
         at = self.pose if pose is None else pose
-        return sensors.detect_docks(at, self.world.docks, self.opaque, self.params.camera, self.rng)
+        return sensors.detect_docks(at, self.world.docks, self._with_others(self.opaque), self.params.camera, self.rng)
 
     def detect_dock(
         self, pose: Pose2D | None = None, dock_id: str | None = None
@@ -362,3 +486,18 @@ class SimWorld:
     def dock_contact(self) -> DockContact:
         """Ground-truth contact state against the nearest dock."""
         return dock_contact(self.pose, self.world.docks, self.params.contact)
+
+
+def step_together(robots: Sequence[SimWorld], commands: Sequence[tuple[float, float]]) -> None:
+    """One ``dt_s`` for every robot in one room, each commanded ``(v, w)``: one step of their shared space."""
+    if not robots:
+        return
+    if len(commands) != len(robots):
+        raise ValueError(f"{len(robots)} robots but {len(commands)} commands")
+    space = robots[0].space
+    if any(r.space is not space for r in robots) or len(robots) != len(robots[0].members):
+        raise ValueError("step_together steps every robot of one room, and only them")
+    before = [r._drive_step(v, w) for r, (v, w) in zip(robots, commands)]
+    space.step(robots[0].params.dt_s)
+    for robot, start in zip(robots, before):
+        robot._after_step(start)

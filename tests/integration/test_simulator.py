@@ -12,6 +12,7 @@ import zenoh
 from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
 from shared.messages import (
     Clock,
+    CollisionEvent,
     DockContact,
     LaserScan,
     Odometry,
@@ -114,3 +115,35 @@ def test_bad_world_exits_2_with_one_clear_line(tmp_path) -> None:  # type: ignor
     )
     assert result.returncode == 2
     assert "bounds" in result.stderr and "xmax > xmin" in result.stderr
+
+
+def test_a_fleet_world_puts_its_robots_in_one_room(spawn, bus: zenoh.Session, namespace: str, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """Two robots of a world's ``robots`` list, each under its own namespace: each one's lidar sees the
+    other, and when one drives into the other both report a collision naming the other."""
+    world = tmp_path / "pair.yaml"
+    world.write_text(
+        "name: pair\nbounds: [-3.0, -2.0, 3.0, 2.0]\n"
+        "robots:\n  - {name: r1, start: [-1.0, 0.0, 0.0]}\n  - {name: r2, start: [1.0, 0.0, 3.14159265]}\n"
+    )
+    collisions = {r: KeyRecorder(bus, f"{namespace}/{r}/collisions", CollisionEvent) for r in ("r1", "r2")}
+    scan = KeyRecorder(bus, f"{namespace}/r1/scan", LaserScan)
+    clock = KeyRecorder(bus, f"{namespace}/r1/clock", Clock)
+    spawn("simulator", "--world", str(world), "-p", "rtf=4")
+    clock.wait_for(timeout_s=20.0)
+    ahead = scan.wait_for(timeout_s=10.0).ranges[180]
+    assert abs(ahead - (2.0 - 0.2 - 0.1)) < 0.05, f"r1's lidar reads {ahead} m ahead, where r2's front stands"
+    cmd = bus.declare_publisher(f"{namespace}/r1/cmd_vel")
+    forward = Twist.planar(0.3, 0.0).encode()
+
+    def hit() -> bool:
+        cmd.put(forward)
+        return bool(collisions["r1"].messages)
+
+    wait_until(hit, 30.0, "r1 never reported running into r2")
+    mine = collisions["r1"].latest()
+    theirs = collisions["r2"].wait_for(timeout_s=10.0)
+    assert (mine.kind, mine.other_robot) == ("robot", "r2"), mine
+    assert (theirs.kind, theirs.other_robot) == ("robot", "r1"), theirs
+    r2 = call_service(bus, f"{namespace}/simulator/state", SIM_STATE, SimStateRequest(robot="r2"), timeout_s=5.0)
+    assert r2.collisions == 1 and r2.pose.position.x > 0.5
+    cmd.undeclare()

@@ -1,0 +1,78 @@
+"""Several robots in one room: one space, so they collide with and see each other."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld, step_together
+from shared.geometry import Pose2D
+from shared.world import World
+
+
+def _drive_together(robots: list[SimWorld], commands: list[tuple[float, float]], seconds: float) -> None:
+    for _ in range(round(seconds / robots[0].params.dt_s)):
+        step_together(robots, commands)
+
+
+def test_two_robots_head_on_collide_and_each_names_the_other(
+    quiet: SimParams, open_world: Callable[..., World]
+) -> None:
+    world = open_world()
+    r1 = SimWorld(world, params=quiet, start=Pose2D(-1.0, 0.0, 0.0), name="r1")
+    r2 = r1.join("r2", Pose2D(1.0, 0.0, math.pi))
+    assert r1.members == [r1, r2] and r2.space is r1.space
+    _drive_together([r1, r2], [(0.4, 0.0), (0.4, 0.0)], 4.0)
+    gap = r2.pose.x - r1.pose.x
+    assert gap == pytest.approx(0.40, abs=0.01), "they stop against each other, front to front"
+    e1, e2 = r1.drain_collisions(), r2.drain_collisions()
+    assert [(e.kind, e.other_robot) for e in e1] == [("robot", "r2")]
+    assert [(e.kind, e.other_robot) for e in e2] == [("robot", "r1")]
+    assert e1[0].x_m == pytest.approx(0.5 * (r1.pose.x + r2.pose.x), abs=0.02)
+    assert e1[0].speed_mps == pytest.approx(0.8, abs=0.15), "the closing speed"
+    assert r1.collision_counts["robot"] == 1 and r1.collision_counts["wall"] == 0
+
+
+def test_each_robots_sensors_see_the_others_body(quiet: SimParams, open_world: Callable[..., World]) -> None:
+    world = open_world()
+    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    alone = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0))
+    r1.join("r2", Pose2D(2.0, 0.0, math.pi / 2))  # broadside, 2 m ahead: its near side at x = 1.85
+    assert r1.ultrasonic_range() == pytest.approx(1.85 - 0.20, abs=1e-6)
+    forward = r1.params.lidar.num_rays // 2
+    assert r1.lidar_scan().ranges_m[forward] == pytest.approx(1.85 - 0.10, abs=1e-6)
+    assert math.isinf(alone.ultrasonic_range()), "alone, nothing within its 3 m range"
+    assert np.isfinite(r1.lidar_scan().ranges_m).sum() >= np.isfinite(alone.lidar_scan().ranges_m).sum()
+
+
+def test_robots_cannot_be_put_into_each_other(quiet: SimParams, open_world: Callable[..., World]) -> None:
+    world = open_world()
+    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    with pytest.raises(PoseInCollisionError, match="robot 'r1'"):
+        r1.join("r2", Pose2D(0.3, 0.0, 0.0))
+    r2 = r1.join("r2", Pose2D(2.0, 0.0, 0.0))
+    with pytest.raises(PoseInCollisionError, match="robot 'r2'"):
+        r1.teleport(Pose2D(1.8, 0.1, 0.0))
+    r1.teleport(Pose2D(-2.0, 0.0, 0.0))  # a fresh body: still in the room, still colliding with r2
+    _drive_together([r1, r2], [(0.5, 0.0), (0.0, 0.0)], 10.0)
+    assert [e.other_robot for e in r1.drain_collisions()] == ["r2"]
+    with pytest.raises(ValueError, match="already in this room"):
+        r1.join("r2", Pose2D(-4.0, 3.0, 0.0))
+
+
+def test_a_shared_room_steps_only_together(quiet: SimParams, open_world: Callable[..., World]) -> None:
+    world = open_world()
+    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r1.step(0.1, 0.0)  # alone, it steps itself
+    r2 = r1.join("r2", Pose2D(2.0, 2.0, 0.0))
+    with pytest.raises(RuntimeError, match="step_together"):
+        r1.step(0.1, 0.0)
+    with pytest.raises(ValueError, match="every robot of one room"):
+        step_together([r1], [(0.0, 0.0)])
+    with pytest.raises(ValueError, match="commands"):
+        step_together([r1, r2], [(0.0, 0.0)])
+    step_together([r1, r2], [(0.0, 0.0), (0.2, 0.0)])
+    assert r2.time_s == pytest.approx(r2.params.dt_s) and r1.steps == 2
