@@ -30,6 +30,12 @@ SIM_TELEPORT = "simulator/teleport"
 SIM_STATE = "simulator/state"
 SIM_SET_LOCALISATION = "simulator/set_localisation"
 BATTERY_SET_STATE = "battery/set_state"
+#: The fleet service's (in the fleet's namespace, not a robot's): ask for a dock, give it back.
+FLEET_RESERVE_DOCK = "fleet/reserve_dock"
+FLEET_RELEASE_DOCK = "fleet/release_dock"
+#: ... and what it publishes: every dock's occupancy, the queue for docks.
+FLEET_DOCKS = "fleet/docks"
+FLEET_QUEUE = "fleet/queue"
 
 # Actions (shared.action)
 NAVIGATE_TO_POSE = "navigate_to_pose"
