@@ -40,6 +40,8 @@ SONAR_MIN_TURN_RAD = 0.1
 GLASS_SAVE_PERIOD_S = 1.0
 #: A scan this far in time from a sonar reading is too old to explain its echo.
 LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
+#: Glass the sonar heard within this angle of the heading slows the robot (a pane beside it does not).
+GLASS_SLOWDOWN_HALF_ANGLE_RAD = math.radians(70.0)
 
 
 def _moved(before: Pose2D, after: Pose2D) -> bool:
@@ -75,7 +77,7 @@ class CostmapUpdater:
         self._pending_scan: LaserScan | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
-        #: Cells of suspected glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
+        #: Cells of heard glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
         self._suspected_xy: np.ndarray | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
@@ -110,24 +112,26 @@ class CostmapUpdater:
         self._mounts.update(msg)
 
     def glass_speed_limit_mps(self, pose: Pose2D | None) -> float | None:
-        """The speed allowed near glass the sonar suspects but has not confirmed (Nav2's regulated pure
-        pursuit slows near obstacles the same way): the top speed times the distance to the nearest such
-        evidence over ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when
-        nothing suspected is that close. Only evidence ahead of the robot's rear axle counts: the limit
-        caps forward speed, and glass behind cannot be driven into going forward."""
+        """The speed allowed near glass the sonar has heard (Nav2's regulated pure pursuit slows near
+        obstacles the same way): the top speed times the distance to the nearest such cell over
+        ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when nothing heard
+        is that close. Only glass ahead counts, within ``GLASS_SLOWDOWN_HALF_ANGLE_RAD`` of the heading:
+        the limit caps forward speed; a pane beside the robot is passed, not driven into."""
         p = self._params
         if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
             return None
         if self._suspected_xy is None:
-            self._suspected_xy = self.glass.suspected_cells_xy()
+            self._suspected_xy = self.glass.heard_cells_xy()
         cells = self._suspected_xy
         if len(cells) == 0:
             return None
         dx, dy = cells[:, 0] - pose.x, cells[:, 1] - pose.y
-        ahead = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw) > 0.0
+        distance = np.hypot(dx, dy)
+        along = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw)
+        ahead = along > math.cos(GLASS_SLOWDOWN_HALF_ANGLE_RAD) * distance
         if not ahead.any():
             return None
-        distance_m = float(np.min(np.hypot(dx[ahead], dy[ahead])))
+        distance_m = float(np.min(distance[ahead]))
         if distance_m >= p.glass_slowdown_radius_m:
             return None
         return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)

@@ -218,10 +218,21 @@ class GlassMemory:
 
     def suspected_cells_xy(self) -> np.ndarray:
         """Centres ``(N, 2)`` of cells with evidence of glass below the mark threshold: glass the sonar
-        has heard but not confirmed (the robot slows near them rather than stopping)."""
+        has heard but not confirmed."""
         model = self.model
         suspected = (self._log_odds > SUSPECTED_LOG_ODDS) & (self._log_odds < model.mark_log_odds)
         iy, ix = np.nonzero(suspected)
+        return self.frame.cells_to_world(np.stack([ix, iy], axis=1))
+
+    def heard_cells_xy(self) -> np.ndarray:
+        """Centres ``(N, 2)`` of every cell the sonar has heard glass in: suspected, marked, or on a held
+        arc. The robot slows near them: where one pane is known its unheard end is near, and a plan that
+        rounds a pane's end keeps changing as the end is heard (the robot once clipped ends at full speed
+        while replanning several times a second)."""
+        heard = self._log_odds > SUSPECTED_LOG_ODDS
+        if self._held:
+            heard = heard | self.held_mask()
+        iy, ix = np.nonzero(heard)
         return self.frame.cells_to_world(np.stack([ix, iy], axis=1))
 
     def glass_mask(self) -> np.ndarray:

@@ -93,7 +93,7 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
     assert _coverage(memory, pane) >= 0.6, f"only {_coverage(memory, pane):.0%} of the pane is marked"
 
 
-def test_glass_heard_but_not_confirmed_slows_the_robot_near_it() -> None:
+def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
     import logging  # noqa: PLC0415
 
     from services.planner.costmap_updater import CostmapUpdater  # noqa: PLC0415
@@ -119,8 +119,12 @@ def test_glass_heard_but_not_confirmed_slows_the_robot_near_it() -> None:
     near = layers.glass_speed_limit_mps(Pose2D(1.6, 2.0, 0.0))
     assert far is None
     assert near is not None and 0.1 <= near < params.max_linear_vel_mps
-    # Driving away from it, with the suspected glass behind: no limit.
+    # Driving away from it, with the heard glass behind: no limit; nor passing it broadside.
     assert layers.glass_speed_limit_mps(Pose2D(1.6, 2.0, math.pi)) is None
+    assert layers.glass_speed_limit_mps(Pose2D(2.0, 1.3, 0.0)) is None
+    # Marked glass counts as much as suspected glass: facing the arc's marked middle from 0.3 m.
+    assert layers.glass_speed_limit_mps(Pose2D(1.7, 2.0, 0.0)) == pytest.approx(
+        params.max_linear_vel_mps * 0.3 / 0.8, abs=0.05)
 
 
 def test_an_echo_from_cells_known_free_is_held_as_glass_for_a_while() -> None:
