@@ -78,7 +78,7 @@ class CostmapUpdater:
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
         #: Cells of heard glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
-        self._suspected_xy: np.ndarray | None = None
+        self._heard_xy: np.ndarray | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
 
@@ -120,9 +120,9 @@ class CostmapUpdater:
         p = self._params
         if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
             return None
-        if self._suspected_xy is None:
-            self._suspected_xy = self.glass.heard_cells_xy()
-        cells = self._suspected_xy
+        if self._heard_xy is None:
+            self._heard_xy = self.glass.heard_cells_xy()
+        cells = self._heard_xy
         if len(cells) == 0:
             return None
         dx, dy = cells[:, 0] - pose.x, cells[:, 1] - pose.y
@@ -180,7 +180,7 @@ class CostmapUpdater:
 
     def apply_glass(self) -> None:
         """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
-        self._suspected_xy = None
+        self._heard_xy = None
         if self.costmap is None or self._base_map is None or self.glass is None:
             return
         if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
