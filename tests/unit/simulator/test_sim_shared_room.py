@@ -76,3 +76,17 @@ def test_a_shared_room_steps_only_together(quiet: SimParams, open_world: Callabl
         step_together([r1, r2], [(0.0, 0.0)])
     step_together([r1, r2], [(0.0, 0.0), (0.2, 0.0)])
     assert r2.time_s == pytest.approx(r2.params.dt_s) and r1.steps == 2
+
+
+def test_the_shipped_fleet_world_puts_every_robot_in_one_room(quiet: SimParams) -> None:
+    from shared.world import load_world  # noqa: PLC0415
+    from tests.support.processes import REPO_ROOT  # noqa: PLC0415
+
+    world = load_world(REPO_ROOT / "deploy/worlds/fleet/warehouse.yaml")
+    assert [r.name for r in world.robots] == ["r1", "r2", "r3"] and len(world.docks) == 2
+    first, *rest = world.robots
+    room = SimWorld(world, params=quiet, start=Pose2D.from_seq(first.start), name=first.name)
+    robots = [room] + [room.join(r.name, Pose2D.from_seq(r.start)) for r in rest]
+    assert [r.name for r in room.members] == ["r1", "r2", "r3"]
+    _drive_together(robots, [(0.2, 0.0)] * 3, 1.0)
+    assert all(not r.drain_collisions() for r in robots), "one second of driving from the starts hits nothing"
