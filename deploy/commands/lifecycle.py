@@ -7,6 +7,7 @@ import signal
 import sys
 
 from deploy.launcher.project import add_project_options, resolve_project
+from deploy.launcher.robot_template import service_for
 from deploy.launcher.runtime import ControlError, request
 from deploy.launcher.status import ServiceStatus
 
@@ -35,7 +36,7 @@ def main(args: argparse.Namespace) -> int:
         return 1
     statuses = {s["name"]: ServiceStatus.from_dict(s) for s in reply["services"]}
     for service in args.services or list(statuses):
-        status = statuses.get(service)
+        status = statuses.get(service_for(service, list(statuses)))
         if status is not None:
             print(f"{service}: {status.state}" + (f" (pid {status.pid})" if status.pid else ""))
     return 0

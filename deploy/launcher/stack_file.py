@@ -31,6 +31,7 @@ from deploy.launcher.durations import format_duration, parse_duration
 from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
 from deploy.launcher.interpolation import InterpolationError, interpolate_tree, parse_env_file
 from deploy.launcher.restart import RestartPolicy, parse_restart_policy
+from deploy.launcher.robot_template import RobotTemplateError, expand_robots
 from shared.config_errors import ConfigError, format_validation_error
 from shared.names import normalise_namespace
 from shared.session import DEFAULT_ROUTER_ENDPOINT
@@ -366,6 +367,10 @@ def load_stack(
         document["zenoh"] = {"connect": [DEFAULT_CONNECT]}
     elif isinstance(zenoh_section, dict) and "connect" not in zenoh_section:
         document["zenoh"] = {**zenoh_section, "connect": [DEFAULT_CONNECT]}
+    try:
+        document = expand_robots(document)
+    except RobotTemplateError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
     try:
         document = interpolate_tree(document, variables)  # type: ignore[assignment]
     except InterpolationError as exc:

@@ -20,6 +20,7 @@ from deploy.launcher.logs import RotatingLog
 from deploy.launcher.plan import LaunchPlan, ServicePlan
 from deploy.launcher.process import ServiceProcess
 from deploy.launcher.restart import Backoff
+from deploy.launcher.robot_template import service_for
 from deploy.launcher.status import Phase, ServiceStatus, public_state
 
 WATCHER_CLOSE_S = 5.0
@@ -396,7 +397,9 @@ class Supervisor:
         return [name for name in dependency_order(deps) if name in selected]
 
     def _check_names(self, names: Iterable[str]) -> list[str]:
-        names = list(names)
+        """The services named (``r2/planner`` is a robot template's ``planner_r2``); KeyError for others."""
+        services = list(self.plan.services)
+        names = [service_for(name, services) for name in names]
         unknown = [name for name in names if name not in self.plan.services]
         if unknown:
             raise KeyError(f"no such service: {', '.join(unknown)}")
