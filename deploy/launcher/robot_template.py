@@ -20,11 +20,11 @@ looked up in the environment.
 from __future__ import annotations
 
 import copy
-import re
 from typing import Any
 
+from shared.world import ROBOT_NAME
+
 ROBOT_VARIABLE = "${ROBOT}"
-_ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 
 
 class RobotTemplateError(ValueError):
@@ -42,7 +42,7 @@ def expand_robots(document: dict[str, Any]) -> dict[str, Any]:
     if not isinstance(robots, list) or not robots or not all(isinstance(r, str) for r in robots):
         raise RobotTemplateError("x-robots.robots: expected a non-empty list of robot names")
     for robot in robots:
-        if not _ROBOT_NAME.fullmatch(robot):
+        if not ROBOT_NAME.fullmatch(robot):
             raise RobotTemplateError(f"x-robots.robots: {robot!r} is not a robot name (a letter, then letters, "
                                      "digits or _)")
     if len(set(robots)) != len(robots):

@@ -104,6 +104,15 @@ class _Obstacle:
     dock: Dock | None = None
 
 
+def _contact_centre(points: Sequence[pymunk.ContactPoint], fallback: tuple[float, float]) -> tuple[float, float]:
+    """The mean of a contact's points (each midway between the two shapes), or ``fallback`` without any."""
+    if not points:
+        return fallback
+    cx = sum(0.5 * (p.point_a.x + p.point_b.x) for p in points) / len(points)
+    cy = sum(0.5 * (p.point_a.y + p.point_b.y) for p in points) / len(points)
+    return cx, cy
+
+
 def _sinc(x: float) -> float:
     return 1.0 - x * x / 6.0 if abs(x) < 1e-4 else math.sin(x) / x
 
@@ -373,13 +382,8 @@ class SimWorld:
         first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
         if first is None or second is None:
             return
-        points = arbiter.contact_point_set.points
-        if points:
-            cx = sum(0.5 * (p.point_a.x + p.point_b.x) for p in points) / len(points)
-            cy = sum(0.5 * (p.point_a.y + p.point_b.y) for p in points) / len(points)
-        else:
-            (ax, ay), (bx, by) = first.body.position, second.body.position
-            cx, cy = 0.5 * (ax + bx), 0.5 * (ay + by)
+        (ax, ay), (bx, by) = first.body.position, second.body.position
+        cx, cy = _contact_centre(arbiter.contact_point_set.points, (0.5 * (ax + bx), 0.5 * (ay + by)))
         for robot, other in ((first, second), (second, first)):
             last = robot._last_separation_s.get(other.shape)
             if last is not None and robot.time_s - last < robot.params.collision_debounce_s:
@@ -406,11 +410,7 @@ class SimWorld:
         if last is not None and self.time_s - last < self.params.collision_debounce_s:
             return
         points = arbiter.contact_point_set.points
-        if points:
-            cx = sum(0.5 * (p.point_a.x + p.point_b.x) for p in points) / len(points)
-            cy = sum(0.5 * (p.point_a.y + p.point_b.y) for p in points) / len(points)
-        else:
-            cx, cy = self.body.position
+        cx, cy = _contact_centre(points, tuple(self.body.position))
         speed = float(abs(self.body.velocity_at_world_point((cx, cy))))
         if obstacle.dock is not None and self._is_docking_touch(obstacle.dock, points, speed):
             return
