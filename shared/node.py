@@ -612,9 +612,12 @@ class Node:
         request: Req,
         on_done: Callable[[Res | None, ServiceError | None], Any],
         timeout_s: float = 5.0,
+        *,
+        absolute: bool = False,
     ) -> None:
-        """Send a request without blocking; ``on_done(response, error)`` runs later on the executor."""
-        key = self.key(name)
+        """Send a request without blocking; ``on_done(response, error)`` runs later on the executor.
+        ``absolute``: ``name`` is a full key, not a name in the node's namespace."""
+        key = name if absolute else self.key(name)
         try:
             payload = request.encode()
         except MessageError as exc:

@@ -113,11 +113,20 @@ class RobotSpec(_Lenient):
     #: The robot's namespace (required in ``robots``; the single ``robot`` has none).
     name: str = ""
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: The robot's own patrol waypoints ``[x, y, yaw]`` (a fleet generates some when this is empty).
+    patrol: list[tuple[float, float, float]] = Field(default_factory=list)
 
     @field_validator("start")
     @classmethod
     def _start_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
         return _finite(v, "start")  # type: ignore[return-value]
+
+    @field_validator("patrol")
+    @classmethod
+    def _patrol_finite(cls, v: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+        for i, waypoint in enumerate(v):
+            _finite(waypoint, f"patrol.{i}")
+        return v
 
 
 class DockGeometry(BaseModel):
@@ -155,6 +164,8 @@ class World(_Lenient):
     docks: list[Dock] = Field(default_factory=list)
     robot: RobotSpec = Field(default_factory=RobotSpec)
     robots: list[RobotSpec] = Field(default_factory=list)
+    #: Where robots waiting for a dock stand (``[x, y, yaw]``), out of the docks' approach corridors.
+    holding: list[tuple[float, float, float]] = Field(default_factory=list)
     aruco_dictionary: str = "DICT_4X4_50"
 
     @model_validator(mode="before")
@@ -179,6 +190,14 @@ class World(_Lenient):
             if not self.contains(robot.start[0], robot.start[1]):
                 raise ValueError(f"robots.{i} ({robot.name}) start {list(robot.start[:2])} is outside bounds "
                                  f"{list(self.bounds)}")
+            for j, waypoint in enumerate(robot.patrol):
+                if not self.contains(waypoint[0], waypoint[1]):
+                    raise ValueError(f"robots.{i} ({robot.name}) patrol.{j} {list(waypoint[:2])} is outside bounds "
+                                     f"{list(self.bounds)}")
+        for i, pose in enumerate(self.holding):
+            _finite(pose, f"holding.{i}")
+            if not self.contains(pose[0], pose[1]):
+                raise ValueError(f"holding.{i} {list(pose[:2])} is outside bounds {list(self.bounds)}")
         return self
 
     @field_validator("aruco_dictionary")

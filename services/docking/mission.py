@@ -68,6 +68,7 @@ class Mission:
         self.next_waypoint = 0
         self._dock_wanted = False
         self._redock_at_s: float | None = None
+        self._leave_asked = False
 
     @property
     def low(self) -> bool:
@@ -82,6 +83,14 @@ class Mission:
         if fired and self.auto_dock:
             self._dock_wanted = True
         return fired
+
+    def leave_dock(self) -> bool:
+        """Another robot needs this one's dock (its battery is critical, this one is charged enough):
+        undock at the next decision. True when this is news (docked by the mission, not yet asked)."""
+        if self.mode is not MissionMode.CHARGING or self._leave_asked:
+            return False
+        self._leave_asked = True
+        return True
 
     def decide(self, now_s: float, running: TaskKind | None) -> MissionOrder | None:
         """What to start now, given what runs (a docking already running, or any undocking, keeps its way)."""
@@ -98,6 +107,9 @@ class Mission:
                 return MissionOrder.DOCK
         if self.mode is MissionMode.ROAMING and self.charging:
             self.mode = MissionMode.CHARGING  # started on the dock
+        if self._leave_asked and self.mode is MissionMode.CHARGING:
+            self._leave_asked = False
+            return MissionOrder.UNDOCK
         if not self.patrol:
             return None
         if self.mode is MissionMode.CHARGING and math.isfinite(self.percentage) and self.percentage >= self.resume_at:
@@ -118,3 +130,4 @@ class Mission:
                 self._redock_at_s = now_s + self.redock_delay_s
         elif kind is TaskKind.UNDOCK:
             self.mode = MissionMode.ROAMING if success else MissionMode.HOLDING
+            self._leave_asked = False

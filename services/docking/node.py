@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from services.docking.dock_claim import AwaitDock, DockClaim, FleetAnswer, docks_seen_free
 from services.docking.dock_db import DockDatabase, load_dock_db
 from services.docking.dock_tracker import DockTracker
 from services.docking.docking_run import DockingRun, DockRequest
@@ -59,6 +60,14 @@ from shared.interfaces.docking import (
     UndockRobotGoal,
     UndockRobotResult,
 )
+from shared.interfaces.fleet import (
+    RELEASE_DOCK,
+    RESERVE_DOCK,
+    ReleaseDockRequest,
+    ReleaseDockResponse,
+    ReserveDockRequest,
+    ReserveDockResponse,
+)
 from shared.messages import (
     BatteryState,
     DockInfraRed,
@@ -72,8 +81,9 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
+from shared.names import topic_key
 from shared.navigation import NavigationClient, TaskResult
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import ServiceSpec
@@ -124,6 +134,11 @@ class DockingService:
         self._state_published_s = -math.inf
         self._feedback_key: tuple[int, int] | None = None
         self._feedback_published_s = -math.inf
+        #: Robots sharing docks ask the fleet service one namespace up (``r1`` asks ``fleet/...``).
+        self.claim = DockClaim(patience_s=params.fleet_patience_s) if params.fleet else None
+        fleet_ns = node.namespace.rpartition("/")[0]
+        self._reserve_key = topic_key(fleet_ns, topics.FLEET_RESERVE_DOCK)
+        self._release_key = topic_key(fleet_ns, topics.FLEET_RELEASE_DOCK)
 
         self.cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self.state_pub = node.create_publisher(String, DOCKING_STATE, RELIABLE)
@@ -154,9 +169,10 @@ class DockingService:
         self.period_s = CONTROL_PERIOD_S[params.controller]
         self.timer = node.create_timer(self.period_s, self._on_tick)
         self._log.info(
-            "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time",
+            "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time%s",
             params.controller, 1.0 / self.period_s, len(self.database), params.dock_database,
             "on" if params.use_detection else "off", len(params.patrol), "sim" if node.use_sim_time else "wall",
+            f", docks reserved with {self._reserve_key}" if params.fleet else "",
         )
 
     # --- inputs ------------------------------------------------------------------------------------
@@ -308,6 +324,8 @@ class DockingService:
                 self.task.cancel()
         self._last_now_s = now
         self._follow_mission(now)
+        if self.claim is not None:
+            self._follow_fleet(now)
         task = self.task
         if isinstance(task, DockingRun):
             latest = self.track.latest()
@@ -335,15 +353,126 @@ class DockingService:
     def _follow_mission(self, now: float) -> None:
         order = self.mission.decide(now, self.task_kind)
         if order is MissionOrder.DOCK:
-            self._start(self._docking_run(DockRequest(dock_id=self.params.dock_id,
-                                                      max_staging_time_s=self.params.max_staging_time_s)),
-                        TaskKind.DOCK)
+            self._begin_docking(DockRequest(dock_id=self.params.dock_id,
+                                            max_staging_time_s=self.params.max_staging_time_s), None)
         elif order is MissionOrder.UNDOCK:
             self._log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
             self._start(self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK)
         elif order is MissionOrder.PATROL:
             self._log.info("patrolling from waypoint %d", self.mission.next_waypoint)
             self._start(Patrol(self.mission.patrol, self.mission.next_waypoint), TaskKind.PATROL)
+
+    # --- the fleet ---------------------------------------------------------------------------------
+
+    def _begin_docking(self, request: DockRequest, handle: ServerGoalHandle[Any, Any, Any] | None) -> None:
+        """Dock now, or (sharing docks) once the fleet grants one: wait in :class:`AwaitDock` till then."""
+        claim = self.claim
+        if claim is None or request.dock_pose is not None:
+            self._start(self._docking_run(request), TaskKind.DOCK, handle)
+            return
+        now = self.node.now()
+        claim.want(now, request.dock_id)
+        granted = claim.granted_dock
+        if granted is not None:
+            self._start(self._docking_run(replace(request, dock_id=granted)), TaskKind.DOCK, handle)
+        else:
+            self._log.info("asking the fleet for %s", f"dock {request.dock_id!r}" if request.dock_id else "a dock")
+            self._start(AwaitDock(request), TaskKind.DOCK, handle)
+
+    def _follow_fleet(self, now: float) -> None:
+        """Ask, renew and release as due; start docking once a dock is granted (or seen free, the fleet down)."""
+        claim = self.claim
+        assert claim is not None
+        task = self.task
+        if isinstance(task, AwaitDock):
+            granted = claim.granted_dock
+            if granted is not None:
+                self._log.info("the fleet granted dock %s", granted)
+                self._start(self._docking_run(replace(task.request, dock_id=granted)), TaskKind.DOCK, self.task_handle)
+            elif claim.fleet_down(now):
+                self._dock_without_fleet(task, now)
+        elif task is None and claim.granted_dock is None and self._charging(now) and not claim.release_pending:
+            # In a dock without a claim (started there, or the fleet lost its book): claim the dock it is in.
+            latest = self.track.latest()
+            if latest is not None:
+                claim.holds(now, self.database.nearest(latest[1]).id)
+        if claim.asked_to_leave and self.mission.leave_dock():
+            self._log.info("the fleet asks this robot to leave its dock for a robot whose battery is critical")
+        if claim.reserve_due(now):
+            self._ask_fleet(now)
+        elif claim.release_due(now):
+            claim.sent(now)
+            self.node.call_async(RELEASE_DOCK, self._release_key, ReleaseDockRequest(robot=self.node.namespace),
+                                 self._on_released, timeout_s=1.0, absolute=True)
+
+    def _ask_fleet(self, now: float) -> None:
+        claim = self.claim
+        assert claim is not None
+        battery = self._battery.percentage if self._battery is not None else math.nan
+        if not 0.0 <= battery <= 1.0:
+            return  # the fleet serves by charge: ask once the battery has spoken
+        latest = self.track.latest()
+        ids: list[str] = []
+        lengths: list[float] = []
+        if latest is not None:
+            # Straight-line distance to each dock's pose: the order of the docks for a robot in open
+            # space; the fleet picks the nearest free one by it.
+            ids = [d.id for d in self.database]
+            lengths = [latest[1].distance_to(d.pose2d) for d in self.database]
+        claim.sent(now)
+        request = ReserveDockRequest(robot=self.node.namespace, battery=float(battery), dock_id=claim.dock_id,
+                                     dock_ids=ids, path_lengths=np.asarray(lengths, dtype=float))
+        self.node.call_async(RESERVE_DOCK, self._reserve_key, request, self._on_reserved, timeout_s=1.0, absolute=True)
+
+    def _on_reserved(self, response: ReserveDockResponse | None, error: ServiceError | None) -> None:
+        claim = self.claim
+        assert claim is not None
+        now = self.node.now()
+        if response is None:
+            claim.unanswered(now)
+            self._say.warning("fleet", "the fleet did not answer: %s", error)
+            return
+        pose = response.holding_pose
+        holding = Pose2D.from_seq(pose) if len(pose) == 3 and np.all(np.isfinite(pose)) else None
+        answer = FleetAnswer(response.granted, response.dock_id, int(response.queue_position), response.reason,
+                             response.asked_to_leave, holding)
+        if not response.granted and response.dock_id == "" and response.queue_position == 0:
+            self._say.warning("fleet-refused", "the fleet refused: %s", response.reason)
+        claim.answered(now, answer)
+        if isinstance(self.task, AwaitDock) and not response.granted:
+            if response.queue_position:
+                self._say.info("queued", "waiting for a dock: number %d in the queue (%s)",
+                               response.queue_position, response.reason)
+            self.task.hold_at(holding)
+
+    def _on_released(self, response: ReleaseDockResponse | None, error: ServiceError | None) -> None:
+        claim = self.claim
+        assert claim is not None
+        if response is None:
+            claim.unanswered(self.node.now())
+            self._say.warning("fleet", "the fleet did not answer a release: %s", error)
+            return
+        claim.released(self.node.now())
+        if response.dock_id:
+            self._log.info("released dock %s", response.dock_id)
+
+    def _dock_without_fleet(self, task: AwaitDock, now: float) -> None:
+        """The fleet is down: dock at the nearest dock seen free (no robot in it), keeping it as a claim so
+        the fleet learns of it when it is back."""
+        claim = self.claim
+        latest = self.track.latest()
+        if claim is None or latest is None:
+            return
+        fresh = self._scan_points if now - self._scan_received_s <= SENSOR_MAX_AGE_S else None
+        wanted = task.request.dock_id
+        docks = [(d.id, d.pose2d) for d in self.database if not wanted or d.id == wanted]
+        free = docks_seen_free(docks, latest[1], fresh)
+        if not free:
+            self._say.warning("fleet-down", "the fleet is down and no dock is seen free: waiting")
+            return
+        self._log.warning("the fleet has not answered for %g s: docking at %s, seen free", claim.patience_s, free[0])
+        claim.holds(now, free[0])
+        self._start(self._docking_run(replace(task.request, dock_id=free[0])), TaskKind.DOCK, self.task_handle)
 
     def _carry_out(self, intent: Intent, inputs: TickInputs) -> None:
         if isinstance(intent, Velocity):
@@ -391,8 +520,10 @@ class DockingService:
         old, old_handle = self.task, self.task_handle
         if isinstance(old, Patrol):
             self.mission.next_waypoint = old.next_index
-        if old_handle is not None and old_handle.active:
+        if old_handle is not None and old_handle.active and old_handle is not handle:
             old_handle.canceled(self._result_message(old_handle, None))
+        if isinstance(old, AwaitDock) and kind is not TaskKind.DOCK and self.claim is not None:
+            self.claim.drop()  # no longer waiting for a dock
         if old is not None:
             self._log.info("%s replaced by %s", type(old).__name__, type(task).__name__)
         self.task, self.task_kind, self.task_handle = task, kind, handle
@@ -408,6 +539,9 @@ class DockingService:
         if isinstance(task, Patrol):
             self.mission.next_waypoint = task.next_index
         self.mission.finished(kind, result.success, handle is not None, self.node.now())
+        if self.claim is not None and ((kind is TaskKind.DOCK and not result.success)
+                                       or (kind is TaskKind.UNDOCK and result.success)):
+            self.claim.drop()  # out of the dock (or never got in): the dock is free for others
         level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
         took = (f" after {task.docking_time_s(self.node.now()):.1f} s" if isinstance(task, (DockingRun, IrDockingRun))
                 else "")
@@ -454,7 +588,7 @@ class DockingService:
         )
         self._log.info("dock_robot: %s", f"dock {goal.dock_id!r}" if goal.use_dock_id and goal.dock_id
                       else "the nearest dock" if goal.use_dock_id else "a given pose")
-        self._start(self._docking_run(request), TaskKind.DOCK, handle)
+        self._begin_docking(request, handle)
 
     def _check_undock_goal(self, goal: UndockRobotGoal) -> None:
         if not goal.max_undocking_time > 0.0:
@@ -500,6 +634,8 @@ class DockingService:
             return "UNDOCKING"
         if isinstance(task, Patrol):
             return "PATROLLING"
+        if isinstance(task, AwaitDock):
+            return "WAITING_FOR_DOCK"
         if self._charging(self.node.now()):
             return "DOCKED"
         return "HOLDING" if self.mission.mode is MissionMode.HOLDING else "IDLE"

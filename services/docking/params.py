@@ -74,6 +74,10 @@ class Params(ServiceParams):
     use_lidar: bool = True
     use_sonar: bool = True
     feedback_period_s: float = Field(0.5, gt=0.0)
+    fleet: bool = Field(False, description="robots share docks: ask the fleet service (fleet/reserve_dock, one "
+                        "namespace up) for a dock before driving to one, and release it after undocking")
+    fleet_patience_s: float = Field(5.0, gt=0.0, description="fleet: no answer for this long, the fleet is down: "
+                                    "dock at a dock seen free")
 
     @field_validator("dock_database")
     @classmethod

@@ -34,11 +34,14 @@ class Claim:
 
 @dataclass(frozen=True, slots=True)
 class Waiting:
-    """A robot in the queue for a dock, with the battery it last reported (0..1)."""
+    """A robot in the queue for a dock, with the battery it last reported (0..1), and the holding spot
+    (an index into the room's holding poses) it waits at, if the room has one free for it."""
 
     robot: str
     battery: float
     since_s: float
+    heard_s: float = -math.inf
+    spot: int | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +51,8 @@ class Decision:
     dock_id: str | None
     queue_position: int = 0
     reason: str = ""
+    #: Where a queued robot waits: an index into the room's holding poses (None: where it stands).
+    holding_spot: int | None = None
 
     @property
     def granted(self) -> bool:
@@ -65,6 +70,8 @@ class DockBook:
     critical_battery: float = 0.10
     #: ... a robot charged to at least this may be asked.
     charged_enough: float = 0.60
+    #: How many holding poses the room has: each queued robot gets one of its own while any is free.
+    holding_spots: int = 0
     claims: dict[str, Claim] = field(default_factory=dict)  # by dock id
     queue: dict[str, Waiting] = field(default_factory=dict)  # by robot
     #: Batteries last reported by claim holders (to know who is charged enough to leave).
@@ -79,6 +86,8 @@ class DockBook:
             raise ValueError(f"lease_s must be a positive number of seconds, got {self.lease_s}")
         if not (0.0 <= self.critical_battery < self.charged_enough <= 1.0):
             raise ValueError("need 0 <= critical_battery < charged_enough <= 1")
+        if self.holding_spots < 0:
+            raise ValueError(f"holding_spots must be >= 0, got {self.holding_spots}")
 
     # --- questions ----------------------------------------------------------------------------------
 
@@ -132,12 +141,13 @@ class DockBook:
             self.batteries[robot] = battery
             return Decision(choice, reason="granted")
         previous = self.queue.get(robot)
-        self.queue[robot] = Waiting(robot, battery, previous.since_s if previous else now_s)
+        spot = previous.spot if previous is not None and previous.spot is not None else self._free_spot()
+        self.queue[robot] = Waiting(robot, battery, previous.since_s if previous else now_s, now_s, spot)
         position = [w.robot for w in self.queue_order()].index(robot) + 1
         reason = "every dock is taken" if not free else f"{len(ahead)} robot(s) with less charge go first"
         if battery <= self.critical_battery:
             self._ask_someone_to_leave(robot)
-        return Decision(None, queue_position=position, reason=reason)
+        return Decision(None, queue_position=position, reason=reason, holding_spot=spot)
 
     def heard_from(self, robot: str, now_s: float) -> None:
         """``robot`` is alive (its liveliness token, any message): its claim's lease runs from now."""
@@ -145,6 +155,9 @@ class DockBook:
         if held is not None:
             claim = self.claims[held]
             self.claims[held] = Claim(robot, held, claim.since_s, max(claim.heard_s, now_s))
+        waiting = self.queue.get(robot)
+        if waiting is not None:
+            self.queue[robot] = Waiting(robot, waiting.battery, waiting.since_s, max(waiting.heard_s, now_s), waiting.spot)
 
     def release(self, robot: str) -> str | None:
         """``robot`` gives its dock back (it undocked, or gave up); the dock it held, if any."""
@@ -157,11 +170,18 @@ class DockBook:
         return held
 
     def expire(self, now_s: float) -> list[Claim]:
-        """Claims whose robot has not been heard from within ``lease_s``: ended, and returned."""
+        """Claims whose robot has not been heard from within ``lease_s``: ended, and returned. A queued
+        robot not heard from for as long leaves the queue too (a dead robot must not hold up the living)."""
         lapsed = [c for c in self.claims.values() if now_s - c.heard_s > self.lease_s]
         for claim in lapsed:
             self.release(claim.robot)
+        for waiting in [w for w in self.queue.values() if now_s - w.heard_s > self.lease_s]:
+            self.release(waiting.robot)
         return lapsed
+
+    def _free_spot(self) -> int | None:
+        taken = {w.spot for w in self.queue.values()}
+        return next((i for i in range(self.holding_spots) if i not in taken), None)
 
     def _reachable(self, path_lengths_m: dict[str, float] | None) -> dict[str, float]:
         if path_lengths_m is None:

@@ -69,9 +69,11 @@ class FleetService:
         self._node = node
         self._log = node.log
         world = load_world(params.world)
+        self._holding_poses = [tuple(map(float, p)) for p in world.holding]
         try:
             self.book = DockBook(tuple(d.id for d in world.docks), lease_s=params.lease_s,
-                                 critical_battery=params.critical_battery, charged_enough=params.charged_enough)
+                                 critical_battery=params.critical_battery, charged_enough=params.charged_enough,
+                                 holding_spots=len(self._holding_poses))
         except ValueError as exc:
             raise ConfigError(f"{params.world}: {exc}") from None
         #: Robots whose docking node is alive now (their namespaces), from liveliness (Zenoh's thread
@@ -117,9 +119,12 @@ class FleetService:
             self._publish()
         elif not decision.granted and decision.queue_position:
             self._publish()
+        spot = decision.holding_spot
         return ReserveDockResponse(granted=decision.granted, dock_id=decision.dock_id or "",
                                    queue_position=decision.queue_position, reason=decision.reason,
-                                   asked_to_leave=robot in self.book.leave_requests)
+                                   asked_to_leave=robot in self.book.leave_requests,
+                                   holding_pose=np.asarray(self._holding_poses[spot] if spot is not None else (),
+                                                           dtype=float))
 
     def _on_release(self, request: ReleaseDockRequest) -> ReleaseDockResponse:
         robot = normalise_namespace(request.robot)

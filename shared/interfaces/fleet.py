@@ -39,6 +39,9 @@ class ReserveDockResponse(Message):
     reason: str = ""
     #: Set when a robot whose battery is critical waits for this robot's dock: leave it when charged enough.
     asked_to_leave: bool = False
+    #: A queued robot's holding pose ``[x, y, yaw]`` in the map frame, its own while it waits (empty: none
+    #: free, wait where it stands).
+    holding_pose: Float64Array = field(default_factory=lambda: np.zeros(0))
 
 
 @message("zendock_msgs/srv/ReleaseDock_Request")

@@ -60,11 +60,15 @@ CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY
 
 class TeleportNavigator:
     """``navigate_to_pose`` played by the simulator's teleport: the robot is put on the goal at once, and the
-    goal succeeds ``dwell_s`` of sim time later (or is aborted when the teleport is refused)."""
+    goal succeeds ``dwell_s`` of sim time later (or is aborted when the teleport is refused).
 
-    def __init__(self, session: zenoh.Session, namespace: str, dwell_s: float = 0.0) -> None:
+    ``robot``: the robot's name in a simulator that serves several, whose requests are one namespace up."""
+
+    def __init__(self, session: zenoh.Session, namespace: str, dwell_s: float = 0.0, robot: str = "") -> None:
         self.node = Node("fake_planner", session, namespace, use_sim_time=True)
         self.dwell_s = dwell_s
+        self.robot = robot
+        self._teleport_key = topic_key(namespace.rpartition("/")[0] if robot else namespace, topics.SIM_TELEPORT)
         self.goals: list[Pose2D] = []
         self.canceled = 0
         self._lock = threading.Lock()
@@ -94,8 +98,8 @@ class TeleportNavigator:
                 self._arrived.append((self.node.now() + self.dwell_s, handle))
                 self._succeed_arrived()
 
-        request = TeleportRequest(x=pose.x, y=pose.y, yaw=pose.yaw)
-        self.node.call_async(TELEPORT, topics.SIM_TELEPORT, request, teleported)
+        request = TeleportRequest(x=pose.x, y=pose.y, yaw=pose.yaw, robot=self.robot)
+        self.node.call_async(TELEPORT, self._teleport_key, request, teleported, absolute=True)
 
     def _succeed_arrived(self) -> None:
         now = self.node.now()

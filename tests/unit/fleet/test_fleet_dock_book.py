@@ -106,3 +106,27 @@ def test_a_bad_book_is_refused() -> None:
         DockBook(("a",), critical_battery=0.7, charged_enough=0.6)
     with pytest.raises(ValueError, match="robot's name"):
         DockBook(("a",)).request("", 0.5, 0.0)
+
+
+def test_queued_robots_each_get_a_holding_spot_of_their_own_while_any_is_free() -> None:
+    book = DockBook(("a",), holding_spots=2)
+    assert book.request("r1", 0.2, 0.0).granted
+    spots = [book.request(r, 0.2, 0.0).holding_spot for r in ("r2", "r3", "r4")]
+    assert spots == [0, 1, None], "two spots, the third robot waits where it stands"
+    assert book.request("r2", 0.19, 1.0).holding_spot == 0, "asking again keeps the spot"
+    book.release("r1")
+    assert book.request("r2", 0.19, 2.0).granted
+    assert book.request("r4", 0.2, 2.0).holding_spot == 0, "r2's spot is free again"
+
+
+def test_a_silent_robot_leaves_the_queue_after_the_lease_and_no_longer_holds_up_the_living() -> None:
+    book = DockBook(("a",), lease_s=10.0)
+    book.request("r1", 0.2, 0.0)
+    book.request("dead", 0.05, 0.0)
+    book.request("r3", 0.2, 0.0)
+    book.heard_from("r3", 9.0)
+    book.release("r1")
+    assert not book.request("r3", 0.2, 9.5).granted, "dead has less charge and is not yet expired"
+    book.expire(10.5)
+    assert [w.robot for w in book.queue_order()] == ["r3"]
+    assert book.request("r3", 0.2, 10.6).dock_id == "a"
