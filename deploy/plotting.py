@@ -83,7 +83,7 @@ def _points(values: Sequence[Sequence[float]] | np.ndarray, columns: int) -> np.
     return np.asarray(values, dtype=np.float64).reshape(-1, columns)
 
 
-def _draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
+def draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
     for i, ((x1, y1), (x2, y2)) in enumerate(world.boundary_walls() + list(world.walls)):
         ax.plot([x1, x2], [y1, y2], color=WALL_COLOR, linewidth=3, solid_capstyle="round",
                 label="walls" if i == 0 else None, zorder=3)
@@ -182,7 +182,7 @@ def plot_picture(picture: RunPicture, output: str | Path, dpi: int = 120) -> Pat
         if picture.map_image is not None and picture.world is None:
             _draw_map(room, picture.map_image)
         if picture.world is not None:
-            _draw_world(room, picture.world, picture.staging_offset_m)
+            draw_world(room, picture.world, picture.staging_offset_m)
         _draw_run(room, fig, picture)
         _frame(room, picture)
         room.set_title(picture.title or (picture.world.name if picture.world is not None else "run"))

@@ -12,7 +12,8 @@
 becomes, for each robot, services ``battery_r1``, ``planner_r1``, ... in namespace ``r1`` (under the
 stack's own), with ``${ROBOT}`` replaced by the robot's name everywhere in the template. A dependency on
 another template service is on that robot's copy (``planner_r1`` depends on ``battery_r1``); a
-dependency on a plain service (``map``, ``simulator``) stays as it is. ``zendock restart r2/planner``
+dependency on a plain service (``map``, ``simulator``) stays as it is; ``healthcheck: {liveliness: true}``
+watches the node named like the template service (``battery`` in namespace ``r1``). ``zendock restart r2/planner``
 names ``planner_r2``. The expansion happens before ``${VAR}`` interpolation, so ``${ROBOT}`` is never
 looked up in the environment.
 """
@@ -60,6 +61,10 @@ def expand_robots(document: dict[str, Any]) -> dict[str, Any]:
                 raise RobotTemplateError(f"{where}: a service is already named {expanded!r}")
             spec = _substitute(copy.deepcopy(template), robot)
             spec.setdefault("namespace", robot)
+            check = spec.get("healthcheck")
+            if isinstance(check, dict) and check.get("liveliness") is True:
+                # The node is named like the template (``battery``), not like its expanded service.
+                spec["healthcheck"] = {**check, "liveliness": name}
             spec["depends_on"] = _robot_dependencies(where, spec.get("depends_on"), templates, robot)
             if not spec["depends_on"]:
                 del spec["depends_on"]

@@ -48,6 +48,7 @@ from services.docking.task_io import (
 from services.docking.undocking_run import UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
+from shared.config_errors import ConfigError
 from shared.frames import SensorMounts, clock_went_back
 from shared.geometry import Pose2D
 from shared.interfaces.docking import (
@@ -87,6 +88,7 @@ from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscrip
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import ServiceSpec
+from shared.world import load_world
 
 #: std_msgs/String with the service's state name, for tools (published on change and every second).
 DOCKING_STATE = "docking/state"
@@ -98,6 +100,18 @@ STATE_PERIOD_S = 1.0
 #: Detections stay subscribed this long (sim seconds) after the run last wanted them.
 DETECTION_LINGER_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+
+
+def _world_patrol(dock_database: str, robot: str) -> list[tuple[float, float, float]]:
+    """The patrol a fleet world gives the robot named ``robot`` (its namespace's last part), if the dock
+    database is such a world; else none."""
+    if not robot:
+        return []
+    try:
+        world = load_world(dock_database)
+    except ConfigError:
+        return []  # a plain dock database: no robots in it
+    return next((list(r.patrol) for r in world.robots if r.name == robot), [])
 
 
 class DockingService:
@@ -112,8 +126,9 @@ class DockingService:
         self.track = PoseTrack()
         self.arbiter = DriveArbiter()
         self.obstacles = ObstacleParams(stop_distance_m=params.obstacle_stop_distance_m)
+        patrol = params.patrol or _world_patrol(params.dock_database, node.namespace.rpartition("/")[2])
         self.mission = Mission(
-            [Pose2D.from_seq(p) for p in params.patrol], params.resume_at, params.low_battery_threshold,
+            [Pose2D.from_seq(p) for p in patrol], params.resume_at, params.low_battery_threshold,
             params.auto_dock,
         )
         self.task: Task[Any] | None = None
@@ -171,7 +186,7 @@ class DockingService:
         self._log.info(
             "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time%s",
             params.controller, 1.0 / self.period_s, len(self.database), params.dock_database,
-            "on" if params.use_detection else "off", len(params.patrol), "sim" if node.use_sim_time else "wall",
+            "on" if params.use_detection else "off", len(patrol), "sim" if node.use_sim_time else "wall",
             f", docks reserved with {self._reserve_key}" if params.fleet else "",
         )
 

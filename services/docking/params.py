@@ -38,7 +38,8 @@ class Params(ServiceParams):
     auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
     low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
     resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
-    patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw]")
+    patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw] (empty: "
+                                                         "those a fleet world in dock_database gives this robot)")
     max_retries: int = Field(3, ge=0)
     use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
     allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")

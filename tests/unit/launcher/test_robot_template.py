@@ -24,6 +24,7 @@ x-robots:
     battery:
       command: [python, -m, services.battery, -p, use_sim_time=true]
       depends_on: {router: {condition: service_started}}
+      healthcheck: {liveliness: true, timeout: 20s}
     planner:
       command: [python, -m, services.planner, -p, "glass_memory_file=.zendock/${ROBOT}/glass.npz"]
       depends_on:
@@ -43,6 +44,7 @@ def test_each_robot_gets_its_services_in_its_namespace(tmp_path: Path) -> None:
     assert set(planner.depends_on) == {"map", "battery_r2"}, "its own robot's battery, the shared map"
     assert set(stack.services["battery_r1"].depends_on) == {"router"}
     assert "deploy/worlds/fleet/warehouse.yaml" in stack.services["map"].command, "${VAR} still interpolated"
+    assert stack.services["battery_r2"].healthcheck.liveliness == "battery", "the node, not the expanded name"
 
 
 def test_robot_slash_service_names_a_robots_copy() -> None:

@@ -1,0 +1,104 @@
+"""``zendock fleet``: several robots patrol one room and share its docks; live progress and a report."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from deploy import strict_json
+from deploy.commands.trials import _count, _rtf
+from shared.config_errors import ConfigError
+
+DEFAULT_WORLD = "deploy/worlds/fleet/warehouse.yaml"
+
+
+def _duration(text: str) -> float:
+    value = float(text)
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a positive number of simulated seconds, got {text}")
+    return value
+
+
+def _scale(text: str) -> float:
+    value = float(text)
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a positive factor, got {text}")
+    return value
+
+
+def _table(report) -> Table:  # type: ignore[no-untyped-def]
+    table = Table(title=f"fleet in {report.world}: {report.sim_s:.0f} s simulated in {report.wall_s:.0f} s "
+                        f"(rtf {report.achieved_rtf})")
+    for column in ("robot", "distance", "dockings", "min battery", "waiting", "collisions"):
+        table.add_column(column, justify="left" if column == "robot" else "right")
+    for r in report.robots:
+        table.add_row(r.name, f"{r.distance_m:.0f} m", str(r.dockings), f"{100 * r.min_battery:.0f} %",
+                      f"{r.wait_s:.0f} s", str(r.collisions))
+    return table
+
+
+def _run(args: argparse.Namespace) -> int:
+    from deploy.fleet.run import run_fleet  # noqa: PLC0415 - heavy imports only when used
+    from deploy.fleet.stack import FleetOptions  # noqa: PLC0415
+
+    world = Path(args.world)
+    if not world.is_file():
+        raise ConfigError(f"--world {world}: no such file")
+    options = FleetOptions(world=world.resolve(), robots=args.robots, duration_s=args.duration, rtf=args.rtf,
+                           seed=args.seed, detector=args.detector, drain_scale=args.drain_scale,
+                           charge_scale=args.drain_scale, resume_at=args.resume_at,
+                           **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
+    console = Console(stderr=args.json)
+
+    def progress(sim_s: float, robots) -> None:  # type: ignore[no-untyped-def]
+        parts = [f"{r.name} {r.state or '?'} {100 * r.battery:.0f}% {r.dockings}d" for r in robots]
+        console.print(f"[dim]{sim_s:7.0f} s[/] " + " | ".join(parts))
+
+    try:
+        report, run_dir = run_fleet(options, log=lambda t: console.print(f"[dim]fleet:[/] {t}"), progress=progress)
+    except (RuntimeError, ValueError) as exc:
+        raise ConfigError(f"fleet in {world}: {exc}") from None
+    console.print(_table(report))
+    collisions = report.collisions
+    console.print(f"collisions: {collisions['robot_robot']} robot-robot, {collisions['robot_world']} robot-world; "
+                  f"reservation conflicts: {report.reservation_conflicts}")
+    for conflict in report.conflicts:
+        console.print(f"  conflict at {conflict}")
+    for error in report.errors:
+        console.print(f"[red]error:[/] {error}")
+    console.print(f"report, picture and logs in {run_dir}")
+    if args.json:
+        print(strict_json.dumps(report.to_json()))
+    clean = collisions["total"] == 0 and report.reservation_conflicts == 0 and not report.errors
+    return 0 if clean else 1
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("fleet", help="several robots patrol one room and share its docks, measured",
+                                   description="Run a fleet: each robot patrols, asks the fleet service for a dock "
+                                               "when low, charges, and patrols again. Reports per robot distance, "
+                                               "dockings, lowest charge, time waiting for a dock and collisions, "
+                                               "and the room's reservation conflicts.")
+    parser.add_argument("--world", default=DEFAULT_WORLD, metavar="FILE",
+                        help=f"a world with docks (and robots; default {DEFAULT_WORLD})")
+    parser.add_argument("--robots", type=_count, default=None, metavar="N",
+                        help="how many robots (default: those the world lists; more are placed at seeded starts)")
+    parser.add_argument("--duration", type=_duration, default=600.0, metavar="SIM_S",
+                        help="simulated seconds to run (default 600)")
+    parser.add_argument("--rtf", type=_rtf, default="4", help="simulator real-time factor, or max")
+    parser.add_argument("--seed", type=int, default=0, help="seed of generated starts, patrols and sensor noise")
+    parser.add_argument("--detector", choices=["aruco", "synthetic"], default="synthetic",
+                        help="how robots find their dock: the simulator's noisy truth, or ArUco in camera images")
+    parser.add_argument("--drain-scale", type=_scale, default=8.0, metavar="X",
+                        help="batteries drain and charge X times faster than the cell model, so an hour holds "
+                             "several charge cycles (default 8)")
+    parser.add_argument("--resume-at", type=float, default=0.9, metavar="FRACTION",
+                        help="charge at which a docked robot undocks and patrols again (default 0.9)")
+    parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
+                        help="where the run directory goes (default: runs/ in the repository)")
+    parser.add_argument("--json", action="store_true", help="print the report as JSON on the last line")
+    parser.set_defaults(func=_run)

@@ -1,0 +1,1 @@
+"""``zendock fleet``: several robots patrolling one room and sharing its docks, run and measured."""

@@ -1,0 +1,197 @@
+"""Watches a fleet from the outside, on the bus, and measures it on ground truth.
+
+Per robot: the distance it drove (ground truth, teleports left out), how often it docked (charging
+began with its contacts mated), its lowest charge, how long it waited for a dock (sim time in
+``WAITING_FOR_DOCK``), its collisions. For the room: collisions between robots (each robot reports one
+contact; the pair is counted once) and with the world, and reservation conflicts: a robot whose contacts
+mate with a dock the fleet's book does not give it, or two robots mated with one dock at once.
+
+Zenoh callbacks only decode and update under a lock; reading takes a copy.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import zenoh
+
+from shared import topics
+from shared.interfaces.fleet import FleetDocks
+from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, PoseStamped, String
+from shared.names import topic_key
+from shared.schema import Message, MessageError
+
+#: docking/state while a robot waits for a dock.
+WAITING_STATE = "WAITING_FOR_DOCK"
+#: Ground truth that jumps further than this between samples was a teleport, not a drive.
+TELEPORT_JUMP_M = 0.3
+#: Track points for the picture are kept this far apart.
+TRACK_STEP_M = 0.1
+#: Two robots' reports of one contact between them are this close in sim time.
+PAIR_WINDOW_S = 1.0
+_CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+
+
+@dataclass
+class RobotTally:
+    name: str
+    distance_m: float = 0.0
+    dockings: int = 0
+    min_battery: float = math.inf
+    battery: float = math.nan
+    wait_s: float = 0.0
+    collisions: int = 0
+    collision_kinds: dict[str, int] = field(default_factory=dict)
+    state: str = ""
+    charging: bool = False
+    track: list[tuple[float, float]] = field(default_factory=list)
+    #: The dock its contacts are mated with now ("" when none).
+    mated_dock: str = ""
+    last_pose: tuple[float, float] | None = None
+    state_since_s: float = math.nan
+
+
+@dataclass
+class Conflict:
+    sim_s: float
+    robot: str
+    dock_id: str
+    holder: str
+
+    def describe(self) -> str:
+        return (f"{self.sim_s:.1f} s: {self.robot} mated with dock {self.dock_id} held by "
+                f"{self.holder or 'nobody'}")
+
+
+class FleetMonitor:
+    """Subscribes to every robot's keys and the fleet's on ``session``."""
+
+    def __init__(self, session: zenoh.Session, robots: list[str], namespace: str = "") -> None:
+        self._lock = threading.Lock()
+        self.robots = {name: RobotTally(name) for name in robots}
+        self.conflicts: list[Conflict] = []
+        #: (sim time, x, y, robot, other) of robot-robot contacts, one per pair.
+        self.robot_contacts: list[tuple[float, float, float, str, str]] = []
+        self.sim_s = math.nan
+        self._holders: dict[str, str] = {}
+        self._fleet_docks_seen = False
+        self._namespace = namespace
+        key = lambda robot, name: topic_key(topic_key(namespace, robot) if namespace else robot, name)  # noqa: E731
+        subs: list[Any] = []
+        for robot in robots:
+            subs += [
+                session.declare_subscriber(key(robot, topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth, robot)),
+                session.declare_subscriber(key(robot, topics.BATTERY_STATUS), self._decoder(BatteryState, self._on_battery, robot)),
+                session.declare_subscriber(key(robot, topics.DOCK_CONTACT), self._decoder(DockContact, self._on_contact, robot)),
+                session.declare_subscriber(key(robot, topics.COLLISIONS), self._decoder(CollisionEvent, self._on_collision, robot)),
+                session.declare_subscriber(key(robot, "docking/state"), self._decoder(String, self._on_state, robot)),
+            ]
+        subs.append(session.declare_subscriber(key(robots[0], topics.CLOCK), self._decoder(Clock, self._on_clock, "")))
+        fleet_key = topic_key(namespace, topics.FLEET_DOCKS)
+        subs.append(session.declare_subscriber(fleet_key, self._decoder(FleetDocks, self._on_docks, "")))
+        self._subscribers = subs
+
+    @staticmethod
+    def _decoder(msg_type: type[Message], handler: Callable[[str, Any], None], robot: str):  # type: ignore[no-untyped-def]
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                msg = msg_type.decode(sample.payload.to_bytes())
+            except MessageError:
+                return
+            handler(robot, msg)
+
+        return on_sample
+
+    # --- callbacks (Zenoh threads) ------------------------------------------------------------------
+
+    def _on_clock(self, _robot: str, msg: Clock) -> None:
+        now = msg.clock.to_sec()
+        with self._lock:
+            previous = self.sim_s
+            self.sim_s = now
+            if math.isfinite(previous) and 0.0 < now - previous < 5.0:
+                for tally in self.robots.values():
+                    if tally.state == WAITING_STATE:
+                        tally.wait_s += now - previous
+
+    def _on_truth(self, robot: str, msg: PoseStamped) -> None:
+        p = msg.pose.position
+        with self._lock:
+            tally = self.robots[robot]
+            here = (p.x, p.y)
+            if tally.last_pose is not None:
+                step = math.dist(tally.last_pose, here)
+                if step < TELEPORT_JUMP_M:
+                    tally.distance_m += step
+            tally.last_pose = here
+            if not tally.track or math.dist(tally.track[-1], here) >= TRACK_STEP_M:
+                tally.track.append(here)
+
+    def _on_battery(self, robot: str, msg: BatteryState) -> None:
+        with self._lock:
+            tally = self.robots[robot]
+            if math.isfinite(msg.percentage):
+                tally.battery = msg.percentage
+                tally.min_battery = min(tally.min_battery, msg.percentage)
+            charging = msg.power_supply_status in _CHARGING
+            if charging and not tally.charging:
+                tally.dockings += 1  # the battery charges only on mated contacts
+            tally.charging = charging
+
+    def _on_contact(self, robot: str, msg: DockContact) -> None:
+        with self._lock:
+            tally = self.robots[robot]
+            dock = msg.dock_id if msg.mated else ""
+            if dock and dock != tally.mated_dock:
+                holder = self._holders.get(dock, "")
+                others = [r.name for r in self.robots.values() if r.name != robot and r.mated_dock == dock]
+                if others:
+                    self.conflicts.append(Conflict(self.sim_s, robot, dock, others[0]))
+                elif self._fleet_docks_seen and holder != self._robot_key(robot):
+                    self.conflicts.append(Conflict(self.sim_s, robot, dock, holder))
+            tally.mated_dock = dock
+
+    def _on_collision(self, robot: str, msg: CollisionEvent) -> None:
+        t = msg.header.stamp.to_sec()
+        with self._lock:
+            tally = self.robots[robot]
+            tally.collisions += 1
+            tally.collision_kinds[msg.kind] = tally.collision_kinds.get(msg.kind, 0) + 1
+            if msg.kind == "robot":
+                pair = sorted((robot, msg.other_robot))
+                seen = any(sorted((a, b)) == pair and abs(t - s) < PAIR_WINDOW_S for s, _, _, a, b in self.robot_contacts)
+                if not seen:
+                    self.robot_contacts.append((t, msg.x, msg.y, robot, msg.other_robot))
+
+    def _on_state(self, robot: str, msg: String) -> None:
+        with self._lock:
+            self.robots[robot].state = msg.data
+
+    def _on_docks(self, _robot: str, msg: FleetDocks) -> None:
+        with self._lock:
+            self._fleet_docks_seen = True
+            self._holders = {d.dock_id: d.robot for d in msg.docks}
+
+    def _robot_key(self, robot: str) -> str:
+        return topic_key(self._namespace, robot) if self._namespace else robot
+
+    # --- reading --------------------------------------------------------------------------------------
+
+    def snapshot(self) -> tuple[float, list[RobotTally], list[Conflict], list[tuple[float, float, float, str, str]]]:
+        with self._lock:
+            robots = [RobotTally(**{**t.__dict__, "track": list(t.track), "collision_kinds": dict(t.collision_kinds)})
+                      for t in self.robots.values()]
+            return self.sim_s, robots, list(self.conflicts), list(self.robot_contacts)
+
+    def holders(self) -> dict[str, str]:
+        with self._lock:
+            return dict(self._holders)
+
+    def close(self) -> None:
+        for sub in self._subscribers:
+            sub.undeclare()
+        self._subscribers.clear()

@@ -1,0 +1,164 @@
+"""``zendock fleet``: a fleet patrols one room for a stretch of simulated time, docking when low.
+
+The run writes the effective world (:mod:`deploy.fleet.world_setup`) and the stack
+(:mod:`deploy.fleet.stack`) into its run directory, starts the stack, staggers the robots' charges so
+that they do not all need a dock at once, and watches the bus (:class:`~deploy.fleet.monitor.FleetMonitor`)
+until the simulator's clock has moved on by the duration. The report (``fleet.json``) and the picture
+(``fleet.png``: every robot's track over the room, with the docks and the robot-robot contacts) go into
+the run directory with every service's log.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from deploy import strict_json
+from deploy.fleet.monitor import Conflict, FleetMonitor, RobotTally
+from deploy.fleet.stack import FleetOptions, fleet_stack
+from deploy.fleet.world_setup import fleet_world
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.memory import PeakRssSampler
+from deploy.paths import REPO_ROOT
+from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
+from shared.names import topic_key
+from shared.node import ServiceError, call_service
+from shared.session import SessionSpec, open_session
+from shared.world import World
+
+#: Starting charges are spread over this range (the first robot full), so the robots run low in turn.
+START_CHARGE = (1.0, 0.45)
+#: How often the live progress is reported (wall seconds).
+PROGRESS_PERIOD_S = 10.0
+
+
+@dataclass
+class RobotReport:
+    name: str
+    distance_m: float
+    dockings: int
+    min_battery: float
+    wait_s: float
+    collisions: int
+    collision_kinds: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class FleetReport:
+    world: str
+    robots: list[RobotReport]
+    docks: int
+    collisions: dict[str, int]
+    reservation_conflicts: int
+    conflicts: list[str]
+    sim_s: float
+    wall_s: float
+    achieved_rtf: float
+    peak_rss_mb: dict[str, float]
+    errors: list[str]
+
+    def to_json(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["robots"] = [{**r, "min_battery": round(r["min_battery"], 4), "distance_m": round(r["distance_m"], 1),
+                           "wait_s": round(r["wait_s"], 1)} for r in data["robots"]]
+        data["sim_s"], data["wall_s"] = round(self.sim_s, 1), round(self.wall_s, 1)
+        return data
+
+
+def run_fleet(
+    options: FleetOptions,
+    log: Callable[[str], None] = print,
+    progress: Callable[[float, list[RobotTally]], None] | None = None,
+) -> tuple[FleetReport, Path]:
+    """Run the fleet; returns the report and the run directory."""
+    run_dir = options.runs_dir / f"fleet-{time.strftime('%Y%m%d-%H%M%S')}-{options.world.stem}"
+    run_dir.mkdir(parents=True, exist_ok=True)
+    world, world_file = fleet_world(options.world, options.robots, options.seed, run_dir / "world.yaml")
+    robots = [r.name for r in world.robots]
+    endpoint = free_endpoint()
+    stack_path = run_dir / "stack.yaml"
+    stack_path.write_text(yaml.safe_dump(fleet_stack(options, endpoint, world_file, robots, run_dir / "state"),
+                                         sort_keys=False))
+    stack = load_stack(stack_path, env={}, project_dir=REPO_ROOT)
+    log(f"{len(robots)} robot(s) and {len(world.docks)} dock(s) in {world.name} for {options.duration_s:g} s of "
+        f"simulated time, rtf {options.rtf}, detector {options.detector}; run directory {run_dir}")
+    errors: list[str] = []
+    wall_start = time.monotonic()
+    with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="fleet") as launcher:
+        launcher.wait_healthy(timeout_s=180.0)
+        sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
+        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
+            monitor = FleetMonitor(session, robots)
+            try:
+                _stagger_charges(session, robots, errors)
+                sim_start, sim_end, wall_run = _watch(monitor, options.duration_s, progress)
+                sim_now, tallies, conflicts, contacts = monitor.snapshot()
+            finally:
+                monitor.close()
+        for status in launcher.ps():
+            (run_dir / f"{status.name}.log").write_text("\n".join(launcher.logs(status.name)) + "\n")
+    sim_s = sim_end - sim_start
+    report = _report(world, tallies, conflicts, contacts, sim_s, time.monotonic() - wall_start,
+                     sim_s / max(wall_run, 1e-9), dict(sampler.peak_mb), errors)
+    (run_dir / "fleet.json").write_text(strict_json.dumps(report.to_json(), indent=2) + "\n")
+    from deploy.fleet.picture import plot_fleet  # noqa: PLC0415 - matplotlib is slow to import
+
+    plot_fleet(world, tallies, contacts, run_dir / "fleet.png")
+    return report, run_dir
+
+
+def _stagger_charges(session: Any, robots: list[str], errors: list[str]) -> None:
+    high, low = START_CHARGE
+    for i, robot in enumerate(robots):
+        charge = high - (high - low) * i / max(1, len(robots) - 1)
+        try:
+            call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
+                         SetBatteryStateRequest(percentage=charge), timeout_s=10.0)
+        except ServiceError as exc:
+            errors.append(f"{robot}: starting charge not set: {exc}")
+
+
+def _watch(monitor: FleetMonitor, duration_s: float,
+           progress: Callable[[float, list[RobotTally]], None] | None) -> tuple[float, float, float]:
+    """Wait until the sim clock has run ``duration_s``; (sim start, sim end, wall seconds)."""
+    deadline = time.monotonic() + 60.0
+    while not math.isfinite(monitor.snapshot()[0]):
+        if time.monotonic() > deadline:
+            raise ServiceError("no clock from the simulator within 60 s")
+        time.sleep(0.2)
+    sim_start = monitor.snapshot()[0]
+    wall_start = time.monotonic()
+    last_progress = -math.inf
+    last_clock, last_clock_wall = sim_start, wall_start
+    while True:
+        sim_now, tallies, _, _ = monitor.snapshot()
+        if sim_now - sim_start >= duration_s:
+            return sim_start, sim_now, time.monotonic() - wall_start
+        if sim_now != last_clock:
+            last_clock, last_clock_wall = sim_now, time.monotonic()
+        elif time.monotonic() - last_clock_wall > 60.0:
+            raise ServiceError(f"the simulator's clock stopped at {sim_now:.1f} s")
+        if progress is not None and time.monotonic() - last_progress >= PROGRESS_PERIOD_S:
+            last_progress = time.monotonic()
+            progress(sim_now - sim_start, tallies)
+        time.sleep(0.5)
+
+
+def _report(world: World, tallies: list[RobotTally], conflicts: list[Conflict],
+            contacts: list[tuple[float, float, float, str, str]], sim_s: float, wall_s: float, rtf: float,
+            peak_rss_mb: dict[str, float], errors: list[str]) -> FleetReport:
+    robots = [RobotReport(t.name, t.distance_m, t.dockings, t.min_battery if math.isfinite(t.min_battery) else 0.0,
+                          t.wait_s, t.collisions, t.collision_kinds) for t in tallies]
+    world_hits = sum(n for t in tallies for kind, n in t.collision_kinds.items() if kind != "robot")
+    return FleetReport(
+        world=world.name, robots=robots, docks=len(world.docks),
+        collisions={"total": world_hits + len(contacts), "robot_robot": len(contacts), "robot_world": world_hits},
+        reservation_conflicts=len(conflicts), conflicts=[c.describe() for c in conflicts],
+        sim_s=sim_s, wall_s=wall_s, achieved_rtf=round(rtf, 2), peak_rss_mb=peak_rss_mb, errors=errors,
+    )

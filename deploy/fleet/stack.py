@@ -1,0 +1,70 @@
+"""The stack a fleet run starts: one simulator for the shared room, the fleet service, and each robot's
+services written once as an ``x-robots`` template (the same form a hand-written fleet stack file uses)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+
+@dataclass(frozen=True)
+class FleetOptions:
+    world: Path
+    robots: int | None = None
+    duration_s: float = 3600.0
+    rtf: str = "4"
+    seed: int = 0
+    detector: str = "synthetic"
+    controller: str = "graceful"
+    #: The battery drains (and charges) this many times faster than the model's real cell, so that an
+    #: hour of simulated time holds several charge cycles per robot.
+    drain_scale: float = 8.0
+    charge_scale: float = 8.0
+    #: Charge at which a docked robot undocks and patrols again.
+    resume_at: float = 0.9
+    runs_dir: Path = Path("runs")
+
+
+def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: list[str], state_dir: Path) -> dict[str, Any]:
+    """A stack file (as data) for ``robots`` sharing the room of ``world_file``."""
+    world = str(world_file)
+    py = ["python", "-m"]
+    template: dict[str, Any] = {
+        "battery": {"command": [*py, "services.battery", "-p", "use_sim_time=true",
+                                "-p", f"drain_scale={options.drain_scale}", "-p", f"charge_scale={options.charge_scale}",
+                                "-p", f"state_file={state_dir}/${{ROBOT}}/battery.json"]},
+        "pose": {"command": [*py, "services.pose", "-p", "use_sim_time=true"]},
+        "planner": {"command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
+                                "-p", f"glass_memory_file={state_dir}/${{ROBOT}}/glass_memory.npz"],
+                    "depends_on": {"router": {"condition": "service_started"},
+                                   "map": {"condition": "service_completed_successfully"}}},
+        "docking": {"command": [*py, "services.docking", "-p", "use_sim_time=true", "-p", f"dock_database={world}",
+                                "-p", f"controller={options.controller}", "-p", "fleet=true",
+                                "-p", f"resume_at={options.resume_at}"]},
+    }
+    if options.detector == "aruco":
+        template["perception"] = {"command": [*py, "services.perception", "-p", f"dock_database={world}"]}
+    for service in template.values():
+        service.setdefault("depends_on", {"router": {"condition": "service_started"}})
+        service["restart"] = "on-failure"
+        service["healthcheck"] = {"liveliness": True, "timeout": "60s"}
+    services: dict[str, Any] = {
+        "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
+        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", ".zendock/maps/map.yaml"], "restart": "no"},
+        "simulator": {
+            "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
+                        "-p", f"seed={options.seed}", "-p", f"dock_detector={options.detector}"],
+            "depends_on": {"router": {"condition": "service_started"}},
+            "healthcheck": {"liveliness": True, "timeout": "60s"},
+            "restart": "on-failure",
+        },
+        "fleet": {
+            "command": [*py, "services.fleet", "-p", f"world={world}"],
+            "depends_on": {"router": {"condition": "service_started"}},
+            "healthcheck": {"liveliness": True, "timeout": "60s"},
+            "restart": "on-failure",
+        },
+    }
+    return {"name": "fleet", "namespace": "", "zenoh": {"connect": [endpoint]}, "services": services,
+            "x-robots": {"robots": list(robots), "services": template}}
