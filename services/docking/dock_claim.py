@@ -165,6 +165,11 @@ class AwaitDock(Task[AwaitPhase]):
         self._key: object = None
         self._arrived = False
 
+    @property
+    def going(self) -> bool:
+        """Driving to the holding pose."""
+        return self.holding_pose is not None and not self._arrived
+
     def hold_at(self, pose: Pose2D | None) -> None:
         """The fleet's holding pose for this robot (None: wait where it stands)."""
         if pose is None or (self.holding_pose is not None and pose.distance_to(self.holding_pose) < 0.05):

@@ -26,7 +26,7 @@ import numpy as np
 from services.docking.dock_claim import AwaitDock, DockClaim, FleetAnswer, docks_seen_free
 from services.docking.dock_db import DockDatabase, load_dock_db
 from services.docking.dock_tracker import DockTracker
-from services.docking.docking_run import DockingRun, DockRequest
+from services.docking.docking_run import DockingRun, DockRequest, RunPhase
 from services.docking.drive_arbiter import DriveArbiter, DriveOrders
 from services.docking.errors import DockingError, DockingState
 from services.docking.ir_run import IR_MAX_AGE_S, IrDockingRun
@@ -45,6 +45,7 @@ from services.docking.task_io import (
     TickInputs,
     Velocity,
 )
+from services.docking.traffic import GiveWay, Meeting, Peer, must_give_way, passing_place
 from services.docking.undocking_run import UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
@@ -76,6 +77,7 @@ from shared.messages import (
     Float64MultiArray,
     LaserScan,
     Odometry,
+    Path,
     PoseStamped,
     Range,
     String,
@@ -100,6 +102,24 @@ STATE_PERIOD_S = 1.0
 #: Detections stay subscribed this long (sim seconds) after the run last wanted them.
 DETECTION_LINGER_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+#: A peer's docking/state while it drives (and so may meet this robot head-on).
+PEER_UNDER_WAY = ("PATROLLING", "NAV_TO_STAGING_POSE", "RETRY")
+#: A peer not heard from (pose, plan) for this long is not on the way.
+PEER_MAX_AGE_S = 2.0
+
+
+class _PeerState:
+    """What the bus last said of another robot of the fleet."""
+
+    __slots__ = ("battery", "plan", "plan_s", "pose", "pose_s", "state")
+
+    def __init__(self) -> None:
+        self.pose: Pose2D | None = None
+        self.pose_s = -math.inf
+        self.battery = 1.0
+        self.state = ""
+        self.plan: np.ndarray | None = None
+        self.plan_s = -math.inf
 
 
 def _world_patrol(dock_database: str, robot: str) -> list[tuple[float, float, float]]:
@@ -112,6 +132,15 @@ def _world_patrol(dock_database: str, robot: str) -> list[tuple[float, float, fl
     except ConfigError:
         return []  # a plain dock database: no robots in it
     return next((list(r.patrol) for r in world.robots if r.name == robot), [])
+
+
+def _world_walls(dock_database: str) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """Every surface of the room (glass too), when the dock database is a world file; else none."""
+    try:
+        world = load_world(dock_database)
+    except ConfigError:
+        return []
+    return [*world.opaque_segments(), *world.glass]
 
 
 class DockingService:
@@ -154,6 +183,18 @@ class DockingService:
         fleet_ns = node.namespace.rpartition("/")[0]
         self._reserve_key = topic_key(fleet_ns, topics.FLEET_RESERVE_DOCK)
         self._release_key = topic_key(fleet_ns, topics.FLEET_RELEASE_DOCK)
+        #: The fleet's other robots (by namespace), and the room's walls for passing places: the traffic rule.
+        self._peers: dict[str, _PeerState] = {}
+        self._walls = _world_walls(params.dock_database) if params.fleet else []
+        if params.fleet and self._walls:
+            for topic, msg_type, handler in (
+                (topics.POSE2D, Float64MultiArray, self._on_peer_pose),
+                (topics.BATTERY_STATUS, BatteryState, self._on_peer_battery),
+                (DOCKING_STATE, String, self._on_peer_state),
+                (topics.PLAN, Path, self._on_peer_plan),
+            ):
+                node.create_subscription(msg_type, topic_key(fleet_ns, f"*/{topic}"), handler, QoS(depth=20),
+                                         with_key=True, absolute=True)
 
         self.cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self.state_pub = node.create_publisher(String, DOCKING_STATE, RELIABLE)
@@ -341,6 +382,8 @@ class DockingService:
         self._follow_mission(now)
         if self.claim is not None:
             self._follow_fleet(now)
+        if self._walls:
+            self._follow_traffic(now)
         task = self.task
         if isinstance(task, DockingRun):
             latest = self.track.latest()
@@ -489,6 +532,80 @@ class DockingService:
         claim.holds(now, free[0])
         self._start(self._docking_run(replace(task.request, dock_id=free[0])), TaskKind.DOCK, self.task_handle)
 
+    # --- traffic -----------------------------------------------------------------------------------
+
+    def _peer(self, key: str, suffix: str) -> _PeerState | None:
+        name = key[: -len(suffix) - 1] if key.endswith("/" + suffix) else ""
+        if not name or name == self.node.namespace:
+            return None
+        return self._peers.setdefault(name, _PeerState())
+
+    def _on_peer_pose(self, key: str, msg: Float64MultiArray) -> None:
+        peer = self._peer(key, topics.POSE2D)
+        if peer is not None and len(msg.data) >= 3 and np.all(np.isfinite(msg.data[:3])):
+            peer.pose, peer.pose_s = Pose2D.from_seq(msg.data[:3]), self.node.now()
+
+    def _on_peer_battery(self, key: str, msg: BatteryState) -> None:
+        peer = self._peer(key, topics.BATTERY_STATUS)
+        if peer is not None and math.isfinite(msg.percentage):
+            peer.battery = float(msg.percentage)
+
+    def _on_peer_state(self, key: str, msg: String) -> None:
+        peer = self._peer(key, DOCKING_STATE)
+        if peer is not None:
+            peer.state = msg.data
+
+    def _on_peer_plan(self, key: str, msg: Path) -> None:
+        peer = self._peer(key, topics.PLAN)
+        if peer is not None:
+            points = [(p.pose.position.x, p.pose.position.y) for p in msg.poses]
+            peer.plan, peer.plan_s = (np.asarray(points, dtype=float) if points else None), self.node.now()
+
+    def _fresh_peers(self, now: float) -> list[Peer]:
+        peers = []
+        for name, p in self._peers.items():
+            if p.pose is None or now - p.pose_s > PEER_MAX_AGE_S:
+                continue
+            plan = p.plan if now - p.plan_s <= PEER_MAX_AGE_S else None
+            peers.append(Peer(name, p.pose, p.battery, p.state in PEER_UNDER_WAY, plan))
+        return peers
+
+    def _under_way(self) -> bool:
+        task = self.task
+        return (isinstance(task, Patrol) or (isinstance(task, DockingRun) and task.phase is RunPhase.NAV_TO_STAGING)
+                or (isinstance(task, AwaitDock) and task.going))
+
+    def _follow_traffic(self, now: float) -> None:
+        """Give way to a robot with priority met head-on (see :mod:`services.docking.traffic`)."""
+        task = self.task
+        if isinstance(task, GiveWay):
+            seen = self._peers.get(task.peer)
+            task.peer_seen(seen.pose if seen is not None and now - seen.pose_s <= PEER_MAX_AGE_S else None)
+            return
+        if not self._under_way() or self._battery is None:
+            return
+        latest = self.track.latest()
+        if latest is None:
+            return
+        me = latest[1]
+        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), self._fresh_peers(now))
+        if met is None:
+            return
+        peer, meeting = met
+        place: Pose2D | None = None
+        if meeting is Meeting.HEAD_ON:
+            place = passing_place(me, peer, self._walls)
+            if place is None:
+                self._say.warning("no-passing-place", "met %s head-on and must give way, but found no passing place: "
+                                  "stopping", peer.name)
+        if place is not None:
+            self._log.info("met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y)
+        else:
+            self._log.info("%s crosses this robot's way (it has priority): stopping for it", peer.name)
+        resume = task.request if isinstance(task, (DockingRun, AwaitDock)) else None
+        assert self.task_kind is not None
+        self._start(GiveWay(peer.name, place, resume), self.task_kind, self.task_handle)
+
     def _carry_out(self, intent: Intent, inputs: TickInputs) -> None:
         if isinstance(intent, Velocity):
             orders = self.arbiter.velocity(intent, inputs.nav.busy, inputs.now_s)
@@ -553,6 +670,11 @@ class DockingService:
         self._apply(self.arbiter.release())
         if isinstance(task, Patrol):
             self.mission.next_waypoint = task.next_index
+        if isinstance(task, GiveWay):
+            self._log.info("gave way: %s", task.message or "done")
+            if isinstance(task.resume, DockRequest):
+                self._begin_docking(task.resume, handle)  # carry on docking (a patrol the mission restarts)
+            return
         self.mission.finished(kind, result.success, handle is not None, self.node.now())
         if self.claim is not None and ((kind is TaskKind.DOCK and not result.success)
                                        or (kind is TaskKind.UNDOCK and result.success)):
@@ -651,6 +773,8 @@ class DockingService:
             return "PATROLLING"
         if isinstance(task, AwaitDock):
             return "WAITING_FOR_DOCK"
+        if isinstance(task, GiveWay):
+            return "GIVING_WAY"
         if self._charging(self.node.now()):
             return "DOCKED"
         return "HOLDING" if self.mission.mode is MissionMode.HOLDING else "IDLE"

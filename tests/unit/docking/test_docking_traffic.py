@@ -1,0 +1,120 @@
+"""Traffic between robots: priority, meeting head-on, the passing place, and giving way."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from services.docking.task_io import Navigate, NavOutcome, NavStatus, Outcome, TickInputs
+from services.docking.traffic import (
+    CLEAR_OF_WAY_M,
+    GiveWay,
+    Meeting,
+    Peer,
+    has_priority,
+    must_give_way,
+    passing_place,
+    peer_way,
+)
+from shared.geometry import Pose2D
+
+# A corridor 0.8 m wide from x=2 to x=8 (y 2.6 .. 3.4) between two open rooms of a 10 x 6 m hall.
+CORRIDOR = [((2.0, 2.6), (8.0, 2.6)), ((2.0, 3.4), (8.0, 3.4)),
+            ((2.0, 0.0), (2.0, 2.6)), ((2.0, 3.4), (2.0, 6.0)), ((8.0, 0.0), (8.0, 2.6)), ((8.0, 3.4), (8.0, 6.0))]
+HALL = [((0.0, 0.0), (10.0, 0.0)), ((10.0, 0.0), (10.0, 6.0)), ((10.0, 6.0), (0.0, 6.0)), ((0.0, 6.0), (0.0, 0.0))]
+
+
+def test_priority_goes_to_less_charge_then_to_the_name_first() -> None:
+    assert has_priority("r2", 0.3, "r1", 0.6)
+    assert not has_priority("r2", 0.6, "r1", 0.3)
+    assert has_priority("r1", 0.5, "r2", 0.5) and not has_priority("r2", 0.5, "r1", 0.5)
+
+
+def test_only_the_robot_without_priority_gives_way_and_only_head_on() -> None:
+    r1 = Pose2D(4.0, 3.0, 0.0)
+    r2 = Pose2D(5.0, 3.0, math.pi)
+    met = must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, True)])
+    assert met is not None and met[1] is Meeting.HEAD_ON, "r2 has less charge"
+    assert must_give_way(r2, "r2", 0.4, [Peer("r1", r1, 0.8, True)]) is None
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, False)]) is None, "a parked robot is not met"
+    following = Pose2D(5.0, 3.0, 0.0)  # going the same way, ahead of r1
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", following, 0.4, True)]) is None
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", Pose2D(7.0, 3.0, math.pi), 0.4, True)]) is None, "too far"
+
+
+def test_a_robot_crossing_in_front_makes_the_one_without_priority_stop() -> None:
+    me = Pose2D(0.0, 0.0, 0.0)
+    crossing = Peer("r2", Pose2D(0.6, 0.5, -math.pi / 2), 0.4, True)  # in front, left, heading across
+    met = must_give_way(me, "r1", 0.8, [crossing])
+    assert met is not None and met[1] is Meeting.CROSSING
+    assert must_give_way(me, "r1", 0.3, [crossing]) is None, "with priority it carries on"
+    behind = Peer("r2", Pose2D(-0.5, 0.3, 0.0), 0.4, True)
+    assert must_give_way(me, "r1", 0.8, [behind]) is None
+
+
+def test_stopping_for_a_crossing_robot_lasts_until_it_is_out_of_the_way() -> None:
+    me = Pose2D(0.0, 0.0, 0.0)
+    task = GiveWay("r2", None, resume=None)
+    task.peer_seen(Pose2D(0.5, 0.4, -math.pi / 2))
+    assert task.step(_inputs(0.0, me)) is None and task.result is None
+    task.peer_seen(Pose2D(0.5, -0.2, -math.pi / 2))
+    assert task.step(_inputs(1.0, me)) is None and task.result is None, "still in front"
+    task.peer_seen(Pose2D(0.5, -1.3, -math.pi / 2))
+    task.step(_inputs(2.0, me))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+
+
+def test_the_passing_place_is_off_the_corridor_behind_the_robot_that_gives_way() -> None:
+    me = Pose2D(3.0, 3.0, 0.0)  # in the corridor heading east
+    peer = Peer("r2", Pose2D(4.2, 3.0, math.pi), 0.2, True)
+    place = passing_place(me, peer, CORRIDOR + HALL)
+    assert place is not None
+    assert place.x < 2.0 - 0.25, f"back out of the corridor's west end: {place}"
+    way = peer_way(peer)
+    assert min(math.dist((place.x, place.y), p) for p in way) >= CLEAR_OF_WAY_M - 1e-9
+
+
+def test_the_passing_place_follows_the_other_robots_plan_when_it_has_one() -> None:
+    me = Pose2D(3.0, 3.0, 0.0)
+    plan = np.array([[4.0, 3.0], [1.5, 3.0], [1.0, 1.0], [1.0, 0.5]])  # r2 turns south after the corridor
+    peer = Peer("r2", Pose2D(4.2, 3.0, math.pi), 0.2, True, plan)
+    place = passing_place(me, peer, CORRIDOR + HALL)
+    assert place is not None and place.x < 1.8 and place.y > 3.5, f"north of the corridor's mouth: {place}"
+
+
+def test_no_passing_place_in_a_dead_end() -> None:
+    dead_end = [((0.0, 2.6), (6.0, 2.6)), ((0.0, 3.4), (6.0, 3.4)), ((0.0, 2.6), (0.0, 3.4))]
+    me = Pose2D(1.0, 3.0, 0.0)
+    assert passing_place(me, Peer("r2", Pose2D(2.0, 3.0, math.pi), 0.1, True), dead_end) is None
+
+
+def _inputs(now: float, me: Pose2D, nav: NavStatus | None = None) -> TickInputs:
+    return TickInputs(now_s=now, robot_pose=me, nav=nav or NavStatus())
+
+
+def test_give_way_goes_to_the_place_waits_for_the_other_to_pass_then_ends() -> None:
+    place = Pose2D(1.2, 4.0, 0.0)
+    task = GiveWay("r2", place, resume=None)
+    task.peer_seen(Pose2D(4.0, 3.0, math.pi))
+    intent = task.step(_inputs(0.0, Pose2D(3.0, 3.0, 0.0)))
+    assert isinstance(intent, Navigate) and intent.pose == place
+    assert task.step(_inputs(5.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
+    task.peer_seen(Pose2D(2.2, 3.0, math.pi))  # coming through, close, heading at the place's side
+    assert task.step(_inputs(6.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
+    assert task.result is None and task.holding == "giving way to r2"
+    task.peer_seen(Pose2D(0.8, 2.0, -math.pi / 2))  # gone by: the place is behind it
+    task.step(_inputs(8.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED)))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+    assert task.message == "r2 has gone by"
+
+
+def test_give_way_does_not_wait_for_ever() -> None:
+    task = GiveWay("r2", Pose2D(1.0, 1.0, 0.0), resume=None)
+    task.peer_seen(Pose2D(1.5, 1.0, math.pi))
+    first = task.step(_inputs(0.0, Pose2D(1.0, 1.0, 0.0)))
+    assert isinstance(first, Navigate)
+    task.step(_inputs(1.0, Pose2D(1.0, 1.0, 0.0), NavStatus(first.key, outcome=NavOutcome.SUCCEEDED)))
+    assert task.result is None
+    task.step(_inputs(61.0, Pose2D(1.0, 1.0, 0.0), NavStatus(first.key, outcome=NavOutcome.SUCCEEDED)))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
