@@ -30,6 +30,13 @@ def _scale(text: str) -> float:
     return value
 
 
+def _fraction(text: str) -> float:
+    value = float(text)
+    if not 0.3 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be a fraction in (0.3, 1], above the docking threshold 0.25, got {text}")
+    return value
+
+
 def _table(report) -> Table:  # type: ignore[no-untyped-def]
     table = Table(title=f"fleet in {report.world}: {report.sim_s:.0f} s simulated in {report.wall_s:.0f} s "
                         f"(rtf {report.achieved_rtf})")
@@ -50,7 +57,7 @@ def _run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--world {world}: no such file")
     options = FleetOptions(world=world.resolve(), robots=args.robots, duration_s=args.duration, rtf=args.rtf,
                            seed=args.seed, detector=args.detector, drain_scale=args.drain_scale,
-                           charge_scale=args.drain_scale, resume_at=args.resume_at,
+                           charge_scale=args.charge_scale, resume_at=args.resume_at,
                            **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
     console = Console(stderr=args.json)
 
@@ -65,7 +72,8 @@ def _run(args: argparse.Namespace) -> int:
     console.print(_table(report))
     collisions = report.collisions
     console.print(f"collisions: {collisions['robot_robot']} robot-robot, {collisions['robot_world']} robot-world; "
-                  f"reservation conflicts: {report.reservation_conflicts}")
+                  f"reservation conflicts: {report.reservation_conflicts}; gave way {report.give_ways} time(s)"
+                  + (f", the longest {report.max_give_way_s} s" if report.give_ways else ""))
     for conflict in report.conflicts:
         console.print(f"  conflict at {conflict}")
     for error in report.errors:
@@ -94,10 +102,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="synthetic",
                         help="how robots find their dock: the simulator's noisy truth, or ArUco in camera images")
     parser.add_argument("--drain-scale", type=_scale, default=8.0, metavar="X",
-                        help="batteries drain and charge X times faster than the cell model, so an hour holds "
-                             "several charge cycles (default 8)")
-    parser.add_argument("--resume-at", type=float, default=0.9, metavar="FRACTION",
-                        help="charge at which a docked robot undocks and patrols again (default 0.9)")
+                        help="batteries drain X times faster than the cell model, so an hour holds several charge "
+                             "cycles (default 8)")
+    parser.add_argument("--charge-scale", type=_scale, default=16.0, metavar="X",
+                        help="docks charge X times faster than the cell model's 0.5 C (default 16)")
+    parser.add_argument("--resume-at", type=_fraction, default=0.8, metavar="FRACTION",
+                        help="charge at which a docked robot undocks and patrols again (default 0.8)")
     parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
                         help="where the run directory goes (default: runs/ in the repository)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON on the last line")

@@ -25,8 +25,9 @@ from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, Po
 from shared.names import topic_key
 from shared.schema import Message, MessageError
 
-#: docking/state while a robot waits for a dock.
+#: docking/state while a robot waits for a dock, and while it gives way to another robot.
 WAITING_STATE = "WAITING_FOR_DOCK"
+GIVING_WAY_STATE = "GIVING_WAY"
 #: Ground truth that jumps further than this between samples was a teleport, not a drive.
 TELEPORT_JUMP_M = 0.3
 #: Track points for the picture are kept this far apart.
@@ -53,6 +54,8 @@ class RobotTally:
     mated_dock: str = ""
     last_pose: tuple[float, float] | None = None
     state_since_s: float = math.nan
+    #: How long each time it gave way lasted (sim seconds), from the meeting until the way was clear.
+    give_ways_s: list[float] = field(default_factory=list)
 
 
 @dataclass
@@ -169,7 +172,14 @@ class FleetMonitor:
 
     def _on_state(self, robot: str, msg: String) -> None:
         with self._lock:
-            self.robots[robot].state = msg.data
+            tally = self.robots[robot]
+            if msg.data == tally.state:
+                return
+            if msg.data == GIVING_WAY_STATE:
+                tally.state_since_s = self.sim_s
+            elif tally.state == GIVING_WAY_STATE and math.isfinite(tally.state_since_s):
+                tally.give_ways_s.append(self.sim_s - tally.state_since_s)
+            tally.state = msg.data
 
     def _on_docks(self, _robot: str, msg: FleetDocks) -> None:
         with self._lock:
@@ -183,7 +193,8 @@ class FleetMonitor:
 
     def snapshot(self) -> tuple[float, list[RobotTally], list[Conflict], list[tuple[float, float, float, str, str]]]:
         with self._lock:
-            robots = [RobotTally(**{**t.__dict__, "track": list(t.track), "collision_kinds": dict(t.collision_kinds)})
+            robots = [RobotTally(**{**t.__dict__, "track": list(t.track), "collision_kinds": dict(t.collision_kinds),
+                                    "give_ways_s": list(t.give_ways_s)})
                       for t in self.robots.values()]
             return self.sim_s, robots, list(self.conflicts), list(self.robot_contacts)
 

@@ -11,6 +11,7 @@ the run directory with every service's log.
 from __future__ import annotations
 
 import math
+import random
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -47,6 +48,8 @@ class RobotReport:
     wait_s: float
     collisions: int
     collision_kinds: dict[str, int] = field(default_factory=dict)
+    #: Each time it gave way to another robot: how long until the way was clear (sim seconds).
+    give_ways_s: list[float] = field(default_factory=list)
 
 
 @dataclass
@@ -57,6 +60,9 @@ class FleetReport:
     collisions: dict[str, int]
     reservation_conflicts: int
     conflicts: list[str]
+    #: Robots giving way to each other: how often, and the longest until the way was clear (sim seconds).
+    give_ways: int
+    max_give_way_s: float | None
     sim_s: float
     wall_s: float
     achieved_rtf: float
@@ -66,7 +72,8 @@ class FleetReport:
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
         data["robots"] = [{**r, "min_battery": round(r["min_battery"], 4), "distance_m": round(r["distance_m"], 1),
-                           "wait_s": round(r["wait_s"], 1)} for r in data["robots"]]
+                           "wait_s": round(r["wait_s"], 1), "give_ways_s": [round(g, 1) for g in r["give_ways_s"]]}
+                          for r in data["robots"]]
         data["sim_s"], data["wall_s"] = round(self.sim_s, 1), round(self.wall_s, 1)
         return data
 
@@ -96,7 +103,7 @@ def run_fleet(
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
             monitor = FleetMonitor(session, robots)
             try:
-                _stagger_charges(session, robots, errors)
+                _stagger_charges(session, robots, options.seed, errors)
                 sim_start, sim_end, wall_run = _watch(monitor, options.duration_s, progress)
                 sim_now, tallies, conflicts, contacts = monitor.snapshot()
             finally:
@@ -113,9 +120,12 @@ def run_fleet(
     return report, run_dir
 
 
-def _stagger_charges(session: Any, robots: list[str], errors: list[str]) -> None:
+def _stagger_charges(session: Any, robots: list[str], seed: int, errors: list[str]) -> None:
+    """Spread the starting charges; the seed decides who gets which (and so who has priority)."""
     high, low = START_CHARGE
-    for i, robot in enumerate(robots):
+    order = list(robots)
+    random.Random(seed).shuffle(order)
+    for i, robot in enumerate(order):
         charge = high - (high - low) * i / max(1, len(robots) - 1)
         try:
             call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
@@ -154,11 +164,13 @@ def _report(world: World, tallies: list[RobotTally], conflicts: list[Conflict],
             contacts: list[tuple[float, float, float, str, str]], sim_s: float, wall_s: float, rtf: float,
             peak_rss_mb: dict[str, float], errors: list[str]) -> FleetReport:
     robots = [RobotReport(t.name, t.distance_m, t.dockings, t.min_battery if math.isfinite(t.min_battery) else 0.0,
-                          t.wait_s, t.collisions, t.collision_kinds) for t in tallies]
+                          t.wait_s, t.collisions, t.collision_kinds, t.give_ways_s) for t in tallies]
+    give_ways = [g for t in tallies for g in t.give_ways_s]
     world_hits = sum(n for t in tallies for kind, n in t.collision_kinds.items() if kind != "robot")
     return FleetReport(
         world=world.name, robots=robots, docks=len(world.docks),
         collisions={"total": world_hits + len(contacts), "robot_robot": len(contacts), "robot_world": world_hits},
         reservation_conflicts=len(conflicts), conflicts=[c.describe() for c in conflicts],
+        give_ways=len(give_ways), max_give_way_s=round(max(give_ways), 1) if give_ways else None,
         sim_s=sim_s, wall_s=wall_s, achieved_rtf=round(rtf, 2), peak_rss_mb=peak_rss_mb, errors=errors,
     )

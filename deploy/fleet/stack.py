@@ -20,9 +20,9 @@ class FleetOptions:
     #: The battery drains (and charges) this many times faster than the model's real cell, so that an
     #: hour of simulated time holds several charge cycles per robot.
     drain_scale: float = 8.0
-    charge_scale: float = 8.0
+    charge_scale: float = 16.0
     #: Charge at which a docked robot undocks and patrols again.
-    resume_at: float = 0.9
+    resume_at: float = 0.8
     runs_dir: Path = Path("runs")
 
 

@@ -567,7 +567,7 @@ class DockingService:
             if p.pose is None or now - p.pose_s > PEER_MAX_AGE_S:
                 continue
             plan = p.plan if now - p.plan_s <= PEER_MAX_AGE_S else None
-            peers.append(Peer(name, p.pose, p.battery, p.state in PEER_UNDER_WAY, plan))
+            peers.append(Peer(name, p.pose, p.battery, p.state in PEER_UNDER_WAY, plan, p.state == "GIVING_WAY"))
         return peers
 
     def _under_way(self) -> bool:
@@ -588,7 +588,8 @@ class DockingService:
         if latest is None:
             return
         me = latest[1]
-        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), self._fresh_peers(now))
+        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), self._fresh_peers(now),
+                            self._walls)
         if met is None:
             return
         peer, meeting = met
@@ -600,11 +601,13 @@ class DockingService:
                                   "stopping", peer.name)
         if place is not None:
             self._log.info("met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y)
+        elif meeting is Meeting.HEAD_ON_PRIORITY:
+            self._log.info("met %s head-on (this robot has priority): waiting for it to back out", peer.name)
         else:
             self._log.info("%s crosses this robot's way (it has priority): stopping for it", peer.name)
         resume = task.request if isinstance(task, (DockingRun, AwaitDock)) else None
         assert self.task_kind is not None
-        self._start(GiveWay(peer.name, place, resume), self.task_kind, self.task_handle)
+        self._start(GiveWay(peer, meeting, place, resume), self.task_kind, self.task_handle)
 
     def _carry_out(self, intent: Intent, inputs: TickInputs) -> None:
         if isinstance(intent, Velocity):

@@ -2,21 +2,23 @@
 
 Planners already treat other robots as obstacles (their lidar sees them), which is enough in open
 space. In a doorway or a corridor one robot wide it is not: two robots meeting head-on each block the
-other's only way, and both wait for ever. The rule:
+other's only way, and both plan, back up and give up for ever. The rule:
 
 - **Priority** goes to the robot with less charge (it needs a dock more), then to the name that sorts
   first. Every robot knows every other's charge from the bus, so both reach the same verdict.
-- Two robots **meet** when each is ahead of the other (within :data:`HEAD_ON_HALF_ANGLE_RAD` of its
-  heading) and they are closer than :data:`MEET_DISTANCE_M`, both under way.
-- The robot without priority **gives way**: it goes to the nearest **passing place** by free path
-  (:func:`passing_place`): a spot clear of the walls, off the other robot's way (its plan ahead, or
-  the line it heads along), and out of its reach; there it waits until the other has gone by (it no
-  longer heads at the robot), then carries on with what it was doing.
+- Two robots **meet head-on** when each is ahead of the other (within :data:`HEAD_ON_HALF_ANGLE_RAD`
+  of its heading), closer than :data:`MEET_DISTANCE_M`, both under way, and the way between them is
+  **narrow** (it passes closer than :data:`NARROW_CLEARANCE_M` to a wall: no room to pass side by side).
+  The one without priority goes to the nearest **passing place** by free path (:func:`passing_place`):
+  a spot clear of the walls, off the other robot's way (its plan ahead, or the line it heads along),
+  and out of its reach; there it waits until the other no longer heads at it (it has gone by), then
+  carries on with what it was doing. The one with priority stops meanwhile and waits until the way
+  ahead is clear, so that it does not plan, back up and give up while the other backs out.
 - Robots whose ways **cross** (the other robot closer than :data:`CROSSING_DISTANCE_M` and in front,
-  within :data:`CROSSING_HALF_ANGLE_RAD` of the heading, but not head-on): the one without priority
-  stops where it is until the other is out of its way. Each planner's collision check sees the other
-  robot only where it is now, not where it is going, so two robots crossing could otherwise meet side
-  on; a robot standing still is an obstacle the other's planner does avoid.
+  within :data:`CROSSING_HALF_ANGLE_RAD` of the heading, not head-on): the one without priority stops
+  where it is until the other is out of its way. Each planner's collision check sees the other robot
+  only where it is now, not where it is going, so two robots crossing could otherwise meet side on; a
+  robot standing still is an obstacle the other's planner does avoid.
 
 Pure: no bus, no clock. The docking node keeps the peers' latest poses, charges and plans, asks
 :func:`must_give_way` each tick while its robot is under way, and runs :class:`GiveWay` when it says so.
@@ -35,8 +37,11 @@ import numpy as np
 from services.docking.task_io import Intent, Navigate, NavOutcome, Outcome, Task, TickInputs
 from shared.geometry import Pose2D, distances_to_segment, wrap_angle
 
-#: Two robots closer than this, each ahead of the other, meet.
-MEET_DISTANCE_M = 1.6
+#: Two robots closer than this, each ahead of the other, in a narrow way, meet head-on (a planner
+#: gives up on a corridor with a robot in it from about 3 m).
+MEET_DISTANCE_M = 3.5
+#: The way between two robots is narrow when it passes this close to a wall.
+NARROW_CLEARANCE_M = 0.65
 HEAD_ON_HALF_ANGLE_RAD = math.radians(50.0)
 #: Another robot this close and in front, within this angle of the heading, is crossing the robot's way.
 CROSSING_DISTANCE_M = 1.0
@@ -56,6 +61,8 @@ WAY_AHEAD_M = 5.0
 CLEAR_DISTANCE_M = 4.0
 #: ... or after this long, whatever happened (then the rule is asked again).
 GIVE_WAY_TIMEOUT_S = 60.0
+#: The robot with priority waits at most this long for the other to back out.
+PRIORITY_WAIT_TIMEOUT_S = 30.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,6 +74,8 @@ class Peer:
     battery: float
     under_way: bool
     plan: np.ndarray | None = None
+    #: It is giving way (or waiting for its way to clear) itself.
+    giving_way: bool = False
 
 
 def has_priority(name: str, battery: float, other_name: str, other_battery: float) -> bool:
@@ -80,22 +89,44 @@ def _ahead(of: Pose2D, point: Pose2D, half_angle_rad: float = HEAD_ON_HALF_ANGLE
 
 
 class Meeting(enum.Enum):
-    #: Each ahead of the other: the one without priority goes to a passing place.
+    #: Head-on in a narrow way, without priority: back out to a passing place.
     HEAD_ON = "head-on"
-    #: The other in front, crossing: the one without priority stops until it is out of the way.
+    #: Head-on in a narrow way, with priority: stop until the other has backed out of the way.
+    HEAD_ON_PRIORITY = "head-on, with priority"
+    #: The other in front, crossing, without priority: stop until it is out of the way.
     CROSSING = "crossing"
 
 
-def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer]) -> tuple[Peer, Meeting] | None:
-    """The robot this one must give way to now, if any (the nearest), and how they meet."""
+Walls = Sequence[tuple[tuple[float, float], tuple[float, float]]]
+
+
+def clearance_between(a: Pose2D, b: Pose2D, walls: Walls) -> float:
+    """The least distance to a wall along the straight way from ``a`` to ``b``."""
+    steps = max(2, int(a.distance_to(b) / 0.1) + 1)
+    points = np.column_stack([np.linspace(a.x, b.x, steps), np.linspace(a.y, b.y, steps)])
+    least = math.inf
+    for start_xy, end_xy in walls:
+        least = min(least, float(distances_to_segment(points, np.asarray(start_xy, float), np.asarray(end_xy, float)).min()))
+    return least
+
+
+def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], walls: Walls) -> tuple[Peer, Meeting] | None:
+    """The robot this one must give way to (or wait for) now, if any (the nearest), and how they meet."""
     found: list[tuple[float, Peer, Meeting]] = []
     for p in peers:
-        if not p.under_way or has_priority(name, battery, p.name, p.battery):
+        if not (p.under_way or p.giving_way):
             continue
+        priority = has_priority(name, battery, p.name, p.battery)
         distance = me.distance_to(p.pose)
-        if distance < MEET_DISTANCE_M and _ahead(me, p.pose) and _ahead(p.pose, me):
-            found.append((distance, p, Meeting.HEAD_ON))
-        elif distance < CROSSING_DISTANCE_M and _ahead(me, p.pose, CROSSING_HALF_ANGLE_RAD):
+        # Each in the other's way: without priority, this robot stands on the other's way ahead; with
+        # it, the other stands on the line this one heads along (what its wait for a clear way checks).
+        in_the_way = (_off_line(p.pose, _heading_line(me)) < CLEAR_OF_WAY_M if priority
+                      else float(_off_ways(np.array([[me.x, me.y]]), peer_way(p))[0]) < CLEAR_OF_WAY_M)
+        if (distance < MEET_DISTANCE_M and _ahead(me, p.pose) and _ahead(p.pose, me) and in_the_way
+                and clearance_between(me, p.pose, walls) < NARROW_CLEARANCE_M):
+            found.append((distance, p, Meeting.HEAD_ON_PRIORITY if priority else Meeting.HEAD_ON))
+        elif (not priority and p.under_way and distance < CROSSING_DISTANCE_M
+              and _ahead(me, p.pose, CROSSING_HALF_ANGLE_RAD)):
             found.append((distance, p, Meeting.CROSSING))
     if not found:
         return None
@@ -103,16 +134,31 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer]) 
     return peer, meeting
 
 
-def peer_way(peer: Peer) -> np.ndarray:
-    """Points along the other robot's way ahead: its plan's first metres, else the line it heads along."""
+def peer_way(peer: Peer) -> list[np.ndarray]:
+    """The other robot's way ahead, as polylines: the line it heads along, and its plan's first metres
+    (a planner that has given up on a blocked corridor may hold a plan elsewhere; the heading still
+    says where it wants to go)."""
+    ends = [peer.pose.transform_point(d, 0.0) for d in np.linspace(0.0, WAY_AHEAD_M, 11)]
+    ways = [np.asarray(ends, dtype=float)]
     if peer.plan is not None and len(peer.plan) >= 2:
         steps = np.hypot(*np.diff(peer.plan, axis=0).T)
         within = np.concatenate([[0.0], np.cumsum(steps)]) <= WAY_AHEAD_M
         points = peer.plan[within]
         if len(points) >= 2:
-            return np.vstack([[peer.pose.x, peer.pose.y], points])
-    ends = [peer.pose.transform_point(d, 0.0) for d in np.linspace(0.0, WAY_AHEAD_M, 11)]
-    return np.asarray(ends, dtype=float)
+            ways.append(np.vstack([[peer.pose.x, peer.pose.y], points]))
+    return ways
+
+
+def _off_ways(points: np.ndarray, ways: list[np.ndarray]) -> np.ndarray:
+    return np.min([_distance_to_polyline(points, way) for way in ways], axis=0)
+
+
+def _heading_line(pose: Pose2D) -> np.ndarray:
+    return np.asarray([pose.transform_point(d, 0.0) for d in np.linspace(0.0, MEET_DISTANCE_M, 8)], dtype=float)
+
+
+def _off_line(pose: Pose2D, line: np.ndarray) -> float:
+    return float(_distance_to_polyline(np.array([[pose.x, pose.y]]), line)[0])
 
 
 def _distance_to_polyline(points: np.ndarray, line: np.ndarray) -> np.ndarray:
@@ -122,7 +168,7 @@ def _distance_to_polyline(points: np.ndarray, line: np.ndarray) -> np.ndarray:
     return best
 
 
-def passing_place(me: Pose2D, peer: Peer, walls: Sequence[tuple[tuple[float, float], tuple[float, float]]]) -> Pose2D | None:
+def passing_place(me: Pose2D, peer: Peer, walls: Walls) -> Pose2D | None:
     """The passing place nearest ``me`` by free path (a grid search round the robot), or None."""
     n = int(round(2 * SEARCH_RADIUS_M / GRID_M)) + 1
     offsets = (np.arange(n) - n // 2) * GRID_M
@@ -135,7 +181,7 @@ def passing_place(me: Pose2D, peer: Peer, walls: Sequence[tuple[tuple[float, flo
     to_peer = np.hypot(cells[:, 0] - peer.pose.x, cells[:, 1] - peer.pose.y)
     # Free to move through: clear of the walls and of the other robot's body (with the robots' size).
     free = (clearance >= WALL_CLEARANCE_M - 0.05) & (to_peer >= 0.55)
-    way = _distance_to_polyline(cells, peer_way(peer))
+    way = _off_ways(cells, peer_way(peer))
     good = free & (clearance >= WALL_CLEARANCE_M) & (way >= CLEAR_OF_WAY_M) & (to_peer >= CLEAR_OF_ROBOT_M)
     free_grid, good_grid = free.reshape(n, n), good.reshape(n, n)
     start = (n // 2, n // 2)
@@ -161,20 +207,21 @@ class GiveWayPhase(enum.Enum):
 
 
 class GiveWay(Task[GiveWayPhase]):
-    """Go to the passing place (``place``; None: stop where it is) and wait there until ``peer`` has gone
-    by (see the module docstring).
+    """What a meeting asks of this robot (see the module docstring): go to the passing place (``place``)
+    and wait there until ``peer`` has gone by, or stop where it is until ``peer`` is out of its way.
 
-    Succeeds once the way is clear (or after :data:`GIVE_WAY_TIMEOUT_S`); the node then carries on with
-    the task it interrupted. The node tells it each tick where the other robot is (:meth:`peer_seen`).
+    Succeeds once the way is clear (or after a timeout); the node then carries on with the task it
+    interrupted. The node tells it each tick where the other robot is (:meth:`peer_seen`).
     """
 
-    def __init__(self, peer: str, place: Pose2D | None, resume: object) -> None:
+    def __init__(self, peer: Peer, meeting: Meeting, place: Pose2D | None, resume: object) -> None:
         super().__init__(GiveWayPhase.GOING if place is not None else GiveWayPhase.WAITING)
-        self.peer = peer
+        self.peer = peer.name
+        self.meeting = meeting
         self.place = place
         #: What to carry on with afterwards (for the node: the interrupted task's request).
         self.resume = resume
-        self._peer_pose: Pose2D | None = None
+        self._peer_pose: Pose2D | None = peer.pose
         self._key = self.new_nav_key()
 
     def peer_seen(self, pose: Pose2D | None) -> None:
@@ -184,6 +231,9 @@ class GiveWay(Task[GiveWayPhase]):
         peer = self._peer_pose
         if peer is None or me is None:
             return True  # the other robot is gone from the bus: nothing to wait for
+        if self.meeting is Meeting.HEAD_ON_PRIORITY:  # until the other is off the way ahead
+            off_way = _off_line(peer, _heading_line(me)) >= CLEAR_OF_WAY_M
+            return off_way or not _ahead(me, peer) or me.distance_to(peer) >= CLEAR_DISTANCE_M
         if self.place is None:  # stopped for a crossing: until the other is out of the way in front
             return (me.distance_to(peer) >= CROSSING_DISTANCE_M + 0.2
                     or not _ahead(me, peer, CROSSING_HALF_ANGLE_RAD + math.radians(10.0)))
@@ -191,7 +241,8 @@ class GiveWay(Task[GiveWayPhase]):
 
     def tick(self, inputs: TickInputs) -> Intent:
         now = inputs.now_s
-        if self.started_s is not None and now - self.started_s >= GIVE_WAY_TIMEOUT_S:
+        limit = PRIORITY_WAIT_TIMEOUT_S if self.meeting is Meeting.HEAD_ON_PRIORITY else GIVE_WAY_TIMEOUT_S
+        if self.started_s is not None and now - self.started_s >= limit:
             self.finish(Outcome.SUCCEEDED, message="gave way for the longest allowed")
             return None
         if self.phase is GiveWayPhase.GOING and self.place is not None:
@@ -204,5 +255,6 @@ class GiveWay(Task[GiveWayPhase]):
         if self._clear(inputs.robot_pose):
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
             return None
-        self.holding = f"giving way to {self.peer}"
+        self.holding = (f"waiting for {self.peer} to back out of the way" if self.meeting is Meeting.HEAD_ON_PRIORITY
+                        else f"giving way to {self.peer}")
         return None

@@ -31,33 +31,55 @@ def test_priority_goes_to_less_charge_then_to_the_name_first() -> None:
     assert has_priority("r1", 0.5, "r2", 0.5) and not has_priority("r2", 0.5, "r1", 0.5)
 
 
-def test_only_the_robot_without_priority_gives_way_and_only_head_on() -> None:
-    r1 = Pose2D(4.0, 3.0, 0.0)
+WALLS = CORRIDOR + HALL
+
+
+def test_head_on_in_a_corridor_one_gives_way_and_the_other_waits_for_the_way_to_clear() -> None:
+    r1 = Pose2D(3.5, 3.0, 0.0)
+    r2 = Pose2D(6.0, 3.0, math.pi)
+    met = must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, True)], WALLS)
+    assert met is not None and met[1] is Meeting.HEAD_ON, "r2 has less charge: r1 gives way"
+    met = must_give_way(r2, "r2", 0.4, [Peer("r1", r1, 0.8, True)], WALLS)
+    assert met is not None and met[1] is Meeting.HEAD_ON_PRIORITY, "r2 waits for r1 to back out"
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, False)], WALLS) is None, "a parked robot is not met"
+    following = Pose2D(6.0, 3.0, 0.0)  # going the same way, ahead of r1
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", following, 0.4, True)], WALLS) is None
+    far = Peer("r2", Pose2D(7.5, 3.0, math.pi), 0.4, True)
+    assert must_give_way(r1, "r1", 0.8, [far], WALLS) is None, "too far"
+
+
+def test_head_on_in_open_space_is_left_to_the_planners() -> None:
+    r1 = Pose2D(3.0, 3.0, 0.0)
     r2 = Pose2D(5.0, 3.0, math.pi)
-    met = must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, True)])
-    assert met is not None and met[1] is Meeting.HEAD_ON, "r2 has less charge"
-    assert must_give_way(r2, "r2", 0.4, [Peer("r1", r1, 0.8, True)]) is None
-    assert must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, False)]) is None, "a parked robot is not met"
-    following = Pose2D(5.0, 3.0, 0.0)  # going the same way, ahead of r1
-    assert must_give_way(r1, "r1", 0.8, [Peer("r2", following, 0.4, True)]) is None
-    assert must_give_way(r1, "r1", 0.8, [Peer("r2", Pose2D(7.0, 3.0, math.pi), 0.4, True)]) is None, "too far"
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, True)], HALL) is None
+
+
+def test_the_priority_robot_waits_only_while_the_other_is_on_its_way() -> None:
+    me = Pose2D(4.5, 3.0, math.pi)
+    at_passing_place = Peer("r1", Pose2D(2.5, 4.0, 0.0), 0.8, False, giving_way=True)
+    assert must_give_way(me, "r2", 0.4, [at_passing_place], WALLS) is None, "off its way: no new wait"
+    task = GiveWay(Peer("r1", Pose2D(3.3, 3.0, 0.0), 0.8, True), Meeting.HEAD_ON_PRIORITY, None, resume=None)
+    assert task.step(_inputs(0.0, me)) is None and task.result is None
+    assert task.holding == "waiting for r1 to back out of the way"
+    task.peer_seen(at_passing_place.pose)
+    task.step(_inputs(4.0, me))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
 
 
 def test_a_robot_crossing_in_front_makes_the_one_without_priority_stop() -> None:
-    me = Pose2D(0.0, 0.0, 0.0)
-    crossing = Peer("r2", Pose2D(0.6, 0.5, -math.pi / 2), 0.4, True)  # in front, left, heading across
-    met = must_give_way(me, "r1", 0.8, [crossing])
+    me = Pose2D(5.0, 1.0, 0.0)
+    crossing = Peer("r2", Pose2D(5.6, 1.5, -math.pi / 2), 0.4, True)  # in front, left, heading across
+    met = must_give_way(me, "r1", 0.8, [crossing], HALL)
     assert met is not None and met[1] is Meeting.CROSSING
-    assert must_give_way(me, "r1", 0.3, [crossing]) is None, "with priority it carries on"
-    behind = Peer("r2", Pose2D(-0.5, 0.3, 0.0), 0.4, True)
-    assert must_give_way(me, "r1", 0.8, [behind]) is None
+    assert must_give_way(me, "r1", 0.3, [crossing], HALL) is None, "with priority it carries on"
+    behind = Peer("r2", Pose2D(4.5, 1.3, 0.0), 0.4, True)
+    assert must_give_way(me, "r1", 0.8, [behind], HALL) is None
 
 
 def test_stopping_for_a_crossing_robot_lasts_until_it_is_out_of_the_way() -> None:
     me = Pose2D(0.0, 0.0, 0.0)
-    task = GiveWay("r2", None, resume=None)
-    task.peer_seen(Pose2D(0.5, 0.4, -math.pi / 2))
-    assert task.step(_inputs(0.0, me)) is None and task.result is None
+    task = GiveWay(Peer("r2", Pose2D(0.5, 0.4, -math.pi / 2), 0.2, True), Meeting.CROSSING, None, resume=None)
+    assert task.step(_inputs(0.0, me)) is None and task.result is None, "the first tick knows where r2 is"
     task.peer_seen(Pose2D(0.5, -0.2, -math.pi / 2))
     assert task.step(_inputs(1.0, me)) is None and task.result is None, "still in front"
     task.peer_seen(Pose2D(0.5, -1.3, -math.pi / 2))
@@ -71,7 +93,7 @@ def test_the_passing_place_is_off_the_corridor_behind_the_robot_that_gives_way()
     place = passing_place(me, peer, CORRIDOR + HALL)
     assert place is not None
     assert place.x < 2.0 - 0.25, f"back out of the corridor's west end: {place}"
-    way = peer_way(peer)
+    way = peer_way(peer)[0]
     assert min(math.dist((place.x, place.y), p) for p in way) >= CLEAR_OF_WAY_M - 1e-9
 
 
@@ -95,8 +117,7 @@ def _inputs(now: float, me: Pose2D, nav: NavStatus | None = None) -> TickInputs:
 
 def test_give_way_goes_to_the_place_waits_for_the_other_to_pass_then_ends() -> None:
     place = Pose2D(1.2, 4.0, 0.0)
-    task = GiveWay("r2", place, resume=None)
-    task.peer_seen(Pose2D(4.0, 3.0, math.pi))
+    task = GiveWay(Peer("r2", Pose2D(4.0, 3.0, math.pi), 0.2, True), Meeting.HEAD_ON, place, resume=None)
     intent = task.step(_inputs(0.0, Pose2D(3.0, 3.0, 0.0)))
     assert isinstance(intent, Navigate) and intent.pose == place
     assert task.step(_inputs(5.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
@@ -110,8 +131,8 @@ def test_give_way_goes_to_the_place_waits_for_the_other_to_pass_then_ends() -> N
 
 
 def test_give_way_does_not_wait_for_ever() -> None:
-    task = GiveWay("r2", Pose2D(1.0, 1.0, 0.0), resume=None)
-    task.peer_seen(Pose2D(1.5, 1.0, math.pi))
+    task = GiveWay(Peer("r2", Pose2D(1.5, 1.0, math.pi), 0.2, True), Meeting.HEAD_ON, Pose2D(1.0, 1.0, 0.0),
+                   resume=None)
     first = task.step(_inputs(0.0, Pose2D(1.0, 1.0, 0.0)))
     assert isinstance(first, Navigate)
     task.step(_inputs(1.0, Pose2D(1.0, 1.0, 0.0), NavStatus(first.key, outcome=NavOutcome.SUCCEEDED)))
