@@ -67,6 +67,8 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         report, run_dir = run_fleet(options, log=lambda t: console.print(f"[dim]fleet:[/] {t}"), progress=progress)
+    except ConfigError:
+        raise  # already names the file and what is wrong
     except (RuntimeError, ValueError) as exc:
         raise ConfigError(f"fleet in {world}: {exc}") from None
     console.print(_table(report))

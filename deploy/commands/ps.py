@@ -36,14 +36,26 @@ def current_statuses(paths: RuntimePaths) -> tuple[list[ServiceStatus], bool]:
 
 
 def format_table(statuses: list[ServiceStatus]) -> str:
-    rows = [("NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL")]
-    for s in statuses:
-        detail = s.detail or (f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else "")
-        if s.members:  # one process: its services start, crash and restart together
-            detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
-        rows.append((s.name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail))
-    widths = [max(len(row[i]) for row in rows) for i in range(5)]
-    return "\n".join("  ".join([*(cell.ljust(w) for cell, w in zip(row[:5], widths, strict=True)), row[5]]).rstrip() for row in rows)
+    """One row per service; a fleet's services grouped by namespace (robot), each group under its name."""
+    namespaces = list(dict.fromkeys(sorted(s.namespace for s in statuses)))
+    grouped = len(namespaces) > 1
+    rows: list[tuple[str, ...]] = [("NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL")]
+    for namespace in namespaces:
+        if grouped and namespace != namespaces[0]:
+            rows.append((f"{namespace}/",))
+        for s in (s for s in statuses if s.namespace == namespace):
+            detail = s.detail or (f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else "")
+            if s.members:  # one process: its services start, crash and restart together
+                detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
+            name = f"  {s.name}" if grouped and namespace != namespaces[0] else s.name
+            rows.append((name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail))
+    table = [row for row in rows if len(row) == 6]
+    widths = [max(len(row[i]) for row in table) for i in range(5)]
+    return "\n".join(
+        row[0] if len(row) == 1
+        else "  ".join([*(cell.ljust(w) for cell, w in zip(row[:5], widths, strict=True)), row[5]]).rstrip()
+        for row in rows
+    )
 
 
 def main(args: argparse.Namespace) -> int:
@@ -63,6 +75,7 @@ def main(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("ps", help="list the services and their state")
     add_project_options(parser)
-    parser.add_argument("--json", action="store_true", help='a JSON array of {"name","state","pid","restarts","health","exit_code","started_at","members"}')
+    parser.add_argument("--json", action="store_true", help='a JSON array of {"name","state","pid","restarts","health","exit_code","started_at","members",'
+                             '"namespace"}')
     parser.add_argument("services", nargs="*", metavar="SERVICE")
     parser.set_defaults(func=main)

@@ -47,6 +47,8 @@ class ServiceStatus:
     pid_create_time: float | None = None
     #: A composed group's services (one process: they start, crash and restart together); empty otherwise.
     members: list[str] = field(default_factory=list)
+    #: The namespace the service runs in (a fleet's robot: ``r1``; "" for the stack's root).
+    namespace: str = ""
 
     def ps_json(self) -> dict[str, Any]:
         """Exactly the keys ``zendock ps --json`` promises, as ``docker compose ps --format json`` users
@@ -59,7 +61,7 @@ class ServiceStatus:
         )
         return {"name": self.name, "state": self.state, "pid": self.pid, "restarts": self.restarts,
                 "health": self.health, "exit_code": self.exit_code, "started_at": started_at,
-                "members": list(self.members)}
+                "members": list(self.members), "namespace": self.namespace}
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -105,6 +105,7 @@ class ServiceRunner:
             started_at=self._launched_wall if process else None,
             pid_create_time=process.create_time if process else None,
             members=list(self.plan.members),
+            namespace=self.plan.namespace,
         )
 
     def _set_phase(self, phase: Phase, detail: str | None = None) -> None:

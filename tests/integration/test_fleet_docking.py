@@ -139,3 +139,38 @@ def test_with_the_fleet_down_a_robot_docks_at_a_dock_it_sees_free(spawn, bus: ze
         assert "the fleet did not answer" in log and "docking at west, seen free" in log, log[-3000:]
     finally:
         robot.close()
+
+
+def test_a_robot_whose_docking_service_is_killed_keeps_its_dock_and_docks_after_restart(  # type: ignore[no-untyped-def]
+        spawn, bus: zenoh.Session, namespace: str, tmp_path: Path) -> None:
+    world = _world(tmp_path)
+    docks = KeyRecorder(bus, f"{namespace}/fleet/docks", FleetDocks, keep=5000)
+    spawn("simulator", "--world", world, "-p", "rtf=5")
+    spawn("fleet", "-p", f"world={world}", "-p", "publish_period_s=0.5", "-p", "lease_s=10")
+    robots = {name: _Robot(spawn, bus, namespace, name, world) for name in ("r1", "r2")}
+    r1, r2 = robots["r1"], robots["r2"]
+    try:
+        for robot in robots.values():
+            robot.wait_state("IDLE", timeout_s=30.0)
+        r1.set_battery(0.2)
+        r1.wait_state("NAV_TO_STAGING_POSE", timeout_s=20.0)
+        docks.wait_for(lambda m: m.docks[0].robot == r1.ns, timeout_s=10.0)
+        r2.set_battery(0.2)
+        r2.wait_state("WAITING_FOR_DOCK", timeout_s=20.0)
+
+        r1.docking.kill9()
+        killed_at = docks.count
+        r1.docking.start()
+        r1.wait_charging(timeout_s=60.0)
+        assert r1.truth().contact.mated
+        after_kill = docks.messages[len(docks.messages) - (docks.count - killed_at):]
+        assert after_kill and all(m.docks[0].robot == r1.ns for m in after_kill), \
+            "the dock stayed r1's while its docking service was down and restarting"
+        # Nothing else stalled: r2 still waits for the dock, its service alive and saying so.
+        mark = r2.state.count
+        r2.state.wait_for(lambda m: m.data == "WAITING_FOR_DOCK", timeout_s=10.0, after=mark)
+        assert "already yours" not in r2.docking.output()
+    finally:
+        for robot in robots.values():
+            robot.close()
+        docks.close()

@@ -37,13 +37,28 @@ def test_ps_json_has_exactly_the_promised_keys() -> None:
     status = ServiceStatus("planner", "running", 42, 1, "healthy", phase="running", detail="up 3s", starts=2,
                            exit_code=-9, started_at=1_795_000_000.25)
     assert status.ps_json() == {"name": "planner", "state": "running", "pid": 42, "restarts": 1, "health": "healthy",
-                                "exit_code": -9, "started_at": "2026-11-18T11:06:40.250+00:00", "members": []}
+                                "exit_code": -9, "started_at": "2026-11-18T11:06:40.250+00:00", "members": [],
+                                "namespace": ""}
     group = ServiceStatus("robot", "running", 43, 0, "healthy", members=["battery", "pose"])
     assert group.ps_json()["members"] == ["battery", "pose"]
     assert ServiceStatus.from_dict(group.to_dict()) == group
     never = ServiceStatus("docking", "stopped", None, 0, "none")
     assert never.ps_json()["exit_code"] is None and never.ps_json()["started_at"] is None
     assert ServiceStatus.from_dict({**status.to_dict(), "unknown": 1}) == status
+
+
+def test_ps_groups_a_fleets_services_by_robot() -> None:
+    from deploy.commands.ps import format_table  # noqa: PLC0415
+
+    statuses = [ServiceStatus("planner_r2", "running", 5, 0, "healthy", namespace="r2"),
+                ServiceStatus("simulator", "running", 1, 0, "healthy"),
+                ServiceStatus("battery_r1", "running", 2, 0, "healthy", namespace="r1"),
+                ServiceStatus("planner_r1", "running", 3, 0, "healthy", namespace="r1")]
+    lines = format_table(statuses).splitlines()
+    names = [line.split()[0] for line in lines]
+    assert names == ["NAME", "simulator", "r1/", "battery_r1", "planner_r1", "r2/", "planner_r2"], lines
+    alone = format_table([ServiceStatus("docking", "running", 7, 0, "healthy")]).splitlines()
+    assert [line.split()[0] for line in alone] == ["NAME", "docking"], "one namespace: no groups"
 
 
 def test_readiness_counts_completed_steps_and_unchecked_services() -> None:

@@ -77,3 +77,14 @@ def test_without_x_robots_nothing_changes() -> None:
     assert expand_robots(doc) is doc
     with pytest.raises(RobotTemplateError):
         expand_robots({"x-robots": {"robots": ["r1"], "services": {"a": "not a mapping"}}})
+
+
+def test_the_shipped_fleet_stack_runs_three_robots_sharing_docks(tmp_path: Path) -> None:
+    from deploy.paths import REPO_ROOT  # noqa: PLC0415
+
+    stack = load_stack(REPO_ROOT / "deploy/stack-fleet.yaml", env={}, project_dir=tmp_path)
+    for robot in ("r1", "r2", "r3"):
+        docking = stack.services[f"docking_{robot}"]
+        assert docking.namespace == robot and "fleet=true" in docking.command
+        assert stack.services[f"planner_{robot}"].healthcheck.liveliness == "planner"
+    assert "fleet" in stack.services and "simulator" in stack.services
