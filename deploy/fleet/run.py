@@ -3,9 +3,9 @@
 The run writes the effective world (:mod:`deploy.fleet.world_setup`) and the stack
 (:mod:`deploy.fleet.stack`) into its run directory, starts the stack, staggers the robots' charges so
 that they do not all need a dock at once, and watches the bus (:class:`~deploy.fleet.monitor.FleetMonitor`)
-until the simulator's clock has moved on by the duration. The report (``fleet.json``) and the picture
-(``fleet.png``: every robot's track over the room, with the docks and the robot-robot contacts) go into
-the run directory with every service's log.
+until the simulator's clock has moved on by the duration. The report (``fleet.json``), the tracks
+(``tracks.json``) and the picture (``fleet.png``: every robot's track over the room, with the docks and
+the robot-robot contacts) go into the run directory with every service's log.
 """
 
 from __future__ import annotations
@@ -114,6 +114,9 @@ def run_fleet(
     report = _report(world, tallies, conflicts, contacts, sim_s, time.monotonic() - wall_start,
                      sim_s / max(wall_run, 1e-9), dict(sampler.peak_mb), errors)
     (run_dir / "fleet.json").write_text(strict_json.dumps(report.to_json(), indent=2) + "\n")
+    # Every robot's ground-truth track (x, y every 10 cm), for reading a run afterwards.
+    tracks = {t.name: [[round(x, 2), round(y, 2)] for x, y in t.track] for t in tallies}
+    (run_dir / "tracks.json").write_text(strict_json.dumps(tracks) + "\n")
     from deploy.fleet.picture import plot_fleet  # noqa: PLC0415 - matplotlib is slow to import
 
     plot_fleet(world, tallies, contacts, run_dir / "fleet.png")

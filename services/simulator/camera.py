@@ -20,6 +20,7 @@ The module imports numpy and OpenCV only (no bus); it is the simulator's and the
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -138,6 +139,9 @@ BOX_ALBEDO = 0.50
 DOCK_BODY_ALBEDO = 0.30
 DOCK_FACE_ALBEDO = 0.92
 MARKER_BLACK = 0.06
+#: Another robot as the camera sees it: a box of its footprint, this high, this bright.
+ROBOT_BODY_HEIGHT_M = 0.25
+ROBOT_BODY_ALBEDO = 0.22
 FLOOR_ALBEDO = 0.40
 BACKGROUND_GREY = 35.0
 
@@ -214,11 +218,18 @@ class CameraRenderer:
             return pts
         return cv2.perspectiveTransform(pts.reshape(-1, 1, 2), level.warp).reshape(-1, 2)
 
-    def render(self, robot_pose: Pose2D, motion: Motion = Motion()) -> np.ndarray:
-        """The camera's image (uint8, height x width) with the robot's base_link at ``robot_pose``."""
+    def render(self, robot_pose: Pose2D, motion: Motion = Motion(),
+               others: Sequence[np.ndarray] = ()) -> np.ndarray:
+        """The camera's image (uint8, height x width) with the robot's base_link at ``robot_pose``;
+        ``others``: the footprints (4 x 2 corners) of other robots in the room, drawn as dark boxes."""
         p = self.params
         level = self._level
-        radiance = self._render_level(self.camera_pose(robot_pose), level)
+        scene = self.scene
+        if len(others):
+            bodies = [Surface(tuple(c[i]), tuple(c[(i + 1) % 4]), ROBOT_BODY_HEIGHT_M, ROBOT_BODY_ALBEDO)
+                      for c in others for i in range(4)]
+            scene = Scene.from_surfaces([*scene.surfaces, *bodies], list(scene.markers))
+        radiance = self._render_level(self.camera_pose(robot_pose), level, scene)
         if level.warp is not None:
             radiance = cv2.warpPerspective(radiance, level.warp, (p.width, p.height), flags=cv2.INTER_LINEAR,
                                            borderMode=cv2.BORDER_REPLICATE)
@@ -236,9 +247,9 @@ class CameraRenderer:
 
     # --- geometry ------------------------------------------------------------------------------------
 
-    def _render_level(self, camera: Pose2D, view: _LevelView) -> np.ndarray:
+    def _render_level(self, camera: Pose2D, view: _LevelView, scene: Scene) -> np.ndarray:
         """Radiance (float32 grey levels) of a level camera at ``camera`` on ``view``'s canvas."""
-        p, scene = self.params, self.scene
+        p = self.params
         f, cy = view.focal_px, view.cy
         h_cam = p.mount_z_m
         cos_y, sin_y = math.cos(camera.yaw), math.sin(camera.yaw)
@@ -306,12 +317,12 @@ class CameraRenderer:
                     marker_index = scene.surfaces[int(surface_index)].marker
                     assert marker_index is not None
                     self._paint_marker(image, shown & (surf == surface_index), camera, scene, marker_index, view)
-        self._paint_glass(image, depth, tops, nearest_depth, cy, f, h_cam)
+        self._paint_glass(image, depth, tops, nearest_depth, cy, f, h_cam, scene)
         return image
 
     def _paint_glass(self, image: np.ndarray, depth: np.ndarray, tops: np.ndarray, nearest_opaque: np.ndarray,
-                     cy: float, f: float, h_cam: float) -> None:
-        glass = ~self.scene.opaque
+                     cy: float, f: float, h_cam: float, scene: Scene) -> None:
+        glass = ~scene.opaque
         if not glass.any():
             return
         rows = self._level.rows

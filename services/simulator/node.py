@@ -552,7 +552,8 @@ class SimulatorService:
         if not image_pub.has_subscribers():
             return
         twist = robot.sim.twist
-        pixels = robot.camera.render(robot.sim.pose, Motion(twist.linear_mps, twist.angular_radps))
+        pixels = robot.camera.render(robot.sim.pose, Motion(twist.linear_mps, twist.angular_radps),
+                                     robot.sim.other_footprints())
         robot.frames_rendered += 1
         height, width = pixels.shape
         image_pub.publish(Image(Header(stamp, topics.CAMERA_OPTICAL_FRAME), height, width, "mono8", 0, width,

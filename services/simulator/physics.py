@@ -289,6 +289,10 @@ class SimWorld:
     def _others(self) -> list[SimWorld]:
         return [m for m in self.members if m is not self]
 
+    def other_footprints(self) -> list[np.ndarray]:
+        """The footprints of the other robots in the room (what the camera draws of them)."""
+        return [other.footprint() for other in self._others()]
+
     def _with_others(self, segments: SegmentSet) -> SegmentSet:
         """``segments`` plus the edges of every other robot in the room (what sensors see of them)."""
         others = self._others()

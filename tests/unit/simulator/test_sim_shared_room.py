@@ -90,3 +90,20 @@ def test_the_shipped_fleet_world_puts_every_robot_in_one_room(quiet: SimParams) 
     assert [r.name for r in room.members] == ["r1", "r2", "r3"]
     _drive_together(robots, [(0.2, 0.0)] * 3, 1.0)
     assert all(not r.drain_collisions() for r in robots), "one second of driving from the starts hits nothing"
+
+
+def test_the_camera_draws_the_other_robots(quiet: SimParams, open_world: Callable[..., World]) -> None:
+    from services.simulator.camera import CameraParams, CameraRenderer, build_scene  # noqa: PLC0415
+
+    world = open_world()
+    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r1.join("r2", Pose2D(1.0, 0.0, math.pi / 2))  # broadside, 1 m ahead
+    camera = CameraRenderer(build_scene(world), CameraParams(noise_sigma=0.0))
+    alone = camera.render(r1.pose).astype(float)
+    seen = camera.render(r1.pose, others=r1.other_footprints()).astype(float)
+    h, w = seen.shape
+    # Below the horizon, in the middle of the image: the other robot's dark side where the floor was.
+    patch = (slice(h // 2 + 5, h // 2 + 40), slice(w // 2 - 30, w // 2 + 30))
+    assert seen[patch].mean() < alone[patch].mean() - 10.0
+    edge = (slice(0, h), slice(0, 20))  # far to the side: nothing changes
+    assert np.array_equal(seen[edge], alone[edge])
