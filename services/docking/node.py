@@ -34,6 +34,7 @@ from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKin
 from services.docking.params import Params
 from services.docking.patrol import Patrol
 from services.docking.pose_filter import PoseFilterParams
+from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams, lidar_blocked, scan_points, sonar_blocked
 from services.docking.task_io import (
     Intent,
@@ -143,6 +144,13 @@ def _world_walls(dock_database: str) -> list[tuple[tuple[float, float], tuple[fl
     return [*world.opaque_segments(), *world.glass]
 
 
+def _world_bounds(dock_database: str) -> tuple[float, float, float, float] | None:
+    try:
+        return load_world(dock_database).bounds
+    except ConfigError:
+        return None
+
+
 class DockingService:
     """The docking service on a node; see the module docstring."""
 
@@ -186,6 +194,10 @@ class DockingService:
         #: The fleet's other robots (by namespace), and the room's walls for passing places: the traffic rule.
         self._peers: dict[str, _PeerState] = {}
         self._walls = _world_walls(params.dock_database) if params.fleet else []
+        bounds = _world_bounds(params.dock_database) if params.fleet else None
+        #: Path lengths to the docks through the room, for the fleet's "nearest free dock".
+        self._room = RoomPaths(bounds, self._walls) if bounds is not None else None
+        self._approach = params.approach_controller()
         if params.fleet and self._walls:
             for topic, msg_type, handler in (
                 (topics.POSE2D, Float64MultiArray, self._on_peer_pose),
@@ -472,11 +484,17 @@ class DockingService:
         latest = self.track.latest()
         ids: list[str] = []
         lengths: list[float] = []
-        if latest is not None:
-            # Straight-line distance to each dock's pose: the order of the docks for a robot in open
-            # space; the fleet picks the nearest free one by it.
+        if latest is not None and claim.granted_dock is None:
+            # How far each dock is to drive to (the fleet grants the nearest free one): through the room
+            # to its staging pose and on into the dock, or (a plain dock database) in a straight line.
             ids = [d.id for d in self.database]
-            lengths = [latest[1].distance_to(d.pose2d) for d in self.database]
+            docks = [d.pose2d for d in self.database]
+            if self._room is not None:
+                staging = [self._approach.staging_pose(d) for d in docks]
+                found = self._room.lengths(latest[1], staging)
+                lengths = [f + s.distance_to(d) for f, s, d in zip(found, staging, docks, strict=True)]
+            else:
+                lengths = [latest[1].distance_to(d) for d in docks]
         claim.sent(now)
         request = ReserveDockRequest(robot=self.node.namespace, battery=float(battery), dock_id=claim.dock_id,
                                      dock_ids=ids, path_lengths=np.asarray(lengths, dtype=float))
