@@ -91,7 +91,7 @@ from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscrip
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import ServiceSpec
-from shared.world import load_world
+from shared.world import World, load_world
 
 #: std_msgs/String with the service's state name, for tools (published on change and every second).
 DOCKING_STATE = "docking/state"
@@ -123,30 +123,10 @@ class _PeerState:
         self.plan_s = -math.inf
 
 
-def _world_patrol(dock_database: str, robot: str) -> list[tuple[float, float, float]]:
-    """The patrol a fleet world gives the robot named ``robot`` (its namespace's last part), if the dock
-    database is such a world; else none."""
-    if not robot:
-        return []
+def _room_world(dock_database: str) -> World | None:
+    """The world the dock database is, when it is a world file (a fleet's room); None for a plain one."""
     try:
-        world = load_world(dock_database)
-    except ConfigError:
-        return []  # a plain dock database: no robots in it
-    return next((list(r.patrol) for r in world.robots if r.name == robot), [])
-
-
-def _world_walls(dock_database: str) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """Every surface of the room (glass too), when the dock database is a world file; else none."""
-    try:
-        world = load_world(dock_database)
-    except ConfigError:
-        return []
-    return [*world.opaque_segments(), *world.glass]
-
-
-def _world_bounds(dock_database: str) -> tuple[float, float, float, float] | None:
-    try:
-        return load_world(dock_database).bounds
+        return load_world(dock_database)
     except ConfigError:
         return None
 
@@ -163,7 +143,12 @@ class DockingService:
         self.track = PoseTrack()
         self.arbiter = DriveArbiter()
         self.obstacles = ObstacleParams(stop_distance_m=params.obstacle_stop_distance_m)
-        patrol = params.patrol or _world_patrol(params.dock_database, node.namespace.rpartition("/")[2])
+        #: The room, when the dock database is a world file: the robot's patrol, the walls for the traffic
+        #: rule's passing places and the path lengths to the docks.
+        room = _room_world(params.dock_database) if params.fleet or not params.patrol else None
+        name = node.namespace.rpartition("/")[2]
+        patrol = params.patrol or (next((list(r.patrol) for r in room.robots if r.name == name), [])
+                                   if room is not None and name else [])
         self.mission = Mission(
             [Pose2D.from_seq(p) for p in patrol], params.resume_at, params.low_battery_threshold,
             params.auto_dock,
@@ -193,10 +178,9 @@ class DockingService:
         self._release_key = topic_key(fleet_ns, topics.FLEET_RELEASE_DOCK)
         #: The fleet's other robots (by namespace), and the room's walls for passing places: the traffic rule.
         self._peers: dict[str, _PeerState] = {}
-        self._walls = _world_walls(params.dock_database) if params.fleet else []
-        bounds = _world_bounds(params.dock_database) if params.fleet else None
+        self._walls = [*room.opaque_segments(), *room.glass] if params.fleet and room is not None else []
         #: Path lengths to the docks through the room, for the fleet's "nearest free dock".
-        self._room = RoomPaths(bounds, self._walls) if bounds is not None else None
+        self._room = RoomPaths(room.bounds, self._walls) if self._walls and room is not None else None
         self._approach = params.approach_controller()
         if params.fleet and self._walls:
             for topic, msg_type, handler in (
@@ -598,7 +582,9 @@ class DockingService:
         task = self.task
         if isinstance(task, GiveWay):
             seen = self._peers.get(task.peer)
-            task.peer_seen(seen.pose if seen is not None and now - seen.pose_s <= PEER_MAX_AGE_S else None)
+            fresh = seen is not None and now - seen.pose_s <= PEER_MAX_AGE_S
+            task.peer_seen(seen.pose if seen is not None and fresh else None,
+                           active=seen is not None and (seen.state in PEER_UNDER_WAY or seen.state == "GIVING_WAY"))
             return
         if not self._under_way() or self._battery is None:
             return

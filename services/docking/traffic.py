@@ -224,13 +224,15 @@ class GiveWay(Task[GiveWayPhase]):
         self._peer_pose: Pose2D | None = peer.pose
         self._key = self.new_nav_key()
 
-    def peer_seen(self, pose: Pose2D | None) -> None:
-        self._peer_pose = pose
+    def peer_seen(self, pose: Pose2D | None, active: bool = True) -> None:
+        """Where the other robot is now, and whether it is still under way or giving way itself (a robot
+        that stopped driving, docked or parked, is nothing to wait for)."""
+        self._peer_pose = pose if active else None
 
     def _clear(self, me: Pose2D | None) -> bool:
         peer = self._peer_pose
         if peer is None or me is None:
-            return True  # the other robot is gone from the bus: nothing to wait for
+            return True  # the other robot is gone from the bus, or stopped driving: nothing to wait for
         if self.meeting is Meeting.HEAD_ON_PRIORITY:  # until the other is off the way ahead
             off_way = _off_line(peer, _heading_line(me)) >= CLEAR_OF_WAY_M
             return off_way or not _ahead(me, peer) or me.distance_to(peer) >= CLEAR_DISTANCE_M

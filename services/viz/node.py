@@ -31,12 +31,14 @@ from shared.foxglove_view import (
     view_topic,
     world_scene,
 )
+from shared.foxglove_view.frames import prefix_frames, robot_frame
 from shared.interfaces.map_server import GET_MAP, GET_MAP_SERVICE, GetMapRequest, GetMapResponse
 from shared.messages import OccupancyGrid
+from shared.names import topic_key
 from shared.node import SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.runtime import ServiceParams, ServiceSpec
 from shared.schema import Message
-from shared.topics import MAP
+from shared.topics import BASE_FRAME, MAP
 from shared.world import World, load_world
 
 #: Latched topics keep only the latest; a map or a plan arrives rarely.
@@ -60,6 +62,9 @@ class Params(ServiceParams):
     world: str | None = Field(None, description="world file to draw walls, glass, boxes, docks and staging poses")
     staging_offset_m: float = Field(DEFAULT_STAGING_OFFSET_M, ge=0.0, description="staging pose behind each dock")
     time_broadcast_hz: float = Field(10.0, gt=0.0, le=100.0, description="how often viewers are told the time")
+    robots: list[str] = Field(default_factory=list, description="a fleet's robots (namespaces under the node's) "
+                              "shown side by side, each one's frames under its name (r1/base_link) below the "
+                              "shared map; empty: the node's own namespace, one robot")
 
     @field_validator("world")
     @classmethod
@@ -82,18 +87,21 @@ class VizService:
         except RuntimeError as exc:  # the SDK's FoxgloveError: the port is taken, the address is not ours
             raise ConfigError(f"cannot serve on {params.host}:{params.port}: {exc} (choose another with --port)") from None
         self._world_topic = view_topic(node.namespace, WORLD_VIEW_TOPIC)
-        self._robot_topic = view_topic(node.namespace, ROBOT_VIEW_TOPIC)
+        #: Each robot shown: its name (the frame prefix, "" for a lone robot) and its namespace.
+        self._robots = ([(r, topic_key(node.namespace, r)) for r in params.robots] if params.robots
+                        else [("", node.namespace)])
         self._map_received = False
         self._publish_scenes()
         #: On-demand views (camera frames): the Foxglove topic, and the bus subscription while a viewer watches.
-        self._on_demand: dict[str, tuple[View, Subscription[Any] | None]] = {}
-        for view in VIEWS:
-            if view.on_demand and view.schema is not None:
-                topic = view_topic(node.namespace, view.topic)
-                self._view.advertise(topic, view.schema)
-                self._on_demand[topic] = (view, None)
-            else:
-                self._subscribe(view)
+        self._on_demand: dict[str, tuple[View, str, str, Subscription[Any] | None]] = {}
+        for robot, namespace in self._robots:
+            for view in VIEWS:
+                if view.on_demand and view.schema is not None:
+                    topic = view_topic(namespace, view.topic)
+                    self._view.advertise(topic, view.schema)
+                    self._on_demand[topic] = (view, robot, namespace, None)
+                else:
+                    self._subscribe(view, robot, namespace)
         self._demand_timer = node.create_timer(ON_DEMAND_CHECK_S, self._follow_viewers, wall=True)
         self._time_timer = node.create_timer(1.0 / params.time_broadcast_hz, self._broadcast_time, wall=True)
         self._map_timer = node.create_timer(MAP_REQUEST_PERIOD_S, self._request_map, wall=True)
@@ -120,42 +128,45 @@ class VizService:
 
     # --- inputs ----------------------------------------------------------------------------------
 
-    def _subscribe(self, view: View) -> Subscription[Any]:
+    def _subscribe(self, view: View, robot: str, namespace: str) -> Subscription[Any]:
         qos = SENSOR_DATA if view.sensor else LATCHED_QOS if view.latched else STATE_QOS
-        return self._node.create_subscription(view.msg_type, view.topic,
-                                              lambda key, msg, v=view: self._on_message(v, key, msg), qos, with_key=True)
+        return self._node.create_subscription(
+            view.msg_type, topic_key(namespace, view.topic),
+            lambda key, msg, v=view, r=robot: self._on_message(v, key, msg, r), qos, with_key=True, absolute=True)
 
     def _follow_viewers(self) -> None:
         """Subscribe to an on-demand stream while a viewer watches it, so frames are made only then."""
-        for topic, (view, sub) in self._on_demand.items():
+        for topic, (view, robot, namespace, sub) in self._on_demand.items():
             watched = self._view.has_viewer(topic)
             if watched and sub is None:
-                self._on_demand[topic] = (view, self._subscribe(view))
+                self._on_demand[topic] = (view, robot, namespace, self._subscribe(view, robot, namespace))
                 self._log.info("a viewer watches %s: subscribing", topic)
             elif not watched and sub is not None:
                 sub.undeclare()
-                self._on_demand[topic] = (view, None)
+                self._on_demand[topic] = (view, robot, namespace, None)
                 self._log.info("no viewer on %s: unsubscribed", topic)
 
-    def _on_message(self, view: View, key: str, msg: Message) -> None:
+    def _on_message(self, view: View, key: str, msg: Message, robot: str = "") -> None:
         if view.topic == MAP:
             self._map_received = True
         if not view.latched and not self._view.wants(key):
             return
-        self._view.publish(key, view.convert("/" + key, msg), latched=view.latched)
+        self._view.publish(key, view.convert("/" + key, prefix_frames(msg, robot)), latched=view.latched)
 
     def _request_map(self) -> None:
         if self._map_received:
             self._map_timer.cancel()
             return
-        self._node.call_async(GET_MAP, GET_MAP_SERVICE, GetMapRequest(), self._on_map_reply, timeout_s=2.0)
+        self._node.call_async(GET_MAP, topic_key(self._robots[0][1], GET_MAP_SERVICE), GetMapRequest(),
+                              self._on_map_reply, timeout_s=2.0, absolute=True)
 
     def _on_map_reply(self, response: GetMapResponse | None, error: ServiceError | None) -> None:
         if response is None or self._map_received:
             if error is not None:
                 self._log.debug("no map yet: %s", error)
             return
-        self._on_message(MAP_VIEW, self._node.key(MAP), response.map)
+        robot, namespace = self._robots[0]
+        self._on_message(MAP_VIEW, topic_key(namespace, MAP), response.map, robot)
 
     # --- the scenes and late viewers -------------------------------------------------------------
 
@@ -164,7 +175,9 @@ class VizService:
         if self._world is not None:
             scene = world_scene(self._world_topic, self._world, now, self._params.staging_offset_m)
             self._view.publish(self._world_topic, [scene], latched=True)
-        self._view.publish(self._robot_topic, [robot_scene(self._robot_topic, now)], latched=True)
+        for robot, namespace in self._robots:
+            topic = view_topic(namespace, ROBOT_VIEW_TOPIC)
+            self._view.publish(topic, [robot_scene(topic, now, robot_frame(robot, BASE_FRAME))], latched=True)
 
     def _on_viewer_subscribed(self, topic: str) -> None:
         """Runs on the server's thread: hand over to the node's executor."""

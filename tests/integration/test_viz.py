@@ -90,3 +90,27 @@ def test_the_camera_is_rendered_only_while_a_viewer_watches_it(spawn, bus: zenoh
     finally:
         client.__exit__()
     wait_until(lambda: "no viewer on" in viz.output(), 10.0, lambda: viz.output()[-1500:])
+
+
+def test_a_fleet_is_shown_robot_by_robot_each_under_its_own_frames(spawn, namespace: str, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    world = tmp_path / "pair.yaml"
+    world.write_text("name: pair\nbounds: [0, 0, 6, 4]\ndocks:\n  - {id: d, pose: [0.6, 2.0, 3.14159]}\n"
+                     "robots:\n  - {name: r1, start: [2, 1, 0]}\n  - {name: r2, start: [4, 3, 3.14159]}\n")
+    port = free_port()
+    spawn("simulator", "--world", str(world), "-p", "rtf=2")
+    viz = spawn("viz", "--world", str(world), "--port", str(port), "-p", "robots=[r1, r2]")
+    ns = f"/{namespace}"
+    wanted = [f"{ns}/r1/scan", f"{ns}/r2/scan", f"{ns}/r1/tf", f"{ns}/r2/tf", f"{ns}/r1/robot", f"{ns}/r2/robot"]
+    client = _connect(f"ws://127.0.0.1:{port}", viz)
+    try:
+        assert client.pump_until(lambda c: set(wanted) <= set(c.topics()), 20.0), sorted(client.topics())
+        client.subscribe(*wanted)
+        assert client.pump_until(lambda c: all(c.received(t) for t in wanted), 20.0), (
+            {t: len(client.received(t)) for t in wanted})
+        for robot in ("r1", "r2"):
+            transforms = client.received(f"{ns}/{robot}/tf")[-1].payload
+            assert f"{robot}/base_link".encode() in transforms and f"{robot}/odom".encode() in transforms
+            assert client.received(f"{ns}/{robot}/scan")[-1].payload.count(f"{robot}/lidar_link".encode()) == 1
+            assert f"{robot}/base_link".encode() in client.received(f"{ns}/{robot}/robot")[0].payload
+    finally:
+        client.__exit__()

@@ -130,6 +130,16 @@ def test_give_way_goes_to_the_place_waits_for_the_other_to_pass_then_ends() -> N
     assert task.message == "r2 has gone by"
 
 
+def test_give_way_ends_when_the_other_robot_stops_driving() -> None:
+    task = GiveWay(Peer("r2", Pose2D(2.0, 0.0, math.pi), 0.2, True), Meeting.HEAD_ON_PRIORITY, None, resume=None)
+    me = Pose2D(0.0, 0.0, 0.0)
+    task.step(_inputs(0.0, me))
+    assert task.result is None
+    task.peer_seen(Pose2D(2.0, 0.0, math.pi), active=False)  # it docked, or parked to wait for a dock
+    task.step(_inputs(1.0, me))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+
+
 def test_give_way_does_not_wait_for_ever() -> None:
     task = GiveWay(Peer("r2", Pose2D(1.5, 1.0, math.pi), 0.2, True), Meeting.HEAD_ON, Pose2D(1.0, 1.0, 0.0),
                    resume=None)
