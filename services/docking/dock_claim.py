@@ -21,25 +21,13 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from services.docking.docking_run import DockRequest
 from services.docking.task_io import Intent, Navigate, NavOutcome, Task, TickInputs
+from shared.fleet_client import FleetAnswer
 from shared.geometry import Pose2D
-
-
-@dataclass(frozen=True, slots=True)
-class FleetAnswer:
-    """The fleet's answer to a reservation request (see ``ReserveDockResponse``)."""
-
-    granted: bool
-    dock_id: str = ""
-    queue_position: int = 0
-    reason: str = ""
-    asked_to_leave: bool = False
-    holding_pose: Pose2D | None = None
 
 
 class ClaimState(enum.Enum):

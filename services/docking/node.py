@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from services.docking.dock_claim import AwaitDock, DockClaim, FleetAnswer, docks_seen_free
+from services.docking.dock_claim import AwaitDock, DockClaim, docks_seen_free
 from services.docking.dock_db import DockDatabase, load_dock_db
 from services.docking.dock_tracker import DockTracker
 from services.docking.docking_run import DockingRun, DockRequest, RunPhase
@@ -33,6 +33,7 @@ from services.docking.ir_run import IR_MAX_AGE_S, IrDockingRun
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.params import Params
 from services.docking.patrol import Patrol
+from services.docking.peers import PeerWatch
 from services.docking.pose_filter import PoseFilterParams
 from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams, lidar_blocked, scan_points, sonar_blocked
@@ -46,11 +47,12 @@ from services.docking.task_io import (
     TickInputs,
     Velocity,
 )
-from services.docking.traffic import GiveWay, Meeting, Peer, must_give_way, passing_place
+from services.docking.traffic import GiveWay, Meeting, must_give_way, passing_place
 from services.docking.undocking_run import UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.config_errors import ConfigError
+from shared.fleet_client import FleetAnswer, FleetClient
 from shared.frames import SensorMounts, clock_went_back
 from shared.geometry import Pose2D
 from shared.interfaces.docking import (
@@ -63,14 +65,6 @@ from shared.interfaces.docking import (
     UndockRobotGoal,
     UndockRobotResult,
 )
-from shared.interfaces.fleet import (
-    RELEASE_DOCK,
-    RESERVE_DOCK,
-    ReleaseDockRequest,
-    ReleaseDockResponse,
-    ReserveDockRequest,
-    ReserveDockResponse,
-)
 from shared.messages import (
     BatteryState,
     DockInfraRed,
@@ -78,14 +72,12 @@ from shared.messages import (
     Float64MultiArray,
     LaserScan,
     Odometry,
-    Path,
     PoseStamped,
     Range,
     String,
     TFMessage,
     Twist,
 )
-from shared.names import topic_key
 from shared.navigation import NavigationClient, TaskResult
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.pose_tracking import OdometrySample, PoseTrack
@@ -103,24 +95,6 @@ STATE_PERIOD_S = 1.0
 #: Detections stay subscribed this long (sim seconds) after the run last wanted them.
 DETECTION_LINGER_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
-#: A peer's docking/state while it drives (and so may meet this robot head-on).
-PEER_UNDER_WAY = ("PATROLLING", "NAV_TO_STAGING_POSE", "RETRY")
-#: A peer not heard from (pose, plan) for this long is not on the way.
-PEER_MAX_AGE_S = 2.0
-
-
-class _PeerState:
-    """What the bus last said of another robot of the fleet."""
-
-    __slots__ = ("battery", "plan", "plan_s", "pose", "pose_s", "state")
-
-    def __init__(self) -> None:
-        self.pose: Pose2D | None = None
-        self.pose_s = -math.inf
-        self.battery = 1.0
-        self.state = ""
-        self.plan: np.ndarray | None = None
-        self.plan_s = -math.inf
 
 
 def _room_world(dock_database: str) -> World | None:
@@ -173,24 +147,14 @@ class DockingService:
         self._feedback_published_s = -math.inf
         #: Robots sharing docks ask the fleet service one namespace up (``r1`` asks ``fleet/...``).
         self.claim = DockClaim(patience_s=params.fleet_patience_s) if params.fleet else None
-        fleet_ns = node.namespace.rpartition("/")[0]
-        self._reserve_key = topic_key(fleet_ns, topics.FLEET_RESERVE_DOCK)
-        self._release_key = topic_key(fleet_ns, topics.FLEET_RELEASE_DOCK)
-        #: The fleet's other robots (by namespace), and the room's walls for passing places: the traffic rule.
-        self._peers: dict[str, _PeerState] = {}
+        self.fleet = FleetClient(node)
+        #: The room's walls, for passing places (the traffic rule) and path lengths to the docks.
         self._walls = [*room.opaque_segments(), *room.glass] if params.fleet and room is not None else []
         #: Path lengths to the docks through the room, for the fleet's "nearest free dock".
         self._room = RoomPaths(room.bounds, self._walls) if self._walls and room is not None else None
         self._approach = params.approach_controller()
-        if params.fleet and self._walls:
-            for topic, msg_type, handler in (
-                (topics.POSE2D, Float64MultiArray, self._on_peer_pose),
-                (topics.BATTERY_STATUS, BatteryState, self._on_peer_battery),
-                (DOCKING_STATE, String, self._on_peer_state),
-                (topics.PLAN, Path, self._on_peer_plan),
-            ):
-                node.create_subscription(msg_type, topic_key(fleet_ns, f"*/{topic}"), handler, QoS(depth=20),
-                                         with_key=True, absolute=True)
+        #: The fleet's other robots, for the traffic rule.
+        self.peers = PeerWatch(node, DOCKING_STATE) if self._walls else None
 
         self.cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self.state_pub = node.create_publisher(String, DOCKING_STATE, RELIABLE)
@@ -224,7 +188,7 @@ class DockingService:
             "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time%s",
             params.controller, 1.0 / self.period_s, len(self.database), params.dock_database,
             "on" if params.use_detection else "off", len(patrol), "sim" if node.use_sim_time else "wall",
-            f", docks reserved with {self._reserve_key}" if params.fleet else "",
+            f", docks reserved with {self.fleet.reserve_key}" if params.fleet else "",
         )
 
     # --- inputs ------------------------------------------------------------------------------------
@@ -378,8 +342,8 @@ class DockingService:
         self._follow_mission(now)
         if self.claim is not None:
             self._follow_fleet(now)
-        if self._walls:
-            self._follow_traffic(now)
+        if self.peers is not None:
+            self._follow_traffic(now, self.peers)
         task = self.task
         if isinstance(task, DockingRun):
             latest = self.track.latest()
@@ -456,8 +420,7 @@ class DockingService:
             self._ask_fleet(now)
         elif claim.release_due(now):
             claim.sent(now)
-            self.node.call_async(RELEASE_DOCK, self._release_key, ReleaseDockRequest(robot=self.node.namespace),
-                                 self._on_released, timeout_s=1.0, absolute=True)
+            self.fleet.release(on_done=self._on_released)
 
     def _ask_fleet(self, now: float) -> None:
         claim = self.claim
@@ -466,55 +429,50 @@ class DockingService:
         if not 0.0 <= battery <= 1.0:
             return  # the fleet serves by charge: ask once the battery has spoken
         latest = self.track.latest()
-        ids: list[str] = []
-        lengths: list[float] = []
+        lengths: dict[str, float] | None = None
         if latest is not None and claim.granted_dock is None:
-            # How far each dock is to drive to (the fleet grants the nearest free one): through the room
-            # to its staging pose and on into the dock, or (a plain dock database) in a straight line.
-            ids = [d.id for d in self.database]
-            docks = [d.pose2d for d in self.database]
-            if self._room is not None:
-                staging = [self._approach.staging_pose(d) for d in docks]
-                found = self._room.lengths(latest[1], staging)
-                lengths = [f + s.distance_to(d) for f, s, d in zip(found, staging, docks, strict=True)]
-            else:
-                lengths = [latest[1].distance_to(d) for d in docks]
+            lengths = self._dock_distances(latest[1])
         claim.sent(now)
-        request = ReserveDockRequest(robot=self.node.namespace, battery=float(battery), dock_id=claim.dock_id,
-                                     dock_ids=ids, path_lengths=np.asarray(lengths, dtype=float))
-        self.node.call_async(RESERVE_DOCK, self._reserve_key, request, self._on_reserved, timeout_s=1.0, absolute=True)
+        self.fleet.reserve(battery, claim.dock_id, lengths, on_answer=self._on_reserved)
 
-    def _on_reserved(self, response: ReserveDockResponse | None, error: ServiceError | None) -> None:
+    def _dock_distances(self, robot: Pose2D) -> dict[str, float]:
+        """How far each dock is to drive to (the fleet grants the nearest free one): through the room to its
+        staging pose and on into the dock, or (a plain dock database, no room) in a straight line."""
+        docks = {d.id: d.pose2d for d in self.database}
+        if self._room is None:
+            return {dock_id: robot.distance_to(pose) for dock_id, pose in docks.items()}
+        staging = [self._approach.staging_pose(pose) for pose in docks.values()]
+        found = self._room.lengths(robot, staging)
+        return {dock_id: length + stage.distance_to(pose)
+                for (dock_id, pose), stage, length in zip(docks.items(), staging, found, strict=True)}
+
+    def _on_reserved(self, answer: FleetAnswer | None, error: ServiceError | None) -> None:
         claim = self.claim
         assert claim is not None
         now = self.node.now()
-        if response is None:
+        if answer is None:
             claim.unanswered(now)
             self._say.warning("fleet", "the fleet did not answer: %s", error)
             return
-        pose = response.holding_pose
-        holding = Pose2D.from_seq(pose) if len(pose) == 3 and np.all(np.isfinite(pose)) else None
-        answer = FleetAnswer(response.granted, response.dock_id, int(response.queue_position), response.reason,
-                             response.asked_to_leave, holding)
-        if not response.granted and response.dock_id == "" and response.queue_position == 0:
-            self._say.warning("fleet-refused", "the fleet refused: %s", response.reason)
+        if answer.refused:
+            self._say.warning("fleet-refused", "the fleet refused: %s", answer.reason)
         claim.answered(now, answer)
-        if isinstance(self.task, AwaitDock) and not response.granted:
-            if response.queue_position:
+        if isinstance(self.task, AwaitDock) and not answer.granted:
+            if answer.queue_position:
                 self._say.info("queued", "waiting for a dock: number %d in the queue (%s)",
-                               response.queue_position, response.reason)
-            self.task.hold_at(holding)
+                               answer.queue_position, answer.reason)
+            self.task.hold_at(answer.holding_pose)
 
-    def _on_released(self, response: ReleaseDockResponse | None, error: ServiceError | None) -> None:
+    def _on_released(self, dock_id: str | None, error: ServiceError | None) -> None:
         claim = self.claim
         assert claim is not None
-        if response is None:
+        if dock_id is None:
             claim.unanswered(self.node.now())
             self._say.warning("fleet", "the fleet did not answer a release: %s", error)
             return
         claim.released(self.node.now())
-        if response.dock_id:
-            self._log.info("released dock %s", response.dock_id)
+        if dock_id:
+            self._log.info("released dock %s", dock_id)
 
     def _dock_without_fleet(self, task: AwaitDock, now: float) -> None:
         """The fleet is down: dock at the nearest dock seen free (no robot in it), keeping it as a claim so
@@ -536,55 +494,16 @@ class DockingService:
 
     # --- traffic -----------------------------------------------------------------------------------
 
-    def _peer(self, key: str, suffix: str) -> _PeerState | None:
-        name = key[: -len(suffix) - 1] if key.endswith("/" + suffix) else ""
-        if not name or name == self.node.namespace:
-            return None
-        return self._peers.setdefault(name, _PeerState())
-
-    def _on_peer_pose(self, key: str, msg: Float64MultiArray) -> None:
-        peer = self._peer(key, topics.POSE2D)
-        if peer is not None and len(msg.data) >= 3 and np.all(np.isfinite(msg.data[:3])):
-            peer.pose, peer.pose_s = Pose2D.from_seq(msg.data[:3]), self.node.now()
-
-    def _on_peer_battery(self, key: str, msg: BatteryState) -> None:
-        peer = self._peer(key, topics.BATTERY_STATUS)
-        if peer is not None and math.isfinite(msg.percentage):
-            peer.battery = float(msg.percentage)
-
-    def _on_peer_state(self, key: str, msg: String) -> None:
-        peer = self._peer(key, DOCKING_STATE)
-        if peer is not None:
-            peer.state = msg.data
-
-    def _on_peer_plan(self, key: str, msg: Path) -> None:
-        peer = self._peer(key, topics.PLAN)
-        if peer is not None:
-            points = [(p.pose.position.x, p.pose.position.y) for p in msg.poses]
-            peer.plan, peer.plan_s = (np.asarray(points, dtype=float) if points else None), self.node.now()
-
-    def _fresh_peers(self, now: float) -> list[Peer]:
-        peers = []
-        for name, p in self._peers.items():
-            if p.pose is None or now - p.pose_s > PEER_MAX_AGE_S:
-                continue
-            plan = p.plan if now - p.plan_s <= PEER_MAX_AGE_S else None
-            peers.append(Peer(name, p.pose, p.battery, p.state in PEER_UNDER_WAY, plan, p.state == "GIVING_WAY"))
-        return peers
-
     def _under_way(self) -> bool:
         task = self.task
         return (isinstance(task, Patrol) or (isinstance(task, DockingRun) and task.phase is RunPhase.NAV_TO_STAGING)
                 or (isinstance(task, AwaitDock) and task.going))
 
-    def _follow_traffic(self, now: float) -> None:
+    def _follow_traffic(self, now: float, peers: PeerWatch) -> None:
         """Give way to a robot with priority met head-on (see :mod:`services.docking.traffic`)."""
         task = self.task
         if isinstance(task, GiveWay):
-            seen = self._peers.get(task.peer)
-            fresh = seen is not None and now - seen.pose_s <= PEER_MAX_AGE_S
-            task.peer_seen(seen.pose if seen is not None and fresh else None,
-                           active=seen is not None and (seen.state in PEER_UNDER_WAY or seen.state == "GIVING_WAY"))
+            task.peer_seen(*peers.seen(task.peer, now))
             return
         if not self._under_way() or self._battery is None:
             return
@@ -592,8 +511,7 @@ class DockingService:
         if latest is None:
             return
         me = latest[1]
-        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), self._fresh_peers(now),
-                            self._walls)
+        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), peers.fresh(now), self._walls)
         if met is None:
             return
         peer, meeting = met

@@ -6,10 +6,11 @@ import math
 
 import numpy as np
 
-from services.docking.dock_claim import AwaitDock, ClaimState, DockClaim, FleetAnswer, docks_seen_free
+from services.docking.dock_claim import AwaitDock, ClaimState, DockClaim, docks_seen_free
 from services.docking.docking_run import DockRequest
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.task_io import Navigate, NavOutcome, NavStatus, TickInputs
+from shared.fleet_client import FleetAnswer
 from shared.geometry import Pose2D
 
 
@@ -110,3 +111,14 @@ def test_the_mission_leaves_its_dock_when_asked_only_while_charging_after_its_ow
     mission.finished(TaskKind.UNDOCK, True, False, 4.0)
     mission.battery(0.69, False)
     assert mission.decide(5.0, None) is MissionOrder.PATROL
+
+
+def test_a_fleet_answer_reads_the_response_and_its_holding_pose() -> None:
+    from shared.interfaces.fleet import ReserveDockResponse  # noqa: PLC0415
+
+    queued = FleetAnswer.from_response(ReserveDockResponse(queue_position=2, reason="every dock is taken",
+                                                           holding_pose=np.array([4.0, 7.4, 0.0])))
+    assert not queued.granted and not queued.refused and queued.holding_pose == Pose2D(4.0, 7.4, 0.0)
+    refused = FleetAnswer.from_response(ReserveDockResponse(reason="no dock 'x'", holding_pose=np.array([1.0, np.nan, 0.0])))
+    assert refused.refused and refused.holding_pose is None
+    assert FleetAnswer.from_response(ReserveDockResponse(granted=True, dock_id="west")).dock_id == "west"

@@ -1,0 +1,101 @@
+"""The other robots of a fleet as the bus tells of them: where each is, its charge, its state, its plan.
+
+Subscribed once with wildcards (``<fleet>/*/map_to_base_link_pose2d``, ``battery_status``,
+``docking/state``, ``plan``), so a robot that joins later is seen too; the callbacks only store. The
+traffic rule (:mod:`services.docking.traffic`) reads :meth:`PeerWatch.fresh`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from services.docking.traffic import Peer
+from shared import topics
+from shared.geometry import Pose2D
+from shared.messages import BatteryState, Float64MultiArray, Path, String
+from shared.names import topic_key
+from shared.node import Node, QoS
+
+#: docking/state (the docking service's state names) of a robot that drives, and of one giving way.
+UNDER_WAY_STATES = ("PATROLLING", "NAV_TO_STAGING_POSE", "RETRY")
+GIVING_WAY_STATE = "GIVING_WAY"
+#: A peer not heard from (pose, plan) for this long is not on the way.
+MAX_AGE_S = 2.0
+
+
+class _PeerState:
+    __slots__ = ("battery", "plan", "plan_s", "pose", "pose_s", "state")
+
+    def __init__(self) -> None:
+        self.pose: Pose2D | None = None
+        self.pose_s = -math.inf
+        self.battery = 1.0
+        self.state = ""
+        self.plan: np.ndarray | None = None
+        self.plan_s = -math.inf
+
+    @property
+    def active(self) -> bool:
+        """Driving, or giving way itself."""
+        return self.state in UNDER_WAY_STATES or self.state == GIVING_WAY_STATE
+
+
+class PeerWatch:
+    """Every other robot in the namespace above ``node``'s; ``state_topic``: their docking state's topic."""
+
+    def __init__(self, node: Node, state_topic: str) -> None:
+        self._node = node
+        self._peers: dict[str, _PeerState] = {}
+        fleet_namespace = node.namespace.rpartition("/")[0]
+        for topic, msg_type, handler in (
+            (topics.POSE2D, Float64MultiArray, self._on_pose),
+            (topics.BATTERY_STATUS, BatteryState, self._on_battery),
+            (state_topic, String, self._on_state),
+            (topics.PLAN, Path, self._on_plan),
+        ):
+            node.create_subscription(msg_type, topic_key(fleet_namespace, f"*/{topic}"),
+                                     lambda key, msg, h=handler, t=topic: h(self._peer(key, t), msg),
+                                     QoS(depth=20), with_key=True, absolute=True)
+
+    def _peer(self, key: str, topic: str) -> _PeerState | None:
+        name = key[: -len(topic) - 1] if key.endswith("/" + topic) else ""
+        if not name or name == self._node.namespace:
+            return None
+        return self._peers.setdefault(name, _PeerState())
+
+    def _on_pose(self, peer: _PeerState | None, msg: Float64MultiArray) -> None:
+        if peer is not None and len(msg.data) >= 3 and np.all(np.isfinite(msg.data[:3])):
+            peer.pose, peer.pose_s = Pose2D.from_seq(msg.data[:3]), self._node.now()
+
+    def _on_battery(self, peer: _PeerState | None, msg: BatteryState) -> None:
+        if peer is not None and math.isfinite(msg.percentage):
+            peer.battery = float(msg.percentage)
+
+    def _on_state(self, peer: _PeerState | None, msg: String) -> None:
+        if peer is not None:
+            peer.state = msg.data
+
+    def _on_plan(self, peer: _PeerState | None, msg: Path) -> None:
+        if peer is not None:
+            points = [(p.pose.position.x, p.pose.position.y) for p in msg.poses]
+            peer.plan, peer.plan_s = (np.asarray(points, dtype=float) if points else None), self._node.now()
+
+    def fresh(self, now: float) -> list[Peer]:
+        """The robots heard from lately, as the traffic rule sees them."""
+        peers = []
+        for name, p in self._peers.items():
+            if p.pose is None or now - p.pose_s > MAX_AGE_S:
+                continue
+            plan = p.plan if now - p.plan_s <= MAX_AGE_S else None
+            peers.append(Peer(name, p.pose, p.battery, p.state in UNDER_WAY_STATES, plan,
+                              p.state == GIVING_WAY_STATE))
+        return peers
+
+    def seen(self, name: str, now: float) -> tuple[Pose2D | None, bool]:
+        """Where ``name`` is now (None: not heard from lately), and whether it is active."""
+        peer = self._peers.get(name)
+        if peer is None or now - peer.pose_s > MAX_AGE_S:
+            return None, False
+        return peer.pose, peer.active
