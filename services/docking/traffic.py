@@ -44,7 +44,7 @@ MEET_DISTANCE_M = 3.5
 NARROW_CLEARANCE_M = 0.65
 HEAD_ON_HALF_ANGLE_RAD = math.radians(50.0)
 #: Another robot this close and in front, within this angle of the heading, is crossing the robot's way.
-CROSSING_DISTANCE_M = 1.0
+CROSSING_DISTANCE_M = 1.2
 CROSSING_HALF_ANGLE_RAD = math.radians(70.0)
 #: A passing place: this far from the other robot's way and from the other robot itself ...
 CLEAR_OF_WAY_M = 0.7
@@ -63,6 +63,9 @@ CLEAR_DISTANCE_M = 4.0
 GIVE_WAY_TIMEOUT_S = 60.0
 #: The robot with priority waits at most this long for the other to back out.
 PRIORITY_WAIT_TIMEOUT_S = 30.0
+#: Giving way lasts at least this long (sim seconds): what the robot knows of the other comes late and
+#: noisy, and a rule that flips every tick stops and starts both robots instead of letting one pass.
+MIN_GIVE_WAY_S = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -231,8 +234,10 @@ class GiveWay(Task[GiveWayPhase]):
 
     def _clear(self, me: Pose2D | None) -> bool:
         peer = self._peer_pose
-        if peer is None or me is None:
+        if peer is None:
             return True  # the other robot is gone from the bus, or stopped driving: nothing to wait for
+        if me is None:
+            return False  # this robot's own pose is stale: wait until it knows where it is
         if self.meeting is Meeting.HEAD_ON_PRIORITY:  # until the other is off the way ahead
             off_way = _off_line(peer, _heading_line(me)) >= CLEAR_OF_WAY_M
             return off_way or not _ahead(me, peer) or me.distance_to(peer) >= CLEAR_DISTANCE_M
@@ -254,7 +259,8 @@ class GiveWay(Task[GiveWayPhase]):
             self.enter(GiveWayPhase.WAITING, now)
             if outcome is not NavOutcome.SUCCEEDED:
                 self.message = "short of the passing place"
-        if self._clear(inputs.robot_pose):
+        held_long_enough = self.started_s is not None and now - self.started_s >= MIN_GIVE_WAY_S
+        if held_long_enough and self._clear(inputs.robot_pose):
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
             return None
         self.holding = (f"waiting for {self.peer} to back out of the way" if self.meeting is Meeting.HEAD_ON_PRIORITY

@@ -62,6 +62,8 @@ def test_the_priority_robot_waits_only_while_the_other_is_on_its_way() -> None:
     assert task.step(_inputs(0.0, me)) is None and task.result is None
     assert task.holding == "waiting for r1 to back out of the way"
     task.peer_seen(at_passing_place.pose)
+    task.step(_inputs(0.5, me))
+    assert task.result is None, "held at least a second, however clear the way looks"
     task.step(_inputs(4.0, me))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
 
@@ -82,7 +84,7 @@ def test_stopping_for_a_crossing_robot_lasts_until_it_is_out_of_the_way() -> Non
     assert task.step(_inputs(0.0, me)) is None and task.result is None, "the first tick knows where r2 is"
     task.peer_seen(Pose2D(0.5, -0.2, -math.pi / 2))
     assert task.step(_inputs(1.0, me)) is None and task.result is None, "still in front"
-    task.peer_seen(Pose2D(0.5, -1.3, -math.pi / 2))
+    task.peer_seen(Pose2D(0.5, -1.5, -math.pi / 2))
     task.step(_inputs(2.0, me))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
 
@@ -111,7 +113,7 @@ def test_no_passing_place_in_a_dead_end() -> None:
     assert passing_place(me, Peer("r2", Pose2D(2.0, 3.0, math.pi), 0.1, True), dead_end) is None
 
 
-def _inputs(now: float, me: Pose2D, nav: NavStatus | None = None) -> TickInputs:
+def _inputs(now: float, me: Pose2D | None, nav: NavStatus | None = None) -> TickInputs:
     return TickInputs(now_s=now, robot_pose=me, nav=nav or NavStatus())
 
 
@@ -125,7 +127,9 @@ def test_give_way_goes_to_the_place_waits_for_the_other_to_pass_then_ends() -> N
     assert task.step(_inputs(6.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
     assert task.result is None and task.holding == "giving way to r2"
     task.peer_seen(Pose2D(0.8, 2.0, -math.pi / 2))  # gone by: the place is behind it
-    task.step(_inputs(8.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED)))
+    task.step(_inputs(8.0, None, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED)))
+    assert task.result is None, "its own pose stale: it waits"
+    task.step(_inputs(8.1, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED)))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
     assert task.message == "r2 has gone by"
 
@@ -136,7 +140,7 @@ def test_give_way_ends_when_the_other_robot_stops_driving() -> None:
     task.step(_inputs(0.0, me))
     assert task.result is None
     task.peer_seen(Pose2D(2.0, 0.0, math.pi), active=False)  # it docked, or parked to wait for a dock
-    task.step(_inputs(1.0, me))
+    task.step(_inputs(1.5, me))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
 
 
