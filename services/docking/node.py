@@ -47,7 +47,7 @@ from services.docking.task_io import (
     TickInputs,
     Velocity,
 )
-from services.docking.traffic import GiveWay, Meeting, must_give_way, passing_place
+from services.docking.traffic import TOO_CLOSE_CALM_S, GiveWay, Meeting, must_give_way, passing_place
 from services.docking.undocking_run import UndockingRun
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
@@ -153,8 +153,9 @@ class DockingService:
         #: Path lengths to the docks through the room, for the fleet's "nearest free dock".
         self._room = RoomPaths(room.bounds, self._walls) if self._walls and room is not None else None
         self._approach = params.approach_controller()
-        #: The fleet's other robots, for the traffic rule.
+        #: The fleet's other robots, for the traffic rule (and until when not to stop again for one too close).
         self.peers = PeerWatch(node, DOCKING_STATE) if self._walls else None
+        self._calm_until: dict[str, float] = {}
 
         self.cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self.state_pub = node.create_publisher(String, DOCKING_STATE, RELIABLE)
@@ -511,7 +512,9 @@ class DockingService:
         if latest is None:
             return
         me = latest[1]
-        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), peers.fresh(now), self._walls)
+        calm = {peer for peer, until in self._calm_until.items() if now < until}
+        met = must_give_way(me, self.node.namespace, float(self._battery.percentage), peers.fresh(now), self._walls,
+                            calm)
         if met is None:
             return
         peer, meeting = met
@@ -525,6 +528,9 @@ class DockingService:
             self._log.info("met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y)
         elif meeting is Meeting.HEAD_ON_PRIORITY:
             self._log.info("met %s head-on (this robot has priority): waiting for it to back out", peer.name)
+        elif meeting is Meeting.TOO_CLOSE:
+            self._log.info("%s is too close in front: stopping for a moment", peer.name)
+            self._calm_until[peer.name] = now + TOO_CLOSE_CALM_S
         else:
             self._log.info("%s crosses this robot's way (it has priority): stopping for it", peer.name)
         resume = task.request if isinstance(task, (DockingRun, AwaitDock)) else None

@@ -19,6 +19,9 @@ other's only way, and both plan, back up and give up for ever. The rule:
   where it is until the other is out of its way. Each planner's collision check sees the other robot
   only where it is now, not where it is going, so two robots crossing could otherwise meet side on; a
   robot standing still is an obstacle the other's planner does avoid.
+- **Too close** (another robot within :data:`TOO_CLOSE_M` in front): even the robot with priority
+  stops, for :data:`TOO_CLOSE_STOP_S`, so that its planner sees the other standing still before it
+  drives on round it; then it does not stop for that robot again for :data:`TOO_CLOSE_CALM_S`.
 
 Pure: no bus, no clock. The docking node keeps the peers' latest poses, charges and plans, asks
 :func:`must_give_way` each tick while its robot is under way, and runs :class:`GiveWay` when it says so.
@@ -29,7 +32,7 @@ from __future__ import annotations
 import enum
 import math
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Container, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +49,12 @@ HEAD_ON_HALF_ANGLE_RAD = math.radians(50.0)
 #: Another robot this close and in front, within this angle of the heading, is crossing the robot's way.
 CROSSING_DISTANCE_M = 1.2
 CROSSING_HALF_ANGLE_RAD = math.radians(70.0)
+#: Another robot this close in front (centre to centre, within this angle) makes even a robot with
+#: priority stop for a moment, then leave the rest to its planner for a while.
+TOO_CLOSE_M = 0.8
+TOO_CLOSE_HALF_ANGLE_RAD = math.radians(60.0)
+TOO_CLOSE_STOP_S = 1.5
+TOO_CLOSE_CALM_S = 6.0
 #: A passing place: this far from the other robot's way and from the other robot itself ...
 CLEAR_OF_WAY_M = 0.7
 CLEAR_OF_ROBOT_M = 1.0
@@ -98,6 +107,8 @@ class Meeting(enum.Enum):
     HEAD_ON_PRIORITY = "head-on, with priority"
     #: The other in front, crossing, without priority: stop until it is out of the way.
     CROSSING = "crossing"
+    #: The other very close in front, with priority: stop for a moment, then let the planner go round.
+    TOO_CLOSE = "too close"
 
 
 Walls = Sequence[tuple[tuple[float, float], tuple[float, float]]]
@@ -113,8 +124,10 @@ def clearance_between(a: Pose2D, b: Pose2D, walls: Walls) -> float:
     return least
 
 
-def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], walls: Walls) -> tuple[Peer, Meeting] | None:
-    """The robot this one must give way to (or wait for) now, if any (the nearest), and how they meet."""
+def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], walls: Walls,
+                  calm: Container[str] = ()) -> tuple[Peer, Meeting] | None:
+    """The robot this one must give way to (or wait for) now, if any (the nearest), and how they meet;
+    ``calm``: robots this one stopped for lately as too close, not stopped for again yet."""
     found: list[tuple[float, Peer, Meeting]] = []
     for p in peers:
         if not (p.under_way or p.giving_way):
@@ -131,6 +144,9 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
         elif (not priority and p.under_way and distance < CROSSING_DISTANCE_M
               and _ahead(me, p.pose, CROSSING_HALF_ANGLE_RAD)):
             found.append((distance, p, Meeting.CROSSING))
+        elif (priority and p.name not in calm and distance < TOO_CLOSE_M
+              and _ahead(me, p.pose, TOO_CLOSE_HALF_ANGLE_RAD)):
+            found.append((distance, p, Meeting.TOO_CLOSE))
     if not found:
         return None
     _, peer, meeting = min(found, key=lambda f: f[0])
@@ -259,8 +275,14 @@ class GiveWay(Task[GiveWayPhase]):
             self.enter(GiveWayPhase.WAITING, now)
             if outcome is not NavOutcome.SUCCEEDED:
                 self.message = "short of the passing place"
-        held_long_enough = self.started_s is not None and now - self.started_s >= MIN_GIVE_WAY_S
-        if held_long_enough and self._clear(inputs.robot_pose):
+        held_s = now - self.started_s if self.started_s is not None else 0.0
+        if self.meeting is Meeting.TOO_CLOSE:
+            if held_s >= TOO_CLOSE_STOP_S:
+                self.finish(Outcome.SUCCEEDED, message=f"stopped {held_s:.1f} s for {self.peer}, too close")
+                return None
+            self.holding = f"{self.peer} is too close in front"
+            return None
+        if held_s >= MIN_GIVE_WAY_S and self._clear(inputs.robot_pose):
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
             return None
         self.holding = (f"waiting for {self.peer} to back out of the way" if self.meeting is Meeting.HEAD_ON_PRIORITY

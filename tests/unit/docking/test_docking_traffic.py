@@ -70,12 +70,26 @@ def test_the_priority_robot_waits_only_while_the_other_is_on_its_way() -> None:
 
 def test_a_robot_crossing_in_front_makes_the_one_without_priority_stop() -> None:
     me = Pose2D(5.0, 1.0, 0.0)
-    crossing = Peer("r2", Pose2D(5.6, 1.5, -math.pi / 2), 0.4, True)  # in front, left, heading across
+    crossing = Peer("r2", Pose2D(5.8, 1.6, -math.pi / 2), 0.4, True)  # in front, left, heading across
     met = must_give_way(me, "r1", 0.8, [crossing], HALL)
     assert met is not None and met[1] is Meeting.CROSSING
     assert must_give_way(me, "r1", 0.3, [crossing], HALL) is None, "with priority it carries on"
     behind = Peer("r2", Pose2D(4.5, 1.3, 0.0), 0.4, True)
     assert must_give_way(me, "r1", 0.8, [behind], HALL) is None
+
+
+def test_a_robot_too_close_in_front_stops_even_the_one_with_priority_for_a_moment() -> None:
+    me = Pose2D(5.0, 1.0, 0.0)
+    close = Peer("r2", Pose2D(5.6, 1.2, math.pi / 2), 0.9, True)  # r1 has priority (less charge)
+    met = must_give_way(me, "r1", 0.3, [close], HALL)
+    assert met is not None and met[1] is Meeting.TOO_CLOSE
+    assert must_give_way(me, "r1", 0.3, [close], HALL, calm={"r2"}) is None, "stopped for it lately"
+    task = GiveWay(close, Meeting.TOO_CLOSE, None, resume=None)
+    task.step(_inputs(0.0, me))
+    task.step(_inputs(1.0, me))
+    assert task.result is None and task.holding == "r2 is too close in front"
+    task.step(_inputs(1.6, me))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
 
 
 def test_stopping_for_a_crossing_robot_lasts_until_it_is_out_of_the_way() -> None:
