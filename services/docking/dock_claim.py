@@ -166,8 +166,8 @@ class AwaitDock(Task[AwaitPhase]):
 
     def tick(self, inputs: TickInputs) -> Intent:
         if self.holding_pose is None or self._arrived:
-            self.holding = "waiting for a dock"
-            return None
+            # Stopped where it is: the planner's goal of the patrol this interrupted is cancelled.
+            return self.hold("waiting for a dock")
         if self.phase is not AwaitPhase.GOING:
             self.enter(AwaitPhase.GOING, inputs.now_s)
         outcome = inputs.nav.finished(self._key)
@@ -177,9 +177,8 @@ class AwaitDock(Task[AwaitPhase]):
         # to reach a blocked holding pose would only block others).
         self._arrived = True
         self.enter(AwaitPhase.WAITING, inputs.now_s)
-        if outcome is not NavOutcome.SUCCEEDED:
-            self.holding = "waiting for a dock short of the holding pose"
-        return None
+        return self.hold("waiting for a dock" if outcome is NavOutcome.SUCCEEDED
+                         else "waiting for a dock short of the holding pose")
 
 
 #: A dock counts as taken when this many lidar returns fall within :data:`OCCUPIED_RADIUS_M` of its

@@ -58,6 +58,9 @@ TOO_CLOSE_CALM_S = 6.0
 #: A passing place: this far from the other robot's way and from the other robot itself ...
 CLEAR_OF_WAY_M = 0.7
 CLEAR_OF_ROBOT_M = 1.0
+#: A passing place keeps this much more from the other's way than the other checks for when it waits for
+#: a clear way, so that a robot standing at its passing place always counts as out of the way.
+PLACE_MARGIN_M = 0.25
 #: ... and this far from every wall (a little more than the robot's half diagonal, 0.25 m).
 WALL_CLEARANCE_M = 0.3
 #: How far round the robot passing places are looked for, and on how fine a grid.
@@ -201,7 +204,8 @@ def passing_place(me: Pose2D, peer: Peer, walls: Walls) -> Pose2D | None:
     # Free to move through: clear of the walls and of the other robot's body (with the robots' size).
     free = (clearance >= WALL_CLEARANCE_M - 0.05) & (to_peer >= 0.55)
     way = _off_ways(cells, peer_way(peer))
-    good = free & (clearance >= WALL_CLEARANCE_M) & (way >= CLEAR_OF_WAY_M) & (to_peer >= CLEAR_OF_ROBOT_M)
+    good = (free & (clearance >= WALL_CLEARANCE_M) & (way >= CLEAR_OF_WAY_M + PLACE_MARGIN_M)
+            & (to_peer >= CLEAR_OF_ROBOT_M))
     free_grid, good_grid = free.reshape(n, n), good.reshape(n, n)
     start = (n // 2, n // 2)
     free_grid[start] = True  # the robot stands there
@@ -280,11 +284,11 @@ class GiveWay(Task[GiveWayPhase]):
             if held_s >= TOO_CLOSE_STOP_S:
                 self.finish(Outcome.SUCCEEDED, message=f"stopped {held_s:.1f} s for {self.peer}, too close")
                 return None
-            self.holding = f"{self.peer} is too close in front"
-            return None
+            return self.hold(f"{self.peer} is too close in front")
         if held_s >= MIN_GIVE_WAY_S and self._clear(inputs.robot_pose):
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
             return None
-        self.holding = (f"waiting for {self.peer} to back out of the way" if self.meeting is Meeting.HEAD_ON_PRIORITY
-                        else f"giving way to {self.peer}")
-        return None
+        # Stopped, not merely driving nothing: the planner's goal of the task this one interrupted is
+        # cancelled, and the base told zero.
+        return self.hold(f"waiting for {self.peer} to back out of the way" if self.meeting is Meeting.HEAD_ON_PRIORITY
+                         else f"giving way to {self.peer}")

@@ -9,7 +9,7 @@ import numpy as np
 from services.docking.dock_claim import AwaitDock, ClaimState, DockClaim, docks_seen_free
 from services.docking.docking_run import DockRequest
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
-from services.docking.task_io import Navigate, NavOutcome, NavStatus, TickInputs
+from services.docking.task_io import STOP, Navigate, NavOutcome, NavStatus, TickInputs
 from shared.fleet_client import FleetAnswer
 from shared.geometry import Pose2D
 
@@ -78,14 +78,14 @@ def _inputs(now: float, nav: NavStatus | None = None) -> TickInputs:
 
 def test_await_dock_holds_still_then_goes_to_its_holding_pose_once_and_waits_there() -> None:
     task = AwaitDock(DockRequest())
-    assert task.step(_inputs(0.0)) is None and task.holding == "waiting for a dock"
+    assert task.step(_inputs(0.0)) == STOP and task.holding == "waiting for a dock"
     task.hold_at(Pose2D(5.0, 1.0, 0.0))
     intent = task.step(_inputs(0.1))
     assert isinstance(intent, Navigate) and intent.pose == Pose2D(5.0, 1.0, 0.0)
     assert task.step(_inputs(0.2, NavStatus(intent.key, busy=True))) == intent
-    assert task.step(_inputs(3.0, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
+    assert task.step(_inputs(3.0, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP
     task.hold_at(Pose2D(5.0, 1.0, 0.0))
-    assert task.step(_inputs(3.1, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None, "no second trip"
+    assert task.step(_inputs(3.1, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP, "no second trip"
     assert task.result is None, "waiting never ends by itself"
 
 

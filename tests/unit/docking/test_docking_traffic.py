@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from services.docking.task_io import Navigate, NavOutcome, NavStatus, Outcome, TickInputs
+from services.docking.task_io import STOP, Navigate, NavOutcome, NavStatus, Outcome, TickInputs
 from services.docking.traffic import (
     CLEAR_OF_WAY_M,
     GiveWay,
@@ -59,7 +59,7 @@ def test_the_priority_robot_waits_only_while_the_other_is_on_its_way() -> None:
     at_passing_place = Peer("r1", Pose2D(2.5, 4.0, 0.0), 0.8, False, giving_way=True)
     assert must_give_way(me, "r2", 0.4, [at_passing_place], WALLS) is None, "off its way: no new wait"
     task = GiveWay(Peer("r1", Pose2D(3.3, 3.0, 0.0), 0.8, True), Meeting.HEAD_ON_PRIORITY, None, resume=None)
-    assert task.step(_inputs(0.0, me)) is None and task.result is None
+    assert task.step(_inputs(0.0, me)) == STOP and task.result is None
     assert task.holding == "waiting for r1 to back out of the way"
     task.peer_seen(at_passing_place.pose)
     task.step(_inputs(0.5, me))
@@ -95,9 +95,9 @@ def test_a_robot_too_close_in_front_stops_even_the_one_with_priority_for_a_momen
 def test_stopping_for_a_crossing_robot_lasts_until_it_is_out_of_the_way() -> None:
     me = Pose2D(0.0, 0.0, 0.0)
     task = GiveWay(Peer("r2", Pose2D(0.5, 0.4, -math.pi / 2), 0.2, True), Meeting.CROSSING, None, resume=None)
-    assert task.step(_inputs(0.0, me)) is None and task.result is None, "the first tick knows where r2 is"
+    assert task.step(_inputs(0.0, me)) == STOP and task.result is None, "the first tick knows where r2 is"
     task.peer_seen(Pose2D(0.5, -0.2, -math.pi / 2))
-    assert task.step(_inputs(1.0, me)) is None and task.result is None, "still in front"
+    assert task.step(_inputs(1.0, me)) == STOP and task.result is None, "still in front"
     task.peer_seen(Pose2D(0.5, -1.5, -math.pi / 2))
     task.step(_inputs(2.0, me))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
@@ -136,9 +136,9 @@ def test_give_way_goes_to_the_place_waits_for_the_other_to_pass_then_ends() -> N
     task = GiveWay(Peer("r2", Pose2D(4.0, 3.0, math.pi), 0.2, True), Meeting.HEAD_ON, place, resume=None)
     intent = task.step(_inputs(0.0, Pose2D(3.0, 3.0, 0.0)))
     assert isinstance(intent, Navigate) and intent.pose == place
-    assert task.step(_inputs(5.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
+    assert task.step(_inputs(5.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP
     task.peer_seen(Pose2D(2.2, 3.0, math.pi))  # coming through, close, heading at the place's side
-    assert task.step(_inputs(6.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) is None
+    assert task.step(_inputs(6.0, place, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP
     assert task.result is None and task.holding == "giving way to r2"
     task.peer_seen(Pose2D(0.8, 2.0, -math.pi / 2))  # gone by: the place is behind it
     task.step(_inputs(8.0, None, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED)))
