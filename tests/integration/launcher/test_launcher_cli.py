@@ -64,7 +64,8 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
     assert ps.returncode == 0, ps.stderr
     rows = json.loads(ps.stdout)
     assert [row["name"] for row in rows] == ["router", "talker", "helper"]
-    assert all(set(row) == {"name", "state", "pid", "restarts", "health", "exit_code", "started_at", "members"} for row in rows)
+    assert all(set(row) == {"name", "state", "pid", "restarts", "health", "exit_code", "started_at", "members",
+                            "namespace"} for row in rows)
     assert all(row["exit_code"] is None and datetime.fromisoformat(row["started_at"]).tzinfo for row in rows)
     by_name = {row["name"]: row for row in rows}
     assert by_name["talker"]["health"] == "healthy" and by_name["router"]["health"] == "none"
