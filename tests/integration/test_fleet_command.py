@@ -8,6 +8,7 @@ report (last line) must say so: give-ways that ended, distance driven, no collis
 from __future__ import annotations
 
 import json
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -18,8 +19,21 @@ CORRIDOR = REPO_ROOT / "deploy/worlds/fleet/corridor_meeting.yaml"
 
 
 def _fleet(*args: str, timeout_s: float = 240.0) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "deploy.cli", "fleet", *args], cwd=REPO_ROOT, capture_output=True,
-                          text=True, timeout=timeout_s)
+    """``zendock fleet``; however the test ends, the command is stopped with SIGTERM (it brings its stack
+    down, as on Ctrl-C) rather than killed, which would leave its services running."""
+    argv = [sys.executable, "-m", "deploy.cli", "fleet", *args]
+    proc = subprocess.Popen(argv, cwd=REPO_ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        out, err = proc.communicate(timeout=timeout_s)
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+            try:
+                proc.communicate(timeout=30.0)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.communicate()
+    return subprocess.CompletedProcess(argv, proc.returncode, out, err)
 
 
 def test_two_robots_meeting_head_on_in_a_corridor_both_get_through(tmp_path: Path) -> None:
