@@ -1,4 +1,4 @@
-"""A layered costmap in the spirit of nav2_costmap_2d: static, obstacle and range layers, then inflation.
+"""A layered costmap in the spirit of nav2_costmap_2d: static and obstacle layers, then inflation.
 
 Cost values are Nav2's (``nav2_costmap_2d/cost_values.hpp``): 0 free, 1..252 inflated, 253 inscribed
 (the robot's centre here means its footprint certainly touches an obstacle), 254 lethal, 255 unknown.
@@ -6,9 +6,9 @@ Cost values are Nav2's (``nav2_costmap_2d/cost_values.hpp``): 0 free, 1..252 inf
 - Static layer: the occupancy map; -1 -> unknown, ``>= lethal_threshold`` -> lethal, else free.
 - Obstacle layer: lidar endpoints within ``obstacle_max_range_m`` are marked lethal, and the cells a beam
   crossed on its way (Bresenham raytrace up to the hit or ``raytrace_max_range_m``) are cleared.
-- Range layer: ultrasonic readings mark an arc across the cone at the measured range and clear the cone
-  short of it (a deterministic take on nav2 ``range_sensor_layer``). Glass, invisible to the lidar,
-  enters the costmap here.
+- Glass, invisible to the lidar, enters through the static layer: the planner's glass memory
+  (:mod:`services.planner.glass_memory`, a probabilistic sonar model) is folded into the map it gives
+  :meth:`LayeredCostmap.set_static_map`, so the lidar's clearing never erases it.
 - Layers combine by maximum, skipping a layer's unknown cells; a known layer cell overrides unknown
   (``updateWithMax`` in nav2 ``costmap_layer.cpp``), so raytracing through unmapped space frees it.
 - Inflation (nav2_costmap_2d ``inflation_layer.cpp``, ``computeCost``): at distance ``d`` from the
@@ -206,7 +206,7 @@ def laser_scan_points(
 
 
 class LayeredCostmap:
-    """Static + obstacle + range layers over one grid, combined and inflated on demand.
+    """Static + obstacle layers over one grid, combined and inflated on demand.
 
     Sensor updates only touch their layer; :meth:`grid` recombines and inflates when something changed
     and otherwise returns the cached snapshot, so it is cheap to call every control cycle.
@@ -229,10 +229,6 @@ class LayeredCostmap:
     def obstacle_layer(self) -> np.ndarray:
         return self._obstacle
 
-    @property
-    def range_layer(self) -> np.ndarray:
-        return self._range
-
     def set_static_map(self, static_map: OccupancyMap) -> None:
         """Adopt a (new) map. Dynamic layers survive if the grid geometry is unchanged."""
         data = static_map.data
@@ -244,13 +240,11 @@ class LayeredCostmap:
         self._static = static
         if not same_grid:
             self._obstacle = np.full(data.shape, NO_INFORMATION, dtype=np.uint8)
-            self._range = np.full(data.shape, NO_INFORMATION, dtype=np.uint8)
         self._cached = None
 
     def clear(self) -> None:
         """Forget everything the sensors said (nav2 ``clearEntirely`` of the dynamic layers)."""
         self._obstacle.fill(NO_INFORMATION)
-        self._range.fill(NO_INFORMATION)
         self._cached = None
 
     def update_with_scan(
@@ -285,60 +279,10 @@ class LayeredCostmap:
         marks = hit & (lengths <= self.params.obstacle_max_range_m)
         self._set_cells(self._obstacle, self._frame.world_to_cells(endpoints[marks]), LETHAL_OBSTACLE)
 
-    def update_with_range(
-        self,
-        sensor_pose: tuple[float, float, float],
-        range_m: float,
-        field_of_view_rad: float,
-        min_range_m: float,
-        max_range_m: float,
-    ) -> None:
-        """Mark and clear one ultrasonic ``Range`` reading taken from ``sensor_pose`` (map frame).
-
-        A reading in ``[min_range, max_range)`` marks the arc across the cone at ``range_m`` and clears
-        the cone short of it. No echo (+inf or ``>= max_range``) clears the cone out to ``max_range``
-        when ``range_clear_on_max_reading``. NaN, -inf and readings under ``min_range`` are ignored.
-        """
-        if math.isnan(range_m) or range_m < min_range_m or not (field_of_view_rad > 0):
-            return
-        echo = range_m < max_range_m
-        if not echo and not self.params.range_clear_on_max_reading:
-            return
-        reach = range_m if echo else max_range_m
-        res = self._frame.resolution_m
-        sx, sy, syaw = sensor_pose
-        half_fov = 0.5 * field_of_view_rad
-        # Cells of a box around the cone, tested by their centres.
-        arc = syaw + np.linspace(-half_fov, half_fov, 9)
-        span = np.concatenate([[[sx, sy]], np.stack([sx + reach * np.cos(arc), sy + reach * np.sin(arc)], 1)])
-        cells = self._cells_around(span)
-        if len(cells) == 0:
-            return
-        centres = self._frame.cells_to_world(cells)
-        dx, dy = centres[:, 0] - sx, centres[:, 1] - sy
-        dist = np.hypot(dx, dy)
-        bearing = np.abs((np.arctan2(dy, dx) - syaw + math.pi) % (2 * math.pi) - math.pi)
-        clear_to = reach - res if echo else reach
-        in_cone = (bearing <= half_fov) & (dist <= clear_to)
-        sensor_cell = self._frame.world_to_cells(np.array([[sx, sy]]))
-        self._set_cells(self._range, np.concatenate([cells[in_cone], sensor_cell]), FREE_SPACE)
-        if echo:
-            count = max(2, math.ceil(field_of_view_rad * range_m / (0.5 * res)) + 1)
-            angles = syaw + np.linspace(-half_fov, half_fov, count)
-            arc_points = np.stack([sx + range_m * np.cos(angles), sy + range_m * np.sin(angles)], axis=1)
-            self._set_cells(self._range, self._frame.world_to_cells(arc_points), LETHAL_OBSTACLE)
-
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
         """Forget what the sensors said within ``radius_m`` of a point (nav2 ``ClearCostmapAroundRobot``)."""
-        inside = self._cells_within(xy, radius_m)
+        inside = self._frame.cells_within(xy, radius_m)
         self._set_cells(self._obstacle, inside, NO_INFORMATION)
-        self._set_cells(self._range, inside, NO_INFORMATION)
-
-    def free_unseen_range_around(self, xy: tuple[float, float], radius_m: float) -> None:
-        """In the range layer, cells never looked at within ``radius_m`` of a point become free."""
-        inside = self._cells_within(xy, radius_m)
-        unseen = inside[self._range[inside[:, 1], inside[:, 0]] == NO_INFORMATION]
-        self._set_cells(self._range, unseen, FREE_SPACE)
 
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
         """Free the cells under the robot in the dynamic layers (nav2 ``footprint_clearing_enabled``)."""
@@ -348,7 +292,7 @@ class LayeredCostmap:
         corners = np.array(
             [[x - reach, y - reach], [x + reach, y - reach], [x - reach, y + reach], [x + reach, y + reach]]
         )
-        cells = self._cells_around(corners)
+        cells = self._frame.cells_around(corners)
         if len(cells) == 0:
             return
         centres = self._frame.cells_to_world(cells)
@@ -357,15 +301,14 @@ class LayeredCostmap:
         fy = -s * (centres[:, 0] - x) + c * (centres[:, 1] - y)
         inside = (np.abs(fx) <= 0.5 * p.robot_length_m) & (np.abs(fy) <= 0.5 * p.robot_width_m)
         self._set_cells(self._obstacle, cells[inside], FREE_SPACE)
-        self._set_cells(self._range, cells[inside], FREE_SPACE)
 
     def combined_costs(self) -> np.ndarray:
         """Layers merged by maximum, before inflation (unknown in a layer defers to the others)."""
         master = self._static.copy()
-        for layer in (self._obstacle, self._range):
-            known = layer != NO_INFORMATION
-            take = known & ((master == NO_INFORMATION) | (master < layer))
-            master[take] = layer[take]
+        layer = self._obstacle
+        known = layer != NO_INFORMATION
+        take = known & ((master == NO_INFORMATION) | (master < layer))
+        master[take] = layer[take]
         return master
 
     def grid(self) -> CostGrid:
@@ -375,24 +318,6 @@ class LayeredCostmap:
             costs.flags.writeable = False
             self._cached = CostGrid(self._frame, costs)
         return self._cached
-
-    def _cells_around(self, points_xy: np.ndarray) -> np.ndarray:
-        """On-grid cells ``(N, 2)`` of the box bounding some world points, one cell of margin."""
-        cells = self._frame.world_to_cells(points_xy)
-        lo = np.maximum(cells.min(axis=0) - 1, 0)
-        hi = np.minimum(cells.max(axis=0) + 1, [self._frame.width - 1, self._frame.height - 1])
-        if np.any(hi < lo):
-            return np.zeros((0, 2), dtype=np.int64)
-        iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
-        return np.stack([ix.ravel(), iy.ravel()], axis=1)
-
-    def _cells_within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
-        """On-grid cells ``(N, 2)`` whose centres lie within ``radius_m`` of a point."""
-        x, y = xy
-        box = np.array([[x - radius_m, y - radius_m], [x + radius_m, y + radius_m]])
-        cells = self._cells_around(box)
-        centres = self._frame.cells_to_world(cells)
-        return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
 
     def _set_cells(self, layer: np.ndarray, cells: np.ndarray, value: int) -> None:
         cells = np.asarray(cells).reshape(-1, 2)

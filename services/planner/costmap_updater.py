@@ -40,6 +40,8 @@ SONAR_MIN_TURN_RAD = 0.1
 GLASS_SAVE_PERIOD_S = 1.0
 #: A scan this far in time from a sonar reading is too old to explain its echo.
 LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
+#: Glass the sonar heard within this angle of the heading slows the robot (a pane beside it does not).
+GLASS_SLOWDOWN_HALF_ANGLE_RAD = math.radians(70.0)
 
 
 def _moved(before: Pose2D, after: Pose2D) -> bool:
@@ -75,6 +77,8 @@ class CostmapUpdater:
         self._pending_scan: LaserScan | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
+        #: Cells of heard glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
+        self._heard_xy: np.ndarray | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
 
@@ -85,7 +89,8 @@ class CostmapUpdater:
         self._base_map = occupancy
         if self.glass is None or self.glass.frame != occupancy.frame:
             self.glass = GlassMemory(
-                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m
+                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m,
+                echo_hold_s=self._params.glass_echo_hold_s,
             )
             kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
             if kept is not None:
@@ -105,6 +110,31 @@ class CostmapUpdater:
 
     def add_mounts(self, msg: TFMessage) -> None:
         self._mounts.update(msg)
+
+    def glass_speed_limit_mps(self, pose: Pose2D | None) -> float | None:
+        """The speed allowed near glass the sonar has heard (Nav2's regulated pure pursuit slows near
+        obstacles the same way): the top speed times the distance to the nearest such cell over
+        ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when nothing heard
+        is that close. Only glass ahead counts, within ``GLASS_SLOWDOWN_HALF_ANGLE_RAD`` of the heading:
+        the limit caps forward speed; a pane beside the robot is passed, not driven into."""
+        p = self._params
+        if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
+            return None
+        if self._heard_xy is None:
+            self._heard_xy = self.glass.heard_cells_xy()
+        cells = self._heard_xy
+        if len(cells) == 0:
+            return None
+        dx, dy = cells[:, 0] - pose.x, cells[:, 1] - pose.y
+        distance = np.hypot(dx, dy)
+        along = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw)
+        ahead = along > math.cos(GLASS_SLOWDOWN_HALF_ANGLE_RAD) * distance
+        if not ahead.any():
+            return None
+        distance_m = float(np.min(distance[ahead]))
+        if distance_m >= p.glass_slowdown_radius_m:
+            return None
+        return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)
 
     def grid(self) -> CostGrid:
         """The inflated cost grid the planner and the follower read (a snapshot, cached between updates)."""
@@ -144,10 +174,13 @@ class CostmapUpdater:
             costmap.clear_footprint(pose.as_tuple())
             if self.glass is not None:
                 self.glass.observe_footprint(pose.as_tuple())
+        if self.glass is not None:
+            self.glass.expire(now)
         self.apply_glass()
 
     def apply_glass(self) -> None:
         """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
+        self._heard_xy = None
         if self.costmap is None or self._base_map is None or self.glass is None:
             return
         if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
@@ -226,5 +259,8 @@ class CostmapUpdater:
                 sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
             )
             return True
-        glass.add_reading(sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range)
+        glass.add_reading(
+            sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range,
+            stamp_s=reading.header.stamp.to_sec(),
+        )
         return True

@@ -3,11 +3,20 @@
 The robot's one sonar looks forward through a 0.5 rad cone, so a pane is seen only where the robot
 happened to face it. Driving round the end of a partly seen pane, the part never faced (the last
 0.3 m in the glass room) is open floor on every layer, and the path cuts close to it. Glass memory
-keeps the sonar's own range layer (marks from echoes the lidar cannot explain, see
-:mod:`services.planner.sonar_fusion`; clearing of the cones it looked through) and treats a cell as
+keeps the sonar's own evidence (echoes the lidar cannot explain, see
+:mod:`services.planner.sonar_fusion`, and the cones it looked through, weighed by the probabilistic
+model of :mod:`services.planner.range_sensor_model` and accumulated as log-odds) and treats a cell as
 glass when the sonar marked it, or when the sonar has never looked at it and it lies within
 ``suspicion_radius_m`` of a mark: a pane probably goes on, and the robot may pass there only once its
 sonar has looked. Cells the robot's footprint has covered are known to be free.
+
+The evidence model weighs an echo less toward the cone's edge, because an echo says only that the
+nearest surface lies somewhere on the arc; that keeps false glass out of the memory, but a pane's end
+heard only at the cone's edge is not marked by one echo, and the robot may drive on and clip it with a
+front corner (the cone does not cover the corners until 0.6 m ahead). So each unexplained echo's whole
+arc is also held as glass for ``echo_hold_s`` (Nav2 pairs its range layer with a collision monitor for
+the same reason): long enough to steer round what was just heard, too short to pile up false glass. The
+held arcs never enter the memory kept on file and never count in the yardstick; only the evidence does.
 
 The node folds the glass into the costmap's static layer (it is as good as a wall until cleared), so
 the lidar's clearing never erases it; a recovery or a clear request forgets it.
@@ -16,30 +25,58 @@ the lidar's clearing never erases it; a recovery or a clear request forgets it.
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
-from services.planner.costmap import LETHAL_OBSTACLE, NO_INFORMATION, CostmapParams, LayeredCostmap
+from services.planner.costmap import FREE_SPACE, LETHAL_OBSTACLE, NO_INFORMATION, CostmapParams
 from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.grid_frame import GridFrame
-from services.planner.occupancy_map import OCC_FREE, OccupancyMap
+from services.planner.range_sensor_model import RangeSensorModel, reading_evidence
+
+#: Evidence above this (log-odds; P = 0.55) and below the mark threshold is suspected glass.
+SUSPECTED_LOG_ODDS = 0.2
+#: How far the sensor's pose (and so any cell as the sonar sees it) may be off: a reading clears only
+#: cells that lie whole inside its cone by this margin.
+SENSOR_POSE_MARGIN_M = 0.01
 
 
 class GlassMemory:
-    """The sonar's marks and clearings on one grid, and the glass they imply."""
+    """The sonar's evidence on one grid, and the glass it implies."""
 
-    def __init__(self, frame: GridFrame, params: CostmapParams, suspicion_radius_m: float = 0.5) -> None:
+    def __init__(
+        self,
+        frame: GridFrame,
+        params: CostmapParams,
+        suspicion_radius_m: float = 0.5,
+        model: RangeSensorModel | None = None,
+        echo_hold_s: float = 0.0,
+    ) -> None:
         if not (math.isfinite(suspicion_radius_m) and suspicion_radius_m >= 0):
             raise ValueError(f"suspicion_radius_m must be a non-negative number, got {suspicion_radius_m}")
+        if not (math.isfinite(echo_hold_s) and echo_hold_s >= 0):
+            raise ValueError(f"echo_hold_s must be a non-negative number, got {echo_hold_s}")
+        self.echo_hold_s = echo_hold_s
+        #: Recent unexplained echoes' arcs: (time they lapse, cells (N, 2)), oldest first.
+        self._held: deque[tuple[float, np.ndarray]] = deque()
+        #: The cells under the robot at its last observed pose (a held arc never covers the robot).
+        self._under_robot = np.zeros((0, 2), dtype=np.int64)
         self.frame = frame
+        self.params = params
         self.suspicion_radius_m = suspicion_radius_m
-        blank = OccupancyMap(frame.resolution_m, frame.origin, np.full(frame.shape, OCC_FREE, dtype=np.int8))
-        self._sonar = LayeredCostmap(blank, params)
+        self.model = model or RangeSensorModel()
+        #: Log-odds that a cell is occupied by glass (0: no evidence either way).
+        self._log_odds = np.zeros(frame.shape, dtype=np.float32)
+        #: Whether the sonar (or the robot's footprint) has ever covered a cell.
+        self._seen = np.zeros(frame.shape, dtype=bool)
 
     @property
     def sonar_layer(self) -> np.ndarray:
-        """Per cell: 254 marked by an echo, 0 looked through, 255 never looked at."""
-        return self._sonar.range_layer
+        """Per cell: 254 glass (evidence above the mark threshold), 0 looked at, 255 never looked at."""
+        layer = np.full(self.frame.shape, NO_INFORMATION, dtype=np.uint8)
+        layer[self._seen] = FREE_SPACE
+        layer[self._log_odds >= self.model.mark_log_odds] = LETHAL_OBSTACLE
+        return layer
 
     def add_reading(
         self,
@@ -48,20 +85,103 @@ class GlassMemory:
         field_of_view_rad: float,
         min_range_m: float,
         max_range_m: float,
+        stamp_s: float | None = None,
     ) -> None:
-        """An echo the lidar cannot explain (or no echo): mark the arc, clear the cone short of it."""
-        self._sonar.update_with_range(sensor_pose, range_m, field_of_view_rad, min_range_m, max_range_m)
+        """An echo the lidar cannot explain (or no echo): evidence of glass at its range, of free space
+        short of it, and (given the reading's ``stamp_s``) its whole arc held as glass for
+        ``echo_hold_s``. NaN, -inf and readings under ``min_range`` are ignored."""
+        if math.isnan(range_m) or range_m < min_range_m or not (field_of_view_rad > 0):
+            return
+        echo = range_m < max_range_m
+        if not echo and not self.params.range_clear_on_max_reading:
+            return
+        self._apply(sensor_pose, range_m if echo else max_range_m, field_of_view_rad, echo)
+        if echo and stamp_s is not None and self.echo_hold_s > 0:
+            self._held.append((stamp_s + self.echo_hold_s, self._arc_cells(sensor_pose, range_m, field_of_view_rad)))
+
+    def _arc_cells(self, sensor_pose: tuple[float, float, float], range_m: float, fov_rad: float) -> np.ndarray:
+        """On-grid cells ``(N, 2)`` the arc across the cone at ``range_m`` passes through."""
+        sx, sy, syaw = sensor_pose
+        count = max(2, math.ceil(fov_rad * range_m / (0.5 * self.frame.resolution_m)) + 1)
+        angles = syaw + np.linspace(-0.5 * fov_rad, 0.5 * fov_rad, count)
+        points = np.stack([sx + range_m * np.cos(angles), sy + range_m * np.sin(angles)], axis=1)
+        cells = self.frame.world_to_cells(points)
+        return np.unique(cells[self.frame.cells_in_bounds(cells)], axis=0)
+
+    def expire(self, now_s: float) -> bool:
+        """Let held arcs lapse at ``now_s`` (sim time); whether any did. A clock that went back (a new
+        run in the same process) lets them all lapse."""
+        held = self._held
+        lapsed = False
+        while held and (held[0][0] <= now_s or held[0][0] - self.echo_hold_s > now_s + 1.0):
+            held.popleft()
+            lapsed = True
+        return lapsed
+
+    def held_mask(self) -> np.ndarray:
+        """Boolean ``(height, width)``: the held arcs, less the cells under the robot."""
+        mask = np.zeros(self.frame.shape, dtype=bool)
+        for _, cells in self._held:
+            mask[cells[:, 1], cells[:, 0]] = True
+        under = self._under_robot
+        mask[under[:, 1], under[:, 0]] = False
+        return mask
 
     def add_clear_view(
         self, sensor_pose: tuple[float, float, float], clear_to_m: float, field_of_view_rad: float, min_range_m: float
     ) -> None:
         """The sonar saw nothing but what the lidar sees: nothing in the cone before ``clear_to_m``."""
-        # A reading with no echo out to a maximum range of clear_to_m clears that far and marks nothing.
-        self._sonar.update_with_range(sensor_pose, clear_to_m, field_of_view_rad, min_range_m, clear_to_m)
+        if not (math.isfinite(clear_to_m) and clear_to_m > min_range_m and field_of_view_rad > 0):
+            return
+        self._apply(sensor_pose, clear_to_m, field_of_view_rad, echo=False)
+
+    def _apply(self, sensor_pose: tuple[float, float, float], reach_m: float, fov_rad: float, echo: bool) -> None:
+        res = self.frame.resolution_m
+        band_m = res  # the arc crosses cells whose centres lie up to half a cell off it
+        sx, sy, syaw = sensor_pose
+        half_fov = 0.5 * fov_rad
+        outer = reach_m + band_m
+        arc = syaw + np.linspace(-half_fov, half_fov, 9)
+        span = np.concatenate([[[sx, sy]], np.stack([sx + outer * np.cos(arc), sy + outer * np.sin(arc)], 1)])
+        cells = self.frame.cells_around(span)
+        if len(cells) == 0:
+            return
+        centres = self.frame.cells_to_world(cells)
+        dx, dy = centres[:, 0] - sx, centres[:, 1] - sy
+        distance = np.hypot(dx, dy)
+        bearing = (np.arctan2(dy, dx) - syaw + math.pi) % (2 * math.pi) - math.pi
+        iy, ix = cells[:, 1], cells[:, 0]
+        current = self._log_odds[iy, ix]
+        # One surface made the echo: arc cells known to be free (seen through from elsewhere) did not, and
+        # the evidence goes to the arc cells that may have (the rest of the arc, renormalised).
+        candidates = current > self.model.clear_log_odds
+        free, occupied = reading_evidence(
+            distance, bearing, reach_m, half_fov, echo, self.model, band_m, candidates=candidates,
+            cell_reach_m=res * math.sqrt(0.5) + SENSOR_POSE_MARGIN_M,
+        )
+        touched = (free != 0.0) | (occupied != 0.0)
+        limit = self.model.max_log_odds
+        self._log_odds[iy, ix] = np.clip(current + free + occupied, -limit, limit)
+        self._seen[iy[touched], ix[touched]] = True
+        sensor_cell = self.frame.world_to_cells(np.array([[sx, sy]]))
+        if self.frame.cells_in_bounds(sensor_cell).all():
+            self._seen[sensor_cell[0, 1], sensor_cell[0, 0]] = True
 
     def observe_footprint(self, pose: tuple[float, float, float]) -> None:
         """Where the robot stands there is no glass."""
-        self._sonar.clear_footprint(pose)
+        x, y, yaw = pose
+        reach = self.params.circumscribed_radius_m + self.frame.resolution_m
+        cells = self.frame.cells_around(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
+        if len(cells) == 0:
+            return
+        centres = self.frame.cells_to_world(cells)
+        c, s = math.cos(yaw), math.sin(yaw)
+        fx = c * (centres[:, 0] - x) + s * (centres[:, 1] - y)
+        fy = -s * (centres[:, 0] - x) + c * (centres[:, 1] - y)
+        inside = cells[(np.abs(fx) <= 0.5 * self.params.robot_length_m) & (np.abs(fy) <= 0.5 * self.params.robot_width_m)]
+        self._log_odds[inside[:, 1], inside[:, 0]] = -self.model.max_log_odds
+        self._seen[inside[:, 1], inside[:, 0]] = True
+        self._under_robot = inside
 
     def observe_turning_circle(self, pose: tuple[float, float, float]) -> None:
         """Within reach of the robot turning in place, suspect nothing unseen (marks stay marks).
@@ -74,28 +194,60 @@ class GlassMemory:
         still, and never while driving: suspicion keeps a moving robot off the unseen end of a pane.
         """
         x, y, _ = pose
-        reach = self._sonar.params.circumscribed_radius_m + 1.5 * self.frame.resolution_m
-        self._sonar.free_unseen_range_around((x, y), reach)
+        reach = self.params.circumscribed_radius_m + 1.5 * self.frame.resolution_m
+        inside = self.frame.cells_within((x, y), reach)
+        self._seen[inside[:, 1], inside[:, 0]] = True
 
     def clear(self) -> None:
-        self._sonar.clear()
+        self._log_odds[...] = 0.0
+        self._seen[...] = False
+        self._held.clear()
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
-        """Forget marks and looks within ``radius_m`` of a point; glass found farther away stays known."""
-        self._sonar.clear_around(xy, radius_m)
+        """Forget evidence and looks within ``radius_m`` of a point; glass found farther away stays known."""
+        inside = self.frame.cells_within(xy, radius_m)
+        self._log_odds[inside[:, 1], inside[:, 0]] = 0.0
+        self._seen[inside[:, 1], inside[:, 0]] = False
+        self._held.clear()
 
     def restore(self, layer: np.ndarray) -> None:
-        """Adopt a sonar layer kept from before (see :mod:`services.planner.glass_store`)."""
+        """Adopt a sonar layer kept from before (see :mod:`services.planner.glass_store`): its glass as
+        just over the mark threshold, what it had looked at as looked at, with no evidence either way."""
         if layer.shape != self.frame.shape:
             raise ValueError(f"a sonar layer of shape {layer.shape} does not fit the grid {self.frame.shape}")
-        self._sonar.range_layer[...] = layer
+        marked = layer == LETHAL_OBSTACLE
+        self._seen[...] = layer != NO_INFORMATION
+        self._log_odds[...] = 0.0
+        self._log_odds[marked] = min(self.model.mark_log_odds + 0.5, self.model.max_log_odds)
+
+    def suspected_cells_xy(self) -> np.ndarray:
+        """Centres ``(N, 2)`` of cells with evidence of glass below the mark threshold: glass the sonar
+        has heard but not confirmed."""
+        model = self.model
+        suspected = (self._log_odds > SUSPECTED_LOG_ODDS) & (self._log_odds < model.mark_log_odds)
+        iy, ix = np.nonzero(suspected)
+        return self.frame.cells_to_world(np.stack([ix, iy], axis=1))
+
+    def heard_cells_xy(self) -> np.ndarray:
+        """Centres ``(N, 2)`` of every cell the sonar has heard glass in: suspected, marked, or on a held
+        arc. The robot slows near them: where one pane is known its unheard end is near, and a plan that
+        rounds a pane's end keeps changing as the end is heard (the robot once clipped ends at full speed
+        while replanning several times a second)."""
+        heard = self._log_odds > SUSPECTED_LOG_ODDS
+        if self._held:
+            heard = heard | self.held_mask()
+        iy, ix = np.nonzero(heard)
+        return self.frame.cells_to_world(np.stack([ix, iy], axis=1))
 
     def glass_mask(self) -> np.ndarray:
-        """Boolean ``(height, width)``: marked by the sonar, or unlooked-at within the suspicion radius."""
-        layer = self._sonar.range_layer
-        marks = layer == LETHAL_OBSTACLE
-        if self.suspicion_radius_m <= 0 or not marks.any():
-            return marks
-        radius_cells = self.suspicion_radius_m / self.frame.resolution_m
-        near = squared_distance_to_marks(marks, radius_cells) <= radius_cells * radius_cells
-        return marks | (near & (layer == NO_INFORMATION))
+        """Boolean ``(height, width)``: marked by the sonar, unlooked-at within the suspicion radius of a
+        mark, or on a held arc."""
+        marks = self._log_odds >= self.model.mark_log_odds
+        glass = marks
+        if self.suspicion_radius_m > 0 and marks.any():
+            radius_cells = self.suspicion_radius_m / self.frame.resolution_m
+            near = squared_distance_to_marks(marks, radius_cells) <= radius_cells * radius_cells
+            glass = marks | (near & ~self._seen)
+        if self._held:
+            glass = glass | self.held_mask()
+        return glass

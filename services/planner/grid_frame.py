@@ -81,6 +81,23 @@ class GridFrame:
             (cells[:, 0] >= 0) & (cells[:, 0] < self.width) & (cells[:, 1] >= 0) & (cells[:, 1] < self.height)
         )
 
+    def cells_around(self, points_xy: np.ndarray) -> np.ndarray:
+        """On-grid cells ``(N, 2)`` of the box bounding some world points, one cell of margin."""
+        cells = self.world_to_cells(points_xy)
+        lo = np.maximum(cells.min(axis=0) - 1, 0)
+        hi = np.minimum(cells.max(axis=0) + 1, [self.width - 1, self.height - 1])
+        if np.any(hi < lo):
+            return np.zeros((0, 2), dtype=np.int64)
+        iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
+        return np.stack([ix.ravel(), iy.ravel()], axis=1)
+
+    def cells_within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
+        """On-grid cells ``(N, 2)`` whose centres lie within ``radius_m`` of a point."""
+        x, y = xy
+        cells = self.cells_around(np.array([[x - radius_m, y - radius_m], [x + radius_m, y + radius_m]]))
+        centres = self.cells_to_world(cells)
+        return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
+
     def cell_centres(self) -> tuple[np.ndarray, np.ndarray]:
         """World x and y of every cell centre, each shaped ``(height, width)``."""
         iy, ix = np.mgrid[0 : self.height, 0 : self.width]

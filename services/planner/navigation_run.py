@@ -89,6 +89,8 @@ class NavSnapshot:
     planning_in_flight: bool
     #: The last command published on cmd_vel (by any goal).
     last_cmd: tuple[float, float] = (0.0, 0.0)
+    #: A cap on the forward speed (near suspected glass), or None.
+    speed_limit_mps: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -330,7 +332,7 @@ class NavigationRun:
         # Acceleration limits (and the lookahead) start from the last command, as Nav2's velocity smoother
         # does in open loop: measured odometry lags the base, and ramping from it would slow every start.
         reference = snap.last_cmd if p.open_loop_acceleration else velocity
-        command = self.follower.compute_velocity_command(pose, reference, dt, snap.grid)
+        command = self.follower.compute_velocity_command(pose, reference, dt, snap.grid, snap.speed_limit_mps)
         if command.status is FollowStatus.GOAL_REACHED and (
             abs(velocity[0]) > p.trans_stopped_velocity_mps or abs(velocity[1]) > p.rot_stopped_velocity_radps
         ):

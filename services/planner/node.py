@@ -267,16 +267,18 @@ class PlannerService:
         now = self._node.now() if now is None else now
         timeout_s = self._params.pose_timeout_s
         tracker = self._tracker
+        pose = tracker.current_pose(now, timeout_s)
         return NavSnapshot(
             now_s=now,
             wall_s=time.monotonic(),
-            pose=tracker.current_pose(now, timeout_s),
+            pose=pose,
             pose_age_s=tracker.pose_age_s(now),
             pose_carried=tracker.carried_by_odometry(now, timeout_s),
             velocity=tracker.twist(now, timeout_s),
             grid=self._layers.grid() if self._layers.costmap is not None else None,
             planning_in_flight=self._planning_in_flight,
             last_cmd=self._last_cmd,
+            speed_limit_mps=self._layers.glass_speed_limit_mps(pose),
         )
 
     def _carry_out(self, orders: NavOrders) -> None:

@@ -66,6 +66,13 @@ class Params(ServiceParams):
         "", description="keep the sonar's glass in this file across restarts (empty: forget it on exit)")
     glass_suspicion_radius_m: float = Field(
         0.3, ge=0.0, description="unlooked-at floor this close to sonar-only marks counts as glass (0: off)")
+    glass_echo_hold_s: float = Field(
+        2.0, ge=0.0, description="each unexplained sonar echo's whole arc counts as glass this long (sim "
+        "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)")
+    glass_slowdown_radius_m: float = Field(
+        0.8, ge=0.0, description="closer than this to glass the sonar has heard ahead, the speed falls in "
+        "proportion to the distance (0: off)")
+    glass_slowdown_min_speed_mps: float = Field(0.15, gt=0.0, description="... but never below this")
     lidar_mount: tuple[float, float, float] = Field(
         (0.10, 0.0, 0.0), description="base_link -> lidar_link until tf_static says otherwise")
     ultrasonic_mount: tuple[float, float, float] = Field(

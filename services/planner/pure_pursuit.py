@@ -197,9 +197,15 @@ class RegulatedPurePursuit:
         self.set_path(np.zeros((0, 3)))
 
     def compute_velocity_command(
-        self, pose: Pose2D, velocity: tuple[float, float], dt_s: float, costmap: CostGrid | None = None
+        self,
+        pose: Pose2D,
+        velocity: tuple[float, float],
+        dt_s: float,
+        costmap: CostGrid | None = None,
+        speed_limit_mps: float | None = None,
     ) -> VelocityCommand:
-        """One control step: robot ``pose`` (map frame), measured ``(v, w)``, cycle time ``dt_s``."""
+        """One control step: robot ``pose`` (map frame), measured ``(v, w)``, cycle time ``dt_s``;
+        ``speed_limit_mps`` caps the forward speed (Nav2's speed limit, here from suspected glass)."""
         p = self.params
         if len(self._path) == 0:
             return VelocityCommand(0.0, 0.0, FollowStatus.NO_PATH)
@@ -244,6 +250,8 @@ class RegulatedPurePursuit:
 
         curvature = curvature_to(float(carrot_local[0]), float(carrot_local[1]))
         v = self._regulated_speed(pose, curvature, costmap)
+        if speed_limit_mps is not None:
+            v = min(v, max(speed_limit_mps, 0.0))
         w = v * curvature
         if abs(w) > p.max_angular_vel_radps:
             w = math.copysign(p.max_angular_vel_radps, w)

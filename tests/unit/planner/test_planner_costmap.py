@@ -20,6 +20,7 @@ from services.planner.costmap import (
     occupancy_from_costs,
 )
 from services.planner.distance_transform import distance_to_marks
+from services.planner.glass_memory import GlassMemory
 from services.planner.global_planner import GlobalPlanner
 from services.planner.occupancy_map import OCC_FREE, OCC_OCCUPIED, OCC_UNKNOWN, OccupancyMap
 from services.planner.rasterize import map_from_world
@@ -166,30 +167,10 @@ def test_laser_scan_points_handles_inf_nan_and_limits() -> None:
     np.testing.assert_allclose(endpoints[1], [-9.0, 2.0], atol=1e-9)  # 90 degrees further: -x
 
 
-def test_sonar_marks_glass_and_no_echo_clears_it() -> None:
-    costmap = LayeredCostmap(_free_map())
-    costmap.update_with_range((1.5, 0.5, math.pi / 2), 1.0, 0.3, 0.02, 3.0)
-    layer = costmap.range_layer
-    assert layer[30, 30] == LETHAL_OBSTACLE  # straight ahead at 1.0 m
-    arc_x = 1.5 + 1.0 * math.sin(0.14)
-    arc_y = 0.5 + 1.0 * math.cos(0.14)
-    assert layer[int(arc_y / 0.05), int(arc_x / 0.05)] == LETHAL_OBSTACLE  # edge of the cone
-    assert layer[20, 30] == FREE_SPACE  # inside the cone, short of the reading
-    assert layer[20, 45] == NO_INFORMATION  # outside the cone
-    assert costmap.grid().costs[30, 30] == LETHAL_OBSTACLE
-    # Same direction, no echo: the obstacle has gone.
-    costmap.update_with_range((1.5, 0.5, math.pi / 2), math.inf, 0.3, 0.02, 3.0)
-    assert layer[30, 30] == FREE_SPACE
-    # Readings below min_range and NaN are ignored.
-    before = layer.copy()
-    costmap.update_with_range((1.5, 0.5, math.pi / 2), 0.01, 0.3, 0.02, 3.0)
-    costmap.update_with_range((1.5, 0.5, math.pi / 2), math.nan, 0.3, 0.02, 3.0)
-    np.testing.assert_array_equal(layer, before)
-
-
-def test_lidar_does_not_clear_what_the_sonar_saw() -> None:
-    costmap = LayeredCostmap(_free_map())
-    costmap.update_with_range((1.5, 0.5, math.pi / 2), 1.0, 0.3, 0.02, 3.0)
+def test_lidar_does_not_clear_glass_in_the_static_layer() -> None:
+    glass_map = _free_map()
+    glass_map.data[30, 25:35] = OCC_OCCUPIED  # glass memory folded into the static map
+    costmap = LayeredCostmap(glass_map)
     costmap.update_with_scan((1.5, 0.5), np.array([[1.5, 2.9]]), hits=np.array([False]))  # lidar sees through
     assert costmap.grid().costs[30, 30] == LETHAL_OBSTACLE
 
@@ -199,7 +180,6 @@ def test_clear_resets_dynamic_layers_and_footprint_clearing() -> None:
     grid_map.data[5, 5] = OCC_OCCUPIED
     costmap = LayeredCostmap(grid_map)
     costmap.update_with_scan((0.5, 1.5), np.array([[1.0, 1.5], [0.5, 2.0]]))
-    costmap.update_with_range((1.5, 0.5, math.pi / 2), 1.0, 0.3, 0.02, 3.0)
     costmap.clear_footprint((0.5, 2.0, 0.0))
     assert costmap.obstacle_layer[40, 10] == FREE_SPACE
     assert costmap.obstacle_layer[30, 20] == LETHAL_OBSTACLE
@@ -207,7 +187,7 @@ def test_clear_resets_dynamic_layers_and_footprint_clearing() -> None:
     assert costmap.grid() is snapshot  # cached until something changes
     costmap.clear()
     assert costmap.grid() is not snapshot
-    assert np.all(costmap.obstacle_layer == NO_INFORMATION) and np.all(costmap.range_layer == NO_INFORMATION)
+    assert np.all(costmap.obstacle_layer == NO_INFORMATION)
     costs = costmap.grid().costs
     assert costs[30, 20] == FREE_SPACE and costs[30, 30] == FREE_SPACE
     assert costs[5, 5] == LETHAL_OBSTACLE
@@ -231,7 +211,9 @@ def test_occupancy_translation_for_display() -> None:
 
 def test_glass_enters_through_the_sonar_and_the_planner_goes_around() -> None:
     world = load_world(WORLDS / "glass_room.yaml")
-    costmap = LayeredCostmap(map_from_world(world))
+    base = map_from_world(world)
+    costmap = LayeredCostmap(base)
+    glass = GlassMemory(base.frame, costmap.params, suspicion_radius_m=0.0)
     start, goal = world.robot.start, (-1.0, 1.4, -math.pi / 2)
     planner = GlobalPlanner()
 
@@ -243,7 +225,10 @@ def test_glass_enters_through_the_sonar_and_the_planner_goes_around() -> None:
     assert -1.9 < crossing_x(before.poses) < 1.6  # straight through the glass
     (gx1, gy), (gx2, _) = world.glass[0]
     for x in np.arange(gx1, gx2 + 0.01, 0.1):  # the robot's sonar sweeping along the pane
-        costmap.update_with_range((float(x), gy + 0.8, -math.pi / 2), 0.8, 0.26, 0.02, 3.0)
+        glass.add_reading((float(x), gy + 0.8, -math.pi / 2), 0.8, 0.26, 0.02, 3.0)
+    data = base.data.copy()
+    data[glass.glass_mask()] = OCC_OCCUPIED  # as the planner folds glass into the static layer
+    costmap.set_static_map(OccupancyMap(base.resolution_m, base.origin, data))
     costs = costmap.grid()
     after = planner.compute_path(costs, start, goal)
     assert crossing_x(after.poses) > 1.6  # through the opening at the end of the glass

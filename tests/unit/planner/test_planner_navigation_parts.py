@@ -118,8 +118,8 @@ def test_only_new_obstacles_ahead_block_a_plan() -> None:
     costmap = LayeredCostmap(map_from_world(room), CostmapParams())
     plan = _straight_plan(costmap.grid())
     assert not plan.newly_blocked(costmap.grid(), 0, skip_m=0.15)
-    # A glass pane across the path, seen by the sonar from (1.0, 1.5) facing +x at 1.5 m.
-    costmap.update_with_range((1.0, 1.5, 0.0), 1.5, 0.5, 0.02, 3.0)
+    # A new obstacle across the path 1.5 m ahead of (1.0, 1.5), seen by the lidar.
+    costmap.update_with_scan((1.0, 1.5), np.array([[2.5, 1.5 + dy] for dy in np.arange(-0.2, 0.21, 0.05)]))
     assert plan.newly_blocked(costmap.grid(), 0, skip_m=0.15)
     # Once the robot is past it, it no longer counts.
     assert not plan.newly_blocked(costmap.grid(), 50, skip_m=0.15)
@@ -319,7 +319,9 @@ def test_glass_memory_marks_echoes_and_suspects_only_floor_the_sonar_never_saw()
     memory.add_reading((1.0, 1.5, 0.0), 1.0, 0.5, 0.02, 3.0)
     assert _is_glass(memory, 2.0, 1.5)  # the echo itself
     assert not _is_glass(memory, 1.5, 1.5)  # looked through on the way
-    assert _is_glass(memory, 2.0, 1.5 + 0.45)  # the pane may go on beyond what the cone covered ...
+    # One echo marks the middle of the arc (its edges are less likely the echo's source) ...
+    assert _is_glass(memory, 1.0 + math.sqrt(1.0 - 0.15**2), 1.5 + 0.15)  # on the arc, 0.15 rad off the axis
+    assert _is_glass(memory, 2.0, 1.5 + 0.4)  # ... the pane may go on beyond what the cone covered ...
     assert _is_glass(memory, 2.2, 1.5)  # ... and behind it the sonar cannot look
     assert not _is_glass(memory, 2.0, 1.5 + 0.7)  # but not further than the suspicion radius
     # Looking along the suspected continuation from elsewhere clears it.
@@ -336,7 +338,12 @@ def test_glass_memory_without_suspicion_keeps_only_the_marks() -> None:
     memory = _glass_memory(suspicion_m=0.0)
     memory.add_reading((1.0, 1.5, 0.0), 1.0, 0.5, 0.02, 3.0)
     assert _is_glass(memory, 2.0, 1.5) and not _is_glass(memory, 2.0, 1.5 + 0.45)
-    memory.add_reading((1.0, 1.5, 0.0), math.inf, 0.5, 0.02, 3.0)  # no echo: the cone is clear
+    memory.add_reading((1.0, 1.5, 0.0), math.inf, 0.5, 0.02, 3.0)  # no echo: the cone is clear ...
+    assert not _is_glass(memory, 2.0, 1.5)
+    # ... but only the cells it covers whole: those at the arc's ends lie partly outside it, and glass could
+    # stand in their other part until a look covers them whole.
+    memory.add_reading((1.0, 1.5 + 0.15, 0.0), math.inf, 0.5, 0.02, 3.0)
+    memory.add_reading((1.0, 1.5 - 0.15, 0.0), math.inf, 0.5, 0.02, 3.0)
     assert not memory.glass_mask().any()
     with pytest.raises(ValueError, match="suspicion_radius_m"):
         GlassMemory(memory.frame, CostmapParams(), suspicion_radius_m=-1.0)
