@@ -51,8 +51,9 @@ def parse_restart_policy(value: object) -> RestartPolicy:
 class Backoff:
     """Exponential delay before restart n (0-based) of a streak: ``initial_s * 2**n``, capped at ``max_s``.
 
-    A run that lasted ``reset_after_s`` or longer ends the streak, so a service that crashes once a day
-    restarts quickly while one that crashes at start-up settles at one attempt every ``max_s``. The first
+    A run that lasted ``reset_after_s`` or longer, or passed its healthcheck, ends the streak, so a service
+    killed now and then restarts quickly while one that crashes at start-up settles at one attempt every
+    ``max_s``. The first
     delay is 0.1 s, as Docker's restart policy starts: a service starts in 0.2-0.3 s on a quiet machine,
     so a longer first wait would be most of a recovery.
     """

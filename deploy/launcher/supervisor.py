@@ -53,6 +53,8 @@ class ServiceRunner:
         self.next_start_at: float | None = None
         self._launched_wall: float | None = None
         self._health = "none"
+        #: Whether the current (or last) run of the process passed its healthcheck.
+        self._healthy_this_run = False
         self._exec_health = "starting"
         self._token_seen = False
         self._stopping = False
@@ -139,6 +141,8 @@ class ServiceRunner:
 
     def refresh_health(self, notify: bool = True) -> None:
         health = self._compute_health()
+        if health == "healthy":
+            self._healthy_this_run = True
         if health != self._health:
             previous, self._health = self._health, health
             reportable = health in ("healthy", "unhealthy") or previous in ("healthy", "unhealthy") and health == "starting"
@@ -249,7 +253,10 @@ class ServiceRunner:
             self.exit_code = code
             if self._stopping:
                 break
-            if time.monotonic() - launched_at >= backoff.reset_after_s:
+            if self._healthy_this_run or time.monotonic() - launched_at >= backoff.reset_after_s:
+                # A run that passed its healthcheck was not a crash at start-up, whatever ended it (a kill,
+                # a fault minutes in): the backoff guards against start-up crash loops, and a healthy
+                # service killed twice within reset_after_s would otherwise wait 0.2, 0.4, 0.8 ... s.
                 streak = 0
             if not self.plan.restart.should_restart(code, streak):
                 self._set_phase(Phase.EXITED, _describe_exit(code))
@@ -274,6 +281,7 @@ class ServiceRunner:
             self.event(f"cannot start {self.plan.argv[0]}: {exc.strerror or exc}")
             return SPAWN_FAILED_EXIT
         process.started_at = launched_at
+        self._healthy_this_run = False
         self.process = process
         self.starts += 1
         self.exit_code = None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import re
 import signal
 import threading
 import time
@@ -11,7 +12,7 @@ from pathlib import Path
 
 import psutil
 
-from deploy.launcher import Launcher
+from deploy.launcher import Backoff, Launcher
 from tests.integration.launcher.conftest import fake, marked_processes, read_records, wait_for
 
 
@@ -148,6 +149,30 @@ def test_restart_policies(launch) -> None:  # type: ignore[no-untyped-def]
     stack.wait_until(lambda st: st["unless_stopped"].restarts >= restarts_when_stopped["unless_stopped"] + 2, 10, "more restarts")
     assert stack.status("always").restarts == restarts_when_stopped["always"]
     assert stack.status("on_failure").state == "stopped"
+
+
+def test_a_run_that_passed_its_healthcheck_restarts_without_growing_backoff(launch) -> None:  # type: ignore[no-untyped-def]
+    """The backoff guards against start-up crash loops: a service that became healthy and then died (a
+    kill, a fault later on) restarts after the first delay every time; one that never passed a
+    healthcheck waits twice as long at each restart of its streak."""
+    dies = ("--exit-after", "1.0", "--exit-code", "1")
+    stack = launch(
+        f"""\
+        services:
+          healthy_then_dies:
+            command: {fake("--token", "healthy_then_dies", *dies)}
+            restart: on-failure
+            healthcheck: {{liveliness: true, timeout: 10s}}
+          never_healthy:
+            command: {fake(*dies)}
+            restart: on-failure
+        """,
+        backoff=Backoff(initial_s=0.2, max_s=5.0, reset_after_s=60.0),
+    )
+    stack.wait_until(lambda st: all(s.restarts >= 4 for s in st.values()), 30, "four restarts of each")
+    delays = {name: re.findall(r"restarting in ([0-9.]+)s", "\n".join(stack.logs(name))) for name in ("healthy_then_dies", "never_healthy")}
+    assert delays["healthy_then_dies"][:4] == ["0.2"] * 4, delays
+    assert delays["never_healthy"][:4] == ["0.2", "0.4", "0.8", "1.6"], delays
 
 
 def test_kill_9_of_a_service_leads_to_a_restart(launch) -> None:  # type: ignore[no-untyped-def]
