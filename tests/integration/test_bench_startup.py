@@ -11,7 +11,11 @@ def test_a_services_start_splits_into_interpreter_imports_and_the_rest() -> None
     report = run_startup_bench(repeats=1, services=["battery"])
     row = report["services"]["battery"]
     assert row["interpreter_ms"] > 0 and row["imports_ms"] > 0
-    assert row["to_token_ms"] >= row["imports_ms"] and row["to_token_max_ms"] >= row["to_token_ms"]
+    assert row["to_token_max_ms"] >= row["to_token_ms"] > 0
+    # The phases add up to the start (imports and the start are timed in different processes, so on a busy
+    # machine one sample of the imports may outlast one start: the rest is then negative, never hidden).
+    parts = row["interpreter_ms"] + row["imports_ms"] + row["session_and_ready_ms"]
+    assert parts == pytest.approx(row["to_token_ms"], abs=0.2)
     assert row["top_imports_ms"] and "services.battery.node" not in row["top_imports_ms"]
 
 
