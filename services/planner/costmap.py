@@ -286,21 +286,9 @@ class LayeredCostmap:
 
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
         """Free the cells under the robot in the dynamic layers (nav2 ``footprint_clearing_enabled``)."""
-        x, y, yaw = pose
         p = self.params
-        reach = p.circumscribed_radius_m + self._frame.resolution_m
-        corners = np.array(
-            [[x - reach, y - reach], [x + reach, y - reach], [x - reach, y + reach], [x + reach, y + reach]]
-        )
-        cells = self._frame.cells_around(corners)
-        if len(cells) == 0:
-            return
-        centres = self._frame.cells_to_world(cells)
-        c, s = math.cos(yaw), math.sin(yaw)
-        fx = c * (centres[:, 0] - x) + s * (centres[:, 1] - y)
-        fy = -s * (centres[:, 0] - x) + c * (centres[:, 1] - y)
-        inside = (np.abs(fx) <= 0.5 * p.robot_length_m) & (np.abs(fy) <= 0.5 * p.robot_width_m)
-        self._set_cells(self._obstacle, cells[inside], FREE_SPACE)
+        self._set_cells(self._obstacle, self._frame.cells_under_rectangle(pose, p.robot_length_m, p.robot_width_m),
+                        FREE_SPACE)
 
     def combined_costs(self) -> np.ndarray:
         """Layers merged by maximum, before inflation (unknown in a layer defers to the others)."""

@@ -173,16 +173,7 @@ class GlassMemory:
 
     def observe_footprint(self, pose: tuple[float, float, float]) -> None:
         """Where the robot stands there is no glass."""
-        x, y, yaw = pose
-        reach = self.params.circumscribed_radius_m + self.frame.resolution_m
-        cells = self.frame.cells_around(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
-        if len(cells) == 0:
-            return
-        centres = self.frame.cells_to_world(cells)
-        c, s = math.cos(yaw), math.sin(yaw)
-        fx = c * (centres[:, 0] - x) + s * (centres[:, 1] - y)
-        fy = -s * (centres[:, 0] - x) + c * (centres[:, 1] - y)
-        inside = cells[(np.abs(fx) <= 0.5 * self.params.robot_length_m) & (np.abs(fy) <= 0.5 * self.params.robot_width_m)]
+        inside = self.frame.cells_under_rectangle(pose, self.params.robot_length_m, self.params.robot_width_m)
         self._log_odds[inside[:, 1], inside[:, 0]] = -self.model.max_log_odds
         self._seen[inside[:, 1], inside[:, 0]] = True
         self._under_robot = inside

@@ -98,6 +98,20 @@ class GridFrame:
         centres = self.cells_to_world(cells)
         return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
 
+    def cells_under_rectangle(self, pose: tuple[float, float, float], length_m: float, width_m: float) -> np.ndarray:
+        """On-grid cells ``(N, 2)`` whose centres lie inside a ``length_m`` x ``width_m`` rectangle centred on
+        ``pose`` and turned with its yaw (the robot's footprint)."""
+        x, y, yaw = pose
+        reach = 0.5 * math.hypot(length_m, width_m) + self.resolution_m
+        cells = self.cells_around(np.array([[x - reach, y - reach], [x + reach, y + reach]]))
+        if len(cells) == 0:
+            return cells
+        centres = self.cells_to_world(cells)
+        c, s = math.cos(yaw), math.sin(yaw)
+        fx = c * (centres[:, 0] - x) + s * (centres[:, 1] - y)
+        fy = -s * (centres[:, 0] - x) + c * (centres[:, 1] - y)
+        return cells[(np.abs(fx) <= 0.5 * length_m) & (np.abs(fy) <= 0.5 * width_m)]
+
     def cell_centres(self) -> tuple[np.ndarray, np.ndarray]:
         """World x and y of every cell centre, each shaped ``(height, width)``."""
         iy, ix = np.mgrid[0 : self.height, 0 : self.width]

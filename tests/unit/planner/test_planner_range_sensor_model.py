@@ -51,11 +51,15 @@ def _nearest_echo(sensor: tuple[float, float, float], pane: tuple[np.ndarray, np
     return float(seen.min()) if len(seen) else math.inf
 
 
+def _marked_xy(memory: GlassMemory) -> np.ndarray:
+    """Centres ``(N, 2)`` of the cells the memory marks as glass."""
+    return memory.frame.cells_to_world(np.argwhere(memory.sonar_layer == 254)[:, ::-1])
+
+
 def _false_marks(memory: GlassMemory, pane: tuple[np.ndarray, np.ndarray], tolerance_m: float = 0.1) -> int:
-    marks = np.argwhere(memory.sonar_layer == 254)[:, ::-1]
-    if len(marks) == 0:
+    xy = _marked_xy(memory)
+    if len(xy) == 0:
         return 0
-    xy = memory.frame.cells_to_world(marks)
     a, b = pane
     t = np.clip(((xy - a) @ (b - a)) / float((b - a) @ (b - a)), 0.0, 1.0)
     off = np.hypot(*(xy - (a + t[:, None] * (b - a))).T)
@@ -64,10 +68,9 @@ def _false_marks(memory: GlassMemory, pane: tuple[np.ndarray, np.ndarray], toler
 
 def _coverage(memory: GlassMemory, pane: tuple[np.ndarray, np.ndarray], tolerance_m: float = 0.1) -> float:
     """The fraction of the pane's length within ``tolerance_m`` of a mark."""
-    marks = np.argwhere(memory.sonar_layer == 254)[:, ::-1]
-    if len(marks) == 0:
+    xy = _marked_xy(memory)
+    if len(xy) == 0:
         return 0.0
-    xy = memory.frame.cells_to_world(marks)
     a, b = pane
     points = a + np.linspace(0.0, 1.0, 100)[:, None] * (b - a)
     nearest = np.min(np.hypot(points[:, None, 0] - xy[None, :, 0], points[:, None, 1] - xy[None, :, 1]), axis=1)
