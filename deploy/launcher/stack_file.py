@@ -348,6 +348,7 @@ def load_stack(
     project_dir: str | Path | None = None,
     project_name: str | None = None,
     compose: Mapping[str, list[str]] | None = None,
+    interpolate: bool = True,
 ) -> Stack:
     """Read, interpolate and validate a stack file.
 
@@ -356,7 +357,8 @@ def load_stack(
 
     ``env`` replaces the shell environment for interpolation (tests pass a dict); ``project_dir``
     (default: the current directory) is where ``.env`` is looked up and names the project when the file
-    has no ``name``. Raises :class:`ConfigError` listing every problem found.
+    has no ``name``. ``interpolate=False`` keeps every ``${VAR}`` as written (``zendock export`` writes them
+    into files that another tool interpolates). Raises :class:`ConfigError` listing every problem found.
     """
     source = Path(path)
     directory = Path(project_dir) if project_dir is not None else Path.cwd()
@@ -372,7 +374,8 @@ def load_stack(
     except RobotTemplateError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     try:
-        document = interpolate_tree(document, variables)  # type: ignore[assignment]
+        if interpolate:
+            document = interpolate_tree(document, variables)  # type: ignore[assignment]
     except InterpolationError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     declared = document.get("x-compose")

@@ -1,23 +1,32 @@
-"""The container deployment stays in step with the default stack (checked without a container engine; the
-containers themselves run in `make test-containers`)."""
+"""The container deployment is generated from the stack files (`zendock export compose`), and what it
+generates keeps the stack's meaning (checked without a container engine; the containers themselves run in
+`make test-containers`)."""
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
 
+import pytest
 import yaml
 
+from deploy.cli import main
+from deploy.commands.export import export_compose
+from deploy.export.compose import HOST_ONLY_VARIABLES
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
+#: (stack file, committed file, --secure), as the committed files' headers name them.
+GENERATED = [
+    ("deploy/stack.yaml", "deploy/docker-compose.yml", False),
+    ("deploy/stack-secure.yaml", "deploy/docker-compose.secure.yml", True),
+]
 COMPOSE = yaml.safe_load((REPO_ROOT / "deploy" / "docker-compose.yml").read_text())
 SECURE = yaml.safe_load((REPO_ROOT / "deploy" / "docker-compose.secure.yml").read_text())
 STACK = yaml.safe_load((REPO_ROOT / "deploy" / "stack.yaml").read_text())
-#: Variables of the stack file that have no meaning in containers (host paths, the host's router endpoint).
-HOST_ONLY_VARIABLES = {"ZENOH_LISTEN", "ZENDOCK_GLASS_MEMORY"}
 
 
 def _variables(command: list[str]) -> set[str]:
-    return set(re.findall(r"\$\{(\w+)", " ".join(command))) - HOST_ONLY_VARIABLES
+    return set(re.findall(r"\$\{(\w+)", " ".join(command))) - set(HOST_ONLY_VARIABLES)
 
 
 def _conditions(service: dict) -> dict[str, str]:
@@ -25,6 +34,30 @@ def _conditions(service: dict) -> dict[str, str]:
     if isinstance(depends, list):
         return {name: "service_started" for name in depends}
     return {name: spec.get("condition", "service_started") for name, spec in depends.items()}
+
+
+@pytest.mark.parametrize(("stack", "committed", "secure"), GENERATED)
+def test_the_committed_compose_files_are_generated_from_the_stack_files(monkeypatch, stack, committed, secure) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.chdir(REPO_ROOT)
+    generated = export_compose(stack, secure=secure, output=committed)
+    flag = " --secure" if secure else ""
+    assert generated == (REPO_ROOT / committed).read_text(), (
+        f"{committed} is out of date: zendock export compose{flag} -f {stack} -o {committed}")
+
+
+def test_export_writes_the_file_and_bad_stacks_exit_2(monkeypatch, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.chdir(REPO_ROOT)
+    out = tmp_path / "compose.yml"
+    assert main(["export", "compose", "-o", str(out)]) == 0
+    assert yaml.safe_load(out.read_text()) == COMPOSE
+    assert main(["export", "compose", "--secure"]) == 0
+    assert yaml.safe_load(capsys.readouterr().out) == SECURE
+    assert main(["export", "compose", "-f", str(tmp_path / "missing.yaml")]) == 2
+    assert capsys.readouterr().err.strip().count("\n") == 0
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("services: {a: {command: [x], restart: sometimes}}\n")
+    assert main(["export", "compose", "-f", str(bad)]) == 2
+    assert "services.a.restart" in capsys.readouterr().err
 
 
 def test_compose_and_the_stack_file_have_the_same_services() -> None:
