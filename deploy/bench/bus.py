@@ -17,7 +17,6 @@ ranged 1.10 to 1.27 that way); round by round both paths see the same machine.
 from __future__ import annotations
 
 import socket
-import statistics
 import subprocess
 import sys
 import threading
@@ -27,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from deploy.bench.echo import ping_key, pong_key
+from deploy.percentiles import median, percentile
 from shared.messages import Twist
 from shared.node import RELIABLE, Node
 from shared.session import SessionSpec, open_session
@@ -59,11 +59,6 @@ class BusBenchResult:
             "ratio": round(self.ratio, 3),
             "rounds": self.rounds,
         }
-
-
-def _percentile(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
 
 
 class _Echo:
@@ -176,9 +171,9 @@ def run_bus_bench(rounds: int = 4000) -> BusBenchResult:
             for echo in echoes:
                 echo.close()
     return BusBenchResult(
-        rtt_p50_us=statistics.median(typed),
-        rtt_p99_us=_percentile(typed, 0.99),
-        raw_rtt_p50_us=statistics.median(raw),
-        raw_rtt_p99_us=_percentile(raw, 0.99),
+        rtt_p50_us=median(typed),
+        rtt_p99_us=percentile(typed, 0.99),
+        raw_rtt_p50_us=median(raw),
+        raw_rtt_p99_us=percentile(raw, 0.99),
         rounds=len(typed),
     )

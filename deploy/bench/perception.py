@@ -14,7 +14,6 @@ detecting, publishing); the simulator's own benchmark (a tool process) gives the
 from __future__ import annotations
 
 import math
-import statistics
 import tempfile
 import threading
 import time
@@ -27,6 +26,7 @@ import psutil
 import yaml
 
 from deploy.bench.processes import ServiceGroup, free_port
+from deploy.percentiles import median, percentile
 from deploy.service_tools import run_tool
 from shared import topics
 from shared.action import spin_in_background
@@ -66,13 +66,12 @@ class Viewpoint:
             "frames": self.frames,
             "detection_rate": round(rate, 3),
             "median_position_error_mm": _median_mm(self.position_errors_m),
-            "median_yaw_error_deg": round(math.degrees(statistics.median(self.yaw_errors_rad)), 2)
-            if self.yaw_errors_rad else math.nan,
+            "median_yaw_error_deg": round(math.degrees(median(self.yaw_errors_rad)), 2),
         }
 
 
 def _median_mm(values: list[float]) -> float:
-    return round(1000.0 * statistics.median(values), 1) if values else math.nan
+    return round(1000.0 * median(values), 1)
 
 
 class _Watcher:
@@ -213,22 +212,17 @@ def _report(points: list[Viewpoint], latencies_s: list[float]) -> dict[str, Any]
         summary[f"{range_m:g} m"] = {
             "detection_rate": round(detected / frames, 3) if frames else math.nan,
             "median_position_error_mm": _median_mm(positions),
-            "p95_position_error_mm": round(1000.0 * _p95(positions), 1) if positions else math.nan,
-            "median_yaw_error_deg": round(math.degrees(statistics.median(yaws)), 2) if yaws else math.nan,
+            "p95_position_error_mm": round(1000.0 * percentile(positions, 0.95), 1),
+            "median_yaw_error_deg": round(math.degrees(median(yaws)), 2),
         }
     frames = sum(p.frames for p in points)
     return {
         "angles_deg": list(ANGLES_DEG),
         "detection_rate": round(sum(p.detected for p in points) / frames, 3) if frames else math.nan,
-        "median_latency_ms": round(1000.0 * statistics.median(latencies_s), 1) if latencies_s else math.nan,
+        "median_latency_ms": round(1000.0 * median(latencies_s), 1),
         "by_range": summary,
         "points": [p.as_dict() for p in points],
     }
-
-
-def _p95(values: list[float]) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, math.ceil(0.95 * len(ordered)) - 1)]
 
 
 __all__ = ["run_perception_bench", "viewpoint_pose"]

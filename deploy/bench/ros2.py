@@ -30,6 +30,7 @@ import psutil
 import zenoh
 
 from deploy.bench.processes import ServiceGroup, free_port
+from deploy.percentiles import median, percentile
 from shared.messages import (
     BatteryState,
     Header,
@@ -246,11 +247,11 @@ def _measure(session: zenoh.Session, bridge: psutil.Process, case: Case, message
         "payload_bytes": len(payloads[0]),
         "paced_rate_hz": case.rate_hz,
         "delivered": len(paced),
-        "bridge_p50_ms": _ms(_quantile(through, 0.5)),
-        "bridge_p99_ms": _ms(_quantile(through, 0.99)),
-        "direct_p50_ms": _ms(_quantile(straight, 0.5)),
-        "direct_p99_ms": _ms(_quantile(straight, 0.99)),
-        "added_p50_ms": _ms(_quantile(through, 0.5) - _quantile(straight, 0.5)),
+        "bridge_p50_ms": _ms(median(through)),
+        "bridge_p99_ms": _ms(percentile(through, 0.99)),
+        "direct_p50_ms": _ms(median(straight)),
+        "direct_p99_ms": _ms(percentile(straight, 0.99)),
+        "added_p50_ms": _ms(median(through) - median(straight)),
         "bridge_cpu_us_per_message": round(1e6 * cpu_s / max(1, len(paced)), 1),
         "burst_sent_per_s": round(burst_sent / burst_s),
         "burst_forwarded_per_s": round(burst_received / burst_s),
@@ -267,12 +268,6 @@ def _wait_for(predicate: Callable[[], bool], timeout_s: float, cv: threading.Con
     with cv:
         while not predicate() and time.monotonic() < deadline:
             cv.wait(0.05)
-
-
-def _quantile(values: list[float], q: float) -> float:
-    if not values:
-        return math.nan
-    return float(np.quantile(values, q))
 
 
 def _ms(seconds: float) -> float | None:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import signal
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -22,6 +21,7 @@ from typing import Any
 
 from deploy.bench.processes import free_port
 from deploy.paths import REPO_ROOT
+from deploy.percentiles import median
 from shared.names import node_token_key
 from shared.session import SessionSpec, open_session
 
@@ -117,19 +117,19 @@ def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> di
         report: dict[str, Any] = {"repeats": repeats, "services": {}}
         with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
                 open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
-            interpreter = statistics.median(_timed([sys.executable, "-c", "pass"]) for _ in range(repeats))
+            interpreter = median(_timed([sys.executable, "-c", "pass"]) for _ in range(repeats))
             report["interpreter_ms"] = round(1000 * interpreter, 1)
             for service in wanted:
                 module = f"services.{service}.node"
-                imports = statistics.median(_import_s(module) for _ in range(repeats))
+                imports = median(_import_s(module) for _ in range(repeats))
                 ready = [_to_token(service, commands[service], endpoint, f"startup{i}", session)
                          for i in range(repeats)]
                 report["services"][service] = {
                     "interpreter_ms": round(1000 * interpreter, 1),
                     "imports_ms": round(1000 * imports, 1),
                     # parameters, the session, the node's declarations, the token's trip to the router
-                    "session_and_ready_ms": round(1000 * (statistics.median(ready) - interpreter - imports), 1),
-                    "to_token_ms": round(1000 * statistics.median(ready), 1),
+                    "session_and_ready_ms": round(1000 * (median(ready) - interpreter - imports), 1),
+                    "to_token_ms": round(1000 * median(ready), 1),
                     "to_token_max_ms": round(1000 * max(ready), 1),
                     "top_imports_ms": dict(top_imports(module)),
                 }

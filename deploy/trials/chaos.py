@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import math
 import random
-import statistics
 import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
 from deploy.launcher import Launcher
-from deploy.trials.stats import percentile
+from deploy.percentiles import median, percentile
 
 
 @dataclass
@@ -36,7 +35,7 @@ def recovery_figures(times: list[float]) -> dict[str, float]:
     if not times:
         return {"median_recovery_s": math.nan, "p95_recovery_s": math.nan, "max_recovery_s": math.nan}
     return {
-        "median_recovery_s": round(statistics.median(times), 2),
+        "median_recovery_s": round(median(times), 2),
         "p95_recovery_s": round(percentile(times, 0.95), 2),
         "max_recovery_s": round(max(times), 2),
     }

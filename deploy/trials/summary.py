@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import math
-import statistics
 
+from deploy.percentiles import median, percentile
 from deploy.trials.chaos import combine_chaos
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
-from deploy.trials.stats import percentile
 from shared.world import World
 
 
@@ -18,7 +17,6 @@ def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, 
 def summarise_results(results: list[TrialResult], wall_s: float, controller: str, world_name: str) -> TrialsSummary:
     """The summary of any set of trials: one world's, or a campaign's across worlds."""
     ok = [r for r in results if r.docked]
-    med = lambda xs: statistics.median(xs) if xs else math.nan  # noqa: E731
     false_glass = [r.false_glass_cells for r in results if math.isfinite(r.false_glass_cells)]
     coverage = [r.glass_coverage for r in results if math.isfinite(r.glass_coverage)]
     bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
@@ -26,20 +24,20 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
         n=len(results),
         successes=len(ok),
         success_rate=len(ok) / len(results) if results else math.nan,
-        median_dock_time_s=med([r.dock_time_s for r in ok]),
-        median_lower_bound_s=med([r.lower_bound_s for r in bounded]),
-        median_time_ratio=med([r.dock_time_s / r.lower_bound_s for r in bounded]),
-        median_lateral_error_m=med([r.lateral_error_m for r in ok]),
+        median_dock_time_s=median([r.dock_time_s for r in ok]),
+        median_lower_bound_s=median([r.lower_bound_s for r in bounded]),
+        median_time_ratio=median([r.dock_time_s / r.lower_bound_s for r in bounded]),
+        median_lateral_error_m=median([r.lateral_error_m for r in ok]),
         p95_lateral_error_m=percentile([r.lateral_error_m for r in ok], 0.95),
-        median_yaw_error_rad=med([r.yaw_error_rad for r in ok]),
+        median_yaw_error_rad=median([r.yaw_error_rad for r in ok]),
         collisions=sum(r.collisions for r in results),
         wall_s=wall_s,
         sim_s=sum(r.sim_s for r in results if math.isfinite(r.sim_s)),
         controller=controller,
         world=world_name,
-        median_false_glass_cells=med(false_glass),
+        median_false_glass_cells=median(false_glass),
         p95_false_glass_cells=percentile(false_glass, 0.95),
-        median_glass_coverage=med(coverage),
+        median_glass_coverage=median(coverage),
     )
 
 
