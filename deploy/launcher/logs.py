@@ -6,6 +6,7 @@ order things happened. ``name.log`` is the newest file, then ``name.log.1`` ... 
 
 from __future__ import annotations
 
+import logging
 import os
 import re
 import time
@@ -13,6 +14,7 @@ from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from logging.handlers import RotatingFileHandler
 from pathlib import Path
 from typing import TextIO
 
@@ -26,36 +28,37 @@ def utc_stamp(epoch_s: float | None = None) -> str:
     return moment.strftime("%Y-%m-%dT%H:%M:%S.") + f"{moment.microsecond // 1000:03d}Z"
 
 
+class _UtcStampFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        return f"{utc_stamp(record.created)} {record.getMessage()}"
+
+
 class RotatingLog:
-    """Append-only line log that rolls over to ``.1`` once it exceeds ``max_bytes``."""
+    """Append-only line log that rolls over to ``.1`` before a line would take it past ``max_bytes``.
+
+    The standard library's :class:`~logging.handlers.RotatingFileHandler` does the writing and the
+    rollover (thread-safe, flushed after every line), used directly, outside the ``logging`` hierarchy, so
+    a service's output never reaches another handler. As there, ``backups=0`` never rolls over.
+    """
 
     def __init__(self, path: Path, max_bytes: int = DEFAULT_MAX_BYTES, backups: int = DEFAULT_BACKUPS) -> None:
         self.path = path
         self.max_bytes = max_bytes
         self.backups = backups
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = path.open("a", encoding="utf-8")
+        self._handler = RotatingFileHandler(path, maxBytes=max_bytes, backupCount=backups, encoding="utf-8")
+        self._handler.setFormatter(_UtcStampFormatter())
 
     def rotate(self) -> None:
         """Shift ``name.log`` to ``name.log.1`` (and so on), dropping the oldest, and start a new file."""
-        self._file.close()
-        for index in range(self.backups, 0, -1):
-            older = self.path.with_name(f"{self.path.name}.{index}")
-            newer = self.path.with_name(f"{self.path.name}.{index - 1}") if index > 1 else self.path
-            if newer.exists():
-                os.replace(newer, older)
-        if self.backups == 0:
-            self.path.unlink(missing_ok=True)
-        self._file = self.path.open("a", encoding="utf-8")
+        with self._handler.lock:  # type: ignore[union-attr]
+            self._handler.doRollover()
 
     def write(self, text: str) -> None:
-        self._file.write(f"{utc_stamp()} {text}\n")
-        self._file.flush()
-        if self._file.tell() >= self.max_bytes:
-            self.rotate()
+        self._handler.handle(logging.makeLogRecord({"msg": text, "args": None}))
 
     def close(self) -> None:
-        self._file.close()
+        self._handler.close()
 
 
 @dataclass(frozen=True)
