@@ -158,6 +158,17 @@ class AwaitDock(Task[AwaitPhase]):
         """Driving to the holding pose."""
         return self.holding_pose is not None and not self._arrived
 
+    def state_name(self) -> str:
+        return "WAITING_FOR_DOCK"
+
+    @property
+    def under_way(self) -> bool:
+        return self.going
+
+    @property
+    def dock_request(self) -> DockRequest:
+        return self.request
+
     def hold_at(self, pose: Pose2D | None) -> None:
         """The fleet's holding pose for this robot (None: wait where it stands)."""
         if pose is None or (self.holding_pose is not None and pose.distance_to(self.holding_pose) < 0.05):

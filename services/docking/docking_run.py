@@ -44,7 +44,17 @@ from services.docking.dock_db import DockDatabase
 from services.docking.dock_tracker import DockEstimate, DockTracker
 from services.docking.errors import DockingError, DockingErrorCode, DockingState
 from services.docking.graceful import GracefulGains
-from services.docking.task_io import STOP, Intent, Navigate, NavOutcome, Outcome, Task, TickInputs
+from services.docking.task_io import (
+    STOP,
+    DockFeedback,
+    Intent,
+    Navigate,
+    NavOutcome,
+    Outcome,
+    Task,
+    TickInputs,
+    docking_state_name,
+)
 from shared.geometry import Pose2D
 
 log = logging.getLogger(__name__)
@@ -182,6 +192,25 @@ class DockingRun(Task[RunPhase]):
     @property
     def retries(self) -> int:
         return self.num_retries
+
+    watches_obstacles = True
+
+    def state_name(self) -> str:
+        return docking_state_name(self.feedback_state)
+
+    @property
+    def under_way(self) -> bool:
+        return self.phase is RunPhase.NAV_TO_STAGING
+
+    def dock_to_excuse(self) -> Pose2D | None:
+        return self.dock_pose
+
+    def dock_feedback(self, now_s: float) -> DockFeedback:
+        return DockFeedback(self.feedback_state, self.num_retries, max(0.0, self.docking_time_s(now_s)))
+
+    @property
+    def dock_request(self) -> DockRequest:
+        return self.request
 
     @property
     def dock_pose(self) -> Pose2D | None:

@@ -18,7 +18,17 @@ import math
 from services.docking.approach import graceful_staging_pose
 from services.docking.errors import DockingErrorCode, DockingState
 from services.docking.ir_drive import IrDockDrive, IrDriveParams, IrState
-from services.docking.task_io import Intent, Navigate, NavOutcome, Outcome, Task, TickInputs, Velocity
+from services.docking.task_io import (
+    DockFeedback,
+    Intent,
+    Navigate,
+    NavOutcome,
+    Outcome,
+    Task,
+    TickInputs,
+    Velocity,
+    docking_state_name,
+)
 from shared.geometry import Pose2D
 from shared.world import ROBOT_FRONT_M
 
@@ -60,6 +70,16 @@ class IrDockingRun(Task[IrPhase]):
 
     def docking_time_s(self, now_s: float) -> float:
         return 0.0 if self.started_s is None else now_s - self.started_s
+
+    #: The obstacle checks guard the approach, but excuse no dock: without a map pose nothing is the dock.
+    watches_obstacles = True
+    obstacles_need_map_pose = False
+
+    def state_name(self) -> str:
+        return docking_state_name(self.feedback_state)
+
+    def dock_feedback(self, now_s: float) -> DockFeedback:
+        return DockFeedback(self.feedback_state, self.num_retries, max(0.0, self.docking_time_s(now_s)))
 
     def tick(self, inputs: TickInputs) -> Intent:
         now = inputs.now_s

@@ -33,6 +33,17 @@ class Patrol(Task[PatrolPhase]):
         self.laps = 0
         self._key: object = self.new_nav_key()
 
+    def state_name(self) -> str:
+        return "PATROLLING"
+
+    @property
+    def under_way(self) -> bool:
+        return True
+
+    @property
+    def waypoint_index(self) -> int:
+        return self.next_index
+
     @property
     def current_goal(self) -> Pose2D:
         return self.waypoints[self.next_index]

@@ -6,6 +6,12 @@ Tasks (docking, undocking, patrolling) are pure state machines stepped at the co
 builds the inputs and carries out the intents through :class:`~services.docking.drive_arbiter.DriveArbiter`,
 which keeps one driver at a time. :class:`Task` holds what every task shares: phases with entry times,
 cancellation and the result.
+
+Every task also answers the same questions about itself (its *protocol*), so that the executive
+(:mod:`services.docking.executive`) never asks which kind of task runs: its ``docking/state`` name, whether
+it is under way (the traffic rule watches robots under way), which dock the obstacle checks excuse, whether
+it wants dock detections (and takes them), what it reports to a dock_robot client, what docking request it
+would carry on with, and where a patrol stands. The defaults are those of a task that does none of these.
 """
 
 from __future__ import annotations
@@ -16,7 +22,7 @@ import itertools
 from dataclasses import dataclass, field
 from typing import Generic, TypeVar
 
-from services.docking.errors import DockingErrorCode
+from services.docking.errors import DockingErrorCode, DockingState
 from shared.geometry import Pose2D
 
 
@@ -87,6 +93,20 @@ class Navigate:
 
 
 Intent = Velocity | Navigate | None
+
+
+@dataclass(frozen=True, slots=True)
+class DockFeedback:
+    """What a docking task reports to its dock_robot client (Nav2's DockRobot feedback, in plain numbers)."""
+
+    state: DockingState
+    num_retries: int
+    docking_time_s: float
+
+
+def docking_state_name(state: DockingState) -> str:
+    """A docking task's ``docking/state``: its feedback state's name ("STARTING" before the first)."""
+    return state.name if state is not DockingState.NONE else "STARTING"
 
 
 class Outcome(enum.Enum):
@@ -185,6 +205,51 @@ class Task(abc.ABC, Generic[P]):
     @property
     def retries(self) -> int:
         return 0
+
+    # --- the protocol: what the executive asks of any task (defaults: a task that does none of it) ----
+
+    #: The obstacle checks guard this task's driving (lidar ahead and behind, the sonar ahead) ...
+    watches_obstacles = False
+    #: ... and only while localisation is fresh (the dock they excuse is placed by the map pose).
+    obstacles_need_map_pose = True
+
+    def state_name(self) -> str:
+        """The service's ``docking/state`` while this task runs."""
+        return type(self).__name__.upper()
+
+    @property
+    def under_way(self) -> bool:
+        """Driving along the room's ways: the traffic rule looks for robots to give way to."""
+        return False
+
+    def dock_to_excuse(self) -> Pose2D | None:
+        """The dock (map frame) the obstacle checks must not count as an obstacle, if any."""
+        return None
+
+    def wants_detections(self, robot_pose: Pose2D | None) -> bool:
+        """Whether dock detections could help now (they cost a rendered and analysed camera frame each)."""
+        return False
+
+    def add_detection(self, dock_in_base: Pose2D, robot_pose_at_stamp: Pose2D, stamp_s: float) -> bool:
+        """A detection of the dock (base_link at ``stamp_s``) with the robot's map pose then; True if used."""
+        return False
+
+    def relocalised(self, correction: Pose2D) -> None:
+        """The localiser's map -> odom correction moved by ``correction`` (detections move with odometry)."""
+
+    def dock_feedback(self, now_s: float) -> DockFeedback | None:
+        """What to report to a dock_robot client now; None for a task that does not dock."""
+        return None
+
+    @property
+    def dock_request(self) -> object | None:
+        """The docking request to carry on with after an interruption (giving way); None: nothing to resume."""
+        return None
+
+    @property
+    def waypoint_index(self) -> int | None:
+        """The patrol waypoint the robot is heading for, to resume from; None for a task that does not patrol."""
+        return None
 
     @abc.abstractmethod
     def tick(self, inputs: TickInputs) -> Intent:

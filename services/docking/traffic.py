@@ -247,6 +247,9 @@ class GiveWay(Task[GiveWayPhase]):
         self._peer_pose: Pose2D | None = peer.pose
         self._key = self.new_nav_key()
 
+    def state_name(self) -> str:
+        return "GIVING_WAY"
+
     def peer_seen(self, pose: Pose2D | None, active: bool = True) -> None:
         """Where the other robot is now, and whether it is still under way or giving way itself (a robot
         that stopped driving, docked or parked, is nothing to wait for)."""

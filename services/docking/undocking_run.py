@@ -62,6 +62,14 @@ class UndockingRun(Task[UndockPhase]):
         self.dock_pose: Pose2D | None = None
         self.target: Pose2D | None = None
 
+    watches_obstacles = True
+
+    def state_name(self) -> str:
+        return "UNDOCKING"
+
+    def dock_to_excuse(self) -> Pose2D | None:
+        return self.dock_pose
+
     def tick(self, inputs: TickInputs) -> Intent:
         return {
             UndockPhase.STARTING: self._starting,

@@ -1,0 +1,571 @@
+"""The docking service's executive: which task runs, and what the service does about it.
+
+Pure: no bus, no clock. The node hands it what it hears (:class:`~services.docking.inputs.Heard`) and
+what happens (:data:`Event`: action goals and cancels, the fleet's answers, dock sightings, battery
+readings); it answers with :data:`Effects`, a list of plain data the node carries out in order (drive
+orders, fleet requests, action feedback and results, the state to publish). Each control tick
+(:meth:`Executive.step`) it
+
+1. follows the mission (:class:`~services.docking.mission.Mission`): patrol, go home when low, resume;
+2. with a fleet, follows the dock claim (:class:`~services.docking.dock_claim.DockClaim`): ask, renew and
+   release; start docking once a dock is granted, or seen free with the fleet down;
+3. with a fleet in the room, follows the traffic rule (:mod:`services.docking.traffic`): a robot met on
+   the way may make this one give way, and the interrupted docking carries on afterwards;
+4. steps the running task with a :class:`~services.docking.task_io.TickInputs` snapshot and turns its
+   intent into drive orders through the :class:`~services.docking.drive_arbiter.DriveArbiter`, so the
+   service and the planner never drive at once;
+5. reports: dock_robot feedback on change (and every ``feedback_period_s``), the result when the task ends
+   (an action's goal is answered; a replaced task's goal is cancelled), ``docking/state`` on change and
+   every second.
+
+Tasks answer one protocol (:class:`~services.docking.task_io.Task`), so nothing here asks which kind runs;
+the two tasks the executive itself starts for a reason of its own (waiting for a dock, giving way) are
+kept by name. Action goals are opaque here: :class:`Goal` carries the node's handle and which action it is.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+
+from services.docking.dock_claim import AwaitDock, DockClaim, docks_seen_free
+from services.docking.dock_db import DockDatabase
+from services.docking.dock_tracker import DockTracker
+from services.docking.docking_run import DockingRun, DockRequest
+from services.docking.drive_arbiter import DriveArbiter, DriveOrders
+from services.docking.errors import DockingError
+from services.docking.inputs import DockSighting, Heard
+from services.docking.ir_run import IrDockingRun
+from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
+from services.docking.params import Params
+from services.docking.patrol import Patrol
+from services.docking.pose_filter import PoseFilterParams
+from services.docking.room_paths import RoomPaths
+from services.docking.safety import ObstacleParams
+from services.docking.task_io import Intent, Navigate, NavStatus, Outcome, Task, TickInputs, Velocity
+from services.docking.traffic import TOO_CLOSE_CALM_S, GiveWay, Meeting, Peer, must_give_way, passing_place
+from services.docking.undocking_run import UndockingRun
+from shared.fleet_client import FleetAnswer
+from shared.geometry import Pose2D
+from shared.interfaces.docking import DockRobotFeedback, DockRobotResult, UndockRobotGoal, UndockRobotResult
+from shared.messages import Duration
+from shared.ratelimit import RateLimitedLogger
+from shared.world import World
+
+#: ``docking/state`` is published on change and at least this often.
+STATE_PERIOD_S = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class Goal:
+    """An action goal being served: the node's ``handle`` (opaque here: one per goal, compared by identity)
+    and which action it belongs to."""
+
+    handle: object
+    action: TaskKind
+
+    def same(self, other: Goal | None) -> bool:
+        return other is not None and other.handle is self.handle
+
+
+# --- events: what happens ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class DockGoal:
+    goal: Goal
+    request: DockRequest
+
+
+@dataclass(frozen=True)
+class UndockGoal:
+    goal: Goal
+    max_time_s: float
+    dock_type: str = ""
+
+
+@dataclass(frozen=True)
+class CancelGoal:
+    goal: Goal
+
+
+@dataclass(frozen=True)
+class FleetReserved:
+    """The fleet's answer to a reservation request (None and an error: it did not answer)."""
+
+    answer: FleetAnswer | None
+    error: Exception | None = None
+
+
+@dataclass(frozen=True)
+class FleetReleased:
+    """The fleet's answer to a release: the dock released ("" none), or None and an error."""
+
+    dock_id: str | None
+    error: Exception | None = None
+
+
+Event = DockGoal | UndockGoal | CancelGoal | FleetReserved | FleetReleased | DockSighting
+
+
+# --- effects: what the node does -----------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Drive:
+    orders: DriveOrders
+
+
+@dataclass(frozen=True)
+class Reserve:
+    """Ask the fleet for ``dock_id`` ("" : the nearest free one by ``path_lengths``) at charge ``battery``."""
+
+    battery: float
+    dock_id: str
+    path_lengths: dict[str, float] | None
+
+
+@dataclass(frozen=True)
+class Release:
+    """Tell the fleet the robot's dock is free."""
+
+
+@dataclass(frozen=True)
+class WantDetections:
+    wanted: bool
+
+
+@dataclass(frozen=True)
+class GoalFeedback:
+    goal: Goal
+    feedback: DockRobotFeedback
+
+
+@dataclass(frozen=True)
+class GoalEnded:
+    """Answer ``goal`` (if its client still waits) with ``result``, as succeeded, canceled or aborted."""
+
+    goal: Goal
+    outcome: Outcome
+    result: DockRobotResult | UndockRobotResult
+
+
+@dataclass(frozen=True)
+class PublishState:
+    name: str
+
+
+Effect = Drive | Reserve | Release | WantDetections | GoalFeedback | GoalEnded | PublishState
+Effects = list[Effect]
+
+
+class Executive:
+    """See the module docstring."""
+
+    def __init__(self, params: Params, database: DockDatabase, room: World | None, namespace: str,
+                 log: logging.Logger) -> None:
+        self.params = params
+        self.database = database
+        self.namespace = namespace
+        self._log = log
+        self._say = RateLimitedLogger(log, interval_s=5.0)
+        name = namespace.rpartition("/")[2]
+        patrol = params.patrol or (next((list(r.patrol) for r in room.robots if r.name == name), [])
+                                   if room is not None and name else [])
+        self.patrol = [Pose2D.from_seq(p) for p in patrol]
+        self.mission = Mission(self.patrol, params.resume_at, params.low_battery_threshold, params.auto_dock)
+        self.arbiter = DriveArbiter()
+        self.obstacles = ObstacleParams(stop_distance_m=params.obstacle_stop_distance_m)
+        #: Robots sharing docks ask the fleet for one (the node sends what :class:`Reserve` says).
+        self.claim = DockClaim(patience_s=params.fleet_patience_s) if params.fleet else None
+        #: The room's walls, for passing places (the traffic rule) and path lengths to the docks.
+        self.walls = [*room.opaque_segments(), *room.glass] if params.fleet and room is not None else []
+        self._room_paths = RoomPaths(room.bounds, self.walls) if self.walls and room is not None else None
+        self._approach = params.approach_controller()
+        self.task: Task | None = None
+        self.task_kind: TaskKind | None = None
+        self.goal: Goal | None = None
+        #: The running task when it is one the executive started for its own reasons.
+        self._awaiting: AwaitDock | None = None
+        self._giving_way: GiveWay | None = None
+        #: Until when not to stop again for a robot that came too close.
+        self._calm_until: dict[str, float] = {}
+        self._applied_correction: Pose2D | None = None
+        self._holding = ""
+        self._last_state = ""
+        self._state_published_s = -math.inf
+        self._feedback_key: tuple[int, int] | None = None
+        self._feedback_published_s = -math.inf
+
+    @property
+    def watches_traffic(self) -> bool:
+        """Whether the traffic rule applies (a fleet in a room with walls): the node then watches the peers."""
+        return bool(self.walls)
+
+    # --- what happens ----------------------------------------------------------------------------------
+
+    def battery_reading(self, percentage: float, charging: bool) -> None:
+        if self.mission.battery(percentage, charging):
+            self._log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * percentage,
+                           100.0 * self.params.low_battery_threshold)
+
+    def handle(self, event: Event, heard: Heard) -> Effects:
+        """React to ``event`` at once (an action's goal replaces what runs before the next tick)."""
+        out: Effects = []
+        match event:
+            case DockGoal(goal, request):
+                self._begin_docking(request, goal, heard, out)
+            case UndockGoal(goal, max_time_s, dock_type):
+                self._start(self._undocking_run(max_time_s, dock_type), TaskKind.UNDOCK, goal, out)
+            case CancelGoal(goal):
+                if goal.same(self.goal) and self.task is not None:
+                    self._log.info("%s: cancel requested", type(self.task).__name__)
+                    self.task.cancel()
+                else:
+                    out.append(GoalEnded(goal, Outcome.CANCELED, _result_message(goal.action, None)))
+            case FleetReserved(answer, error):
+                self._reserved(answer, error, heard.now_s)
+            case FleetReleased(dock_id, error):
+                self._released(dock_id, error, heard.now_s)
+            case DockSighting():
+                if self.task is not None:
+                    self._follow_correction(heard.map_to_odom)
+                    self.task.add_detection(event.dock_in_base, event.robot_at_stamp, event.stamp_s)
+        return out
+
+    # --- the tick --------------------------------------------------------------------------------------
+
+    def step(self, heard: Heard) -> Effects:
+        """One control tick; see the module docstring."""
+        out: Effects = []
+        now = heard.now_s
+        if heard.clock_reset:
+            self._log.warning("clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs",
+                              now)
+            self.mission.trigger.reset()  # a low battery after the reset sends the robot home again
+            if self.task is not None:
+                self.task.cancel()
+        self._follow_mission(heard, out)
+        if self.claim is not None:
+            self._follow_fleet(self.claim, heard, out)
+        if self.watches_traffic:
+            self._follow_traffic(heard, out)
+        task = self.task
+        out.append(WantDetections(task is not None and task.wants_detections(heard.latest_pose)))
+        if task is not None:
+            self._follow_correction(heard.map_to_odom)
+            inputs = self._task_inputs(task, heard)
+            intent = task.step(inputs)
+            if task.holding and task.holding != self._holding:
+                self._say.info(f"hold:{task.holding}", "holding still: %s", task.holding)
+            if task.holding and self._log.isEnabledFor(logging.DEBUG):
+                self._log.debug("hold t=%.3f %s: localisation %.3f s old, odometry %.3f s old", now, task.holding,
+                                heard.localisation_age_s, heard.odometry_age_s)
+            self._holding = task.holding
+            out.append(Drive(self._orders(intent, inputs)))
+            self._report_feedback(task, now, out)
+            if task.done:
+                self._end_task(heard, out)
+        self._report_state(heard, out)
+        return out
+
+    def _task_inputs(self, task: Task, heard: Heard) -> TickInputs:
+        blocked_ahead = blocked_behind = False
+        robot = heard.robot_pose
+        if task.watches_obstacles and (robot is not None or not task.obstacles_need_map_pose):
+            dock = task.dock_to_excuse()
+            dock_in_base = dock.relative_to(robot) if dock is not None and robot is not None else None
+            blocked_ahead, blocked_behind = heard.blocked(dock_in_base, self.obstacles, self.params.use_lidar,
+                                                          self.params.use_sonar)
+        nav = heard.nav
+        outcome = nav.outcome if not nav.busy and self.arbiter.nav_key is not None else None
+        return TickInputs(
+            now_s=heard.now_s,
+            robot_pose=heard.robot_pose,
+            pose_age_s=heard.pose_age_s,
+            base_twist=heard.base_twist,
+            charging=heard.charging,
+            nav=NavStatus(self.arbiter.nav_key, nav.busy, outcome, nav.reason if outcome else ""),
+            blocked_ahead=blocked_ahead,
+            blocked_behind=blocked_behind,
+            ir_dock=heard.ir_dock,
+        )
+
+    def _orders(self, intent: Intent, inputs: TickInputs) -> DriveOrders:
+        if isinstance(intent, Velocity):
+            return self.arbiter.velocity(intent, inputs.nav.busy, inputs.now_s)
+        if isinstance(intent, Navigate):
+            return self.arbiter.navigate(intent)
+        return DriveOrders()
+
+    def _follow_correction(self, correction: Pose2D | None) -> None:
+        """Move the detected dock with every change of the localiser's map -> odom correction, so that it
+        stays where odometry put it relative to the robot (see :mod:`services.docking.dock_tracker`)."""
+        applied = self._applied_correction
+        if self.task is not None and correction is not None and applied is not None and correction != applied:
+            self.task.relocalised(correction.compose(applied.inverse()))
+        self._applied_correction = correction
+
+    def _follow_mission(self, heard: Heard, out: Effects) -> None:
+        order = self.mission.decide(heard.now_s, self.task_kind)
+        if order is MissionOrder.DOCK:
+            request = DockRequest(dock_id=self.params.dock_id, max_staging_time_s=self.params.max_staging_time_s)
+            self._begin_docking(request, None, heard, out)
+        elif order is MissionOrder.UNDOCK:
+            self._log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
+            self._start(self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK, None, out)
+        elif order is MissionOrder.PATROL:
+            self._log.info("patrolling from waypoint %d", self.mission.next_waypoint)
+            self._start(Patrol(self.mission.patrol, self.mission.next_waypoint), TaskKind.PATROL, None, out)
+
+    # --- the fleet -------------------------------------------------------------------------------------
+
+    def _begin_docking(self, request: DockRequest, goal: Goal | None, heard: Heard, out: Effects) -> None:
+        """Dock now, or (sharing docks) once the fleet grants one: wait in :class:`AwaitDock` till then."""
+        claim = self.claim
+        if claim is None or request.dock_pose is not None:
+            self._start(self._docking_run(request, heard), TaskKind.DOCK, goal, out)
+            return
+        claim.want(heard.now_s, request.dock_id)
+        granted = claim.granted_dock
+        if granted is not None:
+            self._start(self._docking_run(replace(request, dock_id=granted), heard), TaskKind.DOCK, goal, out)
+        else:
+            self._log.info("asking the fleet for %s", f"dock {request.dock_id!r}" if request.dock_id else "a dock")
+            waiting = AwaitDock(request)
+            self._start(waiting, TaskKind.DOCK, goal, out)
+            self._awaiting = waiting
+
+    def _follow_fleet(self, claim: DockClaim, heard: Heard, out: Effects) -> None:
+        """Ask, renew and release as due; start docking once a dock is granted (or seen free, the fleet down)."""
+        now = heard.now_s
+        waiting = self._awaiting
+        if waiting is not None:
+            granted = claim.granted_dock
+            if granted is not None:
+                self._log.info("the fleet granted dock %s", granted)
+                self._start(self._docking_run(replace(waiting.request, dock_id=granted), heard), TaskKind.DOCK,
+                            self.goal, out)
+            elif claim.fleet_down(now):
+                self._dock_without_fleet(claim, waiting, heard, out)
+        elif self.task is None and claim.granted_dock is None and heard.charging and not claim.release_pending:
+            # In a dock without a claim (started there, or the fleet lost its book): claim the dock it is in.
+            if heard.latest_pose is not None:
+                claim.holds(now, self.database.nearest(heard.latest_pose).id)
+        if claim.asked_to_leave and self.mission.leave_dock():
+            self._log.info("the fleet asks this robot to leave its dock for a robot whose battery is critical")
+        if claim.reserve_due(now):
+            if heard.battery is None or not 0.0 <= heard.battery <= 1.0:
+                return  # the fleet serves by charge: ask once the battery has spoken
+            lengths = None
+            if heard.latest_pose is not None and claim.granted_dock is None:
+                lengths = self.dock_distances(heard.latest_pose)
+            claim.sent(now)
+            out.append(Reserve(heard.battery, claim.dock_id, lengths))
+        elif claim.release_due(now):
+            claim.sent(now)
+            out.append(Release())
+
+    def dock_distances(self, robot: Pose2D) -> dict[str, float]:
+        """How far each dock is to drive to (the fleet grants the nearest free one): through the room to its
+        staging pose and on into the dock, or (a plain dock database, no room) in a straight line."""
+        docks = {d.id: d.pose2d for d in self.database}
+        if self._room_paths is None:
+            return {dock_id: robot.distance_to(pose) for dock_id, pose in docks.items()}
+        staging = [self._approach.staging_pose(pose) for pose in docks.values()]
+        found = self._room_paths.lengths(robot, staging)
+        return {dock_id: length + stage.distance_to(pose)
+                for (dock_id, pose), stage, length in zip(docks.items(), staging, found, strict=True)}
+
+    def _reserved(self, answer: FleetAnswer | None, error: Exception | None, now: float) -> None:
+        claim = self.claim
+        if claim is None:
+            return
+        if answer is None:
+            claim.unanswered(now)
+            self._say.warning("fleet", "the fleet did not answer: %s", error)
+            return
+        if answer.refused:
+            self._say.warning("fleet-refused", "the fleet refused: %s", answer.reason)
+        claim.answered(now, answer)
+        if self._awaiting is not None and not answer.granted:
+            if answer.queue_position:
+                self._say.info("queued", "waiting for a dock: number %d in the queue (%s)",
+                               answer.queue_position, answer.reason)
+            self._awaiting.hold_at(answer.holding_pose)
+
+    def _released(self, dock_id: str | None, error: Exception | None, now: float) -> None:
+        claim = self.claim
+        if claim is None:
+            return
+        if dock_id is None:
+            claim.unanswered(now)
+            self._say.warning("fleet", "the fleet did not answer a release: %s", error)
+            return
+        claim.released(now)
+        if dock_id:
+            self._log.info("released dock %s", dock_id)
+
+    def _dock_without_fleet(self, claim: DockClaim, waiting: AwaitDock, heard: Heard, out: Effects) -> None:
+        """The fleet is down: dock at the nearest dock seen free (no robot in it), keeping it as a claim so
+        the fleet learns of it when it is back."""
+        if heard.latest_pose is None:
+            return
+        wanted = waiting.request.dock_id
+        docks = [(d.id, d.pose2d) for d in self.database if not wanted or d.id == wanted]
+        free = docks_seen_free(docks, heard.latest_pose, heard.scan_points)
+        if not free:
+            self._say.warning("fleet-down", "the fleet is down and no dock is seen free: waiting")
+            return
+        self._log.warning("the fleet has not answered for %g s: docking at %s, seen free", claim.patience_s, free[0])
+        claim.holds(heard.now_s, free[0])
+        self._start(self._docking_run(replace(waiting.request, dock_id=free[0]), heard), TaskKind.DOCK, self.goal,
+                    out)
+
+    # --- traffic ---------------------------------------------------------------------------------------
+
+    def _follow_traffic(self, heard: Heard, out: Effects) -> None:
+        """Give way to a robot with priority met on the way (see :mod:`services.docking.traffic`)."""
+        now = heard.now_s
+        if self._giving_way is not None:
+            other = next((p for p in heard.peers if p.name == self._giving_way.peer), None)
+            self._giving_way.peer_seen(other.pose if other else None,
+                                       other is not None and (other.under_way or other.giving_way))
+            return
+        task = self.task
+        if task is None or not task.under_way or heard.battery is None or heard.latest_pose is None:
+            return
+        me = heard.latest_pose
+        calm = {peer for peer, until in self._calm_until.items() if now < until}
+        met = must_give_way(me, self.namespace, heard.battery, list(heard.peers), self.walls, calm)
+        if met is None:
+            return
+        peer, meeting = met
+        place = self._give_way_plan(me, peer, meeting, now)
+        assert self.task_kind is not None
+        giving_way = GiveWay(peer, meeting, place, task.dock_request)
+        self._start(giving_way, self.task_kind, self.goal, out)
+        self._giving_way = giving_way
+
+    def _give_way_plan(self, me: Pose2D, peer: Peer, meeting: Meeting, now: float) -> Pose2D | None:
+        """Where to give way (None: stop where it stands), saying why in the log."""
+        place: Pose2D | None = None
+        if meeting is Meeting.HEAD_ON:
+            place = passing_place(me, peer, self.walls)
+            if place is None:
+                self._say.warning("no-passing-place", "met %s head-on and must give way, but found no passing place: "
+                                  "stopping", peer.name)
+        if place is not None:
+            self._log.info("met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y)
+        elif meeting is Meeting.HEAD_ON_PRIORITY:
+            self._log.info("met %s head-on (this robot has priority): waiting for it to back out", peer.name)
+        elif meeting is Meeting.TOO_CLOSE:
+            self._log.info("%s is too close in front: stopping for a moment", peer.name)
+            self._calm_until[peer.name] = now + TOO_CLOSE_CALM_S
+        else:
+            self._log.info("%s crosses this robot's way (it has priority): stopping for it", peer.name)
+        return place
+
+    # --- task life -------------------------------------------------------------------------------------
+
+    def _docking_run(self, request: DockRequest, heard: Heard) -> Task:
+        p = self.params
+        if p.controller == "ir":
+            try:
+                dock = request.dock_pose or self.database.choose(request.dock_id or None, heard.latest_pose,
+                                                                 request.dock_type or None).pose2d
+            except DockingError:
+                dock = None  # no such dock in the database: infrared docking needs none
+            return IrDockingRun(max_time_s=min(p.max_docking_time_s, p.approach_timeout_s + 60.0), dock_pose=dock,
+                                staging_offset_m=p.staging_offset_m, max_staging_time_s=request.max_staging_time_s)
+        tracker = DockTracker(replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m)
+        return DockingRun(request, self.database, p.approach_controller(), p.docking_config(), tracker)
+
+    def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
+        return UndockingRun(self.database, max_time_s, dock_type, self.params.undock_config())
+
+    def _start(self, task: Task, kind: TaskKind, goal: Goal | None, out: Effects) -> None:
+        """Run ``task`` from the next tick on, replacing whatever runs (its action, if any, is cancelled)."""
+        old, old_goal = self.task, self.goal
+        if old is not None and old.waypoint_index is not None:
+            self.mission.next_waypoint = old.waypoint_index
+        if old_goal is not None and not old_goal.same(goal):
+            out.append(GoalEnded(old_goal, Outcome.CANCELED, _result_message(old_goal.action, None)))
+        if old is not None and old is self._awaiting and kind is not TaskKind.DOCK and self.claim is not None:
+            self.claim.drop()  # no longer waiting for a dock
+        if old is not None:
+            self._log.info("%s replaced by %s", type(old).__name__, type(task).__name__)
+        self.task, self.task_kind, self.goal = task, kind, goal
+        self._awaiting = self._giving_way = None
+        self._feedback_key = None
+
+    def _end_task(self, heard: Heard, out: Effects) -> None:
+        task, kind, goal = self.task, self.task_kind, self.goal
+        assert task is not None and task.result is not None and kind is not None
+        result = task.result
+        giving_way = self._giving_way if task is self._giving_way else None
+        self.task, self.task_kind, self.goal = None, None, None
+        self._awaiting = self._giving_way = None
+        self._holding = ""
+        out.append(Drive(self.arbiter.release()))
+        if task.waypoint_index is not None:
+            self.mission.next_waypoint = task.waypoint_index
+        if giving_way is not None:
+            self._log.info("gave way: %s", giving_way.message or "done")
+            if isinstance(giving_way.resume, DockRequest):
+                self._begin_docking(giving_way.resume, goal, heard, out)  # carry on docking (a patrol: the mission)
+            return
+        self.mission.finished(kind, result.success, goal is not None, heard.now_s)
+        if self.claim is not None and ((kind is TaskKind.DOCK and not result.success)
+                                       or (kind is TaskKind.UNDOCK and result.success)):
+            self.claim.drop()  # out of the dock (or never got in): the dock is free for others
+        level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
+        feedback = task.dock_feedback(heard.now_s)
+        took = f" after {feedback.docking_time_s:.1f} s" if feedback is not None else ""
+        self._log.log(level, "%s %s%s (code %d, %d retries)%s", kind.value, result.outcome.value, took,
+                      int(result.error_code), result.num_retries, f": {result.message}" if result.message else "")
+        if goal is not None:
+            out.append(GoalEnded(goal, result.outcome, _result_message(goal.action, task)))
+
+    # --- reports ---------------------------------------------------------------------------------------
+
+    def _report_feedback(self, task: Task, now: float, out: Effects) -> None:
+        feedback = task.dock_feedback(now)
+        if feedback is None or self.goal is None:
+            return
+        key = (int(feedback.state), feedback.num_retries)
+        if key == self._feedback_key and now - self._feedback_published_s < self.params.feedback_period_s:
+            return
+        self._feedback_key, self._feedback_published_s = key, now
+        out.append(GoalFeedback(self.goal, DockRobotFeedback(
+            state=int(feedback.state),
+            docking_time=Duration.from_sec(feedback.docking_time_s),
+            num_retries=feedback.num_retries,
+        )))
+
+    def state_name(self, charging: bool) -> str:
+        """What the service is doing, for ``docking/state``."""
+        if self.task is not None:
+            return self.task.state_name()
+        if charging:
+            return "DOCKED"
+        return "HOLDING" if self.mission.mode is MissionMode.HOLDING else "IDLE"
+
+    def _report_state(self, heard: Heard, out: Effects) -> None:
+        name = self.state_name(heard.charging)
+        now = heard.now_s
+        if name == self._last_state and now - self._state_published_s < STATE_PERIOD_S:
+            return
+        if name != self._last_state:
+            self._log.info("state %s (clock %.2f s)", name, now)
+        self._last_state, self._state_published_s = name, now
+        out.append(PublishState(name))
+
+
+def _result_message(action: TaskKind, task: Task | None) -> DockRobotResult | UndockRobotResult:
+    """The action's result for ``task`` (None: a goal cancelled before any task ran for it)."""
+    result = task.result if task is not None else None
+    success = result is not None and result.success
+    code = int(result.error_code) if result is not None else 0
+    if action is TaskKind.DOCK:
+        return DockRobotResult(success=success, error_code=code, num_retries=task.retries if task else 0)
+    return UndockRobotResult(success=success, error_code=code)
