@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import sys
+
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
 
 from deploy.launcher.durations import format_duration
 from deploy.launcher.project import add_project_options, resolve_project
@@ -35,27 +40,34 @@ def current_statuses(paths: RuntimePaths) -> tuple[list[ServiceStatus], bool]:
     return statuses, False
 
 
-def format_table(statuses: list[ServiceStatus]) -> str:
+COLUMNS = ("NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL")
+
+
+def ps_table(statuses: list[ServiceStatus]) -> Table:
     """One row per service; a fleet's services grouped by namespace (robot), each group under its name."""
     namespaces = list(dict.fromkeys(sorted(s.namespace for s in statuses)))
     grouped = len(namespaces) > 1
-    rows: list[tuple[str, ...]] = [("NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL")]
+    table = Table(box=None, show_edge=False, pad_edge=False, padding=(0, 2, 0, 0), header_style="")
+    for column in COLUMNS:
+        table.add_column(column, no_wrap=True)
     for namespace in namespaces:
-        if grouped and namespace != namespaces[0]:
-            rows.append((f"{namespace}/",))
+        nested = grouped and namespace != namespaces[0]
+        if nested:
+            table.add_row(Text(f"{namespace}/"))
         for s in (s for s in statuses if s.namespace == namespace):
             detail = s.detail or (f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else "")
             if s.members:  # one process: its services start, crash and restart together
                 detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
-            name = f"  {s.name}" if grouped and namespace != namespaces[0] else s.name
-            rows.append((name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail))
-    table = [row for row in rows if len(row) == 6]
-    widths = [max(len(row[i]) for row in table) for i in range(5)]
-    return "\n".join(
-        row[0] if len(row) == 1
-        else "  ".join([*(cell.ljust(w) for cell, w in zip(row[:5], widths, strict=True)), row[5]]).rstrip()
-        for row in rows
-    )
+            name = f"  {s.name}" if nested else s.name
+            table.add_row(*(Text(cell) for cell in (name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail)))
+    return table
+
+
+def format_table(statuses: list[ServiceStatus]) -> str:
+    """The table as plain text, one line per row however wide (``zendock ps | grep`` keeps working)."""
+    console = Console(file=io.StringIO(), width=100_000, color_system=None, highlight=False, markup=False)
+    console.print(ps_table(statuses))
+    return "\n".join(line.rstrip() for line in console.file.getvalue().splitlines())  # type: ignore[attr-defined]
 
 
 def main(args: argparse.Namespace) -> int:
