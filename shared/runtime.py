@@ -11,8 +11,16 @@ Every ``python -m services.<name>`` takes the same flags::
     --node-name NAME        default: the service's name
     --log-level LEVEL
 
-Parameters are a pydantic model per service (unknown names and bad values are errors). A bad flag or
-parameter prints one clear message and exits with code 2. SIGINT and SIGTERM stop the node, close the
+Parameters are a pydantic model per service (unknown names and bad values are errors). A service with
+several parts nests a model per part, as Nav2 names ``controller.k_phi``; a dotted NAME sets one field
+of a part and leaves its other fields as they were::
+
+    -p lidar.noise_m=0.02                   # the simulator's lidar model, field noise_m
+    --config sim.yaml                       # lidar: {noise_m: 0.02}  (a nested map; ``lidar.noise_m: 0.02`` also works)
+
+Overrides apply after the file, field by field (``-p lidar.rate_hz=5`` keeps the file's ``lidar.noise_m``).
+A dotted name whose part is unknown, or is not a group of parameters, is an error naming the whole
+name, as a bad flat name or value is. A bad flag or parameter prints one clear message and exits with code 2. SIGINT and SIGTERM stop the node, close the
 session and exit 0. :func:`run_service` is the whole lifecycle; tests call :func:`serve` with options.
 """
 
@@ -100,6 +108,45 @@ def _parse_override(text: str) -> tuple[str, Any]:
     return name, value
 
 
+def _group_model(model: type[BaseModel], name: str) -> type[BaseModel] | None:
+    """The model of ``model``'s field ``name`` when that field is a nested group of parameters, else None."""
+    annotation = model.model_fields[name].annotation
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    return None
+
+
+def set_dotted(values: dict[str, Any], name: str, value: Any, model: type[BaseModel], source: str) -> None:
+    """Set parameter ``name`` (``field`` or ``group.field``, any depth) to ``value`` in ``values``.
+
+    Each part before the last must name a nested group of ``model``; the last part and the value are left
+    to the model's validation (which names them). A mapping value merges into what is already there.
+    """
+    parts = name.split(".")
+    if any(not part.strip() for part in parts):
+        raise ConfigError(f"{source}: {name}: not a parameter name (empty part)")
+    target, here = values, model
+    for depth, part in enumerate(parts[:-1]):
+        where = ".".join(parts[: depth + 1])
+        if part not in here.model_fields:
+            known = ", ".join(n for n in here.model_fields if _group_model(here, n)) or "none"
+            raise ConfigError(f"{source}: {name}: unknown group {where!r} (groups: {known})")
+        group = _group_model(here, part)
+        if group is None:
+            raise ConfigError(f"{source}: {name}: {where!r} is a single parameter, not a group")
+        child = target.get(part)
+        if not isinstance(child, dict):
+            child = target[part] = {}
+        target, here = child, group
+    last = parts[-1]
+    group = _group_model(here, last) if last in here.model_fields else None
+    if group is not None and isinstance(value, dict) and isinstance(target.get(last), dict):
+        for key, item in value.items():  # a map for a group merges into what an earlier source set
+            set_dotted(target[last], str(key), item, group, source)
+        return
+    target[last] = value
+
+
 def build_arg_parser(service_name: str, description: str = "") -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=f"python -m services.{service_name}", description=description)
     env_connect = [e for e in os.environ.get("ZENDOCK_CONNECT", "").split(",") if e.strip()]
@@ -165,8 +212,10 @@ def load_params(model: type[P], options: ServiceOptions) -> P:
             if isinstance(scoped, dict) and isinstance(scoped.get("ros__parameters"), dict):
                 data = scoped["ros__parameters"]
                 break
-        values.update(data)
-    values.update(options.overrides)
+        for name, value in data.items():
+            set_dotted(values, str(name), value, model, source)
+    for name, value in options.overrides.items():
+        set_dotted(values, name, value, model, "parameters")
     try:
         return model.model_validate(values)
     except ValidationError as exc:

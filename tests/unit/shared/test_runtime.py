@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import signal
 import subprocess
 import sys
@@ -9,6 +10,7 @@ import threading
 from pathlib import Path
 
 import pytest
+from pydantic import BaseModel, ConfigDict, Field
 
 from shared.config_errors import ConfigError
 from shared.runtime import (
@@ -25,6 +27,19 @@ from shared.runtime import (
 class DemoParams(ServiceParams):
     rate_hz: float = 10.0
     target_frame: str = "base_link"
+
+
+class LidarPart(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    rate_hz: float = Field(10.0, gt=0)
+    noise_m: float = Field(0.01, ge=0)
+
+
+class NestedParams(ServiceParams):
+    """A service with a part, as the simulator nests ``lidar``."""
+
+    world: str = "room.yaml"
+    lidar: LidarPart = LidarPart()
 
 
 def _options(*argv: str) -> ServiceOptions:
@@ -87,6 +102,44 @@ def test_run_service_exits_2_on_bad_parameter(capsys: pytest.CaptureFixture[str]
     assert run_service("demo", DemoParams, never_built, ["-p", "bogus=1"]) == 2
     err = capsys.readouterr().err
     assert "bogus: unknown key" in err and err.count("\n") == 1
+
+
+def test_dotted_override_sets_one_field_of_a_part() -> None:
+    params = load_params(NestedParams, _options("-p", "lidar.noise_m=0.02"))
+    assert params.lidar == LidarPart(noise_m=0.02)  # the part's other fields keep their defaults
+
+
+def test_dotted_overrides_merge_with_a_nested_config_file(tmp_path: Path) -> None:
+    config = tmp_path / "sim.yaml"
+    config.write_text("lidar: {rate_hz: 5}\n")
+    params = load_params(NestedParams, _options("--config", str(config), "-p", "lidar.noise_m=0.02"))
+    assert params.lidar == LidarPart(rate_hz=5, noise_m=0.02)
+    dotted = tmp_path / "dotted.yaml"
+    dotted.write_text("lidar.rate_hz: 4\n")
+    assert load_params(NestedParams, _options("--config", str(dotted), "-p", "lidar={noise_m: 0}")).lidar == LidarPart(
+        rate_hz=4, noise_m=0)
+
+
+@pytest.mark.parametrize(("override", "message"), [
+    ("lidr.noise_m=0.02", "lidr.noise_m: unknown group 'lidr' (groups: lidar)"),
+    ("lidar.noise=0.02", "lidar.noise: unknown key"),
+    ("lidar.noise_m=-1", "lidar.noise_m: Input should be greater than or equal to 0"),
+    ("lidar.noise_m=loud", "lidar.noise_m: Input should be a valid number"),
+    ("world.name=x", "world.name: 'world' is a single parameter, not a group"),
+    ("lidar..noise_m=1", "lidar..noise_m: not a parameter name"),
+])
+def test_bad_dotted_overrides_name_the_parameter(override: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        load_params(NestedParams, _options("-p", override))
+
+
+def test_run_service_exits_2_on_a_bad_dotted_parameter(capsys: pytest.CaptureFixture[str]) -> None:
+    def never_built(node, params):  # type: ignore[no-untyped-def]
+        raise AssertionError("must not start with bad parameters")
+
+    assert run_service("demo", NestedParams, never_built, ["-p", "lidar.noise=1"]) == 2
+    err = capsys.readouterr().err
+    assert "lidar.noise: unknown key" in err and err.count("\n") == 1
 
 
 _STOPPED_BY_A_SIGNAL_ON_ANOTHER_THREAD = """
