@@ -59,7 +59,7 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
         "map": {"command": ["zendock", "map", "save", "--world", world, "-o", ".zendock/maps/map.yaml"], "restart": "no"},
         "simulator": {
             "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
-                        "-p", f"seed={options.seed}", "-p", f"dock_detector={options.detector}"],
+                        "-p", f"seed={options.seed}", "-p", f"detection.source={options.detector}"],
             "depends_on": {"router": {"condition": "service_started"}},
             "healthcheck": {"liveliness": True, "timeout": "60s"},
             "restart": "on-failure",

@@ -28,8 +28,8 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         "simulator": {
             "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
                         "-p", f"seed={options.seed}", "-p", f"robots={json.dumps(robots)}",
-                        "-p", f"localisation_error={json.dumps(list(options.localisation_error))}",
-                        "-p", f"dock_detector={options.detector}"],
+                        "-p", f"localisation.error={json.dumps(list(options.localisation_error))}",
+                        "-p", f"detection.source={options.detector}"],
             "depends_on": {"router": {"condition": "service_started"}},
             "healthcheck": {"liveliness": True, "timeout": "30s"},
             "restart": "on-failure",

@@ -26,7 +26,10 @@ from functools import lru_cache
 
 import cv2
 import numpy as np
+from pydantic import Field
 
+from services.simulator.component import ComponentParams
+from services.simulator.sensors import CAMERA_MOUNT_X_M
 from shared.geometry import Pose2D
 from shared.world import DOCK_GEOMETRY, Dock, DockMarker, World, dock_markers
 
@@ -36,37 +39,26 @@ _OPAQUE_LAYERS = 8
 _SUPERSAMPLE = 3
 
 
-@dataclass(frozen=True, slots=True)
-class CameraParams:
+class CameraParams(ComponentParams):
     """A pinhole camera on ``camera_link``, ``mount_x_m`` ahead of base_link and ``mount_z_m`` above the floor.
 
     ``pitch_rad`` tilts it down (REP 103: a positive rotation about camera_link's y axis). ``noise_sigma``
-    is read noise in grey levels; ``exposure_s`` sets motion blur; ``gain`` scales brightness.
+    is read noise in grey levels; ``exposure_s`` sets motion blur; ``gain`` scales brightness. The
+    simulator renders frames only while someone subscribes (``enabled: false``: no camera at all).
     """
 
-    width: int = 640
-    height: int = 480
-    horizontal_fov_rad: float = math.radians(70.0)
-    rate_hz: float = 15.0
-    mount_x_m: float = 0.15
-    mount_z_m: float = 0.10
-    pitch_rad: float = 0.0
-    noise_sigma: float = 2.0
-    exposure_s: float = 0.008
-    gain: float = 1.0
+    enabled: bool = Field(True, description="render camera/image_raw and camera/camera_info (while subscribed)")
+    width: int = Field(640, ge=16, le=4096)
+    height: int = Field(480, ge=16, le=4096)
+    horizontal_fov_rad: float = Field(math.radians(70.0), gt=0.1, lt=2.6)
+    rate_hz: float = Field(15.0, gt=0)
+    mount_x_m: float = CAMERA_MOUNT_X_M
+    mount_z_m: float = Field(0.10, gt=0)
+    pitch_rad: float = Field(0.0, gt=-1.04, lt=1.04)
+    noise_sigma: float = Field(2.0, ge=0, description="read noise, grey levels (sigma)")
+    exposure_s: float = Field(0.008, ge=0, description="exposure time: sets motion blur")
+    gain: float = Field(1.0, gt=0)
     near_m: float = 0.01
-
-    def __post_init__(self) -> None:
-        if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
-            raise ValueError(f"camera resolution must be 16..4096 pixels a side, got {self.width}x{self.height}")
-        if not (0.1 < self.horizontal_fov_rad < math.radians(150.0)):
-            raise ValueError(f"camera horizontal_fov_rad must be in (0.1, 2.6), got {self.horizontal_fov_rad}")
-        if not abs(self.pitch_rad) < math.radians(60.0):
-            raise ValueError(f"camera pitch_rad must be within +-1.04 rad, got {self.pitch_rad}")
-        if self.rate_hz <= 0 or self.mount_z_m <= 0:
-            raise ValueError("camera rate_hz and mount_z_m must be positive")
-        if self.noise_sigma < 0 or self.exposure_s < 0 or self.gain <= 0:
-            raise ValueError("camera noise_sigma and exposure_s must be >= 0 and gain > 0")
 
     @property
     def focal_px(self) -> float:

@@ -9,33 +9,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from pydantic import Field
 
+from services.simulator.component import ComponentParams
 from services.simulator.footprint import footprint_corners, polygon_distance
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import DOCK_GEOMETRY, Dock
 
 
-@dataclass(frozen=True, slots=True)
-class DockContactParams:
-    contact_reach_m: float = 0.05
+class DockContactParams(ComponentParams):
+    rate_hz: float = Field(20.0, gt=0, description="dock_contact messages per second (sim time)")
+    contact_reach_m: float = Field(0.05, ge=0)
     #: How far past the dock pose base_link may be and still count (the body stops it anyway).
-    overshoot_slack_m: float = 0.01
-    max_lateral_error_m: float = 0.04
-    max_yaw_error_rad: float = 0.1
+    overshoot_slack_m: float = Field(0.01, ge=0)
+    max_lateral_error_m: float = Field(0.04, ge=0)
+    max_yaw_error_rad: float = Field(0.1, ge=0)
     #: Footprint and dock body closer than this are touching.
-    touch_tolerance_m: float = 0.005
+    touch_tolerance_m: float = Field(0.005, ge=0)
     #: Docks farther than this from base_link are not reported.
-    search_radius_m: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in self.__dataclass_fields__:
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"DockContactParams.{name} must be >= 0, got {value!r}")
+    search_radius_m: float = Field(1.0, ge=0)
 
 
 class DockContact(NamedTuple):

@@ -25,7 +25,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import Field, model_validator
 
+from services.simulator.component import ComponentParams
 from services.simulator.raycast import SegmentSet, segment_blocked
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import DOCK_GEOMETRY, Dock
@@ -52,9 +54,9 @@ class Receiver:
         return Pose2D(self.x_m, self.y_m, self.yaw_rad)
 
 
-@dataclass(frozen=True, slots=True)
-class InfraredParams:
-    near_range_m: float = 0.6
+class InfraredParams(ComponentParams):
+    rate_hz: float = Field(20.0, gt=0, description="the receivers' readings (ir_dock) per second, while subscribed")
+    near_range_m: float = Field(0.6, gt=0)
     far_range_m: float = 2.5
     centre_half_angle_rad: float = math.radians(5.0)
     centre_min_half_width_m: float = 0.012
@@ -66,16 +68,13 @@ class InfraredParams:
         Receiver(0.13, 0.0, 0.0, math.radians(25.0)),
         Receiver(0.10, 0.10, math.radians(60.0), math.radians(55.0)),
     )
-    dropout: float = 0.03
-    rate_hz: float = 20.0
+    dropout: float = Field(0.03, ge=0.0, lt=1.0, description="probability a bit a receiver should see drops out")
 
-    def __post_init__(self) -> None:
-        if not 0.0 < self.near_range_m < self.far_range_m:
+    @model_validator(mode="after")
+    def _ranges(self) -> InfraredParams:
+        if not self.near_range_m < self.far_range_m:
             raise ValueError("infrared ranges must satisfy 0 < near_range_m < far_range_m")
-        if not 0.0 <= self.dropout < 1.0:
-            raise ValueError(f"infrared dropout must be in [0, 1), got {self.dropout}")
-        if self.rate_hz <= 0:
-            raise ValueError("infrared rate_hz must be positive")
+        return self
 
 
 def fields_at(x: float, y: float, params: InfraredParams) -> int:

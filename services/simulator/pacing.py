@@ -16,19 +16,34 @@ pose falls further behind and sim-time deadlines (staging, recoveries) expire wi
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
+from pydantic import Field
 
-@dataclass(frozen=True)
-class PacingParams:
+from services.simulator.component import ComponentParams
+
+#: A wall-clock schedule this far behind (the machine was busy) restarts from now instead of catching up.
+CATCH_UP_LIMIT_S = 0.25
+#: How long to sleep while holding for a late driver, and at most while waiting for the next step (wall s).
+HOLD_SLEEP_S = 0.0005
+MAX_SLEEP_S = 0.05
+
+
+class PacingParams(ComponentParams):
+    """``pacing.*``: whether and how long the world waits for late drivers and poses."""
+
+    to_drivers: bool = Field(True, description="wait (briefly) for a moving robot's late command instead of "
+                             "driving it blind")
+    to_pose: bool = Field(True, description="with to_drivers: also wait (briefly) for a robot's late "
+                          "map_to_base_link_pose2d")
     #: A moving robot's driver is late once its last command is this old (sim seconds): three periods
     #: of a 20 Hz controller.
-    driver_gap_s: float = 0.15
+    driver_gap_s: float = Field(0.15, gt=0, description="a moving robot's command older than this (sim) is late")
     #: The longest wait for one late command (wall seconds).
-    driver_wait_max_s: float = 0.1
+    driver_wait_max_s: float = Field(0.1, ge=0, description="wait at most this long (wall) for one late command")
     #: A robot's pose is late once this old (sim seconds): three periods of the 10 Hz pose.
-    pose_gap_s: float = 0.3
+    pose_gap_s: float = Field(0.3, gt=0, description="a robot's pose older than this (sim) is late")
 
 
 @dataclass(frozen=True)
@@ -86,3 +101,62 @@ class DriverPacer:
         kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._last_late}) or ["?"]
         kind = "+".join(kinds)
         self.held_by_kind[kind] = self.held_by_kind.get(kind, 0.0) + seconds
+
+
+@dataclass(frozen=True)
+class Tick:
+    """What the stepping loop does now: step, or sleep ``sleep_s``; ``hold_ended``: a wait just ended
+    (publish the pacer's counters)."""
+
+    step: bool
+    sleep_s: float = 0.0
+    hold_ended: bool = False
+
+
+class StepPacer:
+    """Paces steps of ``dt_s`` against the wall clock at ``rtf`` (``"max"``: flat out), holding for late
+    drivers with ``drivers`` (None: never). After a hold, or when far behind, the schedule restarts from
+    now: the world does not rush to catch up.
+    """
+
+    def __init__(self, dt_s: float, rtf: float | str, drivers: DriverPacer | None, wall_now_s: float) -> None:
+        self.wall_per_step_s = 0.0 if rtf == "max" else dt_s / float(rtf)
+        self.drivers = drivers
+        self._next_wall_s = wall_now_s
+        self._held_since_s: float | None = None
+
+    def tick(self, wall_now_s: float, sim_now_s: float, awaited: Callable[[], Iterable[Driver]]) -> Tick:
+        """Whether to step now; ``awaited`` lists the inputs the driver pacer may wait for."""
+        pacer = self.drivers
+        if pacer is not None and pacer.hold(sim_now_s, wall_now_s, awaited()):
+            if self._held_since_s is None:
+                self._held_since_s = wall_now_s
+            return Tick(step=False, sleep_s=HOLD_SLEEP_S)
+        hold_ended = False
+        if self._held_since_s is not None:
+            assert pacer is not None
+            pacer.note_held(wall_now_s - self._held_since_s)
+            self._held_since_s = None
+            self._next_wall_s = wall_now_s
+            hold_ended = True
+        if self.wall_per_step_s > 0.0:
+            if wall_now_s < self._next_wall_s:
+                return Tick(step=False, sleep_s=min(self._next_wall_s - wall_now_s, MAX_SLEEP_S), hold_ended=hold_ended)
+            if wall_now_s - self._next_wall_s > CATCH_UP_LIMIT_S:
+                self._next_wall_s = wall_now_s
+            self._next_wall_s += self.wall_per_step_s
+        return Tick(step=True, hold_ended=hold_ended)
+
+
+def pacing_stats(pacer: DriverPacer, sim_s: float) -> dict[str, float]:
+    """The waits for late drivers as the node's extra counters (``@zendock/stats``)."""
+    extra = {"pacing_holds": float(pacer.holds), "pacing_held_s": pacer.held_s, "sim_s": sim_s}
+    extra.update({f"pacing_held_s_{kind}": s for kind, s in pacer.held_by_kind.items()})
+    return extra
+
+
+def rate_report(sim_s: float, wall_s: float, target: float | str, pacer: DriverPacer | None) -> str:
+    """The log line for a real-time factor achieved over ``wall_s`` wall seconds that ran ``sim_s``."""
+    achieved = sim_s / max(wall_s, 1e-9)
+    waits = f"; waited for late drivers {pacer.holds} times, {pacer.held_s:.1f} s in all" if pacer else ""
+    return f"real-time factor {achieved:.1f} over the last {wall_s:.0f} s (target {target}){waits}"

@@ -11,44 +11,28 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from pydantic import Field
+
+from services.simulator.component import ComponentParams
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M
 
 
-@dataclass(frozen=True, slots=True)
-class DiffDriveParams:
+class DiffDriveParams(ComponentParams):
     """Geometry and limits of the differential drive (values of a small indoor base)."""
 
-    wheel_separation_m: float = 0.26
-    wheel_radius_m: float = 0.033
-    max_linear_mps: float = 0.5
-    max_angular_radps: float = 1.5
-    max_linear_accel: float = 1.0  # m/s^2
-    max_angular_accel: float = 3.0  # rad/s^2
+    wheel_separation_m: float = Field(0.26, gt=0)
+    wheel_radius_m: float = Field(0.033, gt=0)
+    max_linear_mps: float = Field(0.5, gt=0)
+    max_angular_radps: float = Field(1.5, gt=0)
+    max_linear_accel: float = Field(1.0, gt=0, description="m/s^2")
+    max_angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
     #: Braking is harder than speeding up (diff_drive_controller's max_deceleration): the watchdog's stop
     #: from full speed takes 0.2 s.
-    max_linear_decel: float = 2.5  # m/s^2
-    max_angular_decel: float = 6.0  # rad/s^2
-    footprint_length_m: float = ROBOT_LENGTH_M
-    footprint_width_m: float = ROBOT_WIDTH_M
-    mass_kg: float = 5.0
-
-    def __post_init__(self) -> None:
-        for name in (
-            "wheel_separation_m",
-            "wheel_radius_m",
-            "max_linear_mps",
-            "max_angular_radps",
-            "max_linear_accel",
-            "max_angular_accel",
-            "max_linear_decel",
-            "max_angular_decel",
-            "footprint_length_m",
-            "footprint_width_m",
-            "mass_kg",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ValueError(f"DiffDriveParams.{name} must be a positive number, got {value!r}")
+    max_linear_decel: float = Field(2.5, gt=0, description="m/s^2")
+    max_angular_decel: float = Field(6.0, gt=0, description="rad/s^2")
+    footprint_length_m: float = Field(ROBOT_LENGTH_M, gt=0)
+    footprint_width_m: float = Field(ROBOT_WIDTH_M, gt=0)
+    mass_kg: float = Field(5.0, gt=0)
 
     @property
     def max_wheel_speed_radps(self) -> float:

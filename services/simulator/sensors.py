@@ -13,24 +13,21 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import BaseModel, Field, model_validator
 
+from services.simulator.component import ComponentParams
 from services.simulator.raycast import SegmentSet, cast_rays, nearest_in_cone, segment_blocked
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import DOCK_GEOMETRY, Dock
 
-
-def _check_positive(owner: object, *names: str) -> None:
-    for name in names:
-        value = getattr(owner, name)
-        if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{type(owner).__name__}.{name} must be a positive number, got {value!r}")
+#: The forward camera's mount ahead of base_link: the rendered camera and the fiducial detector are one camera.
+CAMERA_MOUNT_X_M = 0.15
 
 
-def _check_non_negative(owner: object, *names: str) -> None:
-    for name in names:
-        value = getattr(owner, name)
-        if not (math.isfinite(value) and value >= 0.0):
-            raise ValueError(f"{type(owner).__name__}.{name} must be >= 0, got {value!r}")
+def _check_range(owner: BaseModel) -> None:
+    low, high = owner.range_min_m, owner.range_max_m  # type: ignore[attr-defined]
+    if high <= low:
+        raise ValueError(f"{type(owner).__name__}: range_max_m {high} must exceed range_min_m {low}")
 
 
 @functools.lru_cache(maxsize=8)
@@ -40,26 +37,21 @@ def _beam_angles(num_rays: int) -> np.ndarray:
     return angles
 
 
-@dataclass(frozen=True, slots=True)
-class LidarParams:
+class LidarParams(ComponentParams):
     """A 360-degree planar lidar on lidar_link (``mount_x_m`` ahead of base_link, same heading)."""
 
-    num_rays: int = 360
-    range_min_m: float = 0.12
-    range_max_m: float = 8.0
-    noise_sigma_m: float = 0.01
+    rate_hz: float = Field(10.0, gt=0, description="scans per second (sim time)")
+    num_rays: int = Field(360, ge=1)
+    range_min_m: float = Field(0.12, gt=0)
+    range_max_m: float = Field(8.0, gt=0)
+    noise_m: float = Field(0.01, ge=0, description="range noise (sigma)")
     mount_x_m: float = 0.10
     mount_y_m: float = 0.0
 
-    def __post_init__(self) -> None:
-        if self.num_rays < 1:
-            raise ValueError(f"LidarParams.num_rays must be >= 1, got {self.num_rays}")
-        _check_positive(self, "range_min_m", "range_max_m")
-        _check_non_negative(self, "noise_sigma_m")
-        if self.range_max_m <= self.range_min_m:
-            raise ValueError(
-                f"LidarParams: range_max_m {self.range_max_m} must exceed range_min_m {self.range_min_m}"
-            )
+    @model_validator(mode="after")
+    def _ranges(self) -> LidarParams:
+        _check_range(self)
+        return self
 
     @property
     def angle_min_rad(self) -> float:
@@ -94,25 +86,20 @@ class LidarScan:
     ranges_m: np.ndarray
 
 
-@dataclass(frozen=True, slots=True)
-class UltrasonicParams:
+class UltrasonicParams(ComponentParams):
     """A single ultrasonic ranger on ultrasonic_link, at the front centre, facing forward."""
 
-    field_of_view_rad: float = 0.5
-    range_min_m: float = 0.02
-    range_max_m: float = 3.0
-    noise_sigma_m: float = 0.005
+    rate_hz: float = Field(20.0, gt=0, description="pings per second (sim time)")
+    field_of_view_rad: float = Field(0.5, gt=0, lt=math.pi)
+    range_min_m: float = Field(0.02, gt=0)
+    range_max_m: float = Field(3.0, gt=0)
+    noise_m: float = Field(0.005, ge=0, description="range noise (sigma)")
     mount_x_m: float = 0.20
 
-    def __post_init__(self) -> None:
-        _check_positive(self, "field_of_view_rad", "range_min_m", "range_max_m")
-        _check_non_negative(self, "noise_sigma_m")
-        if self.field_of_view_rad >= math.pi:
-            raise ValueError(f"UltrasonicParams.field_of_view_rad must be below pi, got {self.field_of_view_rad}")
-        if self.range_max_m <= self.range_min_m:
-            raise ValueError(
-                f"UltrasonicParams: range_max_m {self.range_max_m} must exceed range_min_m {self.range_min_m}"
-            )
+    @model_validator(mode="after")
+    def _ranges(self) -> UltrasonicParams:
+        _check_range(self)
+        return self
 
     @property
     def mount(self) -> Pose2D:
@@ -120,22 +107,17 @@ class UltrasonicParams:
         return Pose2D(self.mount_x_m, 0.0, 0.0)
 
 
-@dataclass(frozen=True, slots=True)
-class FiducialCameraParams:
+class FiducialCameraParams(ComponentParams):
     """The forward camera that finds the dock's marker (mounted ``mount_x_m`` ahead of base_link)."""
 
-    mount_x_m: float = 0.15
-    horizontal_fov_rad: float = 1.2
-    range_min_m: float = 0.1
-    range_max_m: float = 2.5
+    mount_x_m: float = CAMERA_MOUNT_X_M
+    horizontal_fov_rad: float = Field(1.2, gt=0, lt=math.pi)
+    range_min_m: float = Field(0.1, gt=0)
+    range_max_m: float = Field(2.5, gt=0)
     #: The marker is readable while the angle between its normal and the line of sight is below this.
-    max_view_angle_rad: float = math.radians(70.0)
-    position_sigma_m: float = 0.003
-    yaw_sigma_rad: float = 0.01
-
-    def __post_init__(self) -> None:
-        _check_positive(self, "horizontal_fov_rad", "range_min_m", "range_max_m", "max_view_angle_rad")
-        _check_non_negative(self, "position_sigma_m", "yaw_sigma_rad")
+    max_view_angle_rad: float = Field(math.radians(70.0), gt=0)
+    position_sigma_m: float = Field(0.003, ge=0)
+    yaw_sigma_rad: float = Field(0.01, ge=0)
 
     @property
     def mount(self) -> Pose2D:
@@ -169,8 +151,8 @@ def lidar_scan(
     sensor = robot_pose.compose(params.mount)
     ranges = cast_rays((sensor.x, sensor.y), sensor.yaw + params.beam_angles_rad(), segments)
     in_range = (ranges >= params.range_min_m) & (ranges <= params.range_max_m)
-    if params.noise_sigma_m > 0.0:
-        ranges = ranges + rng.normal(0.0, params.noise_sigma_m, ranges.shape)
+    if params.noise_m > 0.0:
+        ranges = ranges + rng.normal(0.0, params.noise_m, ranges.shape)
     ranges = np.where(in_range, ranges, np.inf)
     return LidarScan(
         angle_min_rad=params.angle_min_rad,
@@ -193,8 +175,8 @@ def ultrasonic_range(
     nearest = nearest_in_cone((sensor.x, sensor.y), sensor.yaw, 0.5 * params.field_of_view_rad, segments)
     if nearest > params.range_max_m:
         return math.inf
-    if params.noise_sigma_m > 0.0:
-        nearest += float(rng.normal(0.0, params.noise_sigma_m))
+    if params.noise_m > 0.0:
+        nearest += float(rng.normal(0.0, params.noise_m))
     return min(params.range_max_m, max(params.range_min_m, nearest))
 
 

@@ -267,7 +267,7 @@ def test_seed_docks_when_the_battery_crosses_the_threshold(stack) -> None:  # ty
 
 
 def test_graceful_docks_with_detection_despite_localisation_error(stack) -> None:  # type: ignore[no-untyped-def]
-    s: Stack = stack(sim=("localisation_error=[0.03,-0.02,0.02]",), battery=("initial_percentage=0.2",))
+    s: Stack = stack(sim=("localisation.error=[0.03,-0.02,0.02]",), battery=("initial_percentage=0.2",))
     s.start_docking()  # starts below the threshold: the first reading triggers
     s.wait_state("CONTROLLING", timeout_s=30.0)
     started_s = s.sim_time()
@@ -287,7 +287,7 @@ LARGE_LOCALISATION_ERROR = "[0.03,0.06,0.03]"
 @pytest.mark.parametrize("detection", [True, False], ids=["detection", "blind"])
 def test_detection_is_what_docks_a_mislocalised_robot(stack, detection: bool) -> None:  # type: ignore[no-untyped-def]
     # Blind: the simulator leaves detection to a perception service, and none runs.
-    s: Stack = stack(sim=(f"localisation_error={LARGE_LOCALISATION_ERROR}", f"dock_detector={'synthetic' if detection else 'aruco'}"),
+    s: Stack = stack(sim=(f"localisation.error={LARGE_LOCALISATION_ERROR}", f"detection.source={'synthetic' if detection else 'aruco'}"),
                      battery=("initial_percentage=0.2",))
     s.start_docking("max_retries=1", "wait_charge_timeout_s=2")
     after = s.wait_state("CONTROLLING", timeout_s=30.0)
@@ -508,7 +508,7 @@ def test_patrol_docks_when_low_and_resumes_when_charged(stack) -> None:  # type:
 
 def test_infrared_docking_needs_no_map_pose_and_no_camera(stack) -> None:  # type: ignore[no-untyped-def]
     """controller=ir from 1.2 m in front of the dock, turned away: Kobuki's scan, stream and approach."""
-    s: Stack = stack(sim=("dock_detector=aruco",), battery=("initial_percentage=0.2",))
+    s: Stack = stack(sim=("detection.source=aruco",), battery=("initial_percentage=0.2",))
     dock = load_world(SEED_ROOM).docks[0].pose2d
     s.teleport(dock.compose(Pose2D(-1.2, 0.3, 2.0)))
     started_s = s.sim_time()

@@ -31,7 +31,7 @@ def test_a_rendered_frame_becomes_the_dock_pose_within_2_cm_and_2_degrees(spawn,
     robot = dock.compose(Pose2D(-1.0, 0.05, 0.1))  # 1 m out, a little off the axis, turned a little
     detections = KeyRecorder(bus, f"{namespace}/detected_dock_pose", PoseStamped)
     named = KeyRecorder(bus, f"{namespace}/dock_detections", DockDetection)
-    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1", "-p", "dock_detector=aruco")
+    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1", "-p", "detection.source=aruco")
     spawn("perception", "-p", f"dock_database={SEED_ROOM}")
     _teleport(bus, namespace, robot)
     truth = dock.relative_to(robot)
@@ -51,7 +51,7 @@ def test_bad_frames_are_counted_and_the_service_keeps_detecting(spawn, bus: zeno
                                                                 namespace: str) -> None:  # type: ignore[no-untyped-def]
     dock = load_world(SEED_ROOM).docks[0].pose2d
     detections = KeyRecorder(bus, f"{namespace}/detected_dock_pose", PoseStamped)
-    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1", "-p", "dock_detector=aruco")
+    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1", "-p", "detection.source=aruco")
     perception = spawn("perception", "-p", f"dock_database={SEED_ROOM}")
     _teleport(bus, namespace, dock.compose(Pose2D(-0.8, 0.0, 0.0)))
     detections.wait_for(timeout_s=30.0)

@@ -141,10 +141,10 @@ def sense(world: World, pose: Pose2D, extra_boxes: list[dict] | None = None) -> 
         world = World.model_validate(world.model_dump() | {"boxes": [*world.model_dump()["boxes"], *extra_boxes]})
     segments = SegmentSet(world.opaque_segments())
     rng = np.random.default_rng(0)
-    lidar = LidarParams(noise_sigma_m=0.0)
+    lidar = LidarParams(noise_m=0.0)
     scan = lidar_scan(pose, segments, lidar, rng)
     points = scan_points(scan.ranges_m, scan.angle_min_rad, scan.angle_increment_rad, lidar.mount)
-    sonar = ultrasonic_range(pose, segments, UltrasonicParams(noise_sigma_m=0.0), rng)
+    sonar = ultrasonic_range(pose, segments, UltrasonicParams(noise_m=0.0), rng)
     return points, sonar
 
 

@@ -263,7 +263,7 @@ def test_router_endpoints_follow_the_variables() -> None:
 def test_zendock_detector_switches_who_reports_the_dock() -> None:
     for detector in ("aruco", "synthetic"):
         stack = load_stack(DEFAULT_STACK, env={"ZENDOCK_DETECTOR": detector}, project_dir=REPO_ROOT)
-        assert f"dock_detector={detector}" in stack.services["simulator"].command
+        assert f"detection.source={detector}" in stack.services["simulator"].command
         assert f"dock_detector={detector}" in stack.services["perception"].command
     default = load_stack(DEFAULT_STACK, env={}, project_dir=REPO_ROOT)
-    assert "dock_detector=aruco" in default.services["simulator"].command
+    assert "detection.source=aruco" in default.services["simulator"].command

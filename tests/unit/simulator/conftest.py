@@ -15,8 +15,8 @@ from shared.world import World, parse_world
 _WORLDS = Path(__file__).resolve().parents[3] / "deploy" / "worlds"
 
 _QUIET = SimParams(
-    lidar=LidarParams(noise_sigma_m=0.0),
-    ultrasonic=UltrasonicParams(noise_sigma_m=0.0),
+    lidar=LidarParams(noise_m=0.0),
+    ultrasonic=UltrasonicParams(noise_m=0.0),
     camera=FiducialCameraParams(position_sigma_m=0.0, yaw_sigma_rad=0.0),
 )
 

@@ -58,7 +58,7 @@ def test_lidar_out_of_range_reads_inf(open_world: Callable[..., World]) -> None:
     far = SegmentSet(open_world(bounds=[-20.0, -20.0, 20.0, 20.0]).opaque_segments())
     assert np.isinf(lidar_scan(Pose2D(), far, LidarParams(), rng).ranges_m).all()
     too_close = SegmentSet([((0.15, -1.0), (0.15, 1.0))])  # 5 cm ahead of the lidar, under range_min
-    ranges = lidar_scan(Pose2D(), too_close, LidarParams(noise_sigma_m=0.0), rng).ranges_m
+    ranges = lidar_scan(Pose2D(), too_close, LidarParams(noise_m=0.0), rng).ranges_m
     assert np.isinf(ranges[FORWARD_BEAM])
     assert ranges[FORWARD_BEAM + 70] == pytest.approx(0.05 / math.cos(math.radians(70)))
 

@@ -1,0 +1,138 @@
+"""The simulator's parameters: a few for the whole world, then one model per component (``-p lidar.noise_m=0.02``).
+
+Each component's model owns its values, bounds and its publishing rate, once: the sensor, drive, camera,
+infrared, contact and pacing models are the settings classes their pure modules use
+(:class:`~services.simulator.sensors.LidarParams` and so on); the ones below add what only the service
+needs (the clock, odometry, tf, ground truth, the synthetic detector's latency, the drive's watchdog).
+Names follow Nav2's ``component.parameter`` style; the dotted form is described in :mod:`shared.runtime`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, field_validator
+
+from services.simulator.camera import CameraParams
+from services.simulator.component import ComponentParams
+from services.simulator.dock_contact import DockContactParams
+from services.simulator.infrared import InfraredParams
+from services.simulator.pacing import PacingParams
+from services.simulator.physics import SimParams
+from services.simulator.robot_model import DiffDriveParams
+from services.simulator.sensors import FiducialCameraParams, LidarParams, UltrasonicParams
+from shared.geometry import Pose2D
+from shared.names import normalise_namespace
+from shared.runtime import ServiceParams
+from shared.world import load_world
+
+
+class ClockParams(ComponentParams):
+    rate_hz: float = Field(20.0, gt=0, description="sim-time clock rate: the stack's fastest sim-time timer "
+                           "(planner and docking control, 20 Hz); every sim-time node receives every tick")
+
+
+class OdomParams(ComponentParams):
+    rate_hz: float = Field(20.0, gt=0, description="odometry rate: the control timers' 20 Hz (they read the latest)")
+    noise: float = Field(0.0, ge=0, description="relative std dev of each wheel's travel per step (0: exact)")
+
+
+class TfParams(ComponentParams):
+    rate_hz: float = Field(20.0, gt=0, description="tf rate: twice the pose service's 10 Hz, on the clock's ticks")
+    static_rate_hz: float = Field(1.0, gt=0, description="tf_static (sensor mounts) rate")
+
+
+class GroundTruthParams(ComponentParams):
+    rate_hz: float = Field(20.0, gt=0)
+
+
+class LocalisationParams(ComponentParams):
+    #: map->odom is off by this much (in base_link at the start), like a drifting localiser.
+    error: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="x_m, y_m, yaw_rad")
+
+
+class DriveParams(DiffDriveParams):
+    """The drive's geometry and limits (Gazebo diff_drive / ros2_control names) and its command watchdog."""
+
+    cmd_vel_timeout_s: float = Field(
+        0.3, gt=0, description="watchdog: brake when no command for this long (standing still 0.5 s after the last)")
+
+
+class DetectionParams(FiducialCameraParams):
+    """The dock detector's camera model, and who publishes detected_dock_pose."""
+
+    #: ``aruco`` leaves it to the perception service (which reads camera/image_raw); ``synthetic`` publishes
+    #: detected_dock_pose from the true pose plus noise.
+    source: Literal["aruco", "synthetic"] = "synthetic"
+    rate_hz: float = Field(15.0, gt=0, description="synthetic detections per second (sim time)")
+    latency_s: float = Field(0.05, ge=0, description="a synthetic detection is published this long after capture")
+
+
+class Params(ServiceParams):
+    """Simulator parameters (``-p name=value``, ``-p component.name=value``)."""
+
+    world: str = Field(description="world file (deploy/worlds/*.yaml)")
+    rtf: float | str = Field(1.0, description="real-time factor: a positive number, or 'max'")
+    robots: list[str] = Field(default_factory=list, description="robot namespaces served (empty: the node's own)")
+    seed: int = 0
+    dt_s: float = Field(0.01, gt=0, le=0.05)
+    clock: ClockParams = ClockParams()
+    odom: OdomParams = OdomParams()
+    tf: TfParams = TfParams()
+    ground_truth: GroundTruthParams = GroundTruthParams()
+    localisation: LocalisationParams = LocalisationParams()
+    pacing: PacingParams = PacingParams()
+    drive: DriveParams = DriveParams()
+    lidar: LidarParams = LidarParams()
+    ultrasonic: UltrasonicParams = UltrasonicParams()
+    detection: DetectionParams = DetectionParams()
+    camera: CameraParams = CameraParams()
+    ir: InfraredParams = InfraredParams()
+    contact: DockContactParams = DockContactParams()
+
+    @field_validator("rtf")
+    @classmethod
+    def _rtf(cls, value: float | str) -> float | str:
+        if isinstance(value, str):
+            if value.strip().lower() == "max":
+                return "max"
+            try:
+                value = float(value)
+            except ValueError:
+                raise ValueError(f"rtf must be a positive number or 'max', got {value!r}") from None
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"rtf must be a positive number or 'max', got {value}")
+        return value
+
+    @field_validator("world")
+    @classmethod
+    def _world_loads(cls, value: str) -> str:
+        load_world(value)  # a ConfigError (a ValueError) names the file and the problem
+        return value
+
+    @field_validator("robots")
+    @classmethod
+    def _robots(cls, value: list[str]) -> list[str]:
+        names = [normalise_namespace(v) for v in value]
+        if any(not n for n in names) or len(set(names)) != len(names):
+            raise ValueError("robots must be distinct, non-empty namespaces")
+        return names
+
+    def sim_params(self, robot_index: int = 0) -> SimParams:
+        """The physics' settings for the ``robot_index``-th robot (each draws from its own seed)."""
+        return SimParams(
+            dt_s=self.dt_s,
+            odom_noise=self.odom.noise,
+            seed=self.seed + robot_index,
+            lidar=self.lidar,
+            ultrasonic=self.ultrasonic,
+            camera=self.detection,
+            infrared=self.ir,
+            contact=self.contact,
+            localisation_error=Pose2D(*self.localisation.error),
+        )
+
+
+__all__ = ["ClockParams", "DetectionParams", "DriveParams", "GroundTruthParams", "LocalisationParams", "OdomParams",
+           "Params", "TfParams"]
