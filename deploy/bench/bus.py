@@ -16,7 +16,6 @@ ranged 1.10 to 1.27 that way); round by round both paths see the same machine.
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 import threading
@@ -26,16 +25,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from deploy.bench.echo import ping_key, pong_key
+from deploy.bench.processes import free_port
 from deploy.percentiles import median, percentile
 from shared.messages import Twist
 from shared.node import RELIABLE, Node
 from shared.session import SessionSpec, open_session
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
 
 
 @dataclass
@@ -160,7 +154,7 @@ def run_bus_bench(rounds: int = 4000) -> BusBenchResult:
     """``rounds`` round trips on each path, interleaved; medians and p99 of each."""
     if rounds < 1:
         raise ValueError(f"rounds must be at least 1, got {rounds}")
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
     with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))):
         echoes: list[_Echo] = []
         try:
