@@ -231,7 +231,7 @@ class ActionServer(Generic[G, R, F]):
         node.create_service(CANCEL_GOAL, action_key(name, "cancel_goal"), self._handle_cancel)
         self._result_key = node.key(action_key(name, "get_result"))
         self._result_queryable = node.session.declare_queryable(self._result_key, self._on_result_query)
-        node._declare_endpoint("act", action.type_name, node.key(name))
+        node.declare_endpoint("act", action.type_name, node.key(name))
 
     # request handlers (executor thread)
 
@@ -267,7 +267,7 @@ class ActionServer(Generic[G, R, F]):
         try:
             request = self.action.get_result_request.decode(payload.to_bytes() if payload is not None else b"")
         except MessageError as exc:
-            self.node._reject(self._result_key, exc.at(key=self._result_key))
+            self.node.reject(self._result_key, exc.at(key=self._result_key))
             query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
             query.drop()
             return

@@ -68,7 +68,7 @@ def test_sequence_numbers_attached(node_pair: tuple[Node, Node], bus: zenoh.Sess
     sub = bus.declare_subscriber(talker.key("seq"), lambda s: (seqs.append(sequence_number(s.attachment)), len(seqs) == 3 and done.set()))
     pub = talker.create_publisher(Bool, "seq")
     # the raw subscriber declares no token: wait until the publisher's route to it is up
-    wait_until(lambda: pub._publisher.matching_status.matching, 5.0, "the publisher never matched the subscriber")
+    wait_until(pub.has_subscribers, 5.0, "the publisher never matched the subscriber")
     for _ in range(3):
         pub.publish(Bool(True))
     _wait(done, "three samples")
@@ -129,7 +129,7 @@ def test_a_node_answers_with_its_counters(node_pair: tuple[Node, Node], bus: zen
     pub = talker.create_publisher(Bool, "counted")
     talker.declare_ready()
     listener.declare_ready()
-    wait_until(lambda: pub._publisher.matching_status.matching, 5.0, "the publisher never matched the subscriber")
+    wait_until(pub.has_subscribers, 5.0, "the publisher never matched the subscriber")
     for _ in range(3):
         pub.publish(Bool(True))
     wait_until(lambda: listener.stats.received.get(talker.key("counted"), 0) == 3, 5.0,

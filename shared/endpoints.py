@@ -1,0 +1,315 @@
+"""A node's endpoints on the bus: publishers, subscriptions, service servers, and requests.
+
+Each endpoint validates at its edge: a publisher refuses an invalid message at the sender; a subscription
+or a server decodes on Zenoh's thread and rejects (counts and logs, through its node) a payload that
+fails validation, so callbacks only ever see valid messages. When a callback runs is the executor's
+business (:mod:`shared.executor`): a subscription offers each message to :meth:`Executor.try_run_now
+<shared.executor.Executor.try_run_now>` and queues it when the executor declines.
+"""
+
+from __future__ import annotations
+
+import itertools
+import threading
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+import zenoh
+
+from shared.encoding import (
+    ENCODING_PREFIX,
+    MAX_PAYLOAD_BYTES,
+    encoding_for,
+    publisher_gid,
+    schema_of,
+    sequence_attachment,
+)
+from shared.executor import Work
+from shared.schema import Message, MessageError
+
+if TYPE_CHECKING:
+    from shared.node import Node
+
+M = TypeVar("M", bound=Message)
+Req = TypeVar("Req", bound=Message)
+Res = TypeVar("Res", bound=Message)
+
+_PUT = zenoh.SampleKind.PUT
+
+
+@dataclass(frozen=True)
+class QoS:
+    """Delivery policy mapped onto Zenoh.
+
+    Publisher side: ``reliable`` (Zenoh reliability), ``block`` (congestion control BLOCK instead of DROP:
+    never lose a message, at the cost of stalling the sender) and ``express`` (send without batching).
+    Subscriber side: ``depth``, how many unprocessed messages a subscription keeps (keep-last: the oldest
+    are dropped and counted). Zenoh decides reliability at the sender, so a subscription's ``reliable``
+    has no effect.
+    """
+
+    reliable: bool = True
+    block: bool = False
+    depth: int = 10
+    express: bool = False
+
+
+#: Commands and state: reliable, keep the last ten.
+RELIABLE = QoS()
+#: Sensor streams: best effort, drop under congestion, keep the latest few (ROS SensorDataQoS).
+SENSOR_DATA = QoS(reliable=False, block=False, depth=5, express=True)
+#: Nothing may be lost (maps, action results).
+BLOCKING = QoS(reliable=True, block=True, depth=100)
+
+
+class ServiceError(RuntimeError):
+    """A request failed: nothing answered, it timed out, or the server rejected it (reason given)."""
+
+
+class ServiceUnavailable(ServiceError):
+    """Nothing answered the request in time: no server, or one restarting. Asking again may work."""
+
+
+@dataclass(frozen=True)
+class ServiceType(Generic[Req, Res]):
+    """A request/response interface, e.g. ``zendock_msgs/srv/Teleport``."""
+
+    type_name: str
+    request: type[Req]
+    response: type[Res]
+
+
+class Publisher(Generic[M]):
+    """Publishes one message type on one key; refuses invalid messages at the sender."""
+
+    def __init__(self, node: Node, msg_type: type[M], topic: str, qos: QoS) -> None:
+        self.msg_type = msg_type
+        self.key = node.key(topic)
+        self.qos = qos
+        self._encoding = encoding_for(msg_type.TYPE_NAME)
+        self._publisher = node.session.declare_publisher(
+            self.key,
+            encoding=self._encoding,
+            reliability=zenoh.Reliability.RELIABLE if qos.reliable else zenoh.Reliability.BEST_EFFORT,
+            congestion_control=zenoh.CongestionControl.BLOCK if qos.block else zenoh.CongestionControl.DROP,
+            express=qos.express,
+        )
+        self._put = self._publisher.put
+        self._seq = itertools.count(1)
+        self._lock = threading.Lock()
+        self._gid = publisher_gid(self._publisher.id)
+        self._published = node.stats.published
+        self._token = node.declare_endpoint("pub", msg_type.TYPE_NAME, self.key)
+
+    def publish(self, msg: M) -> None:
+        if type(msg) is not self.msg_type and not isinstance(msg, self.msg_type):
+            raise MessageError(f"publisher expects {self.msg_type.TYPE_NAME}, got {type(msg).__name__}", key=self.key)
+        try:
+            payload = msg.encode()
+        except MessageError as exc:
+            raise exc.at(key=self.key) from None
+        self.publish_encoded(payload)
+
+    def publish_encoded(self, payload: bytes) -> None:
+        """Put an already validated payload (replay, relays).
+
+        Every sample's attachment carries its sequence number and the publisher's id
+        (:func:`~shared.encoding.sequence_attachment`), so a recorder counts losses per publisher. The
+        encoding was declared once with the publisher, so no put passes (or builds) it.
+        """
+        with self._lock:  # the put order is the sequence order, whichever threads publish
+            self._put(payload, attachment=sequence_attachment(next(self._seq), self._gid))
+            self._published[self.key] = self._published.get(self.key, 0) + 1
+
+    def has_subscribers(self) -> bool:
+        """Whether any subscriber matches this key now (Zenoh's matching status), so costly messages such as
+        images are made only while someone listens."""
+        status: Any = self._publisher.matching_status  # a MatchingStatus (the stub says bool)
+        return bool(status.matching)
+
+    def undeclare(self) -> None:
+        self._token.undeclare()
+        self._publisher.undeclare()
+
+
+class Subscription(Generic[M]):
+    """Receives one message type on one key (wildcards allowed) and hands valid messages to a callback.
+
+    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``. Messages
+    reach the callback in arrival order: one runs at once only while none of this subscription's is
+    queued, and the queue keeps the last ``qos.depth`` (older ones are dropped and counted).
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        msg_type: type[M],
+        topic: str,
+        callback: Callable[..., Any],
+        qos: QoS,
+        inline: bool,
+        with_key: bool,
+        absolute: bool = False,
+    ) -> None:
+        self._node = node
+        self.msg_type = msg_type
+        self.key = topic if absolute else node.key(topic)
+        self._callback = callback
+        self._inline = inline
+        self._with_key = with_key
+        self._queue: deque[tuple[str, M]] = deque(maxlen=max(1, qos.depth))
+        self._scheduled = False
+        self._lock = threading.Lock()
+        self._encoding = encoding_for(msg_type.TYPE_NAME)
+        self._decode = msg_type.decode
+        self._received = node.stats.received
+        self._dropped = node.stats.dropped
+        executor = node.executor
+        self._try_run_now = executor.try_run_now
+        self._run_inline = executor.run_inline
+        self._post_drain = executor.post_drain
+        #: Without wildcards every sample's key is the subscription's own key: no need to read it back.
+        self._exact_key = "" if "*" in self.key else self.key
+        self._subscriber = node.session.declare_subscriber(self.key, self._on_sample)
+        self._token = node.declare_endpoint("sub", msg_type.TYPE_NAME, self.key)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        # The hot path of every message: each attribute read of a sample makes a new object, and on a busy
+        # machine this code runs with cold caches, so it reads each only once and skips what it can.
+        payload = sample.payload
+        size = len(payload)
+        if not size and sample.kind != _PUT:  # a DELETE (never a message): it has no payload
+            return
+        key = self._exact_key or str(sample.key_expr)
+        try:
+            encoding = sample.encoding
+            if encoding != self._encoding:  # one comparison in Rust for the common case
+                mime, schema = schema_of(encoding)
+                if schema and schema != self.msg_type.TYPE_NAME and mime == ENCODING_PREFIX:
+                    raise MessageError(f"expected type {self.msg_type.TYPE_NAME}, got {schema}", key=key)
+            if size > MAX_PAYLOAD_BYTES:
+                raise MessageError(f"payload of {size} bytes exceeds {MAX_PAYLOAD_BYTES}", key=key)
+            msg = self._decode(payload.to_bytes())
+        except MessageError as exc:
+            self._node.reject(key, exc.at(key=key))
+            return
+        received = self._received
+        received[key] = received.get(key, 0) + 1
+        if self._inline:
+            self._run_inline(self._deliver, key, msg)
+            return
+        # Run it now unless one of ours is queued (order is kept); the executor declines when it is busy.
+        # zenoh-python calls one subscription's callback from one thread, so reading our state needs no lock.
+        if not (self._scheduled or self._queue) and (
+            self._try_run_now(self._callback, key, msg) if self._with_key else self._try_run_now(self._callback, msg)
+        ):
+            return
+        with self._lock:
+            if len(self._queue) == self._queue.maxlen:
+                self._dropped[key] = self._dropped.get(key, 0) + 1
+            self._queue.append((key, msg))
+            if self._scheduled:
+                return
+            self._scheduled = True
+        self._post_drain(self._next_delivery)
+
+    def _next_delivery(self) -> Work | None:
+        """The executor's drain: the oldest queued message's delivery, or ``None`` (and unscheduled) when none."""
+        with self._lock:
+            if not self._queue:
+                self._scheduled = False
+                return None
+            key, msg = self._queue.popleft()
+        return self._deliver, (key, msg)
+
+    def _deliver(self, key: str, msg: M) -> None:
+        if self._with_key:
+            self._callback(key, msg)
+        else:
+            self._callback(msg)
+
+    def undeclare(self) -> None:
+        """Stop receiving (a subscription a node declares and drops as its needs change)."""
+        self._token.undeclare()
+        self._subscriber.undeclare()
+        self._node.forget(self, self._token)
+
+
+class ServiceServer(Generic[Req, Res]):
+    """Answers requests on ``<ns>/<name>`` (a Zenoh queryable); the handler runs on the executor.
+
+    The handler returns a response message, or raises :class:`ServiceError` / ``ValueError`` to reply
+    with an error that names the reason. Malformed requests are rejected before the handler sees them.
+    Any other exception is a bug in the handler: the client gets an internal error and the executor
+    logs and counts it as a failed callback.
+    """
+
+    def __init__(self, node: Node, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res]) -> None:
+        self._node = node
+        self.srv = srv
+        self.key = node.key(name)
+        self._handler = handler
+        self._queryable = node.session.declare_queryable(self.key, self._on_query)
+        self._token = node.declare_endpoint("srv", srv.type_name, self.key)
+
+    def _on_query(self, query: zenoh.Query) -> None:
+        payload = query.payload
+        try:
+            request = self.srv.request.decode(payload.to_bytes() if payload is not None else b"\x80")
+        except MessageError as exc:
+            self._node.reject(self.key, exc.at(key=self.key))
+            query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
+            query.drop()
+            return
+        self._node.post(self._answer, query, request)
+
+    def _answer(self, query: zenoh.Query, request: Req) -> None:
+        try:
+            response = self._handler(request)
+            if not isinstance(response, self.srv.response):
+                raise ServiceError(f"handler returned {type(response).__name__}, expected {self.srv.response.__name__}")
+            query.reply(self.key, response.encode(), encoding=encoding_for(self.srv.response.TYPE_NAME))
+        except (ServiceError, ValueError) as exc:
+            query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
+        except Exception as exc:  # a bug in a handler: answer, then let the executor log it; keep serving
+            query.reply_err(f"internal error: {type(exc).__name__}: {exc}".encode(), encoding=zenoh.Encoding("text/plain"))
+            raise
+        finally:
+            query.drop()
+
+    def undeclare(self) -> None:
+        self._token.undeclare()
+        self._queryable.undeclare()
+
+
+def decode_reply(srv: ServiceType[Any, Res], key: str, reply: zenoh.Reply) -> Res:
+    """The response in a reply, or :class:`ServiceError` naming the key and the server's reason."""
+    if reply.ok is None:
+        err = reply.err
+        text = err.payload.to_string() if err is not None else "no reason given"
+        raise ServiceError(f"{key}: {text}")
+    try:
+        return srv.response.decode(reply.ok.payload.to_bytes())
+    except MessageError as exc:
+        raise ServiceError(f"{key}: malformed response: {exc}") from None
+
+
+def call_service(
+    session: zenoh.Session, key: str, srv: ServiceType[Req, Res], request: Req, timeout_s: float = 5.0
+) -> Res:
+    """Blocking request/response on a bare session (tools, tests). Raises :class:`ServiceError`."""
+    payload = request.encode()
+    replies = list(
+        session.get(
+            key,
+            payload=payload,
+            encoding=encoding_for(srv.request.TYPE_NAME),
+            timeout=timeout_s,
+            target=zenoh.QueryTarget.BEST_MATCHING,
+        )
+    )
+    if not replies:
+        raise ServiceUnavailable(f"{key}: no service answered within {timeout_s:g} s")
+    return decode_reply(srv, key, replies[0])
