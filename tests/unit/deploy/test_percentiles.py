@@ -23,8 +23,8 @@ def test_percentile_is_the_nearest_rank_for_every_size_and_level() -> None:
             assert percentile(values, q) == _nearest_rank(values, q), (n, q)
 
 
-def test_a_median_is_a_measured_value_and_no_values_give_nan() -> None:
-    assert median([10.0, 20.0]) == 10.0
+def test_a_median_is_the_usual_one_and_no_values_give_nan() -> None:
+    assert median([10.0, 20.0]) == 15.0
     assert median([3.0, 1.0, 2.0]) == 2.0
     assert percentile(iter([1.0, 2.0, 3.0, 4.0]), 0.99) == 4.0
     assert math.isnan(percentile([], 0.95)) and math.isnan(median([]))
