@@ -59,16 +59,9 @@ class Executor:
         ``False`` (nothing run) otherwise, and the caller queues the work instead."""
         if self._ready or self._stop or not self._run_lock.acquire(False):
             return False
-        # _run's body, inlined: this is every message's path, so it saves one Python call per message.
-        context = _callback_context
-        outer = getattr(context, "active", False)
-        context.active = True
         try:
-            fn(*args)
-        except Exception as exc:
-            self._on_error(exc)
+            self._run(fn, args)
         finally:
-            context.active = outer
             self._run_lock.release()
         return True
 
