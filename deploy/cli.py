@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.metadata
 import pkgutil
 import signal
 import sys
@@ -18,11 +19,20 @@ from deploy import commands
 from shared.config_errors import ConfigError
 
 
+def installed_version() -> str:
+    """The version of the installed ``zendock`` distribution (its package metadata)."""
+    try:
+        return importlib.metadata.version("zendock")
+    except importlib.metadata.PackageNotFoundError:
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="zendock",
         description="Autonomous docking for a two-wheeled robot, as services over Zenoh.",
     )
+    parser.add_argument("--version", action="version", version=f"zendock {installed_version()}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers.required = True
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):

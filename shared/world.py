@@ -21,29 +21,32 @@ A dock may name its ArUco marker: ``marker_id`` (default: the dock's index in ``
 
 A dock's pose is the robot's base_link pose when docked with contacts mated; the dock body and its
 charging plate stand directly ahead of it (see :data:`ROBOT_FRONT_M` and :class:`DockGeometry`).
-Keys this version does not know are reported as warnings, not errors, so newer world files still load.
+Keys this version does not know are errors naming the key and the file, as in stack files: a misspelt
+``wals:`` would otherwise build a room without its walls.
 """
 
 from __future__ import annotations
 
-import logging
 import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
-from shared.geometry import Pose2D
-
-log = logging.getLogger(__name__)
+from shared.geometry import Pose2D, distances_to_segment
 
 #: Robot footprint (length along x, width along y) and where base_link sits: at its centre.
 ROBOT_LENGTH_M = 0.40
 ROBOT_WIDTH_M = 0.30
 ROBOT_FRONT_M = ROBOT_LENGTH_M / 2.0
+
+#: How far base_link must stand from any solid for the body to clear it whatever its heading: half the
+#: robot's width (the footprint covers that disc), less a centimetre the simulator's placement tolerates.
+PLACEMENT_CLEARANCE_M = ROBOT_WIDTH_M / 2.0 - 0.01
 
 Point = tuple[float, float]
 Segment = tuple[Point, Point]
@@ -56,13 +59,13 @@ def _finite(values: tuple[float, ...], what: str) -> tuple[float, ...]:
     return values
 
 
-class _Lenient(BaseModel):
-    """Known keys are validated strictly; unknown keys are kept and reported as warnings."""
+class _Strict(BaseModel):
+    """Every key is validated; an unknown key is an error (``<file>: robot.strat: unknown key``)."""
 
-    model_config = ConfigDict(extra="allow", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-class Box(_Lenient):
+class Box(_Strict):
     pose: tuple[float, float, float]
     size: tuple[float, float]
 
@@ -87,7 +90,7 @@ class Box(_Lenient):
         return [frame.transform_point(px, py) for px, py in local]
 
 
-class Dock(_Lenient):
+class Dock(_Strict):
     id: str = Field(min_length=1)
     pose: tuple[float, float, float]
     type: str = "charger"
@@ -109,7 +112,7 @@ class Dock(_Lenient):
 ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 
 
-class RobotSpec(_Lenient):
+class RobotSpec(_Strict):
     #: The robot's namespace (required in ``robots``; the single ``robot`` has none).
     name: str = ""
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -155,7 +158,7 @@ class DockGeometry(BaseModel):
 DOCK_GEOMETRY = DockGeometry()
 
 
-class World(_Lenient):
+class World(_Strict):
     name: str = Field(min_length=1)
     bounds: tuple[float, float, float, float]
     walls: list[Segment] = Field(default_factory=list)
@@ -242,6 +245,34 @@ class World(_Lenient):
         xmin, ymin, xmax, ymax = self.bounds
         return xmin < x < xmax and ymin < y < ymax
 
+    def placement_problem(self, x: float, y: float) -> str | None:
+        """Why the robot cannot stand with base_link at ``(x, y)``, or None when it may.
+
+        A cheap check that needs no heading, for a start pose given on a command line before anything
+        starts: outside the bounds, or closer to a wall, pane, box or dock body than
+        :data:`PLACEMENT_CLEARANCE_M` (the body then overlaps it whatever the heading). The simulator's
+        footprint check at the pose's heading stays the exact one.
+        """
+        if not (math.isfinite(x) and math.isfinite(y)):
+            return f"({x}, {y}) is not finite"
+        if not self.contains(x, y):
+            return f"({x:g}, {y:g}) is outside the bounds {list(self.bounds)}"
+        point = np.array([[x, y]])
+        segments = [("the outer wall", s) for s in self.boundary_walls()]
+        segments += [(f"walls.{i}", s) for i, s in enumerate(self.walls)]
+        segments += [(f"glass.{i}", s) for i, s in enumerate(self.glass)]
+        for label, (a, b) in segments:
+            if distances_to_segment(point, np.array(a), np.array(b))[0] < PLACEMENT_CLEARANCE_M:
+                return f"({x:g}, {y:g}) puts the robot into {label}"
+        solids = [(f"boxes.{i}", box) for i, box in enumerate(self.boxes)]
+        solids += [(f"dock {d.id!r}", DOCK_GEOMETRY.body_box(d)) for d in self.docks]
+        for label, box in solids:
+            local_x, local_y = Pose2D(*box.pose).inverse().transform_point(x, y)
+            gap_x, gap_y = max(abs(local_x) - box.size[0] / 2, 0.0), max(abs(local_y) - box.size[1] / 2, 0.0)
+            if math.hypot(gap_x, gap_y) < PLACEMENT_CLEARANCE_M:
+                return f"({x:g}, {y:g}) puts the robot into {label}"
+        return None
+
     def boundary_walls(self) -> list[Segment]:
         xmin, ymin, xmax, ymax = self.bounds
         return [
@@ -264,18 +295,6 @@ class World(_Lenient):
             if dock.id == dock_id:
                 return dock
         raise KeyError(f"no dock {dock_id!r} in world {self.name!r} (docks: {[d.id for d in self.docks]})")
-
-    def unknown_keys(self) -> list[str]:
-        """Dotted paths of keys this version does not know (kept, reported as warnings)."""
-        found = [k for k in (self.model_extra or {})]
-        for i, box in enumerate(self.boxes):
-            found += [f"boxes.{i}.{k}" for k in (box.model_extra or {})]
-        for i, dock in enumerate(self.docks):
-            found += [f"docks.{i}.{k}" for k in (dock.model_extra or {})]
-        found += [f"robot.{k}" for k in (self.robot.model_extra or {})]
-        for i, robot in enumerate(self.robots):
-            found += [f"robots.{i}.{k}" for k in (robot.model_extra or {})]
-        return found
 
 
 @dataclass(frozen=True, slots=True)
@@ -317,8 +336,6 @@ def parse_world(data: Any, source: str | Path = "<world>") -> World:
         world = World.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, source)) from None
-    for key in world.unknown_keys():
-        log.warning("%s: unknown key %r ignored", source, key)
     return world
 
 

@@ -10,21 +10,9 @@ from rich.console import Console
 from rich.table import Table
 
 from deploy import strict_json
+from deploy.arg_types import positive_number, real_time_factor
 from shared.config_errors import ConfigError
-
-
-def _positive(text: str) -> float:
-    value = float(text)
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
-    return value
-
-
-def _rtf(text: str) -> str:
-    if text.strip().lower() == "max":
-        return "max"
-    _positive(text)
-    return text
+from shared.world import load_world
 
 
 def _print_report(report: dict, console: Console) -> None:
@@ -57,6 +45,10 @@ def _run(args: argparse.Namespace) -> int:
     world = Path(args.world)
     if not world.is_file():
         raise ConfigError(f"--world {world}: no such file")
+    room = load_world(world)  # a bad world file or start pose is one line, before any process starts
+    problem = room.placement_problem(args.start[0], args.start[1]) if args.start else None
+    if problem:
+        raise ConfigError(f"--start {problem} of world {world}")
     console = Console(stderr=args.json)
     options = DemoOptions(
         world=world.resolve(),
@@ -84,10 +76,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
                         help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
-    parser.add_argument("--rtf", type=_rtf, default="1.0", help="real-time factor of the simulator, or max")
+    parser.add_argument("--rtf", type=real_time_factor, default="1.0", help="real-time factor of the simulator, or max")
     parser.add_argument("--seed", type=int, default=0, help="simulator noise seed")
     parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"), help="start pose (map frame)")
-    parser.add_argument("--timeout", type=_positive, default=300.0, metavar="SIM_SECONDS",
+    parser.add_argument("--timeout", type=positive_number, default=300.0, metavar="SIM_SECONDS",
                         help="give up this many sim seconds after the trigger")
     parser.add_argument("--json", action="store_true", help="print the JSON report as the last line")
     parser.set_defaults(func=_run)

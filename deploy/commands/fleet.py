@@ -3,21 +3,24 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
 
 from deploy import strict_json
-from deploy.commands.demo import _positive
-from deploy.commands.trials import _count, _rtf
+from deploy.arg_types import count, positive_number, real_time_factor
 from shared.config_errors import ConfigError
 
 DEFAULT_WORLD = "deploy/worlds/fleet/warehouse.yaml"
 
 
 def _fraction(text: str) -> float:
-    value = float(text)
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
     if not 0.3 < value <= 1.0:
         raise argparse.ArgumentTypeError(f"must be a fraction in (0.3, 1], above the docking threshold 0.25, got {text}")
     return value
@@ -81,18 +84,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                                "and the room's reservation conflicts.")
     parser.add_argument("--world", default=DEFAULT_WORLD, metavar="FILE",
                         help=f"a world with docks (and robots; default {DEFAULT_WORLD})")
-    parser.add_argument("--robots", type=_count, default=None, metavar="N",
+    parser.add_argument("--robots", type=count, default=None, metavar="N",
                         help="how many robots (default: those the world lists; more are placed at seeded starts)")
-    parser.add_argument("--duration", type=_positive, default=600.0, metavar="SIM_S",
+    parser.add_argument("--duration", type=positive_number, default=600.0, metavar="SIM_S",
                         help="simulated seconds to run (default 600)")
-    parser.add_argument("--rtf", type=_rtf, default="4", help="simulator real-time factor, or max")
+    parser.add_argument("--rtf", type=real_time_factor, default="4", help="simulator real-time factor, or max")
     parser.add_argument("--seed", type=int, default=0, help="seed of generated starts, patrols and sensor noise")
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="synthetic",
                         help="how robots find their dock: the simulator's noisy truth, or ArUco in camera images")
-    parser.add_argument("--drain-scale", type=_positive, default=8.0, metavar="X",
+    parser.add_argument("--drain-scale", type=positive_number, default=8.0, metavar="X",
                         help="batteries drain X times faster than the cell model, so an hour holds several charge "
                              "cycles (default 8)")
-    parser.add_argument("--charge-scale", type=_positive, default=16.0, metavar="X",
+    parser.add_argument("--charge-scale", type=positive_number, default=16.0, metavar="X",
                         help="docks charge X times faster than the cell model's 0.5 C (default 16)")
     parser.add_argument("--resume-at", type=_fraction, default=0.8, metavar="FRACTION",
                         help="charge at which a docked robot undocks and patrols again (default 0.8)")

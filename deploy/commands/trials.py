@@ -11,26 +11,11 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from deploy import strict_json
+from deploy.arg_types import count, real_time_factor
 from shared.config_errors import ConfigError
 
 SHIPPED_WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 DEFAULT_WORLD = "deploy/worlds/seed_room.yaml"
-
-
-def _count(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {text}")
-    return value
-
-
-def _rtf(text: str) -> str:
-    if text.strip().lower() == "max":
-        return "max"
-    value = float(text)
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a positive number or max, got {text}")
-    return text
 
 
 def _summary_table(summary: dict) -> Table:
@@ -166,7 +151,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--world", action="append", metavar="FILE",
                         help=f"world file (repeat for a campaign across worlds; 'all': every shipped world); "
                              f"default {DEFAULT_WORLD}")
-    parser.add_argument("--n", type=_count, default=10, help="number of dockings (per world)")
+    parser.add_argument("--n", type=count, default=10, help="number of dockings (per world)")
     parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
                         help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
     parser.add_argument("--starts", choices=["room", "beacon"], default=None,
@@ -175,8 +160,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
                         help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
     parser.add_argument("--seed", type=int, default=0, help="seed of the start poses and the simulator's noise")
-    parser.add_argument("--rtf", type=_rtf, default="8", help="simulator real-time factor, or max")
-    parser.add_argument("--workers", type=_count, default=1, help="robots docking side by side in one simulator")
+    parser.add_argument("--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max")
+    parser.add_argument("--workers", type=count, default=1, help="robots docking side by side in one simulator")
     parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
     parser.add_argument("--chaos", type=float, default=0.0, metavar="PERIOD_S",
                         help="kill -9 a random robot service (with --compose: a robot's group process) every "

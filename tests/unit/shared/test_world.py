@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import logging
 import math
 from pathlib import Path
 
@@ -11,7 +10,8 @@ import pytest
 from shared.config_errors import ConfigError
 from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, load_world, parse_world
 
-WORLDS = sorted((Path(__file__).resolve().parents[3] / "deploy" / "worlds").glob("*.yaml"))
+WORLDS_DIR = Path(__file__).resolve().parents[3] / "deploy" / "worlds"
+WORLDS = sorted(WORLDS_DIR.rglob("*.yaml"))
 
 VALID = {
     "name": "t",
@@ -24,14 +24,14 @@ VALID = {
 }
 
 
-@pytest.mark.parametrize("path", WORLDS, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", WORLDS, ids=lambda p: str(p.relative_to(WORLDS_DIR)))
 def test_shipped_worlds_load(path: Path) -> None:
     world = load_world(path)
     assert world.docks, "every shipped world has a dock"
 
 
 def test_seed_room_reproduces_the_tutorial_dock() -> None:
-    world = load_world(Path(WORLDS[0]).parent / "seed_room.yaml")
+    world = load_world(WORLDS_DIR / "seed_room.yaml")
     dock = world.dock("home")
     assert dock.pose[:2] == (-1.0, 0.83) and dock.pose[2] == pytest.approx(-math.pi / 2)
 
@@ -77,11 +77,25 @@ def test_missing_required_key() -> None:
         parse_world(data, "w.yaml")
 
 
-def test_unknown_keys_warn_but_load(caplog: pytest.LogCaptureFixture) -> None:
-    with caplog.at_level(logging.WARNING):
-        world = parse_world(VALID | {"description": "x", "docks": [{"id": "d", "pose": [1, 1, 0], "color": "red"}]}, "w.yaml")
-    assert world.name == "t"
-    assert "description" in caplog.text and "docks.0.color" in caplog.text
+@pytest.mark.parametrize(
+    ("change", "where"),
+    [
+        ({"wals": [[[1, 0], [1, 1]]]}, "wals"),
+        ({"docks": [{"id": "d", "pose": [1, 1, 0], "color": "red"}]}, "docks.0.color"),
+        ({"boxes": [{"pose": [3, 2, 0], "size": [1, 1], "height": 2}]}, "boxes.0.height"),
+        ({"robots": [{"name": "r1", "start": [1, 1, 0], "strat": [1, 1, 0]}]}, "robots.0.strat"),
+    ],
+)
+def test_unknown_keys_are_errors_naming_the_key_and_the_file(change: dict, where: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        parse_world(VALID | change, "w.yaml")
+    assert str(info.value) == f"w.yaml: {where}: unknown key"
+
+
+def test_a_misspelt_robot_key_is_named_not_the_default_it_leaves() -> None:
+    with pytest.raises(ConfigError) as info:
+        parse_world(VALID | {"robot": {"strat": [2, 2, 0]}}, "w.yaml")
+    assert str(info.value) == "w.yaml: robot.strat: unknown key"
 
 
 def test_unreadable_and_non_yaml_files(tmp_path: Path) -> None:
