@@ -131,7 +131,7 @@ def run_perception_bench(frames_per_point: int = 12) -> dict[str, Any]:
         skipped: list[dict[str, Any]] = []
         with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
                 ServiceGroup(endpoint, namespace, {
-                    "simulator": ["--world", str(world_file), "-p", "rtf=1", "-p", "dock_detector=aruco"],
+                    "simulator": ["--world", str(world_file), "-p", "rtf=1", "-p", "detection.source=aruco"],
                     "perception": ["-p", f"dock_database={world_file}"],
                 }, Path(tmp)) as stack, \
                 open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
