@@ -84,7 +84,14 @@ class DemoReport:
     run_dir: str = ""
 
     def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        """The report's fields; a count is an integer, an empty reason is left out (a measure that is missing
+        is NaN here, ``null`` with its reason once :mod:`deploy.strict_json` writes it)."""
+        out = asdict(self)
+        if math.isfinite(self.false_glass_cells):
+            out["false_glass_cells"] = int(self.false_glass_cells)
+        if not self.lower_bound_s_reason:
+            del out["lower_bound_s_reason"]
+        return out
 
 
 def lower_bound(world_path: Path, start: Pose2D, goal: Pose2D) -> dict[str, float]:

@@ -15,23 +15,31 @@ from shared.config_errors import ConfigError
 from shared.world import load_world
 
 
+def _measure(value: float | None, scale: float, template: str) -> str:
+    """``template`` filled with ``scale * value``, or ``n/a`` for a measure that was not taken (NaN or null)."""
+    if value is None or not math.isfinite(value):
+        return "n/a"
+    return template.format(scale * value)
+
+
 def _print_report(report: dict, console: Console) -> None:
     table = Table(title=f"zendock demo: {report['world']} with the {report['controller']} controller")
     table.add_column("measure")
     table.add_column("value", justify="right")
     rows = [
         ("docked and charging", "yes" if report["docked"] and report["charging"] else "NO"),
-        ("dock time (trigger to CHARGING)", f"{report['dock_time_s']:.1f} s sim"),
-        ("lower bound", f"{report['lower_bound_s']:.1f} s sim"),
-        ("lateral error at contact", f"{1000 * report['final_lateral_error_m']:.1f} mm"),
-        ("yaw error at contact", f"{math.degrees(report['final_yaw_error_rad']):.2f} deg"),
+        ("dock time (trigger to CHARGING)", _measure(report["dock_time_s"], 1.0, "{:.1f} s sim")),
+        ("lower bound", _measure(report["lower_bound_s"], 1.0, "{:.1f} s sim")),
+        ("lateral error at contact", _measure(report["final_lateral_error_m"], 1000.0, "{:.1f} mm")),
+        ("yaw error at contact", _measure(report["final_yaw_error_rad"], 180.0 / math.pi, "{:.2f} deg")),
         ("collisions", str(report["collisions"])),
-        ("path driven", f"{report['path_length_m']:.2f} m"),
-        ("false glass cells (>10 cm from a pane)", str(report.get("false_glass_cells"))),
-        ("glass length found", "no glass" if report.get("glass_coverage") is None
-         else f"{100 * report['glass_coverage']:.0f} %"),
-        ("wall time", f"{report['wall_s']:.1f} s"),
+        ("path driven", _measure(report["path_length_m"], 1.0, "{:.2f} m")),
+        ("false glass cells (>10 cm from a pane)", _measure(report.get("false_glass_cells"), 1.0, "{:.0f}")),
+        ("glass length found", _measure(report.get("glass_coverage"), 100.0, "{:.0f} %")),
+        ("wall time", _measure(report["wall_s"], 1.0, "{:.1f} s")),
     ]
+    if report.get("lower_bound_s_reason"):
+        rows.insert(3, ("why no lower bound", report["lower_bound_s_reason"]))
     rows += [(f"peak RSS {name}", f"{mb:.0f} MB") for name, mb in sorted(report.get("peak_rss_mb", {}).items())]
     for name, value in rows:
         table.add_row(name, value)
