@@ -6,6 +6,7 @@ import argparse
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 
 from deploy.launcher.api import is_ready
 from deploy.launcher.daemon import add_launch_options, launch_argv
@@ -45,19 +46,53 @@ def _failed(status: ServiceStatus) -> bool:
     return status.phase == "exited" and status.exit_code != 0
 
 
-def wait_for_stack(paths: RuntimePaths, services: list[str], *, healthy: bool, timeout_s: float) -> tuple[bool, list[ServiceStatus]]:
-    """Poll the supervisor until every service started (or is ready, with ``healthy``), or one failed."""
+def wait_for_stack(
+    paths: RuntimePaths,
+    services: list[str],
+    *,
+    healthy: bool,
+    timeout_s: float,
+    on_settled: Callable[[ServiceStatus], None] | None = None,
+) -> tuple[bool, list[ServiceStatus]]:
+    """Poll the supervisor until every service started (or is ready, with ``healthy``), or one failed.
+
+    ``on_settled`` is called once per service, as soon as it is started (ready) or has failed, so a user
+    sees each service come up as ``docker compose up --wait`` shows it, not all at the end.
+    """
     deadline = time.monotonic() + timeout_s
     statuses: list[ServiceStatus] = []
+    settled: set[str] = set()
     while time.monotonic() < deadline:
         reply = request(paths, "ps")
         statuses = [ServiceStatus.from_dict(item) for item in reply["services"] if item["name"] in services]
+        for status in statuses:
+            if status.name not in settled and (_failed(status) or (is_ready(status) if healthy else _started(status))):
+                settled.add(status.name)
+                if on_settled is not None:
+                    on_settled(status)
         if any(_failed(s) for s in statuses):
             return False, statuses
         if len(statuses) == len(services) and all(is_ready(s) if healthy else _started(s) for s in statuses):
             return True, statuses
         time.sleep(0.1)
     return False, statuses
+
+
+def status_word(status: ServiceStatus, *, wait: bool) -> str:
+    """What ``up -d`` says of a service: started, healthy, completed, failed: <why>, or its state."""
+    if _failed(status):
+        return f"failed: {status.detail}"
+    if status.phase == "exited":
+        return "completed"
+    if wait:
+        return "healthy" if status.health == "healthy" else status.state if status.health == "none" else status.health
+    return "started" if status.starts else status.detail or status.state
+
+
+def status_line(status: ServiceStatus, *, wait: bool, elapsed_s: float | None = None) -> str:
+    """``router: healthy (1.2s)``: the service, its word, and the seconds since ``up`` began (when known)."""
+    when = f" ({elapsed_s:.1f}s)" if elapsed_s is not None else ""
+    return f"{status.name}: {status_word(status, wait=wait)}{when}"
 
 
 def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePaths) -> int:
@@ -90,23 +125,23 @@ def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePa
 
 
 def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], paths: RuntimePaths) -> int:
+    began = time.monotonic()
     if supervisor_info(paths) is not None:
         request(paths, "start", services=services)
     else:
         code = start_daemon(args, services, paths)
         if code:
             return code
-    ok, statuses = wait_for_stack(paths, services, healthy=args.wait, timeout_s=args.wait_timeout)
-    for status in statuses:
-        if _failed(status):
-            word = f"failed: {status.detail}"
-        elif status.phase == "exited":
-            word = "completed"
-        elif args.wait:
-            word = "healthy" if status.health == "healthy" else status.state if status.health == "none" else status.health
-        else:
-            word = "started" if status.starts else status.detail or status.state
-        print(f"{status.name}: {word}")
+    printed: set[str] = set()
+
+    def report(status: ServiceStatus) -> None:
+        printed.add(status.name)
+        print(status_line(status, wait=args.wait, elapsed_s=time.monotonic() - began), flush=True)
+
+    ok, statuses = wait_for_stack(paths, services, healthy=args.wait, timeout_s=args.wait_timeout, on_settled=report)
+    for status in statuses:  # what the others were doing when the wait ended
+        if status.name not in printed:
+            print(status_line(status, wait=args.wait), flush=True)
     if not ok:
         reason = "a service failed" if any(_failed(s) for s in statuses) else f"timed out after {args.wait_timeout:g}s"
         print(f"zendock up: {reason}; see `zendock ps` and `zendock logs` (the stack stays up: `zendock down`)", file=sys.stderr)
