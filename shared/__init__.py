@@ -5,8 +5,11 @@ Pose2D``). The package itself re-exports nothing on purpose: importing ``shared`
 the pure modules (geometry, frames, world, messages) load without Zenoh and algorithm modules that use
 them stay bus-free, as ``tests/unit/shared/test_kit_layers.py`` checks.
 
-- bus: :mod:`shared.session` (open a session), :mod:`shared.node` (publishers, subscriptions, timers,
-  services), :mod:`shared.action` (actions), :mod:`shared.runtime` (a service's ``main``),
+- bus: :mod:`shared.session` (open a session), :mod:`shared.node` (a node: publishers, subscriptions,
+  timers, services; it re-exports the names of the three modules it is made of: :mod:`shared.executor`,
+  the one place that runs callbacks one at a time, :mod:`shared.endpoints`, publishers, subscriptions,
+  service servers and QoS, and :mod:`shared.encoding`, a sample's encoding and attachment),
+  :mod:`shared.action` (actions), :mod:`shared.runtime` (a service's ``main``),
   :mod:`shared.navigation` (the navigation client), :mod:`shared.names` (key expressions, tokens).
 - data: :mod:`shared.messages` and :mod:`shared.schema` (ROS-named message types), :mod:`shared.topics`,
   :mod:`shared.interfaces` (action and service types), :mod:`shared.world` (world files).
