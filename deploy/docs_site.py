@@ -1,0 +1,202 @@
+"""The documentation site's generated pages: the CLI reference and the measurements page.
+
+One source, generated views. The CLI reference is written from ``deploy/cli.py``'s parser and its
+subparsers (every command's ``--help``), so it cannot drift from the code; the measurements page is
+rendered from ``docs/measurements/*.json`` (one file per measurement: what, result, command, commit,
+date, machine and the numbers).
+
+- ``mkdocs build`` loads this module as a hook (``mkdocs.yml``: ``hooks``): :func:`on_files` adds
+  ``cli.md`` to the site, generated at build time and never committed (the CLI changes often).
+- ``docs/measurements.md`` is committed, so it reads on GitHub too; ``python -m deploy.docs_site``
+  rewrites it and ``--check`` exits 1 when it is stale (``tests/unit/test_docs_site.py`` checks the same).
+- ``python -m deploy.docs_site --cli FILE`` writes the CLI reference to a file.
+
+Pure apart from reading the JSON files and writing the page: no bus, no services.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from deploy.paths import REPO_ROOT
+
+DOCS_DIR = REPO_ROOT / "docs"
+MEASUREMENTS_DIR = DOCS_DIR / "measurements"
+MEASUREMENTS_PAGE = DOCS_DIR / "measurements.md"
+#: Help is wrapped at this width whatever the terminal, so the reference is the same on every machine.
+HELP_COLUMNS = "100"
+MEASUREMENT_FIELDS = ("id", "order", "section", "status", "what", "result", "command", "commit",
+                      "recorded_in", "date", "machine", "numbers")
+STATUSES = ("current", "history")
+
+
+# --- the CLI reference -------------------------------------------------------------------------
+
+
+def _subcommands(parser: argparse.ArgumentParser) -> Iterator[tuple[str, str, argparse.ArgumentParser]]:
+    """(name, one-line help, parser) of each subcommand of ``parser``, in the order they were added."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            helps = {choice.dest: choice.help or "" for choice in action._choices_actions}
+            seen: set[int] = set()
+            for name, sub in action.choices.items():
+                if id(sub) in seen:  # an alias of a command already listed
+                    continue
+                seen.add(id(sub))
+                yield name, helps.get(name, ""), sub
+
+
+def _walk(parser: argparse.ArgumentParser, path: tuple[str, ...]) -> Iterator[tuple[tuple[str, ...], str, argparse.ArgumentParser]]:
+    for name, help_text, sub in _subcommands(parser):
+        yield (*path, name), help_text, sub
+        yield from _walk(sub, (*path, name))
+
+
+def _help_text(parser: argparse.ArgumentParser) -> str:
+    previous = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = HELP_COLUMNS
+    try:
+        return parser.format_help().rstrip()
+    finally:
+        if previous is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = previous
+
+
+def cli_reference(parser: argparse.ArgumentParser | None = None) -> str:
+    """The CLI reference page (Markdown): an index of commands, then each command's ``--help``."""
+    if parser is None:
+        from deploy.cli import build_parser
+
+        parser = build_parser()
+    commands = list(_walk(parser, ()))
+    out = [
+        "# CLI reference",
+        "",
+        "<!-- Generated from deploy/cli.py's parsers by deploy/docs_site.py while the site builds. "
+        "Do not edit. -->",
+        "",
+        "Every command below is `zendock COMMAND ...`, installed in `.venv/bin/zendock` by `make run` or "
+        "`make test`. This page is generated from the parsers themselves, so it is what `--help` prints.",
+        "",
+        "| command | what it does |",
+        "| --- | --- |",
+    ]
+    for path, help_text, _ in commands:
+        anchor = "zendock-" + "-".join(path)
+        out.append(f"| [`zendock {' '.join(path)}`](#{anchor}) | {_cell(help_text).replace('<', '&lt;').replace('>', '&gt;')} |")
+    out += ["", "## zendock", "", "```text", _help_text(parser), "```"]
+    for path, _, sub in commands:
+        level = "#" * min(2 + len(path) - 1, 4)
+        anchor = "zendock-" + "-".join(path)
+        out += ["", f"{level} zendock {' '.join(path)} {{#{anchor}}}", "", "```text", _help_text(sub), "```"]
+    return "\n".join(out) + "\n"
+
+
+# --- the measurements page ---------------------------------------------------------------------
+
+
+def load_measurements(directory: Path = MEASUREMENTS_DIR) -> list[dict[str, Any]]:
+    """Every measurement file, checked (the fields, the status), in the page's order."""
+    records = []
+    for path in sorted(directory.glob("*.json")):
+        record = json.loads(path.read_text(encoding="utf-8"))
+        missing = [field for field in MEASUREMENT_FIELDS if field not in record]
+        if missing:
+            raise ValueError(f"{path}: missing {', '.join(missing)}")
+        if record["status"] not in STATUSES:
+            raise ValueError(f"{path}: status must be one of {', '.join(STATUSES)}, not {record['status']!r}")
+        if not isinstance(record["numbers"], dict) or not record["numbers"]:
+            raise ValueError(f"{path}: numbers must be a non-empty object")
+        record["_file"] = path.name
+        records.append(record)
+    return sorted(records, key=lambda r: r["order"])
+
+
+def _cell(text: str) -> str:
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+def measurements_page(records: list[dict[str, Any]]) -> str:
+    """The measurements page (Markdown): current figures first, then the history, both in the data's order."""
+    out = [
+        "# Measurements",
+        "",
+        "<!-- Generated from docs/measurements/*.json by `python -m deploy.docs_site`. Do not edit: "
+        "edit the JSON and regenerate. -->",
+        "",
+        "Each figure the documentation reports comes from one file under `docs/measurements/` "
+        "(the command, the commit, the date, the machine and the numbers); this page is rendered from "
+        "them. Everything was measured on the 2-core development machine, which other jobs shared (so "
+        "timings are noisy); the command beside each number reproduces it. Trials run the whole "
+        "distributed stack, two robots sharing one simulator, with sensor noise and a map->odom "
+        "localisation error of (0.03 m, -0.02 m, 0.02 rad) on. The rows that say \"five worlds\" were "
+        "measured before `oblique_glass` joined the shipped worlds, and those that say \"six\" before "
+        "`glass_fins` did; `--world all` now runs seven.",
+        "",
+        "*commit* is the commit the measurement names; where it names none (\"the final code\"), the "
+        "commit that recorded the row is given instead, marked *recorded in*. Rows refer to each other "
+        "(\"the row below\") in the order of the complete table at the end of this page.",
+        "",
+    ]
+    for status, title, intro in (
+        ("current", "Current", "Figures on the code as it is (or the latest run of that measurement)."),
+        ("history", "History", "Earlier code, superseded designs and before/after comparisons, kept as "
+                               "the record of why the code is as it is."),
+    ):
+        out += [f"## {title}", "", intro, "", "| # | what | result | command | commit | date |",
+                "| --- | --- | --- | --- | --- | --- |"]
+        for r in records:
+            if r["status"] != status:
+                continue
+            commit = f"`{r['commit']}`" if r["commit"] else f"recorded in `{r['recorded_in']}`"
+            out.append(f"| {r['order']} | {_cell(r['what'])} | {_cell(r['result'])} | {_cell(r['command'])} "
+                       f"| {commit} | {r['date']} |")
+        out.append("")
+    out += ["## The numbers, per file", "",
+            "The structured numbers each file carries, for scripts and plots.", "",
+            "| # | file | section | numbers |", "| --- | --- | --- | --- |"]
+    for r in records:
+        numbers = ", ".join(f"{k}: {json.dumps(v, ensure_ascii=False)}" for k, v in r["numbers"].items())
+        out.append(f"| {r['order']} | `{r['_file']}` | {r['section']} | {_cell(numbers)} |")
+    out += ["", "Each run's per-trial data, histograms and logs land in `runs/`.", ""]
+    return "\n".join(out)
+
+
+# --- the mkdocs hook and the command line ------------------------------------------------------
+
+
+def on_files(files: Any, config: Any) -> Any:
+    """mkdocs hook: add the generated CLI reference as ``cli.md``."""
+    from mkdocs.structure.files import File
+
+    files.append(File.generated(config, "cli.md", content=cli_reference()))
+    return files
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m deploy.docs_site", description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 if docs/measurements.md is stale")
+    parser.add_argument("--cli", metavar="FILE", help="also write the CLI reference to FILE")
+    args = parser.parse_args(argv)
+    page = measurements_page(load_measurements())
+    if args.check:
+        if MEASUREMENTS_PAGE.read_text(encoding="utf-8") != page:
+            print(f"{MEASUREMENTS_PAGE} is stale: run python -m deploy.docs_site", file=sys.stderr)
+            return 1
+    else:
+        MEASUREMENTS_PAGE.write_text(page, encoding="utf-8")
+    if args.cli:
+        Path(args.cli).write_text(cli_reference(), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
