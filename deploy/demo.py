@@ -9,10 +9,12 @@ stack down. Exit 0 only when the robot docked and charges.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import subprocess
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,18 +25,23 @@ from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT
+from deploy.progress import TERMINAL_PERIOD_S, Throttle, demo_line
 from deploy.service_tools import run_tool
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.simulator import TELEPORT, TeleportRequest
+from shared.messages import String
 from shared.names import topic_key
 from shared.node import ServiceError, call_service
+from shared.schema import MessageError
 from shared.session import SessionSpec, open_session
 from shared.world import World, load_world
 
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
 DEFAULT_WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
 DOCK_SERVICES = ("router", "map", "simulator", "perception", "battery", "pose", "planner", "docking")
+#: Where the docking service says which phase it is in (std_msgs/String).
+DOCKING_STATE = "docking/state"
 #: With ``--compose`` the robot's services run as one process, the group ``robot`` (zendock container).
 ROBOT_GROUP = {"robot": ["perception", "battery", "pose", "planner", "docking"]}
 
@@ -152,8 +159,25 @@ def _composed(names: tuple[str, ...]) -> tuple[str, ...]:
     return (*(n for n in names if n not in grouped), *ROBOT_GROUP)
 
 
-def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
-    """Bring the stack up, dock once, write the run's files; always brings the stack down."""
+def _status_line(record: RunRecord, world: World, docking_state: str, trigger_below: float) -> str:
+    """The demo's progress now: the battery before the trigger, the docking state and distance after."""
+    battery = record.battery[-1][1] if record.battery else None
+    distance = None
+    if record.driven and world.docks:
+        _, x, y, _ = record.driven[-1]
+        dock = world.docks[0].pose2d
+        distance = math.hypot(dock.x - x, dock.y - y)
+    return demo_line(sim_s=record.sim_time_s, battery=battery, trigger_s=record.trigger_s,
+                     docking_state=docking_state, distance_m=distance, trigger_below=trigger_below)
+
+
+def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], None] | None = None,
+             status_period_s: float = TERMINAL_PERIOD_S) -> DemoReport:
+    """Bring the stack up, dock once, write the run's files; always brings the stack down.
+
+    ``status`` gets a progress line (battery, then docking state and distance to the dock, sim time) at
+    every phase change and at most every ``status_period_s`` wall seconds otherwise.
+    """
     world = load_world(options.world)
     run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -169,6 +193,23 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
             observer = RunObserver(session)
+            docking_state = [""]
+
+            def on_docking_state(sample: Any) -> None:
+                with contextlib.suppress(MessageError):
+                    docking_state[0] = String.decode(sample.payload.to_bytes()).data
+
+            state_sub = session.declare_subscriber(topic_key("", DOCKING_STATE), on_docking_state)
+            throttle = Throttle(status_period_s)
+            phase_shown: list[object] = []
+
+            def show_status() -> None:
+                record = observer.snapshot()
+                phase = (record.trigger_s is None, docking_state[0])
+                if status is not None and (throttle.due(time.monotonic()) or phase_shown[-1:] != [phase]):
+                    phase_shown[:] = [phase]
+                    status(_status_line(record, world, docking_state[0], observer.low_threshold))
+
             try:
                 if options.start is not None:
                     placed = call_service(session, topic_key("", "simulator/teleport"), TELEPORT,
@@ -185,13 +226,15 @@ def run_demo(options: DemoOptions, log: Any = print) -> DemoReport:
                     too_late = record.trigger_s is not None and record.sim_time_s - record.trigger_s > options.timeout_sim_s
                     return record.charging or too_late or record.sim_time_s > options.timeout_sim_s + 60.0
 
-                while not observer.wait(finished, timeout_s=1.0):
+                while not observer.wait(finished, timeout_s=0.5):
+                    show_status()
                     if time.monotonic() > deadline_wall:
                         log("wall-clock limit reached")
                         break
                 observer.settle()
                 record = observer.snapshot()
             finally:
+                state_sub.undeclare()
                 observer.close()
         for name in services:
             (run_dir / f"{name}.log").write_text("\n".join(launcher.logs(name)) + "\n")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from rich.console import Console
@@ -11,6 +12,7 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import positive_number, real_time_factor
+from deploy.progress import is_terminal, progress_period_s
 from shared.config_errors import ConfigError
 from shared.world import load_world
 
@@ -68,7 +70,12 @@ def _run(args: argparse.Namespace) -> int:
         timeout_sim_s=args.timeout,
         compose=args.compose,
     )
-    report = run_demo(options, log=lambda text: console.print(f"[dim]demo:[/] {text}")).as_dict()
+    # progress every 2 s on a terminal; with --json or into a pipe, a line every 10 s on stderr only
+    interactive = not args.json and is_terminal(sys.stdout)
+    progress_console = console if interactive else Console(stderr=True)
+    report = run_demo(options, log=lambda text: console.print(f"[dim]demo:[/] {text}"),
+                      status=lambda text: progress_console.print(f"[dim]demo:[/] {text}", highlight=False),
+                      status_period_s=progress_period_s(interactive)).as_dict()
     _print_report(report, console)
     if args.json:
         print(strict_json.dumps(report))
