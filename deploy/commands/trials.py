@@ -4,14 +4,25 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+import threading
+import time
 from pathlib import Path
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import count, real_time_factor
+from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
 from shared.config_errors import ConfigError
 
 SHIPPED_WORLDS = Path(__file__).resolve().parents[1] / "worlds"
@@ -124,16 +135,42 @@ def _shard(text: str):  # type: ignore[no-untyped-def]
 
 
 def _run_world(console: Console, options, run_trials):  # type: ignore[no-untyped-def]
-    """One world's trials under a progress bar."""
+    """One world's trials, with progress on stderr: a rich bar on a terminal, else a line every 10 trials.
+
+    stdout keeps only the header, the summary and (``--json``) the JSON line, whatever the progress does.
+    """
+    total = len(options.shard.select(range(options.n)))
+    log = lambda t: console.print(f"[dim]trials:[/] {t}")  # noqa: E731
+    lock = threading.Lock()
+    tally = {"done": 0, "docked": 0}
+    if not is_terminal(sys.stderr):
+        began = time.monotonic()
+        err = Console(stderr=True, highlight=False)
+
+        def count(result) -> None:  # type: ignore[no-untyped-def]
+            with lock:
+                tally["done"] += 1
+                tally["docked"] += bool(result.docked)
+                done = tally["done"]
+                if done == 1 or done % TRIALS_PER_LINE == 0 or done == total:  # the first: the pace, early
+                    err.print(trials_line(world=options.world.stem, done=done, total=total,
+                                          successes=tally["docked"], elapsed_s=time.monotonic() - began))
+
+        return run_trials(options, log=log, progress=count)
     with Progress(TextColumn(f"trials {options.world.stem}"), BarColumn(), MofNCompleteColumn(),
-                  TextColumn("{task.fields[last]}"), TimeElapsedColumn(), console=console) as bar:
-        task = bar.add_task("trials", total=options.n, last="")
+                  TextColumn("{task.fields[docked]} docked"), TextColumn("{task.fields[last]}"),
+                  TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+                  console=Console(stderr=True), redirect_stdout=is_terminal(sys.stdout)) as bar:
+        task = bar.add_task("trials", total=total, last="", docked=0)
 
         def advance(result) -> None:  # type: ignore[no-untyped-def]
             status = "docked" if result.docked else "FAILED"
-            bar.update(task, advance=1, last=f"#{result.index} {status} {result.dock_time_s:.1f} s")
+            with lock:
+                tally["docked"] += bool(result.docked)
+                bar.update(task, advance=1, docked=tally["docked"],
+                           last=f"#{result.index} {status} {result.dock_time_s:.1f} s")
 
-        return run_trials(options, log=lambda t: console.print(f"[dim]trials:[/] {t}"), progress=advance)
+        return run_trials(options, log=log, progress=advance)
 
 
 def _print_summary(console: Console, summary) -> None:  # type: ignore[no-untyped-def]

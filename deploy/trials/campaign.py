@@ -175,6 +175,7 @@ def run_trials(
         f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}")
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
         launcher.wait_healthy(timeout_s=120.0)
+        log(f"stack healthy after {time.monotonic() - wall_start:.0f} s; docking")
         def processes() -> list[tuple[str, int | None]]:
             return [(s.name, s.pid) for s in launcher.ps()]
 
