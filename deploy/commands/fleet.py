@@ -4,16 +4,22 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from rich.console import Console
+from rich.live import Live
 from rich.table import Table
+from rich.text import Text
 
 from deploy import strict_json
 from deploy.arg_types import count, positive_number, real_time_factor
+from deploy.progress import is_terminal
 from shared.config_errors import ConfigError
 
 DEFAULT_WORLD = "deploy/worlds/fleet/warehouse.yaml"
+#: How often the terminal's live table is refreshed from the bus (wall seconds).
+LIVE_PERIOD_S = 1.0
 
 
 def _fraction(text: str) -> float:
@@ -37,6 +43,20 @@ def _table(report) -> Table:  # type: ignore[no-untyped-def]
     return table
 
 
+def live_table(sim_s: float, duration_s: float, robots) -> Table:  # type: ignore[no-untyped-def]
+    """The robots now, for the terminal's live view: charge, docking state, dockings, distance driven."""
+    table = Table(title=f"fleet: {sim_s:.0f} s of {duration_s:.0f} s simulated", title_justify="left")
+    for column in ("robot", "charge", "state", "dockings", "distance", "waiting", "collisions"):
+        table.add_column(column, justify="left" if column in ("robot", "state") else "right")
+    for r in robots:
+        charge = f"{100 * r.battery:.0f} %" if math.isfinite(r.battery) else "?"
+        if r.charging:
+            charge += " +"
+        table.add_row(r.name, charge, r.state or "?", str(r.dockings), f"{r.distance_m:.0f} m", f"{r.wait_s:.0f} s",
+                      str(r.collisions))
+    return table
+
+
 def _run(args: argparse.Namespace) -> int:
     from deploy.fleet.run import run_fleet  # noqa: PLC0415 - heavy imports only when used
     from deploy.fleet.stack import FleetOptions  # noqa: PLC0415
@@ -49,13 +69,26 @@ def _run(args: argparse.Namespace) -> int:
                            charge_scale=args.charge_scale, resume_at=args.resume_at,
                            **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
     console = Console(stderr=args.json)
+    live_wanted = not args.json and is_terminal(sys.stdout)
+    # a live table on a terminal; otherwise a line every 10 s on stderr, so stdout stays the report
+    err = Console(stderr=True, highlight=False)
 
-    def progress(sim_s: float, robots) -> None:  # type: ignore[no-untyped-def]
+    def progress_line(sim_s: float, robots) -> None:  # type: ignore[no-untyped-def]
         parts = [f"{r.name} {r.state or '?'} {100 * r.battery:.0f}% {r.dockings}d" for r in robots]
-        console.print(f"[dim]{sim_s:7.0f} s[/] " + " | ".join(parts))
+        err.print(f"[dim]{sim_s:7.0f} s[/] " + " | ".join(parts))
+
+    def log(text: str) -> None:
+        console.print(f"[dim]fleet:[/] {text}")
 
     try:
-        report, run_dir = run_fleet(options, log=lambda t: console.print(f"[dim]fleet:[/] {t}"), progress=progress)
+        if live_wanted:
+            with Live(Text("fleet: starting the stack"), console=console, refresh_per_second=2,
+                      transient=True) as live:
+                report, run_dir = run_fleet(
+                    options, log=log, progress_period_s=LIVE_PERIOD_S,
+                    progress=lambda sim_s, robots: live.update(live_table(sim_s, options.duration_s, robots)))
+        else:
+            report, run_dir = run_fleet(options, log=log, progress=progress_line)
     except ConfigError:
         raise  # already names the file and what is wrong
     except (RuntimeError, ValueError) as exc:

@@ -35,7 +35,7 @@ from shared.world import World
 
 #: Starting charges are spread over this range (the first robot full), so the robots run low in turn.
 START_CHARGE = (1.0, 0.45)
-#: How often the live progress is reported (wall seconds).
+#: How often the progress is reported (wall seconds) by default: a line in a log; a terminal's live table asks more often.
 PROGRESS_PERIOD_S = 10.0
 
 
@@ -82,8 +82,12 @@ def run_fleet(
     options: FleetOptions,
     log: Callable[[str], None] = print,
     progress: Callable[[float, list[RobotTally]], None] | None = None,
+    progress_period_s: float = PROGRESS_PERIOD_S,
 ) -> tuple[FleetReport, Path]:
-    """Run the fleet; returns the report and the run directory."""
+    """Run the fleet; returns the report and the run directory.
+
+    ``progress(sim seconds so far, robots)`` is called every ``progress_period_s`` wall seconds.
+    """
     run_dir = options.runs_dir / f"fleet-{time.strftime('%Y%m%d-%H%M%S')}-{options.world.stem}"
     run_dir.mkdir(parents=True, exist_ok=True)
     world, world_file = fleet_world(options.world, options.robots, options.seed, run_dir / "world.yaml")
@@ -104,7 +108,7 @@ def run_fleet(
             monitor = FleetMonitor(session, robots)
             try:
                 _stagger_charges(session, robots, options.seed, errors)
-                sim_start, sim_end, wall_run = _watch(monitor, options.duration_s, progress)
+                sim_start, sim_end, wall_run = _watch(monitor, options.duration_s, progress, progress_period_s)
                 sim_now, tallies, conflicts, contacts = monitor.snapshot()
             finally:
                 monitor.close()
@@ -137,8 +141,8 @@ def _stagger_charges(session: Any, robots: list[str], seed: int, errors: list[st
             errors.append(f"{robot}: starting charge not set: {exc}")
 
 
-def _watch(monitor: FleetMonitor, duration_s: float,
-           progress: Callable[[float, list[RobotTally]], None] | None) -> tuple[float, float, float]:
+def _watch(monitor: FleetMonitor, duration_s: float, progress: Callable[[float, list[RobotTally]], None] | None,
+           progress_period_s: float = PROGRESS_PERIOD_S) -> tuple[float, float, float]:
     """Wait until the sim clock has run ``duration_s``; (sim start, sim end, wall seconds)."""
     deadline = time.monotonic() + 60.0
     while not math.isfinite(monitor.snapshot()[0]):
@@ -157,7 +161,7 @@ def _watch(monitor: FleetMonitor, duration_s: float,
             last_clock, last_clock_wall = sim_now, time.monotonic()
         elif time.monotonic() - last_clock_wall > 60.0:
             raise ServiceError(f"the simulator's clock stopped at {sim_now:.1f} s")
-        if progress is not None and time.monotonic() - last_progress >= PROGRESS_PERIOD_S:
+        if progress is not None and time.monotonic() - last_progress >= progress_period_s:
             last_progress = time.monotonic()
             progress(sim_now - sim_start, tallies)
         time.sleep(0.5)
