@@ -1,8 +1,9 @@
 """``zendock dock [DOCK_ID]`` and ``zendock undock``: the docking service's actions from the command line.
 
 Both send one goal to the docking service (``dock_robot`` / ``undock_robot`` in ``--namespace``), print
-each change of the feedback as it comes (time on the service's clock, state, retries) and the result,
-and exit 0 on success, 1 on failure or when no docking service answers, 130 when interrupted (the goal
+each change of the feedback as it comes (time on the service's clock, state, retries; for ``dock`` the
+distance to the dock from ``map_to_base_link_pose2d``, and on a terminal a line every 2 s) and the
+result, and exit 0 on success (``dock``: once the battery says CHARGING, its last line ``charging``), 1 on failure or when no docking service answers, 130 when interrupted (the goal
 is cancelled first: the robot stops). Endpoints come from ``--connect`` (repeatable), else
 ``ZENDOCK_CONNECT``, else ``ZENOH_CONNECT``, else the default router; the namespace from
 ``--namespace``, else ``ZENDOCK_NAMESPACE``.
@@ -11,16 +12,21 @@ is cancelled first: the robot stops). Endpoints come from ``--connect`` (repeata
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import sys
 import threading
+import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TextIO
 
 import zenoh
 
+from deploy.paths import REPO_ROOT
+from deploy.progress import TERMINAL_PERIOD_S, Throttle, dock_line, is_terminal
 from shared import topics
 from shared.action import ActionClient, ActionType, ClientGoal, GoalStatusCode, spin_in_background
 from shared.config_errors import ConfigError
@@ -33,13 +39,18 @@ from shared.interfaces.docking import (
     DockRobotResult,
     UndockRobotGoal,
 )
-from shared.messages import Header, Pose, PoseStamped
-from shared.names import normalise_namespace
+from shared.messages import BatteryState, Float64MultiArray, Header, Pose, PoseStamped
+from shared.names import normalise_namespace, topic_key
 from shared.node import Node
 from shared.runtime import wait_interruptibly
+from shared.schema import MessageError
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+from shared.world import load_world
 
 EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130
+#: After the dock_robot goal succeeded, how long the battery has to say CHARGING (wall seconds).
+CHARGING_WAIT_S = 15.0
+DEFAULT_WORLD = "deploy/worlds/seed_room.yaml"
 ENV_CONNECT = ("ZENDOCK_CONNECT", "ZENOH_CONNECT")
 
 
@@ -93,11 +104,75 @@ def namespace_arg(args: argparse.Namespace) -> str:
         raise ConfigError(f"--namespace: {exc}") from None
 
 
-def describe_dock_feedback(feedback: DockRobotFeedback) -> tuple[object, str]:
-    """What changed (state, retries) and the line to print for it."""
+def describe_dock_feedback(feedback: DockRobotFeedback, distance_m: float | None = None) -> tuple[object, str]:
+    """What changed (state, retries) and the line to print for it (with the distance to the dock, if known)."""
     state = STATE_NAMES.get(feedback.state, str(feedback.state))
-    retries = f"  (retry {feedback.num_retries})" if feedback.num_retries else ""
-    return (feedback.state, feedback.num_retries), f"{feedback.docking_time.to_sec():7.1f} s  {state}{retries}"
+    line = dock_line(docking_time_s=feedback.docking_time.to_sec(), state=state, retries=feedback.num_retries,
+                     distance_m=distance_m)
+    return (feedback.state, feedback.num_retries), line
+
+
+class Approach:
+    """The robot's pose (``map_to_base_link_pose2d``) and charging state (``battery_status``) while it docks.
+
+    Zenoh callbacks only store the latest values; the distance is to ``dock`` (a map pose), or, without
+    one, to the nearest of ``docks`` from where the robot first stood.
+    """
+
+    def __init__(self, session: zenoh.Session, namespace: str, dock: Pose2D | None, docks: list[Pose2D]) -> None:
+        self._dock, self._docks = dock, docks
+        self._pose: Pose2D | None = None
+        self.charging = threading.Event()
+        self._subscribers = [
+            session.declare_subscriber(topic_key(namespace, topics.POSE2D), self._on_pose),
+            session.declare_subscriber(topic_key(namespace, topics.BATTERY_STATUS), self._on_battery),
+        ]
+
+    def _on_pose(self, sample: zenoh.Sample) -> None:
+        with contextlib.suppress(MessageError, ValueError):
+            data = Float64MultiArray.decode(sample.payload.to_bytes()).data
+            self._pose = Pose2D(float(data[0]), float(data[1]), float(data[2]))
+            if self._dock is None and self._docks:
+                here = self._pose
+                self._dock = min(self._docks, key=lambda d: math.hypot(d.x - here.x, d.y - here.y))
+
+    def _on_battery(self, sample: zenoh.Sample) -> None:
+        with contextlib.suppress(MessageError):
+            status = BatteryState.decode(sample.payload.to_bytes()).power_supply_status
+            if status in (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL):
+                self.charging.set()
+            else:
+                self.charging.clear()
+
+    def distance_m(self) -> float | None:
+        pose, dock = self._pose, self._dock
+        return None if pose is None or dock is None else math.hypot(dock.x - pose.x, dock.y - pose.y)
+
+    def close(self) -> None:
+        for sub in self._subscribers:
+            with contextlib.suppress(Exception):
+                sub.undeclare()
+
+
+def _dock_poses(args: argparse.Namespace) -> tuple[Pose2D | None, list[Pose2D]]:
+    """The dock to measure the distance to (``--pose``, or DOCK_ID in the world file), and all the world's docks.
+
+    The world file is ``--world``, else ``ZENDOCK_WORLD`` (the stack's), else the default stack's; without
+    a readable one the lines go without a distance.
+    """
+    if args.pose is not None:
+        return Pose2D.from_seq(args.pose), []
+    path = Path(args.world or os.environ.get("ZENDOCK_WORLD") or DEFAULT_WORLD)
+    if not path.is_absolute():
+        path = (REPO_ROOT / path) if not path.is_file() else path
+    try:
+        world = load_world(path)
+    except (ConfigError, OSError, ValueError):
+        return None, []
+    docks = {d.id: d.pose2d for d in world.docks}
+    if args.dock_id:
+        return docks.get(args.dock_id), []
+    return None, list(docks.values())
 
 
 def run_action(
@@ -111,11 +186,12 @@ def run_action(
     describe_feedback: Callable[[Any], tuple[object, str]] | None = None,
     server_timeout_s: float = 10.0,
     timeout_s: float | None = None,
+    repeat_every_s: float | None = None,
 ) -> tuple[int, ClientGoal[Any, Any] | None]:
     """Send ``goal``, print feedback changes, wait for the result; returns the exit code and the goal.
 
     ``describe_feedback`` turns a feedback message into ``(what changed, line)``; a line is printed when
-    what changed differs from the previous message's.
+    what changed differs from the previous message's, and, with ``repeat_every_s``, at least that often.
     """
     node = Node("zendock_cli", session, namespace)
     thread = spin_in_background(node)
@@ -127,14 +203,18 @@ def run_action(
             return EXIT_FAILED, None
         done = threading.Event()
         previous: list[object] = []
+        throttle = Throttle(repeat_every_s) if repeat_every_s else None
 
         def on_feedback(feedback: Any) -> None:
             if describe_feedback is None:
                 return
             change, line = describe_feedback(feedback)
-            if not previous or previous[-1] != change:
+            changed = not previous or previous[-1] != change
+            if changed or (throttle is not None and throttle.due(time.monotonic())):
                 previous.append(change)
                 print(line, file=out, flush=True)
+                if changed and throttle is not None:
+                    throttle.due(time.monotonic())
 
         handle = client.send_goal(goal, on_feedback=on_feedback, on_done=lambda _h: done.set())
         try:
@@ -185,11 +265,20 @@ def dock_main(args: argparse.Namespace) -> int:
         goal.dock_pose = PoseStamped(Header(frame_id=topics.MAP_FRAME), Pose.from_pose2d(Pose2D.from_seq(args.pose)))
     target = f"dock {args.dock_id!r}" if args.dock_id else ("the given pose" if args.pose else "the nearest dock")
     print(f"docking at {target}", flush=True)
+    dock, docks = _dock_poses(args)
+    # on a terminal a line every 2 s as the robot closes in; into a pipe only the changes of state
+    repeat_every_s = TERMINAL_PERIOD_S if is_terminal(sys.stdout) else None
     try:
         with client_session(args) as session:
-            code, handle = run_action(session, namespace, DOCK_ROBOT, topics.DOCK_ROBOT, goal, sys.stdout,
-                                      describe_feedback=describe_dock_feedback, server_timeout_s=args.server_timeout,
-                                      timeout_s=args.timeout)
+            approach = Approach(session, namespace, dock, docks)
+            try:
+                code, handle = run_action(
+                    session, namespace, DOCK_ROBOT, topics.DOCK_ROBOT, goal, sys.stdout,
+                    describe_feedback=lambda fb: describe_dock_feedback(fb, approach.distance_m()),
+                    server_timeout_s=args.server_timeout, timeout_s=args.timeout, repeat_every_s=repeat_every_s)
+                charging = code == EXIT_OK and approach.charging.wait(CHARGING_WAIT_S)
+            finally:
+                approach.close()
     except RouterUnreachable as exc:
         print(f"zendock dock: {exc}", file=sys.stderr)
         return EXIT_FAILED
@@ -197,6 +286,11 @@ def dock_main(args: argparse.Namespace) -> int:
         retries = getattr(handle.result, "num_retries", 0)
         suffix = f" after {retries} retr{'y' if retries == 1 else 'ies'}" if retries else ""
         print(("docked" if code == EXIT_OK else f"docking {_outcome(handle)}") + suffix, flush=True)
+    if code == EXIT_OK:
+        if not charging:
+            print(f"the battery does not report charging {CHARGING_WAIT_S:g} s after docking", flush=True)
+            return EXIT_FAILED
+        print("charging", flush=True)
     return code
 
 
@@ -243,6 +337,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     dock.add_argument("dock_id", nargs="?", default="", metavar="DOCK_ID", help="dock id (default: the nearest dock)")
     dock.add_argument("--pose", type=float, nargs=3, metavar=("X", "Y", "YAW"),
                       help="dock at this map pose instead of a database dock")
+    dock.add_argument("--world", default=None, metavar="FILE",
+                      help="world file the dock poses are read from, for the distance shown "
+                           "(env ZENDOCK_WORLD; default deploy/worlds/seed_room.yaml)")
     dock.add_argument("--no-staging", action="store_true",
                       help="the robot is already at the staging pose: skip the planner")
     dock.add_argument("--max-staging-time", type=float, default=1000.0, metavar="S",
