@@ -2,7 +2,7 @@
 
 Usage::
 
-    zendock keys list [-t] [-v]
+    zendock keys list [-t] [-v] [-a]
     zendock keys echo KEY [--once | --times N] [--timeout S] [--field a.b.0] [--csv | --raw] [--array-limit N]
     zendock keys hz KEY... [-w WINDOW] [--sim-time] [--duration S] [--json]
     zendock keys bw KEY... [-w WINDOW] [--duration S] [--json]
@@ -86,7 +86,8 @@ def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
 
 
 def _list(args: argparse.Namespace, options: BusOptions) -> int:
-    return run_list(options, ListFormat(show_types=args.show_types, verbose=args.verbose), sys.stdout)
+    return run_list(options, ListFormat(show_types=args.show_types, verbose=args.verbose,
+                                        include_hidden=args.include_hidden), sys.stdout)
 
 
 def _echo(args: argparse.Namespace, options: BusOptions) -> int:
@@ -160,6 +161,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                          description="Keys in use; services and actions are marked. --namespace limits the list.")
     p.add_argument("-t", "--show-types", action="store_true", help="show each key's type")
     p.add_argument("-v", "--verbose", action="store_true", help="show types and the nodes on each key")
+    p.add_argument("-a", "--include-hidden", "--include-hidden-topics", dest="include_hidden", action="store_true",
+                   help="also list hidden keys: those with a part starting with _ (an action's _action/... parts)")
     p.set_defaults(func=_dispatch(_list))
 
     p = verbs.add_parser("echo", parents=[bus], help="print messages on a key",

@@ -1,8 +1,12 @@
-"""``zendock keys list [-t] [-v]``: the keys in use, as ``ros2 topic list`` shows topics.
+"""``zendock keys list [-t] [-v] [-a]``: the keys in use, as ``ros2 topic list`` shows topics.
 
 Keys come from the nodes' liveliness tokens (and the router's admin space when enabled). Service and
 action keys are listed too, marked ``(service)`` and ``(action)``; a key seen only in the admin space is
 marked ``(no token)`` and has no known type. ``--namespace`` limits the list to keys under it.
+
+Hidden keys are left out unless ``-a``/``--include-hidden`` is given: as ROS 2 hides a name with a part
+that starts with ``_``, the parts of an action (``dock_robot/_action/send_goal``, ``.../feedback``, ...)
+and a node's parameter services (``battery/_param/get``) are hidden; the action itself is listed.
 """
 
 from __future__ import annotations
@@ -23,6 +27,12 @@ UNKNOWN_TYPE = "?"
 class ListFormat:
     show_types: bool = False
     verbose: bool = False  # implies show_types
+    include_hidden: bool = False
+
+
+def is_hidden(key: str) -> bool:
+    """A key with a part starting with ``_`` (``dock_robot/_action/status``), as ROS 2 hides such names."""
+    return any(part.startswith("_") for part in key.split("/"))
 
 
 def markers(entry: KeyEntry) -> list[str]:
@@ -77,7 +87,7 @@ def run_list(options: BusOptions, fmt: ListFormat, out: TextIO, err: TextIO | No
     err = err or sys.stderr
     with open_bus(options) as session:
         graph = query_graph(session, GRAPH_TIMEOUT_S)
-    entries = graph.in_namespace(options.namespace)
+    entries = [e for e in graph.in_namespace(options.namespace) if fmt.include_hidden or not is_hidden(e.key)]
     if not entries:
         where = f" in namespace {options.namespace!r}" if options.namespace else ""
         err.write(f"zendock keys list: no keys announced{where} (the router answered; are services running?)\n")

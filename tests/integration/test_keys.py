@@ -48,6 +48,8 @@ class Talker:
         battery = self.node.create_publisher(BatteryState, "battery_status")
         self.node.create_subscription(Twist, "cmd_in", lambda _msg: None)
         self.node.create_service(CANCEL_GOAL, "cancel_all", lambda _request: CancelGoalResponse())
+        # an action's internal part: hidden from ``keys list`` unless -a, as ros2 hides _-prefixed names
+        self.node.create_service(CANCEL_GOAL, "dock/_action/cancel_goal", lambda _request: CancelGoalResponse())
         garbage = session.declare_publisher(f"{namespace}/garbage", encoding=encoding_for(TWIST))
         wrong_shape = session.declare_publisher(f"{namespace}/wrong_shape", encoding=encoding_for(TWIST))
         self.node.create_timer(0.05, lambda: twist.publish(TALKER_TWIST))
@@ -71,6 +73,7 @@ class Talker:
             endpoint_token_key("pub", ns, "talker", BATTERY, f"{ns}/battery_status"),
             endpoint_token_key("sub", ns, "talker", TWIST, f"{ns}/cmd_in"),
             endpoint_token_key("srv", ns, "talker", CANCEL_GOAL.type_name, f"{ns}/cancel_all"),
+            endpoint_token_key("srv", ns, "talker", CANCEL_GOAL.type_name, f"{ns}/dock/_action/cancel_goal"),
         }
 
     def close(self) -> None:
@@ -117,6 +120,9 @@ def test_list_shows_keys_types_and_nodes(talker: Talker, keys, namespace: str) -
     assert out.splitlines() == [
         f"{namespace}/battery_status", f"{namespace}/cancel_all (service)", f"{namespace}/cmd_in", f"{namespace}/cmd_vel",
     ]
+    for flag in ("-a", "--include-hidden"):
+        code, out, _ = keys("list", flag)
+        assert code == 0 and f"{namespace}/dock/_action/cancel_goal (service)" in out.splitlines()
     code, out, _ = keys("list", "-t")
     assert f"{namespace}/cmd_vel [{TWIST}]" in out and f"{namespace}/battery_status [{BATTERY}]" in out
     code, out, _ = keys("list", "-v")

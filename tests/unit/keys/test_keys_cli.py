@@ -12,7 +12,7 @@ from deploy.keys.errors import KeysError
 from deploy.keys.graph import build_graph
 from deploy.keys.hz import RateStats
 from deploy.keys.info import info_lines
-from deploy.keys.listing import ListFormat, list_lines
+from deploy.keys.listing import ListFormat, is_hidden, list_lines
 from deploy.keys.monitor import MonitorRequest
 from deploy.keys.pub import split_type_and_values
 from deploy.keys.sampling import ReceivedSample
@@ -96,6 +96,14 @@ def test_list_plain_types_and_verbose() -> None:
     assert "  action servers (1): /r1/docking" in verbose
     assert "  service servers (1): /r1/sim" in verbose
     assert "  without a zendock token (router admin space): publisher" in verbose
+
+
+def test_hidden_keys_are_those_ros2_hides() -> None:
+    assert is_hidden("r1/dock_robot/_action/status") and is_hidden("r1/battery/_param/get") and is_hidden("_internal")
+    assert not is_hidden("r1/dock_robot") and not is_hidden("r1/cmd_vel") and not is_hidden("r1/a_b")
+    for flag in ("-a", "--include-hidden", "--include-hidden-topics"):
+        assert _parse("list", flag).include_hidden
+    assert not _parse("list").include_hidden
 
 
 def test_info_counts_and_nodes() -> None:
