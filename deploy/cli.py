@@ -16,7 +16,7 @@ import sys
 from collections.abc import Sequence
 
 from deploy import commands
-from shared.config_errors import ConfigError
+from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
 
 
 def installed_version() -> str:
@@ -59,7 +59,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except ConfigError as exc:
         print(f"zendock {args.command}: {exc}", file=sys.stderr)
-        return 2
+        return CONFIG_ERROR_EXIT
     except KeyboardInterrupt:
         return 130
 

@@ -7,6 +7,10 @@ from typing import Any
 
 from pydantic import ValidationError
 
+#: The exit code of a process stopped by a :class:`ConfigError` (a service, a ``zendock`` command), as
+#: argparse exits on a bad flag. Restarting cannot fix one, so the launcher never restarts a service for it.
+CONFIG_ERROR_EXIT = 2
+
 
 class ConfigError(ValueError):
     """A user-written file or value is malformed. The message names the file, the field and the reason."""

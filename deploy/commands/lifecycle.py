@@ -8,7 +8,7 @@ import sys
 
 from deploy.launcher.project import add_project_options, resolve_project
 from deploy.launcher.robot_template import service_for
-from deploy.launcher.runtime import ControlError, request
+from deploy.launcher.runtime import ControlError, RequestRefused, request
 from deploy.launcher.status import ServiceStatus
 
 LIFECYCLE_TIMEOUT_S = 120.0
@@ -31,15 +31,37 @@ def main(args: argparse.Namespace) -> int:
         fields["signal"] = args.signal
     try:
         reply = request(paths, args.command, timeout_s=LIFECYCLE_TIMEOUT_S, **fields)
+    except RequestRefused as exc:  # the stack is up and said why (no such service: ... (services: ...))
+        print(f"zendock {args.command}: {exc}", file=sys.stderr)
+        return 2
     except ControlError as exc:
         print(f"zendock {args.command}: {exc} (is {name} up? `zendock up -d`)", file=sys.stderr)
         return 1
     statuses = {s["name"]: ServiceStatus.from_dict(s) for s in reply["services"]}
+    signalled = set(reply.get("signalled", []))
     for service in args.services or list(statuses):
         status = statuses.get(service_for(service, list(statuses)))
-        if status is not None:
+        if status is None:
+            continue
+        if args.command == "kill":
+            print(_kill_line(service, status, status.name in signalled, args.signal))
+        else:
             print(f"{service}: {status.state}" + (f" (pid {status.pid})" if status.pid else ""))
     return 0
+
+
+def _kill_line(service: str, status: ServiceStatus, signalled: bool, signum: int) -> str:
+    """What ``kill`` did to one service: the status the reply carries was taken before the process ended."""
+    if not signalled:
+        return f"{service}: not running ({status.state}), no signal sent"
+    try:
+        name = signal.Signals(signum).name
+    except ValueError:
+        name = f"signal {signum}"
+    pid = f" pid {status.pid}" if status.pid else ""
+    if signum == signal.SIGKILL:
+        return f"{service}: killed ({name} to{pid or ' its process group'}; its restart policy applies)"
+    return f"{service}: sent {name} to{pid or ' its process group'}"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -13,6 +13,7 @@ import time
 from deploy.launcher.logs import Follower, LogLine, merge_by_time, tail
 from deploy.launcher.printer import Printer
 from deploy.launcher.project import add_project_options, resolve_project
+from deploy.launcher.robot_template import service_for
 from deploy.launcher.runtime import supervisor_info
 
 FOLLOW_POLL_S = 0.2
@@ -24,10 +25,17 @@ def main(args: argparse.Namespace) -> int:
     on_disk = sorted(p.name[: -len(".log")] for p in logs_dir.glob("*.log")) if logs_dir.is_dir() else []
     ordered = [s for s in stack.services if s in on_disk] if stack is not None else []
     available = ordered + [s for s in on_disk if s not in ordered]
-    services = args.services or available
+    known = list(stack.services) if stack is not None else []
+    known += [s for s in available if s not in known]
+    services = [service_for(s, known) for s in args.services] or available
+    unknown = [s for s in services if s not in known]
+    if unknown:
+        listed = f" (services: {', '.join(known)})" if known else ""
+        print(f"zendock logs: no such service: {', '.join(unknown)}{listed}", file=sys.stderr)
+        return 2
     missing = [s for s in services if s not in available]
     if missing:
-        print(f"zendock logs: no logs for {', '.join(missing)} in {logs_dir}", file=sys.stderr)
+        print(f"zendock logs: no logs for {', '.join(missing)} in {logs_dir} (not started yet?)", file=sys.stderr)
         return 1
     printer = Printer(sys.stdout, services, colour=False if args.no_color else None)
 

@@ -12,7 +12,7 @@ from rich.table import Table
 from rich.text import Text
 
 from deploy.launcher.durations import format_duration
-from deploy.launcher.project import add_project_options, resolve_project
+from deploy.launcher.project import add_project_options, find_stack_file, no_stack_file, resolve_project
 from deploy.launcher.runtime import (
     ControlError,
     RuntimePaths,
@@ -72,6 +72,9 @@ def format_table(statuses: list[ServiceStatus]) -> str:
 
 def main(args: argparse.Namespace) -> int:
     _, paths, _ = resolve_project(args)
+    stack_file = find_stack_file(args)
+    if (stack_file is None or not stack_file.is_file()) and not paths.state_dir.exists():
+        raise no_stack_file(stack_file)  # outside a project: nothing to list, and an empty table would hide it
     statuses, live = current_statuses(paths)
     if args.services:
         statuses = [s for s in statuses if s.name in args.services]

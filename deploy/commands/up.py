@@ -11,6 +11,7 @@ from collections.abc import Callable
 from deploy.launcher.api import is_ready
 from deploy.launcher.daemon import add_launch_options, launch_argv
 from deploy.launcher.host import SupervisorHost, run_blocking
+from deploy.launcher.logs import failure_line, tail
 from deploy.launcher.plan import plan_launch
 from deploy.launcher.printer import Printer
 from deploy.launcher.project import (
@@ -25,6 +26,8 @@ from deploy.launcher.stack_file import Stack
 from deploy.launcher.status import ServiceStatus
 
 DAEMON_START_TIMEOUT_S = 20.0
+#: How much of a failed service's log is searched for the line that says why.
+FAILURE_LOG_LINES = 200
 
 
 def run_foreground(args: argparse.Namespace, stack: Stack, services: list[str], paths: RuntimePaths) -> int:
@@ -95,6 +98,12 @@ def status_line(status: ServiceStatus, *, wait: bool, elapsed_s: float | None = 
     return f"{status.name}: {status_word(status, wait=wait)}{when}"
 
 
+def failure_reason(paths: RuntimePaths, status: ServiceStatus) -> str:
+    """``map failed: zendock map save: nope.yaml: cannot read world file ...``: the line of its log that says why."""
+    cause = failure_line([line.text for line in tail(paths.logs_dir, status.name, FAILURE_LOG_LINES)])
+    return f"{status.name} failed: {cause or status.detail}"
+
+
 def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePaths) -> int:
     """Spawn the supervisor in its own session and wait until it answers; 0, or 1 with its log shown."""
     paths.state_dir.mkdir(parents=True, exist_ok=True)
@@ -143,7 +152,8 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
         if status.name not in printed:
             print(status_line(status, wait=args.wait), flush=True)
     if not ok:
-        reason = "a service failed" if any(_failed(s) for s in statuses) else f"timed out after {args.wait_timeout:g}s"
+        failed = [s for s in statuses if _failed(s)]
+        reason = "; ".join(failure_reason(paths, s) for s in failed) or f"timed out after {args.wait_timeout:g}s"
         print(f"zendock up: {reason}; see `zendock ps` and `zendock logs` (the stack stays up: `zendock down`)", file=sys.stderr)
         return 1
     return 0

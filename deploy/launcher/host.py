@@ -163,9 +163,12 @@ class SupervisorHost:
             await sup.restart(names or list(sup.runners))
             await sup.wait_started(names or list(sup.runners), START_WAIT_S)
         elif op == "kill":
-            sup.kill(names or list(sup.runners), int(request.get("signal", signal.SIGKILL)))
+            signalled = sup.kill(names or list(sup.runners), int(request.get("signal", signal.SIGKILL)))
+            return {"ok": True, "signalled": signalled, "services": [status.to_dict() for status in sup.statuses()]}
         elif op == "down":
             await self.down()
+            statuses = {status.name: status for status in sup.statuses()}
+            return {"ok": True, "services": [statuses[name].to_dict() for name in sup.stop_order(statuses)]}
         else:
             return {"ok": False, "error": f"unknown request {op!r}"}
         return {"ok": True, "services": [status.to_dict() for status in sup.statuses()]}

@@ -98,6 +98,27 @@ def tail(log_dir: Path, service: str, count: int | None) -> list[LogLine]:
     return list(lines)
 
 
+#: The launcher's own lines in a service's log (``[zendock] started (pid 12)``), as the supervisor writes them.
+EVENT_PREFIX = "[zendock] "
+_ERROR_RE = re.compile(r"\berror\b", re.IGNORECASE)
+
+
+def failure_line(lines: list[str]) -> str | None:
+    """The line that says why a service's last run failed, from its log's texts (oldest first).
+
+    Only the last run counts (after the last ``[zendock] started`` event). A traceback's cause is its
+    last line; otherwise the first line that says ``error`` (``... : error: world.yaml: cannot read ...``);
+    else the last line the service printed. None when it printed nothing.
+    """
+    starts = [i for i, text in enumerate(lines) if text.startswith(f"{EVENT_PREFIX}started")]
+    output = [text for text in lines[starts[-1] + 1 if starts else 0:] if text.strip() and not text.startswith(EVENT_PREFIX)]
+    if not output:
+        return None
+    if any(text.startswith("Traceback") for text in output):
+        return output[-1].strip()
+    return next((text.strip() for text in output if _ERROR_RE.search(text)), output[-1].strip())
+
+
 def merge_by_time(per_service: list[list[LogLine]]) -> list[LogLine]:
     """Interleave several services' lines by timestamp (stable within a service)."""
     tagged = [(line.stamp, index, order, line) for index, lines in enumerate(per_service) for order, line in enumerate(lines)]

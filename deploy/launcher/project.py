@@ -48,10 +48,17 @@ def find_stack_file(args: argparse.Namespace) -> Path | None:
     return None
 
 
+def no_stack_file(path: Path | None) -> ConfigError:
+    """The error of a command that needs a stack file and found none (or not the one it was given)."""
+    if path is not None:
+        return ConfigError(f"{path}: no such stack file")
+    return ConfigError(f"no stack file: pass -f FILE or create one of {', '.join(STACK_FILE_NAMES)}")
+
+
 def load_project_stack(args: argparse.Namespace) -> Stack:
     path = find_stack_file(args)
     if path is None:
-        raise ConfigError(f"no stack file: pass -f FILE or create one of {', '.join(STACK_FILE_NAMES)}")
+        raise no_stack_file(path)
     env_file = getattr(args, "env_file", None)
     return load_stack(path, env_file=env_file, project_dir=project_dir(args), project_name=args.project_name)
 

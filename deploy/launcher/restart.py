@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from shared.config_errors import CONFIG_ERROR_EXIT
+
 RESTART_MODES = ("no", "always", "on-failure", "unless-stopped")
 _POLICY_RE = re.compile(r"^(no|always|unless-stopped|on-failure)(?::(\d+))?$")
 
@@ -15,13 +17,17 @@ class RestartPolicy:
 
     ``always`` and ``unless-stopped`` restart after any exit; ``on-failure`` after a non-zero exit (a
     signal counts as a failure), at most ``max_retries`` times in a row when given. A service stopped by the
-    user (``stop``, ``down``) is never restarted, whatever the policy.
+    user (``stop``, ``down``) is never restarted, whatever the policy, nor is one that exited with
+    :data:`~shared.config_errors.CONFIG_ERROR_EXIT` (2): a configuration error, which the same files and
+    flags would only repeat, as a crash loop.
     """
 
     mode: str = "no"
     max_retries: int | None = None
 
     def should_restart(self, exit_code: int, consecutive_restarts: int) -> bool:
+        if exit_code == CONFIG_ERROR_EXIT:
+            return False
         if self.mode in ("always", "unless-stopped"):
             return True
         if self.mode == "on-failure" and exit_code != 0:

@@ -34,6 +34,10 @@ class ControlError(RuntimeError):
     """The supervisor is not running, did not answer, or refused the request."""
 
 
+class RequestRefused(ControlError):
+    """The supervisor answered and refused the request (a service it does not run, a bad request)."""
+
+
 @dataclass(frozen=True)
 class RuntimePaths:
     state_dir: Path
@@ -138,7 +142,7 @@ def request(paths: RuntimePaths, op: str, *, timeout_s: float = 10.0, **fields: 
     except ValueError:
         raise ControlError(f"the supervisor gave no answer to {op!r}") from None
     if not reply.get("ok"):
-        raise ControlError(str(reply.get("error", "request refused")))
+        raise RequestRefused(str(reply.get("error", "request refused")))
     return reply
 
 
@@ -151,7 +155,8 @@ def clear_runtime(paths: RuntimePaths) -> None:
 
 def stop_orphans(paths: RuntimePaths, grace_s: float = 5.0) -> list[str]:
     """After a supervisor died: SIGTERM, then SIGKILL after ``grace_s``, the process groups it recorded
-    whose leader is still the same process. Returns the names of the services found running."""
+    whose leader is still the same process. Returns the names of the services found running, latest
+    started first (the order a supervisor stops them in: the router they connect through last)."""
     groups = {}
     for status in recorded_statuses(paths):
         if status.pid is not None and process_matches(status.pid, status.pid_create_time) is not None:
@@ -164,7 +169,7 @@ def stop_orphans(paths: RuntimePaths, grace_s: float = 5.0) -> list[str]:
     for pgid in groups.values():
         if live_group_members(pgid):
             signal_group(pgid, signal.SIGKILL)
-    return list(groups)
+    return list(reversed(groups))
 
 
 def start_new_logs(paths: RuntimePaths) -> None:

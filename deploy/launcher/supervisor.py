@@ -16,12 +16,13 @@ from pathlib import Path
 
 from deploy.launcher.graph import dependency_order, with_dependencies
 from deploy.launcher.health import LivelinessWatcher, run_check
-from deploy.launcher.logs import RotatingLog
+from deploy.launcher.logs import EVENT_PREFIX, RotatingLog
 from deploy.launcher.plan import LaunchPlan, ServicePlan
 from deploy.launcher.process import ServiceProcess
 from deploy.launcher.restart import Backoff
 from deploy.launcher.robot_template import service_for
 from deploy.launcher.status import Phase, ServiceStatus, public_state
+from shared.config_errors import CONFIG_ERROR_EXIT
 
 WATCHER_CLOSE_S = 5.0
 
@@ -34,6 +35,8 @@ class DependencyFailed(Exception):
 
 
 def _describe_exit(code: int) -> str:
+    if code == CONFIG_ERROR_EXIT:
+        return f"exited with code {code} (a configuration error: not restarted)"
     return f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
 
 
@@ -72,7 +75,7 @@ class ServiceRunner:
         self._sup.emit_line(self.name, text)
 
     def event(self, text: str) -> None:
-        self.output(f"[zendock] {text}")
+        self.output(f"{EVENT_PREFIX}{text}")
 
     def close_log(self) -> None:
         if self._log is not None:
@@ -405,13 +408,19 @@ class Supervisor:
         selected = with_dependencies(names, deps)
         return [name for name in dependency_order(deps) if name in selected]
 
+    def stop_order(self, names: Iterable[str]) -> list[str]:
+        """``names`` in the order :meth:`stop` ends them: each service before those it depends on, so the
+        router every service connects through comes last."""
+        wanted = set(names)
+        return [name for name in reversed(self.with_dependencies(wanted)) if name in wanted]
+
     def _check_names(self, names: Iterable[str]) -> list[str]:
         """The services named (``r2/planner`` is a robot template's ``planner_r2``); KeyError for others."""
         services = list(self.plan.services)
         names = [service_for(name, services) for name in names]
         unknown = [name for name in names if name not in self.plan.services]
         if unknown:
-            raise KeyError(f"no such service: {', '.join(unknown)}")
+            raise KeyError(f"no such service: {', '.join(unknown)} (services: {', '.join(services)})")
         return names
 
     # -- control --------------------------------------------------------------------------------------

@@ -71,7 +71,9 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
     assert by_name["talker"]["health"] == "healthy" and by_name["router"]["health"] == "none"
     assert all(row["state"] == "running" and isinstance(row["pid"], int) for row in rows)
 
-    os.kill(by_name["talker"]["pid"], signal.SIGKILL)
+    kill = zendock(project, mark, "kill", "talker")
+    assert kill.returncode == 0, kill.stderr
+    assert kill.stdout == f"talker: killed (SIGKILL to pid {by_name['talker']['pid']}; its restart policy applies)\n"
 
     def talker_back() -> bool:
         talker = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}["talker"]
@@ -83,6 +85,11 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
     assert "talker | talker ready" in logs.stdout
     assert "talker | [zendock] killed by signal 9" in logs.stdout
 
+    for command in ("restart", "logs"):
+        unknown = zendock(project, mark, command, "nosuch")
+        assert unknown.returncode == 2, (command, unknown.stderr)
+        assert unknown.stderr == f"zendock {command}: no such service: nosuch (services: router, talker, helper)\n"
+
     stop = zendock(project, mark, "stop", "helper")
     assert stop.returncode == 0 and "helper: stopped" in stop.stdout
     start = zendock(project, mark, "start", "helper")
@@ -93,6 +100,7 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
 
     down = zendock(project, mark, "down")
     assert down.returncode == 0, down.stderr
+    assert down.stdout.splitlines() == ["helper: stopped", "talker: stopped", "router: stopped"]  # the router last
     assert not marked_processes(mark)
     state_dir = project / ".zendock" / "clitest"
     assert not (state_dir / "state.json").exists() and not (state_dir / "supervisor.json").exists()
@@ -141,6 +149,31 @@ def test_up_refuses_an_invalid_stack_with_the_key_path(tmp_path: Path, mark: str
     result = zendock(tmp_path, mark, "up", "-d")
     assert result.returncode == 2
     assert "stack.yaml: services.a.restart: expected one of no, always" in result.stderr
+
+
+def test_up_wait_names_a_configuration_error_and_does_not_restart_it(write_stack, endpoint: str, mark: str) -> None:
+    """A service exiting 2 (a configuration error) stays down, whatever its policy, and ``up --wait`` says why."""
+    project = write_stack(f"""\
+        name: badworld
+        zenoh: {{connect: ["{endpoint}"]}}
+        services:
+          router:
+            command: [zendock, router, --listen, "{endpoint}"]
+          map:
+            command: [zendock, map, save, --world, nope.yaml, -o, maps]
+            restart: on-failure
+            depends_on: {{router: {{condition: service_started}}}}
+        """).parent
+    try:
+        up = zendock(project, mark, "up", "-d", "--wait", "--wait-timeout", "30")
+        assert up.returncode == 1, up.stderr + up.stdout
+        assert "map: failed: exited with code 2 (a configuration error: not restarted)" in up.stdout
+        reason = up.stderr.splitlines()[-1]
+        assert reason.startswith("zendock up: map failed: zendock map save: nope.yaml: cannot read world file"), reason
+        rows = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}
+        assert (rows["map"]["state"], rows["map"]["restarts"], rows["map"]["exit_code"]) == ("exited", 0, 2)
+    finally:
+        zendock(project, mark, "down")
 
 
 def test_down_cleans_up_after_a_supervisor_that_died(project: Path, mark: str) -> None:

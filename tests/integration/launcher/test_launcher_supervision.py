@@ -126,22 +126,26 @@ def test_restart_policies(launch) -> None:  # type: ignore[no-untyped-def]
         services:
           no_policy: {{command: {fake(*quick, "--exit-code", "1")}, restart: "no"}}
           on_failure_ok: {{command: {fake(*quick, "--exit-code", "0")}, restart: on-failure}}
-          on_failure_max: {{command: {fake(*quick, "--exit-code", "2")}, restart: "on-failure:2"}}
+          on_failure_max: {{command: {fake(*quick, "--exit-code", "3")}, restart: "on-failure:2"}}
           on_failure: {{command: {fake(*quick, "--exit-code", "1")}, restart: on-failure}}
           always: {{command: {fake(*quick, "--exit-code", "0")}, restart: always}}
           unless_stopped: {{command: {fake(*quick, "--exit-code", "1")}, restart: unless-stopped}}
+          misconfigured: {{command: {fake(*quick, "--exit-code", "2")}, restart: always}}
         """
     )
     statuses = stack.wait_until(
         lambda st: all(st[n].restarts >= 3 for n in ("on_failure", "always", "unless_stopped"))
-        and all(st[n].state == "exited" for n in ("no_policy", "on_failure_ok", "on_failure_max")),
+        and all(st[n].state == "exited" for n in ("no_policy", "on_failure_ok", "on_failure_max", "misconfigured")),
         30,
         "the policies to play out",
     )
     assert (statuses["no_policy"].restarts, statuses["no_policy"].exit_code) == (0, 1)
     assert (statuses["on_failure_ok"].restarts, statuses["on_failure_ok"].exit_code) == (0, 0)
-    assert (statuses["on_failure_max"].restarts, statuses["on_failure_max"].exit_code) == (2, 2)
-    assert stack.logs("on_failure_max").count("[zendock] exited with code 2") == 3
+    assert (statuses["on_failure_max"].restarts, statuses["on_failure_max"].exit_code) == (2, 3)
+    assert stack.logs("on_failure_max").count("[zendock] exited with code 3") == 3
+    # a configuration error (exit 2) would only repeat: not restarted, whatever the policy, and ps says why
+    assert (statuses["misconfigured"].restarts, statuses["misconfigured"].exit_code) == (0, 2)
+    assert "configuration error" in statuses["misconfigured"].detail
     stack.stop("always", "on_failure")
     stopped = stack.ps()
     restarts_when_stopped = {s.name: s.restarts for s in stopped}

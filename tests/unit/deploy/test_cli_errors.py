@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.metadata
+import signal
 from pathlib import Path
 
 import pytest
@@ -84,3 +85,36 @@ def test_bad_values_are_named_for_users_not_by_parser_functions(argv: list[str],
 def test_version_comes_from_the_package_metadata(capsys: pytest.CaptureFixture[str]) -> None:
     assert _exit_code(["--version"]) == 0
     assert capsys.readouterr().out == f"zendock {importlib.metadata.version('zendock')}\n"
+
+
+def test_ps_outside_a_project_says_there_is_no_stack_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ZENDOCK_STACK_FILE", raising=False)
+    assert _exit_code(["ps"]) == 2
+    assert _one_error_line(capsys).startswith("zendock ps: no stack file: pass -f FILE")
+    assert _exit_code(["ps", "-f", "nope.yaml"]) == 2
+    assert _one_error_line(capsys) == "zendock ps: nope.yaml: no such stack file"
+
+
+def test_logs_of_a_service_the_stack_does_not_have(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ZENDOCK_STACK_FILE", raising=False)
+    (tmp_path / "stack.yaml").write_text("name: t\nservices:\n  a: {command: [x]}\n  b: {command: [y]}\n")
+    assert _exit_code(["logs", "nosuch"]) == 2
+    assert _one_error_line(capsys) == "zendock logs: no such service: nosuch (services: a, b)"
+    assert _exit_code(["logs", "a"]) == 1  # a service of the stack that has not run yet
+    assert "no logs for a" in _one_error_line(capsys)
+
+
+def test_kill_says_what_it_did() -> None:
+    from deploy.commands.lifecycle import _kill_line  # noqa: PLC0415
+    from deploy.launcher.status import ServiceStatus  # noqa: PLC0415
+
+    running = ServiceStatus("battery", "running", 4242, 0, "healthy")
+    assert _kill_line("battery", running, True, signal.SIGKILL) == \
+        "battery: killed (SIGKILL to pid 4242; its restart policy applies)"
+    assert _kill_line("battery", running, True, signal.SIGINT) == "battery: sent SIGINT to pid 4242"
+    exited = ServiceStatus("map", "exited", None, 0, "none")
+    assert _kill_line("map", exited, False, signal.SIGKILL) == "map: not running (exited), no signal sent"

@@ -24,6 +24,10 @@ from deploy.launcher.restart import Backoff, RestartPolicy, parse_restart_policy
         ("on-failure:2", 1, 2, False),
         ("on-failure:2", 0, 0, False),
         ("on-failure:0", 1, 0, False),
+        # exit 2 is a configuration error (shared.config_errors.CONFIG_ERROR_EXIT): no policy restarts it
+        ("on-failure", 2, 0, False),
+        ("always", 2, 0, False),
+        ("unless-stopped", 2, 0, False),
     ],
 )
 def test_restart_policies(policy: str, exit_code: int, streak: int, restart: bool) -> None:
