@@ -217,6 +217,7 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
                     if not placed.success:
                         raise ServiceError(f"--start {options.start}: {placed.message}")
                 observer.arm()
+                battery_set_s = observer.sim_time()
                 call_service(session, "battery/set_state", SET_BATTERY_STATE,
                              SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
                 log(f"battery set to {options.battery_start:.0%}; waiting for the low-battery trigger and CHARGING")
@@ -258,25 +259,31 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
     report.run_dir = str(run_dir)
     report.peak_rss_mb = dict(sampler.peak_mb)
     (run_dir / "report.json").write_text(strict_json.dumps(report.as_dict(), indent=2) + "\n")
-    _plot(world, record, run_dir / "trajectory.png", log, glass)
+    _plot(world, record, run_dir / "trajectory.png", log, glass, battery_set=(battery_set_s, options.battery_start))
     return report
 
 
-def _plot(world: World, record: RunRecord, path: Path, log: Any, glass: GlassMarks | None = None) -> None:
+def _plot(world: World, record: RunRecord, path: Path, log: Any, glass: GlassMarks | None = None,
+          battery_set: tuple[float, float] | None = None) -> None:
+    """The run's picture; ``battery_set`` ``(sim_s, percentage)``: when and to what the demo set the charge."""
     try:
         from deploy.plotting import plot_run  # noqa: PLC0415 - matplotlib is slow to import
     except ImportError:
         log("plotting is not available; no trajectory picture")
         return
+    track = record.timed_track_since_placed()
     plot_run(
         world,
         path,
-        driven=record.driven_since_placed(),
+        driven=[(x, y) for _, x, y in track],
+        driven_times_s=[t for t, _, _ in track],
         plans=record.plans,
-        sonar_hits=record.sonar_hits,
+        sonar_echoes=record.sonar_echoes,
         collisions=record.collision_points,
         recoveries=record.recovery_points,
         glass_marks=glass.true_xy if glass is not None else (),
         false_glass_marks=glass.false_xy if glass is not None else (),
         battery=record.battery,
+        battery_set=battery_set,
+        events=[(record.trigger_s, "docking triggered")] if record.trigger_s is not None else (),
     )

@@ -48,7 +48,9 @@ class RunRecord:
     collision_points: list[tuple[float, float]] = field(default_factory=list)
     driven: list[tuple[float, float, float, float]] = field(default_factory=list)  # (t, x, y, yaw)
     plans: list[list[tuple[float, float]]] = field(default_factory=list)
-    sonar_hits: list[tuple[float, float]] = field(default_factory=list)
+    #: Each sonar echo as the sensor heard it: (sensor_x, sensor_y, sensor_yaw, range_m, field_of_view_rad),
+    #: the sensor's ground-truth pose at the reading's stamp (the echo came from somewhere in the cone).
+    sonar_echoes: list[tuple[float, float, float, float, float]] = field(default_factory=list)
     battery: list[tuple[float, float]] = field(default_factory=list)  # (t, percentage)
     sim_time_s: float = 0.0
     #: Whether the latest battery message said CHARGING or FULL.
@@ -66,11 +68,15 @@ class RunRecord:
 
     def driven_since_placed(self) -> list[tuple[float, float]]:
         """The ground-truth track (x, y) since the robot was last put down (``--start``), for the picture."""
+        return [(x, y) for _, x, y in self.timed_track_since_placed()]
+
+    def timed_track_since_placed(self) -> list[tuple[float, float, float]]:
+        """:meth:`driven_since_placed` with each point's sim time: ``(t_s, x, y)``."""
         start = 0
         for i in range(1, len(self.driven)):
             if math.dist(self.driven[i - 1][1:3], self.driven[i][1:3]) > TELEPORT_JUMP_M:
                 start = i
-        return [(x, y) for _, x, y, _ in self.driven[start:]]
+        return [(t, x, y) for t, x, y, _ in self.driven[start:]]
 
     def pose_at(self, t_s: float) -> Pose2D | None:
         """The ground-truth pose at (or just before) ``t_s``."""
@@ -191,10 +197,11 @@ class RunObserver:
                 return
             # Where the robot was when the sonar listened, not where it is now the message has arrived.
             sensor = self._truth_at(msg.header.stamp.to_sec()).compose(ULTRASONIC_MOUNT)
-            hit = sensor.transform_point(msg.range, 0.0)
-            hits = self._record.sonar_hits
-            if not hits or math.dist(hits[-1], hit) > 0.02:
-                hits.append(hit)
+            echoes = self._record.sonar_echoes
+            last = echoes[-1] if echoes else None
+            if (last is None or math.dist(last[:2], (sensor.x, sensor.y)) > 0.02 or abs(last[3] - msg.range) > 0.02
+                    or abs(last[2] - sensor.yaw) > 0.02):
+                echoes.append((sensor.x, sensor.y, sensor.yaw, msg.range, msg.field_of_view))
 
     def _on_nav_feedback(self, msg: Any) -> None:
         count = msg.feedback.number_of_recoveries
@@ -229,7 +236,7 @@ class RunObserver:
             contact = self._contact_at(r.charging_s) if r.charging_s is not None else None
             return RunRecord(
                 r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds), list(r.collision_points),
-                list(r.driven), [list(p) for p in r.plans], list(r.sonar_hits), list(r.battery), r.sim_time_s,
+                list(r.driven), [list(p) for p in r.plans], list(r.sonar_echoes), list(r.battery), r.sim_time_s,
                 r.last_charging, list(r.recovery_points),
             )
 

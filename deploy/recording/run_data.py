@@ -2,9 +2,10 @@
 
 From one robot's keys (its namespace): ``ground_truth_pose`` for the driven trajectory (the localiser's
 ``map_to_base_link_pose2d`` when there is no ground truth), every distinct non-empty ``plan``, ``battery_status``,
-the last ``map`` (drawn when there is no world file), and sonar hits: each ``ultrasonic`` echo placed
-where it came from, using the robot's pose at the reading's stamp and the sensor's mount from
-``tf_static``. Times on the plot are seconds since the recording started.
+the last ``map`` (drawn when there is no world file), and sonar echoes: each ``ultrasonic`` reading with
+the sensor's pose when it listened (the robot's pose at the reading's stamp and the sensor's mount from
+``tf_static``), drawn as the arc at its range across the cone. Times on the plot are seconds since the
+recording started.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ class _Collected:
     believed: list[tuple[float, float, float, float]] = field(default_factory=list)  # t_log, x, y, yaw
     plans: list[np.ndarray] = field(default_factory=list)
     battery: list[tuple[float, float]] = field(default_factory=list)
-    ranges: list[tuple[float, float]] = field(default_factory=list)  # stamp, range (valid echoes only)
+    ranges: list[tuple[float, float, float]] = field(default_factory=list)  # stamp, range, field of view (echoes)
     mount: Pose2D | None = None
     last_map: OccupancyGrid | None = None
 
@@ -75,7 +76,7 @@ def _collect(messages: Iterable[RawMessage], keys: dict[str, str], start_ns: int
             elif topic == topics.ULTRASONIC:
                 sonar = Range.decode(raw.payload)
                 if _valid_echo(sonar):
-                    out.ranges.append((sonar.header.stamp.to_sec(), sonar.range))
+                    out.ranges.append((sonar.header.stamp.to_sec(), sonar.range, sonar.field_of_view))
             elif topic == topics.TF_STATIC and out.mount is None:
                 for t in TFMessage.decode(raw.payload).transforms:
                     if t.child_frame_id == topics.ULTRASONIC_FRAME:
@@ -87,22 +88,23 @@ def _collect(messages: Iterable[RawMessage], keys: dict[str, str], start_ns: int
     return out
 
 
-def sonar_hit_points(truth: np.ndarray, ranges: np.ndarray, mount: Pose2D) -> np.ndarray:
-    """Where each echo came from: the pose at the reading's stamp (interpolated), the mount, the range ahead.
+def sonar_echoes(truth: np.ndarray, ranges: np.ndarray, mount: Pose2D) -> np.ndarray:
+    """Each echo as the sensor heard it: rows ``(sensor_x, sensor_y, sensor_yaw, range_m, field_of_view_rad)``,
+    the sensor's pose from the robot's at the reading's stamp (interpolated) and the mount.
 
-    ``truth`` rows are ``(stamp, x, y, yaw)`` sorted by stamp; ``ranges`` rows ``(stamp, range_m)``. Readings
-    outside the poses' time span are left out.
+    ``truth`` rows are ``(stamp, x, y, yaw)`` sorted by stamp; ``ranges`` rows ``(stamp, range_m,
+    field_of_view_rad)``. Readings outside the poses' time span are left out.
     """
     if len(truth) < 2 or len(ranges) == 0:
-        return np.zeros((0, 2))
+        return np.zeros((0, 5))
     inside = (ranges[:, 0] >= truth[0, 0]) & (ranges[:, 0] <= truth[-1, 0])
     ranges = ranges[inside]
     x = np.interp(ranges[:, 0], truth[:, 0], truth[:, 1])
     y = np.interp(ranges[:, 0], truth[:, 0], truth[:, 2])
     yaw = np.interp(ranges[:, 0], truth[:, 0], np.unwrap(truth[:, 3]))
-    ahead = mount.x + ranges[:, 1] * np.cos(mount.yaw)
-    left = mount.y + ranges[:, 1] * np.sin(mount.yaw)
-    return np.column_stack([x + ahead * np.cos(yaw) - left * np.sin(yaw), y + ahead * np.sin(yaw) + left * np.cos(yaw)])
+    return np.column_stack([x + mount.x * np.cos(yaw) - mount.y * np.sin(yaw),
+                            y + mount.x * np.sin(yaw) + mount.y * np.cos(yaw),
+                            yaw + mount.yaw, ranges[:, 1], ranges[:, 2]])
 
 
 def _map_image(grid: OccupancyGrid) -> MapImage:
@@ -123,10 +125,10 @@ def run_picture(recording: Recording, namespace: str | None = None, world: World
         truth = np.array(data.truth)
         timed = truth[:, [0, 2, 3]]
         mount = data.mount or Pose2D(0.0, 0.0, 0.0)
-        hits = sonar_hit_points(truth[np.argsort(truth[:, 1])][:, 1:5], np.array(data.ranges).reshape(-1, 2), mount)
+        echoes = sonar_echoes(truth[np.argsort(truth[:, 1])][:, 1:5], np.array(data.ranges).reshape(-1, 3), mount)
     else:
         timed = np.array(data.believed)[:, :3] if data.believed else np.zeros((0, 3))
-        hits = np.zeros((0, 2))
+        echoes = np.zeros((0, 5))
     world = world if world is not None else recording.world()
     return RunPicture(
         world=world,
@@ -134,7 +136,8 @@ def run_picture(recording: Recording, namespace: str | None = None, world: World
         planned_paths=data.plans,
         trajectory=timed[:, 1:3],
         trajectory_times_s=timed[:, 0],
-        sonar_hits=hits,
+        sonar_echoes=echoes,
         battery=np.array(data.battery).reshape(-1, 2),
         title=f"{recording.path.name}" + (f" ({world.name})" if world is not None else ""),
+        time_label="time since the recording began [s]",
     )

@@ -15,11 +15,14 @@ from deploy.plotting import (
     RECOVERY_COLOR,
     STAGING_COLOR,
     RunPicture,
+    battery_from_set,
+    echo_arc,
+    last_full_plan,
     plot_picture,
     plot_run,
 )
 from deploy.recording.reading import Recording
-from deploy.recording.run_data import run_picture, sonar_hit_points
+from deploy.recording.run_data import run_picture, sonar_echoes
 from shared.geometry import Pose2D
 from shared.world import load_world
 from tests.support.processes import REPO_ROOT
@@ -40,10 +43,11 @@ def _pixels_near(image: np.ndarray, hex_color: str, tolerance: float = 0.08) -> 
 def test_the_picture_is_a_png_with_the_room_in_its_colours(tmp_path: Path) -> None:
     t = np.linspace(0.0, 20.0, 200)
     driven = np.column_stack([-1.0 + 0.5 * np.cos(t / 5.0), 4.0 - 0.15 * t])
-    hits = [(x, 2.6) for x in np.linspace(-1.5, 0.5, 30)]
+    echoes = [(x, 2.0, np.pi / 2, 0.6, 0.5) for x in np.linspace(-1.5, 0.5, 30)]
     plan = [(-1.0, 4.2), (-2.4, 3.0), (-2.4, 2.0), (-1.0, 1.53)]
     path = plot_run(load_world(GLASS_ROOM), tmp_path / "run.png", driven=driven, driven_times_s=t, plans=[plan],
-                    sonar_hits=hits, battery=[(ti, 1.0 - 0.01 * ti) for ti in t], title="test run", dpi=80)
+                    sonar_echoes=echoes, battery=[(ti, 1.0 - 0.01 * ti) for ti in t], battery_set=(0.0, 1.0),
+                    events=[(5.0, "docking triggered")], title="test run", dpi=80)
     image = mpimg.imread(path)
     height, width = image.shape[:2]
     assert width >= 800 and height >= 400
@@ -71,12 +75,47 @@ def test_an_empty_run_still_draws(tmp_path: Path) -> None:
     assert path.stat().st_size > 1000
 
 
-def test_sonar_hits_land_where_the_echo_came_from() -> None:
+def test_an_echo_is_heard_from_where_the_sensor_was_when_it_listened() -> None:
     truth = np.array([[0.0, 0.0, 3.0, -np.pi / 2], [1.0, 0.0, 2.0, -np.pi / 2]])
-    ranges = np.array([[0.5, 1.0], [2.0, 1.0]])  # the second is outside the poses' time span
-    hits = sonar_hit_points(truth, ranges, Pose2D(0.2, 0.0, 0.0))
-    assert hits.shape == (1, 2)
-    np.testing.assert_allclose(hits[0], [0.0, 2.5 - 0.2 - 1.0], atol=1e-9)
+    ranges = np.array([[0.5, 1.0, 0.5], [2.0, 1.0, 0.5]])  # the second is outside the poses' time span
+    echoes = sonar_echoes(truth, ranges, Pose2D(0.2, 0.0, 0.0))
+    assert echoes.shape == (1, 5)
+    np.testing.assert_allclose(echoes[0], [0.0, 2.5 - 0.2, -np.pi / 2, 1.0, 0.5], atol=1e-9)
+    picture = RunPicture(sonar_echoes=echoes)
+    np.testing.assert_allclose(picture.sonar_hits, [[0.0, 2.5 - 0.2 - 1.0]], atol=1e-9)  # its axis point
+
+
+def test_an_echo_is_drawn_as_the_arc_at_its_range_across_the_cone() -> None:
+    arc = echo_arc(1.0, 2.0, np.pi / 2, 0.8, 0.5, points=9)
+    assert arc.shape == (9, 2)
+    np.testing.assert_allclose(np.hypot(arc[:, 0] - 1.0, arc[:, 1] - 2.0), 0.8)  # all at the range
+    bearings = np.arctan2(arc[:, 1] - 2.0, arc[:, 0] - 1.0)
+    np.testing.assert_allclose([bearings[0], bearings[4], bearings[-1]], [np.pi / 2 - 0.25, np.pi / 2, np.pi / 2 + 0.25])
+    width_m = np.hypot(*(arc[-1] - arc[0]))
+    assert abs(width_m - 2 * 0.8 * np.sin(0.25)) < 1e-9  # the cone's width at that range, not a point
+
+
+def test_the_bold_plan_is_the_last_full_one_not_the_stub_at_the_goal() -> None:
+    goal = (-1.0, 1.55)
+    route = np.array([(1.8, 4.2), (0.0, 2.5), goal])
+    again = np.array([(1.78, 4.19), (0.0, 2.5), goal])  # replanned before it had moved: still the whole way
+    remainder = np.array([(0.5, 2.9), goal])
+    stub = np.array([(-1.0, 1.65), goal])  # 10 cm
+    assert last_full_plan([route, again, remainder, stub, stub]) == 1
+    detour = np.array([(0.9, 3.4), (1.5, 2.0), (0.0, 1.2), goal])  # replanned round something: longer
+    assert last_full_plan([route, remainder, detour, stub]) == 2
+    elsewhere = np.array([(3.0, 3.0), (4.0, 3.0)])  # an earlier goal: not a plan to this one
+    assert last_full_plan([elsewhere, remainder, stub]) == 1
+    assert last_full_plan([stub]) == 0
+    assert last_full_plan([]) is None
+    assert last_full_plan([np.zeros((1, 2))]) is None
+
+
+def test_the_battery_is_drawn_from_the_set_not_from_an_assumed_full_charge() -> None:
+    battery = np.array([(0.0, 1.0), (1.0, 1.0), (2.0, 1.0), (2.1, 0.26), (3.0, 0.259), (4.0, 0.25)])
+    np.testing.assert_allclose(battery_from_set(battery, 1.5, 0.26), battery[3:])  # the 100 % on its way dropped
+    np.testing.assert_allclose(battery_from_set(battery, 3.5, 0.5), battery[5:])  # no reading shows the set
+    assert len(battery_from_set(np.zeros((0, 2)), 1.0, 0.26)) == 0
 
 
 def test_zendock_plot_draws_a_recording(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
