@@ -51,3 +51,16 @@ test-containers: $(TEST_STAMP)
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache
+
+# `make pictures` regenerates the shipped pictures under docs/ from the current code: docs/demo_seed_room.png
+# is the picture of one demo run in seed_room (about 2 minutes). docs/fleet.png is left out on purpose: it is
+# the six-robot hour of the fleet measurements (`zendock fleet --world deploy/worlds/fleet/depot.yaml
+# --duration 3600 --rtf 3 --seed 1 --json`, about 45 minutes of wall time); to refresh it, run that and copy
+# the run's runs/<timestamp>/fleet.png to docs/fleet.png.
+.PHONY: pictures
+pictures: $(STAMP)
+	mkdir -p runs
+	$(BIN)/zendock demo --world deploy/worlds/seed_room.yaml --detector synthetic --rtf 8 --json > runs/pictures-demo.json
+	$(BIN)/python -c 'import json, shutil; r = json.load(open("runs/pictures-demo.json")); \
+		shutil.copyfile(r["run_dir"] + "/trajectory.png", "docs/demo_seed_room.png"); \
+		print("docs/demo_seed_room.png from", r["run_dir"])'
