@@ -10,9 +10,11 @@ them stay bus-free, as ``tests/unit/shared/test_kit_layers.py`` checks.
   the one place that runs callbacks one at a time, :mod:`shared.endpoints`, publishers, subscriptions,
   service servers and QoS, and :mod:`shared.encoding`, a sample's encoding and attachment),
   :mod:`shared.action` (actions), :mod:`shared.runtime` (a service's ``main``),
+  :mod:`shared.parameter_server` (a node's parameters on the bus, ``zendock param``),
   :mod:`shared.navigation` (the navigation client), :mod:`shared.names` (key expressions, tokens).
 - data: :mod:`shared.messages` and :mod:`shared.schema` (ROS-named message types), :mod:`shared.topics`,
   :mod:`shared.interfaces` (action and service types), :mod:`shared.world` (world files).
-- pure helpers: :mod:`shared.geometry` (SE(2)), :mod:`shared.frames` (frame names, sensor mounts, clock
+- pure helpers: :mod:`shared.parameters` (which parameters change at runtime, validated as at start-up),
+  :mod:`shared.geometry` (SE(2)), :mod:`shared.frames` (frame names, sensor mounts, clock
   resets), :mod:`shared.ratelimit`, :mod:`shared.config_errors`, :mod:`shared.files`.
 """

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from shared.node import Node
+from shared.parameter_server import attach_parameters
 from shared.runtime import SIGNAL_CHECK_S, ServiceOptions, ServiceParams, ServiceSpec
 from shared.session import open_session
 
@@ -69,6 +70,7 @@ def serve_group(members: list[Member], *, install_signal_handlers: bool = True) 
                 node = Node(member.options.node_name, session, member.options.namespace,
                             use_sim_time=member.params.use_sim_time, logger=logger)
                 service = member.spec.build(node, member.params)
+                attach_parameters(node, member.params, service)  # closed with the node
                 node.declare_ready()
                 thread = threading.Thread(target=node.spin, name=member.label, daemon=True)
                 thread.start()

@@ -9,6 +9,9 @@ so each token splits back unambiguously::
 
     @zendock/node/<ns>/<node>                                  the service is up and ready
     @zendock/<kind>/<ns>/<node>/<type>/<key...>                kind: pub | sub | srv | act
+
+A node's runtime parameters are three services under the node's own name, beside the ``_action`` parts of
+an action (:func:`parameter_service`): ``<ns>/<node>/_param/list``, ``.../get`` and ``.../set``.
 """
 
 from __future__ import annotations
@@ -55,6 +58,17 @@ def node_token_key(namespace: str, node_name: str) -> str:
 def stats_key(namespace: str, node_name: str) -> str:
     """Where a node answers with its message counters (``@zendock/stats/<ns>/<node>``; ``zendock bench messages``)."""
     return f"{GRAPH_PREFIX}/stats/{encode_chunk(normalise_namespace(namespace))}/{encode_chunk(node_name)}"
+
+
+#: The verbs of a node's parameter services (:mod:`shared.parameter_server`).
+PARAMETER_VERBS = ("list", "get", "set")
+
+
+def parameter_service(node_name: str, verb: str) -> str:
+    """The service name (relative to the namespace) of a node's parameter ``verb``: ``battery/_param/set``."""
+    if verb not in PARAMETER_VERBS:
+        raise ValueError(f"parameter verb must be one of {PARAMETER_VERBS}, got {verb!r}")
+    return f"{node_name.strip('/')}/_param/{verb}"
 
 
 def endpoint_token_key(kind: str, namespace: str, node_name: str, type_name: str, key: str) -> str:

@@ -22,6 +22,10 @@ Overrides apply after the file, field by field (``-p lidar.rate_hz=5`` keeps the
 A dotted name whose part is unknown, or is not a group of parameters, is an error naming the whole
 name, as a bad flat name or value is. A bad flag or parameter prints one clear message and exits with code 2. SIGINT and SIGTERM stop the node, close the
 session and exit 0. :func:`run_service` is the whole lifecycle; tests call :func:`serve` with options.
+
+While it runs, every service answers ``<ns>/<node>/_param/{list,get,set}`` (:mod:`shared.parameter_server`):
+the fields its model marks :func:`~shared.parameters.runtime_settable` change through ``zendock param set``,
+validated by the same model; the others are read at start-up only.
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from shared.config_errors import ConfigError, format_validation_error
 from shared.names import normalise_namespace
 from shared.node import Node
+from shared.parameter_server import attach_parameters
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
 P = TypeVar("P", bound="ServiceParams")
@@ -241,7 +246,8 @@ def serve(
     *,
     install_signal_handlers: bool = True,
 ) -> int:
-    """Open the session, build the service on a node, announce it, spin until stopped, close everything."""
+    """Open the session, build the service on a node, serve its parameters (:mod:`shared.parameter_server`),
+    announce it, spin until stopped, close everything."""
     log = configure_logging(options)
     log.info("connecting to %s", ",".join(options.connect))
     with open_session(options.session_spec()) as session:
@@ -250,11 +256,13 @@ def serve(
             for sig in (signal.SIGINT, signal.SIGTERM):
                 signal.signal(sig, lambda *_: node.shutdown())
         service = build(node, params)
+        parameters = attach_parameters(node, params, service)
         node.declare_ready()
         log.info("ready (namespace %r, connect %s)", options.namespace, ",".join(options.connect))
         try:
             node.spin()
         finally:
+            parameters.close()
             if service is not None:
                 service.close()
             node.close()

@@ -24,6 +24,7 @@ from shared import topics
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest, SetBatteryStateResponse
 from shared.messages import BatteryState, DockContact, Header, Odometry
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.parameters import runtime_settable
 from shared.runtime import ServiceParams, ServiceSpec
 
 #: How often the node says it is still waiting for the simulator's clock.
@@ -46,8 +47,10 @@ class Params(ServiceParams):
     nominal_voltage_v: float = Field(11.1, gt=0.0, description="open-circuit voltage at half charge")
     full_voltage_v: float = Field(12.6, gt=0.0, description="open-circuit voltage when full")
     internal_resistance_ohm: float = Field(0.05, ge=0.0, description="series resistance: voltage sag under load")
-    drain_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge drains this many times faster")
-    charge_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge fills this many times faster")
+    drain_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge drains this many times faster",
+                               json_schema_extra=runtime_settable())
+    charge_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge fills this many times faster",
+                                json_schema_extra=runtime_settable())
     state_file: str = Field("", description="keep the charge in this file across restarts (empty: start from the parameters)")
     publish_rate_hz: float = Field(10.0, ge=1.0, le=100.0, description="battery_status rate on the node's clock")
     dock_contact_timeout_s: float = Field(1.0, gt=0.0, description="older dock_contact counts as not mated")
@@ -123,6 +126,7 @@ class BatteryService:
             self._model.set_state(percentage=stored.percentage, drain_scale=stored.drain_scale,
                                   charge_scale=stored.charge_scale, frozen=stored.frozen)
             self._log.info("charge restored from %s: %.1f%%", params.state_file, 100.0 * stored.percentage)
+            params.drain_scale, params.charge_scale = stored.drain_scale, stored.charge_scale
         self._clock = StepClock(params.max_step_s)
         self._odom: FreshValue[tuple[float, float]] = FreshValue(params.odom_timeout_s)
         self._contact: FreshValue[bool] = FreshValue(params.dock_contact_timeout_s)
@@ -230,6 +234,8 @@ class BatteryService:
             self._model.percentage, self._model.drain_scale, self._model.charge_scale,
             ", frozen" if self._model.frozen else "",
         )
+        # The parameters say what is in force (``zendock param get battery drain_scale``).
+        self._params.drain_scale, self._params.charge_scale = self._model.drain_scale, self._model.charge_scale
         self._keep_charge(force=True)
         state = self._publish()
         return SetBatteryStateResponse(
@@ -238,6 +244,15 @@ class BatteryService:
             charge_scale=self._model.charge_scale,
             frozen=self._model.frozen,
         )
+
+    def on_parameter_set(self, name: str, value: float) -> None:
+        """A runtime change of ``drain_scale`` or ``charge_scale`` (``zendock param set``) applies at once."""
+        self._advance()  # the charge up to now moved at the old rate
+        if name == "drain_scale":
+            self._model.set_state(drain_scale=value)
+        elif name == "charge_scale":
+            self._model.set_state(charge_scale=value)
+        self._keep_charge(force=True)
 
     def close(self) -> None:
         self._timer.cancel()

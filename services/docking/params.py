@@ -23,7 +23,11 @@ from services.docking.approach_control import (
 from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockingConfig
 from services.docking.undocking_run import UndockConfig
+from shared.parameters import runtime_settable
 from shared.runtime import ServiceParams
+
+#: When a runtime change of a docking parameter takes effect: each run is built from the parameters.
+NEXT_RUN = "at the next docking or undocking run"
 
 
 class Params(ServiceParams):
@@ -40,7 +44,7 @@ class Params(ServiceParams):
     resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
     patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw] (empty: "
                                                          "those a fleet world in dock_database gives this robot)")
-    max_retries: int = Field(3, ge=0)
+    max_retries: int = Field(3, ge=0, json_schema_extra=runtime_settable(NEXT_RUN))
     use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
     allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")
     min_detections: int = Field(3, ge=1)
@@ -48,16 +52,19 @@ class Params(ServiceParams):
     detection_filter_coef: float = Field(0.1, gt=0.0, le=1.0)
     max_detection_offset_m: float = Field(0.5, gt=0.0, description="detections farther from the database pose are ignored")
     max_staging_time_s: float = Field(120.0, gt=0.0, description="staging time limit of battery-triggered runs")
-    approach_timeout_s: float = Field(120.0, gt=0.0)
+    approach_timeout_s: float = Field(120.0, gt=0.0, json_schema_extra=runtime_settable(NEXT_RUN))
     obstacle_timeout_s: float = Field(20.0, gt=0.0, description="held by an obstacle this long, the attempt fails")
     wait_charge_timeout_s: float = Field(5.0, gt=0.0)
     max_docking_time_s: float = Field(600.0, gt=0.0)
     staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
     handover_distance_m: float = Field(
         0.45, ge=0.0, description="graceful: the approach takes over from navigation this close to the staging "
-        "pose, with the dock in view (0: navigation always stops at the staging pose first)")
-    max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed")
-    undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5)
+        "pose, with the dock in view (0: navigation always stops at the staging pose first)",
+        json_schema_extra=runtime_settable(NEXT_RUN))
+    max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed",
+                                          json_schema_extra=runtime_settable(NEXT_RUN))
+    undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5, description="backing off the dock, m/s",
+                                    json_schema_extra=runtime_settable(NEXT_RUN))
     max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
     max_localisation_age_s: float = Field(
         2.0, gt=0.0, description="... unless odometry no older than max_pose_age_s carries a pose this old forward")
@@ -66,10 +73,10 @@ class Params(ServiceParams):
         0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)")
     command_delay_s: float = Field(
         0.15, ge=0.0, le=1.0, description="graceful: dead time from cmd_vel to the base's response, predicted "
-        "through with the commands still on their way")
+        "through with the commands still on their way", json_schema_extra=runtime_settable(NEXT_RUN))
     pose_correction_gain: float = Field(
         1.0, gt=0.0, le=1.0, description="graceful: how far each pose moves the approach's pose estimate "
-        "(1: the odometry-carried pose as it is, compensated for its age)")
+        "(1: the odometry-carried pose as it is, compensated for its age)", json_schema_extra=runtime_settable(NEXT_RUN))
     battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
     obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
     use_lidar: bool = True

@@ -242,6 +242,11 @@ class LayeredCostmap:
             self._obstacle = np.full(data.shape, NO_INFORMATION, dtype=np.uint8)
         self._cached = None
 
+    def set_params(self, params: CostmapParams) -> None:
+        """New settings (a runtime parameter change): the layers stay, the next :meth:`grid` inflates anew."""
+        self.params = params
+        self._cached = None
+
     def clear(self) -> None:
         """Forget everything the sensors said (nav2 ``clearEntirely`` of the dynamic layers)."""
         self._obstacle.fill(NO_INFORMATION)

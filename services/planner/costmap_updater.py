@@ -102,6 +102,11 @@ class CostmapUpdater:
             self.costmap = LayeredCostmap(occupancy, self._params.costmap_params())
         self.apply_glass()
 
+    def refresh_costmap_params(self) -> None:
+        """The parameters' costmap settings changed (``zendock param set``): inflate with them from now on."""
+        if self.costmap is not None:
+            self.costmap.set_params(self._params.costmap_params())
+
     def add_scan(self, msg: LaserScan) -> None:
         self._pending_scan = msg
 

@@ -165,6 +165,12 @@ class PlannerService:
             params.replan_period_s,
         )
 
+    def on_parameter_set(self, name: str, value: object) -> None:
+        """A runtime parameter change (:mod:`shared.parameter_server`): the costmap's inflation applies at
+        once; the follower's speeds are read when the next goal builds its run."""
+        if name == "inflation_radius_m":
+            self._layers.refresh_costmap_params()
+
     # --- map --------------------------------------------------------------------------------------
 
     def _on_map(self, occupancy: OccupancyMap) -> None:

@@ -20,8 +20,12 @@ from services.planner.pure_pursuit import PurePursuitParams
 from services.planner.rasterize import map_from_world
 from services.planner.recovery import BackUpParams
 from services.planner.smoothing import SmoothingParams
+from shared.parameters import runtime_settable
 from shared.runtime import ServiceParams
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, load_world
+
+#: When a runtime change of a follower setting takes effect: each goal builds its follower.
+NEXT_GOAL = "at the next navigation goal"
 
 
 class Params(ServiceParams):
@@ -36,8 +40,9 @@ class Params(ServiceParams):
     # robot and goal
     robot_length_m: float = Field(ROBOT_LENGTH_M, gt=0.0, description="footprint length along x")
     robot_width_m: float = Field(ROBOT_WIDTH_M, gt=0.0, description="footprint width along y")
-    max_linear_vel_mps: float = Field(0.5, gt=0.0)
-    max_angular_vel_radps: float = Field(1.5, gt=0.0)
+    max_linear_vel_mps: float = Field(0.5, gt=0.0, description="top speed", json_schema_extra=runtime_settable(NEXT_GOAL))
+    max_angular_vel_radps: float = Field(1.5, gt=0.0, description="top turn rate",
+                                         json_schema_extra=runtime_settable(NEXT_GOAL))
     max_linear_accel_mps2: float = Field(1.0, gt=0.0)
     max_linear_decel_mps2: float = Field(1.5, gt=0.0)
     max_angular_accel_radps2: float = Field(3.0, gt=0.0)
@@ -53,7 +58,9 @@ class Params(ServiceParams):
         0.05, gt=0.0, description="the goal counts as reached only when moving slower than this ...")
     rot_stopped_velocity_radps: float = Field(0.1, gt=0.0, description="... and turning slower than this")
     # costmap
-    inflation_radius_m: float = Field(0.55, ge=0.0)
+    inflation_radius_m: float = Field(
+        0.55, ge=0.0, description="obstacles cost this far out",
+        json_schema_extra=runtime_settable("at once: the costmap is inflated again and the next plan uses it"))
     cost_scaling_factor: float = Field(3.0, gt=0.0)
     obstacle_max_range_m: float = Field(2.5, ge=0.0, description="lidar hits further than this do not mark")
     raytrace_max_range_m: float = Field(3.0, ge=0.0, description="lidar beams clear up to this far")

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-PURE_MODULES = ["shared.geometry", "shared.frames", "shared.world", "shared.messages", "shared.topics",
+PURE_MODULES = ["shared.geometry", "shared.frames", "shared.world", "shared.messages", "shared.topics", "shared.parameters",
                 "shared.ros2.wire", "shared.ros2.types", "services.ros2_bridge.demand"]
 ALGORITHM_MODULES = [
     "services.docking.graceful",

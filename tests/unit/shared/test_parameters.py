@@ -1,0 +1,158 @@
+"""Runtime parameters without a bus: what may change, validation as at start-up, listeners, the server's answers."""
+
+from __future__ import annotations
+
+import json
+import logging
+from typing import Any
+
+import pytest
+from pydantic import BaseModel, Field, model_validator
+
+from shared.interfaces.parameters import GetParameterRequest, ListParametersRequest, SetParameterRequest
+from shared.parameter_server import ParameterServer, attach_parameters
+from shared.parameters import AT_ONCE, ParameterRefused, ParameterTable, runtime_settable
+from shared.runtime import ServiceParams
+
+
+class Lidar(BaseModel):
+    noise_m: float = Field(0.01, ge=0.0, json_schema_extra=runtime_settable())
+    rate_hz: float = Field(10.0, gt=0.0)
+
+
+class DemoParams(ServiceParams):
+    speed_mps: float = Field(0.5, gt=0.0, le=1.0, description="top speed",
+                             json_schema_extra=runtime_settable("next run"))
+    min_speed_mps: float = Field(0.1, gt=0.0, json_schema_extra=runtime_settable())
+    frame_id: str = Field("base_link", description="read at start")
+    mount: tuple[float, float, float] = (0.1, 0.0, 0.0)
+    lidar: Lidar = Field(default_factory=Lidar)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> DemoParams:
+        if self.min_speed_mps > self.speed_mps:
+            raise ValueError(f"min_speed_mps ({self.min_speed_mps}) must not exceed speed_mps ({self.speed_mps})")
+        return self
+
+
+def test_list_shows_every_parameter_flattened_with_value_and_settable() -> None:
+    table = ParameterTable(DemoParams())
+    rows = {info.name: info for info in table.describe()}
+    assert list(rows) == sorted(rows)
+    assert set(rows) == {"use_sim_time", "speed_mps", "min_speed_mps", "frame_id", "mount", "lidar.noise_m",
+                         "lidar.rate_hz"}
+    assert (rows["speed_mps"].value, rows["speed_mps"].settable, rows["speed_mps"].applies) == (0.5, True, "next run")
+    assert rows["speed_mps"].description == "top speed"
+    assert (rows["frame_id"].settable, rows["frame_id"].applies) == (False, "")
+    assert rows["mount"].value == [0.1, 0.0, 0.0] and rows["mount"].value_json == "[0.1, 0.0, 0.0]"
+    assert rows["lidar.noise_m"].settable and rows["lidar.noise_m"].applies == AT_ONCE
+    assert table.settable_names() == ["lidar.noise_m", "min_speed_mps", "speed_mps"]
+
+
+def test_a_good_value_is_written_into_the_live_model() -> None:
+    params = DemoParams()
+    table = ParameterTable(params)
+    info = table.set("speed_mps", "0.8")  # coerced as at start-up (-p speed_mps=0.8 would give a float)
+    assert info.value == 0.8 and params.speed_mps == 0.8 and table.get("speed_mps").value == 0.8
+    table.set("lidar.noise_m", 0.05)
+    assert params.lidar.noise_m == 0.05
+
+
+@pytest.mark.parametrize(("name", "value", "reason"), [
+    ("speed_mps", 2.0, "speed_mps: Input should be less than or equal to 1 (got 2.0)"),
+    ("speed_mps", "fast", "speed_mps: Input should be a valid number, unable to parse string as a number (got 'fast')"),
+    ("speed_mps", 0.05, "speed_mps: min_speed_mps (0.1) must not exceed speed_mps (0.05) (got 0.05)"),
+    ("lidar.noise_m", -1, "lidar.noise_m: Input should be greater than or equal to 0 (got -1)"),
+    ("frame_id", "odom", "frame_id: read at start-up only, cannot change while running (settable: lidar.noise_m, "
+                         "min_speed_mps, speed_mps)"),
+    ("lidar.rate_hz", 5.0, "lidar.rate_hz: read at start-up only"),
+    ("speed", 0.3, "speed: no such parameter (settable: lidar.noise_m, min_speed_mps, speed_mps)"),
+])
+def test_a_refused_change_names_the_reason_and_changes_nothing(name: str, value: Any, reason: str) -> None:
+    params = DemoParams()
+    before = params.model_dump()
+    with pytest.raises(ParameterRefused) as refused:
+        ParameterTable(params).set(name, value)
+    assert str(refused.value).startswith(reason)
+    assert params.model_dump() == before
+
+
+def test_get_of_an_unknown_name_is_refused() -> None:
+    with pytest.raises(ParameterRefused, match="nope: no such parameter"):
+        ParameterTable(DemoParams()).get("nope")
+
+
+def test_listeners_hear_accepted_changes_and_may_refuse_them() -> None:
+    params = DemoParams()
+    table = ParameterTable(params)
+    heard: list[tuple[str, Any]] = []
+    table.on_set(["speed_mps", "min_speed_mps"], lambda name, value: heard.append((name, value)))
+    table.set("speed_mps", 0.7)
+    table.set("lidar.noise_m", 0.02)  # not registered
+    assert heard == [("speed_mps", 0.7)]
+
+    def refuse(name: str, value: Any) -> None:
+        raise ValueError("the motors are hot")
+
+    table.on_set("min_speed_mps", refuse)
+    with pytest.raises(ParameterRefused, match="min_speed_mps: the motors are hot"):
+        table.set("min_speed_mps", 0.2)
+    assert params.min_speed_mps == 0.1  # undone
+
+
+def test_a_listener_only_for_settable_names() -> None:
+    with pytest.raises(ValueError, match="frame_id"):
+        ParameterTable(DemoParams()).on_set("frame_id", lambda *_: None)
+
+
+def test_services_mark_what_may_change_while_running() -> None:
+    from services.battery.node import Params as BatteryParams
+    from services.docking.params import Params as DockingParams
+    from services.planner.params import Params as PlannerParams
+
+    assert ParameterTable(BatteryParams()).settable_names() == ["charge_scale", "drain_scale"]
+    assert {"max_linear_vel_mps", "max_angular_vel_radps", "inflation_radius_m"} <= set(
+        ParameterTable(PlannerParams()).settable_names())
+    docking = set(ParameterTable(DockingParams.model_construct()).settable_names())
+    assert {"max_approach_speed_mps", "undock_speed_mps"} <= docking
+    assert "dock_database" not in docking and "controller" not in docking
+
+
+class _FakeNode:
+    """Just what ParameterServer needs of a node: a name, a log and create_service."""
+
+    name = "demo"
+    log = logging.getLogger("demo")
+
+    def __init__(self) -> None:
+        self.services: list[str] = []
+
+    def create_service(self, srv: Any, name: str, handler: Any) -> Any:
+        self.services.append(name)
+        return None
+
+
+class _Listening:
+    def __init__(self) -> None:
+        self.heard: list[tuple[str, Any]] = []
+
+    def on_parameter_set(self, name: str, value: Any) -> None:
+        self.heard.append((name, value))
+
+
+def test_the_server_answers_list_get_and_set() -> None:
+    node, service = _FakeNode(), _Listening()
+    server: ParameterServer = attach_parameters(node, DemoParams(), service)  # type: ignore[arg-type]
+    assert node.services == ["demo/_param/list", "demo/_param/get", "demo/_param/set"]
+    listed = server._on_list(ListParametersRequest()).parameters
+    assert [p.name for p in listed][:2] == ["frame_id", "lidar.noise_m"]
+    assert server._on_get(GetParameterRequest(name="speed_mps")).parameter.value_json == "0.5"
+    ok = server._on_set(SetParameterRequest(name="speed_mps", value_json=json.dumps(0.9)))
+    assert ok.successful and ok.parameter.value_json == "0.9" and ok.parameter.applies == "next run"
+    assert service.heard == [("speed_mps", 0.9)]
+    bad = server._on_set(SetParameterRequest(name="speed_mps", value_json="-1"))
+    assert not bad.successful and bad.reason == "speed_mps: Input should be greater than 0 (got -1)"
+    not_json = server._on_set(SetParameterRequest(name="speed_mps", value_json="{"))
+    assert not not_json.successful and "not JSON" in not_json.reason
+    with pytest.raises(ParameterRefused):
+        server._on_get(GetParameterRequest(name="nope"))
