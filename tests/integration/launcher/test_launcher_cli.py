@@ -163,6 +163,7 @@ def test_up_wait_names_a_configuration_error_and_does_not_restart_it(write_stack
             command: [zendock, map, save, --world, nope.yaml, -o, maps]
             restart: on-failure
             depends_on: {{router: {{condition: service_started}}}}
+            healthcheck: {{liveliness: true, timeout: 20s}}
         """).parent
     try:
         up = zendock(project, mark, "up", "-d", "--wait", "--wait-timeout", "30")
