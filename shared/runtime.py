@@ -45,7 +45,7 @@ from typing import Any, Protocol, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from shared.config_errors import ConfigError, format_validation_error
+from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
 from shared.names import normalise_namespace
 from shared.node import Node
 from shared.parameter_server import attach_parameters
@@ -302,14 +302,14 @@ class ServiceSpec:
             options, params = self.parse(argv)
         except ConfigError as exc:
             print(f"{prog}: error: {exc}", file=sys.stderr)
-            return 2
+            return CONFIG_ERROR_EXIT
         if self.prepare is not None:
             self.prepare()
         try:
             return serve(options, params, self.build)
         except ConfigError as exc:  # raised while building (a bad world file, a bad map)
             print(f"{prog}: error: {exc}", file=sys.stderr)
-            return 2
+            return CONFIG_ERROR_EXIT
 
 
 def run_service(
