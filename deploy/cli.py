@@ -27,6 +27,31 @@ def installed_version() -> str:
         return "unknown (not installed)"
 
 
+class _ShowsDefaults(argparse.HelpFormatter):
+    """Adds ``(default: X)`` to an option's help, unless the help already speaks of its default or there is
+    nothing worth saying (no default, a flag that is off, an empty list)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (not action.option_strings or "default" in text.lower() or default is None or default is False
+                or default == argparse.SUPPRESS
+                or (isinstance(default, list | tuple) and not default) or text == argparse.SUPPRESS):
+            return action.help
+        return f"{text} (default: %(default)s)"
+
+
+def _show_defaults(parser: argparse.ArgumentParser) -> None:
+    """Every parser, subcommands' too, shows its options' defaults, keeping its own formatter otherwise."""
+    if not issubclass(parser.formatter_class, _ShowsDefaults):
+        parser.formatter_class = type(  # type: ignore[assignment]
+            "ShowsDefaults", (_ShowsDefaults, parser.formatter_class), {})
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                _show_defaults(sub)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="zendock",
@@ -40,6 +65,7 @@ def build_parser() -> argparse.ArgumentParser:
         register = getattr(module, "register", None)
         if callable(register):
             register(subparsers)
+    _show_defaults(parser)
     return parser
 
 
@@ -58,7 +84,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except ConfigError as exc:
-        print(f"zendock {args.command}: {exc}", file=sys.stderr)
+        print(f"zendock {getattr(args, 'command_path', args.command)}: {exc}", file=sys.stderr)
         return CONFIG_ERROR_EXIT
     except KeyboardInterrupt:
         return 130

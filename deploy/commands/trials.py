@@ -115,7 +115,7 @@ def _merge(args: argparse.Namespace) -> int:
         reports = [read_shard(path) for path in find_reports(args.paths)]
         merged = merge_reports(reports)
     except MergeError as exc:
-        raise ConfigError(f"trials merge: {exc}") from None
+        raise ConfigError(str(exc)) from None
     out = write_merged(merged, args.runs_dir or REPO_ROOT / "runs")
     per_world = []
     for result in merged.values():
@@ -222,4 +222,4 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     merge.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
                        help="where the merged run directory goes (default: runs/ in the repository)")
     merge.add_argument("--json", action="store_true", help="print the merged summary as JSON on the last line")
-    merge.set_defaults(func=_merge)
+    merge.set_defaults(func=_merge, command_path="trials merge")

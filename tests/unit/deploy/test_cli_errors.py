@@ -118,3 +118,17 @@ def test_kill_says_what_it_did() -> None:
     assert _kill_line("battery", running, True, signal.SIGINT) == "battery: sent SIGINT to pid 4242"
     exited = ServiceStatus("map", "exited", None, 0, "none")
     assert _kill_line("map", exited, False, signal.SIGKILL) == "map: not running (exited), no signal sent"
+
+
+def test_trials_merge_names_itself_once(capsys: pytest.CaptureFixture[str]) -> None:
+    assert _exit_code(["trials", "merge", "no/such/shard"]) == 2
+    line = _one_error_line(capsys)
+    assert line == "zendock trials merge: no/such/shard: no such file or directory", line
+
+
+def test_help_shows_the_defaults_an_option_has(capsys: pytest.CaptureFixture[str]) -> None:
+    assert _exit_code(["trials", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "number of dockings (per world) (default: 10)" in text
+    assert "(default: 0)" in text, "a zero default is a default worth showing"
+    assert "(default: None)" not in text and "(default: False)" not in text
