@@ -52,15 +52,22 @@ test-containers: $(TEST_STAMP)
 clean:
 	rm -rf $(VENV) runs .pytest_cache
 
-# `make pictures` regenerates the shipped pictures under docs/ from the current code: docs/demo_seed_room.png
-# is the picture of one demo run in seed_room (about 2 minutes). docs/fleet.png is left out on purpose: it is
-# the six-robot hour of the fleet measurements (`zendock fleet --world deploy/worlds/fleet/depot.yaml
-# --duration 3600 --rtf 3 --seed 1 --json`, about 45 minutes of wall time); to refresh it, run that and copy
-# the run's runs/<timestamp>/fleet.png to docs/fleet.png.
-.PHONY: pictures
-pictures: $(STAMP)
+# `make pictures` regenerates every shipped picture under docs/ from the current code:
+# - `make picture-demo`: docs/demo_seed_room.png, one demo run in seed_room (about 2 minutes);
+# - `make picture-fleet`: docs/fleet.png, the six-robot hour of the fleet measurements (about 45 minutes).
+.PHONY: pictures picture-demo picture-fleet
+pictures: picture-demo picture-fleet
+
+picture-demo: $(STAMP)
 	mkdir -p runs
 	$(BIN)/zendock demo --world deploy/worlds/seed_room.yaml --detector synthetic --rtf 8 --json > runs/pictures-demo.json
 	$(BIN)/python -c 'import json, shutil; r = json.load(open("runs/pictures-demo.json")); \
 		shutil.copyfile(r["run_dir"] + "/trajectory.png", "docs/demo_seed_room.png"); \
 		print("docs/demo_seed_room.png from", r["run_dir"])'
+
+picture-fleet: $(STAMP)
+	rm -rf runs/pictures-fleet && mkdir -p runs/pictures-fleet
+	$(BIN)/zendock fleet --world deploy/worlds/fleet/depot.yaml --duration 3600 --rtf 3 --seed 1 \
+		--runs-dir runs/pictures-fleet --json > runs/pictures-fleet.json
+	cp runs/pictures-fleet/fleet-*/fleet.png docs/fleet.png
+	@echo "docs/fleet.png from" runs/pictures-fleet/fleet-*
