@@ -37,23 +37,33 @@ class Ros2TypeError(ValueError):
     """A type zendock cannot put on ROS 2's wire, or bytes that are not the type they claim."""
 
 
-#: rosbags keeps ``char`` where rosidl's type description has ``uint8`` (``char`` is uint8 in ROS 2's IDL);
-#: the CDR is the same, the type hash of every service (whose event carries this message) is not.
-_SERVICE_EVENT_INFO = "service_msgs/msg/ServiceEventInfo"
-
-
 @cache
 def typestore() -> Typestore:
     """Jazzy's message definitions and the Nav2 actions zendock serves (:mod:`shared.ros2.interfaces`), one store
-    per process."""
+    per process, with every ``char`` a ``uint8`` (:func:`_char_as_uint8`)."""
     defs: dict[str, Any] = dict(get_typestore(Stores.ROS2_JAZZY).fielddefs)
-    consts, fields = defs[_SERVICE_EVENT_INFO]
-    defs[_SERVICE_EVENT_INFO] = (consts, [(name, (3, ((1, ("uint8", 0)), 16)) if name == "client_gid" else desc)
-                                          for name, desc in fields])
     defs.update(interfaces.definitions())
+    defs = {name: (consts, [(field, _char_as_uint8(desc)) for field, desc in fields])
+            for name, (consts, fields) in defs.items()}
     store = get_typestore(Stores.EMPTY)
     store.register(defs)
     return store
+
+
+def _char_as_uint8(desc: Any) -> Any:
+    """A field description with ``char`` read as ``uint8``, in any array or sequence.
+
+    ROS 2's IDL maps a .msg ``char`` to ``uint8``, so rosidl's type description (and so the RIHS01 hash) of
+    ``std_msgs/msg/Char``, of ``service_msgs/msg/ServiceEventInfo`` (``char[16] client_gid``) and of every
+    service, whose event carries it, says ``uint8``; rosbags keeps ``char`` (its own type id). Both are one
+    byte in CDR, so only the hashes change. Constants keep their type: the hash does not cover them."""
+    kind, detail = desc
+    if kind == _BASE and detail[0] == "char":
+        return (_BASE, ("uint8", detail[1]))
+    if kind in (_ARRAY, _SEQUENCE):
+        sub, length = detail
+        return (kind, (_char_as_uint8(sub), length))
+    return desc
 
 
 #: zendock names its docking actions' types after opennav_docking_msgs, where they began; Jazzy ships them

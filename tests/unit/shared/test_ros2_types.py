@@ -182,6 +182,20 @@ def test_type_hashes_are_jazzys_published_values() -> None:
         assert types.type_hash(route.ros_type).startswith("RIHS01_") and len(types.type_hash(route.ros_type)) == 71
 
 
+def test_char_is_uint8_in_every_types_hash() -> None:
+    """ROS 2's IDL maps ``char`` to ``uint8``, so rosidl describes (and hashes) it as one; rosbags keeps
+    ``char``. The expected value is ``type_hashes`` in ``share/std_msgs/msg/Char.json`` of Jazzy's std_msgs 5.3.6
+    as packaged on PyPI (``ros-jazzy-std-msgs`` 5.3.6 requires ``ros-std-msgs==5.3.6``, built from the ROS
+    sources by ros-python-wheels); its ``char__description.c`` has the same bytes. rmw_zenoh puts this hash
+    in every key and token (rmw_publisher_data.cpp, ``rosidl_stringify_type_hash``), so a wrong one means no
+    match with a ROS 2 peer."""
+    assert types.type_hash("std_msgs/msg/Char") == (
+        "RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9")
+    assert types.typestore().fielddefs["std_msgs/msg/Char"][1] == [("data", (1, ("uint8", 0)))]
+    for name, (_consts, fields) in types.typestore().fielddefs.items():
+        assert "'char'" not in repr(fields), name
+
+
 def test_service_hashes_describe_request_response_and_event() -> None:
     """A service's hash is its description type's (request, response, event), not its request's: checked
     against the published hash of example_interfaces/srv/AddTwoInts, built by the same rule."""
