@@ -7,9 +7,13 @@ subscriptions and action services, announced by liveliness tokens in rmw_zenoh's
 them on rmw_zenoh's data keys:
 
 * zendock -> ROS 2 (:data:`~services.ros2_bridge.routes.OUTBOUND`): a key is read and forwarded only
-  while a ROS 2 subscription for its topic exists (the peer's token says so); transient-local topics
-  (``/map``, ``/tf_static``) are always read, and their last message goes out again whenever a ROS 2
-  subscription appears, as a late joiner expects.
+  while a ROS 2 subscription for its topic exists (the peer's token says so). Transient-local topics
+  (``/map``, ``/tf_static``, actions' status) are always read and always published, through zenoh-ext's
+  AdvancedPublisher configured as rmw_zenoh configures a TRANSIENT_LOCAL publisher (a cache as deep as
+  the history, publisher detection, sporadic heartbeats when reliable): a late rmw_zenoh subscriber (an
+  AdvancedSubscriber with history and late-publisher detection) takes the cached samples itself.
+* Every sample's attachment carries what rmw_zenoh's does: a sequence number starting at 1 and the
+  publisher's gid, the hash of its liveliness token key (:func:`shared.ros2.wire.entity_gid`).
 * ROS 2 -> zendock: ``/cmd_vel`` (Twist or TwistStamped) drives the robot; ``/goal_pose`` (what RViz's
   goal tool sends) becomes a ``navigate_to_pose`` goal; ``/initialpose`` (RViz's pose estimate) sets what
   the simulated localiser believes (``simulator/set_localisation``).
@@ -23,13 +27,13 @@ from __future__ import annotations
 
 import os
 import time
-import uuid
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
 
 import zenoh
-from pydantic import Field
+import zenoh.ext
+from pydantic import Field, field_validator
 
 from services.ros2_bridge.actions import ACTIONS, ActionRelay
 from services.ros2_bridge.demand import PeerSubscriptions
@@ -61,6 +65,8 @@ from shared.ros2.wire import (
     Reliability,
     data_key,
     dds_type_name,
+    entity_gid,
+    namespace_error,
     qualified_name,
 )
 from shared.ros2.wire import RELIABLE as ROS_RELIABLE
@@ -69,6 +75,11 @@ from shared.schema import MessageError
 
 STATS_PERIOD_S = 30.0
 BRIDGE_NODE = "ros2_bridge"
+#: rmw_zenoh's SAMPLE_MISS_DETECTION_HEARTBEAT_PERIOD (rmw_publisher_data.cpp): a reliable transient-local
+#: publisher sends its last sequence number this often, when it changed, so subscribers recover a lost sample.
+HEARTBEAT_PERIOD_S = 0.5
+#: rmw_zenoh's publishers number their samples from 1 (PublisherData's sequence_number_).
+FIRST_SEQUENCE_NUMBER = 1
 
 
 def _default_domain() -> int:
@@ -81,22 +92,29 @@ class Params(ServiceParams):
 
     domain_id: int = Field(default_factory=_default_domain, ge=0, le=232,
                            description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
-    ros_namespace: str = Field("/", pattern=r"^/?([A-Za-z_][A-Za-z0-9_]*/?)*$",
-                               description="ROS 2 namespace the zendock robot's topics and nodes appear in")
+    ros_namespace: str = Field("/", description="ROS 2 namespace the zendock robot's topics and nodes appear "
+                                                "in, in rcl's canonical form (/ or /robot)")
+
+    @field_validator("ros_namespace")
+    @classmethod
+    def _canonical(cls, namespace: str) -> str:
+        error = namespace_error(namespace)
+        if error is not None:
+            raise ValueError(f"not a canonical ROS namespace: {error}")
+        return namespace
 
 
 @dataclass
 class _Outlet:
-    """One outbound route's ROS 2 side: its publisher, gid and sequence, and what feeds it."""
+    """One outbound route's ROS 2 side: its publisher, gid and next sequence number, and what feeds it."""
 
     route: Route
     topic: str
     type_hash: str
     publisher: Any
     gid: bytes
-    sequence: int = 0
+    sequence: int = FIRST_SEQUENCE_NUMBER
     feed: Subscription[Any] | None = None
-    last: Any = None
 
 
 class Ros2Bridge:
@@ -162,23 +180,23 @@ class Ros2Bridge:
     def _open_outlet(self, route: Route) -> None:
         topic = self.ros_topic(route.ros_topic)
         type_hash = ros_types.type_hash(route.ros_type)
-        best_effort = route.qos.reliability is Reliability.BEST_EFFORT
-        key = data_key(self.params.domain_id, topic, route.ros_type, type_hash)
-        publisher = self.session.declare_publisher(
-            key,
-            reliability=zenoh.Reliability.BEST_EFFORT if best_effort else zenoh.Reliability.RELIABLE,
-            congestion_control=zenoh.CongestionControl.DROP if best_effort else zenoh.CongestionControl.BLOCK,
-        )
-        outlet = _Outlet(route, topic, type_hash, publisher, uuid.uuid4().bytes)
-        self.outlets[topic] = outlet
         endpoint = self._declare_endpoint(route.owner, EntityKind.PUBLISHER, topic, route.ros_type, type_hash,
                                           route.qos)
+        best_effort = route.qos.reliability is Reliability.BEST_EFFORT
+        key = data_key(self.params.domain_id, topic, route.ros_type, type_hash)
+        options: dict[str, Any] = {
+            "reliability": zenoh.Reliability.BEST_EFFORT if best_effort else zenoh.Reliability.RELIABLE,
+            "congestion_control": zenoh.CongestionControl.DROP if best_effort else zenoh.CongestionControl.BLOCK,
+        }
+        publisher: zenoh.Publisher | zenoh.ext.AdvancedPublisher
+        if route.latched:
+            publisher = zenoh.ext.declare_advanced_publisher(self.session, key, **options, **_transient_local(route.qos))
+        else:
+            publisher = self.session.declare_publisher(key, **options)
+        outlet = _Outlet(route, topic, type_hash, publisher, entity_gid(endpoint.token_key()))
+        self.outlets[topic] = outlet
         if route.latched:
             self._feed(outlet)
-            # A transient-local subscriber asks publishers' caches for history where rmw_zenoh keeps them.
-            cache_key = f"{key}/@adv/pub/{self.session_id}/{endpoint.entity_id}/_"
-            self._subscribers.append(self.session.declare_queryable(
-                cache_key, lambda query: self._answer_history(outlet, cache_key, query)))
 
     def _feed(self, outlet: _Outlet) -> None:
         qos = SENSOR_DATA if outlet.route.qos.reliability is Reliability.BEST_EFFORT else QoS(depth=10)
@@ -186,9 +204,8 @@ class Ros2Bridge:
             outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos)
 
     def _forward(self, outlet: _Outlet, msg: Any) -> None:
-        if outlet.route.latched:
-            outlet.last = msg
-        if not self.peers.wanted(outlet.topic):
+        # A transient-local publisher's cache must hold the last messages before anyone asks for them.
+        if not outlet.route.latched and not self.peers.wanted(outlet.topic):
             return
         try:
             payload = ros_types.to_cdr(msg, outlet.route.ros_type)
@@ -199,19 +216,6 @@ class Ros2Bridge:
         outlet.sequence += 1
         outlet.publisher.put(payload, attachment=attachment)
         self.counts[f"out {outlet.topic}"] += 1
-
-    def _answer_history(self, outlet: _Outlet, cache_key: str, query: zenoh.Query) -> None:
-        # Zenoh's thread; reads one reference, and a map asked for by a late joiner is rare.
-        last = outlet.last
-        if last is None:
-            return
-        try:
-            payload = ros_types.to_cdr(last, outlet.route.ros_type)
-        except ros_types.Ros2TypeError:
-            return  # counted when forwarding
-        attachment = Attachment(max(0, outlet.sequence - 1), time.time_ns(), outlet.gid).encode()
-        query.reply(cache_key, payload, attachment=attachment)
-        self.counts[f"history {outlet.topic}"] += 1
 
     def _on_graph_token(self, sample: zenoh.Sample) -> None:
         # Zenoh's thread: hand the token to the executor, where the subscriptions it changes live.
@@ -239,8 +243,6 @@ class Ros2Bridge:
             outlet.feed.undeclare()
             outlet.feed = None
             self.node.log.info("no ROS 2 subscription to %s left: no longer forwarding it", outlet.topic)
-        if alive and outlet.last is not None:
-            self._forward(outlet, outlet.last)  # transient local: the late joiner gets the last message
 
     def _check_type(self, outlet: _Outlet, endpoint: Endpoint) -> None:
         if endpoint.ros_type != outlet.route.ros_type or endpoint.type_hash != outlet.type_hash:
@@ -354,6 +356,17 @@ class Ros2Bridge:
         for outlet in self.outlets.values():
             outlet.publisher.undeclare()
         self.graph.close()
+
+
+def _transient_local(qos: QosProfile) -> dict[str, Any]:
+    """AdvancedPublisher options for a TRANSIENT_LOCAL publisher, as rmw_zenoh sets them
+    (``rmw_publisher_data.cpp``, ``PublisherData::make``): a cache of ``depth`` samples, a liveliness token
+    under ``@adv/pub`` so late subscribers detect the publisher, and, when reliable, sporadic heartbeats."""
+    options: dict[str, Any] = {"cache": zenoh.ext.CacheConfig(qos.depth), "publisher_detection": True}
+    if qos.reliability is Reliability.RELIABLE:
+        options["sample_miss_detection"] = zenoh.ext.MissDetectionConfig(heartbeat=None,
+                                                                          sporadic_heartbeat=HEARTBEAT_PERIOD_S)
+    return options
 
 
 SERVICE = ServiceSpec("ros2_bridge", Params, Ros2Bridge,

@@ -7,16 +7,21 @@ and announces every node, publisher, subscription, service and client with a liv
         [/<topic or service>/<dds type>/<type hash>/<qos>]        (endpoints only)
 
 where names have their slashes turned into ``%`` (the empty namespace and enclave are a lone ``%``).
-Each sample carries an attachment: the publisher's sequence number and source timestamp (int64, little
-endian) and its 16-byte gid after a one-byte length. This module writes and reads those forms and
-nothing else: no Zenoh, no message types.
+Each sample carries an attachment: the publisher's sequence number (the first is 1) and source timestamp
+(int64, little endian) and its 16-byte gid after a one-byte length; the gid is the XXH3-128 hash of the
+entity's liveliness token key (:func:`entity_gid`). Namespaces are rcl's canonical form only
+(:func:`namespace_error`). This module writes and reads those forms and nothing else: no Zenoh, no
+message types.
 """
 
 from __future__ import annotations
 
 import enum
+import re
 import struct
 from dataclasses import dataclass
+
+import xxhash
 
 ADMIN_SPACE = "@ros2_lv"
 GID_SIZE = 16
@@ -66,12 +71,35 @@ def _split_type(ros_type: str) -> tuple[str, str, str]:
     return parts[0], parts[1], parts[2]
 
 
+#: One token of a ROS name (rmw's validation rules): a letter or underscore, then letters, digits, underscores.
+_TOKEN = r"[A-Za-z_][A-Za-z0-9_]*"
+_CANONICAL_NAMESPACE = re.compile(rf"/|(/{_TOKEN})+")
+
+
+def namespace_error(namespace: str) -> str | None:
+    """Why ``namespace`` is not in rcl's canonical form (``/`` or ``/a/b``: a leading slash, no trailing or
+    doubled slash, tokens of letters, digits and underscores not starting with a digit); ``None`` if it is.
+
+    rmw_zenoh receives namespaces from rcl, which has already validated and expanded them, and mangles them
+    as they are; a name in any other form would give keys no ROS 2 node makes."""
+    if _CANONICAL_NAMESPACE.fullmatch(namespace):
+        return None
+    if not namespace.startswith("/"):
+        return f"{namespace!r} must start with '/' (e.g. '/{namespace.strip('/')}')"
+    if namespace.endswith("/"):
+        return f"{namespace!r} must not end with '/' (e.g. '/{namespace.strip('/')}')"
+    if "//" in namespace:
+        return f"{namespace!r} must not contain '//'"
+    bad = next(t for t in namespace[1:].split("/") if not re.fullmatch(_TOKEN, t))
+    return (f"{namespace!r}: {bad!r} is not a ROS name token (letters, digits and '_', not starting with a "
+            f"digit)")
+
+
 def qualified_name(namespace: str, name: str) -> str:
-    """A relative topic name resolved in a ROS namespace: (``/robot``, ``scan``) -> ``/robot/scan``."""
+    """A relative topic name resolved in a canonical ROS namespace: (``/robot``, ``scan``) -> ``/robot/scan``."""
     if name.startswith("/"):
         return name
-    namespace = "/" + namespace.strip("/") if namespace.strip("/") else ""
-    return f"{namespace}/{name}"
+    return f"{'' if namespace == '/' else namespace}/{name}"
 
 
 def data_key(domain_id: int, topic: str, ros_type: str, type_hash: str) -> str:
@@ -183,11 +211,22 @@ def parse_endpoint_token(key: str) -> Endpoint:
 
 # --- attachments ---------------------------------------------------------------------------------
 
+
+def entity_gid(token_key: str) -> bytes:
+    """An entity's 16-byte gid, as rmw_zenoh makes it (``liveliness_utils.cpp``, ``Entity::Entity``): the
+    XXH3-128 hash (seed 0) of its liveliness token key, the low 64 bits then the high 64 bits, each in the
+    host's byte order (little endian on every platform ROS 2 Jazzy ships for)."""
+    digest = xxhash.xxh3_128_intdigest(token_key.encode())
+    return digest.to_bytes(GID_SIZE, "little")
+
+
 _HEAD = struct.Struct("<qqB")
 
 
 @dataclass(frozen=True)
 class Attachment:
+    """What rides with each sample (``attachment_helpers.cpp``): sequence number, source time, publisher gid."""
+
     sequence_number: int
     source_timestamp_ns: int
     gid: bytes

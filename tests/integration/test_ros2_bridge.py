@@ -6,16 +6,18 @@ import json
 import math
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
 import zenoh
+import zenoh.ext
 
 from shared.geometry import Pose2D
 from shared.messages import BatteryState, Float64MultiArray, PoseStamped, TFMessage
 from shared.ros2 import types as ros_types
-from shared.ros2.wire import data_key
+from shared.ros2.wire import ADMIN_SPACE, Attachment, data_key, entity_gid
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, wait_until
 
@@ -28,6 +30,15 @@ def _peer(router: str, *args: str, timeout_s: float = 60.0) -> list[Any]:
                           capture_output=True, text=True, timeout=timeout_s, cwd=REPO_ROOT, check=False)
     assert done.returncode == 0, f"ros2_peer {' '.join(args)} failed:\n{done.stdout}\n{done.stderr[-3000:]}"
     return [json.loads(line) for line in done.stdout.splitlines() if line.strip()]
+
+
+def _publisher_token(bus: zenoh.Session, topic: str) -> str:
+    """The liveliness key of the (one) ROS 2 publisher of ``topic`` in domain 0."""
+    mangled = topic.replace("/", "%")
+    keys = [str(r.ok.key_expr) for r in bus.liveliness().get(f"{ADMIN_SPACE}/0/**", timeout=5.0) if r.ok]
+    found = [k for k in keys if k.split("/")[5] == "MP" and k.split("/")[9] == mangled]
+    assert len(found) == 1, keys
+    return found[0]
 
 
 @contextmanager
@@ -55,8 +66,19 @@ def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zen
     info = _peer(router_endpoint, "info", "/battery_status")[0]
     assert info["publishers"] == [{"node": "battery", "namespace": "/", "qos": "::,10:,:,:,,"}]
 
+    # What rides with each sample, seen by a plain Zenoh subscriber on the data key while the peer echoes.
+    attachments: list[Attachment] = []
+    key = data_key(0, "/battery_status", "sensor_msgs/msg/BatteryState",
+                   ros_types.type_hash("sensor_msgs/msg/BatteryState"))
+    raw = bus.declare_subscriber(key, lambda s: attachments.append(Attachment.decode(s.attachment.to_bytes())))
     echoed = _peer(router_endpoint, "echo", "/battery_status", "sensor_msgs/msg/BatteryState", "--count", "3")
     assert len(echoed) == 3
+    raw.undeclare()
+    # rmw_zenoh numbers a publisher's samples from 1 (rmw_publisher_data.cpp: PublisherData's
+    # sequence_number_(1), sequence_number_++ per put), and its gid is the XXH3-128 hash of its liveliness
+    # key (liveliness_utils.cpp, Entity::Entity: simplified_XXH3_128bits), the gid rmw_zenoh's graph has.
+    assert [a.sequence_number for a in attachments] == list(range(1, len(attachments) + 1)), attachments
+    assert {a.gid for a in attachments} == {entity_gid(_publisher_token(bus, "/battery_status"))}
     for msg in echoed:
         stamp = (msg["header"]["stamp"]["sec"], msg["header"]["stamp"]["nanosec"])
         same = [m for m in ours.messages if (m.header.stamp.sec, m.header.stamp.nanosec) == stamp]
@@ -74,8 +96,13 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
                                                                 router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
     truth = KeyRecorder(bus, f"{namespace}/ground_truth_pose", PoseStamped)
     tf_static = KeyRecorder(bus, f"{namespace}/tf_static", TFMessage)
-    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1")
+    # tf_static every 10 s: a late subscriber's first one comes from the bridge's cache, not a fresh one.
+    spawn("simulator", "--world", SEED_ROOM, "-p", "rtf=1", "-p", "tf.static_rate_hz=0.1")
     bridge = spawn("ros2_bridge")
+    key = data_key(0, "/tf_static", "tf2_msgs/msg/TFMessage", ros_types.type_hash("tf2_msgs/msg/TFMessage"))
+    put_at: dict[int, float] = {}  # sequence number -> when the bridge's put reached the bus
+    raw = bus.declare_subscriber(
+        key, lambda s: put_at.setdefault(Attachment.decode(s.attachment.to_bytes()).sequence_number, time.monotonic()))
     start = truth.wait_for(timeout_s=30.0).pose.to_pose2d()
     wait_until(lambda: "zendock's simulator is up" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
     listed = _peer(router_endpoint, "topics", "--wait-for", "/scan")[0]
@@ -126,15 +153,31 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
                lambda: bridge.output()[-2000:])
     assert bridge.alive(), "the bridge died on bad input"
 
-    # /tf_static is transient local: a late joiner's history query gets the last one.
-    tf_static.wait_for(timeout_s=10.0)
-    key = data_key(0, "/tf_static", "tf2_msgs/msg/TFMessage", ros_types.type_hash("tf2_msgs/msg/TFMessage"))
-
-    def history() -> list[Any]:
-        replies = bus.get(f"{key}/@adv/pub/**", timeout=5.0)
-        return [ros_types.from_cdr(r.ok.payload.to_bytes(), "tf2_msgs/msg/TFMessage") for r in replies if r.ok]
-
-    wait_until(lambda: bool(history()), 10.0, "no history reply for /tf_static")
-    frames = {t.child_frame_id for t in history()[0].transforms}
+    # /tf_static is transient local: a subscriber joining late gets the cached message from the bridge's
+    # AdvancedPublisher, under the topic's own key, with no ROS 2 subscription token to prompt a re-send.
+    wait_until(lambda: bool(put_at), 10.0, "the bridge never published /tf_static")
+    raw.undeclare()
+    # The publisher announces itself where late-publisher detection looks (zenoh-ext's @adv/pub token).
+    assert [r for r in bus.liveliness().get(f"{key}/@adv/pub/**", timeout=5.0) if r.ok]
+    late: list[zenoh.Sample] = []
+    # Configured as rmw_zenoh configures a TRANSIENT_LOCAL + RELIABLE subscription (rmw_subscription_data.cpp,
+    # SubscriptionData::init): history of `depth` samples with detect_late_publishers, subscriber detection,
+    # recovery on the publisher's heartbeats.
+    subscriber = zenoh.ext.declare_advanced_subscriber(
+        bus, key, late.append,
+        history=zenoh.ext.HistoryConfig(detect_late_publishers=True, max_samples=1),
+        recovery=zenoh.ext.RecoveryConfig(periodic_queries=None, heartbeat=True),
+        subscriber_detection=True)
+    joined_at = time.monotonic()
+    try:
+        wait_until(lambda: bool(late), 5.0, "no cached /tf_static for a late subscriber")
+    finally:
+        subscriber.undeclare()
+    cached = Attachment.decode(late[0].attachment.to_bytes())
+    assert put_at.get(cached.sequence_number, math.inf) < joined_at, "a fresh sample came first, not the cached one"
+    assert str(late[0].key_expr) == key
+    assert cached.gid == entity_gid(_publisher_token(bus, "/tf_static"))
+    frames = {t.child_frame_id for t in ros_types.from_cdr(late[0].payload.to_bytes(),
+                                                           "tf2_msgs/msg/TFMessage").transforms}
     assert {t.child_frame_id for t in tf_static.messages[-1].transforms} == frames
     assert "camera_optical_frame" in frames

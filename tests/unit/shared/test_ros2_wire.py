@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import struct
+
 import pytest
+import xxhash
 
 from shared.ros2.wire import (
     LATCHED,
@@ -18,7 +21,9 @@ from shared.ros2.wire import (
     data_key,
     dds_type_name,
     demangle,
+    entity_gid,
     mangle,
+    namespace_error,
     parse_endpoint_token,
     qualified_name,
     ros_type_name,
@@ -42,7 +47,28 @@ def test_names_mangle_into_one_key_chunk() -> None:
     assert demangle("%robot%scan") == "/robot/scan" and demangle("%") == "/"
     assert qualified_name("/", "scan") == "/scan"
     assert qualified_name("/robot", "camera/image_raw") == "/robot/camera/image_raw"
-    assert qualified_name("robot/", "/clock") == "/clock"
+    assert qualified_name("/robot", "/clock") == "/clock"
+
+
+@pytest.mark.parametrize("namespace", ["/", "/robot", "/fleet/robot_1", "/_r"])
+def test_canonical_namespaces_are_taken(namespace: str) -> None:
+    """rcl hands rmw_zenoh namespaces already validated and expanded (``/``, ``/a/b``), and rmw_zenoh mangles
+    them as they are (liveliness_utils.cpp, ``mangle_name``: every ``/`` becomes ``%``)."""
+    assert namespace_error(namespace) is None
+    assert GraphNode(0, "s", 1, "n", namespace).token_key().split("/")[7] == namespace.replace("/", "%")
+
+
+@pytest.mark.parametrize(("namespace", "why"), [
+    ("robot", "must start with '/'"),
+    ("/robot/", "must not end with '/'"),
+    ("//r", "must not contain '//'"),
+    ("/r-1", "'r-1' is not a ROS name token"),
+    ("/1robot", "'1robot' is not a ROS name token"),
+    ("", "must start with '/'"),
+])
+def test_other_namespaces_are_refused_with_the_reason(namespace: str, why: str) -> None:
+    error = namespace_error(namespace)
+    assert error is not None and why in error and "\n" not in error
 
 
 def test_data_key_is_domain_topic_type_hash() -> None:
@@ -82,6 +108,20 @@ def test_tokens_carry_the_whole_endpoint_and_parse_back() -> None:
 def test_malformed_tokens_are_named(key: str) -> None:
     with pytest.raises(ValueError, match="token"):
         parse_endpoint_token(key)
+
+
+def test_a_gid_is_the_xxh3_128_hash_of_the_token_key() -> None:
+    """rmw_zenoh (liveliness_utils.cpp, ``Entity::Entity``) hashes the entity's liveliness key with
+    ``simplified_XXH3_128bits`` and memcpys ``low64`` then ``high64`` (host order, little endian) into the
+    16-byte gid it sends in every attachment (rmw_publisher_data.cpp, ``entity_->copy_gid()``)."""
+    assert xxhash.xxh3_128_intdigest(b"") == 0x99AA06D3014798D86001C324468D497F  # XXH3-128 seed 0: the standard
+    endpoint = Endpoint(GraphNode(0, "aa11", 2, "battery"), 9, EntityKind.PUBLISHER, "/battery_status",
+                        "sensor_msgs/msg/BatteryState", HASH)
+    key = endpoint.token_key()
+    value = xxhash.xxh3_128_intdigest(key.encode())
+    low64, high64 = value & (2**64 - 1), value >> 64
+    assert entity_gid(key) == struct.pack("<QQ", low64, high64)
+    assert entity_gid(key) != entity_gid(key.replace("/9/", "/10/"))
 
 
 def test_attachment_is_sequence_stamp_and_gid() -> None:
