@@ -64,7 +64,7 @@ class ParameterServer:
     def _on_set(self, request: SetParameterRequest) -> SetParameterResponse:
         try:
             value = json.loads(request.value_json)
-        except ValueError:
+        except (ValueError, RecursionError):
             return SetParameterResponse(successful=False, reason=f"{request.name}: value is not JSON: {request.value_json!r}")
         try:
             info = self.table.set(request.name, value)

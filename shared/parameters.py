@@ -20,6 +20,7 @@ start-up. A field marked with :func:`runtime_settable` may also change while the
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -141,6 +142,8 @@ class ParameterTable:
         except ValidationError as exc:
             raise ParameterRefused(_reason(name, value, exc)) from None
         new_value, old_value = getattr(candidate, leaf), getattr(live_parent, leaf)
+        if isinstance(new_value, float) and not math.isfinite(new_value):
+            raise ParameterRefused(f"{name}: must be a finite number (got {value!r})")
         setattr(live_parent, leaf, new_value)
         try:
             for names, listener in self._listeners:
@@ -149,6 +152,9 @@ class ParameterTable:
         except ValueError as exc:
             setattr(live_parent, leaf, old_value)
             raise ParameterRefused(f"{name}: {exc}") from None
+        except BaseException:
+            setattr(live_parent, leaf, old_value)  # a listener's own fault: the old value stays in force
+            raise
         return self._info(name)
 
     # --- helpers ---------------------------------------------------------------------------------

@@ -428,8 +428,7 @@ class Executive:
         now = heard.now_s
         if self._giving_way is not None:
             other = next((p for p in heard.peers if p.name == self._giving_way.peer), None)
-            self._giving_way.peer_seen(other.pose if other else None,
-                                       other is not None and (other.under_way or other.giving_way))
+            self._giving_way.peer_seen(other.pose if other else None, other is not None and other.active)
             return
         task = self.task
         if task is None or not task.under_way or heard.battery is None or heard.latest_pose is None:
@@ -509,11 +508,13 @@ class Executive:
         out.append(Drive(self.arbiter.release()))
         if task.waypoint_index is not None:
             self.mission.next_waypoint = task.waypoint_index
-        if giving_way is not None:
+        if giving_way is not None and result.success:
             self._log.info("gave way: %s", giving_way.message or "done")
             if isinstance(giving_way.resume, DockRequest):
                 self._begin_docking(giving_way.resume, goal, heard, out)  # carry on docking (a patrol: the mission)
             return
+        # A give-way cancelled (its dock_robot goal, or a clock reset) ends what it interrupted: the goal is
+        # answered as cancelled below, not resumed.
         self.mission.finished(kind, result.success, goal is not None, heard.now_s)
         if self.claim is not None and ((kind is TaskKind.DOCK and not result.success)
                                        or (kind is TaskKind.UNDOCK and result.success)):

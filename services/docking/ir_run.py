@@ -71,6 +71,10 @@ class IrDockingRun(Task[IrPhase]):
     def docking_time_s(self, now_s: float) -> float:
         return 0.0 if self.started_s is None else now_s - self.started_s
 
+    @property
+    def retries(self) -> int:
+        return self.num_retries
+
     #: The obstacle checks guard the approach, but excuse no dock: without a map pose nothing is the dock.
     watches_obstacles = True
     obstacles_need_map_pose = False

@@ -126,7 +126,8 @@ class DockingService:
         self.sightings = DockSightings(node, cache.track, self._say, self._event)
         self.dock_server = ActionServer(
             node, DOCK_ROBOT, topics.DOCK_ROBOT, on_goal=_check_dock_goal, on_accepted=self._on_dock_goal,
-            on_cancel=lambda handle: self._event(CancelGoal(Goal(handle, TaskKind.DOCK))), preempt_result=lambda: DockRobotResult(success=False),
+            on_cancel=lambda handle: self._event(CancelGoal(Goal(handle, TaskKind.DOCK))),
+            preempt_result=lambda: DockRobotResult(success=False),
         )
         self.undock_server = ActionServer(
             node, UNDOCK_ROBOT, topics.UNDOCK_ROBOT, on_goal=_check_undock_goal,

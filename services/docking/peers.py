@@ -36,11 +36,6 @@ class _PeerState:
         self.plan: np.ndarray | None = None
         self.plan_s = -math.inf
 
-    @property
-    def active(self) -> bool:
-        """Driving, or giving way itself."""
-        return self.state in UNDER_WAY_STATES or self.state == GIVING_WAY_STATE
-
 
 class PeerWatch:
     """Every other robot in the namespace above ``node``'s; ``state_topic``: their docking state's topic."""
@@ -92,10 +87,3 @@ class PeerWatch:
             peers.append(Peer(name, p.pose, p.battery, p.state in UNDER_WAY_STATES, plan,
                               p.state == GIVING_WAY_STATE))
         return peers
-
-    def seen(self, name: str, now: float) -> tuple[Pose2D | None, bool]:
-        """Where ``name`` is now (None: not heard from lately), and whether it is active."""
-        peer = self._peers.get(name)
-        if peer is None or now - peer.pose_s > MAX_AGE_S:
-            return None, False
-        return peer.pose, peer.active

@@ -92,6 +92,11 @@ class Peer:
     #: It is giving way (or waiting for its way to clear) itself.
     giving_way: bool = False
 
+    @property
+    def active(self) -> bool:
+        """Driving, or giving way itself: a robot worth waiting for (one parked or docked is not)."""
+        return self.under_way or self.giving_way
+
 
 def has_priority(name: str, battery: float, other_name: str, other_battery: float) -> bool:
     """Less charge first, then the name that sorts first."""

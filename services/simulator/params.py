@@ -65,6 +65,8 @@ class DetectionParams(FiducialCameraParams):
     #: ``aruco`` leaves it to the perception service (which reads camera/image_raw); ``synthetic`` publishes
     #: detected_dock_pose from the true pose plus noise.
     source: Literal["aruco", "synthetic"] = "synthetic"
+    #: The synthetic detector sees the marker down to 2 cm (the camera is 5 cm from it when docked).
+    range_min_m: float = Field(0.02, ge=0)
     rate_hz: float = Field(15.0, gt=0, description="synthetic detections per second (sim time)")
     latency_s: float = Field(0.05, ge=0, description="a synthetic detection is published this long after capture")
 

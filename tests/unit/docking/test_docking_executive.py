@@ -207,3 +207,19 @@ def test_the_robot_with_priority_waits_for_the_other_to_back_out_and_then_drives
     ex.step(_heard(2.0, me, battery=0.3, peers=(backed_out,)))
     ex.step(_heard(2.05, me, battery=0.3, peers=(backed_out,)))
     assert ex.task is not None and ex.task.state_name() == "PATROLLING"
+
+
+def test_a_dock_goal_cancelled_while_giving_way_ends_cancelled_and_is_not_resumed() -> None:
+    ex = _executive(CORRIDOR, "r1", fleet=True)
+    me = Pose2D(3.5, 3.0, 0.0)
+    goal = Goal(object(), TaskKind.DOCK)
+    ex.handle(DockGoal(goal, DockRequest(dock_pose=Pose2D(9.0, 3.0, 0.0))), _heard(0.0, me))
+    ex.step(_heard(0.0, me, battery=0.8))
+    ex.task.enter(ex.task.phase.__class__.NAV_TO_STAGING, 0.0)  # on its way to the staging pose
+    other = Peer("r2", Pose2D(6.0, 3.0, math.pi), 0.4, True)
+    ex.step(_heard(0.05, me, battery=0.8, peers=(other,)))
+    assert ex.task is not None and ex.task.state_name() == "GIVING_WAY" and ex.goal is goal
+    ex.handle(CancelGoal(goal), _heard(0.1, me))
+    effects = ex.step(_heard(0.15, me, battery=0.8, peers=(other,)))
+    assert _of(effects, GoalEnded) == [GoalEnded(goal, Outcome.CANCELED, DockRobotResult(success=False))]
+    assert ex.task is None, "the docking it interrupted is not started again"

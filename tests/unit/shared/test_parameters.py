@@ -156,3 +156,24 @@ def test_the_server_answers_list_get_and_set() -> None:
     assert not not_json.successful and "not JSON" in not_json.reason
     with pytest.raises(ParameterRefused):
         server._on_get(GetParameterRequest(name="nope"))
+
+
+@pytest.mark.parametrize("value", [float("inf"), "Infinity", 1e999])
+def test_an_infinite_value_is_refused(value: Any) -> None:
+    params = DemoParams()
+    with pytest.raises(ParameterRefused, match="lidar.noise_m: must be a finite number"):
+        ParameterTable(params).set("lidar.noise_m", value)
+    assert params.lidar.noise_m == 0.01
+
+
+def test_a_listener_that_fails_leaves_the_old_value_in_force() -> None:
+    params = DemoParams()
+    table = ParameterTable(params)
+
+    def broken(name: str, value: Any) -> None:
+        raise RuntimeError("a bug in the service")
+
+    table.on_set("speed_mps", broken)
+    with pytest.raises(RuntimeError):
+        table.set("speed_mps", 0.7)
+    assert params.speed_mps == 0.5
