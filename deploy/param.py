@@ -12,8 +12,6 @@ import json
 from collections.abc import Sequence
 from typing import Any, TextIO
 
-import yaml
-
 from deploy.keys.connection import BusOptions, open_bus
 from deploy.keys.errors import EXIT_NOT_FOUND, EXIT_USAGE, KeysError
 from deploy.nodes import resolve_node
@@ -28,16 +26,13 @@ from shared.interfaces.parameters import (
 )
 from shared.names import parameter_service, topic_key
 from shared.node import ServiceError, ServiceType, ServiceUnavailable, call_service
+from shared.runtime import parse_parameter_value
 
 REQUEST_TIMEOUT_S = 3.0
 
 
-def parse_value(text: str) -> Any:
-    """VALUE as YAML (``0.5``, ``true``, ``[0.1, 0, 0]``); text that is not YAML stays text."""
-    try:
-        return yaml.safe_load(text) if text.strip() else ""
-    except yaml.YAMLError:
-        return text
+#: VALUE read as ``-p`` reads it.
+parse_value = parse_parameter_value
 
 
 def service_key(node_display: str, verb: str) -> str:

@@ -101,16 +101,21 @@ class ServiceOptions:
         return SessionSpec(mode="client", connect=self.connect, listen=self.listen, config_file=self.zenoh_config)
 
 
+def parse_parameter_value(text: str) -> Any:
+    """A parameter's VALUE as YAML (``0.5``, ``true``, ``[0.1, 0, 0]``), the one reading of ``-p`` and
+    ``zendock param set``; text that is not YAML stays text."""
+    try:
+        return yaml.safe_load(text) if text.strip() else ""
+    except yaml.YAMLError:
+        return text
+
+
 def _parse_override(text: str) -> tuple[str, Any]:
     name, sep, raw = text.partition("=")
     name = name.strip()
     if not sep or not name:
         raise ConfigError(f"-p {text!r}: expected NAME=VALUE")
-    try:
-        value = yaml.safe_load(raw) if raw.strip() else ""
-    except yaml.YAMLError:
-        value = raw
-    return name, value
+    return name, parse_parameter_value(raw)
 
 
 def _group_model(model: type[BaseModel], name: str) -> type[BaseModel] | None:

@@ -50,7 +50,6 @@ def _bash_complete(script: str, *words: str) -> list[str]:
     return result.stdout.split()
 
 
-@pytest.mark.skipif(shutil.which("bash") is None, reason="bash is not installed")
 def test_bash_completes_subcommands_options_and_choices() -> None:
     script = bash_script(command_tree(_demo_parser()), "demo")
     assert "complete -o bashdefault -o default -F _demo demo" in script
