@@ -10,6 +10,9 @@ from __future__ import annotations
 import argparse
 import math
 
+from deploy.replacements import Replacement, check_unique, parse_replacement
+from shared.config_errors import ConfigError
+
 
 def positive_number(text: str) -> float:
     """A finite number above zero (a duration, a scale)."""
@@ -42,3 +45,28 @@ def real_time_factor(text: str) -> str:
     except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(f"must be a positive number or max, got {text!r}") from None
     return text
+
+
+def service_replacement(text: str) -> Replacement:
+    """``NAME=COMMAND`` of ``--service``: zendock's service NAME replaced by COMMAND (:mod:`deploy.replacements`)."""
+    try:
+        return parse_replacement(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_service_option(parser: argparse.ArgumentParser) -> None:
+    """``--service NAME=COMMAND`` (repeatable), as ``up``, ``demo``, ``trials``, ``fleet`` and ``conform`` take it."""
+    parser.add_argument(
+        "--service", action="append", default=[], type=service_replacement, metavar="NAME=COMMAND", dest="replacements",
+        help="run COMMAND in place of zendock's service NAME, with the flags and environment zendock's own gets "
+        "(repeatable; {robot} in COMMAND becomes the robot's namespace)",
+    )
+
+
+def check_replacements(replacements: list[Replacement]) -> tuple[Replacement, ...]:
+    """``--service`` options as given, refusing two for one service (a :class:`ConfigError`, one line)."""
+    try:
+        return tuple(check_unique(replacements))
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None

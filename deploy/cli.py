@@ -16,6 +16,7 @@ import sys
 from collections.abc import Sequence
 
 from deploy import commands
+from deploy.launcher.api import StackNotReady
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
 
 
@@ -86,6 +87,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"zendock {getattr(args, 'command_path', args.command)}: {exc}", file=sys.stderr)
         return CONFIG_ERROR_EXIT
+    except StackNotReady as exc:  # one line: which service was not ready and the last line it printed
+        print(f"zendock {getattr(args, 'command_path', args.command)}: {exc.summary}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
 

@@ -14,7 +14,7 @@ import json
 import math
 import subprocess
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,6 +26,7 @@ from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, demo_line
+from deploy.replacements import Replacement, apply_replacements, replacements_report
 from deploy.service_tools import run_tool
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
@@ -63,6 +64,8 @@ class DemoOptions:
     localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
     #: The robot's services in one process (``zendock container``) instead of one process each.
     compose: bool = False
+    #: ``--service NAME=COMMAND``: a user's program in place of zendock's service (:mod:`deploy.replacements`).
+    replacements: tuple[Replacement, ...] = ()
 
 
 @dataclass
@@ -88,6 +91,8 @@ class DemoReport:
     sim_s: float = 0.0
     trigger_s: float = 0.0
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
+    #: Each replaced service and the command that ran in its place (``--service``).
+    replaced_services: dict[str, str] = field(default_factory=dict)
     run_dir: str = ""
 
     def as_dict(self) -> dict[str, Any]:
@@ -154,9 +159,14 @@ def build_report(record: RunRecord, options: DemoOptions, world: World, wall_s: 
     )
 
 
-def _composed(names: tuple[str, ...]) -> tuple[str, ...]:
-    grouped = {m for members in ROBOT_GROUP.values() for m in members}
-    return (*(n for n in names if n not in grouped), *ROBOT_GROUP)
+def robot_group(replaced: Iterable[str] = ()) -> dict[str, list[str]]:
+    """The ``--compose`` group without the services a user replaced: those run as their own processes."""
+    return {group: [m for m in members if m not in set(replaced)] for group, members in ROBOT_GROUP.items()}
+
+
+def _composed(names: tuple[str, ...], group: dict[str, list[str]]) -> tuple[str, ...]:
+    grouped = {m for members in group.values() for m in members}
+    return (*(n for n in names if n not in grouped), *group)
 
 
 def _status_line(record: RunRecord, world: World, docking_state: str, trigger_below: float) -> str:
@@ -182,11 +192,14 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
     run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)
     endpoint = free_endpoint()
+    group = robot_group(r.name for r in options.replacements)
     stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint, run_dir), project_dir=REPO_ROOT,
-                       compose=ROBOT_GROUP if options.compose else None)
-    services = _composed(DOCK_SERVICES) if options.compose else DOCK_SERVICES
+                       compose=group if options.compose else None)
+    stack = apply_replacements(stack, options.replacements)
+    services = _composed(DOCK_SERVICES, group) if options.compose else DOCK_SERVICES
     wall_start = time.monotonic()
-    log(f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}")
+    log(f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}"
+        + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements))
     with Launcher(stack, services=services, project_dir=run_dir / "stack", working_dir=REPO_ROOT,
                   project_name="demo") as launcher:
         launcher.wait_healthy(timeout_s=90.0)
@@ -258,6 +271,7 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
         report.false_glass_cells, report.glass_coverage = float(counted.false_glass_cells), counted.glass_coverage
     report.run_dir = str(run_dir)
     report.peak_rss_mb = dict(sampler.peak_mb)
+    report.replaced_services = replacements_report(options.replacements)
     (run_dir / "report.json").write_text(strict_json.dumps(report.as_dict(), indent=2) + "\n")
     _plot(world, record, run_dir / "trajectory.png", log, glass, battery_set=(battery_set_s, options.battery_start))
     return report

@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.table import Table
 
 from deploy import strict_json
-from deploy.arg_types import positive_number, real_time_factor
+from deploy.arg_types import add_service_option, check_replacements, positive_number, real_time_factor
 from deploy.progress import is_terminal, progress_period_s
 from shared.config_errors import ConfigError
 from shared.world import load_world
@@ -43,6 +43,7 @@ def _print_report(report: dict, console: Console) -> None:
     if report.get("lower_bound_s_reason"):
         rows.insert(3, ("why no lower bound", report["lower_bound_s_reason"]))
     rows += [(f"peak RSS {name}", f"{mb:.0f} MB") for name, mb in sorted(report.get("peak_rss_mb", {}).items())]
+    rows += [(f"{name} replaced by", command) for name, command in sorted(report.get("replaced_services", {}).items())]
     for name, value in rows:
         table.add_row(name, value)
     console.print(table)
@@ -69,6 +70,7 @@ def _run(args: argparse.Namespace) -> int:
         start=tuple(args.start) if args.start else None,
         timeout_sim_s=args.timeout,
         compose=args.compose,
+        replacements=check_replacements(args.replacements),
     )
     # progress every 2 s on a terminal; with --json or into a pipe, a line every 10 s on stderr only
     interactive = not args.json and is_terminal(sys.stdout)
@@ -96,5 +98,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"), help="start pose (map frame)")
     parser.add_argument("--timeout", type=positive_number, default=300.0, metavar="SIM_SECONDS",
                         help="give up this many sim seconds after the trigger")
+    add_service_option(parser)
     parser.add_argument("--json", action="store_true", help="print the JSON report as the last line")
     parser.set_defaults(func=_run)

@@ -13,7 +13,7 @@ from rich.table import Table
 from rich.text import Text
 
 from deploy import strict_json
-from deploy.arg_types import count, positive_number, real_time_factor
+from deploy.arg_types import add_service_option, check_replacements, count, positive_number, real_time_factor
 from deploy.progress import is_terminal
 from shared.config_errors import ConfigError
 
@@ -67,6 +67,7 @@ def _run(args: argparse.Namespace) -> int:
     options = FleetOptions(world=world.resolve(), robots=args.robots, duration_s=args.duration, rtf=args.rtf,
                            seed=args.seed, detector=args.detector, drain_scale=args.drain_scale,
                            charge_scale=args.charge_scale, resume_at=args.resume_at,
+                           replacements=check_replacements(args.replacements),
                            **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
     console = Console(stderr=args.json)
     live_wanted = not args.json and is_terminal(sys.stdout)
@@ -134,5 +135,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="charge at which a docked robot undocks and patrols again (default 0.8)")
     parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
                         help="where the run directory goes (default: runs/ in the repository)")
+    add_service_option(parser)
     parser.add_argument("--json", action="store_true", help="print the report as JSON on the last line")
     parser.set_defaults(func=_run)

@@ -21,7 +21,7 @@ from rich.progress import (
 from rich.table import Table
 
 from deploy import strict_json
-from deploy.arg_types import count, real_time_factor
+from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
 from shared.config_errors import ConfigError
 
@@ -79,6 +79,7 @@ def _run(args: argparse.Namespace) -> int:
                                seed=args.seed + 1000 * number,
                                rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
                                chaos_period_s=args.chaos, compose=args.compose, shard=args.shard,
+                               replacements=check_replacements(args.replacements),
                                **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
         try:
             summary, results, run_dir = _run_world(console, options, run_trials)
@@ -211,6 +212,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "whole run; combine them with `zendock trials merge`)")
     parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
                         help="where run directories go (default: runs/ in the repository)")
+    add_service_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)
     verbs = parser.add_subparsers(dest="trials_verb", metavar="merge")

@@ -104,6 +104,14 @@ def failure_reason(paths: RuntimePaths, status: ServiceStatus) -> str:
     return f"{status.name} failed: {cause or status.detail}"
 
 
+def not_ready_reason(paths: RuntimePaths, status: ServiceStatus, timeout_s: float) -> str:
+    """``docking not healthy after 120s (its last line: ...)``: a service, often a replacement, that runs but
+    never declared its node token."""
+    lines = [line.text for line in tail(paths.logs_dir, status.name, FAILURE_LOG_LINES)]
+    last = failure_line(lines)
+    return f"{status.name} not healthy after {timeout_s:g}s ({f'its last line: {last}' if last else 'it printed nothing'})"
+
+
 def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePaths) -> int:
     """Spawn the supervisor in its own session and wait until it answers; 0, or 1 with its log shown."""
     paths.state_dir.mkdir(parents=True, exist_ok=True)
@@ -153,7 +161,9 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
             print(status_line(status, wait=args.wait), flush=True)
     if not ok:
         failed = [s for s in statuses if _failed(s)]
-        reason = "; ".join(failure_reason(paths, s) for s in failed) or f"timed out after {args.wait_timeout:g}s"
+        reason = "; ".join(failure_reason(paths, s) for s in failed) or "; ".join(
+            not_ready_reason(paths, s, args.wait_timeout) for s in statuses if not is_ready(s)
+        ) or f"timed out after {args.wait_timeout:g}s"
         print(f"zendock up: {reason}; see `zendock ps` and `zendock logs` (the stack stays up: `zendock down`)", file=sys.stderr)
         return 1
     return 0

@@ -27,6 +27,7 @@ from deploy.fleet.world_setup import fleet_world
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.paths import REPO_ROOT
+from deploy.replacements import apply_replacements, replacements_report
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.names import topic_key
 from shared.node import ServiceError, call_service
@@ -68,6 +69,8 @@ class FleetReport:
     achieved_rtf: float
     peak_rss_mb: dict[str, float]
     errors: list[str]
+    #: Each replaced service and the command that ran in its place (``--service``): whose figures these are.
+    replaced_services: dict[str, str] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
@@ -96,9 +99,10 @@ def run_fleet(
     stack_path = run_dir / "stack.yaml"
     stack_path.write_text(yaml.safe_dump(fleet_stack(options, endpoint, world_file, robots, run_dir / "state"),
                                          sort_keys=False))
-    stack = load_stack(stack_path, env={}, project_dir=REPO_ROOT)
+    stack = apply_replacements(load_stack(stack_path, env={}, project_dir=REPO_ROOT), options.replacements)
     log(f"{len(robots)} robot(s) and {len(world.docks)} dock(s) in {world.name} for {options.duration_s:g} s of "
-        f"simulated time, rtf {options.rtf}, detector {options.detector}; run directory {run_dir}")
+        f"simulated time, rtf {options.rtf}, detector {options.detector}; run directory {run_dir}"
+        + "".join(f"; {r.name} replaced by `{r.command}`" for r in options.replacements))
     errors: list[str] = []
     wall_start = time.monotonic()
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="fleet") as launcher:
@@ -117,6 +121,7 @@ def run_fleet(
     sim_s = sim_end - sim_start
     report = _report(world, tallies, conflicts, contacts, sim_s, time.monotonic() - wall_start,
                      sim_s / max(wall_run, 1e-9), dict(sampler.peak_mb), errors)
+    report.replaced_services = replacements_report(options.replacements)
     (run_dir / "fleet.json").write_text(strict_json.dumps(report.to_json(), indent=2) + "\n")
     # Every robot's ground-truth track (x, y every 10 cm), for reading a run afterwards.
     tracks = {t.name: [[round(x, 2), round(y, 2)] for x, y in t.track] for t in tallies}

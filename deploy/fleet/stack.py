@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from deploy.replacements import Replacement
+
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
 #: where its lidar last put it) and folding its sensors in twice as often.
 FLEET_PLANNER_PARAMS = ("-p", "max_linear_vel_mps=0.4", "-p", "costmap_update_rate_hz=10")
@@ -28,6 +30,8 @@ class FleetOptions:
     #: Charge at which a docked robot undocks and patrols again.
     resume_at: float = 0.8
     runs_dir: Path = Path("runs")
+    #: ``--service NAME=COMMAND``: a user's program in place of zendock's service, in every robot's copy.
+    replacements: tuple[Replacement, ...] = ()
 
 
 def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: list[str], state_dir: Path) -> dict[str, Any]:

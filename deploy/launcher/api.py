@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, TextIO, TypeVar
 
 from deploy.launcher.host import SupervisorHost
-from deploy.launcher.logs import tail
+from deploy.launcher.logs import failure_line, tail
 from deploy.launcher.plan import LaunchPlan, plan_launch
 from deploy.launcher.printer import Printer
 from deploy.launcher.restart import Backoff
@@ -49,7 +49,12 @@ def is_ready(status: ServiceStatus) -> bool:
 
 
 class StackNotReady(TimeoutError):
-    """``wait_healthy`` / ``wait_until`` timed out; the message holds every service's status."""
+    """``wait_healthy`` / ``wait_until`` timed out; the message holds every service's status, ``summary`` one
+    line naming what was not ready and the last line it printed."""
+
+    def __init__(self, message: str, summary: str = "") -> None:
+        super().__init__(message)
+        self.summary = summary or message.splitlines()[0]
 
 
 def format_statuses(statuses: Iterable[ServiceStatus]) -> str:
@@ -269,11 +274,22 @@ class Launcher:
     def wait_healthy(self, timeout_s: float = 30.0, services: Sequence[str] | None = None) -> dict[str, ServiceStatus]:
         """Until every (given) service is running and healthy, or a one-shot step exited 0."""
         names = list(services) if services is not None else self.services
-        return self.wait_until(
-            lambda st: all(name in st and is_ready(st[name]) for name in names),
-            timeout_s,
-            f"{', '.join(names)} to be healthy",
-        )
+        try:
+            return self.wait_until(
+                lambda st: all(name in st and is_ready(st[name]) for name in names),
+                timeout_s,
+                f"{', '.join(names)} to be healthy",
+            )
+        except StackNotReady as exc:
+            statuses = {s.name: s for s in self.ps()}
+            late = [name for name in names if name not in statuses or not is_ready(statuses[name])]
+            raise StackNotReady(str(exc), "; ".join(self._not_ready_line(name, timeout_s) for name in late)) from None
+
+    def _not_ready_line(self, name: str, timeout_s: float) -> str:
+        """``docking not healthy after 90s (its last line: ...)``: often a replacement that never declared its
+        node token, or one that crashed."""
+        last = failure_line(self.logs(name, 200))
+        return f"{name} not healthy after {timeout_s:g}s ({f'its last line: {last}' if last else 'it printed nothing'})"
 
     def wait_state(self, name: str, state: str, timeout_s: float = 30.0) -> ServiceStatus:
         """Until ``name`` is in ``state`` (running | restarting | exited | stopped)."""

@@ -11,6 +11,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
+from deploy.arg_types import add_service_option
 from deploy.launcher.host import SupervisorHost, run_blocking
 from deploy.launcher.plan import plan_launch
 from deploy.launcher.project import (
@@ -38,6 +39,7 @@ def add_launch_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--namespace", help="override the stack's namespace (e.g. one robot per project)")
     parser.add_argument("--connect", action="append", metavar="ENDPOINT", help="override zenoh.connect (repeatable)")
     parser.add_argument("--working-dir", metavar="DIR", help="where services run (default: the project directory)")
+    add_service_option(parser)
 
 
 def launch_argv(args: argparse.Namespace, services: Sequence[str]) -> list[str]:
@@ -57,6 +59,8 @@ def launch_argv(args: argparse.Namespace, services: Sequence[str]) -> list[str]:
         argv += ["--connect", endpoint]
     if args.working_dir:
         argv += ["--working-dir", args.working_dir]
+    for replacement in args.replacements:
+        argv += ["--service", f"{replacement.name}={replacement.command}"]
     return [*argv, "--", *services]
 
 

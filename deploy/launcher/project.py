@@ -13,6 +13,7 @@ from pathlib import Path
 
 from deploy.launcher.runtime import RUNTIME_DIRNAME, RuntimePaths
 from deploy.launcher.stack_file import Stack, load_stack, project_name_from_dir, read_document
+from deploy.replacements import apply_replacements
 from shared.config_errors import ConfigError
 
 STACK_FILE_NAMES = ("stack.yaml", "zendock.yaml", "deploy/stack.yaml")
@@ -60,7 +61,8 @@ def load_project_stack(args: argparse.Namespace) -> Stack:
     if path is None:
         raise no_stack_file(path)
     env_file = getattr(args, "env_file", None)
-    return load_stack(path, env_file=env_file, project_dir=project_dir(args), project_name=args.project_name)
+    stack = load_stack(path, env_file=env_file, project_dir=project_dir(args), project_name=args.project_name)
+    return apply_replacements(stack, getattr(args, "replacements", None) or [])
 
 
 def active_profiles(args: argparse.Namespace) -> list[str]:

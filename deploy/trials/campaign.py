@@ -29,6 +29,7 @@ from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT
+from deploy.replacements import apply_replacements
 from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
@@ -165,14 +166,15 @@ def run_trials(
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
     stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False))
-    stack = load_stack(stack_path, env={}, project_dir=REPO_ROOT)
+    stack = apply_replacements(load_stack(stack_path, env={}, project_dir=REPO_ROOT), options.replacements)
     results: list[TrialResult] = []
     records: dict[int, RunRecord] = {}
     errors: list[str] = []
     wall_start = time.monotonic()
     sharded = f" (shard {options.shard}: {len(mine)} of {options.n})" if options.shard.count > 1 else ""
     log(f"{options.n} trials{sharded} in {world.name} with {workers} robot(s), controller {options.controller}, "
-        f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}")
+        f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}"
+        + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements))
     with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
         launcher.wait_healthy(timeout_s=120.0)
         log(f"stack healthy after {time.monotonic() - wall_start:.0f} s; docking")

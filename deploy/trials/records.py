@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from deploy.paths import REPO_ROOT
+from deploy.replacements import Replacement
 
 T = TypeVar("T")
 
@@ -76,6 +77,8 @@ class TrialOptions:
     compose: str = ""
     #: Which slice of the campaign this run does (``zendock trials --shard K/N``; merge with ``trials merge``).
     shard: Shard = Shard()
+    #: ``--service NAME=COMMAND``: a user's program in place of zendock's service in every robot's copy.
+    replacements: tuple[Replacement, ...] = ()
 
 
 @dataclass
@@ -124,9 +127,14 @@ class TrialsSummary:
     median_false_glass_cells: float = math.nan
     p95_false_glass_cells: float = math.nan
     median_glass_coverage: float = math.nan
+    #: Each replaced service and the command that ran in its place (``--service``): whose figures these are.
+    replaced_services: dict[str, str] = field(default_factory=dict)
 
     def headline(self) -> dict[str, Any]:
         keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
                 "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
                 "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage")
-        return {k: getattr(self, k) for k in keys}
+        line = {k: getattr(self, k) for k in keys}
+        if self.replaced_services:
+            line["replaced_services"] = dict(self.replaced_services)
+        return line

@@ -51,10 +51,13 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
                                   "restart": "on-failure"}
         after_map = {"depends_on": {"router": {"condition": "service_started"},
                                     "map": {"condition": "service_completed_successfully"}}}
-        if options.compose:
+        # A replaced service keeps a process of its own (a user's program is not a zendock container member).
+        replaced = {r.name for r in options.replacements}
+        grouped = {n: a for n, a in members.items()
+                   if options.compose and (options.compose == "all" or n in LIGHT_SERVICES) and n not in replaced}
+        if grouped:
             # The robot's services (all, or the light ones) share a process and a session (zendock
             # container); the group is healthy once its last member is up.
-            grouped = {n: a for n, a in members.items() if options.compose == "all" or n in LIGHT_SERVICES}
             command = ["zendock", "container"]
             for i, (name, args) in enumerate(grouped.items()):
                 command += [*(["+"] if i else []), name, *args]

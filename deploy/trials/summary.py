@@ -5,13 +5,16 @@ from __future__ import annotations
 import math
 
 from deploy.percentiles import median, percentile
+from deploy.replacements import replacements_report
 from deploy.trials.chaos import combine_chaos
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from shared.world import World
 
 
 def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, world: World) -> TrialsSummary:
-    return summarise_results(results, wall_s, options.controller, world.name)
+    summary = summarise_results(results, wall_s, options.controller, world.name)
+    summary.replaced_services = replacements_report(options.replacements)
+    return summary
 
 
 def summarise_results(results: list[TrialResult], wall_s: float, controller: str, world_name: str) -> TrialsSummary:
@@ -52,6 +55,8 @@ def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller
     for s, _ in per_world:
         for name, mb in s.peak_rss_mb.items():
             summary.peak_rss_mb[name] = max(mb, summary.peak_rss_mb.get(name, 0.0))
+    for s, _ in per_world:  # the same options for every world of a campaign
+        summary.replaced_services.update(s.replaced_services)
     chaos = [s.chaos for s, _ in per_world if s.chaos]
     if chaos:
         summary.chaos = combine_chaos(chaos)

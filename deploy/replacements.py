@@ -1,0 +1,128 @@
+"""``--service NAME=COMMAND``: run a user's own program in place of one of zendock's services.
+
+A stack service is zendock's ``NAME`` when its command runs the module ``services.NAME``
+(``python -m services.NAME ...``), whatever the stack calls it (``docking``, ``docking_robot1``). Its
+replacement keeps everything the launcher gives zendock's own: the environment (``ZENDOCK_CONNECT``,
+``ZENDOCK_NAMESPACE``), the stack entry (dependencies, restart policy, health check: the node token
+``NAME`` must appear), and the flags after the module name, appended to COMMAND (``-p use_sim_time=true
+-p dock_database=...``; the contract says which a replacement may ignore). ``{robot}`` in COMMAND becomes
+the service's namespace (``robot1``; empty in a root-namespace stack), for per-robot arguments.
+
+Reports name every replacement and its command (:func:`replacements_report`), so a campaign's figures are
+attributable to the code that produced them.
+"""
+
+from __future__ import annotations
+
+import shlex
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+from deploy.launcher.stack_file import Stack, join_namespace
+from shared.config_errors import ConfigError
+
+#: The services a user may replace (those with a contract; the router and the one-shot map step are not).
+REPLACEABLE = ("battery", "docking", "fleet", "perception", "planner", "pose", "ros2_bridge", "simulator", "viz")
+ROBOT_PLACEHOLDER = "{robot}"
+
+
+@dataclass(frozen=True)
+class Replacement:
+    """One ``--service NAME=COMMAND``: zendock's service ``name`` replaced by ``command`` (shell words)."""
+
+    name: str
+    command: str
+
+    @property
+    def words(self) -> list[str]:
+        return shlex.split(self.command)
+
+    def argv_for(self, namespace: str, flags: Sequence[str]) -> list[str]:
+        """The command for one copy of the service: ``{robot}`` filled in, zendock's flags appended."""
+        return [word.replace(ROBOT_PLACEHOLDER, namespace) for word in self.words] + list(flags)
+
+
+def parse_replacement(text: str) -> Replacement:
+    """``NAME=COMMAND`` as typed; raises ``ValueError`` with one line saying what is wrong."""
+    name, sep, command = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise ValueError(f"expected NAME=COMMAND (e.g. docking='python my_docking.py'), got {text!r}")
+    if name not in REPLACEABLE:
+        raise ValueError(f"no replaceable service {name!r} (one of: {', '.join(REPLACEABLE)})")
+    try:
+        words = shlex.split(command)
+    except ValueError as exc:
+        raise ValueError(f"--service {name}: the command does not parse as shell words: {exc}") from None
+    if not words:
+        raise ValueError(f"--service {name}: the command is empty")
+    return Replacement(name, command.strip())
+
+
+def check_unique(replacements: Iterable[Replacement]) -> list[Replacement]:
+    """The replacements, refusing two for the same service."""
+    seen: dict[str, Replacement] = {}
+    for replacement in replacements:
+        if replacement.name in seen:
+            raise ValueError(f"--service {replacement.name} is given twice")
+        seen[replacement.name] = replacement
+    return list(seen.values())
+
+
+def module_index(command: Sequence[str], name: str) -> int | None:
+    """Where ``services.<name>`` follows ``-m`` in ``command`` (the flags start after it), or ``None``."""
+    for i in range(len(command) - 1):
+        if command[i] == "-m" and command[i + 1] == f"services.{name}":
+            return i + 1
+    return None
+
+
+def runs_inside_container(command: Sequence[str], name: str) -> bool:
+    """Whether ``command`` is a ``zendock container`` group with ``name`` as one of its members."""
+    if len(command) < 2 or command[1] != "container":
+        return False
+    members = [command[2]] if len(command) > 2 else []
+    members += [command[i + 1] for i, word in enumerate(command[:-1]) if word == "+"]
+    return name in members
+
+
+def apply_replacements(stack: Stack, replacements: Sequence[Replacement]) -> Stack:
+    """``stack`` with every copy of each replaced service running the replacement's command.
+
+    Raises :class:`ConfigError` when a replaced service is not in the stack, or runs inside a composed
+    ``zendock container`` process (replace it in a stack that runs it as its own process).
+    """
+    if not replacements:
+        return stack
+    services = dict(stack.services)
+    for replacement in check_unique(replacements):
+        found = 0
+        for service_name, spec in stack.services.items():
+            if runs_inside_container(spec.command, replacement.name):
+                raise ConfigError(
+                    f"--service {replacement.name}: {service_name} runs it inside a composed zendock container; "
+                    "replace it in a stack that runs it as its own process"
+                )
+            index = module_index(spec.command, replacement.name)
+            if index is None:
+                continue
+            namespace = join_namespace(stack.namespace, spec.namespace)
+            argv = replacement.argv_for(namespace, spec.command[index + 1:])
+            services[service_name] = spec.model_copy(update={"command": argv})
+            found += 1
+        if not found:
+            raise ConfigError(f"--service {replacement.name}: the stack {stack.source} runs no services.{replacement.name}")
+    return replace(stack, services=services)
+
+
+def replacements_report(replacements: Sequence[Replacement]) -> dict[str, str]:
+    """What reports record: each replaced service and the command that ran instead (``{}`` if none)."""
+    return {r.name: r.command for r in replacements}
+
+
+def replacements_from_report(data: Any) -> list[Replacement]:
+    """The replacements a report recorded (``replaced_services``), for a re-run on the same code."""
+    if not isinstance(data, dict):
+        return []
+    return [Replacement(str(name), str(command)) for name, command in data.items()]
