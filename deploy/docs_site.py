@@ -1,4 +1,4 @@
-"""The documentation site's generated pages: the CLI reference and the measurements page.
+"""The documentation site's generated pages: the CLI reference, the measurements page and the contracts.
 
 One source, generated views. The CLI reference is written from ``deploy/cli.py``'s parser and its
 subparsers (every command's ``--help``), so it cannot drift from the code; the measurements page is
@@ -9,6 +9,8 @@ date, machine and the numbers).
   ``cli.md`` to the site, generated at build time and never committed (the CLI changes often).
 - ``docs/measurements.md`` is committed, so it reads on GitHub too; ``python -m deploy.docs_site``
   rewrites it and ``--check`` exits 1 when it is stale (``tests/unit/test_docs_site.py`` checks the same).
+- ``docs/contracts/`` (every service's contract and every message type's JSON Schema) is committed too,
+  rendered from ``shared/contracts`` by :mod:`deploy.contracts.document`; the same command rewrites it.
 - ``python -m deploy.docs_site --cli FILE`` writes the CLI reference to a file.
 
 Pure apart from reading the JSON files and writing the page: no bus, no services.
@@ -24,6 +26,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from deploy.contracts.document import stale_files, write_files
 from deploy.paths import REPO_ROOT
 
 DOCS_DIR = REPO_ROOT / "docs"
@@ -183,16 +186,19 @@ def on_files(files: Any, config: Any) -> Any:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m deploy.docs_site", description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="exit 1 if docs/measurements.md is stale")
+    parser.add_argument("--check", action="store_true", help="exit 1 if docs/measurements.md or docs/contracts/ is stale")
     parser.add_argument("--cli", metavar="FILE", help="also write the CLI reference to FILE")
     args = parser.parse_args(argv)
     page = measurements_page(load_measurements())
     if args.check:
-        if MEASUREMENTS_PAGE.read_text(encoding="utf-8") != page:
-            print(f"{MEASUREMENTS_PAGE} is stale: run python -m deploy.docs_site", file=sys.stderr)
+        stale = ([str(MEASUREMENTS_PAGE)] if MEASUREMENTS_PAGE.read_text(encoding="utf-8") != page else []) + [
+            f"docs/contracts/{name}" for name in stale_files()]
+        if stale:
+            print(f"stale: {', '.join(stale)}: run python -m deploy.docs_site", file=sys.stderr)
             return 1
     else:
         MEASUREMENTS_PAGE.write_text(page, encoding="utf-8")
+        write_files()
     if args.cli:
         Path(args.cli).write_text(cli_reference(), encoding="utf-8")
     return 0

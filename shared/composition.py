@@ -19,6 +19,7 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
+from shared.contracts.enforce import hold_to_contract
 from shared.node import Node
 from shared.parameter_server import attach_parameters
 from shared.runtime import SIGNAL_CHECK_S, ServiceOptions, ServiceParams, ServiceSpec
@@ -69,6 +70,7 @@ def serve_group(members: list[Member], *, install_signal_handlers: bool = True) 
                 logger = logging.getLogger(member.label)
                 node = Node(member.options.node_name, session, member.options.namespace,
                             use_sim_time=member.params.use_sim_time, logger=logger)
+                hold_to_contract(node)
                 service = member.spec.build(node, member.params)
                 attach_parameters(node, member.params, service)  # closed with the node
                 node.declare_ready()

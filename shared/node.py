@@ -131,6 +131,9 @@ class Node:
         self._stats_queryable: Any = None
         self._sim_now = 0.0
         self.clock_started = False
+        #: Called with ``(kind, type name, key)`` before each endpoint is declared (the service's contract,
+        #: :mod:`shared.contracts.enforce`); it raises to refuse one.
+        self.endpoint_check: Callable[[str, str, str], None] | None = None
         self._clock_sub: Subscription[Clock] | None = None
         if use_sim_time:
             self._clock_sub = self.create_subscription(Clock, "clock", self._on_clock, QoS(depth=1), inline=True)
@@ -259,6 +262,8 @@ class Node:
     def declare_endpoint(self, kind: str, type_name: str, key: str) -> zenoh.LivelinessToken:
         """Announce one of this node's endpoints (``pub``, ``sub``, ``srv``, ``act``) in the graph; the token
         is undeclared with the node."""
+        if self.endpoint_check is not None:
+            self.endpoint_check(kind, type_name, key)
         token = self.session.liveliness().declare_token(
             endpoint_token_key(kind, self.namespace, self.name, type_name, key)
         )

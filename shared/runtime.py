@@ -46,6 +46,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
+from shared.contracts.enforce import hold_to_contract
 from shared.names import normalise_namespace
 from shared.node import Node
 from shared.parameter_server import attach_parameters
@@ -257,6 +258,7 @@ def serve(
     log.info("connecting to %s", ",".join(options.connect))
     with open_session(options.session_spec()) as session:
         node = Node(options.node_name, session, options.namespace, use_sim_time=params.use_sim_time, logger=log)
+        hold_to_contract(node)
         if install_signal_handlers:
             for sig in (signal.SIGINT, signal.SIGTERM):
                 signal.signal(sig, lambda *_: node.shutdown())

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -9,8 +10,13 @@ from pathlib import Path
 import pytest
 import zenoh
 
+from shared.contracts.enforce import STRICT_ENV
 from shared.session import SessionSpec, open_session
 from tests.support.processes import ServiceProcess, free_port
+
+# Every zendock service this suite starts (they inherit the environment) refuses to declare an endpoint its
+# contract does not name: shared/contracts and the services' wiring cannot drift apart unnoticed.
+os.environ[STRICT_ENV] = "1"
 
 
 @pytest.fixture

@@ -1,0 +1,1 @@
+"""Contracts as documents (``zendock contract``, ``docs/contracts/``) and the conformance kit (``zendock conform``)."""

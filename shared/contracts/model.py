@@ -1,0 +1,185 @@
+"""What a contract is made of: the endpoints a service declares, what it is handed, what it must survive.
+
+A contract is data. zendock's own services are held to theirs while they run (a node refuses to declare an
+endpoint its contract does not name, :func:`Contract.check_endpoint`); ``docs/contracts/`` is rendered from
+the same objects, and ``zendock conform`` checks a running program against them. So the documents a user
+writes a replacement from cannot drift from what zendock's own service does.
+
+Keys are relative to the robot's namespace (``battery_status`` is ``robot1/battery_status`` for the robot
+``robot1``); a service that serves several robots (the simulator) declares each robot's copy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from shared.action import ActionType
+from shared.endpoints import QoS, ServiceType
+from shared.schema import Message
+
+
+class ContractViolation(RuntimeError):
+    """A service declared an endpoint its contract does not name (a bug in the service or the contract)."""
+
+
+@dataclass(frozen=True)
+class Topic:
+    """A key a service publishes or subscribes, with its message type and delivery."""
+
+    name: str
+    type: type[Message]
+    qos: QoS
+    #: Messages per second of sim time while the service runs (``None``: on events, or as its inputs come).
+    rate_hz: float | None = None
+    #: ``""``: always declared while the service runs; otherwise when it is (``"while docking"``).
+    when: str = ""
+    about: str = ""
+    #: A key outside the robot's namespace, matched by its last parts (the fleet's peers ``*/battery_status``).
+    fleet_wide: bool = False
+
+    @property
+    def required(self) -> bool:
+        return not self.when
+
+
+@dataclass(frozen=True)
+class Request:
+    """A request/response service (a Zenoh queryable)."""
+
+    name: str
+    type: ServiceType[Any, Any]
+    when: str = ""
+    about: str = ""
+
+    @property
+    def required(self) -> bool:
+        return not self.when
+
+
+@dataclass(frozen=True)
+class Action:
+    """An action (goal, feedback, result, cancel) over the keys ``<name>/_action/...``."""
+
+    name: str
+    type: ActionType[Any, Any, Any]
+    when: str = ""
+    about: str = ""
+
+    @property
+    def required(self) -> bool:
+        return not self.when
+
+
+@dataclass(frozen=True)
+class Flag:
+    """A ``-p name=value`` the launcher may hand the service; a replacement may ignore it unless ``needed``."""
+
+    name: str
+    about: str
+    needed: bool = False
+
+
+@dataclass(frozen=True)
+class Contract:
+    """One service's whole promise. ``behaviour`` names the checks ``zendock conform`` runs on its reactions."""
+
+    service: str
+    summary: str
+    publishes: tuple[Topic, ...] = ()
+    subscribes: tuple[Topic, ...] = ()
+    serves: tuple[Request, ...] = ()
+    calls: tuple[Request, ...] = ()
+    serves_actions: tuple[Action, ...] = ()
+    uses_actions: tuple[Action, ...] = ()
+    flags: tuple[Flag, ...] = ()
+    #: What ``zendock conform`` checks of its reactions to inputs, in words (each a named check).
+    behaviour: tuple[str, ...] = ()
+    #: The other services ``zendock conform`` runs beside it (the rest of the stack it needs).
+    needs: tuple[str, ...] = ()
+    #: Subscribes on demand to keys a client asks for (the ROS 2 bridge forwards what a ROS 2 node wants).
+    subscribes_on_demand: bool = False
+    notes: tuple[str, ...] = field(default=())
+
+    # --- the endpoints it declares, as the graph shows them -----------------------------------------------
+
+    def endpoints(self) -> list[tuple[str, str, str, bool]]:
+        """Every endpoint the graph may show for this service: ``(kind, key, type name, required)``."""
+        out: list[tuple[str, str, str, bool]] = []
+        out += [("pub", t.name, t.type.TYPE_NAME, t.required) for t in self.publishes]
+        out += [("sub", t.name, t.type.TYPE_NAME, t.required) for t in self.subscribes]
+        out += [("srv", r.name, r.type.type_name, r.required) for r in self.serves]
+        for a in self.serves_actions:
+            base = f"{a.name}/_action"
+            out += [("act", a.name, a.type.type_name, a.required),
+                    ("srv", f"{base}/send_goal", a.type.send_goal.type_name, a.required),
+                    ("srv", f"{base}/cancel_goal", "action_msgs/srv/CancelGoal", a.required),
+                    ("srv", f"{base}/get_result", a.type.get_result.type_name, False),
+                    ("pub", f"{base}/feedback", a.type.feedback_message.TYPE_NAME, a.required),
+                    ("pub", f"{base}/status", "action_msgs/msg/GoalStatusArray", a.required)]
+        for a in self.uses_actions:
+            base = f"{a.name}/_action"
+            out += [("sub", f"{base}/feedback", a.type.feedback_message.TYPE_NAME, False),
+                    ("sub", f"{base}/status", "action_msgs/msg/GoalStatusArray", False)]
+        return out
+
+    def required_endpoints(self) -> list[tuple[str, str, str]]:
+        return [(kind, key, type_name) for kind, key, type_name, required in self.endpoints() if required]
+
+    def check_endpoint(self, kind: str, type_name: str, key: str, node_name: str) -> None:
+        """Raise :class:`ContractViolation` unless the contract names this endpoint (``key`` is the full key)."""
+        if kind == "sub" and self.subscribes_on_demand:
+            return
+        if is_common_endpoint(kind, type_name, key, node_name):
+            return
+        fleet_wide = {t.name for t in (*self.publishes, *self.subscribes) if t.fleet_wide}
+        for want_kind, name, want_type, _required in self.endpoints():
+            if want_kind == kind and want_type == type_name and key_matches(key, name, name in fleet_wide):
+                return
+        raise ContractViolation(
+            f"{self.service}: declares {kind} {key} ({type_name}), which its contract (shared/contracts) does not name"
+        )
+
+
+def key_matches(key: str, name: str, fleet_wide: bool = False) -> bool:
+    """Whether the full ``key`` is the contract's relative ``name`` in some robot's namespace."""
+    if fleet_wide:
+        return key.endswith(name)
+    return key == name or key.endswith("/" + name)
+
+
+#: Every node may declare these: the clock it follows on sim time and its parameter services (``zendock param``).
+def is_common_endpoint(kind: str, type_name: str, key: str, node_name: str) -> bool:
+    if kind == "sub" and type_name == "rosgraph_msgs/msg/Clock" and key_matches(key, "clock"):
+        return True
+    return kind == "srv" and type_name.startswith("zendock_msgs/srv/") and f"{node_name}/_param/" in key
+
+
+# --- what every service gets and must do, whatever it is ---------------------------------------------------
+
+#: The environment the launcher hands every service.
+ENVIRONMENT: dict[str, str] = {
+    "ZENDOCK_CONNECT": "comma-separated Zenoh endpoints to connect to in client mode (tcp/127.0.0.1:7447)",
+    "ZENDOCK_NAMESPACE": "the robot's namespace: every key is `<namespace>/<key>` (empty: the key alone)",
+}
+#: Flags the launcher may put on any service's command line (after the replacement's own words).
+COMMON_FLAGS: tuple[Flag, ...] = (
+    Flag("--namespace NS", "the robot's namespace; overrides ZENDOCK_NAMESPACE"),
+    Flag("--connect ENDPOINT", "repeatable; overrides ZENDOCK_CONNECT"),
+    Flag("-p NAME=VALUE", "repeatable; a parameter, the value in YAML; a replacement ignores the names it does not use"),
+)
+#: What a service announces on the bus, so launchers, ``zendock nodes`` and the ROS 2 bridge see it.
+ANNOUNCEMENTS: tuple[str, ...] = (
+    "Ready: a Zenoh liveliness token `@zendock/node/<ns>/<service>` once it serves (the launcher's health check); "
+    "`<ns>` is the namespace with `/` written `%`, and `%` alone for none.",
+    "Each endpoint: a liveliness token `@zendock/<kind>/<ns>/<service>/<type>/<key>` with kind pub, sub, srv or act, "
+    "`<type>` the ROS type name with `/` written `%`, and `<key>` the full key.",
+)
+#: What every service must survive and how it must end.
+DUTIES: tuple[str, ...] = (
+    "Bad input never ends it: a payload that does not decode as the key's type is refused and counted; "
+    "a burst of them on every key it subscribes changes nothing else.",
+    "A request that does not decode gets an error reply (a Zenoh `reply_err` with a line of text), not silence.",
+    "SIGTERM or SIGINT: it closes its Zenoh session and exits with code 0 within 2 s.",
+    "Started again, it comes back: the same token and the same keys.",
+)
