@@ -1,8 +1,12 @@
 """Whole-system docking runs: the default stack through the launcher, judged on the simulator's truth,
 with each service its own process and with the robot's services composed into one (``--compose``).
 
-Each run is what ``zendock demo`` does: stack up on a free port, battery set just above the low
-threshold, then the trigger, the navigation, the approach and CHARGING, all across real processes.
+Each run is what ``zendock demo`` does: stack up on a free port, battery set low, then the trigger, the
+navigation, the approach and CHARGING, all across real processes. The graceful controller's
+process-per-service runs go through zendock's pytest plugin (``zendock_stack``, ``zendock_robot``:
+:mod:`deploy.testing`), as a user's tests would, so CI exercises it, and ``pytest tests/e2e
+--zendock-service docking='python my_docking.py'`` runs them against a replacement; the others go
+through ``run_demo``.
 """
 
 from __future__ import annotations
@@ -13,6 +17,8 @@ import psutil
 import pytest
 
 from deploy.demo import DemoOptions, run_demo
+from deploy.testing import Robot, ZendockStack, is_charging
+from shared import topics
 
 WORLDS = sorted((Path(__file__).resolve().parents[2] / "deploy" / "worlds").glob("*.yaml"))
 pytestmark = pytest.mark.e2e
@@ -43,10 +49,32 @@ def test_seed_controller_docks_in_seed_room(tmp_path: Path, compose: bool) -> No
     _no_stack_left(tmp_path)
 
 
-@COMPOSE
+#: What the graceful runs share: the controller, the simulator's pace, a localisation that is a little off.
+GRACEFUL = {"controller": "graceful", "rtf": 4, "localisation_error": (0.03, -0.02, 0.02)}
+#: Below the docking service's low threshold (0.25): the battery crosses it, docking starts.
+LOW_BATTERY = 0.2
+#: From the low battery to CHARGING, wall seconds (the demo's limit is 300 sim s, 75 s at rtf 4).
+DOCK_WITHIN_S = 200.0
+
+
+@pytest.mark.parametrize("world", [pytest.param(w, id=w.stem, marks=pytest.mark.zendock(world=str(w), **GRACEFUL))
+                                   for w in WORLDS])
+def test_graceful_controller_docks_in_every_shipped_world(world: Path, zendock_stack: ZendockStack,
+                                                          zendock_robot: Robot) -> None:
+    """Process per service, through the plugin: low battery, then CHARGING, mated on ground truth."""
+    zendock_robot.wait_for(topics.BATTERY_STATUS, timeout_s=30.0, what="(the battery service publishing)")
+    zendock_robot.set_battery(LOW_BATTERY)
+    zendock_robot.wait_for(topics.BATTERY_STATUS, is_charging, timeout_s=DOCK_WITHIN_S, what="saying CHARGING")
+    truth = zendock_robot.sim_state()
+    contact = truth.contact
+    assert contact.mated, f"charging but not mated on ground truth: {truth}"
+    assert truth.collisions == 0, truth
+    assert abs(contact.lateral_error_m) < 0.04 and abs(contact.yaw_error_rad) < 0.1, truth
+
+
 @pytest.mark.parametrize("world", WORLDS, ids=lambda p: p.stem)
-def test_graceful_controller_docks_in_every_shipped_world(world: Path, tmp_path: Path, compose: bool) -> None:
+def test_graceful_controller_docks_in_every_shipped_world_composed(world: Path, tmp_path: Path) -> None:
     report = run_demo(DemoOptions(world=world, controller="graceful", rtf="4", runs_dir=tmp_path,
-                                  localisation_error=(0.03, -0.02, 0.02), compose=compose), log=lambda _t: None)
+                                  localisation_error=(0.03, -0.02, 0.02), compose=True), log=lambda _t: None)
     _assert_docked(report, tmp_path)
     _no_stack_left(tmp_path)

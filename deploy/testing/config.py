@@ -1,0 +1,160 @@
+"""What stack a test gets: the ``@pytest.mark.zendock(...)`` marker and the ``--zendock-*`` options, read into one
+:class:`StackConfig`.
+
+Kept apart from the fixtures and free of pytest and of the launcher, so reading a marker is a pure function
+the plugin's unit tests check directly, and a typo in a marker fails the test with one line naming the
+argument (not a stack that starts and then misbehaves).
+
+Precedence: the closest marker wins over a class's or a module's; the command line wins over every marker
+(``--zendock-rtf`` slows every stack of a run on a loaded machine; ``--zendock-service`` puts a user's
+replacement into every stack, zendock's own end-to-end tests included).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from deploy.paths import REPO_ROOT
+
+#: The stack the fixture brings up, and where ``world="seed_room"`` is looked up.
+DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
+WORLDS_DIR = REPO_ROOT / "deploy" / "worlds"
+#: The marker's arguments (anything else is a mistake, reported as such).
+MARKER_ARGUMENTS = ("world", "rtf", "detector", "controller", "seed", "localisation_error", "services",
+                    "healthy_timeout_s")
+DETECTORS = ("aruco", "synthetic")
+
+
+@dataclass(frozen=True)
+class StackConfig:
+    """One test's stack. ``rtf`` 4 by default: fast enough for a test, slow enough for two cores."""
+
+    world: Path = WORLDS_DIR / "seed_room.yaml"
+    rtf: str = "4"
+    detector: str = "aruco"
+    controller: str = "graceful"
+    seed: int = 0
+    #: map->odom error of the simulated localisation (x_m, y_m, yaw_rad).
+    localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: ``NAME=COMMAND`` replacements (see :mod:`deploy.replacements`), in order, one per service.
+    services: tuple[tuple[str, str], ...] = ()
+    #: How long the stack has to become healthy (wall seconds).
+    healthy_timeout_s: float = 90.0
+
+    def environment(self, endpoint: str, project_dir: Path) -> dict[str, str]:
+        """The stack file's variables (``deploy/stack.yaml``'s header lists them), as ``zendock demo`` sets them."""
+        return {
+            "ZENOH_LISTEN": endpoint,
+            "ZENOH_CONNECT": endpoint,
+            "ZENDOCK_WORLD": str(self.world),
+            "ZENDOCK_RTF": self.rtf,
+            "ZENDOCK_DETECTOR": self.detector,
+            "ZENDOCK_CONTROLLER": self.controller,
+            "ZENDOCK_SEED": str(self.seed),
+            "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(self.localisation_error)),
+            "ZENDOCK_GLASS_MEMORY": str(project_dir / "glass_memory.npz"),
+        }
+
+
+def shipped_worlds() -> list[str]:
+    return sorted(p.stem for p in WORLDS_DIR.glob("*.yaml"))
+
+
+def resolve_world(value: str | Path, rootdir: Path) -> Path:
+    """A shipped world's name (``seed_room``) or a world file (relative to ``rootdir``), as an absolute path."""
+    text = str(value)
+    if "/" not in text and not text.endswith((".yaml", ".yml")):
+        path = WORLDS_DIR / f"{text}.yaml"
+        if not path.is_file():
+            raise ValueError(f"world={text!r}: no shipped world of that name (one of: {', '.join(shipped_worlds())}), "
+                             "nor a path to a world file")
+        return path
+    path = Path(text) if Path(text).is_absolute() else rootdir / text
+    if not path.is_file():
+        raise ValueError(f"world={text!r}: {path} is not a file")
+    return path.resolve()
+
+
+def parse_rtf(value: object) -> str:
+    """A real-time factor as the stack takes it: a positive number, or ``max``."""
+    text = str(value).strip()
+    if text == "max":
+        return text
+    try:
+        number = float(text)
+    except ValueError:
+        number = math.nan
+    if not (math.isfinite(number) and number > 0):
+        raise ValueError(f"rtf={value!r}: expected a positive number or 'max'")
+    return text
+
+
+def parse_services(services: object, where: str) -> list[tuple[str, str]]:
+    """``{"docking": "python my_docking.py"}`` (a marker's) or ``["docking=python my_docking.py"]`` (options')
+    as checked ``(name, command)`` pairs; raises ``ValueError`` naming the problem."""
+    from deploy.replacements import parse_replacement  # noqa: PLC0415 - the stack file model is slow to import
+
+    if isinstance(services, Mapping):
+        texts = [f"{name}={command}" for name, command in services.items()]
+    elif isinstance(services, Iterable) and not isinstance(services, str | bytes):
+        texts = [str(text) for text in services]
+    else:
+        raise ValueError(f"{where}: services must be a dict of service name to command, got {services!r}")
+    pairs = []
+    for text in texts:
+        try:
+            replacement = parse_replacement(text)
+        except ValueError as exc:
+            raise ValueError(f"{where}: {exc}") from None
+        pairs.append((replacement.name, replacement.command))
+    names = [name for name, _ in pairs]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ValueError(f"{where}: {', '.join(twice)} replaced twice")
+    return pairs
+
+
+def merge_markers(marker_kwargs: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """Markers' arguments, farthest first (module, class, function): a closer one overrides a farther one."""
+    merged: dict[str, Any] = {}
+    for kwargs in marker_kwargs:
+        unknown = sorted(set(kwargs) - set(MARKER_ARGUMENTS))
+        if unknown:
+            raise ValueError(f"@pytest.mark.zendock: unknown argument(s) {', '.join(unknown)} "
+                             f"(known: {', '.join(MARKER_ARGUMENTS)})")
+        merged.update(kwargs)
+    return merged
+
+
+def stack_config(marker: Mapping[str, Any], cli_services: Sequence[str] = (), cli_rtf: str | None = None,
+                 rootdir: Path = REPO_ROOT) -> StackConfig:
+    """The stack for one test: the (merged) marker's arguments, then the command line's."""
+    defaults = StackConfig()
+    world = resolve_world(marker["world"], rootdir) if "world" in marker else defaults.world
+    rtf = parse_rtf(cli_rtf if cli_rtf is not None else marker.get("rtf", defaults.rtf))
+    detector = str(marker.get("detector", defaults.detector))
+    if detector not in DETECTORS:
+        raise ValueError(f"detector={detector!r}: one of {', '.join(DETECTORS)}")
+    error = tuple(float(v) for v in marker.get("localisation_error", defaults.localisation_error))
+    if len(error) != 3:
+        raise ValueError(f"localisation_error={marker['localisation_error']!r}: expected (x_m, y_m, yaw_rad)")
+    timeout = float(marker.get("healthy_timeout_s", defaults.healthy_timeout_s))
+    if not timeout > 0:
+        raise ValueError(f"healthy_timeout_s={timeout!r}: expected a positive number of seconds")
+    services = dict(parse_services(marker.get("services", {}), "@pytest.mark.zendock(services=...)"))
+    services.update(parse_services(cli_services, "--zendock-service"))  # the command line wins
+    return StackConfig(
+        world=world,
+        rtf=rtf,
+        detector=detector,
+        controller=str(marker.get("controller", defaults.controller)),
+        seed=int(marker.get("seed", defaults.seed)),
+        localisation_error=(error[0], error[1], error[2]),
+        services=tuple(services.items()),
+        healthy_timeout_s=timeout,
+    )
