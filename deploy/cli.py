@@ -76,7 +76,12 @@ def _terminate_like_interrupt(signum: int, _frame: object) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    # A command that runs another program (``conform SERVICE -- COMMAND ...``) takes everything after ``--``.
+    if extra and getattr(args, "takes_command", False) and extra[0] == "--":
+        args.command_words = extra[1:]
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
     # SIGTERM (kill, a CI timeout, a supervisor) unwinds like Ctrl-C, so every ``with Launcher(...)`` brings
     # its stack down instead of leaving the services it started running. Commands that handle signals
     # themselves (``up`` in the foreground) install their own handlers over this one.

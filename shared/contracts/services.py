@@ -260,6 +260,7 @@ ROS2_BRIDGE = Contract(
     subscribes_on_demand=True,
     flags=(Flag("domain_id", "the ROS_DOMAIN_ID of its rmw_zenoh face", needed=True),),
     behaviour=("shows zendock to ROS 2: an rmw_zenoh node token for each zendock service",),
+    needs=("simulator",),
     notes=("It subscribes to a robot's topics only while a ROS 2 subscriber wants them.",),
 )
 

@@ -1,0 +1,171 @@
+"""``zendock conform SERVICE -- COMMAND``: run the rest of a stack with COMMAND in place of SERVICE, and
+check the contract with named checks.
+
+The rest of the stack (the router and the services the contract says it needs, zendock's own) runs on a
+private router on a free loopback port, in a temporary working directory, in the robot namespace ``r1``
+(the fleet service in the fleet's, the root). The program under test gets what the launcher would give
+zendock's own service: the environment and the flags. Checks run in order: it starts, announces its
+endpoints, publishes at the contract's rates, behaves as the contract says, refuses bad requests with an
+error, survives malformed payloads, ends on SIGTERM, and comes back when started again.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from deploy.contracts.candidate import Candidate
+from deploy.contracts.checks import (
+    BEHAVIOURS,
+    Check,
+    Context,
+    check_bad_requests,
+    check_endpoints,
+    check_malformed_burst,
+    check_publishes,
+    check_restart,
+    check_sigterm,
+    check_starts,
+    still_serving,
+)
+from deploy.contracts.probe import Probe
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.launcher.plan import resolve_argv
+from deploy.paths import REPO_ROOT
+from deploy.replacements import ROBOT_PLACEHOLDER, module_index
+from shared.config_errors import ConfigError
+from shared.contracts import CONTRACTS
+from shared.session import SessionSpec, open_session
+from shared.world import load_world
+
+DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
+DEFAULT_WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
+ROBOT_NAMESPACE = "r1"
+#: Services that live in the fleet's namespace, not a robot's.
+FLEET_WIDE = ("fleet",)
+
+
+@dataclass
+class ConformOptions:
+    world: Path = DEFAULT_WORLD
+    rtf: str = "4"
+    runs_dir: Path | None = None
+
+
+@dataclass
+class ConformReport:
+    service: str
+    command: list[str]
+    checks: list[Check] = field(default_factory=list)
+    wall_s: float = 0.0
+    log: str = ""
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.checks) and all(c.passed for c in self.checks)
+
+    def failed(self) -> list[str]:
+        return [c.name for c in self.checks if not c.passed]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"service": self.service, "command": self.command, "passed": self.passed, "wall_s": round(self.wall_s, 1),
+                "failed": self.failed(), "checks": [c.as_dict() for c in self.checks], "log": self.log}
+
+
+def _flags_for(service: str, stack: Any, world: Path) -> list[str]:
+    """The flags the launcher gives zendock's own ``service`` (from the stack file), plus conform's own."""
+    spec = stack.services.get(service)
+    flags: list[str] = []
+    if spec is not None:
+        index = module_index(spec.command, service)
+        flags = list(spec.command[index + 1:]) if index is not None else []
+    elif service == "fleet":
+        flags = ["-p", f"world={world}"]
+    if service == "viz":
+        flags += ["-p", "port=0"]  # any free port: never the default a running viewer uses
+    return flags
+
+
+def _absolute(word: str) -> str:
+    """A relative path in COMMAND that names a file here, made absolute: the program runs in the run directory."""
+    path = Path(word)
+    return str(path.resolve()) if not path.is_absolute() and path.exists() else word
+
+
+def run_conform(service: str, command: list[str] | None, options: ConformOptions,
+                log: Callable[[str], None] = lambda _text: None) -> ConformReport:
+    """Run every check of ``service``'s contract against ``command`` (default: zendock's own service)."""
+    contract = CONTRACTS.get(service)
+    if contract is None:
+        raise ConfigError(f"no contract for {service!r} (one of: {', '.join(CONTRACTS)})")
+    world_path = options.world.resolve()
+    world = load_world(world_path)
+    if not world.docks:
+        raise ConfigError(f"--world {options.world}: conform needs a world with a dock")
+    own = command is None
+    words = command or ["python", "-m", f"services.{service}"]
+    namespace = "" if service in FLEET_WIDE else ROBOT_NAMESPACE
+    domain_id = random.randint(100, 200)
+    endpoint = free_endpoint()
+    env = {"ZENOH_LISTEN": endpoint, "ZENOH_CONNECT": endpoint, "ZENDOCK_WORLD": str(world_path),
+           "ZENDOCK_RTF": options.rtf, "ZENDOCK_DETECTOR": "aruco" if service == "perception" else "synthetic",
+           "ROS_DOMAIN_ID": str(domain_id)}
+    runs_dir = options.runs_dir or Path(tempfile.gettempdir())
+    runs_dir.mkdir(parents=True, exist_ok=True)
+    run_dir = Path(tempfile.mkdtemp(prefix=f"conform-{service}-", dir=runs_dir))
+    stack = load_stack(DEFAULT_STACK, env=env, project_dir=run_dir)
+    argv = resolve_argv([_absolute(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]) + _flags_for(service, stack, world_path)
+    report = ConformReport(service, argv, log=str(run_dir / "candidate.log"))
+    # what it needs, and what zendock's own waits for in the stack file (the planner: the map step)
+    own_dependencies = set(stack.services[service].depends_on) if service in stack.services else set()
+    rest = sorted((set(contract.needs) | own_dependencies) - {service}, key=list(stack.services).index)
+    selected = stack.select(["router", *rest])
+    candidate_env = {**os.environ, "ZENDOCK_CONNECT": endpoint, "ZENDOCK_NAMESPACE": namespace,
+                     "ROS_DOMAIN_ID": str(domain_id)}
+    candidate = Candidate(argv, candidate_env, run_dir / "candidate.log", run_dir)
+    start = time.monotonic()
+    log(f"{service}: {'zendock' + chr(39) + 's own' if own else ' '.join(words)}; beside it: {', '.join(rest) or 'the router'}"
+        f" on {endpoint}, run directory {run_dir}")
+    with Launcher(stack, services=selected, project_dir=run_dir / "stack", working_dir=run_dir,
+                  namespace=ROBOT_NAMESPACE, project_name="conform") as launcher:
+        launcher.wait_healthy(timeout_s=90.0)
+        with open_session(SessionSpec(connect=(endpoint,))) as session:
+            probe = Probe(session, ROBOT_NAMESPACE)
+            ctx = Context(contract, candidate, probe, world, namespace, ROBOT_NAMESPACE,
+                          sim="simulator" in contract.needs or service == "simulator", domain_id=domain_id)
+            try:
+                candidate.start()
+                _run_checks(ctx, report, log)
+            finally:
+                candidate.close()
+                probe.close()
+    report.wall_s = time.monotonic() - start
+    return report
+
+
+def _run_checks(ctx: Context, report: ConformReport, log: Callable[[str], None]) -> None:
+    def add(checks: Check | list[Check]) -> bool:
+        for check in checks if isinstance(checks, list) else [checks]:
+            report.checks.append(check)
+            log(f"{'pass' if check.passed else 'FAIL'}  {check.name}: {check.evidence}")
+        return all(c.passed for c in (checks if isinstance(checks, list) else [checks]))
+
+    if not add(check_starts(ctx)):
+        return
+    add(check_endpoints(ctx))
+    add(check_publishes(ctx))
+    behaviour = BEHAVIOURS.get(ctx.contract.service)
+    if behaviour is not None:
+        add(behaviour(ctx))
+    add(check_bad_requests(ctx))
+    add(check_malformed_burst(ctx, still_serving(ctx)))
+    if ctx.candidate.running:
+        add(check_sigterm(ctx))
+    add(check_restart(ctx))
+
