@@ -43,12 +43,12 @@ def _table(contract: Contract, console: Console) -> None:
 def _run(args: argparse.Namespace) -> int:
     console = Console(highlight=False)
     if args.service is None:
-        for contract in CONTRACTS.values():
-            print(f"{contract.service:12s} {contract.summary}")
+        for each in CONTRACTS.values():
+            print(f"{each.service:12s} {each.summary}")
         return 0
-    contract = CONTRACTS.get(args.service)
-    if contract is None:
+    if args.service not in CONTRACTS:
         raise ConfigError(f"no contract for {args.service!r} (one of: {', '.join(CONTRACTS)})")
+    contract = CONTRACTS[args.service]
     if args.json:
         print(json.dumps(contract_json(contract), indent=2))
     elif args.markdown:

@@ -289,7 +289,7 @@ def _battery(ctx: Context, timeout_s: float = 3.0) -> BatteryState | None:
     return ctx.probe.wait_for(ctx.robot_key("battery_status"), BatteryState, lambda _m: True, timeout_s)
 
 
-def _set_battery(ctx: Context, **values: float) -> None:
+def _set_battery(ctx: Context, **values: Any) -> None:
     call_service(ctx.probe.session, ctx.robot_key("battery/set_state"), SET_BATTERY_STATE,
                  SetBatteryStateRequest(**values), timeout_s=5.0)
 
