@@ -228,6 +228,8 @@ VIZ = Contract(
         Topic(topics.TF, TFMessage, QoS(depth=5)),
         Topic(topics.TF_STATIC, TFMessage, QoS(depth=5)),
         Topic(topics.ULTRASONIC, Range, QoS(depth=5)),
+        Topic(topics.CAMERA_IMAGE, Image, IMAGE_QOS, when="while a viewer watches it"),
+        Topic(topics.ARUCO_DEBUG_IMAGE, Image, IMAGE_QOS, when="while a viewer watches it"),
     ),
     calls=(Request(GET_MAP_SERVICE, GET_MAP, about="the map, once, if none arrived"),),
     flags=(Flag("world", "the world file to draw (as --world)"), Flag("port", "WebSocket port (loopback)")),
