@@ -142,7 +142,8 @@ def contract_markdown(contract: Contract) -> str:
                     "`feedback` and `status` (topics), as the [contracts page](index.md#actions) describes.", ""])
 
     topics_table("Publishes", contract.publishes)
-    topics_table("Subscribes", contract.subscribes)
+    topics_table("Subscribes (what it may read: zendock's own reads these, a replacement what it needs)",
+                 contract.subscribes)
     if contract.subscribes_on_demand:
         out.extend(["It also subscribes on demand to whatever a client of its own asks for.", ""])
     requests_table("Serves", contract.serves)

@@ -124,7 +124,10 @@ class Contract:
         return out
 
     def required_endpoints(self) -> list[tuple[str, str, str]]:
-        return [(kind, key, type_name) for kind, key, type_name, required in self.endpoints() if required]
+        """What every implementation must declare: what it publishes, serves and offers as actions. What it
+        subscribes is what it may read: zendock's own reads all of it, a replacement what it needs."""
+        return [(kind, key, type_name) for kind, key, type_name, required in self.endpoints()
+                if required and kind != "sub"]
 
     def check_endpoint(self, kind: str, type_name: str, key: str, node_name: str) -> None:
         """Raise :class:`ContractViolation` unless the contract names this endpoint (``key`` is the full key)."""
