@@ -96,7 +96,7 @@ class Battery:
     # --- the model -----------------------------------------------------------------------------
 
     def mated(self, now: float) -> bool:
-        return now - self.mated_at <= INPUT_TIMEOUT_S
+        return 0.0 <= now - self.mated_at <= INPUT_TIMEOUT_S  # a stamp from the future: the clock went back
 
     def settle(self) -> None:
         """Current and status for the present charge and inputs."""

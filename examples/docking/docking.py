@@ -59,12 +59,20 @@ CHARGING_STATUSES = (1, 4)  # sensor_msgs/BatteryState CHARGING, FULL
 #: corrects a sideways offset sooner but swings more. The mated contacts allow 4 cm and 0.1 rad.
 LOOKAHEAD_M = 0.25
 MAX_SPEED_MPS, MIN_SPEED_MPS, SLOW_DOWN_PER_S = 0.3, 0.04, 0.6
+#: The approach takes over from the planner this close to the staging pose, heading roughly at the dock:
+#: waiting for the planner to stop and turn on the staging pose costs seconds and gains nothing.
+HANDOVER_M, HANDOVER_HEADING_RAD = 0.3, 0.8
 TURN_GAIN, MAX_TURN_RADPS = 2.5, 1.0
 BACK_OFF_SPEED_MPS = 0.15
 #: Older poses hold the robot still; older battery or contact messages say nothing.
 MAX_POSE_AGE_S, MAX_STATUS_AGE_S = 0.5, 1.0
 #: No centimetre of progress for this long: the robot is stuck against the dock, back off and retry.
 STALL_S = 4.0
+
+
+def fresh(stamp_s: float, now: float, max_age_s: float) -> bool:
+    """Heard within ``max_age_s``; a stamp from the future (the clock went back: a simulator reset) is not."""
+    return 0.0 <= now - stamp_s <= max_age_s
 
 
 def wrap(angle: float) -> float:
@@ -295,7 +303,7 @@ class Docking:
         return ax + k * (bx - ax), ay + k * (by - ay), wrap(ayaw + k * wrap(byaw - ayaw))
 
     def docked(self, now: float) -> bool:
-        return now - self.charging_s <= MAX_STATUS_AGE_S or now - self.mated_s <= MAX_STATUS_AGE_S
+        return fresh(self.charging_s, now, MAX_STATUS_AGE_S) or fresh(self.mated_s, now, MAX_STATUS_AGE_S)
 
     # --- goals -------------------------------------------------------------------------------------
 
@@ -422,7 +430,7 @@ class Docking:
         old pose is 3 cm behind."""
         assert self.pose is not None
         age = min(max(now - self.pose_s, 0.0), 0.3)
-        (v, w), (x, y, yaw) = self.odom if now - self.odom_s < 0.2 else self.command, self.pose
+        (v, w), (x, y, yaw) = self.odom if fresh(self.odom_s, now, 0.2) else self.command, self.pose
         return x + v * age * math.cos(yaw), y + v * age * math.sin(yaw), wrap(yaw + w * age)
 
     def set_state(self, state: str) -> None:
@@ -436,15 +444,22 @@ class Docking:
         if run is None:
             return self.set_state(self.state or "idle")
         self.set_state(run.phase)
+        if now < run.phase_s:  # the clock went back (a simulator reset): time the run from now
+            run.started_s = run.phase_s = run.progress_s = now
         if now - run.started_s > run.max_s:
             return self.finish(run, False, TIMEOUT, f"no end after {run.max_s:g} s")
         if run.kind == "dock" and run.phase != "navigating" and self.docked(now):
-            return self.finish(run, True, 0, "charging" if now - self.charging_s <= MAX_STATUS_AGE_S else "mated")
+            return self.finish(run, True, 0, "charging" if fresh(self.charging_s, now, MAX_STATUS_AGE_S) else "mated")
         if run.phase == "navigating":
             if now - run.phase_s > run.max_staging_s:
                 self.finish(run, False, FAILED_TO_STAGE, f"not at the staging pose after {run.max_staging_s:g} s")
+            elif (self.pose is not None and self.near(self.staging(run.dock), HANDOVER_M)
+                  and abs(wrap(self.pose[2] - run.dock[2])) < HANDOVER_HEADING_RAD and run.nav_goal is not None):
+                self.nav.cancel_goal(run.nav_goal)
+                run.nav_goal = None
+                self.begin_approach(run)
             return self.feedback(run, now, NAV_TO_STAGING_POSE)
-        if self.pose is None or now - self.pose_s > MAX_POSE_AGE_S:
+        if self.pose is None or not fresh(self.pose_s, now, MAX_POSE_AGE_S):
             return self.drive(0.0, 0.0)  # no fresh pose: hold still
         robot = self.predicted_pose(now)
         if run.phase == "approaching":
