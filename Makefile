@@ -52,6 +52,17 @@ test-containers: $(TEST_STAMP)
 clean:
 	rm -rf $(VENV) runs .pytest_cache
 
+# `make ros2`: .venv-ros2, real ROS 2 Jazzy rclpy (Fast DDS) from PyPI wheels with zendock installed editable
+# (`pip install -e ".[ros2]"`) and nav2_msgs / tf2_msgs built by colcon into it, for services.ros2_dds and
+# tests/integration/test_ros2_dds.py (skipped without it). About 5 minutes the first time; outside `make test`.
+ROS2_VENV := .venv-ros2
+.PHONY: ros2
+ros2: $(ROS2_VENV)/.ros2-ready
+
+$(ROS2_VENV)/.ros2-ready: tools/setup_ros2.sh pyproject.toml $(wildcard shared/ros2/definitions/nav2_msgs/action/*.action)
+	bash tools/setup_ros2.sh $(ROS2_VENV)
+	touch $@
+
 # `make pictures` regenerates every shipped picture under docs/ from the current code:
 # - `make picture-demo`: docs/demo_seed_room.png, one demo run in seed_room (about 2 minutes);
 # - `make picture-fleet`: docs/fleet.png, the six-robot hour of the fleet measurements (about 45 minutes).

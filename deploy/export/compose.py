@@ -151,11 +151,20 @@ def _service(name: str, spec: ServiceSpec, namespace: str, volumes: list[str]) -
     return out
 
 
+def runs_on_host_only(spec: ServiceSpec) -> bool:
+    """A service whose interpreter is a host virtualenv's (``.venv-ros2/bin/python``: the ROS 2 DDS face, on
+    rclpy wheels the image does not carry) has no container: the Compose files leave it out."""
+    return bool(spec.command) and spec.command[0].startswith(".venv")
+
+
 def compose_document(stack: Stack) -> dict[str, Any]:
-    """The Compose file's content for ``stack`` (loaded with ``interpolate=False``)."""
+    """The Compose file's content for ``stack`` (loaded with ``interpolate=False``), without the services that
+    run on the host only (:func:`runs_on_host_only`)."""
     volumes: list[str] = []
     services = {}
     for name, spec in stack.services.items():
+        if runs_on_host_only(spec):
+            continue
         own: list[str] = []
         services[name] = _service(name, spec, stack.namespace, own)
         volumes.extend(volume for volume in own if volume not in volumes)

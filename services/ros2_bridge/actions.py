@@ -2,7 +2,7 @@
 
 An action on rmw_zenoh is three services (``<action>/_action/send_goal``, ``cancel_goal``,
 ``get_result``: queryables whose requests and replies are CDR with rmw_zenoh's attachment) and two
-topics (``feedback``, ``status``; forwarded as any other topic, see :mod:`.routes`). zendock's actions
+topics (``feedback``, ``status``; forwarded as any other topic, see :mod:`shared.ros2.bridge_routes`). zendock's actions
 have the same parts under the same names with msgpack payloads (:mod:`shared.action`), so each ROS 2
 request becomes the zendock request of the same type, the reply comes back the same way, and a
 ``get_result`` waits, as in ROS 2, until the goal ends. The relay holds no goal state of its own: the
@@ -19,16 +19,11 @@ from typing import Any
 import zenoh
 
 from shared.action import CANCEL_GOAL, action_key
-from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
-from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.node import Node, ServiceError, ServiceType, ServiceUnavailable
-from shared.ros2 import interfaces
+from shared.ros2 import bridge_routes, interfaces
 from shared.ros2 import types as ros_types
 from shared.ros2.wire import Attachment, data_key
 from shared.schema import MessageError
-from shared.topics import DOCK_ROBOT as DOCK_ROBOT_NAME
-from shared.topics import NAVIGATE_TO_POSE as NAVIGATE_TO_POSE_NAME
-from shared.topics import UNDOCK_ROBOT as UNDOCK_ROBOT_NAME
 
 #: A goal's result may take as long as the goal: docking from across the room, navigation with recoveries.
 RESULT_WAIT_S = 3600.0
@@ -53,20 +48,17 @@ class RelayedAction:
     services: tuple[RelayedService, ...]
 
 
-def _relayed(name: str, ros_type: str, owner: str, zendock_action: Any) -> RelayedAction:
-    parts = interfaces.action_parts(ros_type)
-    return RelayedAction(name, ros_type, owner, (
-        RelayedService("send_goal", parts["send_goal"], zendock_action.send_goal, REQUEST_WAIT_S),
+def _relayed(action: bridge_routes.BridgedAction) -> RelayedAction:
+    parts = interfaces.action_parts(action.ros_type)
+    return RelayedAction(action.name, action.ros_type, action.owner, (
+        RelayedService("send_goal", parts["send_goal"], action.zendock.send_goal, REQUEST_WAIT_S),
         RelayedService("cancel_goal", parts["cancel_goal"], CANCEL_GOAL, REQUEST_WAIT_S),
-        RelayedService("get_result", parts["get_result"], zendock_action.get_result, RESULT_WAIT_S),
+        RelayedService("get_result", parts["get_result"], action.zendock.get_result, RESULT_WAIT_S),
     ))
 
 
-ACTIONS: tuple[RelayedAction, ...] = (
-    _relayed(DOCK_ROBOT_NAME, interfaces.DOCK_ROBOT, "docking", DOCK_ROBOT),
-    _relayed(UNDOCK_ROBOT_NAME, interfaces.UNDOCK_ROBOT, "docking", UNDOCK_ROBOT),
-    _relayed(NAVIGATE_TO_POSE_NAME, interfaces.NAVIGATE_TO_POSE, "planner", NAVIGATE_TO_POSE),
-)
+#: zendock's actions (:data:`shared.ros2.bridge_routes.ACTIONS`) as rmw_zenoh's services.
+ACTIONS: tuple[RelayedAction, ...] = tuple(_relayed(action) for action in bridge_routes.ACTIONS)
 
 
 class ActionRelay:

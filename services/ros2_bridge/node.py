@@ -6,7 +6,7 @@ subscriptions and action services, announced by liveliness tokens in rmw_zenoh's
 (:mod:`shared.ros2.wire`) while the service itself is up (:mod:`.graph`), and exchanges CDR samples with
 them on rmw_zenoh's data keys:
 
-* zendock -> ROS 2 (:data:`~services.ros2_bridge.routes.OUTBOUND`): a key is read and forwarded only
+* zendock -> ROS 2 (:data:`~shared.ros2.bridge_routes.OUTBOUND`): a key is read and forwarded only
   while a ROS 2 subscription for its topic exists (the peer's token says so). Transient-local topics
   (``/map``, ``/tf_static``, actions' status) are always read and always published, through zenoh-ext's
   AdvancedPublisher configured as rmw_zenoh configures a TRANSIENT_LOCAL publisher (a cache as deep as
@@ -38,15 +38,6 @@ from pydantic import Field, field_validator
 from services.ros2_bridge.actions import ACTIONS, ActionRelay
 from services.ros2_bridge.demand import PeerSubscriptions
 from services.ros2_bridge.graph import GraphMirror
-from services.ros2_bridge.routes import (
-    GOAL_POSE,
-    INBOUND,
-    INITIAL_POSE,
-    OUTBOUND,
-    TWIST_STAMPED,
-    Inbound,
-    Route,
-)
 from shared import topics
 from shared.interfaces.simulator import SET_LOCALISATION, SetLocalisationRequest, SetLocalisationResponse
 from shared.messages import PoseStamped, PoseWithCovarianceStamped, Twist
@@ -55,6 +46,15 @@ from shared.navigation import NavigationClient
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2 import types as ros_types
+from shared.ros2.bridge_routes import (
+    GOAL_POSE,
+    INBOUND,
+    INITIAL_POSE,
+    OUTBOUND,
+    TWIST_STAMPED,
+    Inbound,
+    Route,
+)
 from shared.ros2.wire import (
     ADMIN_SPACE,
     Attachment,

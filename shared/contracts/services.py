@@ -266,8 +266,24 @@ ROS2_BRIDGE = Contract(
     notes=("It subscribes to a robot's topics only while a ROS 2 subscriber wants them.",),
 )
 
+ROS2_DDS = Contract(
+    service="ros2_dds",
+    summary="zendock seen from ROS 2 on DDS (real rclpy, Fast DDS): nodes, topics, actions, forwarded only while wanted.",
+    publishes=(
+        Topic(topics.CMD_VEL, Twist, RELIABLE, about="from ROS 2's /cmd_vel (Twist or TwistStamped)"),
+    ),
+    uses_actions=(Action(topics.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE), Action(topics.DOCK_ROBOT, DOCK_ROBOT),
+                  Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT)),
+    subscribes_on_demand=True,
+    flags=(Flag("domain_id", "the ROS_DOMAIN_ID of its rclpy (DDS) face", needed=True),),
+    behaviour=("shows zendock to ROS 2 on DDS: an rclpy node for each zendock service that is up",),
+    needs=("simulator",),
+    notes=("It subscribes to a robot's topics only while a ROS 2 subscriber matches (transient-local ones "
+           "always), and runs from .venv-ros2 (make ros2).",),
+)
+
 CONTRACTS: dict[str, Contract] = {c.service: c for c in (
-    BATTERY, DOCKING, FLEET, PERCEPTION, PLANNER, POSE, ROS2_BRIDGE, SIMULATOR, VIZ)}
+    BATTERY, DOCKING, FLEET, PERCEPTION, PLANNER, POSE, ROS2_BRIDGE, ROS2_DDS, SIMULATOR, VIZ)}
 
 
 def contract_for(service: str) -> Contract | None:

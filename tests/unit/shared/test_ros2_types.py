@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from services.ros2_bridge.actions import ACTIONS
-from services.ros2_bridge.routes import INBOUND, OUTBOUND
 from shared.action import UUID, CancelGoalRequest, CancelGoalResponse, GoalInfo, GoalStatus, GoalStatusArray
 from shared.interfaces.docking import (
     DOCK_ROBOT,
@@ -56,6 +55,7 @@ from shared.messages import (
     Vector3,
 )
 from shared.ros2 import types
+from shared.ros2.bridge_routes import INBOUND, OUTBOUND
 from shared.schema import Message
 
 HEADER = Header(Time(12, 345_000_000), "base_link")

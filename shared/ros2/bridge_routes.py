@@ -1,8 +1,9 @@
-"""What the ROS 2 bridge carries: each zendock key, its ROS 2 topic and type, who owns it, its QoS.
+"""What zendock's ROS 2 faces carry: each zendock key, its ROS 2 topic and type, who owns it, its QoS.
 
-The owner is the zendock service that publishes (or, for commands, consumes) the key; the bridge
-announces it to ROS 2 as a node of that name, so ``ros2 node list`` shows zendock's services and
-``ros2 topic info -v`` names the service behind each topic.
+Both faces read these tables: ``services.ros2_bridge`` (rmw_zenoh's wire on zendock's router) and
+``services.ros2_dds`` (real rclpy on the default middleware, Fast DDS). The owner is the zendock service
+that publishes (or, for commands, consumes) the key; a face announces it to ROS 2 as a node of that name,
+so ``ros2 node list`` shows zendock's services and ``ros2 topic info -v`` names the service behind each topic.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from shared import topics
-from shared.action import GoalStatusArray, action_key
+from shared.action import ActionType, GoalStatusArray, action_key
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.messages import (
@@ -57,17 +58,37 @@ def _out(topic: str, zendock_type: type[Message], owner: str, qos: QosProfile = 
     return Route(topic, topic, zendock_type, ros_type or zendock_type.TYPE_NAME, owner, qos)
 
 
-def _action_topics(name: str, ros_action: str, zendock_action: Any, owner: str) -> tuple[Route, ...]:
-    """An action's feedback and status topics (its services are relayed by :mod:`.actions`)."""
-    parts = interfaces.action_parts(ros_action)
+@dataclass(frozen=True)
+class BridgedAction:
+    """One of zendock's actions as a ROS 2 action: its name (relative, as the topics), Jazzy type, owner
+    and zendock's action type (whose server the ROS 2 goals are relayed to)."""
+
+    name: str
+    ros_type: str
+    owner: str
+    zendock: ActionType[Any, Any, Any]
+
+
+ACTIONS: tuple[BridgedAction, ...] = (
+    BridgedAction(topics.DOCK_ROBOT, interfaces.DOCK_ROBOT, "docking", DOCK_ROBOT),
+    BridgedAction(topics.UNDOCK_ROBOT, interfaces.UNDOCK_ROBOT, "docking", UNDOCK_ROBOT),
+    BridgedAction(topics.NAVIGATE_TO_POSE, interfaces.NAVIGATE_TO_POSE, "planner", NAVIGATE_TO_POSE),
+)
+
+
+def _action_topics(action: BridgedAction) -> tuple[Route, ...]:
+    """An action's feedback and status topics (its services are relayed by each face on its own)."""
+    parts = interfaces.action_parts(action.ros_type)
     return (
-        _out(action_key(name, "feedback"), zendock_action.feedback_message, owner, ros_type=parts["feedback"]),
-        _out(action_key(name, "status"), GoalStatusArray, owner, LATCHED, ros_type=parts["status"]),
+        _out(action_key(action.name, "feedback"), action.zendock.feedback_message, action.owner,
+             ros_type=parts["feedback"]),
+        _out(action_key(action.name, "status"), GoalStatusArray, action.owner, LATCHED, ros_type=parts["status"]),
     )
 
 
-#: zendock -> ROS 2, forwarded only while a ROS 2 subscription for the topic exists.
-OUTBOUND: tuple[Route, ...] = (
+#: zendock -> ROS 2 topics of their own (not parts of an action), forwarded only while a ROS 2
+#: subscription for the topic exists (transient-local ones always).
+TOPICS: tuple[Route, ...] = (
     _out(topics.CLOCK, Clock, "simulator"),
     _out(topics.TF, TFMessage, "simulator"),
     _out(topics.TF_STATIC, TFMessage, "simulator", LATCHED),
@@ -81,10 +102,11 @@ OUTBOUND: tuple[Route, ...] = (
     _out(topics.MAP, OccupancyGrid, "planner", LATCHED),
     _out(topics.PLAN, Path, "planner"),
     _out(topics.DETECTED_DOCK_POSE, PoseStamped, "perception", SENSOR_DATA),
-    *_action_topics(topics.DOCK_ROBOT, interfaces.DOCK_ROBOT, DOCK_ROBOT, "docking"),
-    *_action_topics(topics.UNDOCK_ROBOT, interfaces.UNDOCK_ROBOT, UNDOCK_ROBOT, "docking"),
-    *_action_topics(topics.NAVIGATE_TO_POSE, interfaces.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE, "planner"),
 )
+
+#: Every zendock -> ROS 2 topic on rmw_zenoh's wire: the topics and the actions' feedback and status (an
+#: rclpy ActionServer publishes those two itself).
+OUTBOUND: tuple[Route, ...] = TOPICS + tuple(route for action in ACTIONS for route in _action_topics(action))
 
 #: What a ROS 2 command on cmd_vel may be: Twist, or TwistStamped as Jazzy's controllers publish.
 TWIST = "geometry_msgs/msg/Twist"

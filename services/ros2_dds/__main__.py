@@ -1,0 +1,5 @@
+import sys
+
+from services.ros2_dds.node import main
+
+sys.exit(main())

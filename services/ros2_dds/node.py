@@ -1,0 +1,533 @@
+"""The ROS 2 DDS face: zendock as real rclpy nodes on ROS 2's default middleware (Jazzy, Fast DDS).
+
+``services.ros2_bridge`` speaks rmw_zenoh's wire on zendock's router; most ROS 2 machines run Fast DDS,
+so this service is the same face built on rclpy itself (run it from ``.venv-ros2``, see ``make ros2``).
+It reads the same tables (:mod:`shared.ros2.bridge_routes`) and, on ``domain_id`` with discovery on
+loopback only (``discovery_range``):
+
+* shows one rclpy node per zendock service (``simulator``, ``battery``, ``pose``, ``planner``,
+  ``perception``, ``docking``) while that service's zendock node token is up, and its own ``ros2_dds``;
+* zendock -> ROS 2: each topic with its Jazzy type and QoS, read from zendock and published only while a
+  ROS 2 subscription matches the publisher (polled every ``demand_poll_s``); transient-local topics
+  (``/map``, ``/tf_static``) are always read, published TRANSIENT_LOCAL, and the last one is published
+  again when its node comes back, so a late subscriber gets it;
+* ROS 2 -> zendock: ``/cmd_vel`` (Twist; TwistStamped too once a ROS 2 node publishes it so, through a
+  second DDS participant's node ``simulator_twist_stamped``: one participant cannot have a topic under two
+  types), ``/goal_pose`` (a ``navigate_to_pose`` goal), ``/initialpose``
+  (``simulator/set_localisation``);
+* ``navigate_to_pose``, ``dock_robot``, ``undock_robot``: rclpy ActionServers relaying goal, feedback,
+  result and cancel to zendock's action servers (:class:`shared.action.ActionClient`); zendock's server
+  decides acceptance, and is the only authority on a goal.
+
+Messages convert by field name (:mod:`.convert`). Anything that does not convert is refused, counted and
+logged at most once per interval per kind; nothing from ROS 2 stops the face.
+
+Threads: zendock's executor (the main thread) owns the zendock side and the rclpy nodes' lifecycle; an
+rclpy MultiThreadedExecutor spins on its own thread and hands what ROS 2 sends to zendock's executor
+(``node.post``). Action execute callbacks wait on their zendock goal in the rclpy executor's threads.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import zenoh
+from pydantic import Field
+
+from services.ros2_dds.convert import ConversionError, from_ros, ros_class, to_ros
+from shared import topics
+from shared.action import ActionClient, ClientGoal, GoalStatusCode
+from shared.interfaces.navigation import NavigateToPoseGoal
+from shared.interfaces.simulator import SET_LOCALISATION, SetLocalisationRequest, SetLocalisationResponse
+from shared.messages import PoseStamped, PoseWithCovarianceStamped, Twist
+from shared.names import node_token_key, parse_token_key
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
+from shared.ratelimit import RateLimitedLogger
+from shared.ros2.bridge_routes import (
+    ACTIONS,
+    GOAL_POSE,
+    INBOUND,
+    INITIAL_POSE,
+    TOPICS,
+    TWIST_STAMPED,
+    BridgedAction,
+    Inbound,
+    Route,
+)
+from shared.ros2.wire import Durability, QosProfile, Reliability
+from shared.runtime import ServiceParams, ServiceSpec
+
+STATS_PERIOD_S = 30.0
+FACE_NODE = "ros2_dds"
+#: How long a ROS 2 goal waits for zendock's server to accept or reject it.
+ACCEPT_WAIT_S = 10.0
+EXECUTOR_THREADS = 8
+#: The zendock services shown as ROS 2 nodes (every owner in the tables).
+OWNERS: tuple[str, ...] = tuple(dict.fromkeys(
+    [r.owner for r in TOPICS] + [i.owner for i in INBOUND] + [a.owner for a in ACTIONS]))
+
+
+def _default_domain() -> int:
+    raw = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    return int(raw) if raw.isdigit() else 0
+
+
+class Params(ServiceParams):
+    """Parameters of ``python -m services.ros2_dds``."""
+
+    domain_id: int = Field(default_factory=_default_domain, ge=0, le=232,
+                           description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
+    discovery_range: Literal["LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT"] = Field(
+        "LOCALHOST", description="ROS_AUTOMATIC_DISCOVERY_RANGE of the rclpy context (default: loopback only)")
+    demand_poll_s: float = Field(0.2, gt=0.0, le=5.0,
+                                 description="how often the ROS 2 subscription count of each topic is read")
+
+
+def rclpy_qos(profile: QosProfile) -> Any:
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415
+
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=profile.depth,
+        reliability=(ReliabilityPolicy.BEST_EFFORT if profile.reliability is Reliability.BEST_EFFORT
+                     else ReliabilityPolicy.RELIABLE),
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if profile.durability is Durability.TRANSIENT_LOCAL
+                    else DurabilityPolicy.VOLATILE))
+
+
+@dataclass
+class _Outlet:
+    """One zendock -> ROS 2 topic: its zendock feed (while wanted) and, while its node is up, its publisher."""
+
+    route: Route
+    ros_class: Any
+    publisher: Any = None
+    feed: Subscription[Any] | None = None
+    last: Any = None  # transient-local topics: the last message, for a publisher that comes back
+
+
+@dataclass
+class _Relay:
+    """One ROS 2 goal relayed to zendock's server."""
+
+    action: BridgedAction
+    zendock_goal: ClientGoal[Any, Any] | None = None
+    ros_handle: Any = None
+    pending_feedback: Any = None
+    done: threading.Event = field(default_factory=threading.Event)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+
+@dataclass
+class _Face:
+    """One zendock service's rclpy node and what hangs on it."""
+
+    owner: str
+    node: Any
+    action_servers: list[Any] = field(default_factory=list)
+    extra: list[Any] = field(default_factory=list)  # nodes of the second participant (TwistStamped)
+
+
+class Ros2Dds:
+    def __init__(self, node: Node, params: Params) -> None:
+        self.node = node
+        self.params = params
+        self.counts: Counter[str] = Counter()
+        self._counts_lock = threading.Lock()
+        self._say = RateLimitedLogger(node.log, interval_s=5.0)
+        self._lock = threading.RLock()  # rclpy entities of the faces: created, used and destroyed under it
+        self._closing = False
+
+        # --- rclpy: a context (one DDS participant); a second one carries /cmd_vel as TwistStamped if asked
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = params.discovery_range
+        os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy: it would only warn
+        import rclpy  # noqa: PLC0415 - only in .venv-ros2; imported when the service starts
+        from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415
+        from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415
+
+        self._rclpy = rclpy
+        self._executor_class = MultiThreadedExecutor
+        self._signal_options = SignalHandlerOptions.NO
+        self.contexts: list[Any] = []
+        self.executors: list[Any] = []
+        self._threads: list[threading.Thread] = []
+        self._participant(EXECUTOR_THREADS)
+        self._own = rclpy.create_node(FACE_NODE, context=self.contexts[0])
+        self.executors[0].add_node(self._own)
+
+        # --- zendock side
+        self._cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        self.clients: dict[str, ActionClient[Any, Any, Any]] = {
+            a.name: ActionClient(node, a.zendock, a.name) for a in ACTIONS}
+        self.outlets = [_Outlet(route, ros_class(route.ros_type)) for route in TOPICS]
+        for outlet in self.outlets:
+            if outlet.route.latched:
+                self._feed(outlet)
+        self.faces: dict[str, _Face] = {}
+        self._relays: dict[int, _Relay] = {}  # id(ROS goal message) -> relay, until execute takes it
+        self._active: list[_Relay] = []
+        self._services_watch = node.session.liveliness().declare_subscriber(
+            node_token_key(node.namespace, "*"), self._on_service_token, history=True)
+        node.create_timer(params.demand_poll_s, self._poll_demand, wall=True)
+        node.create_timer(STATS_PERIOD_S, self._report_stats, wall=True)
+        node.log.info("ROS 2 domain %d (rclpy, %s, discovery %s): %d topics out, %d in, %d actions",
+                      params.domain_id, os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp"),
+                      params.discovery_range, len(TOPICS), len(INBOUND), len(ACTIONS))
+
+    def _participant(self, threads: int) -> int:
+        """A new rclpy context (a DDS participant) with its executor spinning on a thread; its index."""
+        context = self._rclpy.Context()
+        self._rclpy.init(context=context, domain_id=self.params.domain_id,
+                         signal_handler_options=self._signal_options)
+        executor = self._executor_class(num_threads=threads, context=context)
+        thread = threading.Thread(target=self._spin, args=(executor,), daemon=True,
+                                  name=f"rclpy-executor-{len(self.contexts)}")
+        self.contexts.append(context)
+        self.executors.append(executor)
+        self._threads.append(thread)
+        thread.start()
+        return len(self.contexts) - 1
+
+    def _spin(self, executor: Any) -> None:
+        try:
+            executor.spin()
+        except Exception as exc:  # shutdown races end spin with various rclpy errors
+            if not self._closing:
+                self.node.log.error("rclpy executor stopped: %s", exc)
+
+    # --- the graph: a node per zendock service that is up --------------------------------------------
+
+    def _on_service_token(self, sample: zenoh.Sample) -> None:
+        entry = parse_token_key(str(sample.key_expr))
+        if entry is not None and entry.node in OWNERS:
+            self.node.post(self._service_changed, entry.node, sample.kind == zenoh.SampleKind.PUT)
+
+    def _service_changed(self, owner: str, alive: bool) -> None:
+        if self._closing:
+            return
+        if alive and owner not in self.faces:
+            self._open_face(owner)
+            self.node.log.info("zendock's %s is up: ROS 2 sees node /%s", owner, owner)
+        elif not alive and owner in self.faces:
+            self._close_face(self.faces.pop(owner))
+            self.node.log.info("zendock's %s is gone: its ROS 2 node is destroyed", owner)
+
+    def _open_face(self, owner: str) -> None:
+        from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: PLC0415
+        from rclpy.callback_groups import ReentrantCallbackGroup  # noqa: PLC0415
+
+        with self._lock:
+            rnode = self._rclpy.create_node(owner, context=self.contexts[0])
+            face = _Face(owner, rnode)
+            group = ReentrantCallbackGroup()
+            for outlet in self.outlets:
+                if outlet.route.owner == owner:
+                    outlet.publisher = rnode.create_publisher(outlet.ros_class, outlet.route.ros_topic,
+                                                              rclpy_qos(outlet.route.qos))
+                    if outlet.last is not None:
+                        outlet.publisher.publish(outlet.last)
+            for inbound in INBOUND:
+                if inbound.owner == owner and inbound.ros_type != TWIST_STAMPED:  # that one: _poll_stamped
+                    rnode.create_subscription(ros_class(inbound.ros_type), inbound.ros_topic,
+                                              self._inlet(inbound), rclpy_qos(QosProfile()), callback_group=group)
+            for action in ACTIONS:
+                if action.owner != owner:
+                    continue
+                face.action_servers.append(ActionServer(
+                    rnode, ros_class(action.ros_type), action.name,
+                    execute_callback=lambda handle, a=action: self._execute(a, handle),
+                    goal_callback=lambda goal, a=action: (GoalResponse.ACCEPT if self._accept(a, goal)
+                                                          else GoalResponse.REJECT),
+                    cancel_callback=lambda handle, a=action: (CancelResponse.ACCEPT if self._cancel(a, handle)
+                                                              else CancelResponse.REJECT),
+                    callback_group=group))
+            self.executors[0].add_node(rnode)
+            self.faces[owner] = face
+
+    def _close_face(self, face: _Face) -> None:
+        for relay in list(self._active):
+            if relay.action.owner == face.owner:
+                relay.done.set()  # its server went with the service: the execute callback aborts the goal
+        with self._lock:
+            for outlet in self.outlets:
+                if outlet.route.owner == face.owner:
+                    outlet.publisher = None
+                    if outlet.feed is not None and not outlet.route.latched:
+                        outlet.feed.undeclare()
+                        outlet.feed = None
+            for server in face.action_servers:
+                server.destroy()
+            for executor, rnode in [(self.executors[0], face.node), *((self.executors[-1], e) for e in face.extra)]:
+                executor.remove_node(rnode)
+                rnode.destroy_node()
+
+    # --- zendock -> ROS 2 ----------------------------------------------------------------------------
+
+    def _poll_demand(self) -> None:
+        self._poll_stamped()
+        with self._lock:
+            for outlet in self.outlets:
+                if outlet.route.latched:
+                    continue
+                wanted = outlet.publisher is not None and outlet.publisher.get_subscription_count() > 0
+                if wanted and outlet.feed is None:
+                    self._feed(outlet)
+                    self.node.log.info("a ROS 2 node subscribes to /%s: forwarding %s", outlet.route.ros_topic,
+                                       self.node.key(outlet.route.zendock_topic))
+                elif not wanted and outlet.feed is not None:
+                    outlet.feed.undeclare()
+                    outlet.feed = None
+                    self.node.log.info("no ROS 2 subscription to /%s left: no longer forwarding it",
+                                       outlet.route.ros_topic)
+
+    def _poll_stamped(self) -> None:
+        """/cmd_vel as TwistStamped, once a ROS 2 node publishes it so: a DDS participant cannot have a topic
+        under two types, so it is a second participant's node (``<owner>_twist_stamped``)."""
+        for inbound in INBOUND:
+            face = self.faces.get(inbound.owner)
+            if inbound.ros_type != TWIST_STAMPED or face is None or face.extra:
+                continue
+            with self._lock:
+                infos = face.node.get_publishers_info_by_topic(f"/{inbound.ros_topic}")
+                if not any(info.topic_type == TWIST_STAMPED for info in infos):
+                    continue
+                if len(self.contexts) < 2:  # made the first time it is needed: a participant costs
+                    self._participant(2)
+                extra = self._rclpy.create_node(f"{inbound.owner}_twist_stamped", context=self.contexts[1])
+                extra.create_subscription(ros_class(inbound.ros_type), inbound.ros_topic, self._inlet(inbound),
+                                          rclpy_qos(QosProfile()))
+                face.extra.append(extra)
+                self.executors[1].add_node(extra)
+            self.node.log.info("a ROS 2 node publishes /%s as %s: taking it too", inbound.ros_topic,
+                               inbound.ros_type)
+
+    def _feed(self, outlet: _Outlet) -> None:
+        qos = SENSOR_DATA if outlet.route.qos.reliability is Reliability.BEST_EFFORT else QoS(depth=10)
+        outlet.feed = self.node.create_subscription(
+            outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos)
+
+    def _forward(self, outlet: _Outlet, msg: Any) -> None:
+        try:
+            ros_msg = to_ros(msg, outlet.ros_class)
+        except ConversionError as exc:
+            self._refuse(f"encode-{outlet.route.ros_topic}", "could not put /%s on ROS 2: %s",
+                         outlet.route.ros_topic, exc)
+            return
+        with self._lock:
+            if outlet.route.latched:
+                outlet.last = ros_msg
+            if outlet.publisher is None:
+                return
+            outlet.publisher.publish(ros_msg)
+        self._count(f"out /{outlet.route.ros_topic}")
+
+    # --- ROS 2 -> zendock ----------------------------------------------------------------------------
+
+    def _inlet(self, inbound: Inbound) -> Callable[[Any], None]:
+        def on_message(ros_msg: Any) -> None:  # rclpy's thread: the work is zendock's executor's
+            self.node.post(self._receive, inbound, ros_msg)
+
+        return on_message
+
+    def _receive(self, inbound: Inbound, ros_msg: Any) -> None:
+        topic = f"/{inbound.ros_topic}"
+        try:
+            if inbound.ros_type == TWIST_STAMPED:
+                ros_msg = ros_msg.twist
+            msg = from_ros(ros_msg, inbound.zendock_type)
+        except ConversionError as exc:
+            self._refuse(f"malformed-{inbound.ros_topic}", "refused a message on %s: %s", topic, exc)
+            return
+        self._count(f"in {topic}")
+        if isinstance(msg, Twist):
+            self._cmd_vel.publish(msg)
+        elif inbound.ros_topic == GOAL_POSE and isinstance(msg, PoseStamped):
+            self._navigate(msg)
+        elif inbound.ros_topic == INITIAL_POSE and isinstance(msg, PoseWithCovarianceStamped):
+            self._set_localisation(msg)
+
+    def _navigate(self, goal: PoseStamped) -> None:
+        frame = goal.header.frame_id.lstrip("/")
+        if frame not in ("", topics.MAP_FRAME):
+            self._refuse("goal-frame", "refused a goal in frame %r: zendock plans in %r", goal.header.frame_id,
+                         topics.MAP_FRAME)
+            return
+        target = goal.pose.to_pose2d()
+        self.node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
+        self.clients[topics.NAVIGATE_TO_POSE].send_goal(NavigateToPoseGoal(pose=goal))
+
+    def _set_localisation(self, estimate: PoseWithCovarianceStamped) -> None:
+        frame = estimate.header.frame_id.lstrip("/")
+        if frame not in ("", topics.MAP_FRAME):
+            self._refuse("initialpose-frame", "refused an initial pose in frame %r: zendock localises in %r",
+                         estimate.header.frame_id, topics.MAP_FRAME)
+            return
+        belief = estimate.pose.pose.to_pose2d()
+
+        def done(reply: SetLocalisationResponse | None, error: ServiceError | None) -> None:
+            if error is not None or reply is None or not reply.success:
+                self._refuse("initialpose-failed", "the simulator's localiser did not take the initial pose: %s",
+                             error or (reply.message if reply else "no reply"))
+            else:
+                self.node.log.info("initial pose from ROS 2: the localiser now believes (%.2f, %.2f, %.2f)",
+                                   belief.x, belief.y, belief.yaw)
+
+        self.node.call_async(SET_LOCALISATION, topics.SIM_SET_LOCALISATION,
+                             SetLocalisationRequest(x=belief.x, y=belief.y, yaw=belief.yaw), done)
+
+    # --- actions: rclpy ActionServers relaying to zendock's ------------------------------------------
+
+    def _accept(self, action: BridgedAction, ros_goal: Any) -> bool:
+        """rclpy's goal callback (an executor thread): zendock's server decides, within ACCEPT_WAIT_S."""
+        try:
+            goal = from_ros(ros_goal, action.zendock.goal)
+        except ConversionError as exc:
+            self._refuse(f"goal-{action.name}", "refused a %s goal: %s", action.name, exc)
+            return False
+        relay = _Relay(action)
+        client = self.clients[action.name]
+        sent = threading.Event()
+
+        def send() -> None:
+            relay.zendock_goal = client.send_goal(goal, on_feedback=lambda fb: self._feedback(relay, fb),
+                                                  on_done=lambda _h: relay.done.set(), timeout_s=ACCEPT_WAIT_S)
+            sent.set()
+
+        self.node.post(send)
+        deadline = time.monotonic() + ACCEPT_WAIT_S
+        while time.monotonic() < deadline and not self._closing:
+            if sent.is_set():
+                assert relay.zendock_goal is not None
+                with client.lock:
+                    accepted = relay.zendock_goal.accepted
+                    why = relay.zendock_goal.rejection
+                if accepted is not None:
+                    break
+            time.sleep(0.002)
+        else:
+            self._refuse(f"goal-timeout-{action.name}", "%s: zendock's server did not answer a goal in %.0f s",
+                         action.name, ACCEPT_WAIT_S)
+            return False
+        if not accepted:
+            self._refuse(f"goal-rejected-{action.name}", "%s: goal rejected: %s", action.name, why)
+            return False
+        self._count(f"goal {action.name}")
+        with self._lock:
+            self._relays[id(ros_goal)] = relay
+            self._active.append(relay)
+        return True
+
+    def _feedback(self, relay: _Relay, feedback: Any) -> None:
+        try:
+            ros_feedback = to_ros(feedback, ros_class(f"{relay.action.ros_type}_Feedback"))
+        except ConversionError as exc:
+            self._refuse(f"feedback-{relay.action.name}", "could not put %s feedback on ROS 2: %s",
+                         relay.action.name, exc)
+            return
+        with relay.lock:
+            if relay.ros_handle is None:
+                relay.pending_feedback = ros_feedback
+                return
+            handle = relay.ros_handle
+        handle.publish_feedback(ros_feedback)
+        self._count(f"feedback {relay.action.name}")
+
+    def _cancel(self, action: BridgedAction, ros_handle: Any) -> bool:
+        relay = next((r for r in list(self._active) if r.ros_handle is ros_handle), None)
+        if relay is None or relay.zendock_goal is None:
+            return False
+        self.node.post(self.clients[action.name].cancel_goal, relay.zendock_goal)
+        self._count(f"cancel {action.name}")
+        return True
+
+    def _execute(self, action: BridgedAction, ros_handle: Any) -> Any:
+        """rclpy's execute callback (an executor thread): waits for zendock's goal to end, then ends the ROS 2
+        goal the same way with zendock's result."""
+        result_class = ros_class(f"{action.ros_type}_Result")
+        with self._lock:
+            relay = self._relays.pop(id(ros_handle.request), None)
+        if relay is None or relay.zendock_goal is None:
+            ros_handle.abort()
+            return result_class()
+        with relay.lock:
+            relay.ros_handle = ros_handle
+            pending, relay.pending_feedback = relay.pending_feedback, None
+        if pending is not None:
+            ros_handle.publish_feedback(pending)
+        try:
+            while not relay.done.wait(0.2):
+                if self._closing:
+                    break
+            goal = relay.zendock_goal
+            with self.clients[action.name].lock:
+                status, result, error = goal.status, goal.result, goal.error
+            self.clients[action.name].forget(goal)
+            try:
+                ros_result = to_ros(result, result_class) if result is not None else result_class()
+            except ConversionError as exc:
+                self._refuse(f"result-{action.name}", "could not put a %s result on ROS 2: %s", action.name, exc)
+                ros_result, status = result_class(), GoalStatusCode.ABORTED
+            if status == GoalStatusCode.SUCCEEDED:
+                ros_handle.succeed()
+            elif status == GoalStatusCode.CANCELED and ros_handle.is_cancel_requested:
+                ros_handle.canceled()
+            else:
+                if error or not status.terminal:
+                    self._refuse(f"goal-lost-{action.name}", "%s: zendock's goal ended without a result: %s",
+                                 action.name, error or "its server went away")
+                ros_handle.abort()
+            self._count(f"result {action.name} {status.name}")
+            return ros_result
+        finally:
+            with self._lock:
+                if relay in self._active:
+                    self._active.remove(relay)
+
+    # --- bookkeeping ---------------------------------------------------------------------------------
+
+    def _count(self, what: str) -> None:
+        with self._counts_lock:
+            self.counts[what] += 1
+
+    def _refuse(self, kind: str, fmt: str, *args: object) -> None:
+        self._count(f"refused {kind}")
+        self._say.warning(kind, fmt, *args)
+
+    def _report_stats(self) -> None:
+        with self._counts_lock:
+            counts = dict(sorted(self.counts.items()))
+        if counts:
+            self.node.log.info("samples %s", counts)
+
+    def close(self) -> None:
+        self._closing = True
+        self._report_stats()
+        self._services_watch.undeclare()
+        for face in list(self.faces.values()):
+            self._close_face(face)
+        self.faces.clear()
+        with self._lock:
+            for outlet in self.outlets:
+                if outlet.feed is not None:
+                    outlet.feed.undeclare()
+                    outlet.feed = None
+        for executor in self.executors:
+            executor.shutdown(timeout_sec=2.0)
+        for thread in self._threads:
+            thread.join(timeout=3.0)
+        self._own.destroy_node()
+        for context in self.contexts:
+            context.try_shutdown()
+
+
+SERVICE = ServiceSpec("ros2_dds", Params, Ros2Dds,
+                      description="zendock's ROS 2 DDS face: real rclpy nodes (Jazzy, Fast DDS) for zendock's services")
+
+
+def main(argv: list[str] | None = None) -> int:
+    return SERVICE.run(argv)

@@ -1,0 +1,107 @@
+"""A real rclpy user (ROS 2 Jazzy on Fast DDS, in .venv-ros2) lists, echoes, drives, navigates and docks a
+zendock robot through services.ros2_dds, and sees a stopped zendock service leave the ROS 2 graph."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import subprocess
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.testing.config import DEFAULT_STACK, StackConfig
+from tests.support.processes import REPO_ROOT
+
+ROS2_VENV = REPO_ROOT / ".venv-ros2"
+ROS2_PYTHON = ROS2_VENV / "bin" / "python"
+USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
+ROS2_READY = ROS2_PYTHON.exists() and any((ROS2_VENV / "lib").glob("python3.*/site-packages/nav2_msgs/action"))
+
+pytestmark = pytest.mark.skipif(
+    not ROS2_READY, reason=f"{ROS2_VENV} with rclpy and nav2_msgs is missing: `make ros2` builds it (about 5 min)")
+
+
+@pytest.fixture
+def dds_stack(tmp_path: Path) -> Iterator[tuple[Launcher, int]]:
+    """The default stack (synthetic detector, rtf 4) plus ros2_dds on a random ROS 2 domain in 100-200."""
+    domain = random.randint(100, 200)
+    endpoint = free_endpoint()
+    environment = {**StackConfig(detector="synthetic", rtf="4").environment(endpoint, tmp_path),
+                   "ROS_DOMAIN_ID": str(domain)}
+    stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
+    launcher = Launcher(stack, profiles=["ros2-dds"], project_dir=tmp_path, working_dir=REPO_ROOT,
+                        project_name="zendock-test")
+    assert "ros2_dds" in launcher.services
+    try:
+        launcher.up()
+        launcher.wait_healthy(timeout_s=90.0)
+        yield launcher, domain
+    finally:
+        launcher.down()
+
+
+def _run_user(launcher: Launcher, domain: int, timeout_s: float) -> tuple[dict[str, dict[str, Any]], str]:
+    """Run the rclpy user to the end; its steps by name and its stderr. Stops the planner when asked."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTHON"))}
+    env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    user = subprocess.Popen([str(ROS2_PYTHON), str(USER_SCRIPT)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=REPO_ROOT, env=env)
+    timer = threading.Timer(timeout_s, user.kill)
+    timer.start()
+    steps: dict[str, dict[str, Any]] = {}
+    try:
+        assert user.stdout is not None
+        for line in user.stdout:
+            if not line.startswith("{"):
+                continue
+            step = json.loads(line)
+            steps[step["step"]] = step
+            print(line.rstrip())  # with -s: what the user saw, step by step
+            if step["step"] == "stop_planner":
+                launcher.stop("planner")
+        stderr = user.stderr.read() if user.stderr is not None else ""
+        user.wait(timeout=10)
+    finally:
+        timer.cancel()
+        if user.poll() is None:
+            user.kill()
+            user.wait()
+    return steps, stderr
+
+
+def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher, int]) -> None:
+    launcher, domain = dds_stack
+    started = time.monotonic()
+    steps, stderr = _run_user(launcher, domain, timeout_s=150.0)
+    face_log = "\n".join(launcher.logs("ros2_dds", 40))
+
+    def check(name: str) -> dict[str, Any]:
+        step = steps.get(name)
+        assert step is not None, (f"the rclpy user never reported {name!r} (reported: {list(steps)});\n"
+                                  f"its stderr:\n{stderr[-3000:]}\nros2_dds:\n{face_log}")
+        assert step["ok"], f"{name}: {json.dumps(step)}\nros2_dds:\n{face_log}"
+        return step
+
+    graph = check("graph")
+    assert graph["topics"]["/cmd_vel"] == ["geometry_msgs/msg/Twist"], graph
+    check("battery_status")
+    late_map = check("late_map")
+    assert late_map["cells"] == late_map["width"] * late_map["height"] > 0, late_map
+    clock = check("clock")
+    assert clock["sim_seconds_per_wall_second"] and clock["sim_seconds_per_wall_second"] > 1.5, clock
+    check("cmd_vel_odom")
+    check("cmd_vel_stamped_odom")
+    check("navigate_to_pose")
+    check("cancel")
+    check("dock_robot")
+    left = check("planner_left")
+    assert "planner" not in left["nodes"] and "battery" in left["nodes"], left
+    assert time.monotonic() - started < 150.0

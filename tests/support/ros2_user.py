@@ -1,0 +1,268 @@
+"""A ROS 2 user of a zendock robot on DDS: real rclpy (Jazzy, Fast DDS) and ROS 2 message packages only.
+
+Run it with ``.venv-ros2/bin/python tests/support/ros2_user.py`` on a ``ROS_DOMAIN_ID`` where
+``services.ros2_dds`` shows zendock (discovery on loopback: ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
+It goes through what a ROS 2 user does, one JSON line per step on stdout (``{"step": ..., "ok": ...}``):
+lists nodes and topics, echoes ``/battery_status``, joins ``/map`` late (TRANSIENT_LOCAL), follows ``/clock``
+with ``use_sim_time``, drives with ``/cmd_vel`` (Twist, then TwistStamped) and watches ``/odom``, sends NavigateToPose and DockRobot
+goals (feedback, result, CHARGING), cancels a goal, and, after printing ``{"step": "stop_planner"}``, waits
+for ``/planner`` to leave the graph. It imports nothing of zendock's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+import rclpy
+from action_msgs.msg import GoalStatus
+from geometry_msgs.msg import Twist, TwistStamped
+from nav2_msgs.action import DockRobot, NavigateToPose
+from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.action import ActionClient
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import BatteryState
+from std_msgs.msg import Float64MultiArray
+
+ZENDOCK_NODES = ("simulator", "battery", "pose", "planner", "perception", "docking", "ros2_dds")
+EXPECTED_TYPES = {
+    "/battery_status": "sensor_msgs/msg/BatteryState",
+    "/odom": "nav_msgs/msg/Odometry",
+    "/scan": "sensor_msgs/msg/LaserScan",
+    "/map": "nav_msgs/msg/OccupancyGrid",
+    "/tf": "tf2_msgs/msg/TFMessage",
+    "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/clock": "rosgraph_msgs/msg/Clock",
+    "/map_to_base_link_pose2d": "std_msgs/msg/Float64MultiArray",
+    "/plan": "nav_msgs/msg/Path",
+    "/cmd_vel": "geometry_msgs/msg/Twist",
+    "/goal_pose": "geometry_msgs/msg/PoseStamped",
+    "/initialpose": "geometry_msgs/msg/PoseWithCovarianceStamped",
+}
+CHARGING = BatteryState.POWER_SUPPLY_STATUS_CHARGING
+LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def report(step: str, ok: bool, **details: Any) -> None:
+    print(json.dumps({"step": step, "ok": ok, **details}), flush=True)
+
+
+class User:
+    def __init__(self, node: Node) -> None:
+        self.node = node
+
+    def spin_until(self, done: Callable[[], bool], timeout_s: float) -> bool:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if done():
+                return True
+            rclpy.spin_once(self.node, timeout_sec=0.05)
+        return done()
+
+    def collect(self, msg_type: Any, topic: str, count: int, timeout_s: float, qos: Any = 10) -> list[Any]:
+        got: list[Any] = []
+        sub = self.node.create_subscription(msg_type, topic, got.append, qos)
+        self.spin_until(lambda: len(got) >= count, timeout_s)
+        self.node.destroy_subscription(sub)
+        return got
+
+    # --- steps ----------------------------------------------------------------------------------
+
+    def graph(self) -> None:
+        def complete() -> bool:
+            topics = dict(self.node.get_topic_names_and_types())
+            return (set(ZENDOCK_NODES) <= set(self.node.get_node_names())
+                    and all(t in topics for t in EXPECTED_TYPES))
+        self.spin_until(complete, 30.0)
+        nodes = sorted(set(self.node.get_node_names()) - {self.node.get_name()})
+        topics = {name: types for name, types in self.node.get_topic_names_and_types()}
+        wrong = {t: topics.get(t) for t, ros_type in EXPECTED_TYPES.items() if ros_type not in topics.get(t, [])}
+        report("graph", set(ZENDOCK_NODES) <= set(nodes) and not wrong, nodes=nodes,
+               topics={t: topics[t] for t in sorted(topics) if not t.startswith(("/rosout", "/parameter_events"))},
+               missing_nodes=sorted(set(ZENDOCK_NODES) - set(nodes)), wrong_topics=wrong)
+
+    def battery(self) -> None:
+        got = self.collect(BatteryState, "/battery_status", 3, 15.0)
+        report("battery_status", len(got) >= 3, count=len(got),
+               percentage=got[-1].percentage if got else None,
+               power_supply_status=got[-1].power_supply_status if got else None,
+               frame_id=got[-1].header.frame_id if got else None)
+
+    def late_map(self) -> None:
+        infos = self.node.get_publishers_info_by_topic("/map")
+        durability = [str(i.qos_profile.durability.name) for i in infos]
+        started = time.monotonic()
+        got = self.collect(OccupancyGrid, "/map", 1, 10.0, LATCHED)
+        after = time.monotonic() - started
+        grid = got[0] if got else None
+        report("late_map", bool(got) and durability == ["TRANSIENT_LOCAL"], publisher_durability=durability,
+               after_s=round(after, 3), width=grid.info.width if grid else None,
+               height=grid.info.height if grid else None,
+               resolution=round(grid.info.resolution, 4) if grid else None,
+               cells=len(grid.data) if grid else None)
+
+    def clock(self) -> None:
+        sim = Node("sim_time_user", parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+        got: list[Any] = []
+        sub = sim.create_subscription(Clock, "/clock", got.append, 10)
+        wall0 = time.monotonic()
+        deadline = wall0 + 10.0
+        while time.monotonic() < deadline and len(got) < 20:
+            rclpy.spin_once(sim, timeout_sec=0.05)
+        wall = time.monotonic() - wall0
+        stamps = [m.clock.sec + m.clock.nanosec * 1e-9 for m in got]
+        now = sim.get_clock().now().nanoseconds * 1e-9
+        increasing = all(b >= a for a, b in zip(stamps, stamps[1:]))
+        ratio = (stamps[-1] - stamps[0]) / wall if len(stamps) > 1 and wall > 0 else None
+        sim.destroy_subscription(sub)
+        sim.destroy_node()
+        report("clock", len(got) >= 20 and increasing and bool(stamps) and abs(now - stamps[-1]) < 1.0,
+               count=len(got), increasing=increasing, sim_seconds_per_wall_second=ratio and round(ratio, 2),
+               node_time=round(now, 3), last_clock=round(stamps[-1], 3) if stamps else None)
+
+    def _drive(self, msg_type: Any, forward: Any, step: str, seconds: float) -> None:
+        odom: list[Odometry] = []
+        sub = self.node.create_subscription(Odometry, "/odom", odom.append, 10)
+        pub = self.node.create_publisher(msg_type, "/cmd_vel", 10)
+        matched = self.spin_until(lambda: bool(odom) and pub.get_subscription_count() > 0, 10.0)
+        start = odom[-1].pose.pose.position if odom else None
+        end_at = time.monotonic() + seconds
+        while time.monotonic() < end_at:
+            pub.publish(forward)
+            self.spin_until(lambda: False, 0.05)
+        pub.publish(msg_type())
+        self.spin_until(lambda: False, 0.3)
+        end = odom[-1].pose.pose.position if odom else None
+        moved = math.hypot(end.x - start.x, end.y - start.y) if start and end else 0.0
+        self.node.destroy_publisher(pub)
+        self.node.destroy_subscription(sub)
+        report(step, moved > 0.1, matched=matched, moved_m=round(moved, 3), odom_messages=len(odom))
+
+    def drive(self) -> None:
+        forward = Twist()
+        forward.linear.x = 0.2
+        self._drive(Twist, forward, "cmd_vel_odom", 1.0)
+
+    def drive_stamped(self) -> None:
+        """TwistStamped, as Jazzy's controllers publish /cmd_vel (the face takes it once it sees such a publisher)."""
+        forward = TwistStamped()
+        forward.header.frame_id = "base_link"
+        forward.twist.linear.x = -0.2
+        self._drive(TwistStamped, forward, "cmd_vel_stamped_odom", 1.0)
+
+    def robot_pose(self) -> tuple[float, float, float] | None:
+        got = self.collect(Float64MultiArray, "/map_to_base_link_pose2d", 1, 10.0)
+        return tuple(got[-1].data[:3]) if got else None  # type: ignore[return-value]
+
+    def run_goal(self, client: ActionClient, goal: Any, timeout_s: float,
+                 cancel_after_feedback: bool = False) -> dict[str, Any]:
+        if not client.wait_for_server(timeout_sec=15.0):
+            return {"error": "action server not found"}
+        feedback: list[Any] = []
+        sent = client.send_goal_async(goal, feedback_callback=lambda fb: feedback.append(fb.feedback))
+        if not self.spin_until(sent.done, 15.0) or sent.result() is None:
+            return {"error": "no answer to the goal"}
+        handle = sent.result()
+        if not handle.accepted:
+            return {"accepted": False}
+        out: dict[str, Any] = {"accepted": True}
+        if cancel_after_feedback:
+            self.spin_until(lambda: bool(feedback), 15.0)
+            cancelling = handle.cancel_goal_async()
+            self.spin_until(cancelling.done, 10.0)
+            reply = cancelling.result()
+            out["cancel_return_code"] = reply.return_code if reply is not None else None
+        result = handle.get_result_async()
+        self.spin_until(result.done, timeout_s)
+        done = result.result()
+        out.update(status=done.status if done is not None else None, feedbacks=len(feedback),
+                   result=done.result if done is not None else None, last_feedback=feedback[-1] if feedback else None)
+        return out
+
+    def navigate(self) -> None:
+        client = ActionClient(self.node, NavigateToPose, "/navigate_to_pose")
+        goal = NavigateToPose.Goal()
+        goal.pose.header.frame_id = "map"
+        goal.pose.pose.position.x, goal.pose.pose.position.y = 0.3, 4.0
+        goal.pose.pose.orientation.z, goal.pose.pose.orientation.w = 1.0, 0.0  # facing -x
+        out = self.run_goal(client, goal, 60.0)
+        pose = self.robot_pose()
+        last = out.pop("last_feedback", None)
+        result = out.pop("result", None)
+        report("navigate_to_pose", out.get("status") == GoalStatus.STATUS_SUCCEEDED and out.get("feedbacks", 0) > 0,
+               **out, error_code=result.error_code if result is not None else None,
+               distance_remaining=round(last.distance_remaining, 3) if last is not None else None,
+               pose_after=[round(v, 3) for v in pose] if pose else None)
+        client.destroy()
+
+    def cancel(self) -> None:
+        client = ActionClient(self.node, NavigateToPose, "/navigate_to_pose")
+        goal = NavigateToPose.Goal()
+        goal.pose.header.frame_id = "map"
+        goal.pose.pose.position.x, goal.pose.pose.position.y = -2.0, 2.0
+        goal.pose.pose.orientation.w = 1.0
+        out = self.run_goal(client, goal, 30.0, cancel_after_feedback=True)
+        out.pop("last_feedback", None)
+        out.pop("result", None)
+        report("cancel", out.get("status") == GoalStatus.STATUS_CANCELED and out.get("cancel_return_code") == 0, **out)
+        client.destroy()
+
+    def dock(self) -> None:
+        client = ActionClient(self.node, DockRobot, "/dock_robot")
+        goal = DockRobot.Goal(use_dock_id=True, dock_id="home", navigate_to_staging_pose=True)
+        out = self.run_goal(client, goal, 90.0)
+        last = out.pop("last_feedback", None)
+        result = out.pop("result", None)
+        battery = self.collect(BatteryState, "/battery_status", 2, 10.0)
+        charging = bool(battery) and battery[-1].power_supply_status == CHARGING
+        report("dock_robot", out.get("status") == GoalStatus.STATUS_SUCCEEDED and bool(result and result.success)
+               and out.get("feedbacks", 0) > 0 and charging, **out,
+               success=bool(result.success) if result is not None else None,
+               error_code=result.error_code if result is not None else None,
+               last_feedback_state=last.state if last is not None else None,
+               power_supply_status=battery[-1].power_supply_status if battery else None, charging=charging)
+        client.destroy()
+
+    def node_leaves(self) -> None:
+        report("stop_planner", True)
+        started = time.monotonic()
+        gone = self.spin_until(lambda: "planner" not in self.node.get_node_names(), 30.0)
+        report("planner_left", gone, after_s=round(time.monotonic() - started, 3),
+               nodes=sorted(set(self.node.get_node_names()) - {self.node.get_name()}))
+
+
+STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "cancel", "dock", "node_leaves")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", default=",".join(STEPS), help="comma-separated, in order")
+    args = parser.parse_args(argv)
+    rclpy.init()
+    node = Node("ros2_user")
+    user = User(node)
+    try:
+        for step in args.steps.split(","):
+            started = time.monotonic()
+            try:
+                getattr(user, step)()
+            except Exception as exc:  # one step's failure is reported; the next steps still run
+                report(step, False, error=f"{type(exc).__name__}: {exc}")
+            print(json.dumps({"step": f"{step}_time", "ok": True, "s": round(time.monotonic() - started, 2)}),
+                  file=sys.stderr, flush=True)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
