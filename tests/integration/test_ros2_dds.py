@@ -102,6 +102,10 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("navigate_to_pose")
     check("cancel")
     check("dock_robot")
+    check("bad_input")
+    refusals = "\n".join(launcher.logs("ros2_dds"))
+    for refused in ("refused a message on /cmd_vel", "refused a goal in frame 'odom'", "refused a navigate_to_pose goal"):
+        assert refused in refusals, f"ros2_dds did not log {refused!r}:\n{face_log}"
     left = check("planner_left")
     assert "planner" not in left["nodes"] and "battery" in left["nodes"], left
     assert time.monotonic() - started < 150.0

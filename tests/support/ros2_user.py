@@ -5,7 +5,7 @@ Run it with ``.venv-ros2/bin/python tests/support/ros2_user.py`` on a ``ROS_DOMA
 It goes through what a ROS 2 user does, one JSON line per step on stdout (``{"step": ..., "ok": ...}``):
 lists nodes and topics, echoes ``/battery_status``, joins ``/map`` late (TRANSIENT_LOCAL), follows ``/clock``
 with ``use_sim_time``, drives with ``/cmd_vel`` (Twist, then TwistStamped) and watches ``/odom``, sends NavigateToPose and DockRobot
-goals (feedback, result, CHARGING), cancels a goal, and, after printing ``{"step": "stop_planner"}``, waits
+goals (feedback, result, CHARGING), cancels a goal, sends what zendock refuses, and, after printing ``{"step": "stop_planner"}``, waits
 for ``/planner`` to leave the graph. It imports nothing of zendock's.
 """
 
@@ -21,7 +21,7 @@ from typing import Any
 
 import rclpy
 from action_msgs.msg import GoalStatus
-from geometry_msgs.msg import Twist, TwistStamped
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav2_msgs.action import DockRobot, NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionClient
@@ -231,6 +231,35 @@ class User:
                power_supply_status=battery[-1].power_supply_status if battery else None, charging=charging)
         client.destroy()
 
+    def bad_input(self) -> None:
+        """What zendock cannot take is refused (a NaN velocity, a goal in the odom frame, a NaN goal), and the
+        face goes on: still in the graph, still forwarding."""
+        nan = float("nan")
+        cmd = self.node.create_publisher(Twist, "/cmd_vel", 10)
+        goal_pose = self.node.create_publisher(PoseStamped, "/goal_pose", 10)
+        self.spin_until(lambda: cmd.get_subscription_count() > 0 and goal_pose.get_subscription_count() > 0, 10.0)
+        broken = Twist()
+        broken.linear.x = nan
+        elsewhere = PoseStamped()
+        elsewhere.header.frame_id = "odom"
+        elsewhere.pose.orientation.w = 1.0
+        for _ in range(5):
+            cmd.publish(broken)
+            goal_pose.publish(elsewhere)
+            self.spin_until(lambda: False, 0.05)
+        client = ActionClient(self.node, NavigateToPose, "/navigate_to_pose")
+        goal = NavigateToPose.Goal()
+        goal.pose.header.frame_id = "map"
+        goal.pose.pose.position.x = nan
+        out = self.run_goal(client, goal, 10.0)
+        client.destroy()
+        self.node.destroy_publisher(cmd)
+        self.node.destroy_publisher(goal_pose)
+        alive = "ros2_dds" in self.node.get_node_names()
+        battery = self.collect(BatteryState, "/battery_status", 1, 10.0)
+        report("bad_input", out.get("accepted") is False and alive and bool(battery), nan_goal=out,
+               face_in_graph=alive, battery_after=len(battery))
+
     def node_leaves(self) -> None:
         report("stop_planner", True)
         started = time.monotonic()
@@ -239,7 +268,7 @@ class User:
                nodes=sorted(set(self.node.get_node_names()) - {self.node.get_name()}))
 
 
-STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "cancel", "dock", "node_leaves")
+STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "cancel", "dock", "bad_input", "node_leaves")
 
 
 def main(argv: list[str] | None = None) -> int:
