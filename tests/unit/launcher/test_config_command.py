@@ -33,9 +33,9 @@ def test_config_lists_services_and_profiles(monkeypatch, capsys) -> None:  # typ
     monkeypatch.chdir(REPO_ROOT)
     assert main(["config", "--services"]) == 0
     assert capsys.readouterr().out.split() == ["router", "map", "simulator", "perception", "battery", "pose", "planner",
-                                              "docking", "viz", "ros2_bridge"]
+                                              "docking", "viz", "ros2_bridge", "ros2_dds"]
     assert main(["config", "--profiles"]) == 0
-    assert capsys.readouterr().out.split() == ["ros2", "viz"]
+    assert capsys.readouterr().out.split() == ["ros2", "ros2-dds", "viz"]
 
 
 def test_config_errors_exit_2_naming_file_and_key(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
