@@ -120,8 +120,13 @@ def test_the_secure_stack_runs_the_default_stacks_services(tmp_path: Path) -> No
     env = {"ZENDOCK_WORLD": "w.yaml"}
     base = load_stack(REPO_ROOT / "deploy/stack.yaml", env=env, project_dir=tmp_path)
     secure = load_stack(REPO_ROOT / "deploy/stack-secure.yaml", env=env, project_dir=tmp_path)
-    assert set(secure.services) == set(base.services)
+    # The ROS 2 DDS face runs from a host virtualenv (.venv-ros2) and has no Zenoh user of the secure profile yet.
+    host_only = {name for name, spec in base.services.items() if spec.command[0].startswith(".venv")}
+    assert host_only == {"ros2_dds"}
+    assert set(secure.services) == set(base.services) - host_only
     for name, spec in base.services.items():
+        if name in host_only:
+            continue
         command = list(secure.services[name].command)
         if command[:2] == ["python", "-m"]:
             assert command == [*spec.command, "--zenoh-config", f"deploy/zenoh/secure/{name}.json5"], name
