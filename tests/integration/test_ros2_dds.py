@@ -103,6 +103,7 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("cancel")
     check("dock_robot")
     check("bad_input")
+    check("initial_pose")
     refusals = "\n".join(launcher.logs("ros2_dds"))
     for refused in ("refused a message on /cmd_vel", "refused a goal in frame 'odom'", "refused a navigate_to_pose goal"):
         assert refused in refusals, f"ros2_dds did not log {refused!r}:\n{face_log}"

@@ -5,7 +5,7 @@ Run it with ``.venv-ros2/bin/python tests/support/ros2_user.py`` on a ``ROS_DOMA
 It goes through what a ROS 2 user does, one JSON line per step on stdout (``{"step": ..., "ok": ...}``):
 lists nodes and topics, echoes ``/battery_status``, joins ``/map`` late (TRANSIENT_LOCAL), follows ``/clock``
 with ``use_sim_time``, drives with ``/cmd_vel`` (Twist, then TwistStamped) and watches ``/odom``, sends NavigateToPose and DockRobot
-goals (feedback, result, CHARGING), cancels a goal, sends what zendock refuses, and, after printing ``{"step": "stop_planner"}``, waits
+goals (feedback, result, CHARGING), cancels a goal, sends what zendock refuses, sets the localiser's belief with ``/initialpose``, and, after printing ``{"step": "stop_planner"}``, waits
 for ``/planner`` to leave the graph. It imports nothing of zendock's.
 """
 
@@ -21,7 +21,7 @@ from typing import Any
 
 import rclpy
 from action_msgs.msg import GoalStatus
-from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from nav2_msgs.action import DockRobot, NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionClient
@@ -260,6 +260,33 @@ class User:
         report("bad_input", out.get("accepted") is False and alive and bool(battery), nan_goal=out,
                face_in_graph=alive, battery_after=len(battery))
 
+    def initial_pose(self) -> None:
+        """RViz's 2D Pose Estimate: the localiser believes the robot is there (the robot does not move)."""
+        before = self.robot_pose()
+        if before is None:
+            report("initial_pose", False, error="no /map_to_base_link_pose2d")
+            return
+        target = (before[0] + 0.3, before[1] - 0.2, before[2])
+        estimate = PoseWithCovarianceStamped()
+        estimate.header.frame_id = "map"
+        estimate.pose.pose.position.x, estimate.pose.pose.position.y = target[0], target[1]
+        estimate.pose.pose.orientation.z = math.sin(target[2] / 2)
+        estimate.pose.pose.orientation.w = math.cos(target[2] / 2)
+        pub = self.node.create_publisher(PoseWithCovarianceStamped, "/initialpose", 10)
+        self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
+        pub.publish(estimate)
+        believed: list[Any] = []
+        sub = self.node.create_subscription(Float64MultiArray, "/map_to_base_link_pose2d",
+                                            lambda m: believed.append(tuple(m.data[:3])), 10)
+
+        def there() -> bool:
+            return bool(believed) and math.hypot(believed[-1][0] - target[0], believed[-1][1] - target[1]) < 0.05
+        ok = self.spin_until(there, 10.0)
+        self.node.destroy_subscription(sub)
+        self.node.destroy_publisher(pub)
+        report("initial_pose", ok, before=[round(v, 3) for v in before], estimate=[round(v, 3) for v in target],
+               believed=[round(v, 3) for v in believed[-1]] if believed else None)
+
     def node_leaves(self) -> None:
         report("stop_planner", True)
         started = time.monotonic()
@@ -268,7 +295,8 @@ class User:
                nodes=sorted(set(self.node.get_node_names()) - {self.node.get_name()}))
 
 
-STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "cancel", "dock", "bad_input", "node_leaves")
+STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "cancel", "dock", "bad_input", "initial_pose",
+         "node_leaves")
 
 
 def main(argv: list[str] | None = None) -> int:
