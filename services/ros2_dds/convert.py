@@ -33,6 +33,8 @@ _PRIMITIVES: dict[str, tuple[str, Any]] = {
     "float": ("f", np.float32), "double": ("d", np.float64),
 }
 _FLOATS = {"float", "double"}
+_BOUNDS = {name: (int(np.iinfo(dtype).min), int(np.iinfo(dtype).max))
+           for name, (_, dtype) in _PRIMITIVES.items() if name != "boolean" and name not in _FLOATS}
 _STRINGS = re.compile(r"^w?string(<=\d+)?$")
 _SEQUENCE = re.compile(r"^sequence<(.+?)(?:, ?\d+)?>$")
 _ARRAY = re.compile(r"^(.+)\[(\d+)\]$")
@@ -99,7 +101,15 @@ def _to_field(value: Any, ros_type: str, where: str) -> Any:
     if ros_type in _PRIMITIVES:
         if ros_type == "boolean":
             return bool(value)
-        return float(value) if ros_type in _FLOATS else int(value)
+        if ros_type in _FLOATS:
+            return float(value)
+        number = int(value)
+        # rclpy checks ranges only when ROS_PYTHON_CHECK_FIELDS says so; the C conversion at publish time would
+        # fail outside the face's handlers, so the bounds are checked here
+        low, high = _BOUNDS[ros_type]
+        if not low <= number <= high:
+            raise ConversionError(f"{where} ({ros_type}): {number} is out of [{low}, {high}]")
+        return number
     if _STRINGS.match(ros_type):
         return str(value)
     sequence = _SEQUENCE.match(ros_type)

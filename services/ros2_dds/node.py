@@ -323,7 +323,12 @@ class Ros2Dds:
                 outlet.last = ros_msg
             if outlet.publisher is None:
                 return
-            outlet.publisher.publish(ros_msg)
+            try:
+                outlet.publisher.publish(ros_msg)
+            except Exception as exc:  # rclpy's C conversion of a value convert did not catch: refused, not fatal
+                self._refuse(f"publish-{outlet.route.ros_topic}", "could not publish /%s: %s",
+                             outlet.route.ros_topic, exc)
+                return
         self._count(f"out /{outlet.route.ros_topic}")
 
     # --- ROS 2 -> zendock ----------------------------------------------------------------------------
@@ -434,7 +439,12 @@ class Ros2Dds:
                 relay.pending_feedback = ros_feedback
                 return
             handle = relay.ros_handle
-        handle.publish_feedback(ros_feedback)
+        try:
+            handle.publish_feedback(ros_feedback)
+        except Exception as exc:  # the goal ended meanwhile, or rclpy's C conversion refused a value
+            self._refuse(f"feedback-publish-{relay.action.name}", "could not publish %s feedback: %s",
+                         relay.action.name, exc)
+            return
         self._count(f"feedback {relay.action.name}")
 
     def _cancel(self, action: BridgedAction, ros_handle: Any) -> bool:

@@ -110,3 +110,15 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     left = check("planner_left")
     assert "planner" not in left["nodes"] and "battery" in left["nodes"], left
     assert time.monotonic() - started < 150.0
+
+
+def test_every_message_the_face_carries_converts_both_ways() -> None:
+    """zendock -> rclpy -> zendock gives the same message for every route and action part; what does not fit
+    (a NaN, a uint16 out of range) is a ConversionError, never anything else."""
+    done = subprocess.run([str(ROS2_PYTHON), str(REPO_ROOT / "tests" / "support" / "ros2_convert_check.py")],
+                          capture_output=True, text=True, cwd=REPO_ROOT, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    cases = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    assert len(cases) >= 40, done.stdout
+    failed = [case for case in cases if not case["ok"]]
+    assert not failed, failed
