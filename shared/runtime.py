@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
 import yaml
+import zenoh
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
@@ -72,6 +73,46 @@ def wait_interruptibly(event: threading.Event, timeout_s: float | None = None) -
             return event.is_set()
         if event.wait(step):
             return True
+
+
+def open_session_unless(spec: SessionSpec, stopped: threading.Event) -> zenoh.Session | None:
+    """Open a session, or give up (``None``) once ``stopped`` is set: ``zenoh.open`` blocks in native code
+    while no router answers, where no signal handler can run, so it opens on a helper thread while the
+    main thread keeps waking for signals. A session that opens after the stop is closed at once."""
+    result: list[zenoh.Session | BaseException] = []
+    done = threading.Event()
+    lock = threading.Lock()
+    abandoned = False
+
+    def connect() -> None:
+        outcome: zenoh.Session | BaseException
+        try:
+            outcome = open_session(spec)
+        except BaseException as exc:  # handed to the main thread, raised there
+            outcome = exc
+        with lock:
+            if abandoned:
+                if isinstance(outcome, zenoh.Session):
+                    outcome.close()
+                return
+            result.append(outcome)
+            done.set()
+
+    threading.Thread(target=connect, name="zendock-connect", daemon=True).start()
+    while not wait_interruptibly(done, SIGNAL_CHECK_S):
+        if stopped.is_set():
+            with lock:
+                if not done.is_set():
+                    abandoned = True
+                    return None
+            break
+    outcome = result[0]
+    if isinstance(outcome, BaseException):
+        raise outcome
+    if stopped.is_set():
+        outcome.close()
+        return None
+    return outcome
 
 
 class ServiceParams(BaseModel):
@@ -256,12 +297,28 @@ def serve(
     announce it, spin until stopped, close everything."""
     log = configure_logging(options)
     log.info("connecting to %s", ",".join(options.connect))
-    with open_session(options.session_spec()) as session:
+    stopped = threading.Event()
+    nodes: list[Node] = []
+
+    def stop(*_: object) -> None:
+        stopped.set()
+        for each in nodes:
+            each.shutdown()
+
+    if install_signal_handlers:  # before connecting: SIGTERM while no router answers still ends it with 0
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, stop)
+    opened = open_session_unless(options.session_spec(), stopped)
+    if opened is None:
+        log.info("stopped before the router answered")
+        return 0
+    with opened as session:
         node = Node(options.node_name, session, options.namespace, use_sim_time=params.use_sim_time, logger=log)
+        nodes.append(node)
         hold_to_contract(node)
-        if install_signal_handlers:
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                signal.signal(sig, lambda *_: node.shutdown())
+        if stopped.is_set():
+            node.close()
+            return 0
         service = build(node, params)
         parameters = attach_parameters(node, params, service)
         node.declare_ready()

@@ -16,7 +16,7 @@ from pathlib import Path
 import psutil
 
 from tests.integration.launcher.conftest import kill_marked, marked_processes
-from tests.support.processes import wait_until
+from tests.support.processes import free_port, wait_until
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
@@ -53,3 +53,21 @@ def test_sigterm_to_demo_brings_its_stack_down(tmp_path: Path) -> None:
             demo.kill()
             demo.wait()
         kill_marked(mark)
+
+
+def test_a_service_still_waiting_for_its_router_ends_on_sigterm_with_0(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The contract's duty holds before the session is open: zenoh.open blocks in native code while no router
+    answers, so the service connects on a helper thread and its main thread still runs the SIGTERM handler."""
+    log = tmp_path / "battery.log"
+    with log.open("wb") as out:
+        proc = subprocess.Popen([sys.executable, "-m", "services.battery", "--connect", f"tcp/127.0.0.1:{free_port()}"],
+                                stdout=out, stderr=subprocess.STDOUT)
+    try:
+        wait_until(lambda: "connecting to" in log.read_text(), 20.0, lambda: log.read_text())
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=2.0) == 0, log.read_text()
+        assert "stopped before the router answered" in log.read_text()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
