@@ -134,6 +134,8 @@ def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dic
         "ZENDOCK_SEED": str(options.seed),
         "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(options.localisation_error)),
         "ZENDOCK_GLASS_MEMORY": str(run_dir / "glass_memory.npz"),
+        # the run's own map: two demos (or a demo and a test) in one checkout never read each other's
+        "ZENDOCK_MAP": str(run_dir / "map.yaml"),
     }
 
 

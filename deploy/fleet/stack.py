@@ -43,7 +43,7 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
                                 "-p", f"drain_scale={options.drain_scale}", "-p", f"charge_scale={options.charge_scale}",
                                 "-p", f"state_file={state_dir}/${{ROBOT}}/battery.json"]},
         "pose": {"command": [*py, "services.pose", "-p", "use_sim_time=true"]},
-        "planner": {"command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
+        "planner": {"command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", f"map_yaml={state_dir}/map.yaml",
                                 "-p", f"glass_memory_file={state_dir}/${{ROBOT}}/glass_memory.npz",
                                 *FLEET_PLANNER_PARAMS],
                     "depends_on": {"router": {"condition": "service_started"},
@@ -60,7 +60,7 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
         service["healthcheck"] = {"liveliness": True, "timeout": "60s"}
     services: dict[str, Any] = {
         "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
-        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", ".zendock/maps/map.yaml"], "restart": "no"},
+        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", f"{state_dir}/map.yaml"], "restart": "no"},
         "simulator": {
             "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
                         "-p", f"seed={options.seed}", "-p", f"detection.source={options.detector}"],

@@ -58,6 +58,7 @@ class StackConfig:
             "ZENDOCK_SEED": str(self.seed),
             "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(self.localisation_error)),
             "ZENDOCK_GLASS_MEMORY": str(project_dir / "glass_memory.npz"),
+            "ZENDOCK_MAP": str(project_dir / "map.yaml"),  # its own map, whatever else runs in this checkout
         }
 
 

@@ -21,10 +21,12 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
     restarts (``--chaos``).
     """
     world = str(options.world)
+    # the campaign's own map (in its state directory): other stacks in this checkout never read it
+    map_file = str(state_dir / "map.yaml") if state_dir else ".zendock/maps/map.yaml"
     py = ["python", "-m"]
     services: dict[str, Any] = {
         "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
-        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", ".zendock/maps/map.yaml"], "restart": "no"},
+        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", map_file], "restart": "no"},
         "simulator": {
             "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
                         "-p", f"seed={options.seed}", "-p", f"robots={json.dumps(robots)}",
@@ -40,7 +42,7 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         members: dict[str, list[str]] = {
             "battery": ["-p", "use_sim_time=true", *keep_charge],
             "pose": ["-p", "use_sim_time=true"],
-            "planner": ["-p", "use_sim_time=true", "-p", "map_yaml=.zendock/maps/map.yaml",
+            "planner": ["-p", "use_sim_time=true", "-p", f"map_yaml={map_file}",
                         *(["-p", f"glass_memory_file={state_dir / robot / GLASS_MEMORY_FILE}"] if state_dir else [])],
         }
         if options.detector == "aruco":
