@@ -11,8 +11,9 @@ import time
 from pathlib import Path
 
 import psutil
+import pytest
 
-from deploy.launcher import Backoff, Launcher
+from deploy.launcher import Backoff, Launcher, StackNotReady
 from tests.integration.launcher.conftest import fake, marked_processes, read_records, wait_for
 
 
@@ -297,3 +298,24 @@ def test_the_launcher_downs_even_when_the_body_raises(tmp_path: Path, mark: str,
         pass
     assert not marked_processes(mark)
     assert not (tmp_path / ".zendock" / tmp_path.name.lower() / "state.json").exists()
+
+
+def test_a_stack_that_never_gets_healthy_names_the_service_and_its_last_line(launch) -> None:  # type: ignore[no-untyped-def]
+    """What ``demo``, ``trials`` and ``fleet`` print when a replacement never declares its node token."""
+    stack = launch(
+        f"""\
+        services:
+          ready:
+            command: {fake("--token", "ready")}
+            healthcheck: {{liveliness: true, timeout: 10s}}
+          replacement:
+            command: {fake("--name", "my_docking")}
+            healthcheck: {{liveliness: docking, timeout: 500ms}}
+        """
+    )
+    with pytest.raises(StackNotReady) as failure:
+        stack.wait_healthy(timeout_s=2.0)
+    summary = failure.value.summary
+    assert summary.startswith("replacement not healthy after 2s"), summary
+    assert "ready" not in summary.split("(")[0].replace("replacement", ""), summary
+    assert "its last line: my_docking" in summary, summary  # the fake prints "my_docking up (pid ...)"
