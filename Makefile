@@ -34,7 +34,7 @@ check: $(TEST_STAMP)
 	$(BIN)/mypy shared
 
 test: $(TEST_STAMP) check docs
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q --durations=25
 
 # The CLI reference (docs/cli.md) is generated from deploy/cli.py's parsers while the site builds
 # (deploy/docs_site.py, a mkdocs hook); docs/measurements.md is rendered from docs/measurements/*.json.
