@@ -23,7 +23,8 @@ from deploy.launcher.stack_file import Stack, join_namespace
 from shared.config_errors import ConfigError
 
 #: The services a user may replace (those with a contract; the router and the one-shot map step are not).
-REPLACEABLE = ("battery", "docking", "fleet", "perception", "planner", "pose", "ros2_bridge", "simulator", "viz")
+REPLACEABLE = ("battery", "docking", "fleet", "perception", "planner", "pose", "ros2_bridge", "ros2_dds", "simulator",
+               "viz")
 ROBOT_PLACEHOLDER = "{robot}"
 
 

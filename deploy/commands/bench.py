@@ -111,6 +111,24 @@ def _bench_perception(args: argparse.Namespace) -> int:
     return 0
 
 
+def _print_dds(dds: dict) -> None:  # type: ignore[type-arg]
+    """The DDS face (real rclpy on Fast DDS) beside rclpy-to-rclpy, measured in the same run."""
+    table = Table(title="DDS face (rclpy, Fast DDS): through the face against rclpy-to-rclpy, same run")
+    for column in ("measure", "p50", "p90"):
+        table.add_column(column, justify="right")
+    rows = [("cmd_vel -> odom, through the face", dds["cmd_vel_odom_round_trip"]["through_face"]),
+            ("cmd_vel -> odom, zendock direct", dds["cmd_vel_odom_round_trip"]["zendock_direct"]),
+            ("round trip rclpy -> rclpy", dds["cmd_vel_odom_round_trip"]["rclpy_to_rclpy"]),
+            ("battery_status: added by the face", dds["battery_status_latency"]["added_by_face"]),
+            ("BatteryState rclpy -> rclpy, one way", dds["battery_status_latency"]["rclpy_to_rclpy_one_way"])]
+    for label, stats in rows:
+        table.add_row(label, f"{stats.get('p50_ms', 'n/a')} ms", f"{stats.get('p90_ms', 'n/a')} ms")
+    Console().print(table)
+    face = dds["face"]
+    print(f"DDS face: idle {face['idle']['cpu_percent']} % CPU, {face['idle']['rss_mb']} MB; forwarding the sensor "
+          f"topics {face['forwarding_sensors']['cpu_percent']} % CPU, {face['forwarding_sensors']['rss_mb']} MB")
+
+
 def _bench_ros2(args: argparse.Namespace) -> int:
     from deploy.bench.ros2 import run_ros2_bench, run_stack_rtf  # noqa: PLC0415 - starts a router and the bridge
 
@@ -118,6 +136,10 @@ def _bench_ros2(args: argparse.Namespace) -> int:
         report = run_ros2_bench(messages=args.messages)
         if args.rtf_seconds > 0:
             report["stack_rtf"] = run_stack_rtf(args.world, seconds=args.rtf_seconds)
+        if args.dds:
+            from deploy.bench.ros2_dds import run as run_dds_bench  # noqa: PLC0415 - needs .venv-ros2
+
+            report["dds"] = run_dds_bench(rtf="1", seconds=args.dds_seconds)
     except RuntimeError as exc:
         print(f"zendock bench ros2: {exc}", file=sys.stderr)
         return 1
@@ -132,6 +154,8 @@ def _bench_ros2(args: argparse.Namespace) -> int:
                       f"{row['direct_p50_ms']} ms", f"{row['added_p50_ms']} ms",
                       f"{row['bridge_cpu_us_per_message']} us", str(row["burst_forwarded_per_s"]))
     Console().print(table)
+    if "dds" in report:
+        _print_dds(report["dds"])
     for label, rtf in report.get("stack_rtf", {}).items():
         print(f"simulator, battery and pose flat out, {label}: {rtf}x real time")
     return 0
@@ -233,6 +257,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     ros2.add_argument("--rtf-seconds", type=float, default=10.0,
                       help="wall seconds per condition of the stack's real-time factor (0: skip)")
     ros2.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world of the real-time-factor runs")
+    ros2.add_argument("--dds", action="store_true",
+                      help="also the DDS face on real rclpy (needs .venv-ros2: make ros2), beside rclpy-to-rclpy")
+    ros2.add_argument("--dds-seconds", type=float, default=10.0, help="length of each DDS measuring phase")
     ros2.add_argument("--json", action="store_true")
     ros2.set_defaults(func=_bench_ros2)
     planner = verbs.add_parser(

@@ -7,7 +7,10 @@ They drive the robot through the simulator's requests and judge by the simulator
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import subprocess
 import threading
 import time
 from collections.abc import Callable
@@ -16,6 +19,7 @@ from typing import Any
 
 from deploy.contracts.candidate import SIGTERM_LIMIT_S, Candidate
 from deploy.contracts.probe import MALFORMED_PAYLOADS, Probe
+from deploy.paths import REPO_ROOT
 from shared.action import ActionClient, spin_in_background
 from shared.contracts import Contract
 from shared.encoding import ENCODING_PREFIX
@@ -190,6 +194,9 @@ def check_bad_requests(ctx: Context) -> Check:
 def check_malformed_burst(ctx: Context, still_serving: Callable[[], tuple[bool, str]]) -> Check:
     def body() -> tuple[bool, str]:
         keys = [ctx.key(t.name) for t in ctx.contract.subscribes if t.required and not t.fleet_wide]
+        # and whatever it subscribes right now (on-demand subscriptions too), the shared clock aside
+        declared = ctx.probe.node_endpoints(ctx.namespace, ctx.contract.service)
+        keys += sorted({key for kind, key, _type in declared if kind == "sub" and not key.endswith("clock")} - set(keys))
         keys += [ctx.key(r.name) for r in ctx.contract.serves if r.required]
         sent = 0
         for key in keys:
@@ -475,8 +482,46 @@ def ros2_bridge_behaviour(ctx: Context) -> list[Check]:
     return [timed("shows zendock to ROS 2", shows)]
 
 
+#: What a ROS 2 machine sees: real rclpy, on the face's domain, loopback discovery; prints the node names it finds.
+_RCLPY_NODE_LIST = """
+import json, sys, time
+import rclpy
+rclpy.init()
+node = rclpy.create_node("zendock_conform_probe")
+names = []
+deadline = time.monotonic() + float(sys.argv[1])
+while time.monotonic() < deadline:
+    rclpy.spin_once(node, timeout_sec=0.2)
+    names = sorted(set(node.get_node_names()) - {"zendock_conform_probe"})
+    if "simulator" in names:
+        break
+print(json.dumps(names))
+node.destroy_node()
+rclpy.shutdown()
+"""
+
+
+def ros2_dds_behaviour(ctx: Context) -> list[Check]:
+    def shows() -> tuple[bool, str]:
+        python = REPO_ROOT / ".venv-ros2" / "bin" / "python"
+        if not python.exists():
+            return False, f"looking from ROS 2 needs {python} with rclpy (make ros2)"
+        env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTHON"))}
+        env.update(ROS_DOMAIN_ID=str(ctx.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        done = subprocess.run([str(python), "-c", _RCLPY_NODE_LIST, "15"], env=env, capture_output=True, text=True,
+                              timeout=60)
+        lines = done.stdout.strip().splitlines()
+        if done.returncode != 0 or not lines:
+            return False, f"the rclpy probe failed ({done.returncode}): {done.stderr.strip()[-200:]}"
+        names = json.loads(lines[-1])
+        ok = "simulator" in names
+        return ok, (f"an rclpy node on domain {ctx.domain_id} sees: {', '.join(names)}" if ok
+                    else f"no /simulator node on DDS domain {ctx.domain_id} (saw {names})")
+    return [timed("shows zendock to ROS 2 on DDS (real rclpy)", shows)]
+
+
 BEHAVIOURS: dict[str, Callable[[Context], list[Check]]] = {
     "battery": battery_behaviour, "docking": docking_behaviour, "fleet": fleet_behaviour,
     "perception": perception_behaviour, "planner": planner_behaviour, "pose": pose_behaviour,
-    "ros2_bridge": ros2_bridge_behaviour, "simulator": simulator_behaviour,
+    "ros2_bridge": ros2_bridge_behaviour, "ros2_dds": ros2_dds_behaviour, "simulator": simulator_behaviour,
 }

@@ -92,10 +92,22 @@ def _flags_for(service: str, stack: Any, world: Path) -> list[str]:
     return flags
 
 
+def _own_command(service: str, stack: Any) -> list[str]:
+    """zendock's own service as its stack file runs it (the DDS face: with .venv-ros2's interpreter)."""
+    spec = stack.services.get(service)
+    index = module_index(spec.command, service) if spec is not None else None
+    if spec is None or index is None:
+        return ["python", "-m", f"services.{service}"]
+    head = spec.command[: index + 1]
+    if head[0] != "python" and not Path(head[0]).is_absolute():
+        head = [str(REPO_ROOT / head[0]), *head[1:]]  # relative to the repository, where zendock's stacks run
+    return head
+
+
 def _absolute(word: str) -> str:
     """A relative path in COMMAND that names a file here, made absolute: the program runs in the run directory."""
-    path = Path(word)
-    return str(path.resolve()) if not path.is_absolute() and path.exists() else word
+    path = Path(word)  # abspath, not resolve: a venv's python is a symlink that must stay the venv's
+    return os.path.abspath(path) if not path.is_absolute() and path.exists() else word
 
 
 def run_conform(service: str, command: list[str] | None, options: ConformOptions,
@@ -109,7 +121,6 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
     if not world.docks:
         raise ConfigError(f"--world {options.world}: conform needs a world with a dock")
     own = command is None
-    words = command or ["python", "-m", f"services.{service}"]
     namespace = "" if service in FLEET_WIDE else ROBOT_NAMESPACE
     domain_id = random.randint(100, 200)
     endpoint = free_endpoint()
@@ -120,6 +131,7 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
     runs_dir.mkdir(parents=True, exist_ok=True)
     run_dir = Path(tempfile.mkdtemp(prefix=f"conform-{service}-", dir=runs_dir))
     stack = load_stack(DEFAULT_STACK, env=env, project_dir=run_dir)
+    words = command or _own_command(service, stack)
     argv = resolve_argv([_absolute(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]) + _flags_for(service, stack, world_path)
     report = ConformReport(service, argv, log=str(run_dir / "candidate.log"))
     # what it needs, and what zendock's own waits for in the stack file (the planner: the map step)
