@@ -33,7 +33,7 @@ check: $(TEST_STAMP)
 	$(BIN)/ruff check shared services deploy tests
 	$(BIN)/mypy shared
 
-test: $(TEST_STAMP) check docs
+test: $(TEST_STAMP) ros2 check docs
 	$(BIN)/python -m pytest -q --durations=25
 
 # The CLI reference (docs/cli.md) is generated from deploy/cli.py's parsers while the site builds
@@ -54,7 +54,8 @@ clean:
 
 # `make ros2`: .venv-ros2, real ROS 2 Jazzy rclpy (Fast DDS) from PyPI wheels with zendock installed editable
 # (`pip install -e ".[ros2]"`) and nav2_msgs / tf2_msgs built by colcon into it, for services.ros2_dds and
-# tests/integration/test_ros2_dds.py (skipped without it). About 5 minutes the first time; outside `make test`.
+# tests/integration/test_ros2_dds.py (skipped without it). About 5 minutes the first time, seconds after; `make test`
+# runs it, so the suite meets real ROS 2.
 ROS2_VENV := .venv-ros2
 .PHONY: ros2
 ros2: $(ROS2_VENV)/.ros2-ready
