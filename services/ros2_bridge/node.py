@@ -38,23 +38,20 @@ from pydantic import Field, field_validator
 from services.ros2_bridge.actions import ACTIONS, ActionRelay
 from services.ros2_bridge.demand import PeerSubscriptions
 from services.ros2_bridge.graph import GraphMirror
-from shared import topics
-from shared.interfaces.simulator import SET_LOCALISATION, SetLocalisationRequest, SetLocalisationResponse
-from shared.messages import PoseStamped, PoseWithCovarianceStamped, Twist
+from shared.messages import PoseStamped
 from shared.names import node_token_key, parse_token_key
 from shared.navigation import NavigationClient
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
+from shared.node import SENSOR_DATA, Node, QoS, Subscription
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2 import types as ros_types
 from shared.ros2.bridge_routes import (
-    GOAL_POSE,
     INBOUND,
-    INITIAL_POSE,
     OUTBOUND,
     TWIST_STAMPED,
     Inbound,
     Route,
 )
+from shared.ros2.commands import RosCommands
 from shared.ros2.wire import (
     ADMIN_SPACE,
     Attachment,
@@ -132,7 +129,7 @@ class Ros2Bridge:
         self.outlets: dict[str, _Outlet] = {}
         for route in OUTBOUND:
             self._open_outlet(route)
-        self._cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        self._commands = RosCommands(node, self._refuse, self._navigate)
         self._navigation = NavigationClient(node)
         for ros_topic in dict.fromkeys(i.ros_topic for i in INBOUND):
             self._open_inlet(ros_topic, [i for i in INBOUND if i.ros_topic == ros_topic])
@@ -287,41 +284,10 @@ class Ros2Bridge:
             self._refuse(f"malformed-{topic}", "refused a message on %s: %s", topic, exc)
             return
         self.counts[f"in {topic}"] += 1
-        if isinstance(msg, Twist):
-            self._cmd_vel.publish(msg)
-        elif inbound.ros_topic == GOAL_POSE and isinstance(msg, PoseStamped):
-            self._navigate(msg)
-        elif inbound.ros_topic == INITIAL_POSE and isinstance(msg, PoseWithCovarianceStamped):
-            self._set_localisation(msg)
+        self._commands.handle(inbound.ros_topic, msg)
 
     def _navigate(self, goal: PoseStamped) -> None:
-        frame = goal.header.frame_id.lstrip("/")
-        if frame not in ("", topics.MAP_FRAME):
-            self._refuse("goal-frame", "refused a goal in frame %r: zendock plans in %r", goal.header.frame_id,
-                         topics.MAP_FRAME)
-            return
-        target = goal.pose.to_pose2d()
-        self.node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
-        self._navigation.go_to_pose(target)
-
-    def _set_localisation(self, estimate: PoseWithCovarianceStamped) -> None:
-        frame = estimate.header.frame_id.lstrip("/")
-        if frame not in ("", topics.MAP_FRAME):
-            self._refuse("initialpose-frame", "refused an initial pose in frame %r: zendock localises in %r",
-                         estimate.header.frame_id, topics.MAP_FRAME)
-            return
-        belief = estimate.pose.pose.to_pose2d()
-
-        def done(reply: SetLocalisationResponse | None, error: ServiceError | None) -> None:
-            if error is not None or reply is None or not reply.success:
-                self._refuse("initialpose-failed", "the simulator's localiser did not take the initial pose: %s",
-                             error or (reply.message if reply else "no reply"))
-            else:
-                self.node.log.info("initial pose from ROS 2: the localiser now believes (%.2f, %.2f, %.2f)",
-                                   belief.x, belief.y, belief.yaw)
-
-        self.node.call_async(SET_LOCALISATION, topics.SIM_SET_LOCALISATION,
-                             SetLocalisationRequest(x=belief.x, y=belief.y, yaw=belief.yaw), done)
+        self._navigation.go_to_pose(goal.pose.to_pose2d())
 
     # --- actions: ROS 2 goals for zendock's action servers ---------------------------------------
 

@@ -44,22 +44,20 @@ from services.ros2_dds.convert import ConversionError, from_ros, ros_class, to_r
 from shared import topics
 from shared.action import ActionClient, ClientGoal, GoalStatusCode
 from shared.interfaces.navigation import NavigateToPoseGoal
-from shared.interfaces.simulator import SET_LOCALISATION, SetLocalisationRequest, SetLocalisationResponse
-from shared.messages import PoseStamped, PoseWithCovarianceStamped, Twist
+from shared.messages import PoseStamped
 from shared.names import node_token_key, parse_token_key
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError, Subscription
+from shared.node import SENSOR_DATA, Node, QoS, Subscription
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2.bridge_routes import (
     ACTIONS,
-    GOAL_POSE,
     INBOUND,
-    INITIAL_POSE,
     TOPICS,
     TWIST_STAMPED,
     BridgedAction,
     Inbound,
     Route,
 )
+from shared.ros2.commands import RosCommands
 from shared.ros2.wire import Durability, QosProfile, Reliability
 from shared.runtime import ServiceParams, ServiceSpec
 
@@ -161,7 +159,7 @@ class Ros2Dds:
         self.executors[0].add_node(self._own)
 
         # --- zendock side
-        self._cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        self._commands = RosCommands(node, self._refuse, self._navigate)
         self.clients: dict[str, ActionClient[Any, Any, Any]] = {
             a.name: ActionClient(node, a.zendock, a.name) for a in ACTIONS}
         self.outlets = [_Outlet(route, ros_class(route.ros_type)) for route in TOPICS]
@@ -349,41 +347,10 @@ class Ros2Dds:
             self._refuse(f"malformed-{inbound.ros_topic}", "refused a message on %s: %s", topic, exc)
             return
         self._count(f"in {topic}")
-        if isinstance(msg, Twist):
-            self._cmd_vel.publish(msg)
-        elif inbound.ros_topic == GOAL_POSE and isinstance(msg, PoseStamped):
-            self._navigate(msg)
-        elif inbound.ros_topic == INITIAL_POSE and isinstance(msg, PoseWithCovarianceStamped):
-            self._set_localisation(msg)
+        self._commands.handle(inbound.ros_topic, msg)
 
     def _navigate(self, goal: PoseStamped) -> None:
-        frame = goal.header.frame_id.lstrip("/")
-        if frame not in ("", topics.MAP_FRAME):
-            self._refuse("goal-frame", "refused a goal in frame %r: zendock plans in %r", goal.header.frame_id,
-                         topics.MAP_FRAME)
-            return
-        target = goal.pose.to_pose2d()
-        self.node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
         self.clients[topics.NAVIGATE_TO_POSE].send_goal(NavigateToPoseGoal(pose=goal))
-
-    def _set_localisation(self, estimate: PoseWithCovarianceStamped) -> None:
-        frame = estimate.header.frame_id.lstrip("/")
-        if frame not in ("", topics.MAP_FRAME):
-            self._refuse("initialpose-frame", "refused an initial pose in frame %r: zendock localises in %r",
-                         estimate.header.frame_id, topics.MAP_FRAME)
-            return
-        belief = estimate.pose.pose.to_pose2d()
-
-        def done(reply: SetLocalisationResponse | None, error: ServiceError | None) -> None:
-            if error is not None or reply is None or not reply.success:
-                self._refuse("initialpose-failed", "the simulator's localiser did not take the initial pose: %s",
-                             error or (reply.message if reply else "no reply"))
-            else:
-                self.node.log.info("initial pose from ROS 2: the localiser now believes (%.2f, %.2f, %.2f)",
-                                   belief.x, belief.y, belief.yaw)
-
-        self.node.call_async(SET_LOCALISATION, topics.SIM_SET_LOCALISATION,
-                             SetLocalisationRequest(x=belief.x, y=belief.y, yaw=belief.yaw), done)
 
     # --- actions: rclpy ActionServers relaying to zendock's ------------------------------------------
 
