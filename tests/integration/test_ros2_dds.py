@@ -100,6 +100,7 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("cmd_vel_odom")
     check("cmd_vel_stamped_odom")
     check("navigate_to_pose")
+    check("goal_pose")
     check("cancel")
     check("dock_robot")
     check("bad_input")

@@ -5,7 +5,7 @@ Run it with ``.venv-ros2/bin/python tests/support/ros2_user.py`` on a ``ROS_DOMA
 It goes through what a ROS 2 user does, one JSON line per step on stdout (``{"step": ..., "ok": ...}``):
 lists nodes and topics, echoes ``/battery_status``, joins ``/map`` late (TRANSIENT_LOCAL), follows ``/clock``
 with ``use_sim_time``, drives with ``/cmd_vel`` (Twist, then TwistStamped) and watches ``/odom``, sends NavigateToPose and DockRobot
-goals (feedback, result, CHARGING), cancels a goal, sends what zendock refuses, sets the localiser's belief with ``/initialpose``, and, after printing ``{"step": "stop_planner"}``, waits
+goals (feedback, result, CHARGING), sends a ``/goal_pose`` and sees the robot arrive, cancels a goal, sends what zendock refuses, sets the localiser's belief with ``/initialpose``, and, after printing ``{"step": "stop_planner"}``, waits
 for ``/planner`` to leave the graph. It imports nothing of zendock's.
 """
 
@@ -203,6 +203,27 @@ class User:
                pose_after=[round(v, 3) for v in pose] if pose else None)
         client.destroy()
 
+    def goal_pose(self) -> None:
+        """RViz's 2D Goal Pose: a PoseStamped on /goal_pose, and the robot drives there."""
+        target = (0.5, 2.6, -math.pi / 2)
+        goal = PoseStamped()
+        goal.header.frame_id = "map"
+        goal.pose.position.x, goal.pose.position.y = target[0], target[1]
+        goal.pose.orientation.z, goal.pose.orientation.w = math.sin(target[2] / 2), math.cos(target[2] / 2)
+        pub = self.node.create_publisher(PoseStamped, "/goal_pose", 10)
+        self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
+        pub.publish(goal)
+        poses: list[Any] = []
+        sub = self.node.create_subscription(Float64MultiArray, "/map_to_base_link_pose2d",
+                                            lambda m: poses.append(tuple(m.data[:3])), 10)
+
+        def arrived() -> bool:
+            return bool(poses) and math.hypot(poses[-1][0] - target[0], poses[-1][1] - target[1]) < 0.25
+        ok = self.spin_until(arrived, 60.0)
+        self.node.destroy_subscription(sub)
+        self.node.destroy_publisher(pub)
+        report("goal_pose", ok, target=list(target), pose_after=[round(v, 3) for v in poses[-1]] if poses else None)
+
     def cancel(self) -> None:
         client = ActionClient(self.node, NavigateToPose, "/navigate_to_pose")
         goal = NavigateToPose.Goal()
@@ -295,8 +316,8 @@ class User:
                nodes=sorted(set(self.node.get_node_names()) - {self.node.get_name()}))
 
 
-STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "cancel", "dock", "bad_input", "initial_pose",
-         "node_leaves")
+STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "goal_pose", "cancel", "dock",
+         "bad_input", "initial_pose", "node_leaves")
 
 
 def main(argv: list[str] | None = None) -> int:
