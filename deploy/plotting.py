@@ -144,7 +144,8 @@ def battery_from_set(battery: np.ndarray, set_s: float, set_percentage: float,
     after ``set_s`` within ``tolerance`` of ``set_percentage`` (readings published while the request
     was on its way still carry the old charge); from ``set_s`` when no reading shows the set."""
     later = battery[battery[:, 0] >= set_s] if len(battery) else battery
-    shows_set = np.flatnonzero(np.abs(later[:, 1] - set_percentage) <= tolerance) if len(later) else []
+    shows_set: np.ndarray = (np.flatnonzero(np.abs(later[:, 1] - set_percentage) <= tolerance) if len(later)
+                             else np.zeros(0, dtype=int))
     return later[shows_set[0]:] if len(shows_set) else later
 
 

@@ -12,7 +12,6 @@ replacement into every stack, zendock's own end-to-end tests included).
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -48,18 +47,11 @@ class StackConfig:
 
     def environment(self, endpoint: str, project_dir: Path) -> dict[str, str]:
         """The stack file's variables (``deploy/stack.yaml``'s header lists them), as ``zendock demo`` sets them."""
-        return {
-            "ZENOH_LISTEN": endpoint,
-            "ZENOH_CONNECT": endpoint,
-            "ZENDOCK_WORLD": str(self.world),
-            "ZENDOCK_RTF": self.rtf,
-            "ZENDOCK_DETECTOR": self.detector,
-            "ZENDOCK_CONTROLLER": self.controller,
-            "ZENDOCK_SEED": str(self.seed),
-            "ZENDOCK_LOCALISATION_ERROR": json.dumps(list(self.localisation_error)),
-            "ZENDOCK_GLASS_MEMORY": str(project_dir / "glass_memory.npz"),
-            "ZENDOCK_MAP": str(project_dir / "map.yaml"),  # its own map, whatever else runs in this checkout
-        }
+        from deploy.demo import DemoOptions, stack_environment  # noqa: PLC0415 - only when a stack starts
+
+        options = DemoOptions(world=self.world, controller=self.controller, detector=self.detector, rtf=self.rtf,
+                              seed=self.seed, localisation_error=self.localisation_error)
+        return stack_environment(options, endpoint, project_dir)
 
 
 def shipped_worlds() -> list[str]:
