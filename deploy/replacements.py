@@ -14,9 +14,11 @@ attributable to the code that produced them.
 
 from __future__ import annotations
 
+import os
 import shlex
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 from deploy.launcher.stack_file import Stack, join_namespace
@@ -58,7 +60,14 @@ def parse_replacement(text: str) -> Replacement:
         raise ValueError(f"--service {name}: the command does not parse as shell words: {exc}") from None
     if not words:
         raise ValueError(f"--service {name}: the command is empty")
-    return Replacement(name, command.strip())
+    # A file named relative to where the user typed it: zendock runs services in another directory.
+    return Replacement(name, shlex.join(_absolute(word) for word in words))
+
+
+def _absolute(word: str) -> str:
+    """A word naming an existing file here (``my_docking.py``, ``./bin/dock``), as an absolute path."""
+    path = Path(word)
+    return os.path.abspath(path) if not path.is_absolute() and path.is_file() else word
 
 
 def check_unique(replacements: Iterable[Replacement]) -> list[Replacement]:
@@ -97,7 +106,11 @@ def apply_replacements(stack: Stack, replacements: Sequence[Replacement]) -> Sta
     if not replacements:
         return stack
     services = dict(stack.services)
-    for replacement in check_unique(replacements):
+    try:
+        unique = check_unique(replacements)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    for replacement in unique:
         found = 0
         for service_name, spec in stack.services.items():
             if runs_inside_container(spec.command, replacement.name):

@@ -22,8 +22,7 @@ from typing import Any
 from shared.contracts.enforce import hold_to_contract
 from shared.node import Node
 from shared.parameter_server import attach_parameters
-from shared.runtime import SIGNAL_CHECK_S, ServiceOptions, ServiceParams, ServiceSpec
-from shared.session import open_session
+from shared.runtime import SIGNAL_CHECK_S, ServiceOptions, ServiceParams, ServiceSpec, open_session_unless
 
 
 @dataclass(frozen=True)
@@ -64,7 +63,11 @@ def serve_group(members: list[Member], *, install_signal_handlers: bool = True) 
     log.info("connecting to %s: %s", ",".join(first.connect), ", ".join(m.label for m in members))
     started: list[tuple[Member, Node, Any, threading.Thread]] = []
     code = 0
-    with open_session(first.session_spec()) as session:
+    opened = open_session_unless(first.session_spec(), stop)  # SIGTERM ends it even before the router answers
+    if opened is None:
+        log.info("stopped before the router answered")
+        return 0
+    with opened as session:
         try:
             for member in members:
                 logger = logging.getLogger(member.label)

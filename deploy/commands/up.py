@@ -24,6 +24,7 @@ from deploy.launcher.project import (
 from deploy.launcher.runtime import ControlError, RuntimePaths, request, supervisor_info
 from deploy.launcher.stack_file import Stack
 from deploy.launcher.status import ServiceStatus
+from shared.config_errors import ConfigError
 
 DAEMON_START_TIMEOUT_S = 20.0
 #: How much of a failed service's log is searched for the line that says why.
@@ -144,6 +145,9 @@ def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePa
 def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], paths: RuntimePaths) -> int:
     began = time.monotonic()
     if supervisor_info(paths) is not None:
+        if args.replacements:  # the running supervisor keeps the stack it started with
+            raise ConfigError(f"--service: the project {stack.project_name} is already up with its own services; "
+                              "`zendock down` first")
         request(paths, "start", services=services)
     else:
         code = start_daemon(args, services, paths)

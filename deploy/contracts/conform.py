@@ -107,7 +107,7 @@ def _own_command(service: str, stack: Any) -> list[str]:
 def _absolute(word: str) -> str:
     """A relative path in COMMAND that names a file here, made absolute: the program runs in the run directory."""
     path = Path(word)  # abspath, not resolve: a venv's python is a symlink that must stay the venv's
-    return os.path.abspath(path) if not path.is_absolute() and path.exists() else word
+    return os.path.abspath(path) if not path.is_absolute() and path.is_file() else word
 
 
 def run_conform(service: str, command: list[str] | None, options: ConformOptions,
@@ -152,8 +152,13 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
             ctx = Context(contract, candidate, probe, world, namespace, ROBOT_NAMESPACE,
                           sim="simulator" in contract.needs or service == "simulator", domain_id=domain_id)
             try:
-                candidate.start()
-                _run_checks(ctx, report, log)
+                try:
+                    candidate.start()
+                except OSError as exc:  # no such program, not executable
+                    report.checks.append(Check("starts: announces its node token", False,
+                                               f"could not run {argv[0]}: {exc.strerror or exc}"))
+                else:
+                    _run_checks(ctx, report, log)
             finally:
                 candidate.close()
                 probe.close()

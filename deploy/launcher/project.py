@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from dataclasses import replace
 from pathlib import Path
 
 from deploy.launcher.runtime import RUNTIME_DIRNAME, RuntimePaths
@@ -62,7 +63,12 @@ def load_project_stack(args: argparse.Namespace) -> Stack:
         raise no_stack_file(path)
     env_file = getattr(args, "env_file", None)
     stack = load_stack(path, env_file=env_file, project_dir=project_dir(args), project_name=args.project_name)
-    return apply_replacements(stack, getattr(args, "replacements", None) or [])
+    replacements = getattr(args, "replacements", None) or []
+    namespace = getattr(args, "namespace", None)
+    if replacements and namespace is not None:  # {robot} is the namespace the service will run in
+        return replace(apply_replacements(replace(stack, namespace=namespace), replacements),
+                       namespace=stack.namespace)
+    return apply_replacements(stack, replacements)
 
 
 def active_profiles(args: argparse.Namespace) -> list[str]:

@@ -24,7 +24,7 @@ from deploy.trials.summary import combine, summary_reasons
 #: The options that make two runs the same campaign; the rest (workers, rtf, compose, shard, where the runs
 #: went, the world file's own path on each machine) say only how it ran.
 CAMPAIGN_OPTIONS = ("n", "controller", "detector", "starts", "seed", "timeout_sim_s", "localisation_error",
-                    "battery_start", "drain_scale")
+                    "battery_start", "drain_scale", "replacements")
 
 
 class MergeError(ValueError):

@@ -192,11 +192,17 @@ class Ros2Dds:
         return len(self.contexts) - 1
 
     def _spin(self, executor: Any) -> None:
-        try:
-            executor.spin()
-        except Exception as exc:  # shutdown races end spin with various rclpy errors
-            if not self._closing:
-                self.node.log.error("rclpy executor stopped: %s", exc)
+        """rclpy's executor re-raises a callback's exception from ``spin()``: log it and spin on, so one bad
+        callback never leaves the face announced but deaf (shutdown races end it with rclpy errors too)."""
+        while not self._closing:
+            try:
+                executor.spin()
+                return
+            except Exception as exc:
+                if self._closing:
+                    return
+                self._say.warning("rclpy-callback", "an rclpy callback failed (spinning on): %s: %s",
+                                  type(exc).__name__, exc)
 
     # --- the graph: a node per zendock service that is up --------------------------------------------
 

@@ -2,7 +2,7 @@
 
 A node of a service with a contract checks every endpoint it declares against it. Under test
 (``ZENDOCK_STRICT_CONTRACTS=1``, which the project's test suite sets for every process it starts) an
-endpoint the contract does not name stops the service at once, so the contract and the wiring cannot
+endpoint the contract does not name stops the service at once (from a callback too: the process exits 70), so the contract and the wiring cannot
 drift apart unnoticed; otherwise it is logged as an error and the service goes on.
 """
 
@@ -12,9 +12,12 @@ import os
 
 from shared.contracts.model import ContractViolation
 from shared.contracts.services import contract_for
+from shared.executor import in_callback
 from shared.node import Node
 
 STRICT_ENV = "ZENDOCK_STRICT_CONTRACTS"
+#: The exit code of a strict service that declared, in a callback, an endpoint its contract does not name.
+STRICT_EXIT = 70
 
 
 def hold_to_contract(node: Node) -> None:
@@ -28,8 +31,10 @@ def hold_to_contract(node: Node) -> None:
         try:
             contract.check_endpoint(kind, type_name, key, node.name)
         except ContractViolation as exc:
+            node.log.error("%s", exc)
+            if strict and in_callback():  # a callback's exception is only logged: end the process instead
+                os._exit(STRICT_EXIT)
             if strict:
                 raise
-            node.log.error("%s", exc)
 
     node.endpoint_check = check

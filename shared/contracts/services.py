@@ -199,7 +199,8 @@ PERCEPTION = Contract(
     publishes=(
         Topic(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA, about="the dock in base_link, from pixels alone"),
         Topic(topics.DOCK_DETECTIONS, DockDetection, RELIABLE, about="each detection with its quality"),
-        Topic(topics.ARUCO_DEBUG_IMAGE, Image, IMAGE_QOS, about="the image with the markers drawn, while someone listens"),
+        Topic(topics.ARUCO_DEBUG_IMAGE, Image, IMAGE_QOS, when="optional: a view for people",
+              about="the image with the markers drawn, while someone listens"),
     ),
     subscribes=(
         Topic(topics.CAMERA_INFO, CameraInfo, QoS(depth=1)),

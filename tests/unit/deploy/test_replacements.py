@@ -66,3 +66,16 @@ def test_a_malformed_option_names_what_is_wrong(text: str, problem: str) -> None
 def test_reports_name_each_replacement_and_its_command() -> None:
     assert replacements_report([parse_replacement("docking=python my docking.py")]) == {"docking": "python my docking.py"}
     assert replacements_report([]) == {}
+
+
+def test_a_file_named_relative_to_where_the_user_is_becomes_absolute(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """zendock runs services in another directory: ``python my_docking.py`` must still find the file."""
+    (tmp_path / "my_docking.py").write_text("")
+    monkeypatch.chdir(tmp_path)
+    replacement = parse_replacement("docking=python my_docking.py --gain 2")
+    assert replacement.words == ["python", str(tmp_path / "my_docking.py"), "--gain", "2"]
+
+
+def test_the_same_service_twice_is_one_clear_error(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="--service docking is given twice"):
+        apply_replacements(_trials_stack(tmp_path), [parse_replacement("docking=a"), parse_replacement("docking=b")])  # type: ignore[arg-type]
