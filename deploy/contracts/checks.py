@@ -140,7 +140,7 @@ def check_endpoints(ctx: Context) -> list[Check]:
         extra = []
         for kind, key, type_name in sorted(declared):
             try:
-                ctx.contract.check_endpoint(kind, type_name, key, ctx.contract.service)
+                ctx.contract.check_endpoint(kind, type_name, key, ctx.contract.service, ctx.namespace)
             except RuntimeError:
                 extra.append(f"{kind} {key} ({type_name})")
         return (not extra, "none beyond the contract" if not extra else "not in the contract: " + ", ".join(extra))

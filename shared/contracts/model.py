@@ -129,15 +129,23 @@ class Contract:
         return [(kind, key, type_name) for kind, key, type_name, required in self.endpoints()
                 if required and kind != "sub"]
 
-    def check_endpoint(self, kind: str, type_name: str, key: str, node_name: str) -> None:
-        """Raise :class:`ContractViolation` unless the contract names this endpoint (``key`` is the full key)."""
+    def check_endpoint(self, kind: str, type_name: str, key: str, node_name: str, namespace: str | None = None) -> None:
+        """Raise :class:`ContractViolation` unless the contract names this endpoint (``key`` is the full key).
+
+        With ``namespace`` the key must be the name in exactly that namespace (``zendock conform`` knows
+        where the program runs); without, in any robot's (a simulator serves several)."""
         if kind == "sub" and self.subscribes_on_demand:
             return
         if is_common_endpoint(kind, type_name, key, node_name):
             return
         fleet_wide = {t.name for t in (*self.publishes, *self.subscribes) if t.fleet_wide}
         for want_kind, name, want_type, _required in self.endpoints():
-            if want_kind == kind and want_type == type_name and key_matches(key, name, name in fleet_wide):
+            if want_kind != kind or want_type != type_name:
+                continue
+            if namespace is not None and name not in fleet_wide:
+                if key == (f"{namespace}/{name}" if namespace else name):
+                    return
+            elif key_matches(key, name, name in fleet_wide):
                 return
         raise ContractViolation(
             f"{self.service}: declares {kind} {key} ({type_name}), which its contract (shared/contracts) does not name"

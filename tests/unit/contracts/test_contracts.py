@@ -86,3 +86,11 @@ def test_a_schema_names_every_field_a_payload_carries() -> None:
     assert schema["properties"]["percentage"] == {"type": "number", "minimum": 0.0, "maximum": 1.0}
     header = schema["$defs"]["std_msgs.msg.Header"]
     assert header["properties"]["stamp"] == {"$ref": "#/$defs/builtin_interfaces.msg.Time"}
+
+
+def test_in_a_known_namespace_the_key_must_be_there() -> None:
+    """conform knows where the program runs: ``cmd_vel`` in the wrong namespace is not the contract's."""
+    docking = CONTRACTS["docking"]
+    docking.check_endpoint("pub", "geometry_msgs/msg/Twist", "r1/cmd_vel", "docking", "r1")
+    with pytest.raises(ContractViolation):
+        docking.check_endpoint("pub", "geometry_msgs/msg/Twist", "other/cmd_vel", "docking", "r1")
