@@ -25,7 +25,6 @@ goal in a frame zendock does not plan in) is counted and logged at most once per
 
 from __future__ import annotations
 
-import os
 import time
 from collections import Counter
 from dataclasses import dataclass
@@ -50,6 +49,7 @@ from shared.ros2.bridge_routes import (
     TWIST_STAMPED,
     Inbound,
     Route,
+    default_domain_id,
 )
 from shared.ros2.commands import RosCommands
 from shared.ros2.wire import (
@@ -79,15 +79,10 @@ HEARTBEAT_PERIOD_S = 0.5
 FIRST_SEQUENCE_NUMBER = 1
 
 
-def _default_domain() -> int:
-    raw = os.environ.get("ROS_DOMAIN_ID", "").strip()
-    return int(raw) if raw.isdigit() else 0
-
-
 class Params(ServiceParams):
     """Parameters of ``python -m services.ros2_bridge``."""
 
-    domain_id: int = Field(default_factory=_default_domain, ge=0, le=232,
+    domain_id: int = Field(default_factory=default_domain_id, ge=0, le=232,
                            description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
     ros_namespace: str = Field("/", description="ROS 2 namespace the zendock robot's topics and nodes appear "
                                                 "in, in rcl's canonical form (/ or /robot)")

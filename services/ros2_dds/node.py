@@ -56,6 +56,7 @@ from shared.ros2.bridge_routes import (
     BridgedAction,
     Inbound,
     Route,
+    default_domain_id,
 )
 from shared.ros2.commands import RosCommands
 from shared.ros2.wire import Durability, QosProfile, Reliability
@@ -71,15 +72,10 @@ OWNERS: tuple[str, ...] = tuple(dict.fromkeys(
     [r.owner for r in TOPICS] + [i.owner for i in INBOUND] + [a.owner for a in ACTIONS]))
 
 
-def _default_domain() -> int:
-    raw = os.environ.get("ROS_DOMAIN_ID", "").strip()
-    return int(raw) if raw.isdigit() else 0
-
-
 class Params(ServiceParams):
     """Parameters of ``python -m services.ros2_dds``."""
 
-    domain_id: int = Field(default_factory=_default_domain, ge=0, le=232,
+    domain_id: int = Field(default_factory=default_domain_id, ge=0, le=232,
                            description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
     discovery_range: Literal["LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT"] = Field(
         "LOCALHOST", description="ROS_AUTOMATIC_DISCOVERY_RANGE of the rclpy context (default: loopback only)")

@@ -8,6 +8,7 @@ so ``ros2 node list`` shows zendock's services and ``ros2 topic info -v`` names 
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -134,3 +135,9 @@ INBOUND: tuple[Inbound, ...] = (
     # zendock's localiser is the simulator's (map -> odom): it takes the estimate.
     Inbound(INITIAL_POSE, "geometry_msgs/msg/PoseWithCovarianceStamped", "simulator", PoseWithCovarianceStamped),
 )
+
+
+def default_domain_id() -> int:
+    """The ROS 2 domain both faces join unless told: ``ROS_DOMAIN_ID``, else 0 (as rcl reads it)."""
+    raw = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    return int(raw) if raw.isdigit() else 0
