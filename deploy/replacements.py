@@ -19,7 +19,6 @@ import shlex
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 from deploy.launcher.stack_file import Stack, join_namespace
 from shared.config_errors import ConfigError
@@ -61,11 +60,12 @@ def parse_replacement(text: str) -> Replacement:
     if not words:
         raise ValueError(f"--service {name}: the command is empty")
     # A file named relative to where the user typed it: zendock runs services in another directory.
-    return Replacement(name, shlex.join(_absolute(word) for word in words))
+    return Replacement(name, shlex.join(absolute_if_file(word) for word in words))
 
 
-def _absolute(word: str) -> str:
-    """A word naming an existing file here (``my_docking.py``, ``./bin/dock``), as an absolute path."""
+def absolute_if_file(word: str) -> str:
+    """A word naming an existing file here (``my_docking.py``, ``./bin/dock``), as an absolute path; others as
+    they are. ``abspath``, not ``resolve``: a venv's python is a symlink that must stay the venv's."""
     path = Path(word)
     return os.path.abspath(path) if not path.is_absolute() and path.is_file() else word
 
@@ -80,11 +80,12 @@ def check_unique(replacements: Iterable[Replacement]) -> list[Replacement]:
     return list(seen.values())
 
 
-def module_index(command: Sequence[str], name: str) -> int | None:
-    """Where ``services.<name>`` follows ``-m`` in ``command`` (the flags start after it), or ``None``."""
+def split_service_command(command: Sequence[str], name: str) -> tuple[list[str], list[str]] | None:
+    """``(program up to services.<name>, the flags after it)`` of a command running ``-m services.<name>``,
+    or ``None`` when it does not run it."""
     for i in range(len(command) - 1):
         if command[i] == "-m" and command[i + 1] == f"services.{name}":
-            return i + 1
+            return list(command[: i + 2]), list(command[i + 2:])
     return None
 
 
@@ -118,11 +119,11 @@ def apply_replacements(stack: Stack, replacements: Sequence[Replacement]) -> Sta
                     f"--service {replacement.name}: {service_name} runs it inside a composed zendock container; "
                     "replace it in a stack that runs it as its own process"
                 )
-            index = module_index(spec.command, replacement.name)
-            if index is None:
+            split = split_service_command(spec.command, replacement.name)
+            if split is None:
                 continue
             namespace = join_namespace(stack.namespace, spec.namespace)
-            argv = replacement.argv_for(namespace, spec.command[index + 1:])
+            argv = replacement.argv_for(namespace, split[1])
             services[service_name] = spec.model_copy(update={"command": argv})
             found += 1
         if not found:
@@ -134,9 +135,3 @@ def replacements_report(replacements: Sequence[Replacement]) -> dict[str, str]:
     """What reports record: each replaced service and the command that ran instead (``{}`` if none)."""
     return {r.name: r.command for r in replacements}
 
-
-def replacements_from_report(data: Any) -> list[Replacement]:
-    """The replacements a report recorded (``replaced_services``), for a re-run on the same code."""
-    if not isinstance(data, dict):
-        return []
-    return [Replacement(str(name), str(command)) for name, command in data.items()]

@@ -38,7 +38,7 @@ from deploy.contracts.probe import Probe
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.launcher.plan import resolve_argv
 from deploy.paths import REPO_ROOT
-from deploy.replacements import ROBOT_PLACEHOLDER, module_index
+from deploy.replacements import ROBOT_PLACEHOLDER, absolute_if_file, split_service_command
 from shared.config_errors import ConfigError
 from shared.contracts import CONTRACTS
 from shared.session import SessionSpec, open_session
@@ -81,12 +81,8 @@ class ConformReport:
 def _flags_for(service: str, stack: Any, world: Path) -> list[str]:
     """The flags the launcher gives zendock's own ``service`` (from the stack file), plus conform's own."""
     spec = stack.services.get(service)
-    flags: list[str] = []
-    if spec is not None:
-        index = module_index(spec.command, service)
-        flags = list(spec.command[index + 1:]) if index is not None else []
-    elif service == "fleet":
-        flags = ["-p", f"world={world}"]
+    split = split_service_command(spec.command, service) if spec is not None else None
+    flags = split[1] if split is not None else (["-p", f"world={world}"] if service == "fleet" else [])
     if service == "viz":
         flags += ["-p", "port=0"]  # any free port: never the default a running viewer uses
     return flags
@@ -95,19 +91,13 @@ def _flags_for(service: str, stack: Any, world: Path) -> list[str]:
 def _own_command(service: str, stack: Any) -> list[str]:
     """zendock's own service as its stack file runs it (the DDS face: with .venv-ros2's interpreter)."""
     spec = stack.services.get(service)
-    index = module_index(spec.command, service) if spec is not None else None
-    if spec is None or index is None:
+    split = split_service_command(spec.command, service) if spec is not None else None
+    if split is None:
         return ["python", "-m", f"services.{service}"]
-    head = spec.command[: index + 1]
+    head = split[0]
     if head[0] != "python" and not Path(head[0]).is_absolute():
         head = [str(REPO_ROOT / head[0]), *head[1:]]  # relative to the repository, where zendock's stacks run
     return head
-
-
-def _absolute(word: str) -> str:
-    """A relative path in COMMAND that names a file here, made absolute: the program runs in the run directory."""
-    path = Path(word)  # abspath, not resolve: a venv's python is a symlink that must stay the venv's
-    return os.path.abspath(path) if not path.is_absolute() and path.is_file() else word
 
 
 def run_conform(service: str, command: list[str] | None, options: ConformOptions,
@@ -120,7 +110,6 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
     world = load_world(world_path)
     if not world.docks:
         raise ConfigError(f"--world {options.world}: conform needs a world with a dock")
-    own = command is None
     namespace = "" if service in FLEET_WIDE else ROBOT_NAMESPACE
     domain_id = random.randint(100, 200)
     endpoint = free_endpoint()
@@ -132,7 +121,7 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
     run_dir = Path(tempfile.mkdtemp(prefix=f"conform-{service}-", dir=runs_dir))
     stack = load_stack(DEFAULT_STACK, env=env, project_dir=run_dir)
     words = command or _own_command(service, stack)
-    argv = resolve_argv([_absolute(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]) + _flags_for(service, stack, world_path)
+    argv = resolve_argv([absolute_if_file(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]) + _flags_for(service, stack, world_path)
     report = ConformReport(service, argv, log=str(run_dir / "candidate.log"))
     # what it needs, and what zendock's own waits for in the stack file (the planner: the map step)
     own_dependencies = set(stack.services[service].depends_on) if service in stack.services else set()
@@ -142,8 +131,8 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
                      "ROS_DOMAIN_ID": str(domain_id)}
     candidate = Candidate(argv, candidate_env, run_dir / "candidate.log", run_dir)
     start = time.monotonic()
-    log(f"{service}: {'zendock' + chr(39) + 's own' if own else ' '.join(words)}; beside it: {', '.join(rest) or 'the router'}"
-        f" on {endpoint}, run directory {run_dir}")
+    who = "zendock's own" if command is None else " ".join(words)
+    log(f"{service}: {who}; beside it: {', '.join(rest) or 'the router'} on {endpoint}, run directory {run_dir}")
     with Launcher(stack, services=selected, project_dir=run_dir / "stack", working_dir=run_dir,
                   namespace=ROBOT_NAMESPACE, project_name="conform") as launcher:
         launcher.wait_healthy(timeout_s=90.0)

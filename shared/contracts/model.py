@@ -23,8 +23,18 @@ class ContractViolation(RuntimeError):
     """A service declared an endpoint its contract does not name (a bug in the service or the contract)."""
 
 
+class _Conditional:
+    """Required (declared whenever the service runs) unless ``when`` says when it is declared."""
+
+    when: str
+
+    @property
+    def required(self) -> bool:
+        return not self.when
+
+
 @dataclass(frozen=True)
-class Topic:
+class Topic(_Conditional):
     """A key a service publishes or subscribes, with its message type and delivery."""
 
     name: str
@@ -38,13 +48,9 @@ class Topic:
     #: A key outside the robot's namespace, matched by its last parts (the fleet's peers ``*/battery_status``).
     fleet_wide: bool = False
 
-    @property
-    def required(self) -> bool:
-        return not self.when
-
 
 @dataclass(frozen=True)
-class Request:
+class Request(_Conditional):
     """A request/response service (a Zenoh queryable)."""
 
     name: str
@@ -52,23 +58,15 @@ class Request:
     when: str = ""
     about: str = ""
 
-    @property
-    def required(self) -> bool:
-        return not self.when
-
 
 @dataclass(frozen=True)
-class Action:
+class Action(_Conditional):
     """An action (goal, feedback, result, cancel) over the keys ``<name>/_action/...``."""
 
     name: str
     type: ActionType[Any, Any, Any]
     when: str = ""
     about: str = ""
-
-    @property
-    def required(self) -> bool:
-        return not self.when
 
 
 @dataclass(frozen=True)

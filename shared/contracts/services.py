@@ -7,6 +7,8 @@ The services declare what they declare; their nodes are held to these tables whi
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from shared import topics
 from shared.contracts.model import Action, Contract, Flag, Request, Topic
 from shared.endpoints import BLOCKING, RELIABLE, SENSOR_DATA, QoS
@@ -267,18 +269,13 @@ ROS2_BRIDGE = Contract(
     notes=("It subscribes to a robot's topics only while a ROS 2 subscriber wants them.",),
 )
 
-ROS2_DDS = Contract(
+#: The same promise on DDS (real rclpy): the same routes (shared/ros2/bridge_routes.py), another middleware.
+ROS2_DDS = replace(
+    ROS2_BRIDGE,
     service="ros2_dds",
     summary="zendock seen from ROS 2 on DDS (real rclpy, Fast DDS): nodes, topics, actions, forwarded only while wanted.",
-    publishes=(
-        Topic(topics.CMD_VEL, Twist, RELIABLE, about="from ROS 2's /cmd_vel (Twist or TwistStamped)"),
-    ),
-    uses_actions=(Action(topics.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE), Action(topics.DOCK_ROBOT, DOCK_ROBOT),
-                  Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT)),
-    subscribes_on_demand=True,
     flags=(Flag("domain_id", "the ROS_DOMAIN_ID of its rclpy (DDS) face", needed=True),),
     behaviour=("shows zendock to ROS 2 on DDS: an rclpy node for each zendock service that is up",),
-    needs=("simulator",),
     notes=("It subscribes to a robot's topics only while a ROS 2 subscriber matches (transient-local ones "
            "always), and runs from .venv-ros2 (make ros2).",),
 )
