@@ -23,7 +23,7 @@ from shared.interfaces.fleet import FleetDocks, FleetQueue
 from shared.interfaces.simulator import SIM_STATE, SimStateRequest
 from shared.messages import BatteryState, String
 from shared.names import topic_key
-from shared.node import call_service
+from shared.node import ServiceUnavailable, call_service
 from tests.integration.test_docking_service import CHARGING, TeleportNavigator
 from tests.support.bus import KeyRecorder
 from tests.support.processes import wait_until
@@ -60,8 +60,18 @@ class _Robot:
         self.navigator = TeleportNavigator(bus, self.ns, dwell_s=1.0, robot=name)
 
     def set_battery(self, percentage: float) -> None:
-        call_service(self.bus, topic_key(self.ns, topics.BATTERY_SET_STATE), SET_BATTERY_STATE,
-                     SetBatteryStateRequest(percentage=percentage), timeout_s=5.0)
+        """Asked again while nothing answers: the battery's queryable may not have reached the router yet when
+        the docking service (what the test waits on) is already idle."""
+        key = topic_key(self.ns, topics.BATTERY_SET_STATE)
+        deadline = time.monotonic() + 10.0
+        while True:
+            try:
+                call_service(self.bus, key, SET_BATTERY_STATE, SetBatteryStateRequest(percentage=percentage), timeout_s=5.0)
+                return
+            except ServiceUnavailable:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
 
     def wait_state(self, name: str, timeout_s: float, after: int = 0) -> int:
         self.state.wait_for(lambda m: m.data == name, timeout_s=timeout_s, after=after)
