@@ -56,8 +56,13 @@ def _worlds(args: argparse.Namespace) -> list[Path]:
     names = args.world or [DEFAULT_WORLD]
     if names == ["all"]:
         worlds = sorted(SHIPPED_WORLDS.glob("*.yaml"))
-    else:
-        worlds = [Path(name) for name in names]
+    else:  # a directory stands for every world file in it (deploy/worlds/unseen, a user's own set)
+        worlds = []
+        for name in names:
+            path = Path(name)
+            worlds.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
+        if not worlds:
+            raise ConfigError(f"--world {' '.join(names)}: no world file (*.yaml) there")
     for world in worlds:
         if not world.is_file():
             raise ConfigError(f"--world {world}: no such file")
@@ -186,8 +191,8 @@ def _print_summary(console: Console, summary) -> None:  # type: ignore[no-untype
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("trials", help="Monte Carlo dockings from random starts on the full stack")
-    parser.add_argument("--world", action="append", metavar="FILE",
-                        help=f"world file (repeat for a campaign across worlds; 'all': every shipped world); "
+    parser.add_argument("--world", action="append", metavar="FILE|DIR",
+                        help=f"world file or directory of them (repeat for a campaign across worlds; 'all': every shipped world); "
                              f"default {DEFAULT_WORLD}")
     parser.add_argument("--n", type=count, default=10, help="number of dockings (per world)")
     parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
