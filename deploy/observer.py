@@ -22,7 +22,8 @@ from shared import topics
 from shared.action import action_key
 from shared.geometry import Pose2D
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
-from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, Path, PoseStamped, Range
+from shared.contracts.services import DOCKING_STATE
+from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, Path, PoseStamped, Range, String
 from shared.names import topic_key
 from shared.schema import Message, MessageError
 
@@ -57,6 +58,8 @@ class RunRecord:
     last_charging: bool = False
     #: Where the robot stood (x, y) each time navigation began a recovery, for the picture.
     recovery_points: list[tuple[float, float]] = field(default_factory=list)
+    #: Each change of the docking service's ``docking/state`` (sim time it arrived, the state's name).
+    phases: list[tuple[float, str]] = field(default_factory=list)
 
     @property
     def charging(self) -> bool:
@@ -77,6 +80,30 @@ class RunRecord:
             if math.dist(self.driven[i - 1][1:3], self.driven[i][1:3]) > TELEPORT_JUMP_M:
                 start = i
         return [(t, x, y) for t, x, y, _ in self.driven[start:]]
+
+    def phase_durations(self) -> dict[str, float]:
+        """Sim seconds from the trigger to charging spent in each docking state (``docking/state``).
+
+        ``TRIGGER`` is the time from the battery's crossing to the docking service's first state change
+        after it, leaving IDLE (hearing the battery, starting the run); a state entered twice (a retry)
+        counts once, summed.
+        Empty unless the run both triggered and charged.
+        """
+        if self.trigger_s is None or self.charging_s is None:
+            return {}
+        begin, end = self.trigger_s, self.charging_s
+        durations: dict[str, float] = {}
+        current, since = "TRIGGER", begin
+        for t, name in self.phases:
+            if t <= begin:
+                current = "TRIGGER" if name == "IDLE" else name  # what the trigger found: a run already under way?
+                continue
+            if t >= end:
+                break
+            durations[current] = durations.get(current, 0.0) + (t - since)
+            current, since = name, t
+        durations[current] = durations.get(current, 0.0) + (end - since)
+        return {name: round(seconds, 3) for name, seconds in durations.items()}
 
     def pose_at(self, t_s: float) -> Pose2D | None:
         """The ground-truth pose at (or just before) ``t_s``."""
@@ -109,6 +136,7 @@ class RunObserver:
             session.declare_subscriber(key(topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth)),
             session.declare_subscriber(key(topics.PLAN), self._decoder(Path, self._on_plan)),
             session.declare_subscriber(key(topics.ULTRASONIC), self._decoder(Range, self._on_range)),
+            session.declare_subscriber(key(DOCKING_STATE), self._decoder(String, self._on_docking_state)),
             session.declare_subscriber(key(action_key(topics.NAVIGATE_TO_POSE, "feedback")),
                                        self._decoder(NAVIGATE_TO_POSE.feedback_message, self._on_nav_feedback)),
         ]
@@ -203,6 +231,14 @@ class RunObserver:
                     or abs(last[2] - sensor.yaw) > 0.02):
                 echoes.append((sensor.x, sensor.y, sensor.yaw, msg.range, msg.field_of_view))
 
+    def _on_docking_state(self, msg: String) -> None:
+        with self._lock:
+            if not self._armed:
+                return
+            phases = self._record.phases
+            if not phases or phases[-1][1] != msg.data:
+                phases.append((self._record.sim_time_s, msg.data))
+
     def _on_nav_feedback(self, msg: Any) -> None:
         count = msg.feedback.number_of_recoveries
         goal = bytes(msg.goal_id.uuid)
@@ -237,7 +273,7 @@ class RunObserver:
             return RunRecord(
                 r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds), list(r.collision_points),
                 list(r.driven), [list(p) for p in r.plans], list(r.sonar_echoes), list(r.battery), r.sim_time_s,
-                r.last_charging, list(r.recovery_points),
+                r.last_charging, list(r.recovery_points), list(r.phases),
             )
 
     def settle(self, timeout_s: float = 2.0) -> None:

@@ -47,6 +47,8 @@ def _summary_table(summary: dict) -> Table:
         value = summary[key]
         text = fmt[key](value) if key in fmt else (f"{value:.1f}" if isinstance(value, float) else str(value))
         table.add_row(key, text)
+    for name, seconds in summary.get("median_phase_s", {}).items():
+        table.add_row(f"median s in {name}", f"{seconds:.1f}")
     for name, mb in sorted(summary.get("peak_rss_mb", {}).items()):
         table.add_row(f"peak RSS {name}", f"{mb:.0f} MB")
     return table

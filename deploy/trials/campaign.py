@@ -119,6 +119,7 @@ def _run_one(
         path_length_m=record.driven_length_m(since_s=record.trigger_s),
         wall_s=time.monotonic() - wall_start,
         sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
+        phase_s=record.phase_durations(),
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)

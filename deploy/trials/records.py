@@ -99,6 +99,8 @@ class TrialResult:
     #: The planner's glass memory after the trial (see :mod:`deploy.glass_report`; NaN: none written yet).
     false_glass_cells: float = math.nan
     glass_coverage: float = math.nan
+    #: Sim seconds from the trigger to charging in each docking state (see ``RunRecord.phase_durations``).
+    phase_s: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -129,12 +131,17 @@ class TrialsSummary:
     median_glass_coverage: float = math.nan
     #: Each replaced service and the command that ran in its place (``--service``): whose figures these are.
     replaced_services: dict[str, str] = field(default_factory=dict)
+    #: Where the time to dock goes: per docking state, the median over docked trials of its sim seconds
+    #: (0 for a trial that never entered it); the medians need not add up to the median dock time.
+    median_phase_s: dict[str, float] = field(default_factory=dict)
 
     def headline(self) -> dict[str, Any]:
         keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
                 "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
                 "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage")
         line = {k: getattr(self, k) for k in keys}
+        if self.median_phase_s:
+            line["median_phase_s"] = dict(self.median_phase_s)
         if self.replaced_services:
             line["replaced_services"] = dict(self.replaced_services)
         return line

@@ -41,7 +41,14 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
         median_false_glass_cells=median(false_glass),
         p95_false_glass_cells=percentile(false_glass, 0.95),
         median_glass_coverage=median(coverage),
+        median_phase_s=median_phases([r.phase_s for r in ok]),
     )
+
+
+def median_phases(per_trial: list[dict[str, float]]) -> dict[str, float]:
+    """Each docking state's median sim seconds over the trials, in the order the states first came."""
+    names = list(dict.fromkeys(name for phases in per_trial for name in phases))
+    return {name: round(median([phases.get(name, 0.0) for phases in per_trial]), 2) for name in names}
 
 
 def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller: str) -> TrialsSummary:

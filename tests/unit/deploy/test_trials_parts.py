@@ -152,3 +152,11 @@ def test_chaos_kills_robot_services_or_a_composed_robots_one_process() -> None:
     composed = [("simulator", []), ("robot_r0", ["battery", "pose", "planner", "docking"]), ("perception_r0", []),
                 ("robot_r1", ["battery", "pose"]), ("planner_r1", [])]
     assert chaos_victims(composed, ["r0", "r1"], ChaosMonkey.VICTIMS) == ["robot_r0", "robot_r1", "planner_r1"]
+
+
+def test_the_summary_gives_each_docking_states_median_with_a_missing_state_as_zero() -> None:
+    from deploy.trials.summary import median_phases
+
+    trials = [{"NAV_TO_STAGING_POSE": 8.0, "CONTROLLING": 3.0}, {"NAV_TO_STAGING_POSE": 10.0, "CONTROLLING": 5.0,
+              "RETRY": 2.0}, {"NAV_TO_STAGING_POSE": 12.0, "CONTROLLING": 4.0}]
+    assert median_phases(trials) == {"NAV_TO_STAGING_POSE": 10.0, "CONTROLLING": 4.0, "RETRY": 0.0}
