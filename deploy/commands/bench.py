@@ -37,10 +37,10 @@ def _bench_bus(args: argparse.Namespace) -> int:
     return 0
 
 
-def _tool_json(command: str, module: str, argv: list[str]) -> dict | None:
+def _tool_json(command: str, module: str, argv: list[str], timeout_s: float = 600.0) -> dict | None:
     """Run a service's benchmark as a process (the launcher floor never imports service code)."""
     try:
-        return run_tool(module, argv).last_json()
+        return run_tool(module, argv, timeout_s=timeout_s).last_json()
     except (RuntimeError, ValueError) as exc:
         print(f"zendock bench {command}: {exc}", file=sys.stderr)
         return None
@@ -62,6 +62,29 @@ def _bench_docking(args: argparse.Namespace) -> int:
     summary = {f"{name} {key}": value for name, row in report.get("controllers", {}).items()
                for key, value in row.items() if isinstance(value, (int, float, str))}
     _print(summary or report, args.json, "final approach on the kinematic model: seed vs Nav2 defaults vs tuned")
+    return 0
+
+
+def _bench_ir(args: argparse.Namespace) -> int:
+    argv = ["--json", "--n", str(args.n), "--seed", str(args.seed)]
+    for world in args.world or ["deploy/worlds/unseen"]:
+        argv += ["--world", world]
+    report = _tool_json("ir", "services.docking.ir_bench", argv, timeout_s=3600.0)
+    if report is None:
+        return 1
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title="infrared docking from beacon starts, kinematic model with the simulator's beacon")
+    for column in ("world", "docked", "collisions", "time median", "time p95", "lateral median", "lateral p95"):
+        table.add_column(column, justify="right")
+    for name, row in {**report["worlds"], "all": report["summary"]}.items():
+        table.add_row(name, f"{row['docked']}/{row['n']}", str(row["collisions"]), f"{row['median_time_s']} s",
+                      f"{row['p95_time_s']} s", f"{row['median_lateral_error_m']} m", f"{row['p95_lateral_error_m']} m")
+    Console().print(table)
+    for failure in report["failures"]:
+        print(f"failed from {tuple(round(v, 2) for v in failure['start'])}: {failure['outcome']}; last states "
+              f"{' > '.join(failure['states'][-8:])}")
     return 0
 
 
@@ -276,3 +299,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     docking.add_argument("--seed", type=int, default=0, help="noise seed")
     docking.add_argument("--json", action="store_true")
     docking.set_defaults(func=_bench_docking)
+    ir = verbs.add_parser("ir", help="infrared docking from beacon starts in world files, kinematic model")
+    ir.add_argument("--world", action="append", metavar="FILE|DIR",
+                    help="world file or directory of them (repeatable; default deploy/worlds/unseen)")
+    ir.add_argument("--n", type=int, default=20, help="beacon starts per world")
+    ir.add_argument("--seed", type=int, default=1)
+    ir.add_argument("--json", action="store_true")
+    ir.set_defaults(func=_bench_ir)

@@ -12,11 +12,25 @@ centre, right; near and far; see :mod:`shared.messages.DockInfraRed`), and how f
   on its left) until the receiver on the dock's side sees that side's field, then GET_STREAM.
 - GET_STREAM: drive across the axis until the receiver on that side sees the other side's field (the
   axis is crossed), then SCAN (slowly) to face the dock.
-- ALIGNED (near or far): drive at the dock on the central receiver alone, steering back towards the
-  axis whenever it sees a side field, until contact (charging). Losing the beacon in the near field (a
+- ALIGNED (near or far): drive at the dock on the central receiver, steering back towards the axis
+  whenever it sees a side field, until contact (charging). Losing the beacon in the near field (a
   robot off the axis close to the dock has the emitter outside its central receiver's view), it backs
-  away on the same line until the beacon is back in view, instead of scanning: a turn on the spot next to
-  the dock sweeps a corner into it.
+  away until the beacon is back in view, instead of scanning: a turn on the spot next to the dock sweeps
+  a corner into it.
+
+The side receivers also say roughly where the emitter is: the right one sees it from 5 to 115 degrees
+to the robot's right, the central one within 25 degrees either side, the left one from 5 to 115 degrees
+to the left. The approach uses that as three bins of the emitter's bearing, where the reference
+drives on the central receiver alone:
+
+- turning towards the axis stops while the emitter already stands 5 or more degrees to the other side
+  (the robot then drives on, holding its heading), so the correction cannot turn the emitter out of the
+  central receiver's view; without it the robot turned, lost the beacon, backed off and turned again, a
+  loop that could last until the run's time limit;
+- a beacon lost from the central receiver but seen by a side one is turned back to (on the spot far
+  from the dock, backing off while turning near it), instead of a whole new scan or a straight back-off;
+- a back-off ends once the central receiver sees the centre field again, or the far field alone (out of
+  the near field there is room to correct), after ``min_back_off_s``.
 
 The lidar's obstacle check stops a drive for the axis that heads into a wall or a box (the reference has
 only its bumper); the robot then homes in from where it is: the next scan takes the first field the
@@ -75,11 +89,18 @@ class IrDriveParams:
     max_blind_turns: float = 2.0
     #: Driving for the axis this long (s) without crossing it, or losing the beacon on the way: scan again.
     max_get_stream_s: float = 15.0
-    #: Losing the beacon near the dock, back away on the same line (a turn there sweeps the robot's
-    #: corners into the dock) until the central receiver sees it again, for at most this long (s).
-    max_back_off_s: float = 6.0
+    #: Losing the beacon near the dock, back away (a turn on the spot there sweeps the robot's corners
+    #: into the dock) until the central receiver sees the centre or the far field alone, for at most this
+    #: long (s) ...
+    max_back_off_s: float = 8.0
     #: ... and at least this long (s), so that the approach has room to bring the robot onto the axis.
-    min_back_off_s: float = 3.0
+    min_back_off_s: float = 1.0
+    back_off_mps: float = 0.08
+    #: Backing away from an obstacle on the way in lasts this long (s) before driving across the axis; twice
+    #: as long the second time, three times from the third on.
+    clear_back_off_s: float = 4.0
+    #: Turning back to a beacon a side receiver still sees (rad/s).
+    reacquire_turn_radps: float = 0.4
 
     def __post_init__(self) -> None:
         if self.filter_window < 1:
@@ -113,6 +134,11 @@ class IrDockDrive:
         #: Time spent in the current state (s).
         self._state_s = 0.0
         self._history: deque[tuple[int, int, int]] = deque(maxlen=params.filter_window)
+        #: The side of the dock's axis the approach last saw itself on (+1 its left, -1 its right, 0 unknown).
+        self._side = 0
+        #: A back-off from an obstacle on the way in: then drive across the axis (FIND_STREAM) instead.
+        self._cross_after_back_off = False
+        self._obstacles_met = 0
 
     def _filtered(self, readings: tuple[int, int, int]) -> tuple[int, int, int]:
         self._history.append(readings)
@@ -122,12 +148,29 @@ class IrDockDrive:
         return right, mid, left
 
     def obstacle_ahead(self) -> IrCommand | None:
-        """Something other than the dock blocks the way: driving for the axis, turn and look again (the
-        approach itself drives at the dock, which the obstacle check cannot tell from a wall)."""
+        """Something other than the dock blocks the way. Driving for the axis, turn and look again. Homing in
+        from out of the near field, it cannot be the dock either (the dock stands behind its emitter, over
+        0.6 m away): a box or a pane between the robot and the dock, off the axis; back away, then drive
+        across the axis and approach along it. Near the dock, the obstacle check cannot tell the dock from
+        a wall: nothing to avoid."""
         if self.state is IrState.GET_STREAM:
             self._home_in = True  # the way across the axis is blocked: home in on the beacon from here
             return self._restart_scan(self.params.scan_turn_radps)
+        if self.state is IrState.ALIGNED_FAR and self._side:
+            self.dock_detector = -self._side  # > 0: on the dock's right, as the scan counts it
+            self._cross_after_back_off = True
+            self._obstacles_met += 1  # each time further out: the crossing then passes further from the dock
+            return self._to(IrState.BACK_OFF, -self.params.back_off_mps, 0.0)
         return None
+
+    def obstacle_behind(self) -> IrCommand | None:
+        """Something blocks a back-off: end it where it is (then cross the axis, or look again)."""
+        if self.state is not IrState.BACK_OFF:
+            return None
+        if self._cross_after_back_off:
+            self._cross_after_back_off = False
+            return self._to(IrState.FIND_STREAM, 0.0, 0.0)
+        return self._restart_scan(self.params.scan_turn_radps)
 
     def step(self, readings: tuple[int, int, int], turned_rad: float, dt_s: float = 0.05) -> IrCommand:
         """``readings``: ``(right, central, left)`` bit fields; ``turned_rad``: heading change since the last
@@ -148,18 +191,23 @@ class IrDockDrive:
         if self.state is IrState.SCAN:
             return self._scan(mid, turned_rad)
         if self.state is IrState.FIND_STREAM:
-            return self._find_stream(right, left)
+            return self._find_stream(right, mid, left)
+        if self.state is IrState.BACK_OFF and self._cross_after_back_off:
+            if self._state_s < p.clear_back_off_s * min(self._obstacles_met, 3):
+                return self._to(IrState.BACK_OFF, -p.back_off_mps, 0.0)
+            self._cross_after_back_off = False
+            return self._to(IrState.FIND_STREAM, 0.0, 0.0)
         if self.state is IrState.BACK_OFF:
-            if mid and self._state_s >= p.min_back_off_s:  # back in view, with room to correct: approach again
-                return self._aligned(mid)
+            if mid & (CENTER | FAR) and (mid & CENTER or not mid & NEAR) and self._state_s >= p.min_back_off_s:
+                return self._aligned(right, mid, left)  # on the axis again, or out where there is room to correct
             if self._state_s < p.max_back_off_s:
-                return self._to(IrState.BACK_OFF, -p.near_mps, 0.0)
+                return self._to(IrState.BACK_OFF, -p.back_off_mps, self._towards_beacon(right, mid, left))
             return self._restart_scan(p.scan_turn_radps)
         if self.state is IrState.GET_STREAM:
             if not (right or mid or left) or self._state_s > p.max_get_stream_s:
                 return self._restart_scan(p.scan_turn_radps)  # drifted off, or driving away: look again
             return self._get_stream(right, left)
-        return self._aligned(mid)
+        return self._aligned(right, mid, left)
 
     def _to(self, state: IrState, linear: float, angular: float) -> IrCommand:
         self.state = state
@@ -189,13 +237,15 @@ class IrDockDrive:
             return self._to(IrState.FIND_STREAM, 0.0, 0.0)
         return self._to(IrState.SCAN, 0.0, turn)
 
-    def _find_stream(self, right: int, left: int) -> IrCommand:
+    def _find_stream(self, right: int, mid: int, left: int) -> IrCommand:
+        # ... and the central receiver no longer sees the beacon: the emitter is then at least 25 degrees to
+        # the side, and the drive crosses the axis instead of heading at the dock
         p = self.params
         if self.dock_detector > 0:  # on the dock's right: turn clockwise until the left receiver sees the right field
-            if left & RIGHT:
+            if left & RIGHT and not mid:
                 return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
             return self._to(IrState.FIND_STREAM, 0.0, -p.find_turn_radps)
-        if right & LEFT:  # on the dock's left: counter-clockwise until the right receiver sees the left field
+        if right & LEFT and not mid:  # on the dock's left: counter-clockwise until the right receiver sees the left field
             return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
         return self._to(IrState.FIND_STREAM, 0.0, p.find_turn_radps)
 
@@ -207,11 +257,26 @@ class IrDockDrive:
             return self._restart_scan(p.slow_scan_turn_radps if self.dock_detector > 0 else -p.slow_scan_turn_radps)
         return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
 
-    def _aligned(self, mid: int) -> IrCommand:
+    def _towards_beacon(self, right: int, mid: int, left: int) -> float:
+        """A turn that brings the emitter (back) to the central receiver: towards the side receiver that
+        sees it (0 when only the central one does, or none)."""
+        if mid and not (left or right):
+            return 0.0
+        if left and not right:
+            return self.params.reacquire_turn_radps
+        if right and not left:
+            return -self.params.reacquire_turn_radps
+        return 0.0
+
+    def _aligned(self, right: int, mid: int, left: int) -> IrCommand:
         p = self.params
+        near_now = self.state in (IrState.ALIGNED_NEAR, IrState.BACK_OFF)
         if not mid:
-            if self.state is IrState.ALIGNED_NEAR:  # back away on the same line: the beacon comes back in view
-                return self._to(IrState.BACK_OFF, -p.near_mps, 0.0)
+            turn = self._towards_beacon(right, mid, left)
+            if near_now:  # back away on the same line, turning back to the beacon if a side receiver sees it
+                return self._to(IrState.BACK_OFF, -p.back_off_mps, turn)
+            if turn:  # far from the dock: turn back to it on the spot
+                return self._to(self.state if self.state is IrState.ALIGNED_FAR else IrState.ALIGNED_FAR, 0.0, turn)
             return self._restart_scan(p.scan_turn_radps)
         near = bool(mid & NEAR)
         bits = mid & (NEAR if near else FAR)
@@ -219,7 +284,11 @@ class IrDockDrive:
         state, speed, turn = ((IrState.ALIGNED_NEAR, p.near_mps, p.near_turn_radps) if near
                               else (IrState.ALIGNED_FAR, p.far_mps, p.far_turn_radps))
         if side:
-            return self._to(state, speed, side * turn)  # on the dock's left, turn left: towards the axis
+            self._side = side
+            # on the dock's left, turn left: towards the axis; but not while the emitter already stands 5 or
+            # more degrees to the right (the right receiver sees it), or the turn takes it out of view
+            turned_enough = right if side > 0 else left
+            return self._to(state, speed, 0.0 if turned_enough else side * turn)
         if bits & CENTER:
             return self._to(state, speed, 0.0)
         return self._restart_scan(p.scan_turn_radps)

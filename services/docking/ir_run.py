@@ -6,13 +6,15 @@ that starts out of reach (farther, or beside or behind the dock) is first taken 
 by the planner, as the robot would be sent home on a real floor; that leg is the only one that uses the
 map. The run succeeds when the battery reports charging, fails with FAILED_TO_STAGE (903) when the
 planner does, FAILED_TO_DETECT_DOCK (904) when the receivers see nothing for ``max_blind_turns`` turns of
-scanning, and TIMEOUT (907) after ``max_time_s``. An obstacle ahead (the lidar's check, without the dock's
-exemption since the map pose is not used) turns a drive for the axis into a new scan.
+scanning, and TIMEOUT (907) after ``max_time_s``. An obstacle ahead (the lidar's and the sonar's check,
+without the dock's exemption since the map pose is not used) turns a drive for the axis into a new scan
+and a homing-in from afar into a back-off and a crossing; one behind ends a back-off.
 """
 
 from __future__ import annotations
 
 import enum
+import logging
 import math
 
 from services.docking.approach import graceful_staging_pose
@@ -31,6 +33,8 @@ from services.docking.task_io import (
 )
 from shared.geometry import Pose2D
 from shared.world import ROBOT_FRONT_M
+
+log = logging.getLogger(__name__)
 
 #: Readings older than this (sim seconds) count as none: the robot stops rather than drive on old news.
 IR_MAX_AGE_S = 0.3
@@ -67,6 +71,7 @@ class IrDockingRun(Task[IrPhase]):
         self.num_retries = 0
         self.feedback_state = DockingState.INITIAL_PERCEPTION
         self._last_tick_s: float | None = None
+        self._drive_state: IrState | None = None
 
     def docking_time_s(self, now_s: float) -> float:
         return 0.0 if self.started_s is None else now_s - self.started_s
@@ -114,6 +119,12 @@ class IrDockingRun(Task[IrPhase]):
             if avoided is not None:
                 return Velocity(avoided.linear_mps, avoided.angular_radps)
         command = self.drive.step(inputs.ir_dock, turned, dt)
+        if inputs.blocked_behind and command.linear_mps < 0.0:
+            command = self.drive.obstacle_behind() or command
+        if command.state is not self._drive_state:  # the log tells where a long run spent its time
+            log.info("infrared: %s at %.2f s (readings %s)", command.state.value, self.docking_time_s(now),
+                     inputs.ir_dock)
+            self._drive_state = command.state
         if command.state is IrState.LOST:
             self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_DETECT_DOCK,
                         f"no dock beacon seen in {self.drive.params.max_blind_turns:g} turns")

@@ -18,7 +18,7 @@ from deploy.trials import (
     summarise_results,
     trials_stack,
 )
-from deploy.trials.starts import _distance_to_segment, beacon_starts
+from deploy.trials.starts import distance_to_segment, beacon_starts
 from services.docking.ir_run import within_beacon_reach
 from shared.world import load_world
 
@@ -34,7 +34,7 @@ def test_starts_are_reproducible_clear_and_away_from_the_dock(path: Path) -> Non
     segments = world.opaque_segments() + list(world.glass)
     for pose in starts:
         assert world.contains(pose.x, pose.y)
-        assert min(_distance_to_segment((pose.x, pose.y), s) for s in segments) >= START_CLEARANCE_M
+        assert min(distance_to_segment((pose.x, pose.y), s) for s in segments) >= START_CLEARANCE_M
         assert math.dist((pose.x, pose.y), world.docks[0].pose[:2]) >= 1.2
 
 
@@ -45,13 +45,13 @@ def test_beacon_starts_are_clear_and_within_the_infrared_beacons_reach(path: Pat
     assert starts == beacon_starts(world, 20, seed=5)
     segments = world.opaque_segments() + list(world.glass)
     for pose in starts:
-        assert min(_distance_to_segment((pose.x, pose.y), s) for s in segments) >= START_CLEARANCE_M
+        assert min(distance_to_segment((pose.x, pose.y), s) for s in segments) >= START_CLEARANCE_M
         assert within_beacon_reach(pose, world.docks[0].pose2d)
 
 
-def test_distance_to_segment() -> None:
-    assert _distance_to_segment((0.0, 1.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(1.0)
-    assert _distance_to_segment((3.0, 0.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(2.0)
+def testdistance_to_segment() -> None:
+    assert distance_to_segment((0.0, 1.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(1.0)
+    assert distance_to_segment((3.0, 0.0), ((-1.0, 0.0), (1.0, 0.0))) == pytest.approx(2.0)
 
 
 def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:

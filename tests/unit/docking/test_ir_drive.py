@@ -8,7 +8,7 @@ import random
 import numpy as np
 import pytest
 
-from services.docking.ir_drive import FAR_RIGHT, IrDockDrive, IrState
+from services.docking.ir_drive import FAR_LEFT, FAR_RIGHT, NEAR_LEFT, IrDockDrive, IrState
 from services.docking.ir_run import within_beacon_reach
 from services.simulator.infrared import InfraredParams, receiver_readings
 from services.simulator.raycast import SegmentSet
@@ -79,5 +79,31 @@ def test_a_blocked_way_to_the_axis_homes_in_on_the_first_field_seen() -> None:
     assert turn is not None and turn.state is IrState.SCAN and turn.linear_mps == 0.0
     command = drive.step((0, FAR_RIGHT, 0), 0.02)
     assert command.state is IrState.ALIGNED_FAR  # not the centre, but followed: side corrections bring it in
-    assert drive.step((0, FAR_RIGHT, 0), 0.0).angular_radps < 0  # on the dock's right: turn right, to the axis
+    for _ in range(drive.params.filter_window):  # the left receiver's last sight of the beacon filtered out
+        command = drive.step((0, FAR_RIGHT, 0), 0.0)
+    assert command.angular_radps < 0  # on the dock's right: turn right, to the axis
     assert IrDockDrive().obstacle_ahead() is None  # scanning on the spot: nothing to avoid
+
+
+def test_turning_for_the_axis_stops_while_the_emitter_already_stands_to_the_other_side() -> None:
+    drive = IrDockDrive()
+    drive.state = IrState.ALIGNED_FAR
+    for _ in range(drive.params.filter_window):
+        command = drive.step((0, FAR_RIGHT, 0), 0.0)
+    assert command.angular_radps < 0  # on the dock's right: turn right, towards the axis
+    for _ in range(drive.params.filter_window):  # the left receiver now sees the emitter: turned far enough
+        command = drive.step((0, FAR_RIGHT, FAR_RIGHT), 0.0)
+    assert command.state is IrState.ALIGNED_FAR and command.angular_radps == 0.0 and command.linear_mps > 0
+
+
+def test_a_beacon_lost_from_the_central_receiver_is_turned_back_to_not_scanned_for() -> None:
+    far = IrDockDrive()
+    far.state = IrState.ALIGNED_FAR
+    for _ in range(far.params.filter_window):
+        command = far.step((0, 0, FAR_RIGHT), 0.0)
+    assert command.state is IrState.ALIGNED_FAR and command.linear_mps == 0.0 and command.angular_radps > 0
+    near = IrDockDrive()
+    near.state = IrState.ALIGNED_NEAR
+    for _ in range(near.params.filter_window):
+        command = near.step((NEAR_LEFT | FAR_LEFT, 0, 0), 0.0)
+    assert command.state is IrState.BACK_OFF and command.linear_mps < 0 and command.angular_radps < 0
