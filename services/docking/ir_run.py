@@ -72,6 +72,8 @@ class IrDockingRun(Task[IrPhase]):
         self.feedback_state = DockingState.INITIAL_PERCEPTION
         self._last_tick_s: float | None = None
         self._drive_state: IrState | None = None
+        #: How often the drive entered each state: what a run that gives up reports.
+        self._entered: dict[str, int] = {}
 
     def docking_time_s(self, now_s: float) -> float:
         return 0.0 if self.started_s is None else now_s - self.started_s
@@ -100,7 +102,8 @@ class IrDockingRun(Task[IrPhase]):
             self.finish(Outcome.SUCCEEDED, message="charging")
             return Velocity(0.0, 0.0)
         if now - self.started_s > self.max_time_s:
-            self.finish(Outcome.FAILED, DockingErrorCode.TIMEOUT, f"not charging after {self.max_time_s:.0f} s")
+            self.finish(Outcome.FAILED, DockingErrorCode.TIMEOUT, f"not charging after {self.max_time_s:.0f} s"
+                        + self._story())
             return Velocity(0.0, 0.0)
         if not self._began:
             self._began = True
@@ -125,6 +128,7 @@ class IrDockingRun(Task[IrPhase]):
             log.info("infrared: %s at %.2f s (readings %s)", command.state.value, self.docking_time_s(now),
                      inputs.ir_dock)
             self._drive_state = command.state
+            self._entered[command.state.value] = self._entered.get(command.state.value, 0) + 1
         if command.state is IrState.LOST:
             self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_DETECT_DOCK,
                         f"no dock beacon seen in {self.drive.params.max_blind_turns:g} turns")
@@ -132,6 +136,14 @@ class IrDockingRun(Task[IrPhase]):
         aligned = command.state in (IrState.ALIGNED_FAR, IrState.ALIGNED_NEAR)
         self.feedback_state = DockingState.CONTROLLING if aligned else DockingState.INITIAL_PERCEPTION
         return Velocity(command.linear_mps, command.angular_radps)
+
+    def _story(self) -> str:
+        """Why a run gave up, in words: where the drive was and how often it began each state."""
+        if not self._entered:
+            return " (no infrared readings)" if self.phase is IrPhase.DOCKING else ""
+        where = self.drive.state.value
+        counts = ", ".join(f"{name} {count}x" for name, count in self._entered.items())
+        return f" (in {where}; states begun: {counts})"
 
     def _nav_to_staging(self, inputs: TickInputs) -> Intent:
         now = inputs.now_s

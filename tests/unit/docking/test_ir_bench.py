@@ -27,3 +27,10 @@ def test_a_wall_just_ahead_is_solid_and_blocks_the_way() -> None:
     assert not room.overlaps(facing_wall, room.solid)
     assert room.overlaps(Pose2D(-2.85, 0.0, math.pi), room.solid)
     assert room.blocked_ahead(facing_wall) and not room.blocked_ahead(Pose2D(0.0, 0.0, 0.0))
+
+
+def test_a_run_that_gives_up_says_where_the_drive_was_and_what_it_tried() -> None:
+    room = Room(ROOM)
+    trial = dock_from(room, beacon_starts(ROOM, 1, seed=4)[0], seed=0, max_time_s=3.0)
+    assert not trial.docked
+    assert trial.outcome.startswith("not charging after 3 s (in ") and "states begun: scan 1x" in trial.outcome
