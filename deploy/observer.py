@@ -20,9 +20,9 @@ import zenoh
 
 from shared import topics
 from shared.action import action_key
+from shared.contracts.services import DOCKING_STATE
 from shared.geometry import Pose2D
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
-from shared.contracts.services import DOCKING_STATE
 from shared.messages import BatteryState, Clock, CollisionEvent, DockContact, Path, PoseStamped, Range, String
 from shared.names import topic_key
 from shared.schema import Message, MessageError
@@ -276,11 +276,14 @@ class RunObserver:
                 r.last_charging, list(r.recovery_points), list(r.phases),
             )
 
-    def settle(self, timeout_s: float = 2.0) -> None:
-        """After charging began, wait (briefly) for the simulator's contact reading of that moment."""
+    def settle(self, timeout_s: float = 5.0) -> None:
+        """After charging began, wait (briefly) for the simulator's contact readings of that moment: a mated
+        one, or readings from half a second past it (the window :meth:`_contact_at` looks in). A reading
+        just past the moment is not enough: on a busy machine the mated one may still be on its way."""
         def seen() -> bool:
             t = self._record.charging_s
-            return t is None or any(c.header.stamp.to_sec() >= t for c in self._contacts)
+            return t is None or any(c.header.stamp.to_sec() >= t + 0.5 for c in self._contacts) or any(
+                c.mated and c.header.stamp.to_sec() <= t + 0.5 for c in self._contacts)
 
         with self._changed:
             self._changed.wait_for(seen, timeout=timeout_s)

@@ -18,7 +18,7 @@ from deploy.trials import (
     summarise_results,
     trials_stack,
 )
-from deploy.trials.starts import distance_to_segment, beacon_starts
+from deploy.trials.starts import beacon_starts, distance_to_segment
 from services.docking.ir_run import within_beacon_reach
 from shared.world import load_world
 
