@@ -58,7 +58,7 @@ def live_table(sim_s: float, duration_s: float, robots) -> Table:  # type: ignor
 
 
 def _run(args: argparse.Namespace) -> int:
-    from deploy.fleet.run import run_fleet  # noqa: PLC0415 - heavy imports only when used
+    from deploy.fleet.run import LONG_GIVE_WAY_S, run_fleet  # noqa: PLC0415 - heavy imports only when used
     from deploy.fleet.stack import FleetOptions  # noqa: PLC0415
 
     world = Path(args.world)
@@ -98,7 +98,8 @@ def _run(args: argparse.Namespace) -> int:
     collisions = report.collisions
     console.print(f"collisions: {collisions['robot_robot']} robot-robot, {collisions['robot_world']} robot-world; "
                   f"reservation conflicts: {report.reservation_conflicts}; gave way {report.give_ways} time(s)"
-                  + (f", the longest {report.max_give_way_s} s" if report.give_ways else ""))
+                  + (f", the longest {report.max_give_way_s} s, the median {report.median_give_way_s} s, "
+                     f"{report.long_give_ways} longer than {LONG_GIVE_WAY_S:g} s" if report.give_ways else ""))
     for conflict in report.conflicts:
         console.print(f"  conflict at {conflict}")
     for error in report.errors:

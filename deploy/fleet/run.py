@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import random
+import statistics
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -36,6 +37,8 @@ from shared.world import World
 
 #: Starting charges are spread over this range (the first robot full), so the robots run low in turn.
 START_CHARGE = (1.0, 0.45)
+#: A give-way longer than this (sim seconds) counts as long in the report: two robots waited on each other.
+LONG_GIVE_WAY_S = 20.0
 #: How often the progress is reported (wall seconds) by default: a line in a log; a terminal's live table asks more often.
 PROGRESS_PERIOD_S = 10.0
 
@@ -61,9 +64,12 @@ class FleetReport:
     collisions: dict[str, int]
     reservation_conflicts: int
     conflicts: list[str]
-    #: Robots giving way to each other: how often, and the longest until the way was clear (sim seconds).
+    #: Robots giving way to each other: how often, the longest and the median until the way was clear (sim
+    #: seconds), and how many lasted longer than :data:`LONG_GIVE_WAY_S`.
     give_ways: int
     max_give_way_s: float | None
+    median_give_way_s: float | None
+    long_give_ways: int
     sim_s: float
     wall_s: float
     achieved_rtf: float
@@ -184,5 +190,7 @@ def _report(world: World, tallies: list[RobotTally], conflicts: list[Conflict],
         collisions={"total": world_hits + len(contacts), "robot_robot": len(contacts), "robot_world": world_hits},
         reservation_conflicts=len(conflicts), conflicts=[c.describe() for c in conflicts],
         give_ways=len(give_ways), max_give_way_s=round(max(give_ways), 1) if give_ways else None,
+        median_give_way_s=round(statistics.median(give_ways), 1) if give_ways else None,
+        long_give_ways=sum(1 for g in give_ways if g > LONG_GIVE_WAY_S),
         sim_s=sim_s, wall_s=wall_s, achieved_rtf=round(rtf, 2), peak_rss_mb=peak_rss_mb, errors=errors,
     )
