@@ -4,42 +4,19 @@ from __future__ import annotations
 
 import json
 import math
-import random
 from pathlib import Path
 
 from deploy.service_tools import run_tool
 from shared.geometry import Pose2D
-from shared.starts import (  # noqa: F401 - beacon starts are the trials' too
+from shared.starts import (  # noqa: F401 - the trials' starts
     BEACON_BEARING_RAD,
     BEACON_DISTANCE_M,
     START_CLEARANCE_M,
     beacon_starts,
     distance_to_segment,
+    random_starts,
 )
 from shared.world import World
-
-#: Starts at least this far from the dock, so each trial navigates before it docks.
-MIN_START_DISTANCE_TO_DOCK_M = 1.2
-
-
-def random_starts(world: World, n: int, seed: int) -> list[Pose2D]:
-    """``n`` start poses with clearance from every surface (glass included) and away from the docks."""
-    rng = random.Random(seed)
-    xmin, ymin, xmax, ymax = world.bounds
-    segments = world.opaque_segments() + list(world.glass)
-    starts: list[Pose2D] = []
-    attempts = 0
-    while len(starts) < n:
-        attempts += 1
-        if attempts > 200_000:
-            raise RuntimeError(f"{world.name}: could not find {n} collision-free starts")
-        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
-        if min(distance_to_segment((x, y), s) for s in segments) < START_CLEARANCE_M:
-            continue
-        if any(math.dist((x, y), d.pose[:2]) < MIN_START_DISTANCE_TO_DOCK_M for d in world.docks):
-            continue
-        starts.append(Pose2D(x, y, rng.uniform(-math.pi, math.pi)))
-    return starts
 
 
 def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[Pose2D]:
