@@ -32,10 +32,16 @@ drives on the central receiver alone:
 - a back-off ends once the central receiver sees the centre field again, or the far field alone (out of
   the near field there is room to correct), after ``min_back_off_s``.
 
-The lidar's obstacle check stops a drive for the axis that heads into a wall or a box (the reference has
-only its bumper); the robot then homes in from where it is: the next scan takes the first field the
-central receiver sees as the way in, and the approach's side corrections curve it onto the axis. The
-approach is not checked, since the dock it drives at is an obstacle to the lidar.
+The obstacle checks (lidar and sonar; the reference has only its bumper) stop a drive for the axis that
+heads into a wall, a box or a pane; the robot then homes in from where it is: the next scan takes the
+first field the central receiver sees as the way in, and the approach's side corrections curve it onto
+the axis. Homing in from the far field, an obstacle ahead cannot be the dock: the robot backs away
+(further each time) and drives across the axis from there. Near the dock the approach is not checked,
+since the dock it drives at is an obstacle to the lidar; one behind ends a back-off.
+
+FIND_STREAM also waits until the central receiver has lost the beacon: a side receiver sees the emitter
+from 5 degrees off the heading, so the reference's rule alone can send the drive for the axis almost at
+the dock (into the side of a glass alcove, say) instead of across the axis.
 
 Differences from the reference, each a choice of this implementation: the speeds are parameters
 (faster far from the dock than Kobuki's 0.1 m/s, as slow near it); a scan that sees nothing at all in
@@ -276,7 +282,7 @@ class IrDockDrive:
             if near_now:  # back away on the same line, turning back to the beacon if a side receiver sees it
                 return self._to(IrState.BACK_OFF, -p.back_off_mps, turn)
             if turn:  # far from the dock: turn back to it on the spot
-                return self._to(self.state if self.state is IrState.ALIGNED_FAR else IrState.ALIGNED_FAR, 0.0, turn)
+                return self._to(IrState.ALIGNED_FAR, 0.0, turn)
             return self._restart_scan(p.scan_turn_radps)
         near = bool(mid & NEAR)
         bits = mid & (NEAR if near else FAR)
