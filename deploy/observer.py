@@ -31,6 +31,10 @@ from shared.schema import Message, MessageError
 ULTRASONIC_MOUNT = Pose2D(0.20, 0.0, 0.0)
 
 
+#: The battery charges on a mated dock_contact at most this old (its ``dock_contact_timeout_s``): the mating
+#: that started charging is no older, and a mated reading from before the robot was last put down is.
+MATED_BEFORE_CHARGING_S = 1.0
+
 #: Ground truth that moves further than this between two samples was teleported: at 20 Hz a drive at
 #: 0.5 m/s moves 2.5 cm a sample, so even a dozen lost samples stay under it.
 TELEPORT_JUMP_M = 0.3
@@ -183,7 +187,7 @@ class RunObserver:
     def _contact_at(self, t_s: float) -> DockContact | None:
         """The contact state when charging began: the mating that started it (messages from different
         publishers arrive in any order, so the mated reading may come just after the battery's)."""
-        mated = [c for c in self._contacts if c.mated and c.header.stamp.to_sec() <= t_s + 0.5]
+        mated = [c for c in self._contacts if c.mated and t_s - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t_s + 0.5]
         if mated:
             before = [c for c in mated if c.header.stamp.to_sec() <= t_s + 1e-6]
             return before[-1] if before else mated[0]
@@ -283,7 +287,7 @@ class RunObserver:
         def seen() -> bool:
             t = self._record.charging_s
             return t is None or any(c.header.stamp.to_sec() >= t + 0.5 for c in self._contacts) or any(
-                c.mated and c.header.stamp.to_sec() <= t + 0.5 for c in self._contacts)
+                c.mated and t - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t + 0.5 for c in self._contacts)
 
         with self._changed:
             self._changed.wait_for(seen, timeout=timeout_s)
