@@ -424,6 +424,12 @@ def planner_behaviour(ctx: Context) -> list[Check]:
     return [timed("navigates", navigates)]
 
 
+def _supply_status(msg: BatteryState | None) -> str:
+    if msg is None:
+        return "not charging"
+    return "FULL" if msg.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_FULL else "CHARGING"
+
+
 def docking_behaviour(ctx: Context) -> list[Check]:
     def docks() -> tuple[bool, str]:
         _teleport(ctx, in_front_of_dock(ctx.world, 1.5))
@@ -440,12 +446,15 @@ def docking_behaviour(ctx: Context) -> list[Check]:
                 _cancel(client, handle)
         finally:
             node.close()
+        # CHARGING, or FULL: a battery that was nearly full when the robot mated is full a moment later (both
+        # mean the contacts carry current, as the docking service and the trials count them)
+        on_dock = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
         charging = ctx.probe.wait_for(ctx.robot_key("battery_status"), BatteryState,
-                                      lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_CHARGING, 5.0)
+                                      lambda m: m.power_supply_status in on_dock, 5.0)
         success = bool(handle.result is not None and getattr(handle.result, "success", False))
         ok = handle.status.name == "SUCCEEDED" and success and bool(feedback) and charging is not None
         return ok, (f"status {handle.status.name}, success {success}, {len(feedback)} feedback, "
-                    f"{'CHARGING' if charging else 'not charging'} {handle.rejection or handle.error}").rstrip()
+                    f"{_supply_status(charging)} {handle.rejection or handle.error}").rstrip()
     return [timed("docks", docks)]
 
 

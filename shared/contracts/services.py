@@ -191,7 +191,7 @@ DOCKING = Contract(
     flags=(USE_SIM_TIME, DOCK_DATABASE, Flag("controller", "graceful, seed or ir: zendock's own approach laws"),
            Flag("fleet", "share docks through the fleet service"), Flag("resume_at", "undock at this charge (fleet)")),
     behaviour=("docks: a dock_robot goal from 1.5 m in front of the dock gets feedback and a successful result, "
-               "and battery_status says CHARGING",),
+               "and battery_status says CHARGING (or FULL, when the charge was nearly full)",),
     needs=("simulator", "battery", "pose", "planner"),
 )
 
