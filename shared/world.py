@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -337,6 +338,15 @@ def parse_world(data: Any, source: str | Path = "<world>") -> World:
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, source)) from None
     return world
+
+
+def world_files(names: Iterable[str | Path]) -> list[Path]:
+    """The world files ``names`` give: a file as it is, a directory as every ``*.yaml`` in it (sorted)."""
+    files: list[Path] = []
+    for name in names:
+        path = Path(name)
+        files.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
+    return files
 
 
 def load_world(path: str | Path) -> World:

@@ -24,6 +24,7 @@ from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
 from shared.config_errors import ConfigError
+from shared.world import world_files
 
 SHIPPED_WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 DEFAULT_WORLD = "deploy/worlds/seed_room.yaml"
@@ -59,10 +60,7 @@ def _worlds(args: argparse.Namespace) -> list[Path]:
     if names == ["all"]:
         worlds = sorted(SHIPPED_WORLDS.glob("*.yaml"))
     else:  # a directory stands for every world file in it (deploy/worlds/unseen, a user's own set)
-        worlds = []
-        for name in names:
-            path = Path(name)
-            worlds.extend(sorted(path.glob("*.yaml")) if path.is_dir() else [path])
+        worlds = world_files(names)
         if not worlds:
             raise ConfigError(f"--world {' '.join(names)}: no world file (*.yaml) there")
     for world in worlds:

@@ -43,20 +43,29 @@ from services.docking.ir_drive import IrDriveParams
 from services.docking.ir_run import IrDockingRun
 from services.docking.kinematics import DiffDriveModel
 from services.docking.task_io import Outcome, TickInputs, Velocity
+from services.simulator.dock_contact import DockContactParams
 from services.simulator.infrared import InfraredParams, receiver_readings
 from services.simulator.raycast import SegmentSet
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D, wrap_angle
 from shared.starts import beacon_starts
-from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, ROBOT_LENGTH_M, ROBOT_WIDTH_M, World, load_world
+from shared.world import (
+    DOCK_GEOMETRY,
+    ROBOT_FRONT_M,
+    ROBOT_LENGTH_M,
+    ROBOT_WIDTH_M,
+    World,
+    load_world,
+    world_files,
+)
 
 DT_S = 0.05
 #: Points along every solid surface this far apart: what the footprint and the check ahead test against.
 SURFACE_STEP_M = 0.01
 STOP_DISTANCE_M = 0.3
 SIDE_MARGIN_M = 0.05
-#: The simulator's mating tolerances (:class:`services.simulator.dock_contact.DockContactParams`).
-CONTACT_REACH_M, OVERSHOOT_SLACK_M, MATE_LATERAL_M, MATE_YAW_RAD = 0.05, 0.01, 0.04, 0.1
+#: The simulator's own mating tolerances.
+MATING = DockContactParams()
 
 
 @dataclass
@@ -92,16 +101,17 @@ class Room:
         self.plate = _surface_points([(body[i], body[(i + 1) % 4]) for i in range(4)])
         others = [s for s in world.opaque_segments() if not _is_edge_of(s, body)]
         self.solid = _surface_points(others + list(world.glass))
-        self.seen_ahead = _surface_points(world.opaque_segments() + list(world.glass))
+        self.seen = _surface_points(world.opaque_segments() + list(world.glass))
 
     def overlaps(self, pose: Pose2D, points: np.ndarray) -> bool:
-        local = _in_robot_frame(pose, points)
+        local = pose.inverse().transform_points(points)
         return bool(np.any((np.abs(local[:, 0]) <= ROBOT_LENGTH_M / 2) & (np.abs(local[:, 1]) <= ROBOT_WIDTH_M / 2)))
 
-    def blocked_ahead(self, pose: Pose2D) -> bool:
-        local = _in_robot_frame(pose, self.seen_ahead)
-        ahead = (local[:, 0] > ROBOT_FRONT_M) & (local[:, 0] <= ROBOT_FRONT_M + STOP_DISTANCE_M)
-        return bool(np.any(ahead & (np.abs(local[:, 1]) <= ROBOT_WIDTH_M / 2 + SIDE_MARGIN_M)))
+    def blocked(self, pose: Pose2D, direction: float) -> bool:
+        """Something within ``STOP_DISTANCE_M`` of the robot's front (``direction`` +1) or rear (-1)."""
+        local = pose.inverse().transform_points(self.seen)
+        along, side = direction * local[:, 0] - ROBOT_FRONT_M, np.abs(local[:, 1])
+        return bool(np.any((along > 0.0) & (along <= STOP_DISTANCE_M) & (side <= ROBOT_WIDTH_M / 2 + SIDE_MARGIN_M)))
 
     def pressed_flush(self, pose: Pose2D, moved: Pose2D, pushed_m: float) -> Pose2D:
         """Where the plate leaves a robot that pushed ``pushed_m`` into it from ``pose``: no further along the
@@ -115,26 +125,15 @@ class Room:
         along = min(local.x, max(pose.relative_to(self.dock).x, reach))
         return self.dock.compose(Pose2D(along, local.y, local.yaw))
 
-    def blocked_behind(self, pose: Pose2D) -> bool:
-        local = _in_robot_frame(pose, self.seen_ahead)
-        behind = (local[:, 0] < -ROBOT_FRONT_M) & (local[:, 0] >= -ROBOT_FRONT_M - STOP_DISTANCE_M)
-        return bool(np.any(behind & (np.abs(local[:, 1]) <= ROBOT_WIDTH_M / 2 + SIDE_MARGIN_M)))
-
     def mated(self, pose: Pose2D) -> tuple[bool, Pose2D]:
         offset = pose.relative_to(self.dock)
         yaw = wrap_angle(pose.yaw - self.dock.yaw)
-        return (-CONTACT_REACH_M <= offset.x <= OVERSHOOT_SLACK_M and abs(offset.y) <= MATE_LATERAL_M
-                and abs(yaw) <= MATE_YAW_RAD), offset
+        return (-MATING.contact_reach_m <= offset.x <= MATING.overshoot_slack_m
+                and abs(offset.y) <= MATING.max_lateral_error_m and abs(yaw) <= MATING.max_yaw_error_rad), offset
 
 
 def _is_edge_of(segment: tuple[tuple[float, float], tuple[float, float]], corners: list[tuple[float, float]]) -> bool:
     return all(any(math.dist(end, c) < 1e-9 for c in corners) for end in segment)
-
-
-def _in_robot_frame(pose: Pose2D, points: np.ndarray) -> np.ndarray:
-    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-    dx, dy = points[:, 0] - pose.x, points[:, 1] - pose.y
-    return np.column_stack((c * dx + s * dy, -s * dx + c * dy))
 
 
 def dock_from(room: Room, start: Pose2D, seed: int, max_time_s: float = 180.0,
@@ -151,8 +150,8 @@ def dock_from(room: Room, start: Pose2D, seed: int, max_time_s: float = 180.0,
         mated, offset = room.mated(pose)
         readings, late = late, receiver_readings(pose, room.world.docks, room.occluders, params, rng)
         intent = task.step(TickInputs(now_s=t, base_twist=(base.v_mps, base.w_radps), charging=mated,
-                                      blocked_ahead=room.blocked_ahead(pose),
-                                      blocked_behind=room.blocked_behind(pose), ir_dock=readings))
+                                      blocked_ahead=room.blocked(pose, 1.0),
+                                      blocked_behind=room.blocked(pose, -1.0), ir_dock=readings))
         state = task.drive.state.value
         if not states or states[-1] != state:
             states.append(state)
@@ -220,12 +219,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--max-time", type=float, default=180.0, help="the run's time limit (s), as the service's")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    worlds: list[Path] = []
-    for name in args.world:
-        path = Path(name)
-        worlds += sorted(path.glob("*.yaml")) if path.is_dir() else [path]
     try:
-        report = run(worlds, args.n, args.seed, args.max_time)
+        report = run(world_files(args.world), args.n, args.seed, args.max_time)
     except (ConfigError, OSError, ValueError, RuntimeError) as exc:
         print(f"ir_bench: {exc}", file=sys.stderr)
         return 2

@@ -26,7 +26,7 @@ def test_a_wall_just_ahead_is_solid_and_blocks_the_way() -> None:
     facing_wall = Pose2D(-2.75, 0.0, math.pi)  # front 5 cm from the west wall: any drive forward touches it
     assert not room.overlaps(facing_wall, room.solid)
     assert room.overlaps(Pose2D(-2.85, 0.0, math.pi), room.solid)
-    assert room.blocked_ahead(facing_wall) and not room.blocked_ahead(Pose2D(0.0, 0.0, 0.0))
+    assert room.blocked(facing_wall, 1.0) and not room.blocked(Pose2D(0.0, 0.0, 0.0), 1.0)
 
 
 def test_a_run_that_gives_up_says_where_the_drive_was_and_what_it_tried() -> None:
