@@ -44,7 +44,15 @@ from services.docking.pose_filter import PoseFilterParams
 from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams
 from services.docking.task_io import Intent, Navigate, NavStatus, Outcome, Task, TickInputs, Velocity
-from services.docking.traffic import TOO_CLOSE_CALM_S, GiveWay, Meeting, Peer, must_give_way, passing_place
+from services.docking.traffic import (
+    CARRY_ON_S,
+    TOO_CLOSE_CALM_S,
+    GiveWay,
+    Meeting,
+    Peer,
+    must_give_way,
+    passing_place,
+)
 from services.docking.undocking_run import UndockingRun
 from shared.fleet_client import FleetAnswer
 from shared.geometry import Pose2D
@@ -189,6 +197,8 @@ class Executive:
         self._giving_way: GiveWay | None = None
         #: Until when not to stop again for a robot that came too close.
         self._calm_until: dict[str, float] = {}
+        #: Robots this one waited for lately without the way clearing: left to the planner until then.
+        self._carry_on_until: dict[str, float] = {}
         self._applied_correction: Pose2D | None = None
         self._holding = ""
         self._last_state = ""
@@ -435,7 +445,8 @@ class Executive:
             return
         me = heard.latest_pose
         calm = {peer for peer, until in self._calm_until.items() if now < until}
-        met = must_give_way(me, self.namespace, heard.battery, list(heard.peers), self.walls, calm)
+        carry_on = {peer for peer, until in self._carry_on_until.items() if now < until}
+        met = must_give_way(me, self.namespace, heard.battery, list(heard.peers), self.walls, calm, carry_on)
         if met is None:
             return
         peer, meeting = met
@@ -510,6 +521,8 @@ class Executive:
             self.mission.next_waypoint = task.waypoint_index
         if giving_way is not None and result.success:
             self._log.info("gave way: %s", giving_way.message or "done")
+            if giving_way.unresolved:
+                self._carry_on_until[giving_way.peer] = heard.now_s + CARRY_ON_S
             if isinstance(giving_way.resume, DockRequest):
                 self._begin_docking(giving_way.resume, goal, heard, out)  # carry on docking (a patrol: the mission)
             return

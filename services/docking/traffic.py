@@ -22,6 +22,16 @@ other's only way, and both plan, back up and give up for ever. The rule:
 - **Too close** (another robot within :data:`TOO_CLOSE_M` in front): even the robot with priority
   stops, for :data:`TOO_CLOSE_STOP_S`, so that its planner sees the other standing still before it
   drives on round it; then it does not stop for that robot again for :data:`TOO_CLOSE_CALM_S`.
+- **Nobody moves.** A wait ends when the way clears, and the robot waited for must move for it to clear.
+  What each robot knows of the other comes late, so both can wait on each other (the one with priority
+  sees the one giving way still on the line it heads along, which turned after the passing place was
+  chosen), or the robot waited for can be held up by something else, even by the robot waiting for it
+  (a robot stopped for a crossing stands where the other's planner finds no way). So a robot that waits
+  watches the other: once the other has stood within :data:`PEER_STILL_M` for :data:`STILL_PRIORITY_S`
+  (with priority) or :data:`STILL_GIVING_WAY_S` (without), it carries on; its planner goes round a
+  robot standing still. The times differ so that of two robots waiting on each other the one with
+  priority moves first, and the other sees it move. After such a wait, or one that ran to its time
+  limit, the robot does not stop for the same robot again for :data:`CARRY_ON_S`.
 
 Pure: no bus, no clock. The docking node keeps the peers' latest poses, charges and plans, asks
 :func:`must_give_way` each tick while its robot is under way, and runs :class:`GiveWay` when it says so.
@@ -78,6 +88,16 @@ PRIORITY_WAIT_TIMEOUT_S = 30.0
 #: Giving way lasts at least this long (sim seconds): what the robot knows of the other comes late and
 #: noisy, and a rule that flips every tick stops and starts both robots instead of letting one pass.
 MIN_GIVE_WAY_S = 1.0
+#: The other robot stands still when it stays within this of where it stood: a robot blocked, backing up
+#: (0.15 m a recovery) and creeping forward again as it replans, stays within it; one driving by leaves it
+#: within 3 s ...
+PEER_STILL_M = 0.75
+#: ... for this long (sim seconds): then a robot waiting with priority carries on ...
+STILL_PRIORITY_S = 6.0
+#: ... and, later, one giving way: of two robots waiting on each other, the one with priority moves first.
+STILL_GIVING_WAY_S = 12.0
+#: After a wait that ended without the way clearing, the robot does not stop for that robot for this long.
+CARRY_ON_S = 10.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -133,12 +153,13 @@ def clearance_between(a: Pose2D, b: Pose2D, walls: Walls) -> float:
 
 
 def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], walls: Walls,
-                  calm: Container[str] = ()) -> tuple[Peer, Meeting] | None:
+                  calm: Container[str] = (), carry_on: Container[str] = ()) -> tuple[Peer, Meeting] | None:
     """The robot this one must give way to (or wait for) now, if any (the nearest), and how they meet;
-    ``calm``: robots this one stopped for lately as too close, not stopped for again yet."""
+    ``calm``: robots this one stopped for lately as too close, not stopped for again yet; ``carry_on``:
+    robots this one waited for lately without the way clearing, not waited for again yet."""
     found: list[tuple[float, Peer, Meeting]] = []
     for p in peers:
-        if not (p.under_way or p.giving_way):
+        if not (p.under_way or p.giving_way) or p.name in carry_on:
             continue
         priority = has_priority(name, battery, p.name, p.battery)
         distance = me.distance_to(p.pose)
@@ -249,7 +270,13 @@ class GiveWay(Task[GiveWayPhase]):
         self.place = place
         #: What to carry on with afterwards (for the node: the interrupted task's request).
         self.resume = resume
+        #: It ended without the way clearing (the other stood still, or the time limit): the node then
+        #: leaves that robot to the planner for a while (:data:`CARRY_ON_S`).
+        self.unresolved = False
         self._peer_pose: Pose2D | None = peer.pose
+        #: Where the other robot stood when last seen to move, and since when (sim seconds).
+        self._peer_anchor: Pose2D | None = None
+        self._peer_still_since = 0.0
         self._key = self.new_nav_key()
 
     def state_name(self) -> str:
@@ -259,6 +286,16 @@ class GiveWay(Task[GiveWayPhase]):
         """Where the other robot is now, and whether it is still under way or giving way itself (a robot
         that stopped driving, docked or parked, is nothing to wait for)."""
         self._peer_pose = pose if active else None
+
+    def _peer_still_s(self, now: float) -> float:
+        """How long the other robot has stood within :data:`PEER_STILL_M` of one spot (0 while it moves)."""
+        pose = self._peer_pose
+        if pose is None:
+            self._peer_anchor = None
+            return 0.0
+        if self._peer_anchor is None or self._peer_anchor.distance_to(pose) >= PEER_STILL_M:
+            self._peer_anchor, self._peer_still_since = pose, now
+        return now - self._peer_still_since
 
     def _clear(self, me: Pose2D | None) -> bool:
         peer = self._peer_pose
@@ -278,8 +315,10 @@ class GiveWay(Task[GiveWayPhase]):
         now = inputs.now_s
         limit = PRIORITY_WAIT_TIMEOUT_S if self.meeting is Meeting.HEAD_ON_PRIORITY else GIVE_WAY_TIMEOUT_S
         if self.started_s is not None and now - self.started_s >= limit:
+            self.unresolved = True
             self.finish(Outcome.SUCCEEDED, message="gave way for the longest allowed")
             return None
+        still_s = self._peer_still_s(now)
         if self.phase is GiveWayPhase.GOING and self.place is not None:
             outcome = inputs.nav.finished(self._key)
             if outcome is None:
@@ -295,6 +334,11 @@ class GiveWay(Task[GiveWayPhase]):
             return self.hold(f"{self.peer} is too close in front")
         if held_s >= MIN_GIVE_WAY_S and self._clear(inputs.robot_pose):
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
+            return None
+        patience = STILL_PRIORITY_S if self.meeting is Meeting.HEAD_ON_PRIORITY else STILL_GIVING_WAY_S
+        if min(still_s, held_s) >= patience:
+            self.unresolved = True
+            self.finish(Outcome.SUCCEEDED, message=f"{self.peer} stood still for {still_s:.1f} s: carrying on")
             return None
         # Stopped, not merely driving nothing: the planner's goal of the task this one interrupted is
         # cancelled, and the base told zero.

@@ -5,10 +5,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from services.docking.task_io import STOP, Navigate, NavOutcome, NavStatus, Outcome, TickInputs
 from services.docking.traffic import (
     CLEAR_OF_WAY_M,
+    STILL_GIVING_WAY_S,
+    STILL_PRIORITY_S,
     GiveWay,
     Meeting,
     Peer,
@@ -167,3 +170,46 @@ def test_give_way_does_not_wait_for_ever() -> None:
     assert task.result is None
     task.step(_inputs(61.0, Pose2D(1.0, 1.0, 0.0), NavStatus(first.key, outcome=NavOutcome.SUCCEEDED)))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+
+
+def test_two_robots_waiting_on_each_other_the_one_with_priority_carries_on_first() -> None:
+    # Seen in a fleet run in the yard: r2 waited at its passing place, chosen off r3's plan, for r3 to go
+    # by; r3 had turned meanwhile and found r2 on the line it headed along, so it waited for r2 to back out,
+    # and both stood until r3's wait ran out (30 s).
+    r3, r2 = Pose2D(1.82, 2.43, 0.72), Pose2D(4.37, 4.91, -3.12)
+    waiting = GiveWay(Peer("r2", r2, 0.9, False, giving_way=True), Meeting.HEAD_ON_PRIORITY, None, resume=None)
+    giving = GiveWay(Peer("r3", r3, 0.4, True), Meeting.HEAD_ON, r2, resume=None)
+    going = giving.step(_inputs(0.0, r2))
+    assert isinstance(going, Navigate)
+    arrived = NavStatus(going.key, outcome=NavOutcome.SUCCEEDED)
+    t = 0.0
+    while waiting.result is None and t < STILL_PRIORITY_S + 1.0:
+        waiting.peer_seen(r2)
+        giving.peer_seen(r3)
+        waiting.step(_inputs(t, r3))
+        giving.step(_inputs(t, r2, arrived))
+        t += 0.1
+    assert waiting.result is not None and waiting.result.outcome is Outcome.SUCCEEDED
+    assert waiting.unresolved and waiting.message.startswith("r2 stood still"), waiting.message
+    assert t == pytest.approx(STILL_PRIORITY_S, abs=0.3)
+    assert giving.result is None, "the one giving way waits longer than the one with priority"
+    assert must_give_way(r3, "r3", 0.4, [Peer("r2", r2, 0.9, False, giving_way=True)], [], carry_on={"r2"}) is None
+
+
+def test_a_robot_stopped_for_a_crossing_carries_on_when_the_other_stands_still_but_not_while_it_moves() -> None:
+    me = Pose2D(5.0, 5.0, 0.0)
+    stuck = Pose2D(6.0, 5.2, math.pi / 2)  # in front, crossing, with priority; held up (by this robot, say)
+    task = GiveWay(Peer("r1", stuck, 0.2, True), Meeting.CROSSING, None, resume=None)
+    t = 0.0
+    while t < 30.0 and task.result is None:
+        # Backing up and replanning, it stays within a few centimetres of one spot.
+        task.peer_seen(Pose2D(stuck.x, stuck.y - 0.2 * math.sin(t), stuck.yaw))
+        task.step(_inputs(t, me))
+        t += 0.1
+    assert task.result is not None and task.unresolved, "waited out its time limit (60 s) instead"
+    assert t == pytest.approx(STILL_GIVING_WAY_S, abs=0.3)
+    moving = GiveWay(Peer("r1", stuck, 0.2, True), Meeting.CROSSING, None, resume=None)
+    for i in range(int(STILL_GIVING_WAY_S * 20)):  # manoeuvring to and fro across the way in front
+        moving.peer_seen(Pose2D(6.0, 5.0 + 0.6 * math.cos(0.06 * i), math.pi / 2))
+        moving.step(_inputs(i * 0.1, me))
+    assert moving.result is None, "a robot that moves is waited for"
