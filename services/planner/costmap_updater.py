@@ -24,6 +24,7 @@ from services.planner.glass_memory import GlassMemory
 from services.planner.glass_store import GlassStore
 from services.planner.occupancy_map import OCC_OCCUPIED, OccupancyMap
 from services.planner.params import Params
+from services.planner.range_sensor_model import RangeSensorModel
 from services.planner.recovery import GlassClearing
 from services.planner.sonar_fusion import echo_explained_by_lidar
 from shared import topics
@@ -90,6 +91,7 @@ class CostmapUpdater:
         if self.glass is None or self.glass.frame != occupancy.frame:
             self.glass = GlassMemory(
                 occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m,
+                model=RangeSensorModel(trusted_range_m=self._params.glass_trusted_range_m),
                 echo_hold_s=self._params.glass_echo_hold_s,
             )
             kept = self._glass_store.load(occupancy) if self._glass_store is not None else None

@@ -76,6 +76,10 @@ class Params(ServiceParams):
     glass_echo_hold_s: float = Field(
         2.0, ge=0.0, description="each unexplained sonar echo's whole arc counts as glass this long (sim "
         "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)")
+    glass_trusted_range_m: float = Field(
+        2.0, gt=0.0, description="a sonar echo from this far gives the glass memory half the evidence of a near "
+        "one, from 0.5 m farther an eighth (Nav2's phi): a far echo's arc is wide and mostly open floor; far "
+        "glass is still held for glass_echo_hold_s")
     glass_slowdown_radius_m: float = Field(
         0.8, ge=0.0, description="closer than this to glass the sonar has heard ahead, the speed falls in "
         "proportion to the distance (0: off)")

@@ -7,7 +7,9 @@ marked too. This model follows Nav2's RangeSensorLayer (after Thrun et al., *Pro
 ch. 6, and the sonar model of Elfes, 1989): each reading adds log-odds evidence per cell,
 
 - occupied evidence in the band ``|d - r| <= band`` around the echo's range, strongest on the beam's axis
-  and falling off with the angle from it (``1 - (theta / half_fov)^n``) and in the band's outer half;
+  and falling off with the angle from it (``1 - (theta / half_fov)^n``), in the band's outer half, and
+  with the echo's range past ``trusted_range_m`` (Nav2's ``phi_v``: ``1 - (1 + tanh(2 (r - phi_v))) / 2``):
+  a far echo's arc is wide (``fov * r``), and one echo says little about which of its cells made it;
 - free evidence inside the measured range (the sonar looked through those cells), also weighted by angle,
   but only for cells the cone covers whole: a cell half inside the cone may hold a pane's end in its other
   half (see :func:`reading_evidence`);
@@ -40,8 +42,9 @@ def log_odds(probability: float) -> float:
 class RangeSensorModel:
     """The model's probabilities and thresholds (a single reading's, on the beam's axis)."""
 
-    #: P(occupied) of a cell on the axis at the echo's range, from one reading: one echo marks the middle
-    #: three quarters of the arc (glass must stop the robot the first time it is heard).
+    #: P(occupied) of a cell on the axis at the echo's range, from one near reading (``trusted_range_m``
+    #: weakens far ones): one echo marks the middle three quarters of the arc (glass must stop the robot
+    #: the first time it is heard near).
     hit_probability: float = 0.95
     #: P(occupied) of a cell on the axis the beam passed through: one clear look undoes one echo.
     miss_probability: float = 0.1
@@ -54,6 +57,15 @@ class RangeSensorModel:
     clear_threshold: float = 0.3
     #: Log-odds are clamped to +-this: evidence never so sure that new readings cannot overturn it.
     max_log_odds: float = 4.0
+    #: The range at which an echo's occupied evidence has fallen to half (Nav2's ``phi_v``; its default is
+    #: 1.2 m, which left far glass unmarked until the robot came near: in a 14 x 10 m hall the memory found
+    #: a quarter of the pane length it found without). One echo from 1.5 m still marks (0.88 of a near
+    #: one's evidence), one from 2.5 m gives an eighth and one from 3 m a fiftieth. An echo's arc is
+    #: ``fov * r`` wide and the surface that made it lies on one cell of it: at 3 m the arc is 1.5 m, and an
+    #: oblique pane or a pane's end put up to 0.75 m of it in front of the glass, out on the floor. Glass
+    #: heard from afar is still held for ``echo_hold_s`` (see :mod:`services.planner.glass_memory`), and
+    #: echoes that agree from look to look still add up.
+    trusted_range_m: float = 2.0
 
     def __post_init__(self) -> None:
         for name in ("hit_probability", "miss_probability", "mark_threshold", "clear_threshold"):
@@ -66,6 +78,8 @@ class RangeSensorModel:
             raise ValueError("RangeSensorModel needs clear_threshold < 0.5 < mark_threshold")
         if not (self.range_band_m > 0.0 and self.max_log_odds > 0.0):
             raise ValueError("RangeSensorModel.range_band_m and max_log_odds must be positive")
+        if not (math.isfinite(self.trusted_range_m) and self.trusted_range_m > 0.0):
+            raise ValueError(f"RangeSensorModel.trusted_range_m must be positive, got {self.trusted_range_m!r}")
 
     @property
     def mark_log_odds(self) -> float:
@@ -87,6 +101,12 @@ def angular_weight(bearing_rad: np.ndarray, half_fov_rad: float) -> np.ndarray:
     """How much a reading says about a cell at ``bearing_rad`` off the axis: 1 on it, 0 at the cone's edge."""
     ratio = np.abs(np.asarray(bearing_rad, dtype=float)) / half_fov_rad
     return np.where(ratio < 1.0, 1.0 - ratio**ANGULAR_FALLOFF_EXPONENT, 0.0)
+
+
+def range_weight(range_m: float, trusted_range_m: float) -> float:
+    """How much one echo from ``range_m`` says about the cells of its arc (Nav2's ``delta(phi)``): near 1
+    well inside ``trusted_range_m``, one half at it, near 0 beyond twice it."""
+    return 1.0 - 0.5 * (1.0 + math.tanh(2.0 * (range_m - trusted_range_m)))
 
 
 def reading_evidence(
@@ -142,6 +162,6 @@ def reading_evidence(
         strongest = float(weight[in_band].max()) if in_band.any() else 0.0
         if strongest > 0.0:
             weight = np.minimum(weight / strongest, 1.0)
-    hit = 0.5 + (model.hit_probability - 0.5) * weight * across
+    hit = 0.5 + (model.hit_probability - 0.5) * weight * across * range_weight(range_m, model.trusted_range_m)
     occupied = np.where(in_band, np.log(hit / (1.0 - hit)), 0.0)
     return free, occupied

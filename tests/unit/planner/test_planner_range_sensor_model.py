@@ -10,7 +10,13 @@ import pytest
 from services.planner.costmap import CostmapParams
 from services.planner.glass_memory import GlassMemory
 from services.planner.grid_frame import GridFrame
-from services.planner.range_sensor_model import RangeSensorModel, angular_weight, log_odds, reading_evidence
+from services.planner.range_sensor_model import (
+    RangeSensorModel,
+    angular_weight,
+    log_odds,
+    range_weight,
+    reading_evidence,
+)
 
 MODEL = RangeSensorModel()
 HALF_FOV = 0.25
@@ -19,7 +25,8 @@ HALF_FOV = 0.25
 def test_occupied_evidence_falls_off_with_the_angle_from_the_axis() -> None:
     bearings = np.linspace(0.0, HALF_FOV * 1.2, 13)
     _, occupied = reading_evidence(np.full(13, 1.0), bearings, 1.0, HALF_FOV, True, MODEL)
-    assert occupied[0] == pytest.approx(log_odds(MODEL.hit_probability))
+    near_hit = 0.5 + (MODEL.hit_probability - 0.5) * range_weight(1.0, MODEL.trusted_range_m)
+    assert occupied[0] == pytest.approx(log_odds(near_hit))
     assert np.all(np.diff(occupied) <= 1e-12), occupied  # never rises away from the axis
     assert np.all(occupied[bearings >= HALF_FOV] == 0.0)  # outside the cone: nothing
     assert np.all(angular_weight(-bearings, HALF_FOV) == angular_weight(bearings, HALF_FOV))  # symmetric
@@ -34,8 +41,21 @@ def test_cells_seen_through_get_free_evidence_and_nothing_beyond_the_echo() -> N
     assert np.all(free < 0.0) and not occupied.any()
 
 
+def test_an_echo_from_afar_gives_its_arc_less_evidence() -> None:
+    """An echo's arc is ``fov * r`` wide and one of its cells made it: from 0.5 m one echo marks, from the
+    trusted range (Nav2's phi; 2 m here) it gives half the evidence, from 3 m next to none."""
+    on_axis = {r: reading_evidence(np.array([r]), np.zeros(1), r, HALF_FOV, True, MODEL)[1][0]
+               for r in (0.5, 1.0, MODEL.trusted_range_m, 2.5, 3.0)}
+    assert on_axis[0.5] >= MODEL.mark_log_odds and on_axis[1.0] >= MODEL.mark_log_odds  # near: one echo marks
+    assert on_axis[0.5] > on_axis[1.0] > on_axis[MODEL.trusted_range_m] > on_axis[2.5] > on_axis[3.0] > 0.0
+    assert range_weight(MODEL.trusted_range_m, MODEL.trusted_range_m) == pytest.approx(0.5)
+    assert on_axis[3.0] < 0.02 * on_axis[0.5]
+    free, _ = reading_evidence(np.array([2.0]), np.zeros(1), 3.0, HALF_FOV, True, MODEL)
+    assert free[0] == pytest.approx(log_odds(MODEL.miss_probability))  # seeing through is as sure from afar
+
+
 @pytest.mark.parametrize("bad", [{"hit_probability": 0.4}, {"miss_probability": 1.2}, {"mark_threshold": 0.3},
-                                 {"range_band_m": 0.0}])
+                                 {"range_band_m": 0.0}, {"trusted_range_m": 0.0}])
 def test_a_model_that_contradicts_itself_is_refused(bad: dict[str, float]) -> None:
     with pytest.raises(ValueError, match="RangeSensorModel"):
         RangeSensorModel(**bad)  # type: ignore[arg-type]
@@ -92,8 +112,10 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
         most_false = max(most_false, _false_marks(memory, pane))
     final_false = _false_marks(memory, pane)
     assert final_false <= 3, f"{final_false} cells marked more than 10 cm in front of the pane"
-    assert final_false < most_false, "looks from further along should clear the early false marks"
-    assert _coverage(memory, pane) >= 0.6, f"only {_coverage(memory, pane):.0%} of the pane is marked"
+    # (With the far echoes trusted less, the first looks may put no false marks there at all.)
+    assert final_false == 0 or final_false < most_false, "looks from further along should clear the early false marks"
+    # Its far end is heard only from beyond the trusted range (2 m) here: it waits for nearer looks.
+    assert _coverage(memory, pane) >= 0.55, f"only {_coverage(memory, pane):.0%} of the pane is marked"
 
 
 def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
@@ -164,7 +186,7 @@ def test_a_pane_end_in_a_corner_of_a_cell_never_becomes_known_free() -> None:
     end_cell = frame.world_to_cells(end[None, :])[0]
     for _ in range(200):
         memory.add_reading((0.5, 1.5, 0.0), 2.5, 2 * HALF_FOV, 0.02, 3.0)  # the echo from a wall behind
-    memory.add_reading((0.5, end[1], 0.0), 1.5, 2 * HALF_FOV, 0.02, 3.0)  # now facing the end
+    memory.add_reading((1.0, end[1], 0.0), 1.0, 2 * HALF_FOV, 0.02, 3.0)  # now facing the end from 1 m
     assert memory.sonar_layer[end_cell[1], end_cell[0]] == 254
 
 
@@ -182,3 +204,31 @@ def test_a_held_arc_never_covers_the_robot_and_a_clock_that_goes_back_drops_it()
     assert not memory.held_mask().any()
     with pytest.raises(ValueError, match="echo_hold_s"):
         GlassMemory(frame, CostmapParams(), echo_hold_s=-1.0)
+
+
+def test_far_echoes_at_the_cone_edge_mark_no_floor_and_the_pane_is_found_up_close() -> None:
+    """A large room: the robot passes a long pane 2.5 m off, looking across it obliquely, so each echo comes
+    from the cone's edge and its 1.3 m arc lies mostly on open floor in front of the pane (before the range
+    trust, those looks left 15 cells marked more than 10 cm from the pane). Then it drives at the pane and
+    stops 0.3 m short: the pane is marked where it came near, the first time it hears it within 1 m."""
+    frame = GridFrame(0.05, (0.0, 0.0, 0.0), 120, 120)
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0)
+    pane = (np.array([4.5, 1.0]), np.array([4.5, 5.0]))
+    for y in np.arange(0.5, 5.5, 0.1):
+        for yaw in (0.5, 0.8, -0.5, -0.8):
+            sensor = (1.8, float(y), yaw)
+            memory.add_reading(sensor, _nearest_echo(sensor, pane), 2 * HALF_FOV, 0.02, 3.0)
+    assert _false_marks(memory, pane) == 0
+    ahead = frame.world_to_cells(np.array([[4.5, 3.0]]))[0]
+    for x in np.arange(1.8, 4.0, 0.05):
+        sensor = (float(x), 3.0, 0.0)
+        memory.add_reading(sensor, _nearest_echo(sensor, pane), 2 * HALF_FOV, 0.02, 3.0)
+        if 4.5 - x <= 1.0:
+            assert memory.sonar_layer[ahead[1], ahead[0]] == 254, f"not marked from {4.5 - x:.2f} m"
+            break
+    for x in np.arange(3.5, 4.2, 0.05):
+        sensor = (float(x), 3.0, 0.0)
+        memory.add_reading(sensor, _nearest_echo(sensor, pane), 2 * HALF_FOV, 0.02, 3.0)
+    assert _false_marks(memory, pane) <= 2
+    marked_y = _marked_xy(memory)[:, 1]
+    assert marked_y.min() <= 2.85 and marked_y.max() >= 3.15, "the part of the pane faced up close is marked"
