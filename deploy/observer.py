@@ -34,6 +34,8 @@ ULTRASONIC_MOUNT = Pose2D(0.20, 0.0, 0.0)
 #: The battery charges on a mated dock_contact at most this old (its ``dock_contact_timeout_s``): the mating
 #: that started charging is no older, and a mated reading from before the robot was last put down is.
 MATED_BEFORE_CHARGING_S = 1.0
+#: ... and the mated reading may arrive stamped up to this long after it (publishers' order is not kept).
+MATED_AFTER_CHARGING_S = 0.5
 
 #: Ground truth that moves further than this between two samples was teleported: at 20 Hz a drive at
 #: 0.5 m/s moves 2.5 cm a sample, so even a dozen lost samples stay under it.
@@ -187,11 +189,17 @@ class RunObserver:
     def _contact_at(self, t_s: float) -> DockContact | None:
         """The contact state when charging began: the mating that started it (messages from different
         publishers arrive in any order, so the mated reading may come just after the battery's)."""
-        mated = [c for c in self._contacts if c.mated and t_s - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t_s + 0.5]
+        mated = self._mated_near(t_s)
         if mated:
             before = [c for c in mated if c.header.stamp.to_sec() <= t_s + 1e-6]
             return before[-1] if before else mated[0]
         return self._contacts[-1] if self._contacts else None
+
+    def _mated_near(self, t_s: float) -> list[DockContact]:
+        """The mated readings that may have started charging at ``t_s``: the window both
+        :meth:`_contact_at` and :meth:`settle` look in."""
+        return [c for c in self._contacts if c.mated
+                and t_s - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t_s + MATED_AFTER_CHARGING_S]
 
     def _on_contact(self, msg: DockContact) -> None:
         with self._changed:
@@ -286,8 +294,8 @@ class RunObserver:
         just past the moment is not enough: on a busy machine the mated one may still be on its way."""
         def seen() -> bool:
             t = self._record.charging_s
-            return t is None or any(c.header.stamp.to_sec() >= t + 0.5 for c in self._contacts) or any(
-                c.mated and t - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t + 0.5 for c in self._contacts)
+            return (t is None or any(c.header.stamp.to_sec() >= t + MATED_AFTER_CHARGING_S for c in self._contacts)
+                    or bool(self._mated_near(t)))
 
         with self._changed:
             self._changed.wait_for(seen, timeout=timeout_s)

@@ -32,6 +32,19 @@ def _connect(url: str, viz: ServiceProcess) -> FoxgloveTestClient:
     return clients[0]
 
 
+def _subscribe_until_each_delivers(client: FoxgloveTestClient, topics: list[str], timeout_s: float = 20.0) -> bool:
+    """Subscribe to ``topics`` until each has delivered a message, or ``timeout_s``. The Foxglove server may
+    advertise a channel a moment before it accepts subscriptions to it ("attempted to subscribe to unknown
+    channel"): ask again for those still silent, as a viewer's user would."""
+    deadline = time.monotonic() + timeout_s
+    client.subscribe(*topics)
+    while not client.pump_until(lambda c: all(c.received(t) for t in topics), 5.0):
+        if time.monotonic() >= deadline:
+            return False
+        client.subscribe(*[t for t in topics if not client.received(t)])
+    return True
+
+
 def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
     port = free_port()
     clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
@@ -85,13 +98,7 @@ def test_the_camera_is_rendered_only_while_a_viewer_watches_it(spawn, bus: zenoh
         assert client.pump_until(lambda c: camera in c.topics(), 20.0), sorted(client.topics())
         assert client.topics()[camera]["schemaName"] == "foxglove.RawImage"
         assert "subscribing" not in viz.output()  # advertised, but nothing asked of the bus yet
-        # The Foxglove server may advertise a channel a moment before it accepts subscriptions to it ("attempted
-        # to subscribe to unknown channel"): ask again, as a viewer's user would, until frames come.
-        deadline = time.monotonic() + 20.0
-        client.subscribe(camera)
-        while not client.pump_until(lambda c: c.received(camera), 5.0) and time.monotonic() < deadline:
-            client.subscribe(camera)
-        assert client.received(camera), viz.output()[-1500:]
+        assert _subscribe_until_each_delivers(client, [camera]), viz.output()[-1500:]
         frame = client.received(camera)[-1].payload
         assert len(frame) > 640 * 480 and b"mono8" in frame
     finally:
@@ -111,14 +118,9 @@ def test_a_fleet_is_shown_robot_by_robot_each_under_its_own_frames(spawn, namesp
     client = _connect(f"ws://127.0.0.1:{port}", viz)
     try:
         assert client.pump_until(lambda c: set(wanted) <= set(c.topics()), 20.0), sorted(client.topics())
-        # As for the camera: a channel advertised a moment before the server accepts subscriptions to it is
-        # asked for again, until every one delivers (seen once in make test: r2/scan never came).
-        deadline = time.monotonic() + 20.0
-        client.subscribe(*wanted)
-        while not client.pump_until(lambda c: all(c.received(t) for t in wanted), 5.0) and time.monotonic() < deadline:
-            client.subscribe(*[t for t in wanted if not client.received(t)])
-        assert all(client.received(t) for t in wanted), ({t: len(client.received(t)) for t in wanted},
-                                                         viz.output()[-1500:])
+        # (Seen once in make test without asking again: r2/scan never came.)
+        assert _subscribe_until_each_delivers(client, wanted), (
+            {t: len(client.received(t)) for t in wanted}, viz.output()[-1500:])
         for robot in ("r1", "r2"):
             transforms = client.received(f"{ns}/{robot}/tf")[-1].payload
             assert f"{robot}/base_link".encode() in transforms and f"{robot}/odom".encode() in transforms
