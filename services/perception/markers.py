@@ -91,12 +91,21 @@ class MarkerFinder:
         self._cells_across = int(markers.markerSize) + 2
         self._detector = cv2.aruco.ArucoDetector(markers, params)
 
-    def find(self, grey: np.ndarray) -> list[MarkerSighting]:
-        corners, ids, _rejected = self._detector.detectMarkers(grey)
-        if ids is None:
-            return []
-        return [MarkerSighting(int(i), refine_corners(grey, np.asarray(c, dtype=np.float64).reshape(4, 2), self._cells_across))
-                for i, c in zip(ids.ravel(), corners, strict=True)]
+    def find(self, grey: np.ndarray, regions: Sequence[tuple[int, int, int, int]] | None = None) -> list[MarkerSighting]:
+        """Markers in the whole image, or only within ``regions`` (``(x0, y0, x1, y1)`` pixel boxes, end
+        exclusive): the detector's cost grows with the pixels it thresholds, and a marker found a frame ago
+        is still near where it was. Corners are refined on the whole image either way."""
+        found: dict[int, np.ndarray] = {}
+        for x0, y0, x1, y1 in regions if regions is not None else [(0, 0, grey.shape[1], grey.shape[0])]:
+            crop = grey if (x0, y0, x1, y1) == (0, 0, grey.shape[1], grey.shape[0]) else np.ascontiguousarray(grey[y0:y1, x0:x1])
+            if crop.size == 0:
+                continue
+            corners, ids, _rejected = self._detector.detectMarkers(crop)
+            if ids is None:
+                continue
+            for i, c in zip(ids.ravel(), corners, strict=True):
+                found.setdefault(int(i), np.asarray(c, dtype=np.float64).reshape(4, 2) + (x0, y0))
+        return [MarkerSighting(i, refine_corners(grey, c, self._cells_across)) for i, c in found.items()]
 
 
 _PROFILE_STEP_PX = 0.1

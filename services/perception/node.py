@@ -26,6 +26,7 @@ from pydantic import Field
 
 from services.perception.images import ImageError, grey_pixels
 from services.perception.markers import DockSighting, MarkerFinder, MarkerSighting, locate_dock
+from services.perception.search_regions import SearchRegions
 from shared import topics
 from shared.geometry import Pose2D
 from shared.memory import return_large_blocks
@@ -73,6 +74,7 @@ class PerceptionService:
         world = load_world(params.dock_database)
         self.markers: dict[int, DockMarker] = {m.marker_id: m for m in dock_markers(world)}
         self.finder = MarkerFinder(world.aruco_dictionary)
+        self.search = SearchRegions()
         self.frames = StaticTransforms()
         self._camera_matrix: np.ndarray | None = None
         self._distortion = np.zeros(5)
@@ -146,14 +148,29 @@ class PerceptionService:
         if base_from_camera is None:
             self._refuse("no-mount", "no tf_static chain from %s to %s yet", msg.header.frame_id, topics.BASE_FRAME)
             return
-        sightings = self.finder.find(grey)
-        found = self._locate(sightings, base_from_camera, msg.header.stamp.to_sec())
+        stamp_s = msg.header.stamp.to_sec()
+        sightings = self._find(grey, stamp_s)
+        found = self._locate(sightings, base_from_camera, stamp_s)
         self._publish(msg.header, found)
         if self.debug_pub.has_subscribers():
             self._publish_debug(msg.header, grey, sightings, found, base_from_camera)
         self._report_stats()
 
     # --- work ----------------------------------------------------------------------------------------
+
+    def _find(self, grey: np.ndarray, stamp_s: float) -> list[MarkerSighting]:
+        """Markers near where they were in the last frame, else (or when one is missing) in the whole frame."""
+        boxes = self.search.boxes(stamp_s, grey.shape[1], grey.shape[0])
+        if boxes is not None:
+            sightings = self.finder.find(grey, boxes)
+            if self.search.complete(sightings):
+                self.counts["searched-boxes"] += 1
+                self.search.update(sightings, stamp_s, whole_frame=False)
+                return sightings
+            self.counts["box-missed"] += 1
+        sightings = self.finder.find(grey)
+        self.search.update(sightings, stamp_s, whole_frame=True)
+        return sightings
 
     def _locate(self, sightings: list[MarkerSighting], base_from_camera: Rigid3, stamp_s: float) -> list[DockSighting]:
         assert self._camera_matrix is not None
