@@ -269,11 +269,18 @@ class CameraRenderer:
 
         opaque = scene.opaque
         o_depth = np.where(opaque[None, :], depth, np.inf)
-        k = min(_OPAQUE_LAYERS, int(opaque.sum()))
+        # Layers: as many as the column with the most opaque hits has (at most _OPAQUE_LAYERS), since each
+        # layer costs a pass over the whole image below.
+        hits_per_column = np.isfinite(o_depth).sum(axis=1)
+        k = min(_OPAQUE_LAYERS, int(hits_per_column.max())) if len(hits_per_column) else 0
         col = np.arange(W)
         nearest_depth = np.full(W, np.inf)
         if k:
-            order = np.argsort(o_depth, axis=1)[:, :k]  # (W, k) surfaces by depth
+            if k < o_depth.shape[1]:  # the k nearest of each column, then those k in order
+                order = np.argpartition(o_depth, k - 1, axis=1)[:, :k]
+                order = np.take_along_axis(order, np.argsort(np.take_along_axis(o_depth, order, axis=1), axis=1), axis=1)
+            else:
+                order = np.argsort(o_depth, axis=1)
             layer_depth = np.take_along_axis(o_depth, order, axis=1)
             hit = np.isfinite(layer_depth)  # a prefix of each row: misses sort last
             layer_top = np.where(hit, np.take_along_axis(tops, order, axis=1), np.inf)
