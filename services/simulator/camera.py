@@ -307,15 +307,17 @@ class CameraRenderer:
             np.copyto(image, value, where=shown)
             del value
             layer_face = scene.marker_faces[order] & hit
-            if layer_face.any():
-                faces = np.zeros((k + 1, W), dtype=np.int32)
-                faces[:k] = np.where(layer_face, order, -1).T
-                faces[k] = -1
-                surf = faces.ravel()[flat]
-                for surface_index in np.unique(surf[shown & (surf >= 0)]):
-                    marker_index = scene.surfaces[int(surface_index)].marker
-                    assert marker_index is not None
-                    self._paint_marker(image, shown & (surf == surface_index), camera, scene, marker_index, view)
+            # Each marker face lies in at most one layer of a column: its pixels are those showing that layer.
+            for surface_index in np.unique(order[layer_face]):
+                in_layer = (order == surface_index) & hit  # (W, k)
+                layer_of = np.where(in_layer.any(axis=1), in_layer.argmax(axis=1), -1).astype(np.int16)
+                face_mask = idx == layer_of[None, :]
+                face_mask &= shown
+                if not face_mask.any():
+                    continue  # hidden behind nearer surfaces everywhere
+                marker_index = scene.surfaces[int(surface_index)].marker
+                assert marker_index is not None
+                self._paint_marker(image, face_mask, camera, scene, marker_index, view)
         self._paint_glass(image, depth, tops, nearest_depth, cy, f, h_cam, scene)
         return image
 
@@ -351,12 +353,14 @@ class CameraRenderer:
         texture = marker_texture(marker.dictionary, marker.marker_id, _texture_size(ss * side_px))
         n = texture.shape[0]
         src = np.array([[-0.5, -0.5], [n - 0.5, -0.5], [n - 0.5, n - 0.5], [-0.5, n - 0.5]], dtype=np.float32)
-        ys, xs = np.nonzero(face_mask)
         # Only the marker's own box (within the face's) changes: the rest of the face stays plain white.
-        x0 = max(int(xs.min()), math.floor(float(pts[:, 0].min())) - 1)
-        x1 = min(int(xs.max()) + 1, math.ceil(float(pts[:, 0].max())) + 2)
-        y0 = max(int(ys.min()), math.floor(float(pts[:, 1].min())) - 1)
-        y1 = min(int(ys.max()) + 1, math.ceil(float(pts[:, 1].max())) + 2)
+        # The face's columns first, then its rows within them: two reductions, not every pixel's index.
+        xs = np.flatnonzero(face_mask.any(axis=0))
+        ys = np.flatnonzero(face_mask[:, xs[0]:xs[-1] + 1].any(axis=1))
+        x0 = max(int(xs[0]), math.floor(float(pts[:, 0].min())) - 1)
+        x1 = min(int(xs[-1]) + 1, math.ceil(float(pts[:, 0].max())) + 2)
+        y0 = max(int(ys[0]), math.floor(float(pts[:, 1].min())) - 1)
+        y1 = min(int(ys[-1]) + 1, math.ceil(float(pts[:, 1].max())) + 2)
         if x1 <= x0 or y1 <= y0:
             return
         # Warp onto a grid ``ss`` times finer over the face's bounding box, then average each ss x ss block:
