@@ -97,7 +97,7 @@ class MarkerFinder:
         is still near where it was. Corners are refined on the whole image either way."""
         found: dict[int, np.ndarray] = {}
         for x0, y0, x1, y1 in regions if regions is not None else [(0, 0, grey.shape[1], grey.shape[0])]:
-            crop = grey if (x0, y0, x1, y1) == (0, 0, grey.shape[1], grey.shape[0]) else np.ascontiguousarray(grey[y0:y1, x0:x1])
+            crop = np.ascontiguousarray(grey[y0:y1, x0:x1])  # the whole image is already contiguous: no copy
             if crop.size == 0:
                 continue
             corners, ids, _rejected = self._detector.detectMarkers(crop)
@@ -204,14 +204,6 @@ def upright_marker(pose: MarkerPose) -> Pose2D:
     n = pose.normal
     t = pose.base_from_marker.translation
     return Pose2D(float(t[0]), float(t[1]), math.atan2(float(n[1]), float(n[0])))
-
-
-def upright_corners(marker: Pose2D, size_m: float, centre_height_m: float) -> np.ndarray:
-    """The corners (base_link, ArUco's order) of an upright marker of this size standing at ``marker``."""
-    rx, ry = -math.sin(marker.yaw), math.cos(marker.yaw)  # the viewer's right, facing the marker
-    h = size_m / 2.0
-    return np.array([[marker.x + u * rx, marker.y + u * ry, centre_height_m + v]
-                     for u, v in ((-h, h), (h, h), (h, -h), (-h, -h))])
 
 
 #: The upright marker's corners (ArUco's order) in its own plane, in half sides: (right, up).
@@ -378,4 +370,4 @@ def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.
 
 
 __all__ = ["DockSighting", "MarkerFinder", "MarkerPose", "MarkerSighting", "choose_fit", "choose_pose", "facing_seed", "locate_dock",
-           "marker_object_points", "marker_poses", "refine_corners", "refine_upright", "upright_corners", "upright_marker"]
+           "marker_object_points", "marker_poses", "refine_corners", "refine_upright", "upright_marker"]

@@ -271,8 +271,7 @@ class CameraRenderer:
         o_depth = np.where(opaque[None, :], depth, np.inf)
         # Layers: as many as the column with the most opaque hits has (at most _OPAQUE_LAYERS), since each
         # layer costs a pass over the whole image below.
-        hits_per_column = np.isfinite(o_depth).sum(axis=1)
-        k = min(_OPAQUE_LAYERS, int(hits_per_column.max())) if len(hits_per_column) else 0
+        k = min(_OPAQUE_LAYERS, int(np.isfinite(o_depth).sum(axis=1).max()))
         col = np.arange(W)
         nearest_depth = np.full(W, np.inf)
         if k:

@@ -10,6 +10,7 @@ import msgpack
 import numpy as np
 import pytest
 
+from shared import schema
 from shared.messages import Image, LaserScan
 from shared.schema import MessageError, registered_types, unpack
 
@@ -36,7 +37,6 @@ def _value(rng: random.Random, depth: int = 0) -> object:
 @pytest.mark.parametrize("seed", range(40))
 def test_the_codec_writes_msgpack_pythons_bytes(seed: int) -> None:
     value = _value(random.Random(seed))
-    from shared import schema
     assert schema._PACK(value) == msgpack.packb(value, use_bin_type=True)
 
 
