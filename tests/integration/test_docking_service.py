@@ -259,11 +259,20 @@ def test_seed_docks_when_the_battery_crosses_the_threshold(stack) -> None:  # ty
     staging = s.navigator.goals_sent()[0]  # the line approach's staging goal for this dock
     assert staging.distance_to(Pose2D(0.0, 2.0, 0.0)) < 1e-6 and abs(staging.yaw) < 1e-6, staging
     commands = [(m.linear.x, m.angular.z) for m in since(s.cmd_vel, first_cmd)]
-    assert set(commands) <= {(0.0, 0.0), (0.08, 0.0), (0.0, 0.1), (0.0, -0.1)}, set(commands)
-    assert {(0.08, 0.0), (0.0, -0.1)} <= set(commands)
+    log = s.docking_log()
+    # A failed attempt backs off the dock (reversing, graceful law) before the next one: on a loaded
+    # machine the first attempt may miss. Backing off must come from a logged retry; every other command
+    # is the line approach's.
+    backing = {c for c in commands if c[0] < 0.0}
+    retries = [line for line in log.splitlines() if "retry" in line]
+    assert not backing or retries, f"backed off without a retry: {sorted(backing)[:5]}\n{log[-3000:]}"
+    approach = set(commands) - backing
+    assert approach <= {(0.0, 0.0), (0.08, 0.0), (0.0, 0.1), (0.0, -0.1)}, f"{approach}\n{log[-3000:]}"
+    assert {(0.08, 0.0), (0.0, -0.1)} <= approach, f"{approach}\n{log[-3000:]}"
     rate_hz = len(commands) / took_s
     assert 8.0 < rate_hz < 12.0, f"{len(commands)} commands in {took_s:.1f} s of sim time"
-    print(f"\nseed: charging {took_s:.1f} s (sim) after the line approach started; {_contact_report(truth)}")
+    print(f"\nseed: charging {took_s:.1f} s (sim) after the line approach started; {_contact_report(truth)}"
+          + "".join(f"\n  {line}" for line in retries))
 
 
 def test_graceful_docks_with_detection_despite_localisation_error(stack) -> None:  # type: ignore[no-untyped-def]
