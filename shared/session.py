@@ -14,6 +14,12 @@ from pathlib import Path
 import zenoh
 
 DEFAULT_ROUTER_ENDPOINT = "tcp/127.0.0.1:7447"
+#: Batches a link may queue at the data priority, where every zendock message goes (Zenoh's default: 2).
+#: A simulator step puts several express samples at once (clock, odometry, tf, ranges, the dock's contact),
+#: each its own batch, and a camera frame is five; with two slots, whatever finds the queue full for 1 ms
+#: is dropped. On a busy machine the sending thread is often that late, so recording everything while the
+#: camera streamed lost about one sample in fifty. Sixteen 64 kB batches hold a step and a frame.
+TX_QUEUE_BATCHES = 16
 
 
 @dataclass(frozen=True)
@@ -29,7 +35,11 @@ class SessionSpec:
 
 
 def make_config(spec: SessionSpec) -> zenoh.Config:
-    """Build a zenoh.Config: the file (if any) first, then mode, endpoints and the no-multicast rule."""
+    """Build a zenoh.Config: the file (if any) first, then mode, endpoints and the no-multicast rule.
+
+    Without a file, zendock's transport settings apply too (a file decides them itself): no shared memory,
+    and :data:`TX_QUEUE_BATCHES` send batches at the data priority.
+    """
     if spec.mode not in ("client", "peer", "router"):
         raise ValueError(f"zenoh mode must be client, peer or router, got {spec.mode!r}")
     if spec.config_file:
@@ -41,10 +51,11 @@ def make_config(spec: SessionSpec) -> zenoh.Config:
         conf = zenoh.Config()
     conf.insert_json5("mode", json.dumps(spec.mode))
     conf.insert_json5("scouting/multicast/enabled", "false")
-    # Shared memory off unless a config file turns it on: every receiver maps each sender's 16 MiB pool,
-    # which costs tens of MB of RSS per process, and zendock's messages are small.
+    # Shared memory off: every receiver maps each sender's 16 MiB pool, which costs tens of MB of RSS per
+    # process, and zendock's messages are small. Deeper send queues: see TX_QUEUE_BATCHES.
     if not spec.config_file:
         conf.insert_json5("transport/shared_memory/enabled", "false")
+        conf.insert_json5("transport/link/tx/queue/size/data", str(TX_QUEUE_BATCHES))
     if spec.connect:
         conf.insert_json5("connect/endpoints", json.dumps(list(spec.connect)))
     if spec.listen:

@@ -108,9 +108,9 @@ class MessageCount:
     cpu_after: dict[str, dict[str, float]] = field(default_factory=dict)
 
     @contextmanager
-    def tap(self, session: Any, robots: list[str], processes: Any = None) -> Iterator[None]:
+    def tap(self, session: Any, robots: list[str], processes: Any = None, endpoint: str = "") -> Iterator[None]:
         """Entered with the stack healthy, left after the last trial (``run_trials``' ``tap``); ``processes()``
-        gives the stack's ``(service, pid)`` pairs for the CPU split."""
+        gives the stack's ``(service, pid)`` pairs for the CPU split (the router's ``endpoint`` is not needed)."""
         self.robots = list(robots)
         self.cpu_before = cpu_by_thread_kind(processes() if processes else [])
         start = _sim_now(session, robots[0])

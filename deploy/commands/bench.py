@@ -219,6 +219,50 @@ def _bench_messages(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_record(args: argparse.Namespace) -> int:
+    import shutil  # noqa: PLC0415
+    import tempfile  # noqa: PLC0415
+    from pathlib import Path  # noqa: PLC0415
+
+    from deploy.bench.recording import RecordingTap  # noqa: PLC0415 - starts a stack
+    from deploy.trials import TrialOptions, run_trials  # noqa: PLC0415
+
+    world = Path(args.world)
+    if not world.is_file():
+        print(f"zendock bench record: --world {world}: no such file", file=sys.stderr)
+        return 2
+    options = TrialOptions(world=world.resolve(), n=args.n, detector=args.detector, seed=args.seed, rtf=args.rtf,
+                           workers=args.workers)
+    console = Console(stderr=True)
+    scratch = Path(tempfile.mkdtemp(prefix="zendock-bench-record-"))  # the run directory is made by the campaign
+    recorder = RecordingTap(output=scratch / "campaign.mcap", world=world.resolve())
+    try:
+        summary, _, run_dir = run_trials(options, log=lambda t: console.print(f"[dim]bench:[/] {t}"), tap=recorder.tap)
+        report = recorder.report()
+    except (RuntimeError, ValueError) as exc:
+        print(f"zendock bench record: {exc}", file=sys.stderr)
+        shutil.rmtree(scratch, ignore_errors=True)
+        return 1
+    kept = run_dir / "campaign.mcap"
+    shutil.move(str(recorder.output), kept)
+    shutil.rmtree(scratch, ignore_errors=True)
+    report.update({"docked": f"{summary.successes}/{summary.n}", "achieved_rtf": summary.achieved_rtf,
+                   "detector": args.detector, "rtf": args.rtf, "workers": args.workers, "recording": str(kept)})
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title=f"recording everything through {report['docked']} dockings ({args.detector}, rtf {args.rtf})")
+    for column in ("key", "recorded", "lost", "gaps"):
+        table.add_column(column, justify="left" if column == "key" else "right")
+    for key, row in report["keys"].items():
+        table.add_row(key, str(row["recorded"]), str(row["lost"]), str(row["gaps"]))
+    Console().print(table)
+    print(f"{report['recorded']} messages recorded, {report['lost']} lost in {report['gaps']} gap(s); images "
+          f"{report['images_recorded']} recorded, {report['images_lost']} lost; recorder peak RSS "
+          f"{report['recorder_peak_rss_mb']} MB, CPU {report['recorder_cpu_fraction']} of a core; {kept}")
+    return 0
+
+
 def _bench_startup(args: argparse.Namespace) -> int:
     from deploy.bench.startup import run_startup_bench  # noqa: PLC0415 - starts services
 
@@ -270,6 +314,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     messages.add_argument("--compose", action="store_true", help="the robot's services in one process")
     messages.add_argument("--json", action="store_true")
     messages.set_defaults(func=_bench_messages)
+    record = verbs.add_parser("record", help="record everything, camera included, through a docking campaign: gaps")
+    record.add_argument("--world", default="deploy/worlds/seed_room.yaml")
+    record.add_argument("--n", type=int, default=3, help="dockings from random starts")
+    record.add_argument("--rtf", default="1", help="simulator real-time factor, or max (1: as a real run)")
+    record.add_argument("--workers", type=int, default=1, help="robots docking side by side")
+    record.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
+    record.add_argument("--seed", type=int, default=0)
+    record.add_argument("--json", action="store_true")
+    record.set_defaults(func=_bench_record)
     startup = verbs.add_parser("startup", help="where a service's start-up goes: interpreter, imports, session")
     startup.add_argument("services", nargs="*", metavar="SERVICE", help="default: the stack's robot services")
     startup.add_argument("--repeats", type=int, default=5, help="starts per service (medians)")

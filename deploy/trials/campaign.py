@@ -141,12 +141,13 @@ def run_trials(
     options: TrialOptions,
     log: Callable[[str], None] = print,
     progress: Callable[[TrialResult], None] | None = None,
-    tap: Callable[[Any, list[str], Callable[[], list[tuple[str, int | None]]]], AbstractContextManager[Any]] | None = None,
+    tap: Callable[[Any, list[str], Callable[[], list[tuple[str, int | None]]], str], AbstractContextManager[Any]] | None = None,
 ) -> tuple[TrialsSummary, list[TrialResult], Path]:
     """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs).
 
-    ``tap(session, robots, processes)``, when given, is entered once the stack is healthy and left after the last trial,
-    before the stack goes down: a benchmark's way to watch the campaign's bus (``zendock bench messages``).
+    ``tap(session, robots, processes, endpoint)``, when given, is entered once the stack is healthy and left after the
+    last trial, before the stack goes down: a benchmark's way to watch the campaign's bus (``zendock bench messages``,
+    ``zendock bench record``); ``endpoint`` is the campaign's router.
     """
     world = load_world(options.world)
     if not world.docks:
@@ -189,7 +190,7 @@ def run_trials(
         lock = threading.Lock()
         chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()), \
-                (tap(session, robots, processes) if tap is not None else _Nothing()):
+                (tap(session, robots, processes, endpoint) if tap is not None else _Nothing()):
             clock_start = _sim_clock(session, robots[0])
             wall_clock_start = time.monotonic()
 

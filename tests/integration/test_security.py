@@ -19,6 +19,7 @@ import zenoh
 
 from deploy.launcher import Launcher, free_endpoint, load_stack
 from shared.messages import LaserScan, Twist
+from shared.session import TX_QUEUE_BATCHES
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, free_port, wait_until
 
@@ -108,12 +109,14 @@ def test_every_user_file_matches_the_credentials_file() -> None:
             assert (usrpwd["user"], usrpwd["password"]) == (user, credentials[user]), folder / f"{user}.json5"
 
 
-def test_no_session_of_the_profile_uses_shared_memory() -> None:
-    """Like zendock's default sessions (shared/session.py), which turn it off unless a config file is given."""
-    files = [*SECURE.glob("*.json5"), *(SECURE / "tls").glob("*.json5")]
-    assert len(files) == 2 + 2 * len(USERS)
+def test_every_session_of_the_profile_has_the_default_sessions_transport() -> None:
+    """Like zendock's default sessions (shared/session.py): no shared memory, TX_QUEUE_BATCHES send batches."""
+    files = [*SECURE.glob("*.json5"), *(SECURE / "tls").glob("*.json5"), REPO_ROOT / "deploy/zenoh/router.json5"]
+    assert len(files) == 3 + 2 * len(USERS)
     for path in files:
-        assert json.loads(str(zenoh.Config.from_file(str(path))))["transport"]["shared_memory"]["enabled"] is False, path
+        transport = json.loads(str(zenoh.Config.from_file(str(path))))["transport"]
+        assert transport["shared_memory"]["enabled"] is False, path
+        assert transport["link"]["tx"]["queue"]["size"]["data"] == TX_QUEUE_BATCHES, path
 
 
 def test_the_secure_stack_runs_the_default_stacks_services(tmp_path: Path) -> None:
