@@ -51,7 +51,7 @@ def _sim_now(session: Any, robot: str) -> float:
         return math.nan
 
 
-def _relative(key: str, robots: list[str]) -> str:
+def robot_relative(key: str, robots: list[str]) -> str:
     """``r0/odom`` -> ``odom``: one robot's keys under one name, whichever robot."""
     for robot in robots:
         if key.startswith(f"{robot}/"):
@@ -133,11 +133,11 @@ class MessageCount:
         nodes: dict[str, float] = {}
 
         def row_of(key: str) -> dict[str, Any]:
-            return keys.setdefault(_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()})
+            return keys.setdefault(robot_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()})
 
         for label, body in self.after.items():
             old = self.before.get(label, {})
-            node = _relative(label, self.robots)
+            node = robot_relative(label, self.robots)
             for key, n in _delta(body.get("published", {}), old.get("published", {})).items():
                 row_of(key)["published"] += n / per
             received = _delta(body.get("received", {}), old.get("received", {}))

@@ -22,19 +22,13 @@ from typing import Any
 
 import psutil
 
+from deploy.bench.messages import robot_relative
 from deploy.recording.reading import Recording
 
 #: Where a big sample's loss shows first: the camera's frames and perception's debug images.
 IMAGE_KEYS = ("camera/image_raw", "aruco/debug_image")
 #: How long the recorder may take to write what it holds and close the file once asked to stop.
 STOP_TIMEOUT_S = 60.0
-
-
-def _relative(key: str, robots: list[str]) -> str:
-    for robot in robots:
-        if key.startswith(f"{robot}/"):
-            return key[len(robot) + 1:]
-    return key
 
 
 @dataclass
@@ -61,10 +55,9 @@ class RecordingTap:
             self._wait_recording(recorder)
             yield
         finally:
-            try:
-                usage = psutil.Process(recorder.pid)
+            try:  # before it stops: the recording's cost, not the file's closing
                 self.peak_rss_mb = _peak_rss_mb(recorder.pid)
-                times = usage.cpu_times()
+                times = psutil.Process(recorder.pid).cpu_times()
                 self.cpu_s = times.user + times.system
             except psutil.Error:
                 pass
@@ -94,7 +87,7 @@ class RecordingTap:
             summary = recording.summary()
         keys: dict[str, dict[str, int]] = {}
         for key, row in summary.items():
-            entry = keys.setdefault(_relative(key, self.robots), {"recorded": 0, "lost": 0, "gaps": 0})
+            entry = keys.setdefault(robot_relative(key, self.robots), {"recorded": 0, "lost": 0, "gaps": 0})
             entry["recorded"] += int(row["received"])
             entry["lost"] += int(row["lost"])
             entry["gaps"] += len(row["gaps"])

@@ -10,6 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from deploy import strict_json
+from deploy.arg_types import count, real_time_factor
 from deploy.service_tools import run_tool
 
 
@@ -307,8 +308,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     perception.set_defaults(func=_bench_perception)
     messages = verbs.add_parser("messages", help="messages per simulated second per key and subscriber, docking")
     messages.add_argument("--world", default="deploy/worlds/seed_room.yaml")
-    messages.add_argument("--n", type=int, default=5, help="dockings from random starts")
-    messages.add_argument("--rtf", default="8", help="simulator real-time factor, or max")
+    messages.add_argument("--n", type=count, default=5, help="dockings from random starts")
+    messages.add_argument("--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max")
     messages.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
     messages.add_argument("--seed", type=int, default=0)
     messages.add_argument("--compose", action="store_true", help="the robot's services in one process")
@@ -316,9 +317,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     messages.set_defaults(func=_bench_messages)
     record = verbs.add_parser("record", help="record everything, camera included, through a docking campaign: gaps")
     record.add_argument("--world", default="deploy/worlds/seed_room.yaml")
-    record.add_argument("--n", type=int, default=3, help="dockings from random starts")
-    record.add_argument("--rtf", default="1", help="simulator real-time factor, or max (1: as a real run)")
-    record.add_argument("--workers", type=int, default=1, help="robots docking side by side")
+    record.add_argument("--n", type=count, default=3, help="dockings from random starts")
+    record.add_argument("--rtf", type=real_time_factor, default="1",
+                        help="simulator real-time factor, or max (1: as a real run)")
+    record.add_argument("--workers", type=count, default=1, help="robots docking side by side")
     record.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
     record.add_argument("--seed", type=int, default=0)
     record.add_argument("--json", action="store_true")
