@@ -213,15 +213,15 @@ class DockSightings:
     def subscribed(self) -> bool:
         return self._subscription is not None
 
-    def want(self, wanted: bool, now_s: float) -> None:
-        """Subscribe while the run wants detections (and a little longer, so no flapping)."""
+    def want(self, wanted: bool, now_s: float, linger: bool = True) -> None:
+        """Subscribe while the run wants detections (and, with ``linger``, a little longer, so no flapping)."""
         if wanted:
             self._wanted_s = now_s
         if wanted and self._subscription is None:
             self._subscription = self._node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE,
                                                                 self._on_detection, SENSOR_DATA)
         elif (not wanted and self._subscription is not None
-              and not 0.0 <= now_s - self._wanted_s < DETECTION_LINGER_S):
+              and not (linger and 0.0 <= now_s - self._wanted_s < DETECTION_LINGER_S)):
             self._subscription.undeclare()
             self._subscription = None
 

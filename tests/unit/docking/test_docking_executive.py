@@ -77,11 +77,13 @@ def test_a_low_battery_starts_a_docking_run_that_asks_for_detections_near_the_do
     ex = _executive()
     ex.battery_reading(0.2, False)
     dock = next(iter(ex.database)).pose2d
-    near = dock.compose(Pose2D(1.0, 0.0, math.pi))  # 1 m in front, facing it
+    near = dock.compose(Pose2D(-1.0, 0.0, 0.0))  # 1 m in front of its marker, facing it
     effects = ex.step(_heard(0.0, near, battery=0.2))
     assert ex.task is not None and ex.task_kind is TaskKind.DOCK and ex.goal is None
     assert _of(effects, WantDetections) == [WantDetections(False)], "no dock chosen before its first step"
     assert _of(ex.step(_heard(0.05, near, battery=0.2)), WantDetections) == [WantDetections(True)]
+    assert _of(_executive().step(_heard(0.0, near)), WantDetections) == [WantDetections(False, linger=False)], \
+        "no task: nothing will want detections soon, so the subscription goes at once"
     assert _states(effects) and _states(effects)[0] not in ("IDLE", "DOCKED")
     assert not _of(effects, GoalEnded), "nobody asked: no action to answer"
 

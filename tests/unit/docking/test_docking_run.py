@@ -337,4 +337,18 @@ def test_detections_are_wanted_only_where_the_dock_could_be_in_view() -> None:
     near_facing = SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0))
     assert run.wants_detections(near_facing)
     assert not run.wants_detections(near_facing.compose(Pose2D(0.0, 0.0, math.pi)))  # turned away
+    assert not run.wants_detections(near_facing.compose(Pose2D(0.0, 0.0, math.radians(42.0))))  # out of the view
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(1.5, 0.0, math.pi)))  # behind the dock, facing it
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.2, 1.5, -math.pi / 2)))  # edge-on, 82 deg off
     assert not graceful_run(use_detection=False).wants_detections(near_facing)
+
+
+def test_from_staging_on_detections_are_wanted_until_the_camera_is_too_close_for_the_marker() -> None:
+    run = graceful_run()
+    run.step(TickInputs(now_s=0.0, robot_pose=FAR))
+    run.enter(RunPhase.CONTROLLING, 1.0)
+    assert run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, 0.5)))  # anywhere on the approach
+    assert run.wants_detections(None)  # no pose yet: look
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.08, 0.0, 0.0)))  # the marker fills the view
+    run.enter(RunPhase.WAIT_FOR_CHARGE, 2.0)
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.3, 0.0, 0.0)))
