@@ -264,7 +264,7 @@ def test_seed_docks_when_the_battery_crosses_the_threshold(stack) -> None:  # ty
     # machine the first attempt may miss. Backing off must come from a logged retry; every other command
     # is the line approach's.
     backing = {c for c in commands if c[0] < 0.0}
-    retries = [line for line in log.splitlines() if "retry" in line]
+    retries = [line for line in log.splitlines() if "; retry " in line]  # "attempt failed (...): ...; retry 1 of 3"
     assert not backing or retries, f"backed off without a retry: {sorted(backing)[:5]}\n{log[-3000:]}"
     approach = set(commands) - backing
     assert approach <= {(0.0, 0.0), (0.08, 0.0), (0.0, 0.1), (0.0, -0.1)}, f"{approach}\n{log[-3000:]}"
