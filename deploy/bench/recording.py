@@ -23,6 +23,7 @@ from typing import Any
 import psutil
 
 from deploy.bench.messages import robot_relative
+from deploy.memory import PeakRssSampler
 from deploy.recording.reading import Recording
 
 #: Where a big sample's loss shows first: the camera's frames and perception's debug images.
@@ -51,12 +52,14 @@ class RecordingTap:
         env = {**os.environ, "ZENDOCK_NAMESPACE": ""}
         recorder = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
         started = time.monotonic()
+        sampler = PeakRssSampler(lambda: [("recorder", recorder.pid)])  # as the campaign samples its services
         try:
             self._wait_recording(recorder)
-            yield
+            with sampler:
+                yield
         finally:
             try:  # before it stops: the recording's cost, not the file's closing
-                self.peak_rss_mb = _peak_rss_mb(recorder.pid)
+                self.peak_rss_mb = sampler.peak_mb.get("recorder", 0.0)
                 times = psutil.Process(recorder.pid).cpu_times()
                 self.cpu_s = times.user + times.system
             except psutil.Error:
@@ -104,14 +107,3 @@ class RecordingTap:
             "keys": dict(sorted(keys.items(), key=lambda kv: (-kv[1]["lost"], kv[0]))),
         }
 
-
-def _peak_rss_mb(pid: int) -> float:
-    """The process's peak resident set (VmHWM) so far, MB."""
-    try:
-        with open(f"/proc/{pid}/status") as f:
-            for line in f:
-                if line.startswith("VmHWM:"):
-                    return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return 0.0
