@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from pydantic import ValidationError
+if TYPE_CHECKING:  # pydantic costs 15 MB of RSS; the router and other lean processes never load it
+    from pydantic import ValidationError
 
 #: The exit code of a process stopped by a :class:`ConfigError` (a service, a ``zendock`` command), as
 #: argparse exits on a bad flag. Restarting cannot fix one, so the launcher never restarts a service for it.

@@ -36,7 +36,6 @@ import os
 import signal
 import sys
 import threading
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,27 +51,9 @@ from shared.names import normalise_namespace
 from shared.node import Node
 from shared.parameter_server import attach_parameters
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+from shared.waiting import SIGNAL_CHECK_S, wait_interruptibly
 
 P = TypeVar("P", bound="ServiceParams")
-
-#: How often a main thread waiting on an event comes back to the interpreter to run signal handlers.
-SIGNAL_CHECK_S = 0.2
-
-
-def wait_interruptibly(event: threading.Event, timeout_s: float | None = None) -> bool:
-    """``event.wait(timeout_s)`` for a main thread that must still run its signal handlers.
-
-    The kernel may hand SIGINT to any thread, often one of Zenoh's: Python then only marks the handler
-    pending, and a main thread asleep in a long ``Event.wait`` does not wake to run it (the router hung
-    so after its stop). Waking every ``SIGNAL_CHECK_S`` lets the handler run (or Ctrl-C raise).
-    """
-    deadline = None if timeout_s is None else time.monotonic() + timeout_s
-    while True:
-        step = SIGNAL_CHECK_S if deadline is None else min(SIGNAL_CHECK_S, deadline - time.monotonic())
-        if step <= 0:
-            return event.is_set()
-        if event.wait(step):
-            return True
 
 
 def open_session_unless(spec: SessionSpec, stopped: threading.Event) -> zenoh.Session | None:

@@ -13,8 +13,8 @@ import threading
 
 from shared.messages import Twist
 from shared.node import RELIABLE, Node
-from shared.runtime import wait_interruptibly
 from shared.session import SessionSpec, open_session
+from shared.waiting import wait_interruptibly
 
 
 def ping_key(mode: str) -> str:

@@ -42,9 +42,9 @@ from shared.interfaces.docking import (
 from shared.messages import BatteryState, Float64MultiArray, Header, Pose, PoseStamped
 from shared.names import normalise_namespace, topic_key
 from shared.node import Node
-from shared.runtime import wait_interruptibly
 from shared.schema import MessageError
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+from shared.waiting import wait_interruptibly
 from shared.world import load_world
 
 EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130

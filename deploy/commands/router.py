@@ -13,8 +13,8 @@ import threading
 from collections.abc import Sequence
 
 from shared.config_errors import ConfigError
-from shared.runtime import wait_interruptibly
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
+from shared.waiting import wait_interruptibly
 
 #: A link whose send queue stays blocked this long (µs) is closed, instead of Zenoh's default 5 s: a cut
 #: link to another host must not hold up this router's forwarding to its local services.

@@ -1,5 +1,9 @@
 import sys
 
-from services.docking.node import main
+from shared.memory import keep_openssl_out
+
+keep_openssl_out()  # before any import of pydantic, which loads hashlib
+
+from services.docking.node import main  # noqa: E402
 
 sys.exit(main())

@@ -1,5 +1,9 @@
 import sys
 
-from services.perception.node import main
+from shared.memory import keep_openssl_out
+
+keep_openssl_out()  # before any import of pydantic, which loads hashlib
+
+from services.perception.node import main  # noqa: E402
 
 sys.exit(main())

@@ -2,7 +2,11 @@
 
 import sys
 
-from services.planner.node import main
+from shared.memory import keep_openssl_out
+
+keep_openssl_out()  # before any import of pydantic, which loads hashlib
+
+from services.planner.node import main  # noqa: E402
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -175,28 +175,42 @@ class Motion:
     angular_radps: float = 0.0
 
 
+class ReadNoise:
+    """Gaussian read noise for whole frames: windows at random offsets into a bank of two frames' worth.
+
+    Drawing fresh normals costs more than the rest of the sensor model; a shifted window is as good for a
+    detector (independent per pixel within a frame, different from frame to frame). The bank is 2.4 MB
+    for a 640 x 480 frame, so the cameras of one process (a simulator's robots) share one: each draws
+    its own offsets from its own generator.
+    """
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self._rng = rng
+        self._bank = np.zeros(0, dtype=np.float32)
+        self._sigma = math.nan
+
+    def window(self, n: int, sigma: float, rng: np.random.Generator) -> np.ndarray:
+        """``n`` pixels' noise of standard deviation ``sigma`` (a view into the bank: do not write to it)."""
+        if len(self._bank) < 2 * n or sigma != self._sigma:
+            self._bank = self._rng.standard_normal(2 * n, dtype=np.float32)
+            self._bank *= np.float32(sigma)
+            self._sigma = sigma
+        start = int(rng.integers(0, n))
+        return self._bank[start:start + n]
+
+
 class CameraRenderer:
     """Renders ``scene`` through a camera with ``params``: :meth:`render` gives a mono8 image."""
 
-    def __init__(self, scene: Scene, params: CameraParams, rng: np.random.Generator | None = None) -> None:
+    def __init__(self, scene: Scene, params: CameraParams, rng: np.random.Generator | None = None,
+                 noise: ReadNoise | None = None) -> None:
+        """``noise``: a bank shared with the other cameras of the process (one is made when None)."""
         self.scene = scene
         self.params = params
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self._K = params.intrinsics()
         self._level = _LevelView.for_params(params)
-        self._noise_bank = np.zeros(0, dtype=np.float32)
-
-    def _noise(self, n: int) -> np.ndarray:
-        """Read noise for ``n`` pixels: a window at a random offset into a bank of two frames' worth.
-
-        Drawing fresh normals costs more than the rest of the sensor model; a shifted window is as good
-        for a detector (independent per pixel within a frame, different from frame to frame).
-        """
-        if len(self._noise_bank) < 2 * n:
-            self._noise_bank = self.rng.standard_normal(2 * n, dtype=np.float32)
-            self._noise_bank *= np.float32(self.params.noise_sigma)
-        start = int(self.rng.integers(0, n))
-        return self._noise_bank[start:start + n]
+        self.noise = noise if noise is not None else ReadNoise(self.rng)
 
     def camera_pose(self, robot_pose: Pose2D) -> Pose2D:
         return robot_pose.compose(self.params.mount)
@@ -233,7 +247,7 @@ class CameraRenderer:
             k = int(round(blur_px)) | 1
             image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
         if p.noise_sigma > 0:
-            image += self._noise(image.size).reshape(image.shape)
+            image += self.noise.window(image.size, p.noise_sigma, self.rng).reshape(image.shape)
         np.clip(image, 0, 255, out=image)
         return image.astype(np.uint8)
 

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from services.simulator.camera import CameraRenderer, build_scene
+from services.simulator.camera import CameraRenderer, ReadNoise, build_scene
 from services.simulator.channels import Channels, SimRobot, channel_table, contact_message, tf_message
 from services.simulator.pacing import Driver, DriverPacer, StepPacer, pacing_stats, rate_report
 from services.simulator.params import Params
@@ -62,6 +62,7 @@ class SimulatorService:
         self.robots: dict[str, SimRobot] = {}
         self.channels = Channels(channel_table(params))
         scene = build_scene(self.world) if params.camera.enabled else None
+        noise = ReadNoise(np.random.default_rng([params.seed, 7])) if scene is not None else None
         #: Whether the robots share one room (a fleet world) and so step together.
         self.shared_room = bool(self.world.robots)
         room: SimWorld | None = None
@@ -78,7 +79,7 @@ class SimulatorService:
                 raise ConfigError(f"{params.world}: {exc}") from None
             robot = SimRobot(ns, sim, f"{ns}/" if ns else "")
             if scene is not None:
-                robot.camera = CameraRenderer(scene, params.camera, np.random.default_rng([params.seed, i, 7]))
+                robot.camera = CameraRenderer(scene, params.camera, np.random.default_rng([params.seed, i, 7]), noise)
             self._declare(robot)
             self.robots[ns] = robot
         self.dt_s = params.dt_s

@@ -20,8 +20,8 @@ from shared.runtime import (
     load_params,
     options_from_args,
     run_service,
-    wait_interruptibly,
 )
+from shared.waiting import wait_interruptibly
 
 
 class DemoParams(ServiceParams):
@@ -144,7 +144,7 @@ def test_run_service_exits_2_on_a_bad_dotted_parameter(capsys: pytest.CaptureFix
 
 _STOPPED_BY_A_SIGNAL_ON_ANOTHER_THREAD = """
 import signal, sys, threading
-from shared.runtime import wait_interruptibly
+from shared.waiting import wait_interruptibly
 stop = threading.Event()
 signal.signal(signal.SIGINT, lambda *_: stop.set())
 threading.Thread(target=threading.Event().wait, args=(60,), daemon=True).start()
