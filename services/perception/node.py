@@ -29,7 +29,6 @@ from services.perception.markers import DockSighting, MarkerFinder, MarkerSighti
 from services.perception.search_regions import SearchRegions
 from shared import topics
 from shared.geometry import Pose2D
-from shared.memory import return_large_blocks
 from shared.messages import (
     CameraInfo,
     DockDetection,
@@ -252,8 +251,7 @@ def _invert(t: Rigid3) -> Rigid3:
 
 
 SERVICE = ServiceSpec("perception", Params, PerceptionService,
-                      description="zendock perception: ArUco markers in camera images -> dock poses",
-                      prepare=return_large_blocks)  # camera frames: image-sized temporaries at 15 Hz
+                      description="zendock perception: ArUco markers in camera images -> dock poses")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -42,7 +42,6 @@ from shared.interfaces.simulator import (
     TeleportRequest,
     TeleportResponse,
 )
-from shared.memory import return_large_blocks
 from shared.messages import CollisionEvent, Float64MultiArray, Header, Pose, Time, Twist
 from shared.names import normalise_namespace
 from shared.node import BLOCKING, Node, QoS, ServiceError
@@ -237,8 +236,7 @@ def _add_flags(parser: Any) -> dict[str, str]:
 
 SERVICE = ServiceSpec("simulator", Params, SimulatorService,
                       description="zendock simulator: physics, clock, odometry, tf and sensors",
-                      add_flags=_add_flags,
-                      prepare=return_large_blocks)  # camera frames: image-sized temporaries at 15 Hz
+                      add_flags=_add_flags)
 
 
 def main(argv: list[str] | None = None) -> int:
