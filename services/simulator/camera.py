@@ -59,6 +59,8 @@ class CameraParams(ComponentParams):
     exposure_s: float = Field(0.008, ge=0, description="exposure time: sets motion blur")
     gain: float = Field(1.0, gt=0)
     near_m: float = 0.01
+    opencv_threads: int = Field(1, ge=0, description="threads OpenCV may use for the simulator's process (0: one "
+                                "per core); one costs 10-20 % less CPU a frame where the cores are busy")
 
     @property
     def focal_px(self) -> float:
