@@ -34,6 +34,9 @@ G = TypeVar("G", bound=Message)
 R = TypeVar("R", bound=Message)
 F = TypeVar("F", bound=Message)
 
+#: How often :meth:`ActionClient.server_ready` asks again for a server that has not answered yet.
+SERVER_POLL_S = 0.05
+
 log = logging.getLogger(__name__)
 
 
@@ -365,10 +368,22 @@ class ActionClient(Generic[G, R, F]):
         self._server_key = node.key(action_key(name, "send_goal"))
 
     def server_ready(self, timeout_s: float = 1.0) -> bool:
-        """Whether an action server answers (its send_goal queryable is declared)."""
+        """Whether an action server answers (its send_goal queryable is declared) within ``timeout_s``.
+
+        A liveliness query sees only the tokens the router knows when the query reaches it: a server that
+        comes up, or whose token is still on its way, a moment later is missed. So the query is repeated
+        until a server answers or the time is up, as ROS 2's ``wait_for_server`` waits.
+        """
         token_pattern = f"@zendock/act/**/{self.node.key(self.name)}"
-        replies = self.node.session.liveliness().get(token_pattern, timeout=timeout_s)
-        return any(r.ok is not None for r in replies)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            remaining_s = deadline - time.monotonic()
+            replies = self.node.session.liveliness().get(token_pattern, timeout=max(0.05, min(remaining_s, 1.0)))
+            if any(r.ok is not None for r in replies):
+                return True
+            if time.monotonic() + SERVER_POLL_S >= deadline:
+                return False
+            time.sleep(SERVER_POLL_S)
 
     def send_goal(
         self,

@@ -75,6 +75,33 @@ def _send(client: ActionClient, target: float) -> tuple[ClientGoal, threading.Ev
     return handle, done, feedback
 
 
+def test_server_ready_waits_for_a_server_that_comes_up_while_it_asks(router_endpoint: str, namespace: str) -> None:
+    """A liveliness query sees only the tokens the router has when it arrives: ``server_ready`` asks again
+    until its timeout, so a server that starts a moment after the client began waiting is found."""
+    with open_session(SessionSpec(connect=(router_endpoint,))) as s1, open_session(SessionSpec(connect=(router_endpoint,))) as s2:
+        client_node = Node("client", s2, namespace)
+        client = ActionClient(client_node, COUNT, "count_to")
+        assert not client.server_ready(0.2), "a server answered before any was started"
+        asking, answers = threading.Event(), []
+
+        def wait_for_server() -> None:
+            asking.set()
+            answers.append(client.server_ready(10.0))
+
+        waiter = threading.Thread(target=wait_for_server)
+        waiter.start()
+        assert asking.wait(5.0)
+        server_node = Node("counter", s1, namespace)
+        Counter(server_node)
+        server_node.declare_ready()
+        thread = spin_in_background(server_node)
+        waiter.join(15.0)
+        server_node.shutdown()
+        thread.join(5)
+        client_node.shutdown()
+    assert answers == [True], "server_ready gave up on a server that started while it waited"
+
+
 def test_goal_runs_to_success_with_feedback(client_and_server: ActionClient) -> None:
     client = client_and_server
     assert client.server_ready(2.0)
