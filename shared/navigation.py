@@ -16,7 +16,6 @@ run on the node's executor thread.
 from __future__ import annotations
 
 import enum
-import time
 
 from shared.action import ActionClient, ClientGoal, GoalStatusCode
 from shared.geometry import Pose2D
@@ -56,12 +55,7 @@ class NavigationClient:
 
     def wait_until_active(self, timeout_s: float = 30.0) -> bool:
         """Block until the navigation server is up; ``False`` after the timeout."""
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if self._client.server_ready(timeout_s=0.5):
-                return True
-            time.sleep(0.1)
-        return False
+        return self._client.server_ready(timeout_s=timeout_s)
 
     def go_to_pose(self, pose: Pose2D | PoseStamped) -> None:
         """Send a goal (map frame); the previous goal of this client is forgotten (the server preempts it)."""
