@@ -237,26 +237,31 @@ class CameraRenderer:
             bodies = [Surface(tuple(c[i]), tuple(c[(i + 1) % 4]), ROBOT_BODY_HEIGHT_M, ROBOT_BODY_ALBEDO)
                       for c in others for i in range(4)]
             scene = Scene.from_surfaces([*scene.surfaces, *bodies], list(scene.markers))
-        radiance = self._render_level(self.camera_pose(robot_pose), level, scene)
+        # The level view comes column by column (its transpose): a level camera's columns are runs of flat
+        # grey. The sensor model works on it as it is, and one uint8 transpose at the end gives the image.
+        image = self._render_level(self.camera_pose(robot_pose), level, scene)
+        by_column = level.warp is None
         if level.warp is not None:
-            radiance = cv2.warpPerspective(radiance, level.warp, (p.width, p.height), flags=cv2.INTER_LINEAR,
-                                           borderMode=cv2.BORDER_REPLICATE)
-        image = radiance  # a fresh array: scaled, blurred and clipped in place
+            image = cv2.warpPerspective(cv2.transpose(image), level.warp, (p.width, p.height),
+                                        flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        # ``image`` is a fresh array: scaled, blurred and clipped in place.
         if p.gain != 1.0:
             image *= np.float32(p.gain)
         blur_px = abs(motion.angular_radps) * p.exposure_s * p.focal_px
-        if blur_px >= 1.0:
+        if blur_px >= 1.0:  # along the image's rows
             k = int(round(blur_px)) | 1
-            image = np.asarray(cv2.blur(image, (k, 1)), dtype=np.float32)
+            image = np.asarray(cv2.blur(image, (1, k) if by_column else (k, 1)), dtype=np.float32)
         if p.noise_sigma > 0:
             image += self.noise.window(image.size, p.noise_sigma, self.rng).reshape(image.shape)
         np.clip(image, 0, 255, out=image)
-        return image.astype(np.uint8)
+        out = image.astype(np.uint8)
+        return np.asarray(cv2.transpose(out)) if by_column else out
 
     # --- geometry ------------------------------------------------------------------------------------
 
     def _render_level(self, camera: Pose2D, view: _LevelView, scene: Scene) -> np.ndarray:
-        """Radiance (float32 grey levels) of a level camera at ``camera`` on ``view``'s canvas."""
+        """Radiance (float32 grey levels) of a level camera at ``camera`` on ``view``'s canvas, transposed:
+        (width, height), one image column after another."""
         p = self.params
         f, cy = view.focal_px, view.cy
         h_cam = p.mount_z_m
@@ -266,31 +271,21 @@ class CameraRenderer:
         a = view.column_slopes  # (W,): X/Z of each column
         rays = forward[None, :] + a[:, None] * right[None, :]  # (W, 2): Z-depth 1 along each
         W, H = view.width, view.height
-        image = np.empty((H, W), dtype=np.float32)
         # Floor and background, row by row (below the horizon the floor's depth is f h / (row - cy)).
         rows = view.rows
         below = rows > cy + 1e-6
         floor_depth = np.where(below, f * h_cam / np.maximum(rows - cy, 1e-6), np.inf)
         floor_grey = 255.0 * FLOOR_ALBEDO * (0.55 + 0.45 * np.exp(-floor_depth / 4.0))
         floor_grey = np.where(below, floor_grey, BACKGROUND_GREY).astype(np.float32)
-        image[:] = floor_grey[:, None]
-        if not len(scene.surfaces):
-            return image
         depth, along = _intersect(np.array([camera.x, camera.y]), rays, scene.a, scene.d, p.near_m)  # (W, S)
-        tops = cy - f * (scene.heights[None, :] - h_cam) / depth  # row of each surface's top edge
-        # Flat shading per surface and column: brighter when seen face-on.
-        ray_angle = np.arctan2(rays[:, 1], rays[:, 0])
-        facing = np.abs(np.cos(ray_angle[:, None] - scene.normal_angle[None, :]))
-        shade = (255.0 * scene.albedo[None, :] * (0.35 + 0.65 * facing)).astype(np.float32)
-
-        opaque = scene.opaque
-        o_depth = np.where(opaque[None, :], depth, np.inf)
-        # Layers: as many as the column with the most opaque hits has (at most _OPAQUE_LAYERS), since each
-        # layer costs a pass over the whole image below.
-        k = min(_OPAQUE_LAYERS, int(np.isfinite(o_depth).sum(axis=1).max()))
-        col = np.arange(W)
-        nearest_depth = np.full(W, np.inf)
-        if k:
+        o_depth = np.where(scene.opaque[None, :], depth, np.inf)
+        # Layers: as many as the column with the most opaque hits has (at most _OPAQUE_LAYERS).
+        k = min(_OPAQUE_LAYERS, int(np.isfinite(o_depth).sum(axis=1).max())) if len(scene.surfaces) else 0
+        if not k:
+            image = np.empty((W, H), dtype=np.float32)
+            image[:] = floor_grey[None, :]
+            nearest_depth = np.full(W, np.inf)
+        else:
             if k < o_depth.shape[1]:  # the k nearest of each column, then those k in order
                 order = np.argpartition(o_depth, k - 1, axis=1)[:, :k]
                 order = np.take_along_axis(order, np.argsort(np.take_along_axis(o_depth, order, axis=1), axis=1), axis=1)
@@ -298,45 +293,29 @@ class CameraRenderer:
                 order = np.argsort(o_depth, axis=1)
             layer_depth = np.take_along_axis(o_depth, order, axis=1)
             hit = np.isfinite(layer_depth)  # a prefix of each row: misses sort last
-            layer_top = np.where(hit, np.take_along_axis(tops, order, axis=1), np.inf)
-            running_top = np.minimum.accumulate(layer_top, axis=1)  # non-increasing along the prefix
-            # A pixel shows the first (nearest) layer whose top is above it: row r shows layer
-            # k - #{layers with ceil(top) <= r}. A miss counts on every row (threshold 0), so a column with
-            # h hits ends at layer h, whose table entry is NaN (the floor). One (H, W) int16 for all k layers.
-            q = np.where(hit, np.clip(np.ceil(running_top), 0, H), 0).astype(np.int32)
-            row_index = np.arange(H, dtype=np.int32)[:, None]
-            idx = np.full((H, W), k, dtype=np.int16)
-            for j in range(k):
-                idx -= row_index >= q[None, :, j]
-            table = np.full((k + 1, W), np.nan, dtype=np.float32)
-            table[:k] = np.where(hit, np.take_along_axis(shade, order, axis=1), np.nan).T
-            flat = idx.astype(np.int32)
-            flat *= W
-            flat += col[None, :].astype(np.int32)
-            value = table.ravel()[flat]
+            tops = cy - f * (scene.heights[order] - h_cam) / layer_depth  # row of each layer's top edge
+            running_top = np.minimum.accumulate(np.where(hit, tops, np.inf), axis=1)  # non-increasing
+            # Flat shading per layer and column: brighter when seen face-on.
+            ray_angle = np.arctan2(rays[:, 1], rays[:, 0])
+            facing = np.abs(np.cos(ray_angle[:, None] - scene.normal_angle[order]))
+            shade = (255.0 * scene.albedo[order] * (0.35 + 0.65 * facing)).astype(np.float32)
             nearest_depth = layer_depth[:, 0]
-            floor_row = cy + f * h_cam / nearest_depth  # inf depth: the horizon, and no surface there anyway
-            shown = np.isnan(value)
-            np.logical_not(shown, out=shown)
-            shown &= rows[:, None] <= floor_row[None, :]
-            np.copyto(image, value, where=shown)
-            del value
-            layer_face = scene.marker_faces[order] & hit
-            # Each marker face lies in at most one layer of a column: its pixels are those showing that layer.
-            for surface_index in np.unique(order[layer_face]):
+            spans = _ColumnSpans.of_layers(running_top, hit, cy + f * h_cam / nearest_depth, H)
+            image = spans.paint(np.where(hit, shade, np.float32(np.nan)), floor_grey)
+            # Each marker face lies in at most one layer of a column: its pixels are that layer's span.
+            for surface_index in np.unique(order[scene.marker_faces[order] & hit]):
                 in_layer = (order == surface_index) & hit  # (W, k)
-                layer_of = np.where(in_layer.any(axis=1), in_layer.argmax(axis=1), -1).astype(np.int16)
-                face_mask = idx == layer_of[None, :]
-                face_mask &= shown
-                if not face_mask.any():
+                columns = np.flatnonzero(in_layer.any(axis=1))
+                start, end = spans.of_layer(columns, in_layer[columns].argmax(axis=1))
+                if not np.any(end > start):
                     continue  # hidden behind nearer surfaces everywhere
                 marker_index = scene.surfaces[int(surface_index)].marker
                 assert marker_index is not None
-                self._paint_marker(image, face_mask, camera, scene, marker_index, view)
-        self._paint_glass(image, depth, tops, nearest_depth, cy, f, h_cam, scene)
+                self._paint_marker(image, columns, start, end, camera, scene, marker_index, view)
+        self._paint_glass(image, depth, nearest_depth, cy, f, h_cam, scene)
         return image
 
-    def _paint_glass(self, image: np.ndarray, depth: np.ndarray, tops: np.ndarray, nearest_opaque: np.ndarray,
+    def _paint_glass(self, image: np.ndarray, depth: np.ndarray, nearest_opaque: np.ndarray,
                      cy: float, f: float, h_cam: float, scene: Scene) -> None:
         glass = ~scene.opaque
         if not glass.any():
@@ -348,15 +327,16 @@ class CameraRenderer:
             if not seen.any():
                 continue
             cols = np.flatnonzero(seen)
-            top = tops[cols, s]
+            top = cy - f * (scene.heights[s] - h_cam) / d[cols]
             bottom = cy + f * h_cam / d[cols]
-            mask = (rows[:, None] >= top[None, :]) & (rows[:, None] <= bottom[None, :])
-            sub = image[:, cols]
-            image[:, cols] = np.where(mask, 0.88 * sub + 0.12 * 235.0, sub)
+            mask = (rows[None, :] >= top[:, None]) & (rows[None, :] <= bottom[:, None])
+            sub = image[cols]
+            image[cols] = np.where(mask, 0.88 * sub + 0.12 * 235.0, sub)
 
-    def _paint_marker(self, image: np.ndarray, face_mask: np.ndarray, camera: Pose2D, scene: Scene,
-                      marker_index: int, view: _LevelView) -> None:
-        """Replace the face's flat white with the marker, warped by the homography of its corners."""
+    def _paint_marker(self, image: np.ndarray, columns: np.ndarray, start: np.ndarray, end: np.ndarray,
+                      camera: Pose2D, scene: Scene, marker_index: int, view: _LevelView) -> None:
+        """Replace the face's flat white with the marker, warped by the homography of its corners. The face
+        shows in rows ``[start, end)`` of each of ``columns`` (ascending)."""
         marker = scene.markers[marker_index]
         corners = marker_corners_world(marker)  # (4, 3): TL, TR, BR, BL
         pts = _project(corners, camera, self.params.mount_z_m, view)
@@ -369,13 +349,12 @@ class CameraRenderer:
         n = texture.shape[0]
         src = np.array([[-0.5, -0.5], [n - 0.5, -0.5], [n - 0.5, n - 0.5], [-0.5, n - 0.5]], dtype=np.float32)
         # Only the marker's own box (within the face's) changes: the rest of the face stays plain white.
-        # The face's columns first, then its rows within them: two reductions, not every pixel's index.
-        xs = np.flatnonzero(face_mask.any(axis=0))
-        ys = np.flatnonzero(face_mask[:, xs[0]:xs[-1] + 1].any(axis=1))
-        x0 = max(int(xs[0]), math.floor(float(pts[:, 0].min())) - 1)
-        x1 = min(int(xs[-1]) + 1, math.ceil(float(pts[:, 0].max())) + 2)
-        y0 = max(int(ys[0]), math.floor(float(pts[:, 1].min())) - 1)
-        y1 = min(int(ys[-1]) + 1, math.ceil(float(pts[:, 1].max())) + 2)
+        visible = end > start
+        columns, start, end = columns[visible], start[visible], end[visible]
+        x0 = max(int(columns[0]), math.floor(float(pts[:, 0].min())) - 1)
+        x1 = min(int(columns[-1]) + 1, math.ceil(float(pts[:, 0].max())) + 2)
+        y0 = max(int(start.min()), math.floor(float(pts[:, 1].min())) - 1)
+        y1 = min(int(end.max()), math.ceil(float(pts[:, 1].max())) + 2)
         if x1 <= x0 or y1 <= y0:
             return
         # Warp onto a grid ``ss`` times finer over the face's bounding box, then average each ss x ss block:
@@ -391,9 +370,64 @@ class CameraRenderer:
         shade = fine.astype(np.float32)
         shade *= np.float32((DOCK_FACE_ALBEDO - MARKER_BLACK) / (255.0 * DOCK_FACE_ALBEDO))
         shade += np.float32(MARKER_BLACK / DOCK_FACE_ALBEDO)
-        region = image[y0:y1, x0:x1]
+        region = image[x0:x1, y0:y1].T  # the image is column by column
         shade *= region
-        np.copyto(region, shade, where=face_mask[y0:y1, x0:x1])
+        first, last = np.full(x1 - x0, y1), np.zeros(x1 - x0, dtype=start.dtype)
+        inside = (columns >= x0) & (columns < x1)
+        first[columns[inside] - x0], last[columns[inside] - x0] = start[inside], end[inside]
+        box_rows = np.arange(y0, y1)[:, None]
+        np.copyto(region, shade, where=(box_rows >= first[None, :]) & (box_rows < last[None, :]))
+
+
+@dataclass(frozen=True)
+class _ColumnSpans:
+    """Where each depth layer shows in each column of a level view, as rows ``[start, end)``.
+
+    Going down a column the image shows the background, then the layers from the farthest one still
+    visible to the nearest, then the floor below the nearest one's foot. Each layer's run is one flat grey,
+    so the image is a single run-length expansion of these spans, column by column, rather than one pass
+    over every pixel per layer.
+    """
+
+    #: (W, k + 2) row boundaries: the background's run starts at column 0, layer j's at ``k - j``, the
+    #: floor below the nearest layer's foot at ``k + 1``.
+    bounds: np.ndarray
+    height: int
+
+    @classmethod
+    def of_layers(cls, running_top: np.ndarray, hit: np.ndarray, foot_row: np.ndarray, height: int) -> _ColumnSpans:
+        """``running_top``: (W, k) the highest top row of the layers up to each, nearest first (non-increasing);
+        ``hit``: which layers exist; ``foot_row``: the nearest layer's foot row in each column."""
+        W, k = running_top.shape
+        bounds = np.empty((W, k + 2), dtype=np.int64)
+        bounds[:, 0] = 0
+        # Layer j shows from the first row under every nearer layer's top; a missing layer from row 0.
+        first_row = np.where(hit, np.clip(np.ceil(running_top), 0, height), 0)
+        bounds[:, 1:k + 1] = first_row[:, ::-1]
+        # Rows at or above the nearest layer's foot show layers; the floor shows below it.
+        bounds[:, k + 1] = np.clip(np.floor(foot_row) + 1, 0, height)
+        np.minimum(bounds, bounds[:, k + 1:], out=bounds)
+        return cls(bounds, height)
+
+    def of_layer(self, columns: np.ndarray, layer: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rows ``[start, end)`` where ``layer[i]`` shows in ``columns[i]``."""
+        run = self.bounds.shape[1] - 2 - layer
+        return self.bounds[columns, run], self.bounds[columns, run + 1]
+
+    def paint(self, layer_grey: np.ndarray, floor_grey: np.ndarray) -> np.ndarray:
+        """The float32 image, transposed (W, H): ``layer_grey`` (W, k) on each layer's run (NaN: the floor
+        shows there), ``floor_grey`` (H,) on the rest, row by row."""
+        W, k = layer_grey.shape
+        grey = np.empty((W, k + 2), dtype=np.float32)
+        grey[:, 0] = np.nan
+        grey[:, 1:k + 1] = layer_grey[:, ::-1]
+        grey[:, k + 1] = np.nan
+        lengths = np.empty_like(self.bounds)
+        lengths[:, :k + 1] = np.diff(self.bounds, axis=1)
+        lengths[:, k + 1] = self.height - self.bounds[:, k + 1]
+        by_column = np.repeat(grey.ravel(), lengths.ravel()).reshape(W, self.height)
+        np.copyto(by_column, floor_grey[None, :], where=np.isnan(by_column))
+        return by_column
 
 
 @dataclass(frozen=True)
