@@ -73,6 +73,23 @@ class DockSighting:
     tilt_rad: float
 
 
+#: The largest adaptive-threshold window (px) when searching boxes around known markers (OpenCV's default
+#: is 23, with windows 3, 13 and 23).
+BOX_THRESHOLD_WINDOW_MAX_PX = 13
+
+
+def _detector_parameters(threshold_window_max_px: int | None = None) -> cv2.aruco.DetectorParameters:
+    """ArUco's defaults with sub-pixel corner refinement, and at most this threshold window when given."""
+    params = cv2.aruco.DetectorParameters()
+    params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+    params.cornerRefinementWinSize = 4
+    params.cornerRefinementMaxIterations = 50
+    params.cornerRefinementMinAccuracy = 0.01
+    if threshold_window_max_px is not None:
+        params.adaptiveThreshWinSizeMax = threshold_window_max_px
+    return params
+
+
 class MarkerFinder:
     """ArUco detection for one dictionary, with sub-pixel corner refinement."""
 
@@ -82,14 +99,13 @@ class MarkerFinder:
         except AttributeError:
             raise ValueError(f"unknown ArUco dictionary {dictionary!r}") from None
         self.dictionary = dictionary
-        params = cv2.aruco.DetectorParameters()
-        params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
-        params.cornerRefinementWinSize = 4
-        params.cornerRefinementMaxIterations = 50
-        params.cornerRefinementMinAccuracy = 0.01
         markers = cv2.aruco.getPredefinedDictionary(family)
         self._cells_across = int(markers.markerSize) + 2
-        self._detector = cv2.aruco.ArucoDetector(markers, params)
+        self._detector = cv2.aruco.ArucoDetector(markers, _detector_parameters())
+        # A box around a marker seen a frame ago is thresholded at two window sizes instead of three: the
+        # same markers found for about two thirds of the cost, and a miss is searched for again in the
+        # whole frame with all three.
+        self._box_detector = cv2.aruco.ArucoDetector(markers, _detector_parameters(BOX_THRESHOLD_WINDOW_MAX_PX))
 
     def find(self, grey: np.ndarray, regions: Sequence[tuple[int, int, int, int]] | None = None) -> list[MarkerSighting]:
         """Markers in the whole image, or only within ``regions`` (``(x0, y0, x1, y1)`` pixel boxes, end
@@ -100,7 +116,8 @@ class MarkerFinder:
             crop = np.ascontiguousarray(grey[y0:y1, x0:x1])  # the whole image is already contiguous: no copy
             if crop.size == 0:
                 continue
-            corners, ids, _rejected = self._detector.detectMarkers(crop)
+            detector = self._detector if regions is None else self._box_detector
+            corners, ids, _rejected = detector.detectMarkers(crop)
             if ids is None:
                 continue
             for i, c in zip(ids.ravel(), corners, strict=True):
@@ -131,30 +148,34 @@ def refine_corners(grey: np.ndarray, corners: np.ndarray, cells_across: int = 6)
     reach = 0.5 * cell_px
     offsets = np.arange(-reach, reach + 1e-9, _PROFILE_STEP_PX)
     along = np.linspace(0.2, 0.8, _SIDE_SAMPLES)
+    # The four sides at once: side i runs from corner i to corner i + 1.
+    side = np.roll(quad, -1, axis=0) - quad  # (4, 2)
+    t = side / np.linalg.norm(side, axis=1, keepdims=True)
+    n = np.stack([-t[:, 1], t[:, 0]], axis=1)
+    outwards = np.sum((quad + side / 2.0 - centre) * n, axis=1) >= 0  # from the black border to the white surround
+    n[~outwards] *= -1.0
+    base = quad[:, None, :] + along[None, :, None] * side[:, None, :]  # (4, K, 2)
+    pts = base[:, :, None, :] + offsets[None, None, :, None] * n[:, None, None, :]  # (4, K, M, 2)
+    K, M = len(along), len(offsets)
+    profile = cv2.remap(grey, pts[..., 0].reshape(4 * K, M).astype(np.float32),
+                        pts[..., 1].reshape(4 * K, M).astype(np.float32),
+                        cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float64)
+    dark = profile[:, :3].mean(axis=1, keepdims=True)
+    light = profile[:, -3:].mean(axis=1, keepdims=True)
+    contrast = (light - dark).reshape(4, K)
+    # Where a step from dark to light sits is the profile's area above dark, measured from the light
+    # end: exact for a pixel-integrated (box-sampled) edge and for any symmetric blur, where a
+    # halfway crossing found by interpolation is off by up to 0.09 px with the edge's sub-pixel phase.
+    level = np.clip((profile - dark) / np.maximum(light - dark, 1e-9), 0.0, 1.0)
+    area = (level.sum(axis=1) - 0.5 * (level[:, 0] + level[:, -1])) * _PROFILE_STEP_PX
+    edge_offsets = (offsets[-1] - area).reshape(4, K)
+    edge_points = base + edge_offsets[:, :, None] * n[:, None, :]  # (4, K, 2)
+    steep = contrast >= 20.0
+    if np.any(steep.sum(axis=1) < _SIDE_SAMPLES // 2):
+        return quad
     lines = []
     for i in range(4):
-        a, b = quad[i], quad[(i + 1) % 4]
-        t = (b - a) / np.linalg.norm(b - a)
-        n = np.array([-t[1], t[0]])
-        if float(np.dot((a + b) / 2.0 - centre, n)) < 0:
-            n = -n  # outwards: from the black border to the white surround
-        base = a[None, :] + along[:, None] * (b - a)[None, :]  # (K, 2)
-        pts = base[:, None, :] + offsets[None, :, None] * n[None, None, :]  # (K, M, 2)
-        profile = cv2.remap(grey, pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
-                            cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float64)
-        dark = profile[:, :3].mean(axis=1, keepdims=True)
-        light = profile[:, -3:].mean(axis=1, keepdims=True)
-        contrast = (light - dark).ravel()
-        # Where a step from dark to light sits is the profile's area above dark, measured from the light
-        # end: exact for a pixel-integrated (box-sampled) edge and for any symmetric blur, where a
-        # halfway crossing found by interpolation is off by up to 0.09 px with the edge's sub-pixel phase.
-        level = np.clip((profile - dark) / np.maximum(light - dark, 1e-9), 0.0, 1.0)
-        area = (level.sum(axis=1) - 0.5 * (level[:, 0] + level[:, -1])) * _PROFILE_STEP_PX
-        edge_offsets = offsets[-1] - area
-        edge_points = [base[k] + edge_offsets[k] * n for k in range(len(along)) if contrast[k] >= 20.0]
-        if len(edge_points) < _SIDE_SAMPLES // 2:
-            return quad
-        vx, vy, x0, y0 = cv2.fitLine(np.asarray(edge_points, dtype=np.float32), cv2.DIST_L2, 0, 0.01, 0.01).ravel()
+        vx, vy, x0, y0 = cv2.fitLine(edge_points[i][steep[i]].astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01).ravel()
         lines.append((np.array([x0, y0], dtype=np.float64), np.array([vx, vy], dtype=np.float64)))
     refined = np.empty_like(quad)
     for i in range(4):
