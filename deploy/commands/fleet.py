@@ -67,7 +67,7 @@ def _run(args: argparse.Namespace) -> int:
     options = FleetOptions(world=world.resolve(), robots=args.robots, duration_s=args.duration, rtf=args.rtf,
                            seed=args.seed, detector=args.detector, drain_scale=args.drain_scale,
                            charge_scale=args.charge_scale, resume_at=args.resume_at,
-                           replacements=check_replacements(args.replacements),
+                           replacements=check_replacements(args.replacements), compose=args.compose,
                            **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
     console = Console(stderr=args.json)
     live_wanted = not args.json and is_terminal(sys.stdout)
@@ -137,5 +137,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
                         help="where the run directory goes (default: runs/ in the repository)")
     add_service_option(parser)
+    parser.add_argument("--compose", nargs="?", const="all", default="", choices=["all", "light"],
+                        help="each robot's services in one process (zendock container): all of them (the default "
+                             "with the flag), or only the light ones (battery, pose)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON on the last line")
     parser.set_defaults(func=_run)

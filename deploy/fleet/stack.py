@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from deploy.launcher.composition import LIGHT_SERVICES
 from deploy.replacements import Replacement
 
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
@@ -32,6 +33,8 @@ class FleetOptions:
     runs_dir: Path = Path("runs")
     #: ``--service NAME=COMMAND``: a user's program in place of zendock's service, in every robot's copy.
     replacements: tuple[Replacement, ...] = ()
+    #: ``--compose``: each robot's services in one process ("all"), only the light ones ("light"), or not ("").
+    compose: str = ""
 
 
 def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: list[str], state_dir: Path) -> dict[str, Any]:
@@ -75,5 +78,12 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
             "restart": "on-failure",
         },
     }
-    return {"name": "fleet", "namespace": "", "zenoh": {"connect": [endpoint]}, "services": services,
-            "x-robots": {"robots": list(robots), "services": template}}
+    document: dict[str, Any] = {"name": "fleet", "namespace": "", "zenoh": {"connect": [endpoint]},
+                                "services": services, "x-robots": {"robots": list(robots), "services": template}}
+    # A replaced service keeps a process of its own (a user's program is not a zendock container member).
+    replaced = {r.name for r in options.replacements}
+    grouped = [name for name in template if name not in replaced
+               and (options.compose == "all" or (options.compose == "light" and name in LIGHT_SERVICES))]
+    if grouped:
+        document["x-compose"] = {f"robot_{robot}": [f"{name}_{robot}" for name in grouped] for robot in robots}
+    return document

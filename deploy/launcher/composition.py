@@ -18,6 +18,8 @@ from typing import Any
 
 from deploy.launcher.durations import parse_duration
 
+#: What ``--compose light`` puts in one process (trials, fleets): the services that do little per message.
+LIGHT_SERVICES = ("battery", "pose")
 #: When two members depend on the same service with different conditions, the strictest holds.
 _STRICTNESS = {"service_started": 0, "service_healthy": 1, "service_completed_successfully": 2}
 
@@ -96,7 +98,11 @@ def _group_service(where: str, group: str, members: list[tuple[str, Any]], names
     if len(namespaces) > 1:
         raise CompositionError(f"{where}: the members have different namespaces {sorted(map(str, namespaces))}")
     first = members[0][1]
-    last_name = members[-1][0]
+    # The group is healthy when its last member's node is: the node its own check watches when it names one
+    # (a robot template's ``docking_r1`` is the node ``docking``), else the node named like the service.
+    last_check = members[-1][1].get("healthcheck")
+    watched = last_check.get("liveliness") if isinstance(last_check, dict) else None
+    last_name = watched if isinstance(watched, str) else members[-1][0]
     timeouts = [m.get("healthcheck", {}).get("timeout") for _, m in members if isinstance(m.get("healthcheck"), dict)]
     service: dict[str, Any] = {
         "command": command,

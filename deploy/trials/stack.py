@@ -6,10 +6,9 @@ import json
 from pathlib import Path
 from typing import Any
 
+from deploy.launcher.composition import LIGHT_SERVICES
 from deploy.trials.records import TrialOptions
 
-#: What ``--compose light`` puts in one process: the services that do little per message.
-LIGHT_SERVICES = ("battery", "pose")
 #: Each robot's planner keeps its glass memory in ``<state_dir>/<robot>/`` under this name.
 GLASS_MEMORY_FILE = "glass_memory.npz"
 
