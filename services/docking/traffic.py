@@ -163,11 +163,9 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
             continue
         priority = has_priority(name, battery, p.name, p.battery)
         distance = me.distance_to(p.pose)
-        # Each in the other's way: without priority, this robot stands on the other's way ahead; with
-        # it, the other stands on the line this one heads along (what its wait for a clear way checks).
-        in_the_way = (_off_line(p.pose, _heading_line(me)) < CLEAR_OF_WAY_M if priority
-                      else float(_off_ways(np.array([[me.x, me.y]]), peer_way(p))[0]) < CLEAR_OF_WAY_M)
-        if (distance < MEET_DISTANCE_M and _ahead(me, p.pose) and _ahead(p.pose, me) and in_the_way
+        # The cheap tests first: the ways and the walls are measured only for robots near and face to face.
+        if (distance < MEET_DISTANCE_M and _ahead(me, p.pose) and _ahead(p.pose, me)
+                and _in_each_others_way(me, p, priority)
                 and clearance_between(me, p.pose, walls) < NARROW_CLEARANCE_M):
             found.append((distance, p, Meeting.HEAD_ON_PRIORITY if priority else Meeting.HEAD_ON))
         elif (not priority and p.under_way and distance < CROSSING_DISTANCE_M
@@ -180,6 +178,14 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
         return None
     _, peer, meeting = min(found, key=lambda f: f[0])
     return peer, meeting
+
+
+def _in_each_others_way(me: Pose2D, peer: Peer, priority: bool) -> bool:
+    """Without priority, this robot stands on the other's way ahead; with it, the other stands on the line
+    this one heads along (what its wait for a clear way checks)."""
+    if priority:
+        return _off_line(peer.pose, _heading_line(me)) < CLEAR_OF_WAY_M
+    return float(_off_ways(np.array([[me.x, me.y]]), peer_way(peer))[0]) < CLEAR_OF_WAY_M
 
 
 def peer_way(peer: Peer) -> list[np.ndarray]:
