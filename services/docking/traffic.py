@@ -12,7 +12,8 @@ other's only way, and both plan, back up and give up for ever. The rule:
   The one without priority goes to the nearest **passing place** by free path (:func:`passing_place`):
   a spot clear of the walls, off the other robot's way (its plan ahead, or the line it heads along),
   and out of its reach; there it waits until the other no longer heads at it (it has gone by), then
-  carries on with what it was doing. The one with priority stops meanwhile and waits until the way
+  carries on with what it was doing. Should the other go its way or stop driving while this one is still
+  on its way to the passing place (the way there can be blocked), it carries on at once. The one with priority stops meanwhile and waits until the way
   ahead is clear, so that it does not plan, back up and give up while the other backs out.
 - Robots whose ways **cross** (the other robot closer than :data:`CROSSING_DISTANCE_M` and in front,
   within :data:`CROSSING_HALF_ANGLE_RAD` of the heading, not head-on): the one without priority stops
@@ -303,6 +304,11 @@ class GiveWay(Task[GiveWayPhase]):
             self._peer_anchor, self._peer_still_since = pose, now
         return now - self._peer_still_since
 
+    def _gone(self, me: Pose2D | None) -> bool:
+        """The other robot stopped driving, or is :data:`CLEAR_DISTANCE_M` away: no need to make room."""
+        peer = self._peer_pose
+        return peer is None or (me is not None and me.distance_to(peer) >= CLEAR_DISTANCE_M)
+
     def _clear(self, me: Pose2D | None) -> bool:
         peer = self._peer_pose
         if peer is None:
@@ -325,14 +331,18 @@ class GiveWay(Task[GiveWayPhase]):
             self.finish(Outcome.SUCCEEDED, message="gave way for the longest allowed")
             return None
         still_s = self._peer_still_s(now)
+        held_s = now - self.started_s if self.started_s is not None else 0.0
         if self.phase is GiveWayPhase.GOING and self.place is not None:
             outcome = inputs.nav.finished(self._key)
             if outcome is None:
+                if held_s >= MIN_GIVE_WAY_S and self._gone(inputs.robot_pose):
+                    # The way to the passing place can stay blocked for as long as the other stays away.
+                    self.finish(Outcome.SUCCEEDED, message=f"{self.peer} went its way before the passing place")
+                    return None
                 return Navigate(self.place, self._key)
             self.enter(GiveWayPhase.WAITING, now)
             if outcome is not NavOutcome.SUCCEEDED:
                 self.message = "short of the passing place"
-        held_s = now - self.started_s if self.started_s is not None else 0.0
         if self.meeting is Meeting.TOO_CLOSE:
             if held_s >= TOO_CLOSE_STOP_S:
                 self.finish(Outcome.SUCCEEDED, message=f"stopped {held_s:.1f} s for {self.peer}, too close")
