@@ -12,8 +12,9 @@ other's only way, and both plan, back up and give up for ever. The rule:
   The one without priority goes to the nearest **passing place** by free path (:func:`passing_place`):
   a spot clear of the walls, off the other robot's way (its plan ahead, or the line it heads along),
   and out of its reach; there it waits until the other no longer heads at it (it has gone by), then
-  carries on with what it was doing. Should the other go its way or stop driving while this one is still
-  on its way to the passing place (the way there can be blocked), it carries on at once. The one with priority stops meanwhile and waits until the way
+  carries on with what it was doing. Should this one still be on its way to the passing place after
+  :data:`STILL_GIVING_WAY_S` (the way there can be blocked) while the other has gone its way or stopped
+  driving, it carries on. The one with priority stops meanwhile and waits until the way
   ahead is clear, so that it does not plan, back up and give up while the other backs out.
 - Robots whose ways **cross** (the other robot closer than :data:`CROSSING_DISTANCE_M` and in front,
   within :data:`CROSSING_HALF_ANGLE_RAD` of the heading, not head-on): the one without priority stops
@@ -335,8 +336,10 @@ class GiveWay(Task[GiveWayPhase]):
         if self.phase is GiveWayPhase.GOING and self.place is not None:
             outcome = inputs.nav.finished(self._key)
             if outcome is None:
-                if held_s >= MIN_GIVE_WAY_S and self._gone(inputs.robot_pose):
+                if held_s >= STILL_GIVING_WAY_S and self._gone(inputs.robot_pose):
                     # The way to the passing place can stay blocked for as long as the other stays away.
+                    # Not sooner: a robot that passes 4 m away while this one backs out may turn back.
+                    self.unresolved = True
                     self.finish(Outcome.SUCCEEDED, message=f"{self.peer} went its way before the passing place")
                     return None
                 return Navigate(self.place, self._key)
