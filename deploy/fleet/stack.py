@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from deploy.launcher.composition import LIGHT_SERVICES
+from deploy.launcher.composition import members_to_compose
 from deploy.replacements import Replacement
 
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
@@ -80,10 +80,7 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
     }
     document: dict[str, Any] = {"name": "fleet", "namespace": "", "zenoh": {"connect": [endpoint]},
                                 "services": services, "x-robots": {"robots": list(robots), "services": template}}
-    # A replaced service keeps a process of its own (a user's program is not a zendock container member).
-    replaced = {r.name for r in options.replacements}
-    grouped = [name for name in template if name not in replaced
-               and (options.compose == "all" or (options.compose == "light" and name in LIGHT_SERVICES))]
+    grouped = members_to_compose(template, options.compose, {r.name for r in options.replacements})
     if grouped:
         document["x-compose"] = {f"robot_{robot}": [f"{name}_{robot}" for name in grouped] for robot in robots}
     return document

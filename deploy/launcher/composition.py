@@ -14,12 +14,23 @@ stops within the longest grace period; services that depended on a member depend
 from __future__ import annotations
 
 import shlex
+from collections.abc import Container, Iterable
 from typing import Any
 
 from deploy.launcher.durations import parse_duration
 
 #: What ``--compose light`` puts in one process (trials, fleets): the services that do little per message.
 LIGHT_SERVICES = ("battery", "pose")
+
+
+def members_to_compose(names: Iterable[str], compose: str, replaced: Container[str]) -> list[str]:
+    """Which of a robot's services ``--compose`` puts in its one process: all of them (``all``), the light
+    ones (``light``) or none (``""``); a replaced service keeps a process of its own (a user's program is
+    not a zendock container member)."""
+    return [name for name in names if name not in replaced
+            and (compose == "all" or (compose == "light" and name in LIGHT_SERVICES))]
+
+
 #: When two members depend on the same service with different conditions, the strictest holds.
 _STRICTNESS = {"service_started": 0, "service_healthy": 1, "service_completed_successfully": 2}
 

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from deploy.launcher.composition import LIGHT_SERVICES
+from deploy.launcher.composition import members_to_compose
 from deploy.trials.records import TrialOptions
 
 #: Each robot's planner keeps its glass memory in ``<state_dir>/<robot>/`` under this name.
@@ -52,10 +52,8 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
                                   "restart": "on-failure"}
         after_map = {"depends_on": {"router": {"condition": "service_started"},
                                     "map": {"condition": "service_completed_successfully"}}}
-        # A replaced service keeps a process of its own (a user's program is not a zendock container member).
-        replaced = {r.name for r in options.replacements}
-        grouped = {n: a for n, a in members.items()
-                   if options.compose and (options.compose == "all" or n in LIGHT_SERVICES) and n not in replaced}
+        grouped = {n: members[n] for n in members_to_compose(members, options.compose,
+                                                              {r.name for r in options.replacements})}
         if grouped:
             # The robot's services (all, or the light ones) share a process and a session (zendock
             # container); the group is healthy once its last member is up.

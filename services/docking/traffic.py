@@ -322,7 +322,7 @@ class GiveWay(Task[GiveWayPhase]):
         if self.place is None:  # stopped for a crossing: until the other is out of the way in front
             return (me.distance_to(peer) >= CROSSING_DISTANCE_M + 0.2
                     or not _ahead(me, peer, CROSSING_HALF_ANGLE_RAD + math.radians(10.0)))
-        return me.distance_to(peer) >= CLEAR_DISTANCE_M or not _ahead(peer, me)
+        return self._gone(me) or not _ahead(peer, me)
 
     def tick(self, inputs: TickInputs) -> Intent:
         now = inputs.now_s

@@ -422,9 +422,7 @@ class _ColumnSpans:
         grey[:, 0] = np.nan
         grey[:, 1:k + 1] = layer_grey[:, ::-1]
         grey[:, k + 1] = np.nan
-        lengths = np.empty_like(self.bounds)
-        lengths[:, :k + 1] = np.diff(self.bounds, axis=1)
-        lengths[:, k + 1] = self.height - self.bounds[:, k + 1]
+        lengths = np.diff(self.bounds, axis=1, append=self.height)
         by_column = np.repeat(grey.ravel(), lengths.ravel()).reshape(W, self.height)
         np.copyto(by_column, floor_grey[None, :], where=np.isnan(by_column))
         return by_column
