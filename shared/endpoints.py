@@ -134,11 +134,18 @@ class Publisher(Generic[M]):
         self._publisher.undeclare()
 
 
+def _payload_bytes(data: bytes) -> bytes:
+    return data
+
+
 class Subscription(Generic[M]):
     """Receives one message type on one key (wildcards allowed) and hands valid messages to a callback.
 
-    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``. Messages
-    reach the callback in arrival order: one runs at once only while none of this subscription's is
+    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``. With
+    ``undecoded=True`` it gets the payload's bytes instead, type and size checked but not decoded: for
+    large messages the subscriber reads only now and then (a peer's plan is decoded, validation and all,
+    when someone asks for it, with :meth:`Node.reject` for one that fails). Messages reach the callback
+    in arrival order: one runs at once only while none of this subscription's is
     queued, and the queue keeps the last ``qos.depth`` (older ones are dropped and counted).
     """
 
@@ -152,6 +159,7 @@ class Subscription(Generic[M]):
         inline: bool,
         with_key: bool,
         absolute: bool = False,
+        undecoded: bool = False,
     ) -> None:
         self._node = node
         self.msg_type = msg_type
@@ -163,7 +171,7 @@ class Subscription(Generic[M]):
         self._scheduled = False
         self._lock = threading.Lock()
         self._encoding = encoding_for(msg_type.TYPE_NAME)
-        self._decode = msg_type.decode
+        self._decode: Callable[[bytes], Any] = _payload_bytes if undecoded else msg_type.decode
         self._received = node.stats.received
         self._dropped = node.stats.dropped
         executor = node.executor

@@ -177,9 +177,11 @@ class Node:
         inline: bool = False,
         with_key: bool = False,
         absolute: bool = False,
+        undecoded: bool = False,
     ) -> Subscription[M]:
-        """Subscribe to ``topic`` in the node's namespace (``absolute=True``: ``topic`` is a full key)."""
-        sub = Subscription(self, msg_type, topic, callback, qos, inline, with_key, absolute)
+        """Subscribe to ``topic`` in the node's namespace (``absolute=True``: ``topic`` is a full key;
+        ``undecoded=True``: the callback gets the payload's bytes, see :class:`Subscription`)."""
+        sub = Subscription(self, msg_type, topic, callback, qos, inline, with_key, absolute, undecoded)
         self._entities.append(sub)
         return sub
 

@@ -44,7 +44,7 @@ from __future__ import annotations
 import enum
 import math
 from collections import deque
-from collections.abc import Container, Iterable, Sequence
+from collections.abc import Callable, Container, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,6 +102,12 @@ STILL_GIVING_WAY_S = 12.0
 CARRY_ON_S = 10.0
 
 
+#: A peer's plan: its points (map frame), or a function that gives them when first asked. The rule
+#: looks at plans only of robots near and face to face, so the docking node hands plans on undecoded
+#: (a 300-pose plan takes about 15 ms to decode and validate, and every peer sends one at each replan).
+PlanPoints = np.ndarray | Callable[[], np.ndarray | None] | None
+
+
 @dataclass(frozen=True, slots=True)
 class Peer:
     """Another robot as the bus tells of it: where it is, its charge, its plan ahead (map frame)."""
@@ -110,9 +116,13 @@ class Peer:
     pose: Pose2D
     battery: float
     under_way: bool
-    plan: np.ndarray | None = None
+    plan: PlanPoints = None
     #: It is giving way (or waiting for its way to clear) itself.
     giving_way: bool = False
+
+    def plan_points(self) -> np.ndarray | None:
+        """The plan's points, decoded now if they came as a function."""
+        return self.plan() if callable(self.plan) else self.plan
 
     @property
     def active(self) -> bool:
@@ -196,10 +206,11 @@ def peer_way(peer: Peer) -> list[np.ndarray]:
     says where it wants to go)."""
     ends = [peer.pose.transform_point(d, 0.0) for d in np.linspace(0.0, WAY_AHEAD_M, 11)]
     ways = [np.asarray(ends, dtype=float)]
-    if peer.plan is not None and len(peer.plan) >= 2:
-        steps = np.hypot(*np.diff(peer.plan, axis=0).T)
+    plan = peer.plan_points()
+    if plan is not None and len(plan) >= 2:
+        steps = np.hypot(*np.diff(plan, axis=0).T)
         within = np.concatenate([[0.0], np.cumsum(steps)]) <= WAY_AHEAD_M
-        points = peer.plan[within]
+        points = plan[within]
         if len(points) >= 2:
             ways.append(np.vstack([[peer.pose.x, peer.pose.y], points]))
     return ways

@@ -246,3 +246,28 @@ def test_keys_deletes_and_declared_types(node_pair: tuple[Node, Node], bus: zeno
     wait_until(lambda: rejected.get(key, 0) >= 4, 5.0, lambda: f"rejections so far: {dict(rejected)}")
     assert rejected[key] == 4  # the empty PUT and the Point, once per subscription; never the DELETE
     assert listener.stats.received[key] == 2 and listener.stats.received[talker.key("other/cmd_vel")] == 1
+
+
+def test_an_undecoded_subscription_gets_the_payload_and_still_refuses_another_type(
+    node_pair: tuple[Node, Node], bus: zenoh.Session
+) -> None:
+    """The bytes as published reach the callback undecoded; a payload declared as another type does not."""
+    talker, listener = node_pair
+    got: list[tuple[str, bytes]] = []
+    done = threading.Event()
+
+    def on_payload(key: str, payload: bytes) -> None:
+        got.append((key, payload))
+        done.set()
+
+    listener.create_subscription(Twist, "*/cmd_vel", on_payload, RELIABLE, with_key=True, undecoded=True)
+    wait_until(lambda: any("cmd_vel" in k for k in liveliness_keys(bus)), 5.0, "the subscription's token")
+    key = talker.key("robot/cmd_vel")
+    bus.put(key, Twist.planar(9.0, 0.0).encode(), encoding=zenoh.Encoding("application/msgpack;geometry_msgs/msg/Point"))
+    rejected = listener.stats.rejected
+    wait_until(lambda: rejected.get(key, 0) >= 1, 5.0, lambda: f"rejections so far: {dict(rejected)}")
+    talker.create_publisher(Twist, "robot/cmd_vel").publish(Twist.planar(1.0, 0.0))
+    _wait(done, "the twist's payload")
+    assert got == [(key, Twist.planar(1.0, 0.0).encode())]
+    assert Twist.decode(got[0][1]) == Twist.planar(1.0, 0.0)
+    assert rejected[key] == 1 and listener.stats.received[key] == 1
