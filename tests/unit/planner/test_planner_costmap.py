@@ -16,6 +16,7 @@ from services.planner.costmap import (
     NO_INFORMATION,
     CostmapParams,
     LayeredCostmap,
+    inflate,
     laser_scan_points,
     occupancy_from_costs,
 )
@@ -233,3 +234,40 @@ def test_glass_enters_through_the_sonar_and_the_planner_goes_around() -> None:
     after = planner.compute_path(costs, start, goal)
     assert crossing_x(after.poses) > 1.6  # through the opening at the end of the glass
     assert costs.costs_at(after.poses[:, :2]).max() < INSCRIBED_INFLATED_OBSTACLE
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_inflating_round_the_changes_gives_the_whole_grid_inflated_anew(seed: int) -> None:
+    """Scans, clearing, a new static layer (glass) and new settings: each snapshot is exactly the one a
+    full inflation of the combined layers gives, and a scan that changes nothing keeps the snapshot."""
+    rng = np.random.default_rng(seed)
+    data = np.full((70, 90), OCC_FREE, dtype=np.int8)
+    data[rng.random(data.shape) < 0.01] = OCC_OCCUPIED
+    data[:, :3] = OCC_UNKNOWN
+    static = OccupancyMap(0.05, (0.0, 0.0, 0.0), data)
+    costmap = LayeredCostmap(static, CostmapParams())
+    for step in range(40):
+        kind = rng.integers(0, 10)
+        scan = None
+        if kind < 6:
+            sensor = rng.uniform([0.3, 0.3], [4.2, 3.2])
+            angles = rng.uniform(-math.pi, math.pi, 30)
+            ranges = rng.uniform(0.2, 2.0, 30)
+            ends = sensor + np.stack([ranges * np.cos(angles), ranges * np.sin(angles)], axis=1)
+            scan = ((float(sensor[0]), float(sensor[1])), ends, rng.random(30) < 0.7)
+            costmap.update_with_scan(*scan)
+        elif kind < 7:
+            costmap.clear_around((float(rng.uniform(0, 4.5)), float(rng.uniform(0, 3.5))), 0.4)
+        elif kind < 8:
+            glass = data.copy()
+            row = int(rng.integers(0, 70))
+            glass[row, 10:30] = OCC_OCCUPIED
+            costmap.set_static_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), glass))
+        elif kind < 9:
+            costmap.set_params(CostmapParams(inflation_radius_m=float(rng.choice([0.4, 0.55, 0.7]))))
+        before = costmap.grid()
+        expected = inflate(costmap.combined_costs(), 0.05, costmap.params)
+        np.testing.assert_array_equal(before.costs, expected, err_msg=f"seed {seed}, step {step}")
+        if scan is not None:
+            costmap.update_with_scan(*scan)  # the same scan again: the layers are as they were
+            assert costmap.grid() is before
