@@ -19,18 +19,34 @@ def squared_distance_to_marks(marks: np.ndarray, max_distance_cells: float) -> n
 
     Exact wherever the distance is at most ``max_distance_cells``; everywhere else the value is only
     known to be larger than ``max_distance_cells ** 2``. Returns int32 ``(height, width)``.
+
+    Only the marks' bounding box, widened by the cut-off, is computed: every cell outside it is farther
+    than the cut-off from every mark (a few glass marks in a large hall cost a few cells, not the hall).
     """
     marks = np.asarray(marks, dtype=bool)
     if marks.ndim != 2:
         raise ValueError(f"marks must be a 2-D array, got shape {marks.shape}")
     if not (max_distance_cells >= 0):
         raise ValueError(f"max_distance_cells must be non-negative, got {max_distance_cells}")
-    height, width = marks.shape
     reach = int(math.floor(max_distance_cells)) + 1  # any row offset or distance beyond this is "far"
     far = reach * reach
-    if not marks.any():
+    rows, columns = np.flatnonzero(marks.any(axis=1)), np.flatnonzero(marks.any(axis=0))
+    if len(rows) == 0:
         return np.full(marks.shape, far, dtype=np.int32)
+    height, width = marks.shape
+    top, bottom = max(0, int(rows[0]) - reach), min(height, int(rows[-1]) + 1 + reach)
+    left, right = max(0, int(columns[0]) - reach), min(width, int(columns[-1]) + 1 + reach)
+    if (bottom - top) * (right - left) == marks.size:
+        return _squared_distance_within(marks, reach)
+    out = np.full(marks.shape, far, dtype=np.int32)
+    out[top:bottom, left:right] = _squared_distance_within(marks[top:bottom, left:right], reach)
+    return out
 
+
+def _squared_distance_within(marks: np.ndarray, reach: int) -> np.ndarray:
+    """The two passes over the whole of ``marks`` (at least one set), capped at ``reach ** 2``."""
+    height, width = marks.shape
+    far = reach * reach
     columns = np.arange(width, dtype=np.int32)
     none = np.int32(4 * (width + height + reach))
     left = np.maximum.accumulate(np.where(marks, columns, -none), axis=1)

@@ -62,6 +62,23 @@ def test_distance_transform_matches_brute_force() -> None:
         np.testing.assert_array_equal(got, expected)
 
 
+
+def test_distance_transform_of_a_few_marks_in_a_large_grid_matches_brute_force() -> None:
+    """Only the marks' surroundings are computed; every cell still gets its exact distance (or far)."""
+    rng = np.random.default_rng(12)
+    for _ in range(40):
+        h, w = (int(v) for v in rng.integers(20, 90, 2))
+        marks = np.zeros((h, w), dtype=bool)
+        for _ in range(int(rng.integers(1, 5))):
+            marks[int(rng.integers(0, h)), int(rng.integers(0, w))] = True
+        cutoff = float(rng.random() * 9)
+        got = distance_to_marks(marks, cutoff)
+        ys, xs = np.nonzero(marks)
+        iy, ix = np.mgrid[0:h, 0:w]
+        expected = np.sqrt(((iy[..., None] - ys) ** 2 + (ix[..., None] - xs) ** 2).min(axis=-1))
+        expected[expected > cutoff] = np.inf
+        np.testing.assert_array_equal(got, expected)
+
 def test_inflation_values_match_nav2_formula_at_known_distances() -> None:
     params = CostmapParams(inflation_radius_m=0.55, cost_scaling_factor=3.0)
     assert params.inscribed_radius_m == pytest.approx(0.15)
