@@ -141,12 +141,13 @@ def _payload_bytes(data: bytes) -> bytes:
 class Subscription(Generic[M]):
     """Receives one message type on one key (wildcards allowed) and hands valid messages to a callback.
 
-    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``. With
-    ``undecoded=True`` it gets the payload's bytes instead, type and size checked but not decoded: for
-    large messages the subscriber reads only now and then (a peer's plan is decoded, validation and all,
-    when someone asks for it, with :meth:`Node.reject` for one that fails). Messages reach the callback
-    in arrival order: one runs at once only while none of this subscription's is
+    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``. Messages
+    reach the callback in arrival order: one runs at once only while none of this subscription's is
     queued, and the queue keeps the last ``qos.depth`` (older ones are dropped and counted).
+
+    With ``undecoded=True`` the callback gets the payload's bytes, type and size checked but not decoded:
+    for large messages the subscriber reads only now and then. It decodes them itself when it needs them
+    (``msg_type.decode``) and reports one that fails with :meth:`Node.reject`, as the subscription would.
     """
 
     def __init__(
