@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from services.planner.distance_transform import squared_distance_to_marks
+from services.planner.distance_transform import bounds_of, squared_distance_to_marks
 from services.planner.grid_frame import GridFrame
 from services.planner.grid_lines import ray_cells
 from services.planner.occupancy_map import OCC_UNKNOWN, OccupancyMap
@@ -330,18 +330,18 @@ class LayeredCostmap:
         if previous is None or last is None:
             return _snapshot(self._frame, inflate(master, self._frame.resolution_m, self.params))
         changed = master != previous
-        rows, columns = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
-        if len(rows) == 0:
-            return last
         reach = int(math.ceil(self.params.inflation_radius_m / self._frame.resolution_m)) + 1
+        bounds = bounds_of(changed, reach)
+        if bounds is None:
+            return last
+        rows, columns = bounds
         height, width = master.shape
-        top, bottom = max(0, int(rows[0]) - reach), min(height, int(rows[-1]) + 1 + reach)
-        left, right = max(0, int(columns[0]) - reach), min(width, int(columns[-1]) + 1 + reach)
-        window_top, window_left = max(0, top - reach), max(0, left - reach)
-        window = master[window_top : min(height, bottom + reach), window_left : min(width, right + reach)]
-        part = inflate(window, self._frame.resolution_m, self.params)
+        window_rows = slice(max(0, rows.start - reach), min(height, rows.stop + reach))
+        window_columns = slice(max(0, columns.start - reach), min(width, columns.stop + reach))
+        part = inflate(master[window_rows, window_columns], self._frame.resolution_m, self.params)
         costs = last.costs.copy()
-        costs[top:bottom, left:right] = part[top - window_top : bottom - window_top, left - window_left : right - window_left]
+        costs[rows, columns] = part[rows.start - window_rows.start : rows.stop - window_rows.start,
+                                    columns.start - window_columns.start : columns.stop - window_columns.start]
         return _snapshot(self._frame, costs)
 
     def _set_cells(self, layer: np.ndarray, cells: np.ndarray, value: int) -> None:

@@ -30,17 +30,25 @@ def squared_distance_to_marks(marks: np.ndarray, max_distance_cells: float) -> n
         raise ValueError(f"max_distance_cells must be non-negative, got {max_distance_cells}")
     reach = int(math.floor(max_distance_cells)) + 1  # any row offset or distance beyond this is "far"
     far = reach * reach
-    rows, columns = np.flatnonzero(marks.any(axis=1)), np.flatnonzero(marks.any(axis=0))
-    if len(rows) == 0:
+    window = bounds_of(marks, reach)
+    if window is None:
         return np.full(marks.shape, far, dtype=np.int32)
-    height, width = marks.shape
-    top, bottom = max(0, int(rows[0]) - reach), min(height, int(rows[-1]) + 1 + reach)
-    left, right = max(0, int(columns[0]) - reach), min(width, int(columns[-1]) + 1 + reach)
-    if (bottom - top) * (right - left) == marks.size:
+    if marks[window].size == marks.size:
         return _squared_distance_within(marks, reach)
     out = np.full(marks.shape, far, dtype=np.int32)
-    out[top:bottom, left:right] = _squared_distance_within(marks[top:bottom, left:right], reach)
+    out[window] = _squared_distance_within(marks[window], reach)
     return out
+
+
+def bounds_of(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
+    """The rows and columns of ``mask``'s ``True`` cells' bounding box widened by ``margin`` cells on
+    every side (clipped to the grid); None when no cell is set."""
+    rows, columns = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if len(rows) == 0:
+        return None
+    height, width = mask.shape
+    return (slice(max(0, int(rows[0]) - margin), min(height, int(rows[-1]) + 1 + margin)),
+            slice(max(0, int(columns[0]) - margin), min(width, int(columns[-1]) + 1 + margin)))
 
 
 def _squared_distance_within(marks: np.ndarray, reach: int) -> np.ndarray:
