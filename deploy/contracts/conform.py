@@ -133,9 +133,16 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
     start = time.monotonic()
     who = "zendock's own" if command is None else " ".join(words)
     log(f"{service}: {who}; beside it: {', '.join(rest) or 'the router'} on {endpoint}, run directory {run_dir}")
+    # Steps the service waits to see finish (the planner: the map written): a step still running counts as
+    # ready to wait_healthy, and the candidate would start before the map is there.
+    own = stack.services.get(service)
+    own_steps = [name for name, dependency in (own.depends_on.items() if own else ())
+                 if dependency.condition == "service_completed_successfully"]
     with Launcher(stack, services=selected, project_dir=run_dir / "stack", working_dir=run_dir,
                   namespace=ROBOT_NAMESPACE, project_name="conform") as launcher:
         launcher.wait_healthy(timeout_s=90.0)
+        for step in own_steps:
+            launcher.wait_state(step, "exited", timeout_s=90.0)
         with open_session(SessionSpec(connect=(endpoint,))) as session:
             probe = Probe(session, ROBOT_NAMESPACE)
             ctx = Context(contract, candidate, probe, world, namespace, ROBOT_NAMESPACE,
