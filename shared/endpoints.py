@@ -102,6 +102,7 @@ class Publisher(Generic[M]):
         self._gid = publisher_gid(self._publisher.id)
         self._published = node.stats.published
         self._token = node.declare_endpoint("pub", msg_type.TYPE_NAME, self.key)
+        self._matching_listeners: list[Any] = []
 
     def publish(self, msg: M) -> None:
         if type(msg) is not self.msg_type and not isinstance(msg, self.msg_type):
@@ -129,7 +130,19 @@ class Publisher(Generic[M]):
         status: Any = self._publisher.matching_status  # a MatchingStatus (the stub says bool)
         return bool(status.matching)
 
+    def on_matching_change(self, callback: Callable[[bool], Any]) -> None:
+        """Call ``callback(matching)`` whenever subscribers to this key appear (True) or all go (False).
+
+        Zenoh calls it on one of its own threads, as soon as the router tells of the change: a service that
+        makes costly messages only on demand follows the demand at once instead of polling for it.
+        """
+        listener: Any = self._publisher.declare_matching_listener(lambda status: callback(bool(status.matching)))
+        self._matching_listeners.append(listener)  # a listener lives as long as its reference
+
     def undeclare(self) -> None:
+        for listener in self._matching_listeners:
+            listener.undeclare()
+        self._matching_listeners.clear()
         self._token.undeclare()
         self._publisher.undeclare()
 

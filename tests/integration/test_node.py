@@ -76,6 +76,19 @@ def test_sequence_numbers_attached(node_pair: tuple[Node, Node], bus: zenoh.Sess
     assert seqs == [1, 2, 3]
 
 
+def test_a_publisher_hears_of_subscribers_coming_and_going(node_pair: tuple[Node, Node]) -> None:
+    talker, listener = node_pair
+    changes: list[bool] = []
+    pub = talker.create_publisher(Bool, "wanted")
+    pub.on_matching_change(changes.append)
+    sub = listener.create_subscription(Bool, "wanted", lambda _m: None, RELIABLE)
+    wait_until(lambda: changes[-1:] == [True], 5.0, lambda: f"matching changes so far: {changes}")
+    sub.undeclare()
+    wait_until(lambda: changes[-1:] == [False], 5.0, lambda: f"matching changes so far: {changes}")
+    assert not pub.has_subscribers()
+    pub.undeclare()  # with its listener
+
+
 def test_sim_time_timer_follows_clock(node_pair: tuple[Node, Node]) -> None:
     talker, listener = node_pair
     ticks: list[float] = []

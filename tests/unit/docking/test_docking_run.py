@@ -341,6 +341,7 @@ def test_detections_are_wanted_only_where_the_dock_could_be_in_view() -> None:
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(1.5, 0.0, math.pi)))  # behind the dock, facing it
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.2, 1.5, -math.pi / 2)))  # edge-on, 82 deg off
     assert not graceful_run(use_detection=False).wants_detections(near_facing)
+    assert run.detection_wish_may_return(), "on the way the view gate flickers: the subscription lingers"
 
 
 def test_from_staging_on_detections_are_wanted_until_the_camera_is_too_close_for_the_marker() -> None:
@@ -350,5 +351,9 @@ def test_from_staging_on_detections_are_wanted_until_the_camera_is_too_close_for
     assert run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, 0.5)))  # anywhere on the approach
     assert run.wants_detections(None)  # no pose yet: look
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.08, 0.0, 0.0)))  # the marker fills the view
+    assert not run.detection_wish_may_return(), "closing in, the wish ends for good: let go at once"
     run.enter(RunPhase.WAIT_FOR_CHARGE, 2.0)
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.3, 0.0, 0.0)))
+    assert not run.detection_wish_may_return()
+    run.enter(RunPhase.RETRY, 3.0)
+    assert run.detection_wish_may_return()
