@@ -336,6 +336,8 @@ def test_detections_are_wanted_only_where_the_dock_could_be_in_view() -> None:
     assert not run.wants_detections(FAR)  # far, and the dock is behind
     near_facing = SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0))
     assert run.wants_detections(near_facing)
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-1.5, 0.0, math.radians(32.0)))), \
+        "the marker 32 degrees off the heading: at the edge of the view, where it is not found whole"
     assert not run.wants_detections(near_facing.compose(Pose2D(0.0, 0.0, math.pi)))  # turned away
     assert not run.wants_detections(near_facing.compose(Pose2D(0.0, 0.0, math.radians(42.0))))  # out of the view
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(1.5, 0.0, math.pi)))  # behind the dock, facing it
@@ -348,7 +350,9 @@ def test_from_staging_on_detections_are_wanted_until_the_camera_is_too_close_for
     run = graceful_run()
     run.step(TickInputs(now_s=0.0, robot_pose=FAR))
     run.enter(RunPhase.CONTROLLING, 1.0)
-    assert run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, 0.5)))  # anywhere on the approach
+    assert run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, -0.3)))  # off the axis, facing the marker
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, 0.5))), "still turning onto the dock"
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.7, 0.0, math.pi / 2))), "turned side-on at staging"
     assert run.wants_detections(None)  # no pose yet: look
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.08, 0.0, 0.0)))  # the marker fills the view
     assert not run.detection_wish_may_return(), "closing in, the wish ends for good: let go at once"
