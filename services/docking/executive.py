@@ -139,11 +139,9 @@ class Release:
 
 @dataclass(frozen=True)
 class WantDetections:
-    """Whether the running task wants dock detections; ``linger``: keep them a moment after it stops
-    wanting them (its wish may come back soon), or let go at once (nothing will want them soon)."""
+    """Whether the running task wants dock detections (the subscription follows at once)."""
 
     wanted: bool
-    linger: bool = True
 
 
 @dataclass(frozen=True)
@@ -264,8 +262,7 @@ class Executive:
         if self.watches_traffic:
             self._follow_traffic(heard, out)
         task = self.task
-        out.append(WantDetections(task is not None and task.wants_detections(heard.latest_pose),
-                                  linger=task is not None and task.detection_wish_may_return()))
+        out.append(WantDetections(task is not None and task.wants_detections(heard.latest_pose)))
         if task is not None:
             self._follow_correction(heard.map_to_odom)
             inputs = self._task_inputs(task, heard)

@@ -33,8 +33,6 @@ from shared.ratelimit import RateLimitedLogger
 
 #: A sensor reading older than this is ignored by the obstacle checks.
 SENSOR_MAX_AGE_S = 0.5
-#: Detections stay subscribed this long (sim seconds) after the run last wanted them.
-DETECTION_LINGER_S = 1.0
 CHARGING_STATUSES = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
 
 
@@ -207,21 +205,19 @@ class DockSightings:
         self._warn = warn
         self._on_sighting = on_sighting
         self._subscription: Subscription[PoseStamped] | None = None
-        self._wanted_s = -math.inf
 
     @property
     def subscribed(self) -> bool:
         return self._subscription is not None
 
-    def want(self, wanted: bool, now_s: float, linger: bool = True) -> None:
-        """Subscribe while the run wants detections (and, with ``linger``, a little longer, so no flapping)."""
-        if wanted:
-            self._wanted_s = now_s
+    def want(self, wanted: bool) -> None:
+        """Subscribed exactly while the run wants detections: each frame wanted is one rendered and searched,
+        and the run's wish starts and ends once per approach (a lingering subscription cost about fifteen
+        frames with no marker in them at every docking)."""
         if wanted and self._subscription is None:
             self._subscription = self._node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE,
                                                                 self._on_detection, SENSOR_DATA)
-        elif (not wanted and self._subscription is not None
-              and not (linger and 0.0 <= now_s - self._wanted_s < DETECTION_LINGER_S)):
+        elif not wanted and self._subscription is not None:
             self._subscription.undeclare()
             self._subscription = None
 

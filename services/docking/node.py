@@ -209,8 +209,8 @@ class DockingService:
                                                           orders.publish.angular_z_radps))
                     if orders.send_goal is not None:
                         self.nav.go_to_pose(orders.send_goal)
-                case WantDetections(wanted, linger):
-                    self.sightings.want(wanted, self.node.now(), linger)
+                case WantDetections(wanted):
+                    self.sightings.want(wanted)
                 case Reserve(battery, dock_id, lengths):
                     self.fleet.reserve(battery, dock_id, lengths,
                                        on_answer=lambda answer, error: self._event(FleetReserved(answer, error)))

@@ -230,12 +230,6 @@ class Task(abc.ABC, Generic[P]):
         """Whether dock detections could help now (they cost a rendered and analysed camera frame each)."""
         return False
 
-    def detection_wish_may_return(self) -> bool:
-        """Whether a wish for detections that ends now may come back within moments (a view gate that
-        flickers as the robot turns on its way): the subscription then lingers a little rather than churn.
-        """
-        return True
-
     def add_detection(self, dock_in_base: Pose2D, robot_pose_at_stamp: Pose2D, stamp_s: float) -> bool:
         """A detection of the dock (base_link at ``stamp_s``) with the robot's map pose then; True if used."""
         return False

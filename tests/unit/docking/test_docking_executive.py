@@ -73,17 +73,18 @@ def test_idle_it_publishes_its_state_on_change_and_every_second() -> None:
     assert _states(ex.step(_heard(1.05, charging=True))) == ["DOCKED"], "a change is published at once"
 
 
-def test_a_low_battery_starts_a_docking_run_that_asks_for_detections_near_the_dock() -> None:
+def test_a_low_battery_starts_a_docking_run_that_asks_for_detections_from_the_staging_pose() -> None:
     ex = _executive()
     ex.battery_reading(0.2, False)
     dock = next(iter(ex.database)).pose2d
-    near = dock.compose(Pose2D(-1.0, 0.0, 0.0))  # 1 m in front of its marker, facing it
-    effects = ex.step(_heard(0.0, near, battery=0.2))
+    staging = dock.compose(Pose2D(-0.7, 0.0, 0.0))  # at the staging pose, facing the marker
+    effects = ex.step(_heard(0.0, staging, battery=0.2))
     assert ex.task is not None and ex.task_kind is TaskKind.DOCK and ex.goal is None
     assert _of(effects, WantDetections) == [WantDetections(False)], "no dock chosen before its first step"
-    assert _of(ex.step(_heard(0.05, near, battery=0.2)), WantDetections) == [WantDetections(True)]
-    assert _of(_executive().step(_heard(0.0, near)), WantDetections) == [WantDetections(False, linger=False)], \
-        "no task: nothing will want detections soon, so the subscription goes at once"
+    for t in (0.05, 0.1, 0.15):
+        wanted = _of(ex.step(_heard(t, staging, battery=0.2)), WantDetections)
+    assert wanted == [WantDetections(True)], "at the staging pose the approach looks for the marker"
+    assert _of(_executive().step(_heard(0.0, staging)), WantDetections) == [WantDetections(False)]
     assert _states(effects) and _states(effects)[0] not in ("IDLE", "DOCKED")
     assert not _of(effects, GoalEnded), "nobody asked: no action to answer"
 
