@@ -117,6 +117,45 @@ def _sinc(x: float) -> float:
     return 1.0 - x * x / 6.0 if abs(x) < 1e-4 else math.sin(x) / x
 
 
+class _RobotEdges:
+    """The footprint edges of every robot in one room, as the sensors of each see the others.
+
+    Six robots' sensors ask for them about 270 times a simulated second; building them once per move
+    (a step or a teleport) instead of once per reading was a quarter of a six-robot simulator's time.
+    """
+
+    __slots__ = ("_built", "_sets", "_version", "start", "delta")
+
+    def __init__(self) -> None:
+        self._version = 0
+        self._built = -1
+        self._sets: dict[tuple[int, int], SegmentSet] = {}
+        self.start = np.zeros((0, 2))
+        self.delta = np.zeros((0, 2))
+
+    def moved(self) -> None:
+        """A robot of the room moved: every cached edge is stale."""
+        self._version += 1
+
+    def with_others(self, robot: SimWorld, segments: SegmentSet) -> SegmentSet:
+        """``segments`` plus the edges of every robot in ``robot``'s room but ``robot`` (in room order)."""
+        members = robot.members
+        if self._built != self._version:
+            corners = np.stack([m.footprint() for m in members])  # (N, 4, 2), counter-clockwise
+            self.start = corners.reshape(-1, 2)
+            self.delta = (np.roll(corners, -1, axis=1) - corners).reshape(-1, 2)
+            self._sets.clear()
+            self._built = self._version
+        key = (id(robot), id(segments))
+        found = self._sets.get(key)
+        if found is None:
+            i = members.index(robot)
+            others = SegmentSet.from_arrays(np.delete(self.start, slice(4 * i, 4 * i + 4), axis=0),
+                                            np.delete(self.delta, slice(4 * i, 4 * i + 4), axis=0))
+            found = self._sets[key] = SegmentSet.concat(segments, others)
+        return found
+
+
 class SimWorld:
     """One robot in one room, stepped at a fixed rate. Public methods are the simulator service's API.
 
@@ -164,6 +203,7 @@ class SimWorld:
             #: Every robot in this room, and whose each robot shape is (a teleport makes a new shape).
             self.members: list[SimWorld] = []
             self._by_shape: dict[pymunk.Shape, SimWorld] = {}
+            self._robot_edges = _RobotEdges()
             self._add_obstacles()
             self.space.on_collision(
                 ROBOT_COLLISION_TYPE, OBSTACLE_COLLISION_TYPE, begin=self._room_begin, separate=self._room_separate
@@ -178,12 +218,14 @@ class SimWorld:
             self._obstacles, self._outlines = room._obstacles, room._outlines
             self.opaque, self.glass, self.sonar_visible = room.opaque, room.glass, room.sonar_visible
             self.space, self.members, self._by_shape = room.space, room.members, room._by_shape
+            self._robot_edges = room._robot_edges
             if any(m.name == name for m in self.members):
                 raise ValueError(f"a robot named {name!r} is already in this room")
         pose = start if start is not None else Pose2D.from_seq(world.robot.start)
         self._check_placement(pose, f"{name} start" if name else "robot.start")
         self.body, self.shape = self._new_robot(pose)
         self.members.append(self)
+        self._robot_edges.moved()
 
     def join(
         self, name: str, start: Pose2D, params: SimParams | None = None, drive: DiffDriveParams | None = None
@@ -295,14 +337,9 @@ class SimWorld:
 
     def _with_others(self, segments: SegmentSet) -> SegmentSet:
         """``segments`` plus the edges of every other robot in the room (what sensors see of them)."""
-        others = self._others()
-        if not others:
+        if len(self.members) < 2:
             return segments
-        edges = []
-        for other in others:
-            c = other.footprint()
-            edges += [(tuple(c[i]), tuple(c[(i + 1) % 4])) for i in range(4)]
-        return SegmentSet.concat(segments, SegmentSet(edges))
+        return self._robot_edges.with_others(self, segments)
 
     def _check_placement(self, pose: Pose2D, what: str) -> None:
         if not all(math.isfinite(v) for v in pose.as_tuple()):
@@ -329,6 +366,7 @@ class SimWorld:
         self.space.remove(self.body, self.shape)
         del self._by_shape[self.shape]
         self.body, self.shape = self._new_robot(pose)
+        self._robot_edges.moved()
         self.drive.stop()
         self.odometry.reset()
         self.twist = Twist2D()
@@ -355,6 +393,7 @@ class SimWorld:
     def _after_step(self, before: tuple[float, float, float]) -> None:
         dt = self.params.dt_s
         x0, y0, yaw0 = before
+        self._robot_edges.moved()
         self.steps += 1
         self.time_s = self.steps * dt
         # What the wheels rolled: the displacement along the heading, not any sideways push by a contact.

@@ -33,6 +33,13 @@ class SegmentSet:
         return len(self.start)
 
     @classmethod
+    def from_arrays(cls, start: np.ndarray, delta: np.ndarray) -> SegmentSet:
+        """Segments already packed: ``start`` and ``delta`` (direction times length), each ``(M, 2)``."""
+        made = cls([])
+        made._set(start, delta)
+        return made
+
+    @classmethod
     def concat(cls, *sets: SegmentSet) -> SegmentSet:
         merged = cls([])
         if sets:

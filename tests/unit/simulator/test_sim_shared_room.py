@@ -48,6 +48,39 @@ def test_each_robots_sensors_see_the_others_body(quiet: SimParams, open_world: C
     assert np.isfinite(r1.lidar_scan().ranges_m).sum() >= np.isfinite(alone.lidar_scan().ranges_m).sum()
 
 
+def _edges_by_hand(robot: SimWorld) -> np.ndarray:
+    """The other robots' footprint edges as ``(M, 2, 2)`` start/end points, built afresh."""
+    return np.array([(c[i], c[(i + 1) % 4]) for m in robot.members if m is not robot
+                     for c in [m.footprint()] for i in range(4)])
+
+
+def test_what_sensors_see_of_the_others_follows_every_move(quiet: SimParams,
+                                                          open_world: Callable[..., World]) -> None:
+    world = open_world()
+    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r2 = r1.join("r2", Pose2D(2.0, 0.0, math.pi / 2))
+    r3 = r1.join("r3", Pose2D(0.0, 2.0, 0.0))  # joined after r1's edges may have been built
+
+    def check() -> None:
+        for robot in (r1, r2, r3):
+            seen = robot._with_others(robot.opaque)
+            static = len(robot.opaque)
+            expected = _edges_by_hand(robot)
+            assert np.array_equal(seen.start[:static], robot.opaque.start)
+            assert np.array_equal(seen.start[static:], expected[:, 0])
+            assert np.array_equal(seen.delta[static:], expected[:, 1] - expected[:, 0])
+
+    check()
+    _drive_together([r1, r2, r3], [(0.3, 0.5), (0.2, -0.4), (0.0, 1.0)], 0.5)
+    check()
+    r2.teleport(Pose2D(-2.0, -1.0, 1.0))
+    check()
+    forward = r1.params.lidar.num_rays // 2
+    r1.teleport(Pose2D(0.0, 0.0, 0.0))
+    r3.teleport(Pose2D(1.5, 0.0, math.pi / 2))  # broadside, straight ahead of r1 now
+    assert r1.lidar_scan().ranges_m[forward] == pytest.approx(1.35 - 0.10, abs=1e-6)
+
+
 def test_robots_cannot_be_put_into_each_other(quiet: SimParams, open_world: Callable[..., World]) -> None:
     world = open_world()
     r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
