@@ -6,6 +6,9 @@ checks and, while someone watches the camera, 15 rendered 640x480 frames. The ro
 sine-wave steering command) so contacts, sensor geometry and the rendered view vary. Both real-time
 factors are reported: with the camera (someone subscribes to camera/image_raw) and without it.
 
+A fleet world (one that lists its robots) puts all of them in one room, stepped together, each with every
+sensor, as the simulator service serves a fleet; the camera renders for the first robot only.
+
     python -m services.simulator.bench deploy/worlds/seed_room.yaml 60
 """
 
@@ -20,8 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from services.simulator.camera import CameraParams, CameraRenderer, Motion, build_scene
-from services.simulator.physics import SimParams, SimWorld
-from shared.world import load_world
+from services.simulator.physics import SimParams, SimWorld, step_together
+from shared.geometry import Pose2D
+from shared.world import World, load_world
 
 LIDAR_HZ = 10
 ULTRASONIC_HZ = 20
@@ -34,7 +38,8 @@ def bench_simulation(
 ) -> dict[str, float]:
     """Run ``seconds`` of simulated time as fast as possible; returns timings and the real-time factor."""
     world = load_world(world_path)
-    sim = SimWorld(world, params=params)
+    robots = _robots(world, params)
+    sim = robots[0]
     camera_params = CameraParams()
     renderer = CameraRenderer(build_scene(world), camera_params, np.random.default_rng(0))
     dt = sim.params.dt_s
@@ -56,23 +61,33 @@ def bench_simulation(
     for i in range(steps):
         t = i * dt
         t0 = clock()
-        sim.step(0.4, 1.2 * math.sin(0.5 * t))
-        _ = sim.odom_pose, sim.twist, sim.map_to_odom()
-        sim.drain_collisions()
+        commands = [(0.4, 1.2 * math.sin(0.5 * t + k)) for k in range(len(robots))]
+        if len(robots) > 1:
+            step_together(robots, commands)
+        else:
+            sim.step(*commands[0])
+        for robot in robots:
+            _ = robot.odom_pose, robot.twist, robot.map_to_odom()
+            robot.drain_collisions()
         spent["step"] += clock() - t0
         calls["step"] += 1
-        for name, call in (
-            ("lidar", sim.lidar_scan),
-            ("ultrasonic", sim.ultrasonic_range),
-            ("detection", sim.detect_docks),
-            ("contact", sim.dock_contact),
-            ("render", lambda: renderer.render(sim.pose, Motion(sim.twist.linear_mps, sim.twist.angular_radps))),
-        ):
-            if i % every[name] == 0:
-                t0 = clock()
-                call()
-                spent[name] += clock() - t0
-                calls[name] += 1
+        for robot in robots:
+            for name, call in (
+                ("lidar", robot.lidar_scan),
+                ("ultrasonic", robot.ultrasonic_range),
+                ("detection", robot.detect_docks),
+                ("contact", robot.dock_contact),
+            ):
+                if i % every[name] == 0:
+                    t0 = clock()
+                    call()
+                    spent[name] += clock() - t0
+                    calls[name] += 1
+        if i % every["render"] == 0:
+            t0 = clock()
+            renderer.render(sim.pose, Motion(sim.twist.linear_mps, sim.twist.angular_radps), sim.other_footprints())
+            spent["render"] += clock() - t0
+            calls["render"] += 1
     wall_s = clock() - started
     sim_s = steps * dt
     result: dict[str, float] = {
@@ -82,13 +97,24 @@ def bench_simulation(
         "real_time_factor_with_camera": sim_s / wall_s,
         "render_ms_per_frame": 1e3 * spent["render"] / max(1, calls["render"]),
         "steps_per_s": steps / wall_s,
-        "collisions": float(sum(sim.collision_counts.values())),
+        "robots": float(len(robots)),
+        "ms_per_sim_s_without_camera": 1e3 * (wall_s - spent["render"]) / sim_s,
+        "collisions": float(sum(sum(r.collision_counts.values()) for r in robots)),
     }
     for name in spent:
         if name == "render":
             continue
         result[f"{name}_us_per_call"] = 1e6 * spent[name] / max(1, calls[name])
     return result
+
+
+def _robots(world: World, params: SimParams | None) -> list[SimWorld]:
+    """The world's fleet in one room, or its one robot."""
+    if not world.robots:
+        return [SimWorld(world, params=params)]
+    first, *rest = world.robots
+    room = SimWorld(world, params=params, start=Pose2D.from_seq(first.start), name=first.name)
+    return [room] + [room.join(r.name, Pose2D.from_seq(r.start), params) for r in rest]
 
 
 def main(world_path: str, seconds: float) -> int:
