@@ -15,10 +15,10 @@ The sequence follows Nav2's opennav_docking ``DockingServer::dockRobot``:
 Detections are asked for from the staging pose on, as in Nav2 (see :meth:`DockingRun.wants_detections`).
 With ``continuous_perception`` (the graceful approach) the dock estimate is kept across phases rather than
 started afresh at the staging pose, and with ``handover_distance_m`` the approach takes over as soon as
-the robot is near the staging pose, behind the dock and facing it: the planner's goal is cancelled instead of being driven to a standstill and
-turned to its heading, INITIAL_PERCEPTION lasts one tick while the planner lets go, and nothing is
-driven before it has. An approach that comes up to the plate off the dock's axis backs off along it and
-tries again from there, without the planner.
+the robot is near the staging pose, behind the dock and facing it: the planner's goal is cancelled
+instead of being driven to a standstill and turned to its heading, INITIAL_PERCEPTION lasts one tick
+while the planner lets go, and nothing is driven before it has. An approach that comes up to the plate
+off the dock's axis backs off along it and tries again from there, without the planner.
 
 A failure in 2-5 is retried (RETRY: stop, back off if at the dock, stage again) up to ``max_retries``
 times; then the run fails with the last error. Cancelling commands zero and ends the run. The whole
