@@ -124,34 +124,32 @@ class _RobotEdges:
     (a step or a teleport) instead of once per reading was a quarter of a six-robot simulator's time.
     """
 
-    __slots__ = ("_built", "_sets", "_version", "start", "delta")
+    __slots__ = ("_edges", "_sets")
 
     def __init__(self) -> None:
-        self._version = 0
-        self._built = -1
+        #: Every robot's four edges in room order, ``(start, delta)`` each ``(4N, 2)``; None once stale.
+        self._edges: tuple[np.ndarray, np.ndarray] | None = None
+        #: Each robot's segments plus the others', by (robot, segments), while the edges stand.
         self._sets: dict[tuple[int, int], SegmentSet] = {}
-        self.start = np.zeros((0, 2))
-        self.delta = np.zeros((0, 2))
 
     def moved(self) -> None:
-        """A robot of the room moved: every cached edge is stale."""
-        self._version += 1
+        """A robot of the room moved (or joined): what was built from the edges is stale."""
+        self._edges = None
+        self._sets.clear()
 
     def with_others(self, robot: SimWorld, segments: SegmentSet) -> SegmentSet:
         """``segments`` plus the edges of every robot in ``robot``'s room but ``robot`` (in room order)."""
-        members = robot.members
-        if self._built != self._version:
-            corners = np.stack([m.footprint() for m in members])  # (N, 4, 2), counter-clockwise
-            self.start = corners.reshape(-1, 2)
-            self.delta = (np.roll(corners, -1, axis=1) - corners).reshape(-1, 2)
-            self._sets.clear()
-            self._built = self._version
         key = (id(robot), id(segments))
         found = self._sets.get(key)
         if found is None:
+            members = robot.members
+            if self._edges is None:
+                corners = np.stack([m.footprint() for m in members])  # (N, 4, 2), counter-clockwise
+                self._edges = corners.reshape(-1, 2), (np.roll(corners, -1, axis=1) - corners).reshape(-1, 2)
+            start, delta = self._edges
             i = members.index(robot)
-            others = SegmentSet.from_arrays(np.delete(self.start, slice(4 * i, 4 * i + 4), axis=0),
-                                            np.delete(self.delta, slice(4 * i, 4 * i + 4), axis=0))
+            own = slice(4 * i, 4 * i + 4)
+            others = SegmentSet.from_arrays(np.delete(start, own, axis=0), np.delete(delta, own, axis=0))
             found = self._sets[key] = SegmentSet.concat(segments, others)
         return found
 

@@ -41,10 +41,9 @@ class SegmentSet:
 
     @classmethod
     def concat(cls, *sets: SegmentSet) -> SegmentSet:
-        merged = cls([])
-        if sets:
-            merged._set(np.concatenate([s.start for s in sets]), np.concatenate([s.delta for s in sets]))
-        return merged
+        if not sets:
+            return cls([])
+        return cls.from_arrays(np.concatenate([s.start for s in sets]), np.concatenate([s.delta for s in sets]))
 
 
 def cast_rays(origin_xy: tuple[float, float], angles_rad: np.ndarray, segments: SegmentSet) -> np.ndarray:
