@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from services.planner.astar import AStarParams
-from services.planner.costmap import CostmapParams, LayeredCostmap
+from services.planner.costmap import LETHAL_OBSTACLE, CostmapParams, LayeredCostmap
 from services.planner.glass_memory import GlassMemory
 from services.planner.global_planner import GlobalPlannerParams
 from services.planner.goal_check import check_goal_on_grid, goal_pose
@@ -393,3 +393,17 @@ def test_follower_settings_come_from_the_planner_parameters() -> None:
     assert (tuned.approach_velocity_scaling_dist_m, tuned.regulated_linear_scaling_min_radius_m) == (0.6, 0.9)
     params = Params()
     assert params.open_loop_acceleration and params.carried_pose_timeout_s > params.pose_timeout_s
+
+
+def test_a_pane_heard_but_not_yet_marked_makes_the_floor_beyond_it_suspect() -> None:
+    """Rounding a pane's end seen obliquely, the cells toward the end hold echoes too weak to mark (from
+    the cone's edge, or from afar); the end lies beyond them. Suspicion grows from those heard cells as
+    from marks, so the unlooked-at floor round the end counts as glass until the sonar looks there."""
+    memory = _glass_memory(suspicion_m=0.3)
+    memory.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)  # one far echo: an eighth of a near one's evidence
+    assert len(memory.heard_cells_xy()) > 0 and not (memory.sonar_layer == LETHAL_OBSTACLE).any()  # heard, not marked
+    assert _is_glass(memory, 3.5 + 0.25, 1.5)  # behind the echo the sonar could not look
+    assert not _is_glass(memory, 3.0, 1.5)  # short of it the cone looked through
+    without = _glass_memory(suspicion_m=0.0)
+    without.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)
+    assert not without.glass_mask().any()
