@@ -7,8 +7,8 @@ keeps the sonar's own evidence (echoes the lidar cannot explain, see
 :mod:`services.planner.sonar_fusion`, and the cones it looked through, weighed by the probabilistic
 model of :mod:`services.planner.range_sensor_model` and accumulated as log-odds) and treats a cell as
 glass when the sonar marked it, or when the sonar has never looked at it and it lies within
-``suspicion_radius_m`` of a mark: a pane probably goes on, and the robot may pass there only once its
-sonar has looked. Cells the robot's footprint has covered are known to be free.
+``suspicion_radius_m`` of a cell the sonar heard glass in (marked, or with evidence too weak to mark): a
+pane probably goes on, and the robot may pass there only once its sonar has looked. Cells the robot's footprint has covered are known to be free.
 
 The evidence model weighs an echo less toward the cone's edge, because an echo says only that the
 nearest surface lies somewhere on the arc; that keeps false glass out of the memory, but a pane's end
@@ -241,7 +241,7 @@ class GlassMemory:
         Suspicion grows from every heard cell, not only from marks: rounding a pane's end seen obliquely,
         the last marks lay 0.3 m short of the end and the cells between held only echoes from the cone's
         edge, too weak to mark. Suspicion from the marks alone stopped short of the end, and the robot's
-        front corner clipped it in about one run in four of the glass room's test."""
+        front corner clipped it in 11 of 35 runs of the glass room's planner test."""
         marks = self._log_odds >= self.model.mark_log_odds
         glass = marks
         heard = self._log_odds > SUSPECTED_LOG_ODDS

@@ -72,7 +72,7 @@ class Params(ServiceParams):
     glass_memory_file: str = Field(
         "", description="keep the sonar's glass in this file across restarts (empty: forget it on exit)")
     glass_suspicion_radius_m: float = Field(
-        0.3, ge=0.0, description="unlooked-at floor this close to sonar-only marks counts as glass (0: off)")
+        0.3, ge=0.0, description="unlooked-at floor this close to glass the sonar heard counts as glass (0: off)")
     glass_echo_hold_s: float = Field(
         2.0, ge=0.0, description="each unexplained sonar echo's whole arc counts as glass this long (sim "
         "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)")

@@ -349,6 +349,20 @@ def test_glass_memory_without_suspicion_keeps_only_the_marks() -> None:
         GlassMemory(memory.frame, CostmapParams(), suspicion_radius_m=-1.0)
 
 
+def test_a_pane_heard_but_not_yet_marked_makes_the_floor_beyond_it_suspect() -> None:
+    """Rounding a pane's end seen obliquely, the cells toward the end hold echoes too weak to mark (from
+    the cone's edge, or from afar); the end lies beyond them. Suspicion grows from those heard cells as
+    from marks, so the unlooked-at floor round the end counts as glass until the sonar looks there."""
+    memory = _glass_memory(suspicion_m=0.3)
+    memory.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)  # one far echo: an eighth of a near one's evidence
+    assert len(memory.heard_cells_xy()) > 0 and not (memory.sonar_layer == LETHAL_OBSTACLE).any()  # heard, not marked
+    assert _is_glass(memory, 3.5 + 0.25, 1.5)  # behind the echo the sonar could not look
+    assert not _is_glass(memory, 3.0, 1.5)  # short of it the cone looked through
+    without = _glass_memory(suspicion_m=0.0)
+    without.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)
+    assert not without.glass_mask().any()
+
+
 def test_a_robot_stopped_facing_glass_may_turn_where_it_stands_once_its_turning_circle_is_trusted() -> None:
     """The glass room's stuck start: 0.46 m from a pane, facing it. Beside the sonar's cone the floor was
     never looked at, so within the suspicion radius it counts as glass, within reach of the front corners."""
@@ -394,16 +408,3 @@ def test_follower_settings_come_from_the_planner_parameters() -> None:
     params = Params()
     assert params.open_loop_acceleration and params.carried_pose_timeout_s > params.pose_timeout_s
 
-
-def test_a_pane_heard_but_not_yet_marked_makes_the_floor_beyond_it_suspect() -> None:
-    """Rounding a pane's end seen obliquely, the cells toward the end hold echoes too weak to mark (from
-    the cone's edge, or from afar); the end lies beyond them. Suspicion grows from those heard cells as
-    from marks, so the unlooked-at floor round the end counts as glass until the sonar looks there."""
-    memory = _glass_memory(suspicion_m=0.3)
-    memory.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)  # one far echo: an eighth of a near one's evidence
-    assert len(memory.heard_cells_xy()) > 0 and not (memory.sonar_layer == LETHAL_OBSTACLE).any()  # heard, not marked
-    assert _is_glass(memory, 3.5 + 0.25, 1.5)  # behind the echo the sonar could not look
-    assert not _is_glass(memory, 3.0, 1.5)  # short of it the cone looked through
-    without = _glass_memory(suspicion_m=0.0)
-    without.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)
-    assert not without.glass_mask().any()
