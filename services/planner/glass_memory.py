@@ -8,7 +8,8 @@ keeps the sonar's own evidence (echoes the lidar cannot explain, see
 model of :mod:`services.planner.range_sensor_model` and accumulated as log-odds) and treats a cell as
 glass when the sonar marked it, or when the sonar has never looked at it and it lies within
 ``suspicion_radius_m`` of a cell the sonar heard glass in (marked, or with evidence too weak to mark): a
-pane probably goes on, and the robot may pass there only once its sonar has looked. Cells the robot's footprint has covered are known to be free.
+pane probably goes on, and the robot may pass there only once its sonar has looked. Cells the robot's
+footprint has covered are known to be free.
 
 The evidence model weighs an echo less toward the cone's edge, because an echo says only that the
 nearest surface lies somewhere on the arc; that keeps false glass out of the memory, but a pane's end

@@ -407,4 +407,3 @@ def test_follower_settings_come_from_the_planner_parameters() -> None:
     assert (tuned.approach_velocity_scaling_dist_m, tuned.regulated_linear_scaling_min_radius_m) == (0.6, 0.9)
     params = Params()
     assert params.open_loop_acceleration and params.carried_pose_timeout_s > params.pose_timeout_s
-
