@@ -61,11 +61,7 @@ def bench_simulation(
     for i in range(steps):
         t = i * dt
         t0 = clock()
-        commands = [(0.4, 1.2 * math.sin(0.5 * t + k)) for k in range(len(robots))]
-        if len(robots) > 1:
-            step_together(robots, commands)
-        else:
-            sim.step(*commands[0])
+        step_together(robots, [(0.4, 1.2 * math.sin(0.5 * t + k)) for k in range(len(robots))])
         for robot in robots:
             _ = robot.odom_pose, robot.twist, robot.map_to_odom()
             robot.drain_collisions()
