@@ -20,7 +20,7 @@ import numpy as np
 
 from services.docking.ir_run import IR_MAX_AGE_S
 from services.docking.params import Params
-from services.docking.safety import ObstacleParams, lidar_blocked, scan_points, sonar_blocked
+from services.docking.safety import LidarReturns, ObstacleParams, lidar_blocked, sonar_blocked
 from services.docking.task_io import NavOutcome
 from services.docking.traffic import Peer
 from shared import topics
@@ -63,8 +63,8 @@ class Heard:
     battery: float | None = None
     #: battery_status says CHARGING or FULL, and is fresh.
     charging: bool = False
-    #: The lidar's returns in base_link (n x 2), when fresh.
-    scan_points: np.ndarray | None = None
+    #: The lidar's latest scan, when fresh (its points in base_link are worked out when asked for).
+    scan: LidarReturns | None = None
     #: The sonar's range, when fresh.
     sonar_range_m: float | None = None
     ir_dock: tuple[int, int, int] | None = None
@@ -76,6 +76,11 @@ class Heard:
     #: For debug logs: how old localisation and odometry are (s; inf: never heard).
     localisation_age_s: float = math.inf
     odometry_age_s: float = math.inf
+
+    @property
+    def scan_points(self) -> np.ndarray | None:
+        """The lidar's returns in base_link (n x 2), when fresh."""
+        return None if self.scan is None else self.scan.points
 
     def blocked(self, dock_in_base: Pose2D | None, obstacles: ObstacleParams, use_lidar: bool,
                 use_sonar: bool) -> tuple[bool, bool]:
@@ -100,7 +105,7 @@ class InputCache:
         self.mounts = SensorMounts()
         self._battery: BatteryState | None = None
         self._battery_received_s = -math.inf
-        self._scan_points: np.ndarray | None = None
+        self._scan: LidarReturns | None = None
         self._scan_received_s = -math.inf
         self._sonar_range_m = math.inf
         self._sonar_received_s = -math.inf
@@ -131,7 +136,7 @@ class InputCache:
         lidar_mount = self.mounts.get(topics.LIDAR_FRAME)
         if lidar_mount is None:
             return
-        self._scan_points = scan_points(ranges, angle_min, angle_increment, lidar_mount)
+        self._scan = LidarReturns(ranges, angle_min, angle_increment, lidar_mount)
         self._scan_received_s = now_s
 
     def sonar(self, range_m: float, now_s: float) -> None:
@@ -175,7 +180,7 @@ class InputCache:
             battery=float(battery.percentage) if battery is not None else None,
             charging=(battery is not None and now_s - self._battery_received_s <= p.battery_timeout_s
                       and battery.power_supply_status in CHARGING_STATUSES),
-            scan_points=self._scan_points if now_s - self._scan_received_s <= SENSOR_MAX_AGE_S else None,
+            scan=self._scan if now_s - self._scan_received_s <= SENSOR_MAX_AGE_S else None,
             sonar_range_m=self._sonar_range_m if now_s - self._sonar_received_s <= SENSOR_MAX_AGE_S else None,
             ir_dock=self._ir_dock if now_s - self._ir_received_s <= IR_MAX_AGE_S else None,
             map_to_odom=track.map_to_odom,

@@ -59,6 +59,38 @@ def scan_points(
     return mount.transform_points(local) if local.size else np.zeros((0, 2))
 
 
+class LidarReturns:
+    """One scan's finite returns in base_link, worked out when first asked for and then kept.
+
+    The docking service hears every scan but looks at one only on an approach that watches for obstacles
+    and when it picks a dock with the fleet down; turning every scan into points as it arrived was an
+    eighth of a patrolling fleet robot's docking time.
+    """
+
+    __slots__ = ("_scan", "_points")
+
+    def __init__(self, ranges_m: np.ndarray, angle_min_rad: float, angle_increment_rad: float, mount: Pose2D) -> None:
+        self._scan: tuple[np.ndarray, float, float, Pose2D] | None = (ranges_m, angle_min_rad, angle_increment_rad,
+                                                                      mount)
+        self._points: np.ndarray | None = None
+
+    @classmethod
+    def of_points(cls, points: np.ndarray) -> LidarReturns:
+        """Returns already in base_link (tests, tools)."""
+        returns = cls(np.zeros(0), 0.0, 0.0, Pose2D(0.0, 0.0, 0.0))
+        returns._scan, returns._points = None, np.asarray(points, dtype=float).reshape(-1, 2)
+        return returns
+
+    @property
+    def points(self) -> np.ndarray:
+        """``(N, 2)`` points in base_link."""
+        if self._points is None:
+            assert self._scan is not None
+            self._points = scan_points(*self._scan)
+            self._scan = None
+        return self._points
+
+
 def in_dock_region(points: np.ndarray, dock_in_base: Pose2D, margin_m: float) -> np.ndarray:
     """Mask of the points at or behind the dock's plate face, within its width plus ``margin_m``."""
     if points.size == 0:

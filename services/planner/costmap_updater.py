@@ -78,8 +78,6 @@ class CostmapUpdater:
         self._pending_scan: LaserScan | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
-        #: Cells of heard glass (see :meth:`glass_speed_limit_mps`), recomputed after each update.
-        self._heard_xy: np.ndarray | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
 
@@ -127,9 +125,7 @@ class CostmapUpdater:
         p = self._params
         if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
             return None
-        if self._heard_xy is None:
-            self._heard_xy = self.glass.heard_cells_xy()
-        cells = self._heard_xy
+        cells = self.glass.heard_cells_xy((pose.x, pose.y), p.glass_slowdown_radius_m)
         if len(cells) == 0:
             return None
         dx, dy = cells[:, 0] - pose.x, cells[:, 1] - pose.y
@@ -187,7 +183,6 @@ class CostmapUpdater:
 
     def apply_glass(self) -> None:
         """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
-        self._heard_xy = None
         if self.costmap is None or self._base_map is None or self.glass is None:
             return
         if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:

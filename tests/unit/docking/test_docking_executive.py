@@ -31,6 +31,7 @@ from services.docking.executive import (
 from services.docking.inputs import Heard
 from services.docking.mission import TaskKind
 from services.docking.params import Params
+from services.docking.safety import LidarReturns
 from services.docking.task_io import Outcome
 from services.docking.traffic import Peer
 from shared.fleet_client import FleetAnswer
@@ -163,7 +164,7 @@ def test_with_the_fleet_down_it_docks_at_a_dock_seen_free_and_releases_after_und
     ex.handle(DockGoal(Goal(object(), TaskKind.DOCK), DockRequest()), _heard(0.0, here))
     ex.step(_heard(0.05, here, battery=0.5))
     ex.handle(FleetReserved(None, TimeoutError("no answer")), _heard(1.0, here))
-    claimed = _of(ex.step(_heard(6.0, here, battery=0.5, scan_points=np.zeros((0, 2)))), Reserve)
+    claimed = _of(ex.step(_heard(6.0, here, battery=0.5, scan=LidarReturns.of_points(np.zeros((0, 2))))), Reserve)
     assert ex.task is not None and ex.task.state_name() != "WAITING_FOR_DOCK"
     assert ex.claim is not None and ex.claim.granted_dock == ex.task.dock_request.dock_id
     assert len(claimed) == 1 and claimed[0].path_lengths is None, "the dock it took is claimed, not asked for"

@@ -10,6 +10,7 @@ import pytest
 from services.docking.approach import dock_frame_error, graceful_staging_pose, offset_along
 from services.docking.dock_tracker import DockTracker
 from services.docking.safety import (
+    LidarReturns,
     ObstacleParams,
     expected_sonar_range,
     in_corridor,
@@ -143,9 +144,21 @@ def sense(world: World, pose: Pose2D, extra_boxes: list[dict] | None = None) -> 
     rng = np.random.default_rng(0)
     lidar = LidarParams(noise_m=0.0)
     scan = lidar_scan(pose, segments, lidar, rng)
-    points = scan_points(scan.ranges_m, scan.angle_min_rad, scan.angle_increment_rad, lidar.mount)
+    points = LidarReturns(scan.ranges_m, scan.angle_min_rad, scan.angle_increment_rad, lidar.mount).points
     sonar = ultrasonic_range(pose, segments, UltrasonicParams(noise_m=0.0), rng)
     return points, sonar
+
+
+def test_a_scan_s_points_are_worked_out_once_when_first_asked_for() -> None:
+    ranges = np.array([1.0, np.inf, 2.0, np.nan, 0.5])
+    mount = Pose2D(0.1, 0.0, 0.2)
+    returns = LidarReturns(ranges, -0.5, 0.25, mount)
+    first = returns.points
+    assert first.shape == (3, 2)  # the finite returns only
+    np.testing.assert_allclose(first, scan_points(ranges, -0.5, 0.25, mount))
+    assert returns.points is first
+    given = np.array([[0.3, 0.1]])
+    np.testing.assert_array_equal(LidarReturns.of_points(given).points, given)
 
 
 APPROACH = [offset_along(SEED_DOCK, -back, lateral, yaw) for back in (0.7, 0.4, 0.2, 0.1, 0.05, 0.0)

@@ -349,6 +349,22 @@ def test_glass_memory_without_suspicion_keeps_only_the_marks() -> None:
         GlassMemory(memory.frame, CostmapParams(), suspicion_radius_m=-1.0)
 
 
+def test_heard_glass_near_a_point_is_what_the_whole_grid_holds_within_the_radius() -> None:
+    """The slowdown asks only round the robot; the window must miss no heard cell within the radius, at
+    the grid's edges too."""
+    memory = _glass_memory(suspicion_m=0.3)
+    memory.add_reading((1.0, 1.5, 0.0), 1.0, 0.5, 0.02, 3.0)  # marked
+    memory.add_reading((1.0, 0.4, 0.3), 2.5, 0.5, 0.02, 3.0)  # heard, not marked
+    every = memory.heard_cells_xy()
+    assert len(every) > 10
+    for near in ((2.0, 1.5), (0.0, 0.0), (3.2, 1.2), (1.5, 2.9), (-3.0, 1.0)):
+        for radius in (0.05, 0.4, 1.0, 5.0):
+            within = every[np.hypot(every[:, 0] - near[0], every[:, 1] - near[1]) <= radius]
+            window = memory.heard_cells_xy(near, radius)
+            kept = window[np.hypot(window[:, 0] - near[0], window[:, 1] - near[1]) <= radius]
+            assert sorted(map(tuple, kept)) == sorted(map(tuple, within)), (near, radius)
+
+
 def test_a_pane_heard_but_not_yet_marked_makes_the_floor_beyond_it_suspect() -> None:
     """Rounding a pane's end seen obliquely, the cells toward the end hold echoes too weak to mark (from
     the cone's edge, or from afar); the end lies beyond them. Suspicion grows from those heard cells as
