@@ -158,5 +158,9 @@ def pacing_stats(pacer: DriverPacer, sim_s: float) -> dict[str, float]:
 def rate_report(sim_s: float, wall_s: float, target: float | str, pacer: DriverPacer | None) -> str:
     """The log line for a real-time factor achieved over ``wall_s`` wall seconds that ran ``sim_s``."""
     achieved = sim_s / max(wall_s, 1e-9)
-    waits = f"; waited for late drivers {pacer.holds} times, {pacer.held_s:.1f} s in all" if pacer else ""
+    waits = ""
+    if pacer is not None:
+        kinds = ", ".join(f"{kind} {s:.1f} s" for kind, s in sorted(pacer.held_by_kind.items()))
+        waits = f"; waited for late drivers {pacer.holds} times, {pacer.held_s:.1f} s in all" + (
+            f" ({kinds})" if kinds else "")
     return f"real-time factor {achieved:.1f} over the last {wall_s:.0f} s (target {target}){waits}"

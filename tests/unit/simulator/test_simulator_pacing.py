@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from services.simulator.pacing import Driver, DriverPacer, PacingParams
+from services.simulator.pacing import Driver, DriverPacer, PacingParams, rate_report
 
 PARAMS = PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1)
 
@@ -52,3 +52,13 @@ def test_held_time_is_counted_by_what_was_late() -> None:
     pacer.note_held(0.05)
     assert pacer.held_by_kind == {"cmd_vel": pytest.approx(0.02), "pose": pytest.approx(0.05)}
     assert pacer.held_s == pytest.approx(0.07) and pacer.holds == 2
+
+
+def test_the_rate_report_says_how_long_the_world_waited_for_each_kind_of_input() -> None:
+    pacer = DriverPacer(PARAMS)
+    assert rate_report(60.0, 20.0, 3.0, None) == "real-time factor 3.0 over the last 20 s (target 3.0)"
+    assert rate_report(60.0, 20.0, 3.0, pacer).endswith("waited for late drivers 0 times, 0.0 s in all")
+    pacer.holds, pacer.held_s, pacer.held_by_kind = 3, 0.6, {"pose": 0.1, "cmd_vel": 0.5}
+    assert rate_report(57.0, 20.0, 3.0, pacer) == (
+        "real-time factor 2.9 over the last 20 s (target 3.0); waited for late drivers 3 times, 0.6 s in all "
+        "(cmd_vel 0.5 s, pose 0.1 s)")
