@@ -52,6 +52,7 @@ from services.docking.traffic import (
     Peer,
     must_give_way,
     passing_place,
+    way_ahead,
 )
 from services.docking.undocking_run import UndockingRun
 from shared.fleet_client import FleetAnswer
@@ -448,13 +449,18 @@ class Executive:
         me = heard.latest_pose
         calm = {peer for peer, until in self._calm_until.items() if now < until}
         carry_on = {peer for peer, until in self._carry_on_until.items() if now < until}
-        met = must_give_way(me, self.namespace, heard.battery, list(heard.peers), self.walls, calm, carry_on)
+        own_plan = heard.own_plan  # decoded only for a robot met face to face
+        met = must_give_way(me, self.namespace, heard.battery, list(heard.peers), self.walls, calm, carry_on,
+                            own_plan)
         if met is None:
             return
         peer, meeting = met
         place = self._give_way_plan(me, peer, meeting, now)
         assert self.task_kind is not None
-        giving_way = GiveWay(peer, meeting, place, task.dock_request)
+        own_way = None
+        if meeting is Meeting.HEAD_ON_PRIORITY:
+            own_way = way_ahead(me, own_plan() if callable(own_plan) else own_plan)
+        giving_way = GiveWay(peer, meeting, place, task.dock_request, own_way)
         self._start(giving_way, self.task_kind, self.goal, out)
         self._giving_way = giving_way
 

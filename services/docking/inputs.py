@@ -22,7 +22,7 @@ from services.docking.ir_run import IR_MAX_AGE_S
 from services.docking.params import Params
 from services.docking.safety import LidarReturns, ObstacleParams, lidar_blocked, sonar_blocked
 from services.docking.task_io import NavOutcome
-from services.docking.traffic import Peer
+from services.docking.traffic import Peer, PlanPoints
 from shared import topics
 from shared.frames import SensorMounts
 from shared.geometry import Pose2D
@@ -73,6 +73,8 @@ class Heard:
     nav: NavHeard = NavHeard()
     #: The fleet's other robots heard from lately (empty without the traffic rule).
     peers: tuple[Peer, ...] = ()
+    #: This robot's own plan as its planner last published it (with the traffic rule; see ``Peer.plan``).
+    own_plan: PlanPoints = None
     #: For debug logs: how old localisation and odometry are (s; inf: never heard).
     localisation_age_s: float = math.inf
     odometry_age_s: float = math.inf
@@ -159,7 +161,7 @@ class InputCache:
 
     # --- what the executive sees ---------------------------------------------------------------------
 
-    def heard(self, now_s: float, nav: NavHeard = NavHeard(), peers: tuple[Peer, ...] = (),
+    def heard(self, now_s: float, nav: NavHeard = NavHeard(), peers: tuple[Peer, ...] = (), own_plan: PlanPoints = None,
               clock_reset: bool = False) -> Heard:
         p = self.params
         track = self.track
@@ -186,6 +188,7 @@ class InputCache:
             map_to_odom=track.map_to_odom,
             nav=nav,
             peers=peers,
+            own_plan=own_plan,
             localisation_age_s=now_s - track.last_pose_received_s,
             odometry_age_s=now_s - odom.stamp_s if odom is not None else math.inf,
         )

@@ -154,8 +154,10 @@ class DockingService:
         busy = not self.nav.is_task_complete()
         outcome = None if busy else _NAV_OUTCOMES.get(self.nav.get_result(), NavOutcome.FAILED)
         nav = NavHeard(busy, outcome, self.nav.failure_reason() if outcome else "")
-        peers = tuple(self.peers.fresh(now_s)) if tick and self.peers is not None else ()
-        return self.inputs.heard(now_s, nav, peers, clock_reset)
+        watch = self.peers if tick else None
+        peers = tuple(watch.fresh(now_s)) if watch is not None else ()
+        own_plan = watch.own_plan(now_s) if watch is not None else None
+        return self.inputs.heard(now_s, nav, peers, own_plan, clock_reset)
 
     def _event(self, event: Event) -> None:
         self._carry_out(self.executive.handle(event, self._heard(self.node.now())))

@@ -2,7 +2,8 @@
 
 Subscribed once with wildcards (``<fleet>/*/map_to_base_link_pose2d``, ``battery_status``,
 ``docking/state``, ``plan``), so a robot that joins later is seen too; the callbacks only store. The
-traffic rule (:mod:`services.docking.traffic`) reads :meth:`PeerWatch.fresh`.
+traffic rule (:mod:`services.docking.traffic`) reads :meth:`PeerWatch.fresh`, and this robot's own plan
+(the same wildcard brings it) with :meth:`PeerWatch.own_plan`.
 
 Plans are kept as they arrive, undecoded: a plan is tens of kilobytes of poses, each peer's comes after
 every replan, and the rule looks at one only for a robot near and face to face. Each plan is decoded
@@ -16,7 +17,7 @@ import math
 
 import numpy as np
 
-from services.docking.traffic import Peer
+from services.docking.traffic import Peer, PlanPoints
 from shared import topics
 from shared.geometry import Pose2D
 from shared.messages import BatteryState, Float64MultiArray, Path, String
@@ -52,6 +53,8 @@ class PeerWatch:
     def __init__(self, node: Node, state_topic: str) -> None:
         self._node = node
         self._peers: dict[str, _PeerState] = {}
+        #: This robot's own latest plan (only the plan fields are used).
+        self._own = _PeerState()
         fleet_namespace = node.namespace.rpartition("/")[0]
         for topic, msg_type, handler in (
             (topics.POSE2D, Float64MultiArray, self._on_pose),
@@ -62,7 +65,7 @@ class PeerWatch:
                                      lambda key, msg, h=handler, t=topic: h(self._peer(key, t), msg),
                                      QoS(depth=20), with_key=True, absolute=True)
         node.create_subscription(Path, topic_key(fleet_namespace, f"*/{topics.PLAN}"),
-                                 lambda key, payload: self._on_plan(key, self._peer(key, topics.PLAN), payload),
+                                 lambda key, payload: self._on_plan(key, self._plan_holder(key), payload),
                                  QoS(depth=20), with_key=True, absolute=True, undecoded=True)
 
     def _peer(self, key: str, topic: str) -> _PeerState | None:
@@ -70,6 +73,12 @@ class PeerWatch:
         if not name or name == self._node.namespace:
             return None
         return self._peers.setdefault(name, _PeerState())
+
+    def _plan_holder(self, key: str) -> _PeerState | None:
+        """Where a plan on ``key`` is kept: this robot's own, or a peer's."""
+        if key == topic_key(self._node.namespace, topics.PLAN):
+            return self._own
+        return self._peer(key, topics.PLAN)
 
     def _on_pose(self, peer: _PeerState | None, msg: Float64MultiArray) -> None:
         if peer is not None and len(msg.data) >= 3 and np.all(np.isfinite(msg.data[:3])):
@@ -100,6 +109,11 @@ class PeerWatch:
                 points = [(p.pose.position.x, p.pose.position.y) for p in msg.poses]
                 peer.plan_points = np.asarray(points, dtype=float) if points else None
         return peer.plan_points
+
+    def own_plan(self, now: float) -> PlanPoints:
+        """This robot's own plan as the traffic rule takes it (decoded when first asked for), while fresh."""
+        own = self._own
+        return (lambda: self._plan_points(own)) if now - own.plan_s <= MAX_AGE_S else None
 
     def fresh(self, now: float) -> list[Peer]:
         """The robots heard from lately, as the traffic rule sees them."""

@@ -7,8 +7,11 @@ other's only way, and both plan, back up and give up for ever. The rule:
 - **Priority** goes to the robot with less charge (it needs a dock more), then to the name that sorts
   first. Every robot knows every other's charge from the bus, so both reach the same verdict.
 - Two robots **meet head-on** when each is ahead of the other (within :data:`HEAD_ON_HALF_ANGLE_RAD`
-  of its heading), closer than :data:`MEET_DISTANCE_M`, both under way, and the way between them is
-  **narrow** (it passes closer than :data:`NARROW_CLEARANCE_M` to a wall: no room to pass side by side).
+  of its heading), closer than :data:`MEET_DISTANCE_M`, both under way, each on the other's way, and
+  the way between them is **narrow** (it passes closer than :data:`NARROW_CLEARANCE_M` to a wall: no
+  room to pass side by side). The way of the robot with priority is its own plan's next metres where
+  it follows one (:func:`way_ahead`), else the line it heads along: a robot standing at its passing
+  place beside the end of that plan is in nobody's way, though it stands on the line.
   The one without priority goes to the nearest **passing place** by free path (:func:`passing_place`):
   a spot clear of the walls, off the other robot's way (its plan ahead, or the line it heads along),
   and out of its reach; there it waits until the other no longer heads at it (it has gone by), then
@@ -80,6 +83,8 @@ SEARCH_RADIUS_M = 4.0
 GRID_M = 0.1
 #: The other robot's way: its plan this far ahead, or (no fresh plan) the line it heads along.
 WAY_AHEAD_M = 5.0
+#: A plan that passes farther than this from the robot is not what it follows now (an old one).
+ON_PLAN_M = 0.5
 #: Giving way ends when the other robot no longer heads at the robot (it has gone by, or turned away),
 #: or is this far away ...
 CLEAR_DISTANCE_M = 4.0
@@ -165,11 +170,20 @@ def clearance_between(a: Pose2D, b: Pose2D, walls: Walls) -> float:
 
 
 def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], walls: Walls,
-                  calm: Container[str] = (), carry_on: Container[str] = ()) -> tuple[Peer, Meeting] | None:
+                  calm: Container[str] = (), carry_on: Container[str] = (),
+                  own_plan: PlanPoints = None) -> tuple[Peer, Meeting] | None:
     """The robot this one must give way to (or wait for) now, if any (the nearest), and how they meet;
     ``calm``: robots this one stopped for lately as too close, not stopped for again yet; ``carry_on``:
-    robots this one waited for lately without the way clearing, not waited for again yet."""
+    robots this one waited for lately without the way clearing, not waited for again yet; ``own_plan``:
+    this robot's plan (see :func:`way_ahead`), looked at only for a robot met face to face."""
     found: list[tuple[float, Peer, Meeting]] = []
+    own_way: list[np.ndarray] = []
+
+    def my_way() -> np.ndarray:
+        if not own_way:
+            own_way.append(way_ahead(me, own_plan() if callable(own_plan) else own_plan))
+        return own_way[0]
+
     for p in peers:
         if not (p.under_way or p.giving_way) or p.name in carry_on:
             continue
@@ -177,7 +191,7 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
         distance = me.distance_to(p.pose)
         # The cheap tests first: the ways and the walls are measured only for robots near and face to face.
         if (distance < MEET_DISTANCE_M and _ahead(me, p.pose) and _ahead(p.pose, me)
-                and _in_each_others_way(me, p, priority)
+                and _in_each_others_way(me, p, priority, my_way)
                 and clearance_between(me, p.pose, walls) < NARROW_CLEARANCE_M):
             found.append((distance, p, Meeting.HEAD_ON_PRIORITY if priority else Meeting.HEAD_ON))
         elif (not priority and p.under_way and distance < CROSSING_DISTANCE_M
@@ -192,12 +206,30 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
     return peer, meeting
 
 
-def _in_each_others_way(me: Pose2D, peer: Peer, priority: bool) -> bool:
-    """Without priority, this robot stands on the other's way ahead; with it, the other stands on the line
-    this one heads along (what its wait for a clear way checks)."""
+def _in_each_others_way(me: Pose2D, peer: Peer, priority: bool, my_way: Callable[[], np.ndarray]) -> bool:
+    """Without priority, this robot stands on the other's way ahead; with it, the other stands on this
+    one's way ahead (what its wait for a clear way checks)."""
     if priority:
-        return _off_line(peer.pose, _heading_line(me)) < CLEAR_OF_WAY_M
+        return _off_line(peer.pose, my_way()) < CLEAR_OF_WAY_M
     return float(_off_ways(np.array([[me.x, me.y]]), peer_way(peer))[0]) < CLEAR_OF_WAY_M
+
+
+def way_ahead(me: Pose2D, plan: np.ndarray | None) -> np.ndarray:
+    """This robot's way ahead, as a polyline: its plan's next :data:`MEET_DISTANCE_M` from the plan's point
+    nearest the robot, when the plan passes within :data:`ON_PLAN_M` of it; else the line it heads along.
+
+    The plan says where the robot will drive: the heading line runs on past the plan's end, and across a
+    corner the plan turns. With the line alone, a robot with priority going to a waypoint beside another's
+    passing place met that robot again at its passing place, each waiting for the other to move."""
+    if plan is None or len(plan) < 2:
+        return _heading_line(me)
+    offsets = np.hypot(plan[:, 0] - me.x, plan[:, 1] - me.y)
+    nearest = int(np.argmin(offsets))
+    if offsets[nearest] > ON_PLAN_M:
+        return _heading_line(me)
+    rest = plan[nearest:]
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(rest, axis=0).T))])
+    return np.vstack([[me.x, me.y], rest[along <= MEET_DISTANCE_M]])
 
 
 def peer_way(peer: Peer) -> list[np.ndarray]:
@@ -282,11 +314,15 @@ class GiveWay(Task[GiveWayPhase]):
     interrupted. The node tells it each tick where the other robot is (:meth:`peer_seen`).
     """
 
-    def __init__(self, peer: Peer, meeting: Meeting, place: Pose2D | None, resume: object) -> None:
+    def __init__(self, peer: Peer, meeting: Meeting, place: Pose2D | None, resume: object,
+                 own_way: np.ndarray | None = None) -> None:
         super().__init__(GiveWayPhase.GOING if place is not None else GiveWayPhase.WAITING)
         self.peer = peer.name
         self.meeting = meeting
         self.place = place
+        #: With priority: the way this robot was to drive when they met (:func:`way_ahead`), which the
+        #: other must be off for the wait to end; None: the line it heads along.
+        self.own_way = own_way
         #: What to carry on with afterwards (for the node: the interrupted task's request).
         self.resume = resume
         #: It ended without the way clearing (the other stood still, or the time limit): the node then
@@ -328,7 +364,8 @@ class GiveWay(Task[GiveWayPhase]):
         if me is None:
             return False  # this robot's own pose is stale: wait until it knows where it is
         if self.meeting is Meeting.HEAD_ON_PRIORITY:  # until the other is off the way ahead
-            off_way = _off_line(peer, _heading_line(me)) >= CLEAR_OF_WAY_M
+            way = self.own_way if self.own_way is not None else _heading_line(me)
+            off_way = _off_line(peer, way) >= CLEAR_OF_WAY_M
             return off_way or not _ahead(me, peer) or me.distance_to(peer) >= CLEAR_DISTANCE_M
         if self.place is None:  # stopped for a crossing: until the other is out of the way in front
             return (me.distance_to(peer) >= CROSSING_DISTANCE_M + 0.2

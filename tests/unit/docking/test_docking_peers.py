@@ -94,17 +94,21 @@ def test_a_malformed_plan_is_rejected_when_asked_for_and_counts_as_none() -> Non
     assert [key for key, _ in node.rejected] == ["fleet/r2/plan"]  # counted once, not at every ask
 
 
-def test_an_old_plan_is_no_plan_and_the_own_robots_is_ignored() -> None:
+def test_an_old_plan_is_no_plan_and_the_own_robots_is_kept_apart() -> None:
     node = _Node()
     watch = _watch_with_r2(node)
     node.callbacks[Path]("fleet/r1/plan", _plan([(0.0, 0.0), (1.0, 0.0)]).encode())
     node.callbacks[Path]("fleet/r2/plan", _plan([(1.0, 2.0), (2.0, 2.0)]).encode())
+    own = watch.own_plan(node.now())
+    assert callable(own) and _points(own()) == [[0.0, 0.0], [1.0, 0.0]]
+    assert [peer.name for peer in watch.fresh(node.now())] == ["fleet/r2"]  # this robot is no peer
     node.clock_s += 1.0
     node.callbacks[Float64MultiArray]("fleet/r2/map_to_base_link_pose2d", Float64MultiArray.from_dict(
         {"layout": {"dim": [], "data_offset": 0}, "data": [1.0, 2.0, 0.0]}))
-    node.clock_s += 1.5  # the plan is now 2.5 s old, the pose 1.5 s
+    node.clock_s += 1.5  # the plans are now 2.5 s old, the pose 1.5 s
     (peer,) = watch.fresh(node.now())
     assert peer.name == "fleet/r2" and peer.plan is None
+    assert watch.own_plan(node.now()) is None
 
 
 def test_the_way_of_a_peer_is_the_same_from_points_or_from_a_function() -> None:

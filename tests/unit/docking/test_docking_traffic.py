@@ -19,6 +19,7 @@ from services.docking.traffic import (
     must_give_way,
     passing_place,
     peer_way,
+    way_ahead,
 )
 from shared.geometry import Pose2D
 
@@ -69,6 +70,44 @@ def test_the_priority_robot_waits_only_while_the_other_is_on_its_way() -> None:
     assert task.result is None, "held at least a second, however clear the way looks"
     task.step(_inputs(4.0, me))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+
+
+def test_the_way_ahead_is_the_plan_from_the_robot_on_or_else_the_line_it_heads_along() -> None:
+    plan = np.column_stack([np.arange(0.0, 10.01, 0.05), np.zeros(201)])
+    way = way_ahead(Pose2D(2.0, 0.1, 0.0), plan)
+    np.testing.assert_allclose(way[0], [2.0, 0.1])
+    np.testing.assert_allclose(way[1], [2.0, 0.0])
+    assert way[-1][0] == pytest.approx(5.5) and np.all(way[1:, 1] == 0.0)  # the next 3.5 m of the plan
+    heading_line = way_ahead(Pose2D(2.0, 1.0, math.pi / 2), None)
+    np.testing.assert_allclose(heading_line[[0, -1]], [[2.0, 1.0], [2.0, 4.5]], atol=1e-12)
+    np.testing.assert_allclose(way_ahead(Pose2D(2.0, 1.0, math.pi / 2), plan), heading_line)  # not on this plan
+
+
+def test_the_priority_robot_does_not_wait_for_one_beyond_the_end_of_its_plan() -> None:
+    """A robot with priority going to a waypoint met the one that gave way to it again where it waited,
+    beside the waypoint: on the line the first heads along, off the way it drives. Each waited for the
+    other until one had stood still long enough."""
+    me = Pose2D(5.0, 3.0, math.pi)
+    beyond_the_end = Peer("r1", Pose2D(3.0, 3.0, 0.0), 0.8, False, giving_way=True)
+    plan = np.column_stack([np.arange(5.0, 3.99, -0.05), np.full(21, 3.0)])  # ends at (4.0, 3.0)
+    met = must_give_way(me, "r2", 0.4, [beyond_the_end], WALLS)
+    assert met is not None and met[1] is Meeting.HEAD_ON_PRIORITY, "on the line it heads along"
+    assert must_give_way(me, "r2", 0.4, [beyond_the_end], WALLS, own_plan=plan) is None
+    assert must_give_way(me, "r2", 0.4, [beyond_the_end], WALLS, own_plan=lambda: plan) is None
+    on_the_way = Peer("r1", Pose2D(4.2, 3.0, 0.0), 0.8, True)
+    met = must_give_way(me, "r2", 0.4, [on_the_way], WALLS, own_plan=plan)
+    assert met is not None and met[1] is Meeting.HEAD_ON_PRIORITY, "standing on the plan: wait for it"
+    # A wait that began on the plan ends once the other is off it, though still on the line ahead.
+    task = GiveWay(on_the_way, Meeting.HEAD_ON_PRIORITY, None, resume=None, own_way=way_ahead(me, plan))
+    task.step(_inputs(0.0, me))
+    task.peer_seen(beyond_the_end.pose)
+    task.step(_inputs(1.5, me))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+    by_the_line = GiveWay(on_the_way, Meeting.HEAD_ON_PRIORITY, None, resume=None)
+    by_the_line.step(_inputs(0.0, me))
+    by_the_line.peer_seen(beyond_the_end.pose)
+    by_the_line.step(_inputs(1.5, me))
+    assert by_the_line.result is None, "by the line it heads along the other is still in the way"
 
 
 def test_a_robot_crossing_in_front_makes_the_one_without_priority_stop() -> None:
