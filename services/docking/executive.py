@@ -52,6 +52,7 @@ from services.docking.traffic import (
     Peer,
     must_give_way,
     passing_place,
+    plan_points,
     way_ahead,
 )
 from services.docking.undocking_run import UndockingRun
@@ -459,7 +460,7 @@ class Executive:
         assert self.task_kind is not None
         own_way = None
         if meeting is Meeting.HEAD_ON_PRIORITY:
-            own_way = way_ahead(me, own_plan() if callable(own_plan) else own_plan)
+            own_way = way_ahead(me, plan_points(own_plan))
         giving_way = GiveWay(peer, meeting, place, task.dock_request, own_way)
         self._start(giving_way, self.task_kind, self.goal, out)
         self._giving_way = giving_way

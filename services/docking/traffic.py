@@ -127,12 +127,17 @@ class Peer:
 
     def plan_points(self) -> np.ndarray | None:
         """The plan's points, decoded now if they came as a function."""
-        return self.plan() if callable(self.plan) else self.plan
+        return plan_points(self.plan)
 
     @property
     def active(self) -> bool:
         """Driving, or giving way itself: a robot worth waiting for (one parked or docked is not)."""
         return self.under_way or self.giving_way
+
+
+def plan_points(plan: PlanPoints) -> np.ndarray | None:
+    """A plan's points, decoded now if they came as a function."""
+    return plan() if callable(plan) else plan
 
 
 def has_priority(name: str, battery: float, other_name: str, other_battery: float) -> bool:
@@ -181,7 +186,7 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
 
     def my_way() -> np.ndarray:
         if not own_way:
-            own_way.append(way_ahead(me, own_plan() if callable(own_plan) else own_plan))
+            own_way.append(way_ahead(me, plan_points(own_plan)))
         return own_way[0]
 
     for p in peers:

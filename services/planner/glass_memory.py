@@ -233,23 +233,15 @@ class GlassMemory:
         With ``near_xy``, only the cells in the box bounding the circle of ``radius_m`` round it (some of
         them farther than ``radius_m``, at the box's corners): the slowdown asks ten times a second, and
         searching the whole grid each time took 2.7 % of a composed fleet robot's busy time in a profile."""
-        rows, cols = self._window(near_xy, radius_m)
+        if near_xy is None or not math.isfinite(radius_m):
+            rows, cols = slice(0, self.frame.height), slice(0, self.frame.width)
+        else:
+            rows, cols = self.frame.window_around(near_xy, radius_m)
         heard = self._log_odds[rows, cols] > SUSPECTED_LOG_ODDS
         if self._held:
             heard = heard | self.held_mask()[rows, cols]
         iy, ix = np.nonzero(heard)
         return self.frame.cells_to_world(np.stack([ix + cols.start, iy + rows.start], axis=1))
-
-    def _window(self, near_xy: tuple[float, float] | None, radius_m: float) -> tuple[slice, slice]:
-        """Row and column slices of the grid's part within ``radius_m`` of ``near_xy`` (all of it without)."""
-        height, width = self.frame.shape
-        if near_xy is None or not math.isfinite(radius_m):
-            return slice(0, height), slice(0, width)
-        ix, iy = self.frame.world_to_cell(*near_xy)
-        reach = int(math.ceil(radius_m / self.frame.resolution_m)) + 1
-        rows = slice(min(max(iy - reach, 0), height), min(max(iy + reach + 1, 0), height))
-        cols = slice(min(max(ix - reach, 0), width), min(max(ix + reach + 1, 0), width))
-        return rows, cols
 
     def glass_mask(self) -> np.ndarray:
         """Boolean ``(height, width)``: marked by the sonar, unlooked-at within the suspicion radius of a

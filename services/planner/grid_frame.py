@@ -91,6 +91,15 @@ class GridFrame:
         iy, ix = np.mgrid[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
         return np.stack([ix.ravel(), iy.ravel()], axis=1)
 
+    def window_around(self, xy: tuple[float, float], radius_m: float) -> tuple[slice, slice]:
+        """Row and column slices of the box of cells bounding the circle of ``radius_m`` round a point,
+        one cell of margin, clipped to the grid (empty when the circle lies off it)."""
+        ix, iy = self.world_to_cell(*xy)
+        reach = int(math.ceil(radius_m / self.resolution_m)) + 1
+        rows = slice(min(max(iy - reach, 0), self.height), min(max(iy + reach + 1, 0), self.height))
+        columns = slice(min(max(ix - reach, 0), self.width), min(max(ix + reach + 1, 0), self.width))
+        return rows, columns
+
     def cells_within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
         """On-grid cells ``(N, 2)`` whose centres lie within ``radius_m`` of a point."""
         x, y = xy
