@@ -15,10 +15,12 @@ other's only way, and both plan, back up and give up for ever. The rule:
   The one without priority goes to the nearest **passing place** by free path (:func:`passing_place`):
   a spot clear of the walls, off the other robot's way (its plan ahead, or the line it heads along),
   and out of its reach; there it waits until the other no longer heads at it (it has gone by), then
-  carries on with what it was doing. Should this one still be on its way to the passing place after
-  :data:`STILL_GIVING_WAY_S` (the way there can be blocked) while the other has gone its way or stopped
-  driving, it carries on. The one with priority stops meanwhile and waits until the way
-  ahead is clear, so that it does not plan, back up and give up while the other backs out.
+  carries on with what it was doing; so it does too should the other drive past before it gets there
+  (it is behind the other, which stands on its far side from where they met). Should this one still be
+  on its way to the passing place after :data:`STILL_GIVING_WAY_S` (the way there can be blocked) while
+  the other has gone its way or stopped driving, it carries on. The one with priority stops meanwhile
+  and waits until the way ahead is clear, so that it does not plan, back up and give up while the
+  other backs out.
 - Robots whose ways **cross** (the other robot closer than :data:`CROSSING_DISTANCE_M` and in front,
   within :data:`CROSSING_HALF_ANGLE_RAD` of the heading, not head-on): the one without priority stops
   where it is until the other is out of its way. Each planner's collision check sees the other robot
@@ -334,6 +336,8 @@ class GiveWay(Task[GiveWayPhase]):
         #: leaves that robot to the planner for a while (:data:`CARRY_ON_S`).
         self.unresolved = False
         self._peer_pose: Pose2D | None = peer.pose
+        #: Where the other robot was when they met: past this robot once on its far side (:meth:`_passed`).
+        self._met_at = peer.pose
         #: Where the other robot stood when last seen to move, and since when (sim seconds).
         self._peer_anchor: Pose2D | None = None
         self._peer_still_since = 0.0
@@ -362,6 +366,16 @@ class GiveWay(Task[GiveWayPhase]):
         peer = self._peer_pose
         return peer is None or (me is not None and me.distance_to(peer) >= CLEAR_DISTANCE_M)
 
+    def _passed(self, me: Pose2D | None) -> bool:
+        """The other robot has driven past this one: this robot is behind it, and it stands on this robot's
+        far side from where they met. One that turned round where it met this robot is not past it (it
+        may turn back)."""
+        peer = self._peer_pose
+        if peer is None or me is None or _ahead(peer, me, math.pi / 2):
+            return False
+        met = self._met_at
+        return (peer.x - me.x) * (met.x - me.x) + (peer.y - me.y) * (met.y - me.y) < 0.0
+
     def _clear(self, me: Pose2D | None) -> bool:
         peer = self._peer_pose
         if peer is None:
@@ -389,6 +403,11 @@ class GiveWay(Task[GiveWayPhase]):
         if self.phase is GiveWayPhase.GOING and self.place is not None:
             outcome = inputs.nav.finished(self._key)
             if outcome is None:
+                if held_s >= MIN_GIVE_WAY_S and self._passed(inputs.robot_pose):
+                    # Driven past while this one was still on its way to the passing place (the way there
+                    # can be blocked, by the other robot itself): the room is made, nothing to wait for.
+                    self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
+                    return None
                 if held_s >= STILL_GIVING_WAY_S and self._gone(inputs.robot_pose):
                     # The way to the passing place can stay blocked for as long as the other stays away.
                     # Not sooner: a robot that passes 4 m away while this one backs out may turn back.

@@ -208,6 +208,20 @@ def test_give_way_ends_on_a_blocked_way_to_the_passing_place_when_the_other_has_
     assert task.unresolved, "the way did not clear as meant: not stopped for r2 again for a while"
 
 
+def test_give_way_ends_on_the_way_to_the_passing_place_once_the_other_has_driven_past() -> None:
+    place = Pose2D(1.2, 4.0, 0.0)
+    task = GiveWay(Peer("r2", Pose2D(4.0, 3.0, math.pi), 0.2, True), Meeting.HEAD_ON, place, resume=None)
+    intent = task.step(_inputs(0.0, Pose2D(3.0, 3.0, 0.0)))
+    me = Pose2D(2.5, 3.6, 2.0)  # backing out towards the place, not there yet
+    running = NavStatus(intent.key, busy=True)
+    task.peer_seen(Pose2D(2.9, 3.0, math.pi))  # coming through, beside this robot, not past it
+    assert task.step(_inputs(3.0, me, running)) == intent and task.result is None
+    task.peer_seen(Pose2D(1.6, 3.0, math.pi))  # past it: this robot is behind, on the side it came from
+    task.step(_inputs(4.0, me, running))
+    assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
+    assert task.message == "r2 has gone by" and not task.unresolved
+
+
 def test_give_way_on_a_blocked_way_to_the_passing_place_waits_for_its_own_pose() -> None:
     place = Pose2D(1.2, 4.0, 0.0)
     task = GiveWay(Peer("r2", Pose2D(9.0, 3.0, math.pi), 0.2, True), Meeting.HEAD_ON, place, resume=None)
