@@ -406,7 +406,7 @@ class GiveWay(Task[GiveWayPhase]):
                 if held_s >= MIN_GIVE_WAY_S and self._passed(inputs.robot_pose):
                     # Driven past while this one was still on its way to the passing place (the way there
                     # can be blocked, by the other robot itself): the room is made, nothing to wait for.
-                    self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
+                    self.finish(Outcome.SUCCEEDED, message=f"{self.peer} drove past before the passing place")
                     return None
                 if held_s >= STILL_GIVING_WAY_S and self._gone(inputs.robot_pose):
                     # The way to the passing place can stay blocked for as long as the other stays away.

@@ -219,7 +219,7 @@ def test_give_way_ends_on_the_way_to_the_passing_place_once_the_other_has_driven
     task.peer_seen(Pose2D(1.6, 3.0, math.pi))  # past it: this robot is behind, on the side it came from
     task.step(_inputs(4.0, me, running))
     assert task.result is not None and task.result.outcome is Outcome.SUCCEEDED
-    assert task.message == "r2 has gone by" and not task.unresolved
+    assert task.message == "r2 drove past before the passing place" and not task.unresolved
 
 
 def test_give_way_on_a_blocked_way_to_the_passing_place_waits_for_its_own_pose() -> None:
