@@ -442,7 +442,8 @@ class Executive:
         now = heard.now_s
         if self._giving_way is not None:
             other = next((p for p in heard.peers if p.name == self._giving_way.peer), None)
-            self._giving_way.peer_seen(other.pose if other else None, other is not None and other.active)
+            self._giving_way.peer_seen(other.pose if other else None, other is not None and other.active,
+                                       other is not None and other.giving_way)
             return
         task = self.task
         if task is None or not task.under_way or heard.battery is None or heard.latest_pose is None:

@@ -37,7 +37,10 @@ other's only way, and both plan, back up and give up for ever. The rule:
   watches the other: once the other has stood within :data:`PEER_STILL_M` for :data:`STILL_PRIORITY_S`
   (with priority) or :data:`STILL_GIVING_WAY_S` (without), it carries on; its planner goes round a
   robot standing still. The times differ so that of two robots waiting on each other the one with
-  priority moves first, and the other sees it move. After such a wait, or one that ran to its time
+  priority moves first, and the other sees it move. A robot that has not been giving way itself for
+  :data:`STILL_PRIORITY_S` waits for nobody: standing still, it is stuck (its planner finds no way,
+  often past the robot giving way to it), so the robot giving way carries on after
+  :data:`STILL_PRIORITY_S` too. After such a wait, or one that ran to its time
   limit, the robot does not stop for the same robot again for :data:`CARRY_ON_S`.
 
 Pure: no bus, no clock. The docking node keeps the peers' latest poses, charges and plans, asks
@@ -336,6 +339,9 @@ class GiveWay(Task[GiveWayPhase]):
         #: leaves that robot to the planner for a while (:data:`CARRY_ON_S`).
         self.unresolved = False
         self._peer_pose: Pose2D | None = peer.pose
+        #: Whether the other robot gives way itself (waits), and when it was last seen to (sim seconds).
+        self._peer_giving_way = peer.giving_way
+        self._peer_gave_way_s = -math.inf
         #: Where the other robot was when they met: past this robot once on its far side (:meth:`_passed`).
         self._met_at = peer.pose
         #: Where the other robot stood when last seen to move, and since when (sim seconds).
@@ -346,10 +352,21 @@ class GiveWay(Task[GiveWayPhase]):
     def state_name(self) -> str:
         return "GIVING_WAY"
 
-    def peer_seen(self, pose: Pose2D | None, active: bool = True) -> None:
+    def peer_seen(self, pose: Pose2D | None, active: bool = True, giving_way: bool | None = None) -> None:
         """Where the other robot is now, and whether it is still under way or giving way itself (a robot
-        that stopped driving, docked or parked, is nothing to wait for)."""
+        that stopped driving, docked or parked, is nothing to wait for); ``giving_way``: whether it gives
+        way (waits) itself, None: as it was."""
         self._peer_pose = pose if active else None
+        if giving_way is not None:
+            self._peer_giving_way = giving_way
+
+    def _patience_s(self, now: float) -> float:
+        """How long the other robot may stand still before this one carries on (see the module docstring)."""
+        if self._peer_giving_way:
+            self._peer_gave_way_s = now
+        if self.meeting is Meeting.HEAD_ON_PRIORITY or now - self._peer_gave_way_s >= STILL_PRIORITY_S:
+            return STILL_PRIORITY_S
+        return STILL_GIVING_WAY_S
 
     def _peer_still_s(self, now: float) -> float:
         """How long the other robot has stood within :data:`PEER_STILL_M` of one spot (0 while it moves)."""
@@ -399,6 +416,7 @@ class GiveWay(Task[GiveWayPhase]):
             self.finish(Outcome.SUCCEEDED, message="gave way for the longest allowed")
             return None
         still_s = self._peer_still_s(now)
+        patience = self._patience_s(now)
         held_s = now - self.started_s if self.started_s is not None else 0.0
         if self.phase is GiveWayPhase.GOING and self.place is not None:
             outcome = inputs.nav.finished(self._key)
@@ -426,7 +444,6 @@ class GiveWay(Task[GiveWayPhase]):
         if held_s >= MIN_GIVE_WAY_S and self._clear(inputs.robot_pose):
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} has gone by")
             return None
-        patience = STILL_PRIORITY_S if self.meeting is Meeting.HEAD_ON_PRIORITY else STILL_GIVING_WAY_S
         if min(still_s, held_s) >= patience:
             self.unresolved = True
             self.finish(Outcome.SUCCEEDED, message=f"{self.peer} stood still for {still_s:.1f} s: carrying on")

@@ -265,8 +265,8 @@ def test_two_robots_waiting_on_each_other_the_one_with_priority_carries_on_first
     arrived = NavStatus(going.key, outcome=NavOutcome.SUCCEEDED)
     t = 0.0
     while waiting.result is None and t < STILL_PRIORITY_S + 1.0:
-        waiting.peer_seen(r2)
-        giving.peer_seen(r3)
+        waiting.peer_seen(r2, giving_way=True)
+        giving.peer_seen(r3, giving_way=True)  # waiting for r2 to back out: giving way itself
         waiting.step(_inputs(t, r3))
         giving.step(_inputs(t, r2, arrived))
         t += 0.1
@@ -277,20 +277,40 @@ def test_two_robots_waiting_on_each_other_the_one_with_priority_carries_on_first
     assert must_give_way(r3, "r3", 0.4, [Peer("r2", r2, 0.9, False, giving_way=True)], [], carry_on={"r2"}) is None
 
 
+def test_a_robot_that_stops_giving_way_but_stands_still_is_waited_for_as_one_stuck_from_then_on() -> None:
+    # The robot with priority carries on after its own wait (6 s) but stays where it is a moment: the one
+    # giving way to it still waits as for a robot giving way, so the one with priority moves first.
+    place = Pose2D(1.2, 4.0, 0.0)
+    other = Pose2D(4.0, 3.0, math.pi)
+    task = GiveWay(Peer("r2", other, 0.2, True), Meeting.HEAD_ON, place, resume=None)
+    going = task.step(_inputs(0.0, Pose2D(3.0, 3.0, 0.0)))
+    arrived = NavStatus(going.key, outcome=NavOutcome.SUCCEEDED)
+    t = 0.0
+    while task.result is None and t < 30.0:
+        task.peer_seen(other, giving_way=t < STILL_PRIORITY_S)
+        task.step(_inputs(t, place, arrived))
+        t += 0.1
+    assert task.result is not None and task.unresolved
+    assert t == pytest.approx(2 * STILL_PRIORITY_S, abs=0.3), "6 s after it stopped giving way, not at once"
+
+
 def test_a_robot_stopped_for_a_crossing_carries_on_when_the_other_stands_still_but_not_while_it_moves() -> None:
     me = Pose2D(5.0, 5.0, 0.0)
     stuck = Pose2D(6.0, 5.2, math.pi / 2)  # in front, crossing, with priority; held up (by this robot, say)
-    task = GiveWay(Peer("r1", stuck, 0.2, True), Meeting.CROSSING, None, resume=None)
-    t = 0.0
-    while t < 30.0 and task.result is None:
-        # Backing up and replanning, it stays within a few centimetres of one spot.
-        task.peer_seen(Pose2D(stuck.x, stuck.y - 0.2 * math.sin(t), stuck.yaw))
-        task.step(_inputs(t, me))
-        t += 0.1
-    assert task.result is not None and task.unresolved, "waited out its time limit (60 s) instead"
-    assert t == pytest.approx(STILL_GIVING_WAY_S, abs=0.3)
+    for waits, patience in ((False, STILL_PRIORITY_S), (True, STILL_GIVING_WAY_S)):
+        task = GiveWay(Peer("r1", stuck, 0.2, True), Meeting.CROSSING, None, resume=None)
+        t = 0.0
+        while t < 30.0 and task.result is None:
+            # Backing up and replanning, it stays within a few centimetres of one spot; or it waits, giving
+            # way to a third robot.
+            task.peer_seen(Pose2D(stuck.x, stuck.y - 0.2 * math.sin(t), stuck.yaw), giving_way=waits)
+            task.step(_inputs(t, me))
+            t += 0.1
+        assert task.result is not None and task.unresolved, "waited out its time limit (60 s) instead"
+        assert t == pytest.approx(patience, abs=0.3), f"giving way itself: {waits}"
     moving = GiveWay(Peer("r1", stuck, 0.2, True), Meeting.CROSSING, None, resume=None)
     for i in range(int(STILL_GIVING_WAY_S * 20)):  # manoeuvring to and fro across the way in front
-        moving.peer_seen(Pose2D(6.0, 5.0 + 0.6 * math.cos(0.06 * i), math.pi / 2))
+        # (1.2 m each way in 2.5 s, about 0.5 m/s: a robot driving, not one rocking on the spot)
+        moving.peer_seen(Pose2D(6.0, 5.0 + 0.6 * math.cos(0.125 * i), math.pi / 2))
         moving.step(_inputs(i * 0.1, me))
     assert moving.result is None, "a robot that moves is waited for"
