@@ -361,7 +361,8 @@ class GiveWay(Task[GiveWayPhase]):
             self._peer_giving_way = giving_way
 
     def _patience_s(self, now: float) -> float:
-        """How long the other robot may stand still before this one carries on (see the module docstring)."""
+        """How long the other robot may stand still before this one carries on (see the module docstring);
+        called every tick, as it notes when the other was last seen giving way."""
         if self._peer_giving_way:
             self._peer_gave_way_s = now
         if self.meeting is Meeting.HEAD_ON_PRIORITY or now - self._peer_gave_way_s >= STILL_PRIORITY_S:
