@@ -27,13 +27,18 @@ class PeakRssSampler:
         self._thread.join(timeout=5.0)
 
     def sample(self) -> None:
-        for name, pid in self._pids():
-            if pid is None:
-                continue
-            try:
-                proc = psutil.Process(pid)
-                rss = proc.memory_info().rss + sum(c.memory_info().rss for c in proc.children(recursive=True))
-            except psutil.Error:
+        """One reading of every service: its process and all its descendants, from one look at the process
+        table. Asking each service's process for its children read the whole table once per service, twice
+        a second: half the CPU of ``zendock fleet``'s own process while six robots ran."""
+        roots = [(name, pid) for name, pid in self._pids() if pid is not None]
+        if not roots:
+            return
+        children: dict[int, list[int]] = {}
+        for proc in psutil.process_iter(["ppid"]):
+            children.setdefault(proc.info["ppid"], []).append(proc.pid)
+        for name, pid in roots:
+            rss = _tree_rss(pid, children)
+            if rss is None:
                 continue
             mb = rss / 1e6
             if mb > self.peak_mb.get(name, 0.0):
@@ -45,3 +50,21 @@ class PeakRssSampler:
                 self.sample()
             except Exception:  # a stack going down under us: keep what we have
                 continue
+
+
+def _tree_rss(root: int, children: dict[int, list[int]]) -> int | None:
+    """Resident bytes of ``root`` and its descendants (``children``: pid -> child pids); None once ``root``
+    is gone. A descendant that exits while being read is left out."""
+    try:
+        total = psutil.Process(root).memory_info().rss
+    except psutil.Error:
+        return None
+    pending = list(children.get(root, ()))
+    while pending:
+        pid = pending.pop()
+        pending.extend(children.get(pid, ()))
+        try:
+            total += psutil.Process(pid).memory_info().rss
+        except psutil.Error:
+            continue
+    return total

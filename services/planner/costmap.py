@@ -21,6 +21,7 @@ The costmap never decides what unknown means for motion: planners refuse 255 unl
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -102,15 +103,21 @@ def occupancy_from_costs(costs: np.ndarray) -> np.ndarray:
     return table[np.asarray(costs, dtype=np.uint8)]
 
 
+@functools.lru_cache(maxsize=8)
 def footprint_outline(length_m: float, width_m: float, spacing_m: float) -> np.ndarray:
-    """Points ``(M, 2)`` along a rectangle centred on base_link, no more than ``spacing_m`` apart."""
+    """Points ``(M, 2)`` along a rectangle centred on base_link, no more than ``spacing_m`` apart.
+
+    Cached, read-only: the collision check asks for the same outline 20 times a simulated second, and
+    building it was 2 % of a fleet robot's busy time."""
     hx, hy = 0.5 * length_m, 0.5 * width_m
     corners = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy], [hx, hy]])
     points = []
     for a, b in zip(corners[:-1], corners[1:], strict=True):
         n = max(1, math.ceil(float(np.hypot(*(b - a))) / spacing_m))
         points.append(a + (b - a) * (np.arange(n) / n)[:, None])
-    return np.concatenate(points)
+    outline = np.concatenate(points)
+    outline.flags.writeable = False
+    return outline
 
 
 @dataclass(frozen=True, eq=False)
@@ -168,11 +175,13 @@ class CostGrid:
         c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
         wx = poses[:, 0:1] + c * outline[:, 0] - s * outline[:, 1]
         wy = poses[:, 1:2] + s * outline[:, 0] + c * outline[:, 1]
-        costs = self.costs_at(np.stack([wx.ravel(), wy.ravel()], axis=1)).reshape(wx.shape).astype(np.int16)
         cells = self.frame.world_to_cells(np.stack([wx.ravel(), wy.ravel()], axis=1))
-        off_grid = ~self.frame.cells_in_bounds(cells).reshape(wx.shape)
-        known = np.where((costs == NO_INFORMATION) & ~off_grid, -1, costs)
-        known[off_grid] = LETHAL_OBSTACLE
+        on_grid = self.frame.cells_in_bounds(cells)
+        # Off the grid is lethal; unknown (-1 here) counts only when the whole outline is unknown.
+        known = np.full(len(cells), LETHAL_OBSTACLE, dtype=np.int16)
+        costs = self.costs[cells[on_grid, 1], cells[on_grid, 0]].astype(np.int16)
+        known[on_grid] = np.where(costs == NO_INFORMATION, -1, costs)
+        known = known.reshape(wx.shape)
         worst = known.max(axis=1)
         return np.where(worst < 0, NO_INFORMATION, worst).astype(np.uint8)
 
