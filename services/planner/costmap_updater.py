@@ -16,6 +16,7 @@ import math
 import pathlib
 import time
 from collections import deque
+from typing import Protocol
 
 import numpy as np
 
@@ -31,7 +32,6 @@ from shared import topics
 from shared.frames import SensorMounts
 from shared.geometry import Pose2D, wrap_angle
 from shared.messages import Header, LaserScan, Range, TFMessage
-from shared.pose_tracking import PoseTrack
 from shared.ratelimit import RateLimitedLogger
 
 #: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
@@ -45,6 +45,36 @@ LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
 GLASS_SLOWDOWN_HALF_ANGLE_RAD = math.radians(70.0)
 
 
+class PoseSource(Protocol):
+    """What the updater asks of the pose track (:class:`~shared.pose_tracking.PoseTrack`, or a view of it
+    that another thread fills, :class:`~services.planner.costmap_thread.LockedPoseTrack`)."""
+
+    def current_pose(self, now_s: float, max_odom_age_s: float) -> Pose2D | None: ...
+
+    def pose_now_at(self, t_s: float) -> Pose2D | None: ...
+
+
+def glass_speed_limit(params: Params, pose: Pose2D | None, heard_xy: np.ndarray) -> float | None:
+    """The speed allowed near glass the sonar has heard (Nav2's regulated pure pursuit slows near
+    obstacles the same way): the top speed times the distance to the nearest heard cell over
+    ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when nothing heard
+    is that close. Only glass ahead counts, within ``GLASS_SLOWDOWN_HALF_ANGLE_RAD`` of the heading:
+    the limit caps forward speed; a pane beside the robot is passed, not driven into.
+
+    ``heard_xy``: centres ``(N, 2)`` of cells the sonar heard glass in (all of them, or those near ``pose``)."""
+    p = params
+    if pose is None or p.glass_slowdown_radius_m <= 0 or len(heard_xy) == 0:
+        return None
+    dx, dy = heard_xy[:, 0] - pose.x, heard_xy[:, 1] - pose.y
+    distance = np.hypot(dx, dy)
+    along = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw)
+    ahead = (along > math.cos(GLASS_SLOWDOWN_HALF_ANGLE_RAD) * distance) & (distance < p.glass_slowdown_radius_m)
+    if not ahead.any():
+        return None
+    distance_m = float(np.min(distance[ahead]))
+    return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)
+
+
 def _moved(before: Pose2D, after: Pose2D) -> bool:
     """Far enough apart for a sonar reading to say something new."""
     return (
@@ -56,7 +86,7 @@ def _moved(before: Pose2D, after: Pose2D) -> bool:
 class CostmapUpdater:
     """The costmap, the glass memory behind it, and the sensor data waiting to be folded in."""
 
-    def __init__(self, params: Params, tracker: PoseTrack, log: logging.Logger) -> None:
+    def __init__(self, params: Params, tracker: PoseSource, log: logging.Logger) -> None:
         self._params = params
         self._tracker = tracker
         self._log = log
@@ -117,27 +147,17 @@ class CostmapUpdater:
         self._mounts.update(msg)
 
     def glass_speed_limit_mps(self, pose: Pose2D | None) -> float | None:
-        """The speed allowed near glass the sonar has heard (Nav2's regulated pure pursuit slows near
-        obstacles the same way): the top speed times the distance to the nearest such cell over
-        ``glass_slowdown_radius_m``, at least ``glass_slowdown_min_speed_mps``; None when nothing heard
-        is that close. Only glass ahead counts, within ``GLASS_SLOWDOWN_HALF_ANGLE_RAD`` of the heading:
-        the limit caps forward speed; a pane beside the robot is passed, not driven into."""
+        """:func:`glass_speed_limit` at ``pose``, from the heard cells round it."""
         p = self._params
         if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
             return None
-        cells = self.glass.heard_cells_xy((pose.x, pose.y), p.glass_slowdown_radius_m)
-        if len(cells) == 0:
-            return None
-        dx, dy = cells[:, 0] - pose.x, cells[:, 1] - pose.y
-        distance = np.hypot(dx, dy)
-        along = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw)
-        ahead = along > math.cos(GLASS_SLOWDOWN_HALF_ANGLE_RAD) * distance
-        if not ahead.any():
-            return None
-        distance_m = float(np.min(distance[ahead]))
-        if distance_m >= p.glass_slowdown_radius_m:
-            return None
-        return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)
+        return glass_speed_limit(p, pose, self.glass.heard_cells_xy((pose.x, pose.y), p.glass_slowdown_radius_m))
+
+    def heard_glass_xy(self) -> np.ndarray:
+        """Centres ``(N, 2)`` of every cell the sonar has heard glass in (none without a glass memory)."""
+        if self.glass is None or self._params.glass_slowdown_radius_m <= 0:
+            return np.zeros((0, 2))
+        return self.glass.heard_cells_xy()
 
     def grid(self) -> CostGrid:
         """The inflated cost grid the planner and the follower read (a snapshot, cached between updates)."""

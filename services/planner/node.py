@@ -13,9 +13,10 @@ and ``map_server/map``.
 
 Threads and cost per tick: every callback runs on the node's executor, one at a time. Sensor callbacks
 only keep the newest data; a costmap timer (``costmap_update_rate_hz`` on sim time, slower when idle)
-folds it into the layers and re-inflates (:class:`~services.planner.costmap_updater.CostmapUpdater`),
-so the 20 Hz control tick finds a cached snapshot. A* runs on a worker thread against that read-only
-snapshot and its result comes back through ``node.post``.
+asks a worker thread (:mod:`services.planner.costmap_thread`) to fold it into the layers and re-inflate
+(:class:`~services.planner.costmap_updater.CostmapUpdater`), so the 20 Hz control tick neither waits for
+an update nor inflates: it reads the newest snapshot. A* runs on another worker thread against such a
+read-only snapshot. Both workers' results come back through ``node.post``.
 
 A goal's life (planning, following, replanning, recoveries, its end and error code) is
 :class:`~services.planner.navigation_run.NavigationRun`: the node hands it a snapshot (pose, twist, cost
@@ -30,7 +31,8 @@ import time
 from collections import deque
 from typing import Any
 
-from services.planner.costmap_updater import CostmapUpdater
+from services.planner.costmap_thread import CostmapThread, LockedPoseTrack
+from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
 from services.planner.goal_check import check_goal_on_grid, goal_pose
 from services.planner.map_messages import costmap_message, path_message
 from services.planner.map_server import MapServer
@@ -122,7 +124,13 @@ class PlannerService:
         self._say = RateLimitedLogger(node.log, interval_s=5.0)
         occupancy, source = load_initial_map(params)
         self._tracker = PoseTrack(max_extrapolation_s=POSE_EXTRAPOLATION_S)
-        self._layers = CostmapUpdater(params, self._tracker, node.log)
+        #: The worker reads the track through this view; the executor adds samples holding its lock.
+        self._shared_track = LockedPoseTrack(self._tracker)
+        self._control_time = _Durations()
+        self._costmap_time = _Durations()
+        self._layers = CostmapUpdater(params, self._shared_track, node.log)
+        self._costmap = CostmapThread(self._layers, lambda now: node.post(self._on_costmap_updated, now), node.log,
+                                      self._costmap_time.add)
         self._worker = PlanningWorker(params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome))
         self._planning_in_flight = False
         self._generations = itertools.count(1)
@@ -130,8 +138,6 @@ class PlannerService:
         self._handle: NavHandle | None = None
         self._last_cmd = (0.0, 0.0)
         self._last_costmap_update_s = -math.inf
-        self._control_time = _Durations()
-        self._costmap_time = _Durations()
 
         self._cmd_pub = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
         self._plan_pub = node.create_publisher(Path, topics.PLAN, RELIABLE)
@@ -141,7 +147,8 @@ class PlannerService:
         node.create_subscription(LaserScan, topics.SCAN, self._layers.add_scan, SENSOR_DATA)
         if params.use_range_layer:
             node.create_subscription(Range, topics.ULTRASONIC, self._layers.add_range, SENSOR_DATA)
-        node.create_subscription(TFMessage, topics.TF_STATIC, self._layers.add_mounts, QoS(depth=5))
+        node.create_subscription(TFMessage, topics.TF_STATIC, lambda msg: self._costmap.change(self._layers.add_mounts, msg),
+                                 QoS(depth=5))
         node.create_service(CLEAR_ENTIRE_COSTMAP, CLEAR_COSTMAPS_SERVICE, self._on_clear_costmaps)
         self._action = ActionServer(
             node, NAVIGATE_TO_POSE, topics.NAVIGATE_TO_POSE,
@@ -169,23 +176,24 @@ class PlannerService:
         """A runtime parameter change (:mod:`shared.parameter_server`): the costmap's inflation applies at
         once; the follower's speeds are read when the next goal builds its run."""
         if name == "inflation_radius_m":
-            self._layers.refresh_costmap_params()
+            self._costmap.change(self._layers.refresh_costmap_params)
 
     # --- map --------------------------------------------------------------------------------------
 
     def _on_map(self, occupancy: OccupancyMap) -> None:
         """A new static map (at start or from ``load_map``): the layers take it; a goal replans on it."""
-        self._layers.set_map(occupancy)
+        self._costmap.change(self._layers.set_map, occupancy)
         run = self._run
         if run is not None and run.phase is Phase.FOLLOWING:
             self._carry_out(run.replan(self._snapshot()))
 
     def _publish_costmap(self) -> None:
-        if self._layers.costmap is not None:
-            self._costmap_pub.publish(costmap_message(self._layers.costmap.grid(), self._node.now(), topics.MAP_FRAME))
+        grid = self._costmap.grid
+        if grid is not None:
+            self._costmap_pub.publish(costmap_message(grid, self._node.now(), topics.MAP_FRAME))
 
     def _on_clear_costmaps(self, request: ClearEntireCostmapRequest) -> ClearEntireCostmapResponse:
-        self._layers.clear(GlassClearing.ALL)
+        self._costmap.change(self._layers.clear, GlassClearing.ALL)
         return ClearEntireCostmapResponse()
 
     # --- sensors ----------------------------------------------------------------------------------
@@ -195,28 +203,31 @@ class PlannerService:
         if len(data) < 3 or not all(math.isfinite(v) for v in data[:3]):
             self._say.warning("bad-pose", "ignored a %s message without three finite numbers", topics.POSE2D)
             return
-        self._tracker.add_pose(self._node.now(), Pose2D.from_seq(data[:3]))
+        with self._shared_track.lock:
+            self._tracker.add_pose(self._node.now(), Pose2D.from_seq(data[:3]))
 
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
         sample = OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z)
-        self._tracker.add_odom(sample, self._node.now())
+        with self._shared_track.lock:
+            self._tracker.add_odom(sample, self._node.now())
 
     def _on_costmap_tick(self) -> None:
-        """Fold the newest scan and the sonar readings since the last update into the costmap."""
-        costmap = self._layers.costmap
+        """Ask the costmap worker to fold in the newest scan and the sonar readings since the last update."""
         now = self._node.now()
-        if costmap is None:
+        if self._costmap.grid is None:
             return
         rate = self._params.costmap_update_rate_hz if self._run else self._params.idle_costmap_update_rate_hz
         if self._last_costmap_update_s <= now < self._last_costmap_update_s + 1.0 / rate - 1e-6:
             return
         self._last_costmap_update_s = now
-        t0 = time.thread_time()
-        self._layers.update(now)
-        if self._run is not None:
-            self._carry_out(self._run.costmap_updated(self._snapshot(now)))
-        self._costmap_time.add(time.thread_time() - t0)
+        self._costmap.request_update(now)
+
+    def _on_costmap_updated(self, now: float) -> None:
+        """The worker's update as of ``now`` is in the snapshot: the run checks its path against it."""
+        run, handle = self._run, self._handle
+        if run is not None and handle is not None and handle.active:
+            self._carry_out(run.costmap_updated(self._snapshot(now)))
 
     # --- action -----------------------------------------------------------------------------------
 
@@ -224,9 +235,10 @@ class PlannerService:
         """Refuse what cannot be planned for; the ``ValueError``'s text is the client's reason."""
         try:
             pose = goal_pose(goal.pose)
-            if self._layers.costmap is None:
+            grid = self._costmap.grid
+            if grid is None:
                 raise ValueError("no map loaded: load one with map_server/load_map first")
-            check_goal_on_grid(self._layers.grid(), pose.x, pose.y, self._params.astar_params())
+            check_goal_on_grid(grid, pose.x, pose.y, self._params.astar_params())
         except ValueError as exc:
             self._log.info("goal refused: %s", exc)
             raise
@@ -281,10 +293,10 @@ class PlannerService:
             pose_age_s=tracker.pose_age_s(now),
             pose_carried=tracker.carried_by_odometry(now, timeout_s),
             velocity=tracker.twist(now, timeout_s),
-            grid=self._layers.grid() if self._layers.costmap is not None else None,
+            grid=self._costmap.grid,
             planning_in_flight=self._planning_in_flight,
             last_cmd=self._last_cmd,
-            speed_limit_mps=self._layers.glass_speed_limit_mps(pose),
+            speed_limit_mps=glass_speed_limit(self._params, pose, self._costmap.heard_glass_xy),
         )
 
     def _carry_out(self, orders: NavOrders) -> None:
@@ -293,13 +305,14 @@ class PlannerService:
         now = self._node.now()
         if orders.cmd is not None:
             self._publish_cmd(*orders.cmd)
-        if orders.plan_from is not None and run is not None and self._layers.costmap is not None:
+        grid = self._costmap.grid
+        if orders.plan_from is not None and run is not None and grid is not None:
             self._planning_in_flight = True
-            self._worker.submit(PlanRequest(run.generation, self._layers.grid(), orders.plan_from, run.goal))
+            self._worker.submit(PlanRequest(run.generation, grid, orders.plan_from, run.goal))
         if orders.path is not None:
             self._plan_pub.publish(path_message(orders.path, now, topics.MAP_FRAME))
         if orders.clear is not None:
-            self._layers.clear(orders.clear, orders.clear_around)
+            self._costmap.change(self._layers.clear, orders.clear, orders.clear_around)
         if orders.feedback is not None and handle is not None:
             feedback = orders.feedback
             handle.publish_feedback(NavigateToPoseFeedback(
@@ -332,7 +345,7 @@ class PlannerService:
             return
         if abs(velocity[0]) > STANDING_STILL_MPS or abs(velocity[1]) > STANDING_STILL_RADPS:
             return
-        self._layers.observe_turning_circle(pose)
+        self._costmap.change(self._layers.observe_turning_circle, pose)
 
     # --- shutdown ---------------------------------------------------------------------------------
 
@@ -344,6 +357,7 @@ class PlannerService:
         for timer in self._timers:
             timer.cancel()
         self._worker.close()
+        self._costmap.close()
         self._action.close()
 
 

@@ -121,7 +121,7 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
 def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
     import logging  # noqa: PLC0415
 
-    from services.planner.costmap_updater import CostmapUpdater  # noqa: PLC0415
+    from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit  # noqa: PLC0415
     from services.planner.occupancy_map import OCC_FREE, OccupancyMap  # noqa: PLC0415
     from services.planner.params import Params  # noqa: PLC0415
     from shared.geometry import Pose2D  # noqa: PLC0415
@@ -150,6 +150,11 @@ def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
     # Marked glass counts as much as suspected glass: facing the arc's marked middle from 0.3 m.
     assert layers.glass_speed_limit_mps(Pose2D(1.7, 2.0, 0.0)) == pytest.approx(
         params.max_linear_vel_mps * 0.3 / 0.8, abs=0.05)
+    # The node reads the limit from every heard cell (the costmap thread's snapshot): the same answers.
+    every = layers.heard_glass_xy()
+    for pose in (Pose2D(0.5, 0.5, 0.0), Pose2D(1.6, 2.0, 0.0), Pose2D(1.6, 2.0, math.pi), Pose2D(2.0, 1.3, 0.0),
+                 Pose2D(1.7, 2.0, 0.0)):
+        assert glass_speed_limit(params, pose, every) == layers.glass_speed_limit_mps(pose), pose
 
 
 def test_an_echo_from_cells_known_free_is_held_as_glass_for_a_while() -> None:
