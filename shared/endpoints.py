@@ -9,6 +9,7 @@ business (:mod:`shared.executor`): a subscription offers each message to :meth:`
 
 from __future__ import annotations
 
+import functools
 import itertools
 import threading
 from collections import deque
@@ -147,8 +148,47 @@ class Publisher(Generic[M]):
         self._publisher.undeclare()
 
 
-def _payload_bytes(data: bytes) -> bytes:
+def _payload_bytes(_key: str, data: bytes) -> bytes:
     return data
+
+
+#: Payloads up to this size are remembered once decoded (a scan is about 3 kB; camera images are not kept).
+SHARED_DECODE_MAX_BYTES = 16384
+#: Remembered keys at most: a process subscribes to a few dozen; past this the memory starts afresh.
+SHARED_DECODE_MAX_KEYS = 512
+
+
+class SharedDecodes:
+    """The last message decoded on each key, per type, in this process: the other subscriptions on that key
+    take it instead of decoding the same bytes again.
+
+    A composed robot's services each subscribe to the robot's odometry, pose, scan, sonar and clock: three
+    planner, docking and battery subscriptions decoded each odometry sample three times. As rclcpp hands
+    one intra-process message to every subscription as a const pointer, a received message is shared:
+    callbacks read it and never change it. Bytes equal to the last on the key decode to an equal message, so
+    sharing changes nothing else; a payload that fails validation is never remembered (each subscription
+    rejects it itself). Safe from any thread: a race between two decodes costs one decode more.
+    """
+
+    def __init__(self) -> None:
+        self._last: dict[tuple[type[Message], str], tuple[bytes, Message]] = {}
+
+    def decode(self, msg_type: type[M], key: str, data: bytes) -> M:
+        if len(data) > SHARED_DECODE_MAX_BYTES:
+            return msg_type.decode(data)
+        slot = (msg_type, key)
+        last = self._last.get(slot)
+        if last is not None and last[0] == data:
+            return last[1]  # type: ignore[return-value]
+        msg = msg_type.decode(data)
+        if len(self._last) >= SHARED_DECODE_MAX_KEYS:
+            self._last.clear()
+        self._last[slot] = (data, msg)
+        return msg
+
+
+#: This process's shared decodes (every node of a composed process shares it).
+SHARED_DECODES = SharedDecodes()
 
 
 class Subscription(Generic[M]):
@@ -185,7 +225,8 @@ class Subscription(Generic[M]):
         self._scheduled = False
         self._lock = threading.Lock()
         self._encoding = encoding_for(msg_type.TYPE_NAME)
-        self._decode: Callable[[bytes], Any] = _payload_bytes if undecoded else msg_type.decode
+        self._decode: Callable[[str, bytes], Any] = (
+            _payload_bytes if undecoded else functools.partial(SHARED_DECODES.decode, msg_type))
         self._received = node.stats.received
         self._dropped = node.stats.dropped
         executor = node.executor
@@ -213,7 +254,7 @@ class Subscription(Generic[M]):
                     raise MessageError(f"expected type {self.msg_type.TYPE_NAME}, got {schema}", key=key)
             if size > MAX_PAYLOAD_BYTES:
                 raise MessageError(f"payload of {size} bytes exceeds {MAX_PAYLOAD_BYTES}", key=key)
-            msg = self._decode(payload.to_bytes())
+            msg = self._decode(key, payload.to_bytes())
         except MessageError as exc:
             self._node.reject(key, exc.at(key=key))
             return

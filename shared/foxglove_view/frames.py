@@ -22,17 +22,18 @@ def robot_frame(robot: str, frame: str) -> str:
 
 
 def prefix_frames(msg: Any, robot: str) -> Any:
-    """``msg`` with every ``frame_id`` and ``child_frame_id`` in it (headers, transforms, poses of a path)
-    put under ``robot``; changed in place and returned."""
-    if not robot or not dataclasses.is_dataclass(msg):
+    """A copy of ``msg`` with every ``frame_id`` and ``child_frame_id`` in it (headers, transforms, poses of
+    a path) put under ``robot``. A copy, not a change: a received message is shared with the process's other
+    subscriptions on its key (:class:`~shared.endpoints.SharedDecodes`)."""
+    if not robot or not dataclasses.is_dataclass(msg) or isinstance(msg, type):
         return msg
+    changes: dict[str, Any] = {}
     for f in dataclasses.fields(msg):
         value = getattr(msg, f.name)
         if f.name in _FRAME_FIELDS and isinstance(value, str):
-            setattr(msg, f.name, robot_frame(robot, value))
+            changes[f.name] = robot_frame(robot, value)
         elif dataclasses.is_dataclass(value):
-            prefix_frames(value, robot)
+            changes[f.name] = prefix_frames(value, robot)
         elif isinstance(value, list) and value and dataclasses.is_dataclass(value[0]):
-            for item in value:
-                prefix_frames(item, robot)
-    return msg
+            changes[f.name] = [prefix_frames(item, robot) for item in value]
+    return dataclasses.replace(msg, **changes)
