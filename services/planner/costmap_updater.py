@@ -41,6 +41,9 @@ SONAR_MIN_TURN_RAD = 0.1
 GLASS_SAVE_PERIOD_S = 1.0
 #: A scan this far in time from a sonar reading is too old to explain its echo.
 LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
+#: The heard glass handed to another thread reaches this much past the slowdown radius round the robot as of
+#: the update: at most 0.5 m/s, it drives a tenth of that before the next update, 5-10 per second.
+HEARD_GLASS_MARGIN_M = 1.0
 #: Glass the sonar heard within this angle of the heading slows the robot (a pane beside it does not).
 GLASS_SLOWDOWN_HALF_ANGLE_RAD = math.radians(70.0)
 
@@ -105,7 +108,12 @@ class CostmapUpdater:
             topics.LIDAR_FRAME: Pose2D(*params.lidar_mount),
             topics.ULTRASONIC_FRAME: Pose2D(*params.ultrasonic_mount),
         })
-        self._pending_scan: LaserScan | None = None
+        #: Sensor data handed over by the callbacks, taken by :meth:`update` (on another thread, see
+        #: :mod:`services.planner.costmap_thread`): deques, whose append and popleft need no lock.
+        self._pending_scan: deque[LaserScan] = deque(maxlen=1)
+        self._pending_mounts: deque[TFMessage] = deque(maxlen=8)
+        #: The robot's pose as of the last update (None before one placed it).
+        self.last_pose: Pose2D | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
         #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
@@ -138,13 +146,14 @@ class CostmapUpdater:
             self.costmap.set_params(self._params.costmap_params())
 
     def add_scan(self, msg: LaserScan) -> None:
-        self._pending_scan = msg
+        self._pending_scan.append(msg)
 
     def add_range(self, msg: Range) -> None:
         self._pending_ranges.append(msg)
 
     def add_mounts(self, msg: TFMessage) -> None:
-        self._mounts.update(msg)
+        """Sensor mounts (``tf_static``): taken in at the next update, where the readings are placed."""
+        self._pending_mounts.append(msg)
 
     def glass_speed_limit_mps(self, pose: Pose2D | None) -> float | None:
         """:func:`glass_speed_limit` at ``pose``, from the heard cells round it."""
@@ -154,10 +163,14 @@ class CostmapUpdater:
         return glass_speed_limit(p, pose, self.glass.heard_cells_xy((pose.x, pose.y), p.glass_slowdown_radius_m))
 
     def heard_glass_xy(self) -> np.ndarray:
-        """Centres ``(N, 2)`` of every cell the sonar has heard glass in (none without a glass memory)."""
-        if self.glass is None or self._params.glass_slowdown_radius_m <= 0:
+        """Centres ``(N, 2)`` of the cells the sonar heard glass in round the robot as of the last update:
+        within :data:`HEARD_GLASS_MARGIN_M` past the slowdown radius, what the next control ticks need
+        (the whole grid took 0.4 ms, ten times a second). None heard, no pose yet, or no slowdown: empty."""
+        radius = self._params.glass_slowdown_radius_m
+        pose = self.last_pose
+        if self.glass is None or radius <= 0 or pose is None:
             return np.zeros((0, 2))
-        return self.glass.heard_cells_xy()
+        return self.glass.heard_cells_xy((pose.x, pose.y), radius + HEARD_GLASS_MARGIN_M)
 
     def grid(self) -> CostGrid:
         """The inflated cost grid the planner and the follower read (a snapshot, cached between updates)."""
@@ -171,7 +184,9 @@ class CostmapUpdater:
         costmap = self.costmap
         if costmap is None:
             return
-        scan, self._pending_scan = self._pending_scan, None
+        while self._pending_mounts:
+            self._mounts.update(self._pending_mounts.popleft())
+        scan = self._pending_scan.popleft() if self._pending_scan else None
         if scan is not None:
             sensor = self._sensor_pose(scan.header)
             if sensor is not None:
@@ -193,6 +208,7 @@ class CostmapUpdater:
             if self._fold_in_sonar(sensor, reading, may_wait=bool(self._pending_ranges)):
                 self._last_range_pose = sensor
         pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
+        self.last_pose = pose
         if pose is not None:
             costmap.clear_footprint(pose.as_tuple())
             if self.glass is not None:

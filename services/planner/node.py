@@ -147,8 +147,7 @@ class PlannerService:
         node.create_subscription(LaserScan, topics.SCAN, self._layers.add_scan, SENSOR_DATA)
         if params.use_range_layer:
             node.create_subscription(Range, topics.ULTRASONIC, self._layers.add_range, SENSOR_DATA)
-        node.create_subscription(TFMessage, topics.TF_STATIC, lambda msg: self._costmap.change(self._layers.add_mounts, msg),
-                                 QoS(depth=5))
+        node.create_subscription(TFMessage, topics.TF_STATIC, self._layers.add_mounts, QoS(depth=5))
         node.create_service(CLEAR_ENTIRE_COSTMAP, CLEAR_COSTMAPS_SERVICE, self._on_clear_costmaps)
         self._action = ActionServer(
             node, NAVIGATE_TO_POSE, topics.NAVIGATE_TO_POSE,
@@ -223,11 +222,12 @@ class PlannerService:
         self._last_costmap_update_s = now
         self._costmap.request_update(now)
 
-    def _on_costmap_updated(self, now: float) -> None:
-        """The worker's update as of ``now`` is in the snapshot: the run checks its path against it."""
+    def _on_costmap_updated(self, _update_s: float) -> None:
+        """The worker's update is in the snapshot: the run checks its path against it, as of now (the
+        update was asked for a little earlier)."""
         run, handle = self._run, self._handle
         if run is not None and handle is not None and handle.active:
-            self._carry_out(run.costmap_updated(self._snapshot(now)))
+            self._carry_out(run.costmap_updated(self._snapshot()))
 
     # --- action -----------------------------------------------------------------------------------
 

@@ -150,11 +150,14 @@ def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
     # Marked glass counts as much as suspected glass: facing the arc's marked middle from 0.3 m.
     assert layers.glass_speed_limit_mps(Pose2D(1.7, 2.0, 0.0)) == pytest.approx(
         params.max_linear_vel_mps * 0.3 / 0.8, abs=0.05)
-    # The node reads the limit from every heard cell (the costmap thread's snapshot): the same answers.
-    every = layers.heard_glass_xy()
+    # The node reads the limit from the heard cells the costmap thread hands over, round where the last
+    # update placed the robot: the same answers there and half a metre on.
+    assert len(layers.heard_glass_xy()) == 0, "before an update placed the robot nothing is handed over"
     for pose in (Pose2D(0.5, 0.5, 0.0), Pose2D(1.6, 2.0, 0.0), Pose2D(1.6, 2.0, math.pi), Pose2D(2.0, 1.3, 0.0),
                  Pose2D(1.7, 2.0, 0.0)):
-        assert glass_speed_limit(params, pose, every) == layers.glass_speed_limit_mps(pose), pose
+        for dx in (0.0, -0.5):
+            layers.last_pose = Pose2D(pose.x + dx, pose.y, pose.yaw)
+            assert glass_speed_limit(params, pose, layers.heard_glass_xy()) == layers.glass_speed_limit_mps(pose), pose
 
 
 def test_an_echo_from_cells_known_free_is_held_as_glass_for_a_while() -> None:
