@@ -13,6 +13,10 @@ from deploy.replacements import Replacement
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
 #: where its lidar last put it) and folding its sensors in twice as often.
 FLEET_PLANNER_PARAMS = ("-p", "max_linear_vel_mps=0.4", "-p", "costmap_update_rate_hz=10")
+#: A fleet's batteries report twice a second, and at once on a change of status (CHARGING): every robot
+#: hears every other's battery (the traffic rule's priority, lowest first), and at 10 Hz that was 60 messages
+#: a simulated second for each robot to decode, for a charge that moves a few hundredths of a percent between.
+FLEET_BATTERY_PARAMS = ("-p", "publish_rate_hz=2")
 
 
 @dataclass(frozen=True)
@@ -44,7 +48,7 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
     template: dict[str, Any] = {
         "battery": {"command": [*py, "services.battery", "-p", "use_sim_time=true",
                                 "-p", f"drain_scale={options.drain_scale}", "-p", f"charge_scale={options.charge_scale}",
-                                "-p", f"state_file={state_dir}/${{ROBOT}}/battery.json"]},
+                                "-p", f"state_file={state_dir}/${{ROBOT}}/battery.json", *FLEET_BATTERY_PARAMS]},
         "pose": {"command": [*py, "services.pose", "-p", "use_sim_time=true"]},
         "planner": {"command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", f"map_yaml={state_dir}/map.yaml",
                                 "-p", f"glass_memory_file={state_dir}/${{ROBOT}}/glass_memory.npz",

@@ -57,7 +57,8 @@ def test_channel_table_rates_and_the_clock_last() -> None:
                      topics.CAMERA_IMAGE: 15.0, topics.DOCK_CONTACT: 20.0, topics.IR_DOCK: 20.0,
                      topics.GROUND_TRUTH_POSE: 20.0, topics.CLOCK: 20.0}
     assert table[-1].topic == topics.CLOCK
-    assert {ch.topic for ch in table if ch.on_demand} == {topics.CAMERA_INFO, topics.CAMERA_IMAGE, topics.IR_DOCK}
+    assert [(ch.topic, ch.rate_hz) for ch in table if ch.on_demand] == [
+        (topics.DETECTED_DOCK_POSE, 15.0), (topics.CAMERA_INFO, 15.0), (topics.CAMERA_IMAGE, 15.0), (topics.IR_DOCK, 20.0)]
     aruco = channel_table(_params(**{"detection.source": "aruco", "camera.enabled": False}))
     assert [ch.rate_hz for ch in aruco if ch.topic == topics.DETECTED_DOCK_POSE] == [None]  # only the queue drains
     assert not {topics.CAMERA_INFO, topics.CAMERA_IMAGE} & {ch.topic for ch in aruco}
