@@ -162,8 +162,8 @@ class SharedDecodes:
     """The last message decoded on each key, per type, in this process: the other subscriptions on that key
     take it instead of decoding the same bytes again.
 
-    A composed robot's services each subscribe to the robot's odometry, pose, scan, sonar and clock: three
-    planner, docking and battery subscriptions decoded each odometry sample three times. As rclcpp hands
+    A composed robot's services each subscribe to the robot's odometry, pose, scan, sonar and clock: the
+    planner's, the docking service's and the battery's subscriptions decoded each odometry sample three times. As rclcpp hands
     one intra-process message to every subscription as a const pointer, a received message is shared:
     callbacks read it and never change it. Bytes equal to the last on the key decode to an equal message, so
     sharing changes nothing else; a payload that fails validation is never remembered (each subscription

@@ -10,8 +10,8 @@ What the two threads share, and how:
 
 - The layers (:class:`~services.planner.costmap_updater.CostmapUpdater`) are touched only under
   :attr:`CostmapThread.lock`: by the worker for an update, by the executor for the rare changes (a new
-  map, a clearing, a turning circle, parameters, sensor mounts) through :meth:`CostmapThread.change`.
-  The sensor hand-overs (``add_scan``, ``add_range``) only swap a reference and append to a deque.
+  map, a clearing, a turning circle, parameters) through :meth:`CostmapThread.change`. The sensor
+  hand-overs (``add_scan``, ``add_range``, ``add_mounts``) only append to deques the update empties.
 - What the executor reads every tick is published after each update or change as snapshots that are
   never changed afterwards: the inflated :class:`~services.planner.costmap.CostGrid` and the cells the
   sonar heard glass in (:attr:`CostmapThread.grid`, :attr:`CostmapThread.heard_glass_xy`).

@@ -1,7 +1,7 @@
 """The planner's layered costmap kept current: the static map with remembered glass, lidar and sonar.
 
 Sensor callbacks only hand their newest data over (:meth:`CostmapUpdater.add_scan`,
-:meth:`CostmapUpdater.add_range`); :meth:`CostmapUpdater.update`, run by the node's costmap timer, places
+:meth:`CostmapUpdater.add_range`, :meth:`CostmapUpdater.add_mounts`); :meth:`CostmapUpdater.update`, run by the node's costmap timer, places
 each reading with the robot's pose at its own stamp (:class:`~shared.pose_tracking.PoseTrack`) and the
 sensor's mount from ``tf_static``, folds it in and re-inflates, so the control tick finds a cached
 snapshot. Sonar echoes the lidar cannot explain are glass: they go into the glass memory
