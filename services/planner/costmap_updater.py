@@ -1,8 +1,9 @@
 """The planner's layered costmap kept current: the static map with remembered glass, lidar and sonar.
 
 Sensor callbacks only hand their newest data over (:meth:`CostmapUpdater.add_scan`,
-:meth:`CostmapUpdater.add_range`, :meth:`CostmapUpdater.add_mounts`); :meth:`CostmapUpdater.update`, run by the node's costmap timer, places
-each reading with the robot's pose at its own stamp (:class:`~shared.pose_tracking.PoseTrack`) and the
+:meth:`CostmapUpdater.add_range`, :meth:`CostmapUpdater.add_mounts`); :meth:`CostmapUpdater.update`, run
+at the node's costmap rate on a worker thread (:mod:`services.planner.costmap_thread`), places each
+reading with the robot's pose at its own stamp (:class:`~shared.pose_tracking.PoseTrack`) and the
 sensor's mount from ``tf_static``, folds it in and re-inflates, so the control tick finds a cached
 snapshot. Sonar echoes the lidar cannot explain are glass: they go into the glass memory
 (:mod:`services.planner.glass_memory`), which is folded into the static layer and kept on file. No bus
