@@ -129,7 +129,7 @@ class PlannerService:
         self._control_time = _Durations()
         self._costmap_time = _Durations()
         self._layers = CostmapUpdater(params, self._shared_track, node.log)
-        self._costmap = CostmapThread(self._layers, lambda now: node.post(self._on_costmap_updated, now), node.log,
+        self._costmap = CostmapThread(self._layers, lambda _update_s: node.post(self._on_costmap_updated), node.log,
                                       self._costmap_time.add)
         self._worker = PlanningWorker(params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome))
         self._planning_in_flight = False
@@ -222,7 +222,7 @@ class PlannerService:
         self._last_costmap_update_s = now
         self._costmap.request_update(now)
 
-    def _on_costmap_updated(self, _update_s: float) -> None:
+    def _on_costmap_updated(self) -> None:
         """The worker's update is in the snapshot: the run checks its path against it, as of now (the
         update was asked for a little earlier)."""
         run, handle = self._run, self._handle
