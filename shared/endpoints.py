@@ -29,6 +29,7 @@ from shared.encoding import (
 )
 from shared.executor import Work
 from shared.schema import Message, MessageError
+from shared.subscriber_hub import SUBSCRIBER_HUB
 
 if TYPE_CHECKING:
     from shared.node import Node
@@ -235,7 +236,8 @@ class Subscription(Generic[M]):
         self._post_drain = executor.post_drain
         #: Without wildcards every sample's key is the subscription's own key: no need to read it back.
         self._exact_key = "" if "*" in self.key else self.key
-        self._subscriber = node.session.declare_subscriber(self.key, self._on_sample)
+        #: Shared with the process's other subscriptions on this key (:mod:`shared.subscriber_hub`).
+        self._subscriber = SUBSCRIBER_HUB.subscribe(node.session, self.key, self._on_sample)
         self._token = node.declare_endpoint("sub", msg_type.TYPE_NAME, self.key)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
@@ -298,6 +300,10 @@ class Subscription(Generic[M]):
         self._token.undeclare()
         self._subscriber.undeclare()
         self._node.forget(self, self._token)
+
+    def close(self) -> None:
+        """Stop receiving, as the node closes (it undeclares the endpoint tokens itself)."""
+        self._subscriber.undeclare()
 
 
 class ServiceServer(Generic[Req, Res]):

@@ -308,6 +308,9 @@ class Node:
 
     def close(self) -> None:
         self.shutdown()
+        for entity in self._entities:
+            if isinstance(entity, Subscription):
+                entity.close()  # a subscriber shared with other nodes outlives this one's membership
         if self._stats_queryable is not None:
             try:
                 self._stats_queryable.undeclare()
