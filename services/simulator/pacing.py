@@ -16,6 +16,7 @@ pose falls further behind and sim-time deadlines (staging, recoveries) expire wi
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -23,8 +24,14 @@ from pydantic import Field
 
 from services.simulator.component import ComponentParams
 
-#: A wall-clock schedule this far behind (the machine was busy) restarts from now instead of catching up.
-CATCH_UP_LIMIT_S = 0.25
+#: Time the world lost against its wall-clock schedule (held for a late driver, or the machine was busy) is
+#: made up by stepping faster than the target, at most this many times the target rate: a user who asks for
+#: 3x gets an hour simulated in twenty minutes when the stack can sustain it, and the drivers never see the
+#: clock jump (made up at once, the lost time would come back as a burst of steps the controllers cannot
+#: follow, and the world would hold for them again).
+CATCH_UP_FACTOR = 1.25
+#: A schedule this far behind (a suspended machine, a debugger) restarts from now instead of catching up.
+CATCH_UP_LIMIT_S = 1.0
 #: How long to sleep while holding for a late driver, and at most while waiting for the next step (wall s).
 HOLD_SLEEP_S = 0.0005
 MAX_SLEEP_S = 0.05
@@ -115,14 +122,18 @@ class Tick:
 
 class StepPacer:
     """Paces steps of ``dt_s`` against the wall clock at ``rtf`` (``"max"``: flat out), holding for late
-    drivers with ``drivers`` (None: never). After a hold, or when far behind, the schedule restarts from
-    now: the world does not rush to catch up.
+    drivers with ``drivers`` (None: never). Time lost to a hold or a busy machine is made up at no more than
+    :data:`CATCH_UP_FACTOR` times the target rate; more than :data:`CATCH_UP_LIMIT_S` behind, the schedule
+    restarts from now.
     """
 
     def __init__(self, dt_s: float, rtf: float | str, drivers: DriverPacer | None, wall_now_s: float) -> None:
         self.wall_per_step_s = 0.0 if rtf == "max" else dt_s / float(rtf)
         self.drivers = drivers
+        #: When the next step is due on the target schedule.
         self._next_wall_s = wall_now_s
+        #: When the last step ran: steps are at least ``wall_per_step_s / CATCH_UP_FACTOR`` apart.
+        self._last_step_wall_s = -math.inf
         self._held_since_s: float | None = None
 
     def tick(self, wall_now_s: float, sim_now_s: float, awaited: Callable[[], Iterable[Driver]]) -> Tick:
@@ -137,14 +148,16 @@ class StepPacer:
             assert pacer is not None
             pacer.note_held(wall_now_s - self._held_since_s)
             self._held_since_s = None
-            self._next_wall_s = wall_now_s
-            hold_ended = True
+            hold_ended = True  # the schedule stays: the held time is made up
         if self.wall_per_step_s > 0.0:
-            if wall_now_s < self._next_wall_s:
-                return Tick(step=False, sleep_s=min(self._next_wall_s - wall_now_s, MAX_SLEEP_S), hold_ended=hold_ended)
-            if wall_now_s - self._next_wall_s > CATCH_UP_LIMIT_S:
-                self._next_wall_s = wall_now_s
+            due_s = self._next_wall_s
+            if wall_now_s - due_s > CATCH_UP_LIMIT_S:
+                due_s = self._next_wall_s = wall_now_s
+            due_s = max(due_s, self._last_step_wall_s + self.wall_per_step_s / CATCH_UP_FACTOR)
+            if wall_now_s < due_s:
+                return Tick(step=False, sleep_s=min(due_s - wall_now_s, MAX_SLEEP_S), hold_ended=hold_ended)
             self._next_wall_s += self.wall_per_step_s
+            self._last_step_wall_s = wall_now_s
         return Tick(step=True, hold_ended=hold_ended)
 
 

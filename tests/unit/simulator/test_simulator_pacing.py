@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import pytest
 
-from services.simulator.pacing import Driver, DriverPacer, PacingParams, rate_report
+from services.simulator.pacing import (
+    CATCH_UP_FACTOR,
+    CATCH_UP_LIMIT_S,
+    Driver,
+    DriverPacer,
+    PacingParams,
+    StepPacer,
+    rate_report,
+)
 
 PARAMS = PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1)
 
@@ -62,3 +70,56 @@ def test_the_rate_report_says_how_long_the_world_waited_for_each_kind_of_input()
     assert rate_report(57.0, 20.0, 3.0, pacer) == (
         "real-time factor 2.9 over the last 20 s (target 3.0); waited for late drivers 3 times, 0.6 s in all "
         "(cmd_vel 0.5 s, pose 0.1 s)")
+
+
+def _run(pacer: StepPacer, until_wall_s: float, late_between: tuple[float, float] | None = None,
+         stall: tuple[float, float] | None = None, dt_s: float = 0.01) -> list[float]:
+    """Drive ``pacer`` on a virtual wall clock; returns the wall time of every step. ``late_between``: a moving
+    robot's command is late in that wall window; ``stall``: the machine stops at ``stall[0]`` for ``stall[1]``."""
+    wall = sim = 0.0
+    steps: list[float] = []
+    stalled = False
+    while wall < until_wall_s:
+        if stall is not None and not stalled and wall >= stall[0]:
+            wall += stall[1]
+            stalled = True
+        late = late_between is not None and late_between[0] <= wall < late_between[1]
+        drivers = [Driver("r1", sim - 1.0 if late else sim, moving=True)]
+        tick = pacer.tick(wall, sim, lambda drivers=drivers: drivers)
+        if tick.step:
+            steps.append(wall)
+            sim += dt_s
+        else:
+            wall += max(tick.sleep_s, 1e-5)
+    return steps
+
+
+def test_the_world_keeps_its_target_rate_and_sleeps_between_steps() -> None:
+    steps = _run(StepPacer(0.01, 2.0, DriverPacer(PARAMS), 0.0), 1.0)
+    assert len(steps) == pytest.approx(200, abs=1), "2x real time: 200 steps of 10 ms in one wall second"
+    gaps = [b - a for a, b in zip(steps, steps[1:], strict=False)]
+    assert min(gaps) >= 0.005 - 1e-9
+
+
+def test_time_held_for_a_late_driver_is_made_up_no_faster_than_the_catch_up_factor() -> None:
+    pacer = StepPacer(0.01, 2.0, DriverPacer(PARAMS), 0.0)
+    steps = _run(pacer, 2.0, late_between=(0.5, 0.55))
+    assert pacer.drivers is not None and pacer.drivers.held_s == pytest.approx(0.05, abs=0.002)
+    assert len(steps) == pytest.approx(400, abs=1), "the 50 ms held are made up within two wall seconds"
+    after = [b - a for a, b in zip(steps, steps[1:], strict=False) if b > 0.56]
+    assert min(after) >= 0.005 / CATCH_UP_FACTOR - 1e-9, "making up, steps come no closer than the factor allows"
+    assert max(after[:5]) <= 0.005 / CATCH_UP_FACTOR + 2e-5, "right after the hold the world runs faster"
+
+
+def test_a_long_stall_restarts_the_schedule_instead_of_rushing() -> None:
+    pacer = StepPacer(0.01, 2.0, None, 0.0)
+    steps = _run(pacer, 1.0 + CATCH_UP_LIMIT_S + 1.0, stall=(0.5, CATCH_UP_LIMIT_S + 0.5))
+    resumed = [t for t in steps if t >= 0.5]
+    # after the stall: back on a 5 ms schedule from where it resumed, nothing to make up
+    assert len(resumed) == pytest.approx((steps[-1] - resumed[0]) / 0.005 + 1, abs=1)
+
+
+def test_flat_out_steps_at_once_and_still_waits_for_a_late_driver() -> None:
+    pacer = StepPacer(0.01, "max", DriverPacer(PARAMS), 0.0)
+    assert pacer.tick(0.0, 0.0, lambda: [Driver("r1", 0.0, moving=True)]).step
+    assert not pacer.tick(0.0, 1.0, lambda: [Driver("r1", 0.0, moving=True)]).step
