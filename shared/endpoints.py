@@ -236,13 +236,21 @@ class Subscription(Generic[M]):
         self._post_drain = executor.post_drain
         #: Without wildcards every sample's key is the subscription's own key: no need to read it back.
         self._exact_key = "" if "*" in self.key else self.key
-        #: Shared with the process's other subscriptions on this key (:mod:`shared.subscriber_hub`).
+        self._receiving = True
+        #: Shared with the session's other subscriptions on this key (:mod:`shared.subscriber_hub`).
         self._subscriber = SUBSCRIBER_HUB.subscribe(node.session, self.key, self._on_sample)
-        self._token = node.declare_endpoint("sub", msg_type.TYPE_NAME, self.key)
+        try:  # the token after the subscriber: seeing it means the subscription receives
+            self._token = node.declare_endpoint("sub", msg_type.TYPE_NAME, self.key)
+        except BaseException:  # refused by the service's contract: leave the shared subscriber
+            self._receiving = False
+            self._subscriber.undeclare()
+            raise
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         # The hot path of every message: each attribute read of a sample makes a new object, and on a busy
         # machine this code runs with cold caches, so it reads each only once and skips what it can.
+        if not self._receiving:  # undeclared while the shared subscriber's thread was handing this one out
+            return
         payload = sample.payload
         size = len(payload)
         if not size and sample.kind != _PUT:  # a DELETE (never a message): it has no payload
@@ -297,12 +305,14 @@ class Subscription(Generic[M]):
 
     def undeclare(self) -> None:
         """Stop receiving (a subscription a node declares and drops as its needs change)."""
+        self._receiving = False
         self._token.undeclare()
         self._subscriber.undeclare()
         self._node.forget(self, self._token)
 
     def close(self) -> None:
         """Stop receiving, as the node closes (it undeclares the endpoint tokens itself)."""
+        self._receiving = False
         self._subscriber.undeclare()
 
 

@@ -9,7 +9,11 @@ key expression share one Zenoh subscriber: its thread hands each sample to every
 subscribed, as rclcpp's intra-process manager hands one message to each of its subscriptions.
 
 Each member still keeps its own queue, executor and counters; only the thread and the subscriber are
-shared. A member that fails does not stop the sample reaching the others. Subscriptions with different
+shared. The members get a sample one after the other: a member whose node is idle runs its callback at
+once on this thread (:meth:`Executor.try_run_now <shared.executor.Executor.try_run_now>`), so the next
+member's delivery waits for that callback, as it would wait for its own subscription's earlier sample.
+Callbacks on hot keys are short (they store the message), and the saving is one thread wake-up per member
+and sample. A member that fails does not stop the sample reaching the others. Subscriptions with different
 key expressions (an exact key and a wildcard that covers it) stay apart, as Zenoh declared them.
 """
 

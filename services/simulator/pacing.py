@@ -157,7 +157,9 @@ class StepPacer:
             if wall_now_s < due_s:
                 return Tick(step=False, sleep_s=min(due_s - wall_now_s, MAX_SLEEP_S), hold_ended=hold_ended)
             self._next_wall_s += self.wall_per_step_s
-            self._last_step_wall_s = wall_now_s
+            # When it was due, not when it ran: a late wake-up (sleep overshoot, the interpreter lock) must not
+            # push every later step back. At most a period back, so a late step brings no burst after it.
+            self._last_step_wall_s = max(due_s, wall_now_s - self.wall_per_step_s)
         return Tick(step=True, hold_ended=hold_ended)
 
 

@@ -105,3 +105,19 @@ def test_a_closed_session_is_forgotten(router_endpoint: str, session: zenoh.Sess
     handle = hub.subscribe(session, f"{namespace}/a", lambda _s: None)
     assert hub.subscriber_count(short_lived) == 0, "the closed session's entry went with the next subscribe"
     handle.undeclare()
+
+
+def test_a_subscription_the_contract_refuses_leaves_the_shared_subscriber(session: zenoh.Session,
+                                                                          namespace: str) -> None:
+    node = Node("strict", session, namespace)
+
+    def refuse(kind: str, type_name: str, key: str) -> None:
+        raise ValueError(f"{kind} {type_name} on {key} is not in the contract")
+
+    node.endpoint_check = refuse
+    try:
+        with pytest.raises(ValueError, match="not in the contract"):
+            node.create_subscription(Twist, "cmd_vel", lambda _m: None, RELIABLE)
+        assert SUBSCRIBER_HUB.subscriber_count(session) == 0
+    finally:
+        node.close()
