@@ -11,12 +11,8 @@ from deploy.launcher.composition import members_to_compose
 from deploy.replacements import Replacement
 
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
-#: where its lidar last put it) and folding its sensors in twice as often. Six planners share the machine,
-#: and each replans every second round the others: they search at half resolution (as large rooms always
-#: are), which takes a quarter of the expansions and about half the time of a plan across the depot, for
-#: paths within 1 % of the same length; the smoothing still runs on the full-resolution costmap.
-FLEET_PLANNER_PARAMS = ("-p", "max_linear_vel_mps=0.4", "-p", "costmap_update_rate_hz=10",
-                        "-p", "max_full_resolution_cells=0")
+#: where its lidar last put it) and folding its sensors in twice as often.
+FLEET_PLANNER_PARAMS = ("-p", "max_linear_vel_mps=0.4", "-p", "costmap_update_rate_hz=10")
 #: A fleet's batteries report twice a second, and at once on a change of status (CHARGING): every robot
 #: hears every other's battery (the traffic rule's priority, lowest first), and at 10 Hz that was 60 messages
 #: a simulated second for each robot to decode, for a charge that moves a few hundredths of a percent between.

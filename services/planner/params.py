@@ -94,9 +94,6 @@ class Params(ServiceParams):
     prefer_room_to_turn: bool = Field(
         True, description="avoid gaps only the inscribed circle fits through when a path with room to turn exists")
     snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
-    max_full_resolution_cells: int = Field(
-        90_000, ge=0, description="grids with more cells than this are searched at half resolution (smoothing "
-        "stays at full resolution; 0: always)")
     replan_period_s: float = Field(1.0, gt=0.0, description="replan this often while following (sim time)")
     min_replan_interval_s: float = Field(0.2, ge=0.0, description="urgent replans no more often than this")
     # control and action
@@ -168,7 +165,6 @@ class Params(ServiceParams):
             astar=self.astar_params(),
             smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),
             preferred_clearance_cost=room_to_turn if self.prefer_room_to_turn else 0,
-            max_full_resolution_cells=self.max_full_resolution_cells,
         )
 
     def astar_params(self) -> AStarParams:

@@ -157,8 +157,7 @@ PLANNER = Contract(
                            about="one goal at a time: a new goal preempts the active one (CANCELED)"),),
     flags=(USE_SIM_TIME, Flag("map_yaml", "the occupancy map (zendock map save)", needed=True),
            Flag("glass_memory_file", "keep the glass marks across restarts"),
-           Flag("max_linear_vel_mps", "speed limit"), Flag("costmap_update_rate_hz", "sensor folding rate"),
-           Flag("max_full_resolution_cells", "grids larger than this are searched at half resolution")),
+           Flag("max_linear_vel_mps", "speed limit"), Flag("costmap_update_rate_hz", "sensor folding rate")),
     behaviour=("navigates: a navigate_to_pose goal 1 m away gets feedback and SUCCEEDED, the robot within 25 cm of it",),
     needs=("simulator", "pose"),
 )
