@@ -5,7 +5,8 @@ this is zendock's. Each member is a service's own :class:`~shared.runtime.Servic
 exactly as ``python -m services.<name>`` does, on a :class:`~shared.node.Node` of its own: its own
 parameters, liveliness token (``zendock ps`` and health checks see the same graph), log prefix and
 executor thread (callbacks never overlap within a node; nodes do not wait for each other). They share the
-session, so a message from one member to another is delivered inside the process; messages to services
+session, so a message from one member to another is delivered inside the process, and the members'
+subscriptions on one key share one Zenoh subscriber (:mod:`shared.subscriber_hub`); messages to services
 elsewhere still go through the router. A callback's exception is contained by its node's executor as
 always; anything that stops the process stops the whole group, and the launcher restarts it.
 """
