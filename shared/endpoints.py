@@ -305,9 +305,8 @@ class Subscription(Generic[M]):
 
     def undeclare(self) -> None:
         """Stop receiving (a subscription a node declares and drops as its needs change)."""
-        self._receiving = False
         self._token.undeclare()
-        self._subscriber.undeclare()
+        self.close()
         self._node.forget(self, self._token)
 
     def close(self) -> None:
