@@ -21,6 +21,7 @@ import numpy as np
 
 from services.planner.astar import AStarParams, AStarPlanner, PlanningError
 from services.planner.costmap import INSCRIBED_INFLATED_OBSTACLE, CostGrid
+from services.planner.goal_heading import GoalHeadingParams, arrive_along_heading
 from services.planner.smoothing import SmoothingParams, path_length_m, smooth_path
 from shared.geometry import Pose2D
 
@@ -43,6 +44,9 @@ class GlobalPlannerParams:
     clearance_detour_factor: float = 2.0
     #: Around the start and the goal the costs stay as they are, so a robot can leave a tight spot.
     clearance_free_radius_m: float = 0.35
+    #: End the path along the goal's heading where there is room (:mod:`services.planner.goal_heading`);
+    #: None: the path ends however A* reached the goal, and the follower turns there on the spot.
+    goal_heading: GoalHeadingParams | None = field(default_factory=GoalHeadingParams)
 
     def __post_init__(self) -> None:
         if self.downsample_factor < 1:
@@ -81,7 +85,16 @@ class GlobalPlanner:
         Raises :class:`~services.planner.astar.PlanningError` when an end is unusable or unreachable.
         """
         t0 = time.perf_counter()
-        start_pose, goal_pose = _pose(start), _pose(goal)
+        path = self._roomy_path(grid, _pose(start), _pose(goal), t0)
+        if self.params.goal_heading is None or path.goal_snapped:
+            return path
+        poses = arrive_along_heading(grid, path.poses, self.params.goal_heading, _pose(start).yaw)
+        if poses is path.poses:
+            return path
+        return replace(path, poses=poses, length_m=path_length_m(poses), planning_time_s=time.perf_counter() - t0)
+
+    def _roomy_path(self, grid: CostGrid, start_pose: Pose2D, goal_pose: Pose2D, t0: float) -> PlannedPath:
+        """The A* path, or one with room to turn when that is not much longer (see the module docstring)."""
         path = self._plan_on(grid, start_pose, goal_pose, t0)
         threshold = self.params.preferred_clearance_cost
         if threshold <= 0 or not np.any(grid.costs_at(path.grid_points) >= threshold):

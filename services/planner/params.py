@@ -48,6 +48,8 @@ class Params(ServiceParams):
     max_angular_accel_radps2: float = Field(3.0, gt=0.0)
     regulated_linear_scaling_min_radius_m: float = Field(
         0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower")
+    cost_scaling_dist_m: float = Field(
+        0.4, gt=0.0, description="closer than this to an obstacle the speed falls in proportion to the distance")
     approach_velocity_scaling_dist_m: float = Field(
         0.3, gt=0.0, description="over this last stretch of the path the speed falls in proportion to what is left")
     open_loop_acceleration: bool = Field(
@@ -185,6 +187,7 @@ class Params(ServiceParams):
             rotate_to_heading_angular_vel_radps=self.max_angular_vel_radps,
             regulated_linear_scaling_min_radius_m=self.regulated_linear_scaling_min_radius_m,
             approach_velocity_scaling_dist_m=self.approach_velocity_scaling_dist_m,
+            cost_scaling_dist_m=self.cost_scaling_dist_m,
             inflation_cost_scaling_factor=costmap.cost_scaling_factor,
             inscribed_radius_m=costmap.inscribed_radius_m,
             xy_goal_tolerance_m=self.xy_goal_tolerance_m,

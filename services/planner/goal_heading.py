@@ -1,0 +1,203 @@
+"""End a path along its goal's heading, where there is room: arrive moving the way the goal faces.
+
+A* plans positions only, so a path reaches its goal from whichever side was shortest, and a follower
+that arrives side-on must stop, turn on the spot to the goal's heading, and (when the goal is a staging
+pose, as docking's is) set off again along it. The last stretch of the path is therefore replaced, when
+it helps, by the shape a car-like robot would drive: from a join point on the path (or the start) a
+straight line tangent to a turning circle, the arc of that circle, and a short straight lead-in along
+the goal's heading (the "line, arc" words of a Dubins path, with the heading at the join point left free
+and the corner there paid for as a turn).
+
+Each candidate (join point, turning radius, lead-in, turning left or right) must keep its centre on cells
+no costlier than ``max_cost`` (or than the stretch it replaces, where that ran costlier) and be quicker to
+drive than the path it replaces followed by the turn on the spot. The time is estimated as the path
+follower drives: top speed, slowed in proportion on curves tighter than ``slow_radius_m``, turning no
+faster than ``max_angular_radps``, and turning on the spot at a corner sharper than ``max_corner_rad``.
+The quickest wins; with none, the path is left as it was. Pure numpy on a
+:class:`~services.planner.costmap.CostGrid`: no Zenoh.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from services.planner.costmap import INSCRIBED_INFLATED_OBSTACLE, NO_INFORMATION, CostGrid
+from services.planner.smoothing import orientations
+from shared.geometry import wrap_angle
+
+
+@dataclass(frozen=True)
+class GoalHeadingParams:
+    """Where the new end may join the path, how it may turn and what it may cross."""
+
+    #: Join points this far before the goal, along the path (the path's start too, when it is shorter).
+    join_distances_m: tuple[float, ...] = (0.5, 0.8, 1.2, 1.6, 2.0, 2.5, 3.0)
+    turning_radii_m: tuple[float, ...] = (0.35, 0.5, 0.7)
+    #: Straight stretches along the goal's heading that end the path.
+    lead_ins_m: tuple[float, ...] = (0.15, 0.4)
+    #: A path that already arrives within this of the goal's heading is left alone.
+    min_turn_rad: float = 0.35
+    #: The curve's centre stays on cells at most this costly (128: about 0.38 m from the nearest obstacle
+    #: with the default inflation), or as costly as the replaced stretch where that was costlier.
+    max_cost: int = 128
+    #: The longest arc allowed (beyond it the new end would circle round).
+    max_arc_rad: float = 1.25 * math.pi
+    spacing_m: float = 0.05
+    #: The follower's speed model (see the module docstring).
+    max_linear_mps: float = 0.5
+    max_angular_radps: float = 1.5
+    slow_radius_m: float = 0.6
+    min_curve_speed_mps: float = 0.25
+    #: Sharper corners than this are turned on the spot (the follower's rotate-to-heading threshold).
+    max_corner_rad: float = 0.785
+    #: What stopping, turning on the spot and setting off again costs besides the turn itself.
+    stop_and_turn_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("join_distances_m", "turning_radii_m"):
+            values = getattr(self, name)
+            if not values or min(values) <= 0.0:
+                raise ValueError(f"{name} must be positive distances, got {values}")
+        if not self.lead_ins_m or min(self.lead_ins_m) < 0.0:
+            raise ValueError(f"lead_ins_m must be non-negative distances, got {self.lead_ins_m}")
+        if not 0 <= self.max_cost < INSCRIBED_INFLATED_OBSTACLE:
+            raise ValueError(f"max_cost must be in 0..252, got {self.max_cost}")
+        for name in ("max_arc_rad", "spacing_m", "max_linear_mps", "max_angular_radps", "slow_radius_m",
+                     "min_curve_speed_mps", "max_corner_rad"):
+            if not getattr(self, name) > 0.0:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+
+
+def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingParams | None = None,
+                         start_yaw: float | None = None) -> np.ndarray:
+    """``poses`` ``(N, 3)`` (goal last, with the goal's yaw) with its end replaced by the quickest line and
+    arc that arrive along the goal's heading; ``poses`` itself when none is quicker or none fits.
+    ``start_yaw``: the robot's heading at the path's start (a new end joined there turns from it)."""
+    p = params or GoalHeadingParams()
+    poses = np.asarray(poses, dtype=float)
+    if len(poses) < 3:
+        return poses
+    xy = poses[:, :2]
+    goal, goal_yaw = xy[-1], float(poses[-1, 2])
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    total = float(arc[-1])
+    arrival_turn = abs(wrap_angle(goal_yaw - _direction_before(xy, arc, total)))
+    if arrival_turn < p.min_turn_rad:
+        return poses
+    heading = np.array([math.cos(goal_yaw), math.sin(goal_yaw)])
+    best: np.ndarray | None = None
+    best_join, best_s = len(xy), math.inf
+    for join_m in sorted({min(d, total) for d in p.join_distances_m}):
+        j = int(np.searchsorted(arc, total - join_m, side="right")) - 1
+        j = min(max(j, 0), len(xy) - 2)
+        replaced = xy[j:]
+        old_yaw = _yaw(_direction_after(xy, arc, j))
+        came_yaw = start_yaw if j == 0 and start_yaw is not None else old_yaw
+        old_s = (_drive_time_s(replaced, p) + _corner_s(came_yaw, old_yaw, p)
+                 + arrival_turn / p.max_angular_radps + p.stop_and_turn_s)
+        allowed = max(p.max_cost, _max_cost(grid, replaced))
+        for radius_m in p.turning_radii_m:
+            for lead_m in p.lead_ins_m:
+                for side in (1.0, -1.0):
+                    tail = _line_arc_lead(xy[j], goal, heading, radius_m, lead_m, side, p)
+                    if tail is None:
+                        continue
+                    new_s = _drive_time_s(tail, p) + _corner_s(came_yaw, _yaw(tail[1] - tail[0]), p)
+                    if new_s < min(old_s, best_s) and _max_cost(grid, tail) <= allowed:
+                        best, best_s, best_join = tail, new_s, j
+    if best is None:
+        return poses
+    points = np.concatenate([xy[:best_join], best])
+    return np.column_stack([points, orientations(points, goal_yaw)])
+
+
+def _yaw(direction: np.ndarray) -> float:
+    return math.atan2(float(direction[1]), float(direction[0]))
+
+
+def _corner_s(from_yaw: float, to_yaw: float, p: GoalHeadingParams) -> float:
+    """A corner the follower cuts costs nothing here; a sharper one is turned on the spot."""
+    corner = abs(wrap_angle(to_yaw - from_yaw))
+    return corner / p.max_angular_radps if corner > p.max_corner_rad else 0.0
+
+
+def _direction_before(xy: np.ndarray, arc: np.ndarray, total: float, back_m: float = 0.2) -> float:
+    """The path's direction of travel over its last ``back_m``."""
+    i = int(np.searchsorted(arc, max(0.0, total - back_m), side="right")) - 1
+    i = min(max(i, 0), len(xy) - 2)
+    return _yaw(xy[-1] - xy[i])
+
+
+def _direction_after(xy: np.ndarray, arc: np.ndarray, j: int, ahead_m: float = 0.15) -> np.ndarray:
+    """The path's direction of travel from point ``j`` over the next ``ahead_m``."""
+    k = int(np.searchsorted(arc, arc[j] + ahead_m, side="left"))
+    k = min(max(k, j + 1), len(xy) - 1)
+    return xy[k] - xy[j]
+
+
+def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, radius_m: float, lead_m: float,
+                   side: float, p: GoalHeadingParams) -> np.ndarray | None:
+    """Points from ``start``: straight to where it meets a circle of ``radius_m`` tangentially, round it
+    (counter-clockwise for ``side`` +1) to the lead-in, then along ``heading`` to ``goal``; None when
+    ``start`` is inside the circle or the arc would circle round."""
+    lead_start = goal - lead_m * heading
+    normal = np.array([-heading[1], heading[0]])
+    centre = lead_start + side * radius_m * normal
+    offset = start - centre
+    distance = float(np.hypot(*offset))
+    if distance <= radius_m + p.spacing_m:
+        return None
+    # The tangent point whose direction of travel round the circle leads away from ``start``.
+    spread = math.acos(radius_m / distance)
+    seen = math.atan2(offset[1], offset[0])
+    touch = seen + side * spread
+    end = math.atan2(lead_start[1] - centre[1], lead_start[0] - centre[0])
+    sweep = (side * (end - touch)) % (2.0 * math.pi)
+    if sweep > p.max_arc_rad:
+        return None
+    tangent_point = centre + radius_m * np.array([math.cos(touch), math.sin(touch)])
+    line = _segment(start, tangent_point, p.spacing_m, include_start=True)
+    steps = max(1, math.ceil(sweep * radius_m / p.spacing_m))
+    angles = touch + side * sweep * np.arange(1, steps + 1) / steps
+    bend = centre + radius_m * np.column_stack([np.cos(angles), np.sin(angles)])
+    lead = _segment(lead_start, goal, p.spacing_m, include_start=False)
+    return np.concatenate([line, bend, lead])
+
+
+def _segment(a: np.ndarray, b: np.ndarray, spacing_m: float, include_start: bool) -> np.ndarray:
+    count = math.ceil(float(np.hypot(*(b - a))) / spacing_m)
+    if count == 0:
+        return a[None, :] if include_start else np.zeros((0, 2))
+    t = np.arange(0 if include_start else 1, count + 1) / count
+    return a + np.outer(t, b - a)
+
+
+def _curvatures(points: np.ndarray) -> np.ndarray:
+    """Curvature at each interior point of a polyline (turn angle over the mean of its two legs)."""
+    legs = np.diff(points, axis=0)
+    lengths = np.hypot(legs[:, 0], legs[:, 1])
+    headings = np.arctan2(legs[:, 1], legs[:, 0])
+    turn = np.abs((np.diff(headings) + math.pi) % (2.0 * math.pi) - math.pi)
+    return turn / np.maximum(0.5 * (lengths[1:] + lengths[:-1]), 1e-9)
+
+
+def _max_cost(grid: CostGrid, points: np.ndarray) -> int:
+    """The highest cost under ``points``; unknown and off-grid count as lethal."""
+    costs = grid.costs_at(points).astype(np.int16)
+    costs = np.where(costs == NO_INFORMATION, 255, costs)
+    return int(costs.max()) if len(costs) else 0
+
+
+def _drive_time_s(points: np.ndarray, p: GoalHeadingParams) -> float:
+    """Seconds to drive a polyline as the follower would (see the module docstring)."""
+    if len(points) < 2:
+        return 0.0
+    legs = np.hypot(*np.diff(points, axis=0).T)
+    kappa = np.concatenate([[0.0], _curvatures(points)])
+    radius = 1.0 / np.maximum(kappa, 1e-9)
+    speed = np.minimum(p.max_linear_mps, np.maximum(p.max_linear_mps * radius / p.slow_radius_m, p.min_curve_speed_mps))
+    speed = np.minimum(speed, p.max_angular_radps * radius)
+    return float(np.sum(legs / np.maximum(speed, 1e-3)))

@@ -1,0 +1,113 @@
+"""A path's end along its goal's heading: it arrives facing the goal's way, only where there is room,
+and never over costlier cells than the path it replaces."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from services.planner.costmap import LayeredCostmap
+from services.planner.global_planner import GlobalPlanner, GlobalPlannerParams
+from services.planner.goal_heading import GoalHeadingParams, arrive_along_heading
+from services.planner.occupancy_map import OCC_FREE, OCC_OCCUPIED, OccupancyMap
+from shared.geometry import wrap_angle
+
+RESOLUTION_M = 0.05
+
+
+def _room(size_m: float = 6.0, blocks: tuple[tuple[float, float, float, float], ...] = ()) -> LayeredCostmap:
+    """A walled square room from (0, 0), with rectangular blocks ``(x0, y0, x1, y1)`` inside."""
+    cells = round(size_m / RESOLUTION_M)
+    data = np.full((cells, cells), OCC_FREE, dtype=np.int8)
+    data[[0, -1], :] = OCC_OCCUPIED
+    data[:, [0, -1]] = OCC_OCCUPIED
+    for x0, y0, x1, y1 in blocks:
+        data[round(y0 / RESOLUTION_M):round(y1 / RESOLUTION_M), round(x0 / RESOLUTION_M):round(x1 / RESOLUTION_M)] = OCC_OCCUPIED
+    return LayeredCostmap(OccupancyMap(RESOLUTION_M, (0.0, 0.0, 0.0), data))
+
+
+def _straight(start: tuple[float, float], goal: tuple[float, float], goal_yaw: float) -> np.ndarray:
+    count = math.ceil(math.dist(start, goal) / RESOLUTION_M)
+    xy = np.linspace(start, goal, count + 1)
+    yaw = np.full(len(xy), math.atan2(goal[1] - start[1], goal[0] - start[0]))
+    yaw[-1] = goal_yaw
+    return np.column_stack([xy, yaw])
+
+
+def _arrival_yaw(poses: np.ndarray, back_m: float = 0.15) -> float:
+    xy = poses[:, :2]
+    before = xy[np.hypot(*(xy - xy[-1]).T) >= back_m][-1]
+    return math.atan2(xy[-1, 1] - before[1], xy[-1, 0] - before[0])
+
+
+def test_a_side_on_arrival_becomes_one_along_the_goal_heading() -> None:
+    grid = _room().grid()
+    side_on = _straight((5.0, 3.0), (2.0, 3.0), -math.pi / 2)  # driving west to a goal that faces south
+    poses = arrive_along_heading(grid, side_on, start_yaw=math.pi)
+    assert poses is not side_on
+    assert np.allclose(poses[-1, :2], side_on[-1, :2])
+    assert poses[-1, 2] == pytest.approx(-math.pi / 2)
+    assert abs(wrap_angle(_arrival_yaw(poses) + math.pi / 2)) < 0.1
+    steps = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+    assert steps.max() <= 0.051 and steps.min() > 0.0
+    assert grid.costs_at(poses[:, :2]).max() <= GoalHeadingParams().max_cost
+
+
+def test_a_path_already_arriving_along_the_heading_is_left_alone() -> None:
+    grid = _room().grid()
+    aligned = _straight((2.0, 5.0), (2.0, 2.0), -math.pi / 2)
+    assert arrive_along_heading(grid, aligned, start_yaw=-math.pi / 2) is aligned
+
+
+def test_no_room_to_turn_leaves_the_path_as_it_was() -> None:
+    # A corridor 0.9 m wide ending at the goal: no curve into a heading across it fits.
+    grid = _room(blocks=((0.0, 0.0, 6.0, 2.55), (0.0, 3.45, 6.0, 6.0))).grid()
+    side_on = _straight((5.0, 3.0), (2.0, 3.0), -math.pi / 2)
+    assert arrive_along_heading(grid, side_on, start_yaw=math.pi) is side_on
+
+
+def test_an_arrival_within_the_turn_allowed_is_left_alone() -> None:
+    grid = _room().grid()
+    nearly = _straight((5.0, 3.0), (2.0, 3.0), math.pi - 0.3)
+    assert arrive_along_heading(grid, nearly, GoalHeadingParams(min_turn_rad=0.35), start_yaw=math.pi) is nearly
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_new_end_never_crosses_costlier_cells_than_allowed(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    blocks = tuple((x, y, x + w, y + h) for x, y, w, h in rng.uniform((0.5, 0.5, 0.2, 0.2), (5.0, 5.0, 1.0, 1.0), (6, 4)))
+    costmap = _room(blocks=blocks)
+    grid = costmap.grid()
+    free = np.argwhere(grid.costs == 0)
+    start_cell, goal_cell = free[rng.integers(len(free))], free[rng.integers(len(free))]
+    start = grid.frame.cell_to_world(int(start_cell[1]), int(start_cell[0]))
+    goal = grid.frame.cell_to_world(int(goal_cell[1]), int(goal_cell[0]))
+    planner = GlobalPlanner(GlobalPlannerParams(goal_heading=None))
+    try:
+        plain = planner.compute_path(grid, (*start, 0.0), (*goal, float(rng.uniform(-math.pi, math.pi))))
+    except Exception:  # noqa: BLE001 - an unreachable pair has no path to change
+        pytest.skip("no path between the drawn cells")
+    poses = arrive_along_heading(grid, plain.poses, start_yaw=0.0)
+    assert np.allclose(poses[-1], plain.poses[-1])
+    assert np.allclose(poses[0, :2], plain.poses[0, :2])
+    allowed = max(GoalHeadingParams().max_cost, int(grid.costs_at(plain.poses[:, :2]).max()))
+    assert int(grid.costs_at(poses[:, :2]).max()) <= allowed
+
+
+def test_the_planner_ends_paths_along_the_goal_heading_unless_told_not_to() -> None:
+    grid = _room().grid()
+    start, goal = (5.0, 3.2, math.pi), (2.0, 3.0, -math.pi / 2)
+    plain = GlobalPlanner(GlobalPlannerParams(goal_heading=None)).compute_path(grid, start, goal)
+    curved = GlobalPlanner().compute_path(grid, start, goal)
+    assert abs(wrap_angle(_arrival_yaw(plain.poses) + math.pi / 2)) > 1.0
+    assert abs(wrap_angle(_arrival_yaw(curved.poses) + math.pi / 2)) < 0.1
+    assert curved.length_m == pytest.approx(float(np.hypot(*np.diff(curved.poses[:, :2], axis=0).T).sum()))
+
+
+def test_bad_parameters_are_refused_with_their_name() -> None:
+    with pytest.raises(ValueError, match="turning_radii_m"):
+        GoalHeadingParams(turning_radii_m=(0.0,))
+    with pytest.raises(ValueError, match="max_cost"):
+        GoalHeadingParams(max_cost=253)
