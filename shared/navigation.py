@@ -16,6 +16,7 @@ run on the node's executor thread.
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 
 from shared.action import ActionClient, ClientGoal, GoalStatusCode
 from shared.geometry import Pose2D
@@ -57,13 +58,15 @@ class NavigationClient:
         """Block until the navigation server is up; ``False`` after the timeout."""
         return self._client.server_ready(timeout_s=timeout_s)
 
-    def go_to_pose(self, pose: Pose2D | PoseStamped) -> None:
-        """Send a goal (map frame); the previous goal of this client is forgotten (the server preempts it)."""
+    def go_to_pose(self, pose: Pose2D | PoseStamped, on_done: Callable[[], None] | None = None) -> None:
+        """Send a goal (map frame); the previous goal of this client is forgotten (the server preempts it).
+        ``on_done`` runs on the executor once this goal has ended (succeeded, canceled, failed or refused)."""
         if isinstance(pose, Pose2D):
             pose = PoseStamped(Header.at(self.node.now(), MAP_FRAME), Pose.from_pose2d(pose))
         if self._goal is not None:
             self._client.forget(self._goal)
-        self._goal = self._client.send_goal(NavigateToPoseGoal(pose=pose))
+        done = None if on_done is None else (lambda _goal: on_done())
+        self._goal = self._client.send_goal(NavigateToPoseGoal(pose=pose), on_done=done)
 
     def is_task_complete(self) -> bool:
         """True once the goal ended, was rejected, or its server went away; also True with no goal."""

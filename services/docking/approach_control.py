@@ -55,6 +55,10 @@ class ApproachController(Protocol):
 
     def staging_pose(self, dock_pose: Pose2D) -> Pose2D: ...
 
+    def entry_curvature(self, pose: Pose2D, dock_pose: Pose2D) -> float:
+        """The curvature (1/m) the approach would first steer on from ``pose``: how sharply it would turn
+        if it took over there."""
+
     def begin(self, dock_pose: Pose2D) -> None: ...
 
     def update_dock(self, dock_pose: Pose2D) -> None: ...
@@ -78,6 +82,9 @@ class SeedApproach:
 
     def staging_pose(self, dock_pose: Pose2D) -> Pose2D:
         return line_approach(dock_pose, self.offsets).staging_goal
+
+    def entry_curvature(self, pose: Pose2D, dock_pose: Pose2D) -> float:
+        return 0.0  # it turns on the spot to each of its goals
 
     def begin(self, dock_pose: Pose2D) -> None:
         self._controller = LineApproachController(line_approach(dock_pose, self.offsets).goals, self.params)
@@ -153,6 +160,10 @@ class GracefulApproach:
 
     def staging_pose(self, dock_pose: Pose2D) -> Pose2D:
         return graceful_staging_pose(dock_pose, self.staging_offset_m)
+
+    def entry_curvature(self, pose: Pose2D, dock_pose: Pose2D) -> float:
+        law = GracefulDockController(dock_pose, replace(self.params, pose_estimator=None))
+        return smooth_control_law(law.target_for(pose), pose, law.gains_at(pose)).curvature_per_m
 
     def begin(self, dock_pose: Pose2D) -> None:
         self._controller = GracefulDockController(dock_pose, self.params)

@@ -5,7 +5,8 @@ Everything runs on the node's executor (callbacks never overlap, nothing blocks)
 store into the :class:`~services.docking.inputs.InputCache`; one timer on the node's clock -- 20 Hz for
 the graceful and infrared controllers, 10 Hz for the seed controller -- hands its snapshot to the
 :class:`~services.docking.executive.Executive`, and action goals, cancels and the fleet's answers go to
-it as events at once. The node only carries out the effects it returns. The low-battery trigger starts
+it as events at once; the end of a planner goal runs a tick at once. The node only carries out the
+effects it returns. The low-battery trigger starts
 the same docking run as the action.
 
 Charging is read from battery_status (CHARGING or FULL), as a real robot would; the simulator's ground
@@ -163,6 +164,8 @@ class DockingService:
         self._carry_out(self.executive.handle(event, self._heard(self.node.now())))
 
     def _on_tick(self) -> None:
+        """The control tick; also run as soon as a planner goal ends, so that the approach taking over from
+        navigation starts as the planner lets go (its last command was a stop), not up to a period later."""
         now = self.node.now()
         reset = clock_went_back(now, self._last_now_s)
         if reset:
@@ -210,7 +213,7 @@ class DockingService:
                         self.cmd_vel.publish(Twist.planar(orders.publish.linear_x_mps,
                                                           orders.publish.angular_z_radps))
                     if orders.send_goal is not None:
-                        self.nav.go_to_pose(orders.send_goal)
+                        self.nav.go_to_pose(orders.send_goal, on_done=self._on_tick)
                 case WantDetections(wanted):
                     self.sightings.want(wanted)
                 case Reserve(battery, dock_id, lengths):

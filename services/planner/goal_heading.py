@@ -35,11 +35,14 @@ class GoalHeadingParams:
 
     #: Join points this far before the goal, along the path (the path's start too, when it is shorter).
     join_distances_m: tuple[float, ...] = (0.5, 0.8, 1.2, 1.6, 2.0, 2.5, 3.0)
-    turning_radii_m: tuple[float, ...] = (0.35, 0.5, 0.7)
+    turning_radii_m: tuple[float, ...] = (0.5, 0.7, 1.0)
     #: Straight stretches along the goal's heading that end the path.
     lead_ins_m: tuple[float, ...] = (0.15, 0.4)
-    #: A path that already arrives within this of the goal's heading is left alone.
-    min_turn_rad: float = 0.35
+    #: A path that already arrives within this of the goal's heading is left alone: a follower turns that
+    #: much at the goal in about a second, and docking takes over from navigation before the staging pose
+    #: when the robot faces the dock within 1 rad (a curve planned for such an arrival made short room
+    #: starts slower: 5.0 -> 5.6 s in one).
+    min_turn_rad: float = 1.0
     #: The curve's centre stays on cells at most this costly (128: about 0.38 m from the nearest obstacle
     #: with the default inflation), or as costly as the replaced stretch where that was costlier.
     max_cost: int = 128
@@ -51,6 +54,9 @@ class GoalHeadingParams:
     max_angular_radps: float = 1.5
     slow_radius_m: float = 0.6
     min_curve_speed_mps: float = 0.25
+    #: From the robot's own pose the new end may first turn along an arc of this radius by these angles.
+    opening_radius_m: float = 0.5
+    opening_sweeps_rad: tuple[float, ...] = (0.35, 0.7, 1.05)
     #: Sharper corners than this are turned on the spot (the follower's rotate-to-heading threshold).
     max_corner_rad: float = 0.785
     #: What stopping, turning on the spot and setting off again costs besides the turn itself.
@@ -65,7 +71,7 @@ class GoalHeadingParams:
             raise ValueError(f"lead_ins_m must be non-negative distances, got {self.lead_ins_m}")
         if not 0 <= self.max_cost < INSCRIBED_INFLATED_OBSTACLE:
             raise ValueError(f"max_cost must be in 0..252, got {self.max_cost}")
-        for name in ("max_arc_rad", "spacing_m", "max_linear_mps", "max_angular_radps", "slow_radius_m",
+        for name in ("opening_radius_m", "max_arc_rad", "spacing_m", "max_linear_mps", "max_angular_radps", "slow_radius_m",
                      "min_curve_speed_mps", "max_corner_rad"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
@@ -95,19 +101,22 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
         j = min(max(j, 0), len(xy) - 2)
         replaced = xy[j:]
         old_yaw = _yaw(_direction_after(xy, arc, j))
-        came_yaw = start_yaw if j == 0 and start_yaw is not None else old_yaw
-        old_s = (_drive_time_s(replaced, p) + _corner_s(came_yaw, old_yaw, p)
+        from_start = j == 0 and start_yaw is not None
+        came_yaw = start_yaw if from_start and start_yaw is not None else old_yaw
+        old_s = (_drive_time_s(replaced, p) + _corner_s(came_yaw, old_yaw, from_start, p)
                  + arrival_turn / p.max_angular_radps + p.stop_and_turn_s)
         allowed = max(p.max_cost, _max_cost(grid, replaced))
-        for radius_m in p.turning_radii_m:
-            for lead_m in p.lead_ins_m:
-                for side in (1.0, -1.0):
-                    tail = _line_arc_lead(xy[j], goal, heading, radius_m, lead_m, side, p)
-                    if tail is None:
-                        continue
-                    new_s = _drive_time_s(tail, p) + _corner_s(came_yaw, _yaw(tail[1] - tail[0]), p)
-                    if new_s < min(old_s, best_s) and _max_cost(grid, tail) <= allowed:
-                        best, best_s, best_join = tail, new_s, j
+        for lead_in, lead_yaw in _openings(xy[j], came_yaw, from_start, p):
+            for radius_m in p.turning_radii_m:
+                for lead_m in p.lead_ins_m:
+                    for side in (1.0, -1.0):
+                        rest = _line_arc_lead(lead_in[-1], goal, heading, radius_m, lead_m, side, p)
+                        if rest is None:
+                            continue
+                        tail = np.concatenate([lead_in[:-1], rest])
+                        new_s = _drive_time_s(tail, p) + _corner_s(lead_yaw, _yaw(rest[min(3, len(rest) - 1)] - rest[0]), from_start, p)
+                        if new_s < min(old_s, best_s) and _max_cost(grid, tail) <= allowed:
+                            best, best_s, best_join = tail, new_s, j
     if best is None:
         return poses
     points = np.concatenate([xy[:best_join], best])
@@ -118,10 +127,30 @@ def _yaw(direction: np.ndarray) -> float:
     return math.atan2(float(direction[1]), float(direction[0]))
 
 
-def _corner_s(from_yaw: float, to_yaw: float, p: GoalHeadingParams) -> float:
-    """A corner the follower cuts costs nothing here; a sharper one is turned on the spot."""
+def _corner_s(from_yaw: float, to_yaw: float, standing: bool, p: GoalHeadingParams) -> float:
+    """A corner on the way the follower cuts for nothing, a sharper one it turns on the spot; at the robot
+    itself (``standing``: the path's start) every turn takes its time, and a sharp one a stop as well."""
     corner = abs(wrap_angle(to_yaw - from_yaw))
+    if standing:
+        return corner / p.max_angular_radps + (0.5 * p.stop_and_turn_s if corner > p.max_corner_rad else 0.0)
     return corner / p.max_angular_radps if corner > p.max_corner_rad else 0.0
+
+
+def _openings(start: np.ndarray, yaw: float, from_start: bool, p: GoalHeadingParams) -> list[tuple[np.ndarray, float]]:
+    """Ways to leave ``start``: as it is, and (from the robot's own pose) along arcs that turn it first, so a
+    robot already on a curve can stay on one: ``(points, heading at the last point)``."""
+    openings = [(start[None, :], yaw)]
+    if not from_start:
+        return openings
+    radius_m = p.opening_radius_m
+    for side in (1.0, -1.0):
+        centre = start + side * radius_m * np.array([-math.sin(yaw), math.cos(yaw)])
+        for sweep in p.opening_sweeps_rad:
+            steps = max(1, math.ceil(sweep * radius_m / p.spacing_m))
+            turned = yaw + side * sweep * np.arange(0, steps + 1) / steps
+            points = centre + side * radius_m * np.column_stack([np.sin(turned), -np.cos(turned)])
+            openings.append((points, float(turned[-1])))
+    return openings
 
 
 def _direction_before(xy: np.ndarray, arc: np.ndarray, total: float, back_m: float = 0.2) -> float:
@@ -142,16 +171,17 @@ def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, rad
                    side: float, p: GoalHeadingParams) -> np.ndarray | None:
     """Points from ``start``: straight to where it meets a circle of ``radius_m`` tangentially, round it
     (counter-clockwise for ``side`` +1) to the lead-in, then along ``heading`` to ``goal``; None when
-    ``start`` is inside the circle or the arc would circle round."""
+    ``start`` is well inside the circle or the arc would circle round."""
     lead_start = goal - lead_m * heading
     normal = np.array([-heading[1], heading[0]])
     centre = lead_start + side * radius_m * normal
     offset = start - centre
     distance = float(np.hypot(*offset))
-    if distance <= radius_m + p.spacing_m:
+    if distance < 0.97 * radius_m:
         return None
-    # The tangent point whose direction of travel round the circle leads away from ``start``.
-    spread = math.acos(radius_m / distance)
+    # The tangent point whose direction of travel round the circle leads away from ``start`` (``start``
+    # itself when it lies on the circle, as a robot already turning onto it does).
+    spread = math.acos(min(1.0, radius_m / distance))
     seen = math.atan2(offset[1], offset[0])
     touch = seen + side * spread
     end = math.atan2(lead_start[1] - centre[1], lead_start[0] - centre[0])

@@ -15,6 +15,7 @@ from pydantic import Field, field_validator, model_validator
 from services.planner.astar import AStarParams
 from services.planner.costmap import CostmapParams, inflation_cost
 from services.planner.global_planner import GlobalPlannerParams
+from services.planner.goal_heading import GoalHeadingParams
 from services.planner.occupancy_map import OccupancyMap, load_map
 from services.planner.pure_pursuit import PurePursuitParams
 from services.planner.rasterize import map_from_world
@@ -93,6 +94,9 @@ class Params(ServiceParams):
     # planning
     cost_weight: float = Field(3.0, ge=0.0, description="how strongly inflation cost lengthens a step")
     allow_unknown: bool = False
+    arrive_along_goal_heading: bool = Field(
+        True, description="end paths along the goal's heading where there is room, instead of turning on the "
+        "spot at the goal")
     prefer_room_to_turn: bool = Field(
         True, description="avoid gaps only the inscribed circle fits through when a path with room to turn exists")
     snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
@@ -167,6 +171,11 @@ class Params(ServiceParams):
             astar=self.astar_params(),
             smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),
             preferred_clearance_cost=room_to_turn if self.prefer_room_to_turn else 0,
+            goal_heading=GoalHeadingParams(
+                max_linear_mps=self.max_linear_vel_mps,
+                max_angular_radps=self.max_angular_vel_radps,
+                slow_radius_m=self.regulated_linear_scaling_min_radius_m,
+            ) if self.arrive_along_goal_heading else None,
         )
 
     def astar_params(self) -> AStarParams:

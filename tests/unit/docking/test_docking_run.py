@@ -271,6 +271,24 @@ def test_the_approach_takes_over_from_navigation_near_the_staging_pose() -> None
     assert run.result is not None and run.result.success and not world.log.goals
 
 
+def test_a_robot_coming_side_on_is_taken_over_while_it_can_still_curve_in() -> None:
+    """1.45 rad off the dock's heading, 0.4 m from the staging pose, the dock 0.92 rad to one side: the
+    approach's first curve is gentle enough, so it takes over at speed instead of letting navigation stop
+    there to turn on the spot."""
+    side_on = offset_along(SEED_DOCK, -0.69, 0.40, -1.45)
+    assert abs(GracefulApproach().entry_curvature(side_on, SEED_DOCK)) < 5.0
+    world = KinematicWorld(offset_along(SEED_DOCK, -1.6), nav_duration_s=30.0)
+    run = handover_run()
+    states = run_with_states(world, run, 0.5)
+    world.robot = DiffDriveModel(side_on, world.robot.limits)
+    world.robot.v_mps = 0.4
+    states += run_with_states(world, run, 20.0)
+    assert run.result is not None and run.result.success, run.result
+    assert DockingState.CONTROLLING in states and world.log.cancels and world.log.overlaps == 0
+    assert world.now_s < 5.0 and world.mated
+    assert abs(dock_frame_error(world.true_pose, SEED_DOCK).lateral_m) < 0.01
+
+
 def test_no_takeover_far_from_staging_or_facing_away() -> None:
     for start in (offset_along(SEED_DOCK, -1.5), offset_along(SEED_DOCK, -1.0, 0.0, 1.3)):
         world = KinematicWorld(start, nav_duration_s=1.0)
