@@ -369,14 +369,14 @@ class DockingRun(Task[RunPhase]):
         if near or self._retreat_to_staging:
             self.enter(RunPhase.RETREAT, now)
             return STOP
-        return self._after_retreat(now)
+        return self._after_retreat(inputs)
 
-    def _after_retreat(self, now: float) -> Intent:
+    def _after_retreat(self, inputs: TickInputs) -> Intent:
         if self.request.navigate_to_staging_pose and not self._realign:
             self._nav_key = self.new_nav_key()
-            self.enter(RunPhase.NAV_TO_STAGING, now)
-        else:
-            self._enter_perception(now)
+            self.enter(RunPhase.NAV_TO_STAGING, inputs.now_s)
+            return self._nav_to_staging(inputs)  # the goal goes out on this tick, not the next
+        self._enter_perception(inputs.now_s)
         return STOP
 
     def _retreat(self, inputs: TickInputs) -> Intent:
@@ -396,7 +396,7 @@ class DockingRun(Task[RunPhase]):
         else:
             finished = pose.distance_to(dock) >= self.config.retreat_clear_m
         if finished:
-            return self._after_retreat(now)
+            return self._after_retreat(inputs)
         if inputs.blocked_behind:
             return self.hold("obstacle behind")
         return back_off_command(target, pose, self.config.back_off_gains)
