@@ -2,11 +2,11 @@
 
 Subscribes ``odom`` (nav_msgs/Odometry: the twist gives the motion load) and ``dock_contact``
 (zendock_msgs/DockContact: charging while ``mated``); publishes ``battery_status``
-(sensor_msgs/BatteryState) every ``1 / publish_rate_hz`` seconds on the node's clock, right after a
-``battery/set_state`` request and as soon as the contacts mate or part. The charge is integrated over
-the clock's steps at each publication; a clock that jumps back (simulator reset) or leaps forward
-restarts the integration instead of draining the battery at once. An input silent for longer than its
-timeout counts as absent: no dock contact means not mated, no odometry means standing still.
+(sensor_msgs/BatteryState) every ``1 / publish_rate_hz`` seconds on the node's clock and right after a
+``battery/set_state`` request. The charge is integrated over the clock's steps at each publication;
+a clock that jumps back (simulator reset) or leaps forward restarts the integration instead of
+draining the battery at once. An input silent for longer than its timeout counts as absent: no dock
+contact means not mated, no odometry means standing still.
 """
 
 from __future__ import annotations
@@ -154,14 +154,7 @@ class BatteryService:
         self._odom.update((math.hypot(twist.linear.x, twist.linear.y), abs(twist.angular.z)), self._node.now())
 
     def _on_dock_contact(self, msg: DockContact) -> None:
-        """Keep the contacts' state; when they mate or part, say so at once (as a charger's BMS reports
-        plugging in), not up to a publication period later."""
-        now_s = self._node.now()
-        changed = bool(msg.mated) != bool(self._contact.get(now_s, False))
-        self._contact.update(msg.mated, now_s)
-        if changed and self._node.clock_started:
-            self._advance()
-            self._publish()
+        self._contact.update(msg.mated, self._node.now())
 
     def _mated(self, now_s: float) -> bool:
         """The dock contact's ``mated``, or False when it has gone silent (said once per silence)."""
