@@ -50,7 +50,7 @@ class Params(ServiceParams):
     regulated_linear_scaling_min_radius_m: float = Field(
         0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower")
     cost_scaling_dist_m: float = Field(
-        0.3, gt=0.0, description="closer than this to an obstacle the speed falls in proportion to the distance")
+        0.4, gt=0.0, description="closer than this to an obstacle the speed falls in proportion to the distance")
     approach_velocity_scaling_dist_m: float = Field(
         0.3, gt=0.0, description="over this last stretch of the path the speed falls in proportion to what is left")
     open_loop_acceleration: bool = Field(
