@@ -60,7 +60,8 @@ class NavigationClient:
 
     def go_to_pose(self, pose: Pose2D | PoseStamped, on_done: Callable[[], None] | None = None) -> None:
         """Send a goal (map frame); the previous goal of this client is forgotten (the server preempts it).
-        ``on_done`` runs on the executor once this goal has ended (succeeded, canceled, failed or refused)."""
+        ``on_done`` runs on the executor once this goal has ended (succeeded, canceled, failed or refused),
+        also when a newer goal has replaced it meanwhile."""
         if isinstance(pose, Pose2D):
             pose = PoseStamped(Header.at(self.node.now(), MAP_FRAME), Pose.from_pose2d(pose))
         if self._goal is not None:

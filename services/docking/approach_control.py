@@ -55,9 +55,9 @@ class ApproachController(Protocol):
 
     def staging_pose(self, dock_pose: Pose2D) -> Pose2D: ...
 
-    def entry_curvature(self, pose: Pose2D, dock_pose: Pose2D) -> float:
-        """The curvature (1/m) the approach would first steer on from ``pose``: how sharply it would turn
-        if it took over there."""
+    def curves_in_from(self, pose: Pose2D, dock_pose: Pose2D) -> bool:
+        """Whether, taking over at ``pose``, the approach would set off on a curve rather than stop to turn
+        on the spot first."""
 
     def begin(self, dock_pose: Pose2D) -> None: ...
 
@@ -83,8 +83,8 @@ class SeedApproach:
     def staging_pose(self, dock_pose: Pose2D) -> Pose2D:
         return line_approach(dock_pose, self.offsets).staging_goal
 
-    def entry_curvature(self, pose: Pose2D, dock_pose: Pose2D) -> float:
-        return 0.0  # it turns on the spot to each of its goals
+    def curves_in_from(self, pose: Pose2D, dock_pose: Pose2D) -> bool:
+        return False  # it turns on the spot to each of its goals
 
     def begin(self, dock_pose: Pose2D) -> None:
         self._controller = LineApproachController(line_approach(dock_pose, self.offsets).goals, self.params)
@@ -162,8 +162,13 @@ class GracefulApproach:
         return graceful_staging_pose(dock_pose, self.staging_offset_m)
 
     def entry_curvature(self, pose: Pose2D, dock_pose: Pose2D) -> float:
+        """The curvature (1/m) the law would first steer on from ``pose``."""
         law = GracefulDockController(dock_pose, replace(self.params, pose_estimator=None))
         return smooth_control_law(law.target_for(pose), pose, law.gains_at(pose)).curvature_per_m
+
+    def curves_in_from(self, pose: Pose2D, dock_pose: Pose2D) -> bool:
+        limit = self.params.pivot_curvature_per_m
+        return limit is None or abs(self.entry_curvature(pose, dock_pose)) <= limit
 
     def begin(self, dock_pose: Pose2D) -> None:
         self._controller = GracefulDockController(dock_pose, self.params)

@@ -15,9 +15,10 @@ The sequence follows Nav2's opennav_docking ``DockingServer::dockRobot``:
 Detections are asked for from the staging pose on, as in Nav2 (see :meth:`DockingRun.wants_detections`).
 With ``continuous_perception`` (the graceful approach) the dock estimate is kept across phases rather than
 started afresh at the staging pose, and with ``handover_distance_m`` the approach takes over as soon as
-the robot is near the staging pose, behind the dock and facing it: the planner's goal is cancelled
-instead of being driven to a standstill and turned to its heading, INITIAL_PERCEPTION lasts one tick
-while the planner lets go, and nothing is driven before it has. An approach that comes up to the plate
+the robot is near the staging pose, behind the dock and facing it or coming side-on where it can still
+curve onto the dock's axis: the planner's goal is cancelled instead of being driven to a standstill
+and turned to its heading, INITIAL_PERCEPTION lasts one tick while the planner lets go, and nothing is
+driven before it has. An approach that comes up to the plate
 off the dock's axis backs off along it and tries again from there, without the planner.
 
 A failure in 2-5 is retried (RETRY: stop, back off if at the dock, stage again) up to ``max_retries``
@@ -90,10 +91,10 @@ class DockingConfig:
     continuous_perception: bool = False
     #: With continuous perception: once the robot is this close to the staging pose, at least
     #: ``handover_min_back_m`` behind the dock, heading within ``handover_yaw_rad`` of the dock's heading,
-    #: with the dock within ``handover_bearing_rad`` of its own and the approach's first curve no tighter
-    #: than ``handover_max_curvature_per_m``, the approach controller takes over from navigation (which is
-    #: cancelled) instead of waiting for it to stop and turn at the staging pose; detections refine the
-    #: dock pose as they come. None: navigation finishes first.
+    #: with the dock within ``handover_bearing_rad`` of its own, and where the approach would set off on a
+    #: curve rather than turn on the spot (``ApproachController.curves_in_from``), the approach controller
+    #: takes over from navigation (which is cancelled) instead of waiting for it to stop and turn at the
+    #: staging pose; detections refine the dock pose as they come. None: navigation finishes first.
     handover_distance_m: float | None = None
     handover_min_back_m: float = 0.45
     #: A robot coming side-on (up to 1.6 rad off the dock's heading) is taken over while it can still curve
@@ -101,9 +102,6 @@ class DockingConfig:
     #: room start: 13.8 s to charging handed over at 1 rad, 12.6 s simulated handed over at 1.6 rad).
     handover_yaw_rad: float = 1.6
     handover_bearing_rad: float = 1.2
-    #: The graceful law's own threshold for turning on the spot (``pivot_curvature_per_m``): below it the
-    #: approach curves onto the axis without stopping.
-    handover_max_curvature_per_m: float = 5.0
     #: This close to the staging pose any heading will do: the approach turns on the spot, as navigation
     #: would before it could stop there.
     handover_any_heading_m: float = 0.15
@@ -427,7 +425,8 @@ class DockingRun(Task[RunPhase]):
         return self._fail(DockingErrorCode.FAILED_TO_STAGE, f"navigation to the staging pose {outcome.value}: {reason}")
 
     def _ready_to_hand_over(self, inputs: TickInputs) -> bool:
-        """Close to the staging pose, behind the dock and roughly facing it: see ``handover_distance_m``."""
+        """Close to the staging pose, behind the dock, facing it or side-on where the approach curves in from:
+        see ``handover_distance_m``."""
         config = self.config
         pose = inputs.robot_pose
         if config.handover_distance_m is None or not config.continuous_perception or pose is None:
@@ -445,7 +444,7 @@ class DockingRun(Task[RunPhase]):
         dock_in_base = dock.relative_to(pose)
         if abs(math.atan2(dock_in_base.y, dock_in_base.x)) > config.handover_bearing_rad:
             return False
-        return abs(self.approach.entry_curvature(pose, dock)) <= config.handover_max_curvature_per_m
+        return self.approach.curves_in_from(pose, dock)
 
     def _dock_in_view(self, now: float) -> bool:
         """Enough detections, the newest of them recent."""

@@ -40,12 +40,15 @@ class GoalHeadingParams:
     lead_ins_m: tuple[float, ...] = (0.15, 0.4)
     #: A path that already arrives within this of the goal's heading is left alone: a follower turns that
     #: much at the goal in about a second, and docking takes over from navigation before the staging pose
-    #: when the robot faces the dock within 1 rad (a curve planned for such an arrival made short room
-    #: starts slower: 5.0 -> 5.6 s in one).
+    #: wherever its approach can curve in from (a curve planned for such an arrival made a short room
+    #: start slower: 5.0 -> 5.6 s).
     min_turn_rad: float = 1.0
     #: The curve's centre stays on cells at most this costly (128: about 0.38 m from the nearest obstacle
-    #: with the default inflation), or as costly as the replaced stretch where that was costlier.
+    #: with the default inflation), or as costly as the replaced stretch where that was costlier, never on
+    #: inscribed or lethal cells; within ``end_radius_m`` of the robot and of the goal, as costly as the
+    #: replaced stretch was there (the planner's own free radius round the two ends).
     max_cost: int = 128
+    end_radius_m: float = 0.35
     #: The longest arc allowed (beyond it the new end would circle round).
     max_arc_rad: float = 1.25 * math.pi
     spacing_m: float = 0.05
@@ -71,7 +74,7 @@ class GoalHeadingParams:
             raise ValueError(f"lead_ins_m must be non-negative distances, got {self.lead_ins_m}")
         if not 0 <= self.max_cost < INSCRIBED_INFLATED_OBSTACLE:
             raise ValueError(f"max_cost must be in 0..252, got {self.max_cost}")
-        for name in ("opening_radius_m", "max_arc_rad", "spacing_m", "max_linear_mps", "max_angular_radps", "slow_radius_m",
+        for name in ("end_radius_m", "opening_radius_m", "max_arc_rad", "spacing_m", "max_linear_mps", "max_angular_radps", "slow_radius_m",
                      "min_curve_speed_mps", "max_corner_rad"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
@@ -84,7 +87,7 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
     ``start_yaw``: the robot's heading at the path's start (a new end joined there turns from it)."""
     p = params or GoalHeadingParams()
     poses = np.asarray(poses, dtype=float)
-    if len(poses) < 3:
+    if len(poses) < 3 or not np.all(np.isfinite(poses)) or (start_yaw is not None and not math.isfinite(start_yaw)):
         return poses
     xy = poses[:, :2]
     goal, goal_yaw = xy[-1], float(poses[-1, 2])
@@ -105,7 +108,7 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
         came_yaw = start_yaw if from_start and start_yaw is not None else old_yaw
         old_s = (_drive_time_s(replaced, p) + _corner_s(came_yaw, old_yaw, from_start, p)
                  + arrival_turn / p.max_angular_radps + p.stop_and_turn_s)
-        allowed = max(p.max_cost, _max_cost(grid, replaced))
+        limits = _cost_limits(grid, replaced, xy[0], goal, p)
         for lead_in, lead_yaw in _openings(xy[j], came_yaw, from_start, p):
             for radius_m in p.turning_radii_m:
                 for lead_m in p.lead_ins_m:
@@ -114,13 +117,35 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
                         if rest is None:
                             continue
                         tail = np.concatenate([lead_in[:-1], rest])
-                        new_s = _drive_time_s(tail, p) + _corner_s(lead_yaw, _yaw(rest[min(3, len(rest) - 1)] - rest[0]), from_start, p)
-                        if new_s < min(old_s, best_s) and _max_cost(grid, tail) <= allowed:
+                        turn_s = _corner_s(lead_yaw, _yaw(rest[min(3, len(rest) - 1)] - rest[0]), from_start, p)
+                        new_s = _drive_time_s(tail, p) + turn_s
+                        if new_s < min(old_s, best_s) and _within(grid, tail, xy[0], goal, limits, p):
                             best, best_s, best_join = tail, new_s, j
     if best is None:
         return poses
     points = np.concatenate([xy[:best_join], best])
     return np.column_stack([points, orientations(points, goal_yaw)])
+
+
+def _near_ends(points: np.ndarray, start: np.ndarray, goal: np.ndarray, radius_m: float) -> np.ndarray:
+    """Which of ``points`` lie within ``radius_m`` of the path's start or of its goal."""
+    return (np.hypot(*(points - start).T) <= radius_m) | (np.hypot(*(points - goal).T) <= radius_m)
+
+
+def _cost_limits(grid: CostGrid, replaced: np.ndarray, start: np.ndarray, goal: np.ndarray,
+                 p: GoalHeadingParams) -> tuple[int, int]:
+    """The costs a new end may cross: ``(away from the ends, near them)``. Away from the ends, ``max_cost`` or
+    what the replaced stretch crossed there, never inscribed or lethal; near the robot and the goal, also what
+    the replaced stretch crossed near them (a robot standing close to a wall must still leave it)."""
+    near = _near_ends(replaced, start, goal, p.end_radius_m)
+    away = min(max(p.max_cost, _max_cost(grid, replaced[~near])), INSCRIBED_INFLATED_OBSTACLE - 1)
+    return away, max(away, _max_cost(grid, replaced[near]))
+
+
+def _within(grid: CostGrid, tail: np.ndarray, start: np.ndarray, goal: np.ndarray, limits: tuple[int, int],
+            p: GoalHeadingParams) -> bool:
+    near = _near_ends(tail, start, goal, p.end_radius_m)
+    return _max_cost(grid, tail[~near]) <= limits[0] and _max_cost(grid, tail[near]) <= limits[1]
 
 
 def _yaw(direction: np.ndarray) -> float:
@@ -179,22 +204,29 @@ def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, rad
     distance = float(np.hypot(*offset))
     if distance < 0.97 * radius_m:
         return None
-    # The tangent point whose direction of travel round the circle leads away from ``start`` (``start``
-    # itself when it lies on the circle, as a robot already turning onto it does).
-    spread = math.acos(min(1.0, radius_m / distance))
+    # The tangent point whose direction of travel round the circle leads away from ``start``; a start on
+    # the circle (or a hair inside: a robot already turning onto it) joins the arc where it stands.
+    on_circle = distance <= radius_m * (1.0 + 1e-6)
+    spread = 0.0 if on_circle else math.acos(radius_m / distance)
     seen = math.atan2(offset[1], offset[0])
     touch = seen + side * spread
     end = math.atan2(lead_start[1] - centre[1], lead_start[0] - centre[0])
     sweep = (side * (end - touch)) % (2.0 * math.pi)
     if sweep > p.max_arc_rad:
         return None
-    tangent_point = centre + radius_m * np.array([math.cos(touch), math.sin(touch)])
+    tangent_point = start if on_circle else centre + radius_m * np.array([math.cos(touch), math.sin(touch)])
     line = _segment(start, tangent_point, p.spacing_m, include_start=True)
     steps = max(1, math.ceil(sweep * radius_m / p.spacing_m))
     angles = touch + side * sweep * np.arange(1, steps + 1) / steps
     bend = centre + radius_m * np.column_stack([np.cos(angles), np.sin(angles)])
     lead = _segment(lead_start, goal, p.spacing_m, include_start=False)
-    return np.concatenate([line, bend, lead])
+    points = np.concatenate([line, bend, lead])
+    steps = np.hypot(*np.diff(points, axis=0).T)
+    points = points[np.concatenate([[True], steps > 0.1 * p.spacing_m])]
+    if np.hypot(*(points[-1] - goal)) > 0.0:  # the goal itself ends the path, exactly
+        points = np.concatenate([points[:-1] if np.hypot(*(points[-1] - goal)) < 0.1 * p.spacing_m else points,
+                                 goal[None, :]])
+    return points
 
 
 def _segment(a: np.ndarray, b: np.ndarray, spacing_m: float, include_start: bool) -> np.ndarray:

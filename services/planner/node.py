@@ -266,10 +266,7 @@ class PlannerService:
         run, handle = self._run, self._handle
         if run is None or handle is None or not handle.active:
             return
-        planning = run.phase is Phase.PLANNING
         self._carry_out(run.plan_outcome(outcome, self._snapshot()))
-        if planning and run.phase is Phase.FOLLOWING:
-            self._on_control_tick()  # a goal's first plan: set off now, not at the next control tick
 
     def _on_control_tick(self) -> None:
         run, handle = self._run, self._handle

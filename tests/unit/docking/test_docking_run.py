@@ -276,7 +276,7 @@ def test_a_robot_coming_side_on_is_taken_over_while_it_can_still_curve_in() -> N
     approach's first curve is gentle enough, so it takes over at speed instead of letting navigation stop
     there to turn on the spot."""
     side_on = offset_along(SEED_DOCK, -0.69, 0.40, -1.45)
-    assert abs(GracefulApproach().entry_curvature(side_on, SEED_DOCK)) < 5.0
+    assert GracefulApproach().curves_in_from(side_on, SEED_DOCK)
     world = KinematicWorld(offset_along(SEED_DOCK, -1.6), nav_duration_s=30.0)
     run = handover_run()
     states = run_with_states(world, run, 0.5)
@@ -290,7 +290,11 @@ def test_a_robot_coming_side_on_is_taken_over_while_it_can_still_curve_in() -> N
 
 
 def test_no_takeover_far_from_staging_or_facing_away() -> None:
-    for start in (offset_along(SEED_DOCK, -1.5), offset_along(SEED_DOCK, -1.0, 0.0, 1.3)):
+    # Far; facing away; and within the yaw and bearing limits but so close to the axis, heading off it,
+    # that the approach would have to stop and turn on the spot first (its curve 9.5 /m).
+    sharp = offset_along(SEED_DOCK, -1.0, -0.2, -0.8)
+    assert not GracefulApproach().curves_in_from(sharp, SEED_DOCK)
+    for start in (offset_along(SEED_DOCK, -1.5), offset_along(SEED_DOCK, -1.0, 0.0, 1.3), sharp):
         world = KinematicWorld(start, nav_duration_s=1.0)
         run = handover_run()
         run_with_states(world, run, 0.5)
