@@ -15,6 +15,8 @@ from services.planner.occupancy_map import OCC_FREE, OCC_OCCUPIED, OccupancyMap
 from shared.geometry import wrap_angle
 
 RESOLUTION_M = 0.05
+#: Side-on arrivals (90 degrees off) count: the default leaves up to 1.6 rad to docking's takeover.
+SIDE_ON = GoalHeadingParams(min_turn_rad=1.0)
 
 
 def _room(size_m: float = 6.0, blocks: tuple[tuple[float, float, float, float], ...] = ()) -> LayeredCostmap:
@@ -45,7 +47,7 @@ def _arrival_yaw(poses: np.ndarray, back_m: float = 0.15) -> float:
 def test_a_side_on_arrival_becomes_one_along_the_goal_heading() -> None:
     grid = _room().grid()
     side_on = _straight((5.0, 3.0), (2.0, 3.0), -math.pi / 2)  # driving west to a goal that faces south
-    poses = arrive_along_heading(grid, side_on, start_yaw=math.pi)
+    poses = arrive_along_heading(grid, side_on, SIDE_ON, start_yaw=math.pi)
     assert poses is not side_on
     assert np.allclose(poses[-1, :2], side_on[-1, :2])
     assert poses[-1, 2] == pytest.approx(-math.pi / 2)
@@ -65,7 +67,7 @@ def test_no_room_to_turn_leaves_the_path_as_it_was() -> None:
     # A corridor 0.9 m wide ending at the goal: no curve into a heading across it fits.
     grid = _room(blocks=((0.0, 0.0, 6.0, 2.55), (0.0, 3.45, 6.0, 6.0))).grid()
     side_on = _straight((5.0, 3.0), (2.0, 3.0), -math.pi / 2)
-    assert arrive_along_heading(grid, side_on, start_yaw=math.pi) is side_on
+    assert arrive_along_heading(grid, side_on, SIDE_ON, start_yaw=math.pi) is side_on
 
 
 def test_an_arrival_within_the_turn_allowed_is_left_alone() -> None:
@@ -79,7 +81,7 @@ def test_the_new_end_crosses_no_costlier_cells_than_the_old_one_away_from_its_en
     new end keeps to ``max_cost`` or to what the old end crossed there, never inscribed or lethal; near them,
     to what the old end crossed near them. Every step is a real one."""
     rng = np.random.default_rng(7)
-    p = GoalHeadingParams()
+    p = SIDE_ON
     planner = GlobalPlanner(GlobalPlannerParams(goal_heading=None))
     changed = 0
     for trial in range(240):
@@ -118,10 +120,21 @@ def test_the_planner_ends_paths_along_the_goal_heading_unless_told_not_to() -> N
     grid = _room().grid()
     start, goal = (5.0, 3.2, math.pi), (2.0, 3.0, -math.pi / 2)
     plain = GlobalPlanner(GlobalPlannerParams(goal_heading=None)).compute_path(grid, start, goal)
-    curved = GlobalPlanner().compute_path(grid, start, goal)
+    curved = GlobalPlanner(GlobalPlannerParams(goal_heading=SIDE_ON)).compute_path(grid, start, goal)
     assert abs(wrap_angle(_arrival_yaw(plain.poses) + math.pi / 2)) > 1.0
     assert abs(wrap_angle(_arrival_yaw(curved.poses) + math.pi / 2)) < 0.1
     assert curved.length_m == pytest.approx(float(np.hypot(*np.diff(curved.poses[:, :2], axis=0).T).sum()))
+
+
+def test_by_default_only_arrivals_beyond_docking_s_takeover_are_curved() -> None:
+    grid = _room().grid()
+    side_on = _straight((5.0, 3.0), (2.0, 3.0), -math.pi / 2)  # 1.57 rad off: docking takes over from there
+    assert arrive_along_heading(grid, side_on, start_yaw=math.pi) is side_on
+    beyond = _straight((5.0, 3.0), (2.0, 3.0), -1.2)  # 1.94 rad off: docking would stop there to turn
+    poses = arrive_along_heading(grid, beyond, start_yaw=math.pi)
+    assert poses is not beyond and abs(wrap_angle(_arrival_yaw(poses) + 1.2)) < 0.1
+    doubling_back = _straight((5.0, 3.0), (2.0, 3.0), -0.3)  # 2.8 rad off: turning there is quicker than a loop
+    assert arrive_along_heading(grid, doubling_back, start_yaw=math.pi) is doubling_back
 
 
 def test_bad_parameters_are_refused_with_their_name() -> None:
