@@ -18,8 +18,8 @@ started afresh at the staging pose, and with ``handover_distance_m`` the approac
 the robot is near the staging pose, behind the dock and facing it or coming side-on where it can still
 curve onto the dock's axis: the planner's goal is cancelled instead of being driven to a standstill
 and turned to its heading, INITIAL_PERCEPTION lasts one tick while the planner lets go, and nothing is
-driven before it has. An approach that comes up to the plate
-off the dock's axis backs off along it and tries again from there, without the planner.
+driven before it has. An approach that comes up to the plate off the dock's axis backs off along it and
+tries again from there, without the planner.
 
 A failure in 2-5 is retried (RETRY: stop, back off if at the dock, stage again) up to ``max_retries``
 times; then the run fails with the last error. Cancelling commands zero and ends the run. The whole
@@ -99,7 +99,7 @@ class DockingConfig:
     handover_min_back_m: float = 0.45
     #: A robot coming side-on (up to 1.6 rad off the dock's heading) is taken over while it can still curve
     #: onto the axis at speed, rather than stopped at the staging pose to turn on the spot (an angled dock's
-    #: room start: 13.8 s to charging handed over at 1 rad, 12.6 s simulated handed over at 1.6 rad).
+    #: room start, seed 31: 13.8 s to charging handed over up to 1 rad, 12.8 s up to 1.6 rad).
     handover_yaw_rad: float = 1.6
     handover_bearing_rad: float = 1.2
     #: This close to the staging pose any heading will do: the approach turns on the spot, as navigation

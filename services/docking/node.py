@@ -6,8 +6,7 @@ store into the :class:`~services.docking.inputs.InputCache`; one timer on the no
 the graceful and infrared controllers, 10 Hz for the seed controller -- hands its snapshot to the
 :class:`~services.docking.executive.Executive`, and action goals, cancels and the fleet's answers go to
 it as events at once; the end of a planner goal runs a tick at once. The node only carries out the
-effects it returns. The low-battery trigger starts
-the same docking run as the action.
+effects it returns. The low-battery trigger starts the same docking run as the action.
 
 Charging is read from battery_status (CHARGING or FULL), as a real robot would; the simulator's ground
 truth (dock_contact, ground_truth_pose) is never used.

@@ -9,8 +9,9 @@ the goal's heading (the "line, arc" words of a Dubins path, with the heading at 
 and the corner there paid for as a turn).
 
 Each candidate (join point, turning radius, lead-in, turning left or right) must keep its centre on cells
-no costlier than ``max_cost`` (or than the stretch it replaces, where that ran costlier) and be quicker to
-drive than the path it replaces followed by the turn on the spot. The time is estimated as the path
+no costlier than ``max_cost`` (or than the stretch it replaces, where that ran costlier), never on
+inscribed or lethal ones, except near the robot and the goal, where it may cross what the old end crossed
+there; and it must be quicker to drive than the path it replaces followed by the turn on the spot. The time is estimated as the path
 follower drives: top speed, slowed in proportion on curves tighter than ``slow_radius_m``, turning no
 faster than ``max_angular_radps``, and turning on the spot at a corner sharper than ``max_corner_rad``.
 The quickest wins; with none, the path is left as it was. Pure numpy on a
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from services.planner.costmap import INSCRIBED_INFLATED_OBSTACLE, NO_INFORMATION, CostGrid
+from services.planner.costmap import INSCRIBED_INFLATED_OBSTACLE, CostGrid
 from services.planner.smoothing import orientations
 from shared.geometry import wrap_angle
 
@@ -75,8 +76,8 @@ class GoalHeadingParams:
             raise ValueError(f"lead_ins_m must be non-negative distances, got {self.lead_ins_m}")
         if not 0 <= self.max_cost < INSCRIBED_INFLATED_OBSTACLE:
             raise ValueError(f"max_cost must be in 0..252, got {self.max_cost}")
-        for name in ("end_radius_m", "opening_radius_m", "max_arc_rad", "spacing_m", "max_linear_mps", "max_angular_radps", "slow_radius_m",
-                     "min_curve_speed_mps", "max_corner_rad"):
+        for name in ("end_radius_m", "opening_radius_m", "max_arc_rad", "spacing_m", "max_linear_mps",
+                     "max_angular_radps", "slow_radius_m", "min_curve_speed_mps", "max_corner_rad"):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
 
@@ -88,8 +89,10 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
     ``start_yaw``: the robot's heading at the path's start (a new end joined there turns from it)."""
     p = params or GoalHeadingParams()
     poses = np.asarray(poses, dtype=float)
-    if len(poses) < 3 or not np.all(np.isfinite(poses)) or (start_yaw is not None and not math.isfinite(start_yaw)):
+    if len(poses) < 3 or not np.all(np.isfinite(poses)):
         return poses
+    if start_yaw is not None and not math.isfinite(start_yaw):
+        start_yaw = None
     xy = poses[:, :2]
     goal, goal_yaw = xy[-1], float(poses[-1, 2])
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
@@ -106,7 +109,7 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
         replaced = xy[j:]
         old_yaw = _yaw(_direction_after(xy, arc, j))
         from_start = j == 0 and start_yaw is not None
-        came_yaw = start_yaw if from_start and start_yaw is not None else old_yaw
+        came_yaw = old_yaw if start_yaw is None or not from_start else start_yaw
         old_s = (_drive_time_s(replaced, p) + _corner_s(came_yaw, old_yaw, from_start, p)
                  + arrival_turn / p.max_angular_radps + p.stop_and_turn_s)
         limits = _cost_limits(grid, replaced, xy[0], goal, p)
@@ -118,7 +121,8 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
                         if rest is None:
                             continue
                         tail = np.concatenate([lead_in[:-1], rest])
-                        turn_s = _corner_s(lead_yaw, _yaw(rest[min(3, len(rest) - 1)] - rest[0]), from_start, p)
+                        setting_off = _yaw(rest[min(3, len(rest) - 1)] - rest[0])  # over about 0.15 m
+                        turn_s = _corner_s(lead_yaw, setting_off, from_start, p)
                         new_s = _drive_time_s(tail, p) + turn_s
                         if new_s < min(old_s, best_s) and _within(grid, tail, xy[0], goal, limits, p):
                             best, best_s, best_join = tail, new_s, j
@@ -162,7 +166,8 @@ def _corner_s(from_yaw: float, to_yaw: float, standing: bool, p: GoalHeadingPara
     return corner / p.max_angular_radps if corner > p.max_corner_rad else 0.0
 
 
-def _openings(start: np.ndarray, yaw: float, from_start: bool, p: GoalHeadingParams) -> list[tuple[np.ndarray, float]]:
+def _openings(start: np.ndarray, yaw: float, from_start: bool,
+              p: GoalHeadingParams) -> list[tuple[np.ndarray, float]]:
     """Ways to leave ``start``: as it is, and (from the robot's own pose) along arcs that turn it first, so a
     robot already on a curve can stay on one: ``(points, heading at the last point)``."""
     openings = [(start[None, :], yaw)]
@@ -222,8 +227,8 @@ def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, rad
     bend = centre + radius_m * np.column_stack([np.cos(angles), np.sin(angles)])
     lead = _segment(lead_start, goal, p.spacing_m, include_start=False)
     points = np.concatenate([line, bend, lead])
-    steps = np.hypot(*np.diff(points, axis=0).T)
-    points = points[np.concatenate([[True], steps > 0.1 * p.spacing_m])]
+    gaps = np.hypot(*np.diff(points, axis=0).T)
+    points = points[np.concatenate([[True], gaps > 0.1 * p.spacing_m])]
     if np.hypot(*(points[-1] - goal)) > 0.0:  # the goal itself ends the path, exactly
         points = np.concatenate([points[:-1] if np.hypot(*(points[-1] - goal)) < 0.1 * p.spacing_m else points,
                                  goal[None, :]])
@@ -248,10 +253,9 @@ def _curvatures(points: np.ndarray) -> np.ndarray:
 
 
 def _max_cost(grid: CostGrid, points: np.ndarray) -> int:
-    """The highest cost under ``points``; unknown and off-grid count as lethal."""
-    costs = grid.costs_at(points).astype(np.int16)
-    costs = np.where(costs == NO_INFORMATION, 255, costs)
-    return int(costs.max()) if len(costs) else 0
+    """The highest cost under ``points`` (0 for none); unknown and off-grid read as ``NO_INFORMATION``,
+    above lethal, so no limit below it lets them pass."""
+    return int(grid.costs_at(points).max()) if len(points) else 0
 
 
 def _drive_time_s(points: np.ndarray, p: GoalHeadingParams) -> float:
@@ -261,6 +265,7 @@ def _drive_time_s(points: np.ndarray, p: GoalHeadingParams) -> float:
     legs = np.hypot(*np.diff(points, axis=0).T)
     kappa = np.concatenate([[0.0], _curvatures(points)])
     radius = 1.0 / np.maximum(kappa, 1e-9)
-    speed = np.minimum(p.max_linear_mps, np.maximum(p.max_linear_mps * radius / p.slow_radius_m, p.min_curve_speed_mps))
+    regulated = np.maximum(p.max_linear_mps * radius / p.slow_radius_m, p.min_curve_speed_mps)
+    speed = np.minimum(p.max_linear_mps, regulated)
     speed = np.minimum(speed, p.max_angular_radps * radius)
     return float(np.sum(legs / np.maximum(speed, 1e-3)))

@@ -95,8 +95,8 @@ class Params(ServiceParams):
     cost_weight: float = Field(3.0, ge=0.0, description="how strongly inflation cost lengthens a step")
     allow_unknown: bool = False
     arrive_along_goal_heading: bool = Field(
-        True, description="end paths along the goal's heading where there is room, instead of turning on the "
-        "spot at the goal")
+        True, description="a path that would arrive more than 1.6 rad off the goal's heading ends along it where "
+        "there is room, instead of turning on the spot at the goal")
     prefer_room_to_turn: bool = Field(
         True, description="avoid gaps only the inscribed circle fits through when a path with room to turn exists")
     snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")

@@ -137,6 +137,15 @@ def test_by_default_only_arrivals_beyond_docking_s_takeover_are_curved() -> None
     assert arrive_along_heading(grid, doubling_back, start_yaw=math.pi) is doubling_back
 
 
+def test_non_finite_input_is_not_an_error() -> None:
+    grid = _room().grid()
+    side_on = _straight((5.0, 3.0), (2.0, 3.0), -math.pi / 2)
+    assert np.array_equal(arrive_along_heading(grid, side_on, SIDE_ON, start_yaw=math.nan)[-1], side_on[-1])
+    broken = side_on.copy()
+    broken[-1, 2] = math.nan
+    assert arrive_along_heading(grid, broken, SIDE_ON, start_yaw=math.pi) is broken
+
+
 def test_bad_parameters_are_refused_with_their_name() -> None:
     with pytest.raises(ValueError, match="turning_radii_m"):
         GoalHeadingParams(turning_radii_m=(0.0,))
