@@ -85,10 +85,11 @@ class GlobalPlanner:
         Raises :class:`~services.planner.astar.PlanningError` when an end is unusable or unreachable.
         """
         t0 = time.perf_counter()
-        path = self._roomy_path(grid, _pose(start), _pose(goal), t0)
+        start_pose = _pose(start)
+        path = self._roomy_path(grid, start_pose, _pose(goal), t0)
         if self.params.goal_heading is None or path.goal_snapped:
             return path
-        poses = arrive_along_heading(grid, path.poses, self.params.goal_heading, _pose(start).yaw)
+        poses = arrive_along_heading(grid, path.poses, self.params.goal_heading, start_pose.yaw)
         if poses is path.poses:
             return path
         return replace(path, poses=poses, length_m=path_length_m(poses), planning_time_s=time.perf_counter() - t0)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from services.planner.costmap import INSCRIBED_INFLATED_OBSTACLE, CostGrid
-from services.planner.smoothing import orientations
+from services.planner.smoothing import orientations, resample_path
 from shared.geometry import wrap_angle
 
 
@@ -221,11 +221,11 @@ def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, rad
     if sweep > p.max_arc_rad:
         return None
     tangent_point = start if on_circle else centre + radius_m * np.array([math.cos(touch), math.sin(touch)])
-    line = _segment(start, tangent_point, p.spacing_m, include_start=True)
+    line = resample_path(np.array([start, tangent_point]), p.spacing_m)
     steps = max(1, math.ceil(sweep * radius_m / p.spacing_m))
     angles = touch + side * sweep * np.arange(1, steps + 1) / steps
     bend = centre + radius_m * np.column_stack([np.cos(angles), np.sin(angles)])
-    lead = _segment(lead_start, goal, p.spacing_m, include_start=False)
+    lead = resample_path(np.array([lead_start, goal]), p.spacing_m)[1:]
     points = np.concatenate([line, bend, lead])
     gaps = np.hypot(*np.diff(points, axis=0).T)
     points = points[np.concatenate([[True], gaps > 0.1 * p.spacing_m])]
@@ -233,14 +233,6 @@ def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, rad
         points = np.concatenate([points[:-1] if np.hypot(*(points[-1] - goal)) < 0.1 * p.spacing_m else points,
                                  goal[None, :]])
     return points
-
-
-def _segment(a: np.ndarray, b: np.ndarray, spacing_m: float, include_start: bool) -> np.ndarray:
-    count = math.ceil(float(np.hypot(*(b - a))) / spacing_m)
-    if count == 0:
-        return a[None, :] if include_start else np.zeros((0, 2))
-    t = np.arange(0 if include_start else 1, count + 1) / count
-    return a + np.outer(t, b - a)
 
 
 def _curvatures(points: np.ndarray) -> np.ndarray:

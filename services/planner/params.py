@@ -171,11 +171,18 @@ class Params(ServiceParams):
             astar=self.astar_params(),
             smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),
             preferred_clearance_cost=room_to_turn if self.prefer_room_to_turn else 0,
-            goal_heading=GoalHeadingParams(
-                max_linear_mps=self.max_linear_vel_mps,
-                max_angular_radps=self.max_angular_vel_radps,
-                slow_radius_m=self.regulated_linear_scaling_min_radius_m,
-            ) if self.arrive_along_goal_heading else None,
+            goal_heading=self._goal_heading_params() if self.arrive_along_goal_heading else None,
+        )
+
+    def _goal_heading_params(self) -> GoalHeadingParams:
+        """The curved end judges its time by the path follower's own speed model."""
+        follower = self.follower_params()
+        return GoalHeadingParams(
+            max_linear_mps=follower.desired_linear_vel_mps,
+            max_angular_radps=follower.max_angular_vel_radps,
+            slow_radius_m=follower.regulated_linear_scaling_min_radius_m,
+            min_curve_speed_mps=follower.regulated_linear_scaling_min_speed_mps,
+            max_corner_rad=follower.rotate_to_heading_min_angle_rad,
         )
 
     def astar_params(self) -> AStarParams:
