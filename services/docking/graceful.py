@@ -207,8 +207,10 @@ class GracefulDockParams:
     command_delay_s: float = 0.0
     #: Speed allowed when the contacts touch; None disables the arrival speed cap.
     contact_speed_mps: float | None = 0.08
-    #: Deceleration the arrival speed cap plans with (keep it under the robot's limit).
-    approach_decel_mps2: float = 0.5
+    #: Deceleration the arrival speed cap plans with (keep it under the robot's braking limit, 2.5 m/s**2
+    #: on the simulated base). 1.5 brakes from 0.5 m/s to the contact speed in the last 0.08 m; 0.5 took
+    #: the last 0.24 m.
+    approach_decel_mps2: float = 1.5
     #: Stop (zero command) once within this distance of the dock pose; None leaves stopping to the caller.
     stop_distance_m: float | None = None
     #: Smooth and latency-compensate the robot pose before the law sees it; None uses raw poses.
@@ -406,7 +408,11 @@ class GracefulDockController:
         p = self.params
         along_m = dock_frame_error(robot_pose, self.dock_pose).along_m
         to_contact_m = max(0.0, -along_m - p.contact_reach_m)
-        cap = math.sqrt(contact_speed_mps**2 + 2.0 * p.approach_decel_mps2 * to_contact_m)
+        # a command holds for a control period: the speed must still brake in time from where it ends,
+        # v**2 <= contact**2 + 2 * a * (d - v * period), solved for v
+        a_dt = p.approach_decel_mps2 * p.control_period_s
+        cap = max(contact_speed_mps,
+                  -a_dt + math.sqrt(a_dt**2 + contact_speed_mps**2 + 2.0 * p.approach_decel_mps2 * to_contact_m))
         speed = abs(command.linear_x_mps)
         if speed <= cap:
             return command

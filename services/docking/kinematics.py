@@ -28,12 +28,33 @@ class DockingController(Protocol):
 
 @dataclass(frozen=True, slots=True)
 class RobotLimits:
-    """Velocity and acceleration limits of the base."""
+    """Velocity and acceleration limits of the base (the simulator's ``DiffDriveParams`` defaults).
+
+    Braking is harder than speeding up, as on the simulated base: a controller that plans its stop at
+    the plate with more than the acceleration limit must see that the base can follow it.
+    """
 
     v_max_mps: float = 0.5
     w_max_radps: float = 1.5
     a_max_mps2: float = 1.0
     alpha_max_radps2: float = 3.0
+    a_decel_mps2: float = 2.5
+    alpha_decel_radps2: float = 6.0
+
+    def next_twist(self, v_mps: float, w_radps: float, target_v_mps: float, target_w_radps: float,
+                   dt_s: float) -> tuple[float, float]:
+        """The twist after ``dt_s`` of steering ``(v, w)`` towards the (clamped) target within the limits."""
+        target_v = min(max(target_v_mps, -self.v_max_mps), self.v_max_mps)
+        target_w = min(max(target_w_radps, -self.w_max_radps), self.w_max_radps)
+        return (_rate_limited(v_mps, target_v, self.a_max_mps2, self.a_decel_mps2, dt_s),
+                _rate_limited(w_radps, target_w, self.alpha_max_radps2, self.alpha_decel_radps2, dt_s))
+
+
+def _rate_limited(previous: float, target: float, accel: float, decel: float, dt_s: float) -> float:
+    """One step from ``previous`` towards ``target``: ``decel`` while slowing in the same direction."""
+    slowing = abs(target) < abs(previous) and target * previous >= 0.0
+    step = (decel if slowing else accel) * dt_s
+    return previous + min(max(target - previous, -step), step)
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,13 +90,7 @@ class DiffDriveModel:
         return Pose2D(self.x, self.y, wrap_angle(self.yaw))
 
     def step(self, cmd_v_mps: float, cmd_w_radps: float, dt_s: float) -> None:
-        lim = self.limits
-        target_v = min(max(cmd_v_mps, -lim.v_max_mps), lim.v_max_mps)
-        target_w = min(max(cmd_w_radps, -lim.w_max_radps), lim.w_max_radps)
-        dv = lim.a_max_mps2 * dt_s
-        dw = lim.alpha_max_radps2 * dt_s
-        self.v_mps += min(max(target_v - self.v_mps, -dv), dv)
-        self.w_radps += min(max(target_w - self.w_radps, -dw), dw)
+        self.v_mps, self.w_radps = self.limits.next_twist(self.v_mps, self.w_radps, cmd_v_mps, cmd_w_radps, dt_s)
         moved = Pose2D(self.x, self.y, self.yaw).advance(self.v_mps, self.w_radps, dt_s)
         self.x, self.y, self.yaw = moved.x, moved.y, moved.yaw
 

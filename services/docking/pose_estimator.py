@@ -93,10 +93,7 @@ class RobotPoseEstimator:
             if limits is None:
                 self._v_mps, self._w_radps = v_mps, w_radps
             else:
-                dv = limits.a_max_mps2 * h
-                dw = limits.alpha_max_radps2 * h
-                self._v_mps += min(max(v_mps - self._v_mps, -dv), dv)
-                self._w_radps += min(max(w_radps - self._w_radps, -dw), dw)
+                self._v_mps, self._w_radps = limits.next_twist(self._v_mps, self._w_radps, v_mps, w_radps, h)
             mid_yaw = yaw + 0.5 * self._w_radps * h
             x += self._v_mps * h * math.cos(mid_yaw)
             y += self._v_mps * h * math.sin(mid_yaw)
