@@ -37,6 +37,9 @@ MATED_BEFORE_CHARGING_S = 1.0
 #: ... and the mated reading may arrive stamped up to this long after it (publishers' order is not kept).
 MATED_AFTER_CHARGING_S = 0.5
 
+#: The arrival speed is the ground-truth speed over this long before the contacts mated (two samples at 20 Hz).
+ARRIVAL_SPEED_WINDOW_S = 0.1
+
 #: Ground truth that moves further than this between two samples was teleported: at 20 Hz a drive at
 #: 0.5 m/s moves 2.5 cm a sample, so even a dozen lost samples stay under it.
 TELEPORT_JUMP_M = 0.3
@@ -66,6 +69,8 @@ class RunRecord:
     recovery_points: list[tuple[float, float]] = field(default_factory=list)
     #: Each change of the docking service's ``docking/state`` (sim time it arrived, the state's name).
     phases: list[tuple[float, str]] = field(default_factory=list)
+    #: When the contacts mated in the mating that started charging (the first of its run of mated readings).
+    mated_s: float | None = None
 
     @property
     def charging(self) -> bool:
@@ -110,6 +115,19 @@ class RunRecord:
             current, since = name, t
         durations[current] = durations.get(current, 0.0) + (end - since)
         return {name: round(seconds, 3) for name, seconds in durations.items()}
+
+    def speed_at(self, t_s: float, window_s: float = ARRIVAL_SPEED_WINDOW_S) -> float:
+        """The ground-truth speed (m/s) over the ``window_s`` before ``t_s``: NaN without track there."""
+        samples = [(t, x, y) for t, x, y, _ in self.driven if t_s - window_s - 1e-9 <= t <= t_s + 1e-9]
+        if len(samples) < 2 or samples[-1][0] <= samples[0][0]:
+            return math.nan
+        length = sum(math.dist(a[1:], b[1:]) for a, b in zip(samples, samples[1:]))
+        return length / (samples[-1][0] - samples[0][0])
+
+    @property
+    def arrival_speed_mps(self) -> float:
+        """How fast the robot met the dock: its speed as the contacts mated (NaN if they never did)."""
+        return self.speed_at(self.mated_s) if self.mated_s is not None else math.nan
 
     def pose_at(self, t_s: float) -> Pose2D | None:
         """The ground-truth pose at (or just before) ``t_s``."""
@@ -286,7 +304,22 @@ class RunObserver:
                 r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds), list(r.collision_points),
                 list(r.driven), [list(p) for p in r.plans], list(r.sonar_echoes), list(r.battery), r.sim_time_s,
                 r.last_charging, list(r.recovery_points), list(r.phases),
+                self._mating_began(contact) if contact is not None and contact.mated else None,
             )
+
+    def _mating_began(self, contact: DockContact) -> float:
+        """The stamp of the first mated reading in the unbroken run of them that ends with ``contact``."""
+        ordered = sorted(self._contacts, key=lambda c: c.header.stamp.to_sec())
+        end = contact.header.stamp.to_sec()
+        began = end
+        for reading in reversed(ordered):
+            stamp = reading.header.stamp.to_sec()
+            if stamp > end:
+                continue
+            if not reading.mated:
+                break
+            began = stamp
+        return began
 
     def settle(self, timeout_s: float = 5.0) -> None:
         """After charging began, wait (briefly) for the simulator's contact readings of that moment: a mated

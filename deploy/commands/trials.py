@@ -39,11 +39,14 @@ def _summary_table(summary: dict) -> Table:
         "median_lateral_error_m": lambda v: f"{1000 * v:.1f} mm",
         "p95_lateral_error_m": lambda v: f"{1000 * v:.1f} mm",
         "median_yaw_error_rad": lambda v: f"{math.degrees(v):.2f} deg",
+        "median_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
+        "max_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
         "median_glass_coverage": lambda v: f"{100 * v:.0f} %",
     }
     for key in ("successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
                 "median_lateral_error_m",
-                "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
+                "p95_lateral_error_m", "median_yaw_error_rad", "median_arrival_speed_mps", "max_arrival_speed_mps",
+                "collisions", "wall_s", "sim_s",
                 "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage"):
         value = summary[key]
         text = fmt[key](value) if key in fmt else (f"{value:.1f}" if isinstance(value, float) else str(value))

@@ -120,6 +120,7 @@ def _run_one(
         wall_s=time.monotonic() - wall_start,
         sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
         phase_s=record.phase_durations(),
+        arrival_speed_mps=record.arrival_speed_mps,
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)

@@ -101,6 +101,8 @@ class TrialResult:
     glass_coverage: float = math.nan
     #: Sim seconds from the trigger to charging in each docking state (see ``RunRecord.phase_durations``).
     phase_s: dict[str, float] = field(default_factory=dict)
+    #: The robot's ground-truth speed as its contacts mated (see ``RunRecord.arrival_speed_mps``).
+    arrival_speed_mps: float = math.nan
 
 
 @dataclass
@@ -134,11 +136,14 @@ class TrialsSummary:
     #: Where the time to dock goes: per docking state, the median over docked trials of its sim seconds
     #: (0 for a trial that never entered it); the medians need not add up to the median dock time.
     median_phase_s: dict[str, float] = field(default_factory=dict)
+    #: How fast the docked robots met their docks: median and fastest ground-truth speed as the contacts mated.
+    median_arrival_speed_mps: float = math.nan
+    max_arrival_speed_mps: float = math.nan
 
     def headline(self) -> dict[str, Any]:
         keys = ("n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
-                "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
-                "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage")
+                "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "median_arrival_speed_mps",
+                "max_arrival_speed_mps", "collisions", "wall_s", "sim_s", "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage")
         line = {k: getattr(self, k) for k in keys}
         if self.median_phase_s:
             line["median_phase_s"] = dict(self.median_phase_s)

@@ -23,6 +23,7 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
     false_glass = [r.false_glass_cells for r in results if math.isfinite(r.false_glass_cells)]
     coverage = [r.glass_coverage for r in results if math.isfinite(r.glass_coverage)]
     bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
+    arrivals = [r.arrival_speed_mps for r in ok if math.isfinite(r.arrival_speed_mps)]
     return TrialsSummary(
         n=len(results),
         successes=len(ok),
@@ -42,6 +43,8 @@ def summarise_results(results: list[TrialResult], wall_s: float, controller: str
         p95_false_glass_cells=percentile(false_glass, 0.95),
         median_glass_coverage=median(coverage),
         median_phase_s=median_phases([r.phase_s for r in ok]),
+        median_arrival_speed_mps=median(arrivals),
+        max_arrival_speed_mps=max(arrivals) if arrivals else math.nan,
     )
 
 
@@ -78,6 +81,9 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "median_lateral_error_m": none_docked or "not measured",
         "p95_lateral_error_m": none_docked or "not measured",
         "median_yaw_error_rad": none_docked or "not measured",
+        "median_arrival_speed_mps": none_docked or "no ground-truth track when the contacts mated",
+        "max_arrival_speed_mps": none_docked or "no ground-truth track when the contacts mated",
+        "arrival_speed_mps": "the contacts never mated, or no ground-truth track then",
         "median_lower_bound_s": none_docked or "no docked trial has a lower bound (see errors in trials.json)",
         "median_time_ratio": none_docked or "no docked trial has a lower bound (see errors in trials.json)",
         "success_rate": "no trials",
