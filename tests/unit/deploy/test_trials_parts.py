@@ -92,6 +92,8 @@ def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: i
 
 def test_summary_counts_only_docked_runs_in_the_medians() -> None:
     results = [_result(0, True, 10.0, 0.001), _result(1, True, 20.0, 0.003), _result(2, False, math.nan, math.nan, 1)]
+    results[0].arrival_speed_mps, results[1].arrival_speed_mps = 0.08, 0.12
+    results[2].arrival_speed_mps = 0.3  # never mated for good: not an arrival
     summary = summarise(results, wall_s=5.0, options=TrialOptions(world=WORLDS[0]), world=load_world(WORLDS[0]))
     assert (summary.n, summary.successes, summary.collisions) == (3, 2, 1)
     assert summary.success_rate == pytest.approx(2 / 3)
@@ -99,9 +101,11 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
     assert summary.p95_lateral_error_m == pytest.approx(0.003)
     assert set(summary.headline()) == {
         "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
-        "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "collisions", "wall_s", "sim_s",
-        "achieved_rtf", "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage"}
+        "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "median_arrival_speed_mps",
+        "max_arrival_speed_mps", "collisions", "wall_s", "sim_s", "achieved_rtf", "median_false_glass_cells",
+        "p95_false_glass_cells", "median_glass_coverage"}
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
+    assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.10, 0.12))
 
 
 def test_time_ratio_is_each_trials_own_ratio_and_skips_missing_bounds() -> None:
