@@ -17,6 +17,15 @@ def test_linear_acceleration_is_limited() -> None:
     assert robot.v_mps == pytest.approx(0.5) and robot.x == pytest.approx(0.375 + 0.0025, abs=2e-3)
 
 
+def test_braking_is_harder_than_speeding_up_as_on_the_simulated_base() -> None:
+    robot = DiffDriveModel(Pose2D(), RobotLimits(a_max_mps2=1.0, a_decel_mps2=2.5, alpha_decel_radps2=6.0))
+    robot.v_mps, robot.w_radps = 0.5, 1.5
+    robot.step(0.0, 0.0, 0.1)
+    assert (robot.v_mps, robot.w_radps) == pytest.approx((0.25, 0.9))
+    robot.step(-0.5, -1.5, 0.1)  # reversing is speeding up the other way once past zero
+    assert (robot.v_mps, robot.w_radps) == pytest.approx((0.15, 0.6))
+
+
 def test_angular_acceleration_and_rate_are_limited() -> None:
     robot = DiffDriveModel(Pose2D(), RobotLimits(alpha_max_radps2=3.0, w_max_radps=1.5))
     robot.step(0.0, -10.0, 0.1)
