@@ -339,6 +339,17 @@ class TrialOutcome(Protocol):
     yaw_error_rad: float
 
 
+def _histogram_range(values: Sequence[float]) -> tuple[float, float] | None:
+    """None (the data's own range) unless the values are all but equal: the simulation is deterministic, two
+    trials can dock in 6.9 s and 6.900000000000002 s, and numpy cannot split such a range into bins."""
+    low, high = min(values), max(values)
+    scale = max(abs(low), abs(high), 1.0)
+    if high - low > 1e-9 * scale:
+        return None
+    pad = 0.05 * scale
+    return (low - pad, high + pad)
+
+
 def plot_trial_histograms(results: Sequence[TrialOutcome], path: Path) -> None:
     """Dock time, lateral and yaw error of the docked trials, one panel each."""
     ok = [r for r in results if r.docked]
@@ -350,7 +361,8 @@ def plot_trial_histograms(results: Sequence[TrialOutcome], path: Path) -> None:
     ]
     for ax, (title, values, colour) in zip(axes, panels):
         if values:
-            ax.hist(values, bins=min(30, max(5, len(values) // 3)), color=colour, edgecolor="white")
+            ax.hist(values, bins=min(30, max(5, len(values) // 3)), range=_histogram_range(values), color=colour,
+                    edgecolor="white")
         ax.set_title(title)
         ax.set_ylabel("trials")
     fig.suptitle(f"{len(ok)}/{len(results)} docked")
