@@ -37,7 +37,8 @@ MATED_BEFORE_CHARGING_S = 1.0
 #: ... and the mated reading may arrive stamped up to this long after it (publishers' order is not kept).
 MATED_AFTER_CHARGING_S = 0.5
 
-#: The arrival speed is the ground-truth speed over this long before the contacts mated (two samples at 20 Hz).
+#: The arrival speed is the ground-truth speed averaged over this long before the contacts mated (the last
+#: three samples at 20 Hz): a robot still braking there reads a little faster than it touched.
 ARRIVAL_SPEED_WINDOW_S = 0.1
 
 #: Ground truth that moves further than this between two samples was teleported: at 20 Hz a drive at

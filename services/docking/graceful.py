@@ -210,11 +210,13 @@ class GracefulDockParams:
     #: The cap slows to the contact speed this far before the contacts' reach: the robot's and the dock's
     #: poses are a few millimetres off along the axis, and braking at ``approach_decel_mps2`` a plate 3 mm
     #: nearer than believed is met at 0.12 m/s. On the docking bench (2 mm pose noise) 5 mm keeps every
-    #: arrival at 0.08 m/s (0.106 at worst without it) for 0.05 s more.
+    #: arrival at 0.08 m/s (0.106 at worst without it) for 0.05 s more (measurement 78). The cap counts on
+    #: the next tick coming a control period later; a late tick near the plate eats into the margin and
+    #: into the base's 1 m/s**2 of braking above the cap's.
     arrival_margin_m: float = 0.005
     #: Deceleration the arrival speed cap plans with (keep it under the robot's braking limit, 2.5 m/s**2
-    #: on the simulated base). 1.5 brakes from 0.5 m/s to the contact speed in the last 0.08 m; 0.5 took
-    #: the last 0.24 m.
+    #: on the simulated base). With the control period and the margin, 1.5 slows the robot from 0.5 m/s
+    #: only in the last 0.11 m before the contacts' reach; 0.5 took the last 0.24 m.
     approach_decel_mps2: float = 1.5
     #: Stop (zero command) once within this distance of the dock pose; None leaves stopping to the caller.
     stop_distance_m: float | None = None

@@ -31,7 +31,8 @@ class RobotLimits:
     """Velocity and acceleration limits of the base (the simulator's ``DiffDriveParams`` defaults).
 
     Braking is harder than speeding up, as on the simulated base: a controller that plans its stop at
-    the plate with more than the acceleration limit must see that the base can follow it.
+    the plate with more than the acceleration limit must see that the base can follow it. Unlike the
+    simulator's drive, the wheels' own speed limit (which slows a fast turn) is not modelled.
     """
 
     v_max_mps: float = 0.5
@@ -43,9 +44,10 @@ class RobotLimits:
 
     def next_twist(self, v_mps: float, w_radps: float, target_v_mps: float, target_w_radps: float,
                    dt_s: float) -> tuple[float, float]:
-        """The twist after ``dt_s`` of steering ``(v, w)`` towards the (clamped) target within the limits."""
-        target_v = min(max(target_v_mps, -self.v_max_mps), self.v_max_mps)
-        target_w = min(max(target_w_radps, -self.w_max_radps), self.w_max_radps)
+        """The twist after ``dt_s`` of steering ``(v, w)`` towards the (clamped) target within the limits;
+        a non-finite target counts as a stop, as on the simulated base."""
+        target_v = min(max(target_v_mps, -self.v_max_mps), self.v_max_mps) if math.isfinite(target_v_mps) else 0.0
+        target_w = min(max(target_w_radps, -self.w_max_radps), self.w_max_radps) if math.isfinite(target_w_radps) else 0.0
         return (_rate_limited(v_mps, target_v, self.a_max_mps2, self.a_decel_mps2, dt_s),
                 _rate_limited(w_radps, target_w, self.alpha_max_radps2, self.alpha_decel_radps2, dt_s))
 

@@ -47,7 +47,8 @@ def _campaign(n: int, seed: int = 1) -> list[TrialResult]:
                             yaw_error_rad=rng.uniform(0, 0.01) if docked else math.nan,
                             collisions=int(rng.random() > 0.9), path_length_m=rng.uniform(1, 8),
                             lower_bound_s=rng.uniform(4, 20) if rng.random() > 0.1 else math.nan,
-                            wall_s=rng.uniform(1, 5), sim_s=rng.uniform(5, 40))
+                            wall_s=rng.uniform(1, 5), sim_s=rng.uniform(5, 40),
+                            arrival_speed_mps=rng.uniform(0.07, 0.1) if docked else math.nan)
         trials.append(trial)
     return trials
 

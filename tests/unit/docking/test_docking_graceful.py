@@ -13,6 +13,7 @@ from services.docking.graceful import (
     EgoPolar,
     GracefulDockController,
     GracefulGains,
+    VelocityCommand,
     curvature,
     ego_polar,
     smooth_control_law,
@@ -238,3 +239,24 @@ def test_commands_on_their_way_are_predicted_through() -> None:
     controller.forget_commands()  # the robot was held instead: nothing is on its way
     assert controller.predict_pose(start) == start
     assert GracefulDockController(DOCK).predict_pose(start) == start  # the bench default: no delay
+
+
+def test_the_arrival_cap_is_the_fastest_speed_that_can_still_brake_after_a_held_command() -> None:
+    p = ZENDOCK_PARAMS
+    controller = GracefulDockController(DOCK)
+    a, period, contact = p.approach_decel_mps2, p.control_period_s, p.contact_speed_mps
+    assert contact is not None
+    reach = p.contact_reach_m + p.arrival_margin_m
+    for to_contact in np.linspace(0.0, 0.3, 31):
+        pose = offset_along(DOCK, -(reach + to_contact), 0.0, 0.0)
+        v = controller._cap_arrival_speed(VelocityCommand(0.5, 0.2, 0.4), pose, contact).linear_x_mps
+        left = to_contact - v * period  # where the command held for a period leaves the robot
+        if v >= 0.5 - 1e-9:  # the command itself is slow enough
+            assert v**2 <= contact**2 + 2.0 * a * left
+        elif v > contact + 1e-9:
+            assert v**2 == pytest.approx(contact**2 + 2.0 * a * left)  # brakes to the contact speed exactly in time
+        else:
+            assert v == pytest.approx(contact)  # never slower than the contact speed
+    at_plate = controller._cap_arrival_speed(VelocityCommand(0.5, 0.2, 0.4), offset_along(DOCK, -reach, 0.0, 0.0), contact)
+    assert at_plate.linear_x_mps == pytest.approx(contact)
+    assert at_plate.curvature_per_m == 0.4 and at_plate.angular_z_radps == pytest.approx(0.4 * contact)

@@ -1,5 +1,6 @@
 import math
 
+import numpy as np
 import pytest
 
 from services.docking.kinematics import DiffDriveModel, PoseSensing, RobotLimits, simulate_approach
@@ -24,6 +25,30 @@ def test_braking_is_harder_than_speeding_up_as_on_the_simulated_base() -> None:
     assert (robot.v_mps, robot.w_radps) == pytest.approx((0.25, 0.9))
     robot.step(-0.5, -1.5, 0.1)  # reversing is speeding up the other way once past zero
     assert (robot.v_mps, robot.w_radps) == pytest.approx((0.15, 0.6))
+
+
+def test_the_model_limits_a_twist_as_the_simulated_base_does_short_of_the_wheels_own_limit() -> None:
+    from services.simulator.robot_model import DiffDriveParams, Twist2D, limit_twist  # noqa: PLC0415
+
+    base = DiffDriveParams()
+    limits = RobotLimits()
+    assert (limits.v_max_mps, limits.w_max_radps, limits.a_max_mps2, limits.alpha_max_radps2, limits.a_decel_mps2,
+            limits.alpha_decel_radps2) == (base.max_linear_mps, base.max_angular_radps, base.max_linear_accel,
+                                           base.max_angular_accel, base.max_linear_decel, base.max_angular_decel)
+    rng = np.random.default_rng(3)
+    compared = 0
+    for _ in range(2000):
+        v, w, cmd_v, cmd_w = rng.uniform(-0.6, 0.6), rng.uniform(-1.8, 1.8), rng.uniform(-0.7, 0.7), rng.uniform(-2, 2)
+        dt = rng.choice([0.005, 0.01, 0.05])
+        model = limits.next_twist(v, w, cmd_v, cmd_w, dt)
+        half_track = 0.5 * base.wheel_separation_m
+        if abs(model[0]) + abs(model[1]) * half_track > base.max_linear_mps:
+            continue  # a wheel at its limit: the simulator scales both down, the model does not
+        delivered = limit_twist(Twist2D(cmd_v, cmd_w), Twist2D(v, w), dt, base)
+        assert model == pytest.approx((delivered.linear_mps, delivered.angular_radps), abs=1e-12)
+        compared += 1
+    assert compared > 500
+    assert limits.next_twist(0.3, 0.5, math.nan, math.inf, 0.1) == pytest.approx((0.05, 0.0))
 
 
 def test_angular_acceleration_and_rate_are_limited() -> None:
