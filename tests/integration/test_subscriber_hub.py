@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 import zenoh
@@ -21,6 +22,19 @@ from tests.support.processes import wait_until
 def session(router_endpoint: str) -> Iterator[zenoh.Session]:
     with open_session(SessionSpec(connect=(router_endpoint,))) as opened:
         yield opened
+
+
+def _once_heard(bus: zenoh.Session, key: str) -> zenoh.Publisher:
+    """A publisher on ``key`` that the bus already matches with a subscriber: a put made before the
+    subscription reached the router would go nowhere."""
+    publisher = bus.declare_publisher(key)
+
+    def matched() -> bool:
+        status: Any = publisher.matching_status  # a MatchingStatus (the stub says bool)
+        return bool(status.matching)
+
+    wait_until(matched, 5.0, f"no subscriber on {key} reached the bus")
+    return publisher
 
 
 def _thread_count() -> int:
@@ -41,9 +55,10 @@ def test_nodes_on_one_session_share_a_subscriber_per_key(session: zenoh.Session,
         spinners = [threading.Thread(target=n.spin, daemon=True) for n in nodes]
         for spinner in spinners:
             spinner.start()
+        cmd_vel = _once_heard(bus, f"{namespace}/cmd_vel")
         for i in range(3):
-            bus.put(f"{namespace}/cmd_vel", Twist.planar(0.1 * (i + 1), 0.0).encode())
-        bus.put(f"{namespace}/clock", Clock(Time.from_sec(2.5)).encode())
+            cmd_vel.put(Twist.planar(0.1 * (i + 1), 0.0).encode())
+        _once_heard(bus, f"{namespace}/clock").put(Clock(Time.from_sec(2.5)).encode())
         wait_until(lambda: all(len(seen) == 3 for seen in got) and all(n.now() == 2.5 for n in nodes), 5.0,
                    lambda: f"samples so far {got}, clocks {[n.now() for n in nodes]}")
         assert all(seen == pytest.approx([0.1, 0.2, 0.3]) for seen in got), got
@@ -65,11 +80,12 @@ def test_a_member_that_leaves_takes_nothing_from_the_others(session: zenoh.Sessi
     for spinner in spinners:
         spinner.start()
     try:
-        bus.put(f"{namespace}/cmd_vel", Twist.planar(1.0, 0.0).encode())
+        cmd_vel = _once_heard(bus, f"{namespace}/cmd_vel")
+        cmd_vel.put(Twist.planar(1.0, 0.0).encode())
         wait_until(lambda: kept == [1.0] and gone == [1.0], 5.0, lambda: f"kept {kept}, gone {gone}")
         sub.undeclare()
         assert SUBSCRIBER_HUB.subscriber_count(session) == 1
-        bus.put(f"{namespace}/cmd_vel", Twist.planar(2.0, 0.0).encode())
+        cmd_vel.put(Twist.planar(2.0, 0.0).encode())
         wait_until(lambda: kept == [1.0, 2.0], 5.0, lambda: f"kept {kept}")
         assert gone == [1.0], "the member that left gets no more samples"
     finally:
@@ -89,7 +105,7 @@ def test_a_failing_member_does_not_stop_the_sample_reaching_the_next(session: ze
     handles = [hub.subscribe(session, key, broken),
                hub.subscribe(session, key, lambda s: reached.append(s.payload.to_bytes()))]
     try:
-        bus.put(key, b"x")
+        _once_heard(bus, key).put(b"x")
         wait_until(lambda: reached == [b"x"], 5.0, lambda: f"reached {reached}")
     finally:
         for handle in handles:
