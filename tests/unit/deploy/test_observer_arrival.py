@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
 
@@ -13,17 +12,9 @@ from shared.geometry import Pose2D
 from shared.messages import BatteryState, DockContact, Header, Pose, PoseStamped, Time
 from shared.names import topic_key
 from shared.session import SessionSpec, open_session
+from tests.support.processes import wait_until
 
 NS = "obs_arrival"
-
-
-def _wait(predicate, timeout_s: float = 5.0) -> bool:  # type: ignore[no-untyped-def]
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.01)
-    return predicate()
 
 
 def test_the_arrival_speed_is_the_ground_truth_speed_just_before_mating() -> None:
@@ -60,12 +51,13 @@ def test_the_observer_takes_the_first_reading_of_the_mating_that_started_chargin
             # mated for a moment, parted, then mated for good from t = 0.4
             for t, mated in ((0.2, True), (0.25, False), (0.3, False), (0.4, True), (0.45, True), (0.5, True)):
                 put(topics.DOCK_CONTACT, DockContact(header=header(t), dock_id="home", mated=mated))
-            assert _wait(lambda: len(observer.snapshot().driven) == 12)
+            wait_until(lambda: len(observer.snapshot().driven) == 12, 5.0, lambda: observer.snapshot().driven)
             charging = BatteryState(header=header(0.5), percentage=0.2,
                                     power_supply_status=BatteryState.POWER_SUPPLY_STATUS_CHARGING)
             put(topics.BATTERY_STATUS, charging)
             # each key has its own callback thread: the contacts may still be on their way after the battery
-            assert _wait(lambda: observer.snapshot().mated_s == pytest.approx(0.4)), observer.snapshot().mated_s
+            wait_until(lambda: observer.snapshot().mated_s == pytest.approx(0.4), 5.0,
+                       lambda: f"mating began at {observer.snapshot().mated_s}")
             record = observer.snapshot()
             assert record.arrival_speed_mps == pytest.approx(0.1)
         finally:
