@@ -31,7 +31,8 @@ run: $(STAMP)
 
 check: $(TEST_STAMP)
 	$(BIN)/ruff check shared services deploy tests
-	$(BIN)/mypy shared
+	$(BIN)/ruff format --check shared services deploy tests
+	$(BIN)/mypy shared services deploy
 
 test: $(TEST_STAMP) ros2 check docs
 	$(BIN)/python -m pytest -q --durations=25

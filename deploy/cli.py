@@ -14,6 +14,7 @@ import pkgutil
 import signal
 import sys
 from collections.abc import Sequence
+from typing import Any, cast
 
 from deploy import commands
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
@@ -44,9 +45,10 @@ class _ShowsDefaults(argparse.HelpFormatter):
 
 def _show_defaults(parser: argparse.ArgumentParser) -> None:
     """Every parser, subcommands' too, shows its options' defaults, keeping its own formatter otherwise."""
-    if not issubclass(parser.formatter_class, _ShowsDefaults):
-        parser.formatter_class = type(  # type: ignore[assignment]
-            "ShowsDefaults", (_ShowsDefaults, parser.formatter_class), {})
+    # argparse types formatter_class as a callable; every parser here is given a HelpFormatter class.
+    own = cast(type[argparse.HelpFormatter], parser.formatter_class)
+    if not issubclass(own, _ShowsDefaults):
+        parser.formatter_class = cast(Any, type("ShowsDefaults", (_ShowsDefaults, own), {}))
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             for sub in action.choices.values():

@@ -169,7 +169,7 @@ class RunObserver:
         self._recoveries_seen: dict[bytes, int] = {}
 
     @staticmethod
-    def _decoder(msg_type: type[Message], handler: Any):  # type: ignore[no-untyped-def]
+    def _decoder(msg_type: type[Message], handler: Any):
         def on_sample(sample: zenoh.Sample) -> None:
             try:
                 msg = msg_type.decode(sample.payload.to_bytes())

@@ -24,13 +24,13 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402 - after choosing the backend
-import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.patches import Polygon  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.patches import Polygon
 
-from shared.foxglove_view.scene import DEFAULT_STAGING_OFFSET_M, staging_pose  # noqa: E402
-from shared.world import DOCK_GEOMETRY, World  # noqa: E402
+from shared.foxglove_view.scene import DEFAULT_STAGING_OFFSET_M, staging_pose
+from shared.world import DOCK_GEOMETRY, World
 
 WALL_COLOR = "black"
 GLASS_COLOR = "#7ec8f0"

@@ -71,7 +71,8 @@ def distances_to_segment(points_xy: np.ndarray, a_xy: np.ndarray, b_xy: np.ndarr
     length2 = float(ab @ ab)
     t = np.zeros(len(points)) if length2 == 0 else np.clip(((points - a) @ ab) / length2, 0.0, 1.0)
     closest = a + t[:, None] * ab
-    return np.hypot(points[:, 0] - closest[:, 0], points[:, 1] - closest[:, 1])
+    distances: np.ndarray = np.hypot(points[:, 0] - closest[:, 0], points[:, 1] - closest[:, 1])
+    return distances
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,7 +116,8 @@ class Pose2D:
         """Transform an ``(N, 2)`` array of points from this frame to its parent."""
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         rot = np.array([[c, -s], [s, c]])
-        return np.asarray(points, dtype=float) @ rot.T + np.array([self.x, self.y])
+        moved: np.ndarray = np.asarray(points, dtype=float) @ rot.T + np.array([self.x, self.y])
+        return moved
 
     def distance_to(self, other: Pose2D) -> float:
         return math.hypot(other.x - self.x, other.y - self.y)

@@ -56,7 +56,8 @@ class Rigid3:
         return Rigid3(self.rotation @ child.rotation, self.rotation @ child.translation + self.translation)
 
     def apply(self, point: np.ndarray) -> np.ndarray:
-        return self.rotation @ np.asarray(point, dtype=np.float64) + self.translation
+        moved: np.ndarray = self.rotation @ np.asarray(point, dtype=np.float64) + self.translation
+        return moved
 
     def to_pose2d(self) -> Pose2D:
         """The floor-plane pose of this frame, its heading being where its x axis points."""

@@ -79,8 +79,8 @@ def launch_stack(tmp_path: Path, namespace: str) -> Iterator:
     launcher's API, on an embedded router at a free port, in a fresh namespace, and waits until they are
     healthy. Teardown stops everything, grandchildren included, even when the test fails.
     """
-    from deploy.launcher import Launcher, free_endpoint, load_stack  # noqa: PLC0415 - only these tests need it
-    from tests.support.processes import REPO_ROOT  # noqa: PLC0415
+    from deploy.launcher import Launcher, free_endpoint, load_stack
+    from tests.support.processes import REPO_ROOT
 
     launchers: list = []
 

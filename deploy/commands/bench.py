@@ -27,7 +27,7 @@ def _print(result: dict, as_json: bool, title: str) -> None:
 
 
 def _bench_bus(args: argparse.Namespace) -> int:
-    from deploy.bench.bus import run_bus_bench
+    from deploy.bench.bus import run_bus_bench  # noqa: PLC0415 - opens Zenoh sessions: only this verb needs it
 
     try:
         result = run_bus_bench(rounds=args.rounds)
@@ -135,7 +135,7 @@ def _bench_perception(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_dds(dds: dict) -> None:  # type: ignore[type-arg]
+def _print_dds(dds: dict) -> None:
     """The DDS face (real rclpy on Fast DDS) beside rclpy-to-rclpy, measured in the same run."""
     table = Table(title="DDS face (rclpy, Fast DDS): through the face against rclpy-to-rclpy, same run")
     for column in ("measure", "p50", "p90"):

@@ -20,7 +20,7 @@ from shared.config_errors import ConfigError
 from shared.contracts import CONTRACTS
 
 
-def _table(report, console: Console) -> None:  # type: ignore[no-untyped-def]
+def _table(report, console: Console) -> None:
     verdict = "[green]conforms[/]" if report.passed else f"[red]does not conform[/] ({len(report.failed())} failed)"
     table = Table(title=f"zendock conform {report.service}: {verdict} in {report.wall_s:.0f} s")
     table.add_column("check")

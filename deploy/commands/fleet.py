@@ -32,7 +32,7 @@ def _fraction(text: str) -> float:
     return value
 
 
-def _table(report) -> Table:  # type: ignore[no-untyped-def]
+def _table(report) -> Table:
     table = Table(title=f"fleet in {report.world}: {report.sim_s:.0f} s simulated in {report.wall_s:.0f} s "
                         f"(rtf {report.achieved_rtf})")
     for column in ("robot", "distance", "dockings", "min battery", "waiting", "collisions"):
@@ -43,7 +43,7 @@ def _table(report) -> Table:  # type: ignore[no-untyped-def]
     return table
 
 
-def live_table(sim_s: float, duration_s: float, robots) -> Table:  # type: ignore[no-untyped-def]
+def live_table(sim_s: float, duration_s: float, robots) -> Table:
     """The robots now, for the terminal's live view: charge, docking state, dockings, distance driven."""
     table = Table(title=f"fleet: {sim_s:.0f} s of {duration_s:.0f} s simulated", title_justify="left")
     for column in ("robot", "charge", "state", "dockings", "distance", "waiting", "collisions"):
@@ -74,7 +74,7 @@ def _run(args: argparse.Namespace) -> int:
     # a live table on a terminal; otherwise a line every 10 s on stderr, so stdout stays the report
     err = Console(stderr=True, highlight=False)
 
-    def progress_line(sim_s: float, robots) -> None:  # type: ignore[no-untyped-def]
+    def progress_line(sim_s: float, robots) -> None:
         parts = [f"{r.name} {r.state or '?'} {100 * r.battery:.0f}% {r.dockings}d" for r in robots]
         err.print(f"[dim]{sim_s:7.0f} s[/] " + " | ".join(parts))
 

@@ -15,7 +15,7 @@ from deploy.commands.dock import RouterUnreachable, add_connection_flags, client
 from shared.names import node_token_key
 
 
-def alive_nodes(session, namespace: str, nodes: list[str], timeout_s: float) -> set[str]:  # type: ignore[no-untyped-def]
+def alive_nodes(session, namespace: str, nodes: list[str], timeout_s: float) -> set[str]:
     """Which of ``nodes`` have their token up: one liveliness query per node, answered by the router."""
     alive = set()
     for node in nodes:

@@ -99,7 +99,7 @@ def _run(args: argparse.Namespace) -> int:
     return _report_campaign(console, per_world, args.controller, args.json)
 
 
-def _report_campaign(console: Console, per_world: list, controller: str, as_json: bool) -> int:  # type: ignore[type-arg]
+def _report_campaign(console: Console, per_world: list, controller: str, as_json: bool) -> int:
     """The campaign's summary across worlds (printed when there are several), the JSON line; the exit code."""
     from deploy.trials import combine  # noqa: PLC0415
     from deploy.trials.summary import summary_reasons  # noqa: PLC0415
@@ -134,7 +134,7 @@ def _merge(args: argparse.Namespace) -> int:
     return _report_campaign(console, per_world, per_world[0][0].controller, args.json)
 
 
-def _shard(text: str):  # type: ignore[no-untyped-def]
+def _shard(text: str):
     from deploy.trials.records import Shard  # noqa: PLC0415
 
     try:
@@ -143,7 +143,7 @@ def _shard(text: str):  # type: ignore[no-untyped-def]
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _run_world(console: Console, options, run_trials):  # type: ignore[no-untyped-def]
+def _run_world(console: Console, options, run_trials):
     """One world's trials, with progress on stderr: a rich bar on a terminal, else a line every 10 trials.
 
     stdout keeps only the header, the summary and (``--json``) the JSON line, whatever the progress does.
@@ -156,7 +156,7 @@ def _run_world(console: Console, options, run_trials):  # type: ignore[no-untype
         began = time.monotonic()
         err = Console(stderr=True, highlight=False)
 
-        def count(result) -> None:  # type: ignore[no-untyped-def]
+        def count(result) -> None:
             with lock:
                 tally["done"] += 1
                 tally["docked"] += bool(result.docked)
@@ -172,7 +172,7 @@ def _run_world(console: Console, options, run_trials):  # type: ignore[no-untype
                   console=Console(stderr=True), redirect_stdout=is_terminal(sys.stdout)) as bar:
         task = bar.add_task("trials", total=total, last="", docked=0)
 
-        def advance(result) -> None:  # type: ignore[no-untyped-def]
+        def advance(result) -> None:
             status = "docked" if result.docked else "FAILED"
             with lock:
                 tally["docked"] += bool(result.docked)
@@ -182,7 +182,7 @@ def _run_world(console: Console, options, run_trials):  # type: ignore[no-untype
         return run_trials(options, log=log, progress=advance)
 
 
-def _print_summary(console: Console, summary) -> None:  # type: ignore[no-untyped-def]
+def _print_summary(console: Console, summary) -> None:
     data = {**summary.headline(), "controller": summary.controller, "world": summary.world,
             "peak_rss_mb": summary.peak_rss_mb}
     console.print(_summary_table(data))

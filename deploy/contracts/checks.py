@@ -156,7 +156,7 @@ def check_publishes(ctx: Context) -> list[Check]:
             continue
         expected = topic.rate_hz
 
-        def body(topic=topic, expected=expected) -> tuple[bool, str]:  # type: ignore[no-untyped-def]
+        def body(topic=topic, expected=expected) -> tuple[bool, str]:
             samples = ctx.probe.collect(ctx.key(topic.name), topic.type, RATE_SPAN_S, ctx.sim, wall_limit_s=20.0)
             if samples.received == 0:
                 return False, "nothing arrived"

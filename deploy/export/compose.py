@@ -189,7 +189,7 @@ def secure_overlay_document(stack: Stack) -> dict[str, Any]:
 
 def render(document: dict[str, Any], header: str) -> str:
     """YAML with flow-style leaves, a blank line between top-level sections and between services."""
-    lines = []
+    lines: list[str] = []
     for line in yaml.safe_dump(document, sort_keys=False, default_flow_style=None, width=100).splitlines():
         top_level = not line.startswith(" ")
         service = re.fullmatch(r"  [A-Za-z0-9_.-]+:", line) is not None and not lines[-1].endswith(":")

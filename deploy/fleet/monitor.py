@@ -99,7 +99,7 @@ class FleetMonitor:
         self._subscribers = subs
 
     @staticmethod
-    def _decoder(msg_type: type[Message], handler: Callable[[str, Any], None], robot: str):  # type: ignore[no-untyped-def]
+    def _decoder(msg_type: type[Message], handler: Callable[[str, Any], None], robot: str):
         def on_sample(sample: zenoh.Sample) -> None:
             try:
                 msg = msg_type.decode(sample.payload.to_bytes())

@@ -25,6 +25,7 @@ from deploy.launcher.restart import Backoff
 from deploy.launcher.runtime import RuntimePaths
 from deploy.launcher.stack_file import Stack, load_stack
 from deploy.launcher.status import ServiceStatus
+from deploy.launcher.supervisor import Supervisor
 
 T = TypeVar("T")
 
@@ -201,7 +202,7 @@ class Launcher:
             raise RuntimeError(f"the stack {self.project} is not up")
         return asyncio.run_coroutine_threadsafe(make(), self._loop).result(timeout_s)
 
-    def _supervisor(self) -> Any:
+    def _supervisor(self) -> Supervisor:
         assert self._host is not None and self._host.supervisor is not None
         return self._host.supervisor
 

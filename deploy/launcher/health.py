@@ -52,7 +52,7 @@ class LivelinessWatcher:
         self._closing = threading.Event()
         self._lock = threading.Lock()
         self._session: zenoh.Session | None = None
-        self._subscriber: zenoh.Subscriber | None = None
+        self._subscriber: zenoh.Subscriber[None] | None = None
         self.connected = threading.Event()
         self._thread = threading.Thread(target=self._connect, name="zendock-liveliness", daemon=True)
 

@@ -141,8 +141,9 @@ def request(paths: RuntimePaths, op: str, *, timeout_s: float = 10.0, **fields: 
         reply = json.loads(buffer)
     except ValueError:
         raise ControlError(f"the supervisor gave no answer to {op!r}") from None
-    if not reply.get("ok"):
-        raise RequestRefused(str(reply.get("error", "request refused")))
+    if not isinstance(reply, dict) or not reply.get("ok"):
+        error = reply.get("error", "request refused") if isinstance(reply, dict) else "not a JSON object"
+        raise RequestRefused(str(error))
     return reply
 
 

@@ -21,7 +21,7 @@ import yaml
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.rosbag2.errors import ReaderError, WriterError
 
-import shared.interfaces.docking  # noqa: F401 - registers the actions' feedback types a bag may carry
+import shared.interfaces.docking
 import shared.interfaces.navigation  # noqa: F401
 from deploy.recording.mcap_log import RecordedSample, split_encoding
 from deploy.recording.reading import RawMessage

@@ -238,11 +238,11 @@ class Robot:
         within ``timeout_s`` (the goal is then cancelled, so the robot stops).
         """
         goal = DockRobotGoal(use_dock_id=True, dock_id=dock_id or "")
-        return self._run_action(self._dock_client, goal, timeout_s, server_timeout_s)  # type: ignore[no-any-return]
+        return self._run_action(self._dock_client, goal, timeout_s, server_timeout_s)
 
     def undock(self, timeout_s: float = 60.0, server_timeout_s: float = SERVER_TIMEOUT_S) -> UndockRobotResult:
         """Send an ``undock_robot`` goal and wait for its result (as :meth:`dock`)."""
-        return self._run_action(self._undock_client, UndockRobotGoal(), timeout_s, server_timeout_s)  # type: ignore[no-any-return]
+        return self._run_action(self._undock_client, UndockRobotGoal(), timeout_s, server_timeout_s)
 
     def _run_action(self, client: ActionClient[Any, Any, Any], goal: Message, timeout_s: float,
                     server_timeout_s: float) -> Any:

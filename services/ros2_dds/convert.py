@@ -149,7 +149,8 @@ def from_ros(ros_msg: Any, zendock_type: type[Message]) -> Any:
 
 def _carried(ros_msg: Any, zendock_type: type[Message]) -> dict[str, Any]:
     out: dict[str, Any] = {}
-    for name, hint in _hints(zendock_type):
+    # A class is hashable; mypy reads a dataclass's instance __hash__ (None) as the class's.
+    for name, hint in _hints(zendock_type):  # type: ignore[arg-type]
         if hasattr(ros_msg, name):
             out[name] = _carried_value(getattr(ros_msg, name), hint)
     return out
@@ -173,7 +174,7 @@ def _plain(value: Any) -> Any:
     if isinstance(value, bytes):
         return np.frombuffer(value, dtype=np.uint8).copy()
     if hasattr(value, "get_fields_and_field_types"):
-        return {name: _plain(getattr(value, name)) for name, _ in _fields(type(value))}
+        return {name: _plain(getattr(value, name)) for name, _ in _fields(type(value))}  # type: ignore[arg-type]
     return value
 
 

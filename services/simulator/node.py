@@ -76,6 +76,7 @@ class SimulatorService:
                 elif room is None:
                     sim = room = SimWorld(self.world, params.drive, sim_params, start=start, name=ns)
                 else:
+                    assert start is not None, "a shared room's robots are the world's fleet, each with its start"
                     sim = room.join(ns, start, sim_params)
             except PoseInCollisionError as exc:
                 raise ConfigError(f"{params.world}: {exc}") from None

@@ -451,7 +451,7 @@ class SimWorld:
         if last is not None and self.time_s - last < self.params.collision_debounce_s:
             return
         points = arbiter.contact_point_set.points
-        cx, cy = _contact_centre(points, tuple(self.body.position))
+        cx, cy = _contact_centre(points, (self.body.position.x, self.body.position.y))
         speed = float(abs(self.body.velocity_at_world_point((cx, cy))))
         if obstacle.dock is not None and self._is_docking_touch(obstacle.dock, points, speed):
             return

@@ -214,9 +214,9 @@ class Project:
 def wait_charging(endpoint: str, timeout_s: float, zenoh_config: str | None = None, full_too: bool = False) -> None:
     """A ``battery_status`` saying CHARGING arrives on a session opened now (so it is a new one); with
     ``full_too``, FULL also counts (a restarted battery starts full, and says FULL only while mated)."""
-    from shared.messages import BatteryState  # noqa: PLC0415
-    from shared.session import SessionSpec, open_session  # noqa: PLC0415
-    from tests.support.bus import KeyRecorder  # noqa: PLC0415
+    from shared.messages import BatteryState
+    from shared.session import SessionSpec, open_session
+    from tests.support.bus import KeyRecorder
 
     spec = SessionSpec(connect=(endpoint,), config_file=zenoh_config)
     with open_session(spec) as session:
@@ -320,8 +320,8 @@ def check_secure_stack(steps: Steps, tag: str) -> None:
 
 
 def check_sharded_trials(steps: Steps, tag: str) -> None:
-    from deploy.trials import reachable_starts  # noqa: PLC0415
-    from shared.world import load_world  # noqa: PLC0415
+    from deploy.trials import reachable_starts
+    from shared.world import load_world
 
     n, seed = 4, 3
     runs = Path(tempfile.mkdtemp(prefix="zendock-shards-"))

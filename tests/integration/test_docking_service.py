@@ -15,6 +15,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TypeVar
 
 import pytest
@@ -317,7 +318,7 @@ def test_detection_is_what_docks_a_mislocalised_robot(stack, detection: bool) ->
 
 
 def test_obstacle_in_the_approach_holds_the_robot(stack, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    world = yaml.safe_load(open(SEED_ROOM))
+    world = yaml.safe_load(Path(SEED_ROOM).read_text())
     world["boxes"].append({"pose": [-0.9, 1.15, 0.0], "size": [0.1, 0.1]})  # a pillar between staging and dock
     path = tmp_path / "pillar_room.yaml"
     path.write_text(yaml.safe_dump(world))

@@ -137,7 +137,7 @@ def test_zendock_plot_draws_a_recording(tmp_path: Path, capsys) -> None:  # type
 def test_trial_histograms_draw_trials_that_took_all_but_the_same_time(tmp_path: Path) -> None:
     # A deterministic simulation docked two robots in 6.9 s and 6.900000000000002 s: numpy has no five
     # finite bins for that range, and the campaign failed after its last trial.
-    from deploy.trials.records import TrialResult  # noqa: PLC0415 - only this test needs the trials' records
+    from deploy.trials.records import TrialResult
 
     results = [TrialResult(0, "r0", (0.0, 0.0, 0.0), True, True, 6.900000000000002, 0.00045, 0.0018, 0, 2.0),
                TrialResult(1, "r1", (0.0, 0.0, 0.0), True, True, 6.9, 0.00105, 0.0018, 0, 2.0)]

@@ -31,7 +31,7 @@ def _one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
 @pytest.fixture(autouse=True)
 def _nothing_starts(monkeypatch: pytest.MonkeyPatch) -> None:
     """A validation error must come before any stack: starting one fails the test."""
-    import deploy.demo  # noqa: PLC0415
+    import deploy.demo
 
     def refuse(*_args: object, **_kwargs: object) -> None:
         raise AssertionError("the demo started before its arguments were checked")
@@ -109,8 +109,8 @@ def test_logs_of_a_service_the_stack_does_not_have(tmp_path: Path, monkeypatch: 
 
 
 def test_kill_says_what_it_did() -> None:
-    from deploy.commands.lifecycle import _kill_line  # noqa: PLC0415
-    from deploy.launcher.status import ServiceStatus  # noqa: PLC0415
+    from deploy.commands.lifecycle import _kill_line
+    from deploy.launcher.status import ServiceStatus
 
     running = ServiceStatus("battery", "running", 4242, 0, "healthy")
     assert _kill_line("battery", running, True, signal.SIGKILL) == \

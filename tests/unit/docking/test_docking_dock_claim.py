@@ -114,7 +114,7 @@ def test_the_mission_leaves_its_dock_when_asked_only_while_charging_after_its_ow
 
 
 def test_a_fleet_answer_reads_the_response_and_its_holding_pose() -> None:
-    from shared.interfaces.fleet import ReserveDockResponse  # noqa: PLC0415
+    from shared.interfaces.fleet import ReserveDockResponse
 
     queued = FleetAnswer.from_response(ReserveDockResponse(queue_position=2, reason="every dock is taken",
                                                            holding_pose=np.array([4.0, 7.4, 0.0])))

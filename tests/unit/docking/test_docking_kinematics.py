@@ -28,7 +28,7 @@ def test_braking_is_harder_than_speeding_up_as_on_the_simulated_base() -> None:
 
 
 def test_the_model_limits_a_twist_as_the_simulated_base_does_short_of_the_wheels_own_limit() -> None:
-    from services.simulator.robot_model import DiffDriveParams, Twist2D, limit_twist  # noqa: PLC0415
+    from services.simulator.robot_model import DiffDriveParams, Twist2D, limit_twist
 
     base = DiffDriveParams()
     limits = RobotLimits()

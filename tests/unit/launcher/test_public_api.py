@@ -48,7 +48,7 @@ def test_ps_json_has_exactly_the_promised_keys() -> None:
 
 
 def test_ps_groups_a_fleets_services_by_robot() -> None:
-    from deploy.commands.ps import format_table  # noqa: PLC0415
+    from deploy.commands.ps import format_table
 
     statuses = [ServiceStatus("planner_r2", "running", 5, 0, "healthy", namespace="r2"),
                 ServiceStatus("simulator", "running", 1, 0, "healthy"),

@@ -80,7 +80,7 @@ def test_without_x_robots_nothing_changes() -> None:
 
 
 def test_the_shipped_fleet_stack_runs_three_robots_sharing_docks(tmp_path: Path) -> None:
-    from deploy.paths import REPO_ROOT  # noqa: PLC0415
+    from deploy.paths import REPO_ROOT
 
     stack = load_stack(REPO_ROOT / "deploy/stack-fleet.yaml", env={}, project_dir=tmp_path)
     for robot in ("r1", "r2", "r3"):

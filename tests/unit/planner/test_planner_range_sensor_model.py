@@ -119,13 +119,13 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
 
 
 def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
-    import logging  # noqa: PLC0415
+    import logging
 
-    from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit  # noqa: PLC0415
-    from services.planner.occupancy_map import OCC_FREE, OccupancyMap  # noqa: PLC0415
-    from services.planner.params import Params  # noqa: PLC0415
-    from shared.geometry import Pose2D  # noqa: PLC0415
-    from shared.pose_tracking import PoseTrack  # noqa: PLC0415
+    from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
+    from services.planner.occupancy_map import OCC_FREE, OccupancyMap
+    from services.planner.params import Params
+    from shared.geometry import Pose2D
+    from shared.pose_tracking import PoseTrack
 
     params = Params.model_validate({"glass_slowdown_radius_m": 0.8, "glass_slowdown_min_speed_mps": 0.1})
     layers = CostmapUpdater(params, PoseTrack(), logging.getLogger("test"))

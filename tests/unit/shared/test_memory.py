@@ -88,9 +88,9 @@ def test_the_router_loads_no_pydantic() -> None:
 
 
 def test_a_simulator_s_cameras_share_one_noise_bank_and_draw_their_own_windows() -> None:
-    from services.simulator.camera import CameraParams, CameraRenderer, ReadNoise, build_scene  # noqa: PLC0415
-    from shared.geometry import Pose2D  # noqa: PLC0415
-    from shared.world import load_world  # noqa: PLC0415
+    from services.simulator.camera import CameraParams, CameraRenderer, ReadNoise, build_scene
+    from shared.geometry import Pose2D
+    from shared.world import load_world
 
     world = load_world(REPO_ROOT / "deploy/worlds/seed_room.yaml")
     scene, params = build_scene(world), CameraParams()

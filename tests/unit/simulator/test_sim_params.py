@@ -43,7 +43,7 @@ def test_dotted_overrides_reach_the_physics() -> None:
 
 
 def test_one_check_per_value_also_for_direct_use() -> None:
-    from services.simulator.sensors import UltrasonicParams  # noqa: PLC0415
+    from services.simulator.sensors import UltrasonicParams
 
     with pytest.raises(ValidationError, match="range_max_m"):
         UltrasonicParams(range_min_m=1.0, range_max_m=0.5)

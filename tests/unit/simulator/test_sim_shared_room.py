@@ -112,8 +112,8 @@ def test_a_shared_room_steps_only_together(quiet: SimParams, open_world: Callabl
 
 
 def test_the_shipped_fleet_world_puts_every_robot_in_one_room(quiet: SimParams) -> None:
-    from shared.world import load_world  # noqa: PLC0415
-    from tests.support.processes import REPO_ROOT  # noqa: PLC0415
+    from shared.world import load_world
+    from tests.support.processes import REPO_ROOT
 
     world = load_world(REPO_ROOT / "deploy/worlds/fleet/warehouse.yaml")
     assert [r.name for r in world.robots] == ["r1", "r2", "r3"] and len(world.docks) == 2
@@ -126,7 +126,7 @@ def test_the_shipped_fleet_world_puts_every_robot_in_one_room(quiet: SimParams) 
 
 
 def test_the_camera_draws_the_other_robots(quiet: SimParams, open_world: Callable[..., World]) -> None:
-    from services.simulator.camera import CameraParams, CameraRenderer, build_scene  # noqa: PLC0415
+    from services.simulator.camera import CameraParams, CameraRenderer, build_scene
 
     world = open_world()
     r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
