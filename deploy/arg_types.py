@@ -58,7 +58,12 @@ def service_replacement(text: str) -> Replacement:
 def add_service_option(parser: argparse.ArgumentParser) -> None:
     """``--service NAME=COMMAND`` (repeatable), as ``up``, ``demo``, ``trials``, ``fleet`` and ``conform`` take it."""
     parser.add_argument(
-        "--service", action="append", default=[], type=service_replacement, metavar="NAME=COMMAND", dest="replacements",
+        "--service",
+        action="append",
+        default=[],
+        type=service_replacement,
+        metavar="NAME=COMMAND",
+        dest="replacements",
         help="run COMMAND in place of zendock's service NAME, with the flags and environment zendock's own gets "
         "(repeatable; {robot} in COMMAND becomes the robot's namespace)",
     )

@@ -36,9 +36,15 @@ class _ShowsDefaults(argparse.HelpFormatter):
     def _get_help_string(self, action: argparse.Action) -> str | None:
         text = action.help or ""
         default = action.default
-        if (not action.option_strings or "default" in text.lower() or default is None or default is False
-                or default == argparse.SUPPRESS
-                or (isinstance(default, list | tuple) and not default) or text == argparse.SUPPRESS):
+        if (
+            not action.option_strings
+            or "default" in text.lower()
+            or default is None
+            or default is False
+            or default == argparse.SUPPRESS
+            or (isinstance(default, list | tuple) and not default)
+            or text == argparse.SUPPRESS
+        ):
             return action.help
         return f"{text} (default: %(default)s)"
 

@@ -69,8 +69,14 @@ def command_tree(parser: argparse.ArgumentParser, path: tuple[str, ...] = (), he
             command.positional_choices += [str(c) for c in action.choices]
         elif action.option_strings and action.help != argparse.SUPPRESS:
             choices = tuple(str(c) for c in action.choices) if action.choices else ()
-            command.options.append(Option(tuple(action.option_strings), _help_text(action.help, action),
-                                          takes_value=action.nargs != 0, choices=choices))
+            command.options.append(
+                Option(
+                    tuple(action.option_strings),
+                    _help_text(action.help, action),
+                    takes_value=action.nargs != 0,
+                    choices=choices,
+                )
+            )
     return command
 
 
@@ -175,10 +181,14 @@ def zsh_script(tree: Command, prog: str = "zendock") -> str:
     for command in tree.walk():
         key = _zsh_quote(" ".join(command.path))
         if command.subcommands:
-            subs.append(f"        {key}) reply=( {' '.join(_zsh_quote(name) for name in command.subcommands)} ) ;;")
+            subs.append(
+                f"        {key}) reply=( {' '.join(_zsh_quote(name) for name in command.subcommands)} ) ;;"
+            )
         if command.words:
-            items = [described(name, command.subcommands[name].help if name in command.subcommands else "")
-                     for name in command.words]
+            items = [
+                described(name, command.subcommands[name].help if name in command.subcommands else "")
+                for name in command.words
+            ]
             words.append(f"        {key}) reply=( {' '.join(items)} ) ;;")
         items = [described(flag, option.help) for option in command.options for flag in option.flags]
         opts.append(f"        {key}) reply=( {' '.join(items)} ) ;;")

@@ -114,7 +114,14 @@ def lower_bound(world_path: Path, start: Pose2D, goal: Pose2D) -> dict[str, floa
     """
     done = run_tool(
         "services.planner.lower_bound",
-        ["--world", str(world_path), "--start", *map(str, start.as_tuple()), "--goal", *map(str, goal.as_tuple())],
+        [
+            "--world",
+            str(world_path),
+            "--start",
+            *map(str, start.as_tuple()),
+            "--goal",
+            *map(str, goal.as_tuple()),
+        ],
         timeout_s=120.0,
     )
     try:
@@ -139,7 +146,9 @@ def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dic
     }
 
 
-def build_report(record: RunRecord, options: DemoOptions, world: World, wall_s: float, bound_s: float) -> DemoReport:
+def build_report(
+    record: RunRecord, options: DemoOptions, world: World, wall_s: float, bound_s: float
+) -> DemoReport:
     contact = record.contact_at_charging
     docked = bool(record.charging and contact is not None and contact.mated)
     trigger = record.trigger_s if record.trigger_s is not None else math.nan
@@ -179,12 +188,22 @@ def _status_line(record: RunRecord, world: World, docking_state: str, trigger_be
         _, x, y, _ = record.driven[-1]
         dock = world.docks[0].pose2d
         distance = math.hypot(dock.x - x, dock.y - y)
-    return demo_line(sim_s=record.sim_time_s, battery=battery, trigger_s=record.trigger_s,
-                     docking_state=docking_state, distance_m=distance, trigger_below=trigger_below)
+    return demo_line(
+        sim_s=record.sim_time_s,
+        battery=battery,
+        trigger_s=record.trigger_s,
+        docking_state=docking_state,
+        distance_m=distance,
+        trigger_below=trigger_below,
+    )
 
 
-def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], None] | None = None,
-             status_period_s: float = TERMINAL_PERIOD_S) -> DemoReport:
+def run_demo(
+    options: DemoOptions,
+    log: Any = print,
+    status: Callable[[str], None] | None = None,
+    status_period_s: float = TERMINAL_PERIOD_S,
+) -> DemoReport:
     """Bring the stack up, dock once, write the run's files; always brings the stack down.
 
     ``status`` gets a progress line (battery, then docking state and distance to the dock, sim time) at
@@ -195,15 +214,22 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
     run_dir.mkdir(parents=True, exist_ok=True)
     endpoint = free_endpoint()
     group = robot_group(r.name for r in options.replacements)
-    stack = load_stack(DEFAULT_STACK, env=stack_environment(options, endpoint, run_dir), project_dir=REPO_ROOT,
-                       compose=group if options.compose else None)
+    stack = load_stack(
+        DEFAULT_STACK,
+        env=stack_environment(options, endpoint, run_dir),
+        project_dir=REPO_ROOT,
+        compose=group if options.compose else None,
+    )
     stack = apply_replacements(stack, options.replacements)
     services = _composed(DOCK_SERVICES, group) if options.compose else DOCK_SERVICES
     wall_start = time.monotonic()
-    log(f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}"
-        + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements))
-    with Launcher(stack, services=services, project_dir=run_dir / "stack", working_dir=REPO_ROOT,
-                  project_name="demo") as launcher:
+    log(
+        f"stack on {endpoint}: world {world.name}, controller {options.controller}, rtf {options.rtf}"
+        + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements)
+    )
+    with Launcher(
+        stack, services=services, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="demo"
+    ) as launcher:
         launcher.wait_healthy(timeout_s=90.0)
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
@@ -227,19 +253,32 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
 
             try:
                 if options.start is not None:
-                    placed = call_service(session, topic_key("", "simulator/teleport"), TELEPORT,
-                                          TeleportRequest(*options.start))
+                    placed = call_service(
+                        session,
+                        topic_key("", "simulator/teleport"),
+                        TELEPORT,
+                        TeleportRequest(*options.start),
+                    )
                     if not placed.success:
                         raise ServiceError(f"--start {options.start}: {placed.message}")
                 observer.arm()
                 battery_set_s = observer.sim_time()
-                call_service(session, "battery/set_state", SET_BATTERY_STATE,
-                             SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
-                log(f"battery set to {options.battery_start:.0%}; waiting for the low-battery trigger and CHARGING")
+                call_service(
+                    session,
+                    "battery/set_state",
+                    SET_BATTERY_STATE,
+                    SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale),
+                )
+                log(
+                    f"battery set to {options.battery_start:.0%}; waiting for the low-battery trigger and CHARGING"
+                )
                 deadline_wall = time.monotonic() + options.timeout_sim_s * 4 + 60.0
 
                 def finished(record: RunRecord) -> bool:
-                    too_late = record.trigger_s is not None and record.sim_time_s - record.trigger_s > options.timeout_sim_s
+                    too_late = (
+                        record.trigger_s is not None
+                        and record.sim_time_s - record.trigger_s > options.timeout_sim_s
+                    )
                     return record.charging or too_late or record.sim_time_s > options.timeout_sim_s + 60.0
 
                 while not observer.wait(finished, timeout_s=0.5):
@@ -270,17 +309,33 @@ def run_demo(options: DemoOptions, log: Any = print, status: Callable[[str], Non
     glass = read_glass_marks(run_dir / "glass_memory.npz", world)
     if glass is not None:
         counted = glass.report()
-        report.false_glass_cells, report.glass_coverage = float(counted.false_glass_cells), counted.glass_coverage
+        report.false_glass_cells, report.glass_coverage = (
+            float(counted.false_glass_cells),
+            counted.glass_coverage,
+        )
     report.run_dir = str(run_dir)
     report.peak_rss_mb = dict(sampler.peak_mb)
     report.replaced_services = replacements_report(options.replacements)
     (run_dir / "report.json").write_text(strict_json.dumps(report.as_dict(), indent=2) + "\n")
-    _plot(world, record, run_dir / "trajectory.png", log, glass, battery_set=(battery_set_s, options.battery_start))
+    _plot(
+        world,
+        record,
+        run_dir / "trajectory.png",
+        log,
+        glass,
+        battery_set=(battery_set_s, options.battery_start),
+    )
     return report
 
 
-def _plot(world: World, record: RunRecord, path: Path, log: Any, glass: GlassMarks | None = None,
-          battery_set: tuple[float, float] | None = None) -> None:
+def _plot(
+    world: World,
+    record: RunRecord,
+    path: Path,
+    log: Any,
+    glass: GlassMarks | None = None,
+    battery_set: tuple[float, float] | None = None,
+) -> None:
     """The run's picture; ``battery_set`` ``(sim_s, percentage)``: when and to what the demo set the charge."""
     try:
         from deploy.plotting import plot_run  # noqa: PLC0415 - matplotlib is slow to import

@@ -34,8 +34,20 @@ MEASUREMENTS_DIR = DOCS_DIR / "measurements"
 MEASUREMENTS_PAGE = DOCS_DIR / "measurements.md"
 #: Help is wrapped at this width whatever the terminal, so the reference is the same on every machine.
 HELP_COLUMNS = "100"
-MEASUREMENT_FIELDS = ("id", "order", "section", "status", "what", "result", "command", "commit",
-                      "recorded_in", "date", "machine", "numbers")
+MEASUREMENT_FIELDS = (
+    "id",
+    "order",
+    "section",
+    "status",
+    "what",
+    "result",
+    "command",
+    "commit",
+    "recorded_in",
+    "date",
+    "machine",
+    "numbers",
+)
 STATUSES = ("current", "history")
 
 
@@ -55,7 +67,9 @@ def _subcommands(parser: argparse.ArgumentParser) -> Iterator[tuple[str, str, ar
                 yield name, helps.get(name, ""), sub
 
 
-def _walk(parser: argparse.ArgumentParser, path: tuple[str, ...]) -> Iterator[tuple[tuple[str, ...], str, argparse.ArgumentParser]]:
+def _walk(
+    parser: argparse.ArgumentParser, path: tuple[str, ...]
+) -> Iterator[tuple[tuple[str, ...], str, argparse.ArgumentParser]]:
     for name, help_text, sub in _subcommands(parser):
         yield (*path, name), help_text, sub
         yield from _walk(sub, (*path, name))
@@ -94,7 +108,9 @@ def cli_reference(parser: argparse.ArgumentParser | None = None) -> str:
     ]
     for path, help_text, _ in commands:
         anchor = "zendock-" + "-".join(path)
-        out.append(f"| [`zendock {' '.join(path)}`](#{anchor}) | {_cell(help_text).replace('<', '&lt;').replace('>', '&gt;')} |")
+        out.append(
+            f"| [`zendock {' '.join(path)}`](#{anchor}) | {_cell(help_text).replace('<', '&lt;').replace('>', '&gt;')} |"
+        )
     out += ["", "## zendock", "", "```text", _help_text(parser), "```"]
     for path, _, sub in commands:
         level = "#" * min(2 + len(path) - 1, 4)
@@ -140,32 +156,49 @@ def measurements_page(records: list[dict[str, Any]]) -> str:
         "them. Everything was measured on the 2-core development machine, which other jobs shared (so "
         "timings are noisy); the command beside each number reproduces it. Trials run the whole "
         "distributed stack, two robots sharing one simulator, with sensor noise and a map->odom "
-        "localisation error of (0.03 m, -0.02 m, 0.02 rad) on. The rows that say \"five worlds\" were "
-        "measured before `oblique_glass` joined the shipped worlds, and those that say \"six\" before "
+        'localisation error of (0.03 m, -0.02 m, 0.02 rad) on. The rows that say "five worlds" were '
+        'measured before `oblique_glass` joined the shipped worlds, and those that say "six" before '
         "`glass_fins` did; `--world all` now runs seven.",
         "",
-        "*commit* is the commit the measurement names; where it names none (\"the final code\"), the "
+        '*commit* is the commit the measurement names; where it names none ("the final code"), the '
         "commit that recorded the row is given instead, marked *recorded in*. Rows refer to each other "
-        "(\"the row below\") in the order of the complete table at the end of this page.",
+        '("the row below") in the order of the complete table at the end of this page.',
         "",
     ]
     for status, title, intro in (
         ("current", "Current", "Figures on the code as it is (or the latest run of that measurement)."),
-        ("history", "History", "Earlier code, superseded designs and before/after comparisons, kept as "
-                               "the record of why the code is as it is."),
+        (
+            "history",
+            "History",
+            "Earlier code, superseded designs and before/after comparisons, kept as "
+            "the record of why the code is as it is.",
+        ),
     ):
-        out += [f"## {title}", "", intro, "", "| # | what | result | command | commit | date |",
-                "| --- | --- | --- | --- | --- | --- |"]
+        out += [
+            f"## {title}",
+            "",
+            intro,
+            "",
+            "| # | what | result | command | commit | date |",
+            "| --- | --- | --- | --- | --- | --- |",
+        ]
         for r in records:
             if r["status"] != status:
                 continue
             commit = f"`{r['commit']}`" if r["commit"] else f"recorded in `{r['recorded_in']}`"
-            out.append(f"| {r['order']} | {_cell(r['what'])} | {_cell(r['result'])} | {_cell(r['command'])} "
-                       f"| {commit} | {r['date']} |")
+            out.append(
+                f"| {r['order']} | {_cell(r['what'])} | {_cell(r['result'])} | {_cell(r['command'])} "
+                f"| {commit} | {r['date']} |"
+            )
         out.append("")
-    out += ["## The numbers, per file", "",
-            "The structured numbers each file carries, for scripts and plots.", "",
-            "| # | file | section | numbers |", "| --- | --- | --- | --- |"]
+    out += [
+        "## The numbers, per file",
+        "",
+        "The structured numbers each file carries, for scripts and plots.",
+        "",
+        "| # | file | section | numbers |",
+        "| --- | --- | --- | --- |",
+    ]
     for r in records:
         numbers = ", ".join(f"{k}: {json.dumps(v, ensure_ascii=False)}" for k, v in r["numbers"].items())
         out.append(f"| {r['order']} | `{r['_file']}` | {r['section']} | {_cell(numbers)} |")
@@ -186,13 +219,16 @@ def on_files(files: Any, config: Any) -> Any:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m deploy.docs_site", description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="exit 1 if docs/measurements.md or docs/contracts/ is stale")
+    parser.add_argument(
+        "--check", action="store_true", help="exit 1 if docs/measurements.md or docs/contracts/ is stale"
+    )
     parser.add_argument("--cli", metavar="FILE", help="also write the CLI reference to FILE")
     args = parser.parse_args(argv)
     page = measurements_page(load_measurements())
     if args.check:
-        stale = ([str(MEASUREMENTS_PAGE)] if MEASUREMENTS_PAGE.read_text(encoding="utf-8") != page else []) + [
-            f"docs/contracts/{name}" for name in stale_files()]
+        stale = (
+            [str(MEASUREMENTS_PAGE)] if MEASUREMENTS_PAGE.read_text(encoding="utf-8") != page else []
+        ) + [f"docs/contracts/{name}" for name in stale_files()]
         if stale:
             print(f"stale: {', '.join(stale)}: run python -m deploy.docs_site", file=sys.stderr)
             return 1

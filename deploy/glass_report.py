@@ -64,19 +64,26 @@ class GlassMarks:
             points = a + np.linspace(0.0, 1.0, samples)[:, None] * (b - a)
             total += samples
             if len(marks):
-                gaps = np.min(np.hypot(points[:, None, 0] - marks[None, :, 0], points[:, None, 1] - marks[None, :, 1]),
-                              axis=1)
+                gaps = np.min(
+                    np.hypot(points[:, None, 0] - marks[None, :, 0], points[:, None, 1] - marks[None, :, 1]),
+                    axis=1,
+                )
                 found += int(np.count_nonzero(gaps <= self.tolerance_m))
         return GlassReport(false_cells, found / total, len(marks))
 
 
 def glass_marks(
-    layer: np.ndarray, resolution_m: float, origin_xy: tuple[float, float], world: World,
+    layer: np.ndarray,
+    resolution_m: float,
+    origin_xy: tuple[float, float],
+    world: World,
     tolerance_m: float = TOLERANCE_M,
 ) -> GlassMarks:
     """The marks of a sonar layer (``(height, width)``, row ``iy`` column ``ix``) against ``world``'s glass."""
     iy, ix = np.nonzero(np.asarray(layer) == GLASS_MARK)
-    xy = np.stack([origin_xy[0] + (ix + 0.5) * resolution_m, origin_xy[1] + (iy + 0.5) * resolution_m], axis=1)
+    xy = np.stack(
+        [origin_xy[0] + (ix + 0.5) * resolution_m, origin_xy[1] + (iy + 0.5) * resolution_m], axis=1
+    )
     nearest = np.full(len(xy), np.inf)
     for a, b in world.glass:
         nearest = np.minimum(nearest, distances_to_segment(xy, np.asarray(a), np.asarray(b)))
@@ -84,7 +91,10 @@ def glass_marks(
 
 
 def glass_report(
-    layer: np.ndarray, resolution_m: float, origin_xy: tuple[float, float], world: World,
+    layer: np.ndarray,
+    resolution_m: float,
+    origin_xy: tuple[float, float],
+    world: World,
     tolerance_m: float = TOLERANCE_M,
 ) -> GlassReport:
     """Compare a sonar layer with ``world``'s glass."""

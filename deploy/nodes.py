@@ -19,8 +19,12 @@ from deploy.keys.graph import Graph, node_display_name, query_graph
 
 GRAPH_TIMEOUT_S = 2.0
 #: Sections of ``nodes info``, in ``ros2 node info``'s order, with the JSON field each one fills.
-SECTIONS = (("pub", "Publishers", "publishers"), ("sub", "Subscriptions", "subscriptions"),
-            ("srv", "Services", "services"), ("act", "Actions", "actions"))
+SECTIONS = (
+    ("pub", "Publishers", "publishers"),
+    ("sub", "Subscriptions", "subscriptions"),
+    ("srv", "Services", "services"),
+    ("act", "Actions", "actions"),
+)
 
 
 @dataclass(frozen=True, order=True)
@@ -35,7 +39,9 @@ class NodeInfo:
 
     name: str
     ready: bool = False
-    endpoints: dict[str, list[NodeEndpoint]] = field(default_factory=lambda: {kind: [] for kind, _l, _f in SECTIONS})
+    endpoints: dict[str, list[NodeEndpoint]] = field(
+        default_factory=lambda: {kind: [] for kind, _l, _f in SECTIONS}
+    )
 
     def to_json(self) -> dict[str, object]:
         body: dict[str, object] = {"name": self.name, "ready": self.ready}

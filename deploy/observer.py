@@ -108,7 +108,9 @@ class RunRecord:
         current, since = "TRIGGER", begin
         for t, name in self.phases:
             if t <= begin:
-                current = "TRIGGER" if name == "IDLE" else name  # what the trigger found: a run already under way?
+                current = (
+                    "TRIGGER" if name == "IDLE" else name
+                )  # what the trigger found: a run already under way?
                 continue
             if t >= end:
                 break
@@ -155,15 +157,25 @@ class RunObserver:
         key = lambda name: topic_key(namespace, name)  # noqa: E731
         self._subscribers = [
             session.declare_subscriber(key(topics.CLOCK), self._decoder(Clock, self._on_clock)),
-            session.declare_subscriber(key(topics.BATTERY_STATUS), self._decoder(BatteryState, self._on_battery)),
-            session.declare_subscriber(key(topics.DOCK_CONTACT), self._decoder(DockContact, self._on_contact)),
-            session.declare_subscriber(key(topics.COLLISIONS), self._decoder(CollisionEvent, self._on_collision)),
-            session.declare_subscriber(key(topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth)),
+            session.declare_subscriber(
+                key(topics.BATTERY_STATUS), self._decoder(BatteryState, self._on_battery)
+            ),
+            session.declare_subscriber(
+                key(topics.DOCK_CONTACT), self._decoder(DockContact, self._on_contact)
+            ),
+            session.declare_subscriber(
+                key(topics.COLLISIONS), self._decoder(CollisionEvent, self._on_collision)
+            ),
+            session.declare_subscriber(
+                key(topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth)
+            ),
             session.declare_subscriber(key(topics.PLAN), self._decoder(Path, self._on_plan)),
             session.declare_subscriber(key(topics.ULTRASONIC), self._decoder(Range, self._on_range)),
             session.declare_subscriber(key(DOCKING_STATE), self._decoder(String, self._on_docking_state)),
-            session.declare_subscriber(key(action_key(topics.NAVIGATE_TO_POSE, "feedback")),
-                                       self._decoder(NAVIGATE_TO_POSE.feedback_message, self._on_nav_feedback)),
+            session.declare_subscriber(
+                key(action_key(topics.NAVIGATE_TO_POSE, "feedback")),
+                self._decoder(NAVIGATE_TO_POSE.feedback_message, self._on_nav_feedback),
+            ),
         ]
         #: Per navigation goal (its id's bytes), the recovery count its feedback last gave.
         self._recoveries_seen: dict[bytes, int] = {}
@@ -199,7 +211,9 @@ class RunObserver:
             if self._armed and record.trigger_s is None and msg.percentage < self.low_threshold:
                 record.trigger_s = t  # crossed below, or was already below when armed
             charging = msg.power_supply_status in (
-                BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+                BatteryState.POWER_SUPPLY_STATUS_CHARGING,
+                BatteryState.POWER_SUPPLY_STATUS_FULL,
+            )
             record.last_charging = charging
             if charging and record.trigger_s is not None and record.charging_s is None:
                 record.charging_s = t
@@ -217,8 +231,12 @@ class RunObserver:
     def _mated_near(self, t_s: float) -> list[DockContact]:
         """The mated readings that may have started charging at ``t_s``: the window both
         :meth:`_contact_at` and :meth:`settle` look in."""
-        return [c for c in self._contacts if c.mated
-                and t_s - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t_s + MATED_AFTER_CHARGING_S]
+        return [
+            c
+            for c in self._contacts
+            if c.mated
+            and t_s - MATED_BEFORE_CHARGING_S <= c.header.stamp.to_sec() <= t_s + MATED_AFTER_CHARGING_S
+        ]
 
     def _on_contact(self, msg: DockContact) -> None:
         with self._changed:
@@ -252,14 +270,20 @@ class RunObserver:
         if not (math.isfinite(msg.range) and msg.min_range <= msg.range < msg.max_range):
             return
         with self._lock:
-            if self._truth is None or not self._armed:  # before arm(): maybe still where --start moves it from
+            if (
+                self._truth is None or not self._armed
+            ):  # before arm(): maybe still where --start moves it from
                 return
             # Where the robot was when the sonar listened, not where it is now the message has arrived.
             sensor = self._truth_at(msg.header.stamp.to_sec()).compose(ULTRASONIC_MOUNT)
             echoes = self._record.sonar_echoes
             last = echoes[-1] if echoes else None
-            if (last is None or math.dist(last[:2], (sensor.x, sensor.y)) > 0.02 or abs(last[3] - msg.range) > 0.02
-                    or abs(last[2] - sensor.yaw) > 0.02):
+            if (
+                last is None
+                or math.dist(last[:2], (sensor.x, sensor.y)) > 0.02
+                or abs(last[3] - msg.range) > 0.02
+                or abs(last[2] - sensor.yaw) > 0.02
+            ):
                 echoes.append((sensor.x, sensor.y, sensor.yaw, msg.range, msg.field_of_view))
 
     def _on_docking_state(self, msg: String) -> None:
@@ -302,9 +326,20 @@ class RunObserver:
             r = self._record
             contact = self._contact_at(r.charging_s) if r.charging_s is not None else None
             return RunRecord(
-                r.trigger_s, r.charging_s, contact, r.collisions, list(r.collision_kinds), list(r.collision_points),
-                list(r.driven), [list(p) for p in r.plans], list(r.sonar_echoes), list(r.battery), r.sim_time_s,
-                r.last_charging, list(r.recovery_points), list(r.phases),
+                r.trigger_s,
+                r.charging_s,
+                contact,
+                r.collisions,
+                list(r.collision_kinds),
+                list(r.collision_points),
+                list(r.driven),
+                [list(p) for p in r.plans],
+                list(r.sonar_echoes),
+                list(r.battery),
+                r.sim_time_s,
+                r.last_charging,
+                list(r.recovery_points),
+                list(r.phases),
                 self._mating_began(contact) if contact is not None and contact.mated else None,
             )
 
@@ -326,10 +361,14 @@ class RunObserver:
         """After charging began, wait (briefly) for the simulator's contact readings of that moment: a mated
         one, or readings from half a second past it (the window :meth:`_contact_at` looks in). A reading
         just past the moment is not enough: on a busy machine the mated one may still be on its way."""
+
         def seen() -> bool:
             t = self._record.charging_s
-            return (t is None or any(c.header.stamp.to_sec() >= t + MATED_AFTER_CHARGING_S for c in self._contacts)
-                    or bool(self._mated_near(t)))
+            return (
+                t is None
+                or any(c.header.stamp.to_sec() >= t + MATED_AFTER_CHARGING_S for c in self._contacts)
+                or bool(self._mated_near(t))
+            )
 
         with self._changed:
             self._changed.wait_for(seen, timeout=timeout_s)

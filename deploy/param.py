@@ -53,8 +53,13 @@ def table_lines(parameters: Sequence[ParameterDescriptor]) -> list[str]:
 
 
 def descriptor_json(p: ParameterDescriptor) -> dict[str, Any]:
-    return {"name": p.name, "value": json.loads(p.value_json), "settable": p.settable, "applies": p.applies,
-            "description": p.description}
+    return {
+        "name": p.name,
+        "value": json.loads(p.value_json),
+        "settable": p.settable,
+        "applies": p.applies,
+        "description": p.description,
+    }
 
 
 def _call(options: BusOptions, node: str, verb: str, srv: ServiceType[Any, Any], request: Any) -> Any:
@@ -63,8 +68,9 @@ def _call(options: BusOptions, node: str, verb: str, srv: ServiceType[Any, Any],
         try:
             return call_service(session, key, srv, request, REQUEST_TIMEOUT_S)
         except ServiceUnavailable:
-            raise KeysError(f"node {node} did not answer on {key} (is it running? zendock nodes list)",
-                            EXIT_NOT_FOUND) from None
+            raise KeysError(
+                f"node {node} did not answer on {key} (is it running? zendock nodes list)", EXIT_NOT_FOUND
+            ) from None
         except ServiceError as exc:
             reason = str(exc).removeprefix(f"{key}: ")
             raise KeysError(f"{node}: {reason}", EXIT_USAGE) from None

@@ -130,23 +130,33 @@ def last_full_plan(plans: Sequence[np.ndarray], full_fraction: float = FULL_PLAN
     return [i for i in same_goal if plan_length_m(plans[i]) >= full_fraction * longest_m][-1]
 
 
-def echo_arc(sensor_x: float, sensor_y: float, sensor_yaw: float, range_m: float, field_of_view_rad: float,
-             points: int = ECHO_ARC_POINTS) -> np.ndarray:
+def echo_arc(
+    sensor_x: float,
+    sensor_y: float,
+    sensor_yaw: float,
+    range_m: float,
+    field_of_view_rad: float,
+    points: int = ECHO_ARC_POINTS,
+) -> np.ndarray:
     """``(points, 2)``: where an echo at ``range_m`` may have come from, the arc of that radius about the
     sensor across its cone (``field_of_view_rad`` wide, centred on ``sensor_yaw``)."""
     bearings = sensor_yaw + np.linspace(-0.5, 0.5, points) * field_of_view_rad
     return np.column_stack([sensor_x + range_m * np.cos(bearings), sensor_y + range_m * np.sin(bearings)])
 
 
-def battery_from_set(battery: np.ndarray, set_s: float, set_percentage: float,
-                     tolerance: float = BATTERY_SET_TOLERANCE) -> np.ndarray:
+def battery_from_set(
+    battery: np.ndarray, set_s: float, set_percentage: float, tolerance: float = BATTERY_SET_TOLERANCE
+) -> np.ndarray:
     """The battery series the run had once ``battery/set_state`` took effect: from the first reading at or
     after ``set_s`` within ``tolerance`` of ``set_percentage`` (readings published while the request
     was on its way still carry the old charge); from ``set_s`` when no reading shows the set."""
     later = battery[battery[:, 0] >= set_s] if len(battery) else battery
-    shows_set: np.ndarray = (np.flatnonzero(np.abs(later[:, 1] - set_percentage) <= tolerance) if len(later)
-                             else np.zeros(0, dtype=int))
-    return later[shows_set[0]:] if len(shows_set) else later
+    shows_set: np.ndarray = (
+        np.flatnonzero(np.abs(later[:, 1] - set_percentage) <= tolerance)
+        if len(later)
+        else np.zeros(0, dtype=int)
+    )
+    return later[shows_set[0] :] if len(shows_set) else later
 
 
 def _points(values: Sequence[Sequence[float]] | np.ndarray, columns: int) -> np.ndarray:
@@ -155,31 +165,70 @@ def _points(values: Sequence[Sequence[float]] | np.ndarray, columns: int) -> np.
 
 def draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
     for i, ((x1, y1), (x2, y2)) in enumerate(world.boundary_walls() + list(world.walls)):
-        ax.plot([x1, x2], [y1, y2], color=WALL_COLOR, linewidth=3, solid_capstyle="round",
-                label="walls" if i == 0 else None, zorder=3)
+        ax.plot(
+            [x1, x2],
+            [y1, y2],
+            color=WALL_COLOR,
+            linewidth=3,
+            solid_capstyle="round",
+            label="walls" if i == 0 else None,
+            zorder=3,
+        )
     for i, ((x1, y1), (x2, y2)) in enumerate(world.glass):
-        ax.plot([x1, x2], [y1, y2], color=GLASS_COLOR, linewidth=5, solid_capstyle="round",
-                label="glass" if i == 0 else None, zorder=3)
+        ax.plot(
+            [x1, x2],
+            [y1, y2],
+            color=GLASS_COLOR,
+            linewidth=5,
+            solid_capstyle="round",
+            label="glass" if i == 0 else None,
+            zorder=3,
+        )
     for box in world.boxes:
         ax.add_patch(Polygon(box.corners(), closed=True, facecolor=BOX_COLOR, edgecolor=WALL_COLOR, zorder=3))
     for i, dock in enumerate(world.docks):
         body = DOCK_GEOMETRY.body_box(dock)
-        ax.add_patch(Polygon(body.corners(), closed=True, facecolor=DOCK_COLOR, edgecolor="none",
-                             label="dock" if i == 0 else None, zorder=3))
+        ax.add_patch(
+            Polygon(
+                body.corners(),
+                closed=True,
+                facecolor=DOCK_COLOR,
+                edgecolor="none",
+                label="dock" if i == 0 else None,
+                zorder=3,
+            )
+        )
         pose = dock.pose2d
-        ax.annotate("", xy=(pose.x + 0.25 * np.cos(pose.yaw), pose.y + 0.25 * np.sin(pose.yaw)), xytext=(pose.x, pose.y),
-                    arrowprops={"arrowstyle": "->", "color": DOCK_COLOR, "lw": 2}, zorder=4)
+        ax.annotate(
+            "",
+            xy=(pose.x + 0.25 * np.cos(pose.yaw), pose.y + 0.25 * np.sin(pose.yaw)),
+            xytext=(pose.x, pose.y),
+            arrowprops={"arrowstyle": "->", "color": DOCK_COLOR, "lw": 2},
+            zorder=4,
+        )
         staging = staging_pose(pose, staging_offset_m)
-        ax.plot([staging.x], [staging.y], marker="D", color=STAGING_COLOR, markersize=7, linestyle="none",
-                label="staging pose" if i == 0 else None, zorder=5)
+        ax.plot(
+            [staging.x],
+            [staging.y],
+            marker="D",
+            color=STAGING_COLOR,
+            markersize=7,
+            linestyle="none",
+            label="staging pose" if i == 0 else None,
+            zorder=5,
+        )
 
 
 def _draw_map(ax: plt.Axes, image: MapImage) -> None:
     cells = image.cells.astype(np.float64)
     shade = np.where(cells < 0, 0.85, 1.0 - np.clip(cells, 0, 100) / 100.0)
     height, width = cells.shape
-    extent = (image.origin_x_m, image.origin_x_m + width * image.resolution_m,
-              image.origin_y_m, image.origin_y_m + height * image.resolution_m)
+    extent = (
+        image.origin_x_m,
+        image.origin_x_m + width * image.resolution_m,
+        image.origin_y_m,
+        image.origin_y_m + height * image.resolution_m,
+    )
     ax.imshow(shade, cmap="gray", vmin=0.0, vmax=1.0, origin="lower", extent=extent, zorder=0)
 
 
@@ -188,30 +237,70 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
     faint_label: str | None = "other plans (replans shorten as it drives)"
     for i, path in enumerate(picture.planned_paths):
         if i != bold and len(path) >= 2:
-            ax.plot(path[:, 0], path[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=1, alpha=0.3, zorder=6,
-                    label=faint_label)
+            ax.plot(
+                path[:, 0],
+                path[:, 1],
+                color=PLAN_COLOR,
+                linestyle="--",
+                linewidth=1,
+                alpha=0.3,
+                zorder=6,
+                label=faint_label,
+            )
             faint_label = None
     if bold is not None:
         full = picture.planned_paths[bold]
-        label = (f"last full plan to the goal ({bold + 1} of {len(picture.planned_paths)})"
-                 if len(picture.planned_paths) > 1 else "planned path")
+        label = (
+            f"last full plan to the goal ({bold + 1} of {len(picture.planned_paths)})"
+            if len(picture.planned_paths) > 1
+            else "planned path"
+        )
         ax.plot(full[:, 0], full[:, 1], color=PLAN_COLOR, linestyle="--", linewidth=2, label=label, zorder=7)
-    for marks, colour, label in ((picture.glass_marks, GLASS_MEMORY_COLOR, "glass memory"),
-                                 (picture.false_glass_marks, FALSE_GLASS_COLOR, "false glass")):
+    for marks, colour, label in (
+        (picture.glass_marks, GLASS_MEMORY_COLOR, "glass memory"),
+        (picture.false_glass_marks, FALSE_GLASS_COLOR, "false glass"),
+    ):
         if len(marks):
-            ax.scatter(marks[:, 0], marks[:, 1], s=9, marker="s", color=colour, alpha=0.7, label=label, zorder=5)
+            ax.scatter(
+                marks[:, 0], marks[:, 1], s=9, marker="s", color=colour, alpha=0.7, label=label, zorder=5
+            )
     if len(picture.collisions):
-        ax.scatter(picture.collisions[:, 0], picture.collisions[:, 1], s=90, marker="X", color="black",
-                   label="collision", zorder=10)
+        ax.scatter(
+            picture.collisions[:, 0],
+            picture.collisions[:, 1],
+            s=90,
+            marker="X",
+            color="black",
+            label="collision",
+            zorder=10,
+        )
     if len(picture.recoveries):
-        ax.scatter(picture.recoveries[:, 0], picture.recoveries[:, 1], s=110, marker="o", facecolors="none",
-                   edgecolors=RECOVERY_COLOR, linewidths=2, label="recovery", zorder=10)
+        ax.scatter(
+            picture.recoveries[:, 0],
+            picture.recoveries[:, 1],
+            s=110,
+            marker="o",
+            facecolors="none",
+            edgecolors=RECOVERY_COLOR,
+            linewidths=2,
+            label="recovery",
+            zorder=10,
+        )
     echoes = picture.sonar_echoes
     if len(echoes):
-        ax.add_collection(LineCollection([echo_arc(*row) for row in echoes], colors=SONAR_COLOR, linewidths=0.5,
-                                         alpha=0.15, zorder=6))
-        ax.plot([], [], color=SONAR_COLOR, linewidth=1, alpha=0.6,  # the legend's sample, visible
-                label="sonar echoes (arc at range across the cone)")
+        ax.add_collection(
+            LineCollection(
+                [echo_arc(*row) for row in echoes], colors=SONAR_COLOR, linewidths=0.5, alpha=0.15, zorder=6
+            )
+        )
+        ax.plot(
+            [],
+            [],
+            color=SONAR_COLOR,
+            linewidth=1,
+            alpha=0.6,  # the legend's sample, visible
+            label="sonar echoes (arc at range across the cone)",
+        )
     traj = picture.trajectory
     if len(traj) >= 2:
         timed = picture.trajectory_times_s is not None and len(picture.trajectory_times_s) == len(traj)
@@ -221,12 +310,33 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
         lines = LineCollection(list(segments), cmap=TRAJECTORY_CMAP, linewidth=2.5, zorder=8)
         lines.set_array(colour_by[:-1])
         ax.add_collection(lines)
-        fig.colorbar(lines, ax=ax, fraction=0.035, pad=0.02,
-                     label=picture.time_label if timed else "progress along the track [%] (no times)")
-        ax.plot([traj[0, 0]], [traj[0, 1]], marker="o", color="black", markersize=6, linestyle="none",
-                label="start", zorder=9)
-        ax.plot([traj[-1, 0]], [traj[-1, 1]], marker="s", color="black", markersize=6, linestyle="none",
-                label="end", zorder=9)
+        fig.colorbar(
+            lines,
+            ax=ax,
+            fraction=0.035,
+            pad=0.02,
+            label=picture.time_label if timed else "progress along the track [%] (no times)",
+        )
+        ax.plot(
+            [traj[0, 0]],
+            [traj[0, 1]],
+            marker="o",
+            color="black",
+            markersize=6,
+            linestyle="none",
+            label="start",
+            zorder=9,
+        )
+        ax.plot(
+            [traj[-1, 0]],
+            [traj[-1, 1]],
+            marker="s",
+            color="black",
+            markersize=6,
+            linestyle="none",
+            label="end",
+            zorder=9,
+        )
 
 
 def _frame(ax: plt.Axes, picture: RunPicture) -> None:
@@ -241,7 +351,9 @@ def _frame(ax: plt.Axes, picture: RunPicture) -> None:
     ax.grid(True, linewidth=0.3, alpha=0.5)
 
 
-def _draw_battery(ax: plt.Axes, battery: np.ndarray, events: Sequence[tuple[float, str]], time_label: str) -> None:
+def _draw_battery(
+    ax: plt.Axes, battery: np.ndarray, events: Sequence[tuple[float, str]], time_label: str
+) -> None:
     ax.set_title("battery")
     ax.set_xlabel(time_label)
     ax.set_ylabel("charge [%]")
@@ -311,7 +423,9 @@ def plot_run(
     marks = list(events)
     if battery_set is not None:
         charge = battery_from_set(charge, *battery_set)
-        marks.insert(0, (float(charge[0, 0]) if len(charge) else battery_set[0], f"set to {battery_set[1]:.0%}"))
+        marks.insert(
+            0, (float(charge[0, 0]) if len(charge) else battery_set[0], f"set to {battery_set[1]:.0%}")
+        )
     picture = RunPicture(
         world=world,
         map_image=map_image,
@@ -361,8 +475,13 @@ def plot_trial_histograms(results: Sequence[TrialOutcome], path: Path) -> None:
     ]
     for ax, (title, values, colour) in zip(axes, panels):
         if values:
-            ax.hist(values, bins=min(30, max(5, len(values) // 3)), range=_histogram_range(values), color=colour,
-                    edgecolor="white")
+            ax.hist(
+                values,
+                bins=min(30, max(5, len(values) // 3)),
+                range=_histogram_range(values),
+                color=colour,
+                edgecolor="white",
+            )
         ax.set_title(title)
         ax.set_ylabel("trials")
     fig.suptitle(f"{len(ok)}/{len(results)} docked")

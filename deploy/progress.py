@@ -47,8 +47,15 @@ def distance_text(distance_m: float | None) -> str:
     return f"{distance_m:.2f} m to dock"
 
 
-def demo_line(*, sim_s: float, battery: float | None, trigger_s: float | None, docking_state: str,
-              distance_m: float | None, trigger_below: float = 0.25) -> str:
+def demo_line(
+    *,
+    sim_s: float,
+    battery: float | None,
+    trigger_s: float | None,
+    docking_state: str,
+    distance_m: float | None,
+    trigger_below: float = 0.25,
+) -> str:
     """One demo progress line: before the trigger the battery running down, after it the approach."""
     if trigger_s is None:
         charge = f"{100 * battery:.1f} %" if battery is not None and math.isfinite(battery) else "unknown"

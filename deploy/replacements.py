@@ -24,8 +24,18 @@ from deploy.launcher.stack_file import Stack, join_namespace
 from shared.config_errors import ConfigError
 
 #: The services a user may replace (those with a contract; the router and the one-shot map step are not).
-REPLACEABLE = ("battery", "docking", "fleet", "perception", "planner", "pose", "ros2_bridge", "ros2_dds", "simulator",
-               "viz")
+REPLACEABLE = (
+    "battery",
+    "docking",
+    "fleet",
+    "perception",
+    "planner",
+    "pose",
+    "ros2_bridge",
+    "ros2_dds",
+    "simulator",
+    "viz",
+)
 ROBOT_PLACEHOLDER = "{robot}"
 
 
@@ -85,7 +95,7 @@ def split_service_command(command: Sequence[str], name: str) -> tuple[list[str],
     or ``None`` when it does not run it."""
     for i in range(len(command) - 1):
         if command[i] == "-m" and command[i + 1] == f"services.{name}":
-            return list(command[: i + 2]), list(command[i + 2:])
+            return list(command[: i + 2]), list(command[i + 2 :])
     return None
 
 
@@ -127,11 +137,12 @@ def apply_replacements(stack: Stack, replacements: Sequence[Replacement]) -> Sta
             services[service_name] = spec.model_copy(update={"command": argv})
             found += 1
         if not found:
-            raise ConfigError(f"--service {replacement.name}: the stack {stack.source} runs no services.{replacement.name}")
+            raise ConfigError(
+                f"--service {replacement.name}: the stack {stack.source} runs no services.{replacement.name}"
+            )
     return replace(stack, services=services)
 
 
 def replacements_report(replacements: Sequence[Replacement]) -> dict[str, str]:
     """What reports record: each replaced service and the command that ran instead (``{}`` if none)."""
     return {r.name: r.command for r in replacements}
-

@@ -32,15 +32,25 @@ class ToolResult:
     def last_json(self) -> Any:
         """The last line of output, parsed as JSON (``RuntimeError`` with the tool's error otherwise)."""
         if self.returncode != 0:
-            raise RuntimeError(self.stderr.strip().splitlines()[-1] if self.stderr.strip() else f"exit {self.returncode}")
+            raise RuntimeError(
+                self.stderr.strip().splitlines()[-1] if self.stderr.strip() else f"exit {self.returncode}"
+            )
         lines = [line for line in self.stdout.splitlines() if line.strip()]
         if not lines:
             raise RuntimeError("the tool printed nothing")
         return json.loads(lines[-1])
 
 
-def run_tool(module: str, argv: Sequence[str], input_text: str | None = None, timeout_s: float = 600.0) -> ToolResult:
+def run_tool(
+    module: str, argv: Sequence[str], input_text: str | None = None, timeout_s: float = 600.0
+) -> ToolResult:
     """``python -m <module> <argv...>`` with this interpreter; output captured."""
-    done = subprocess.run([sys.executable, "-m", module, *argv], input=input_text, capture_output=True, text=True,
-                          timeout=timeout_s, cwd=Path.cwd())
+    done = subprocess.run(
+        [sys.executable, "-m", module, *argv],
+        input=input_text,
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        cwd=Path.cwd(),
+    )
     return ToolResult(done.returncode, done.stdout, done.stderr)

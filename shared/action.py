@@ -139,14 +139,20 @@ class ActionType(Generic[G, R, F]):
         self.result = result
         self.feedback = feedback
         self.send_goal_request = _wrapper(f"{type_name}_SendGoal_Request", {"goal_id": UUID, "goal": goal})
-        self.send_goal_response = _wrapper(f"{type_name}_SendGoal_Response", {"accepted": bool, "stamp": Time})
+        self.send_goal_response = _wrapper(
+            f"{type_name}_SendGoal_Response", {"accepted": bool, "stamp": Time}
+        )
         self.get_result_request = _wrapper(f"{type_name}_GetResult_Request", {"goal_id": UUID})
         self.get_result_response = _wrapper(
             f"{type_name}_GetResult_Response", {"status": Annotated[int, Range(0, 6)], "result": result}
         )
-        self.feedback_message = _wrapper(f"{type_name}_FeedbackMessage", {"goal_id": UUID, "feedback": feedback})
+        self.feedback_message = _wrapper(
+            f"{type_name}_FeedbackMessage", {"goal_id": UUID, "feedback": feedback}
+        )
         self.send_goal = ServiceType(f"{type_name}_SendGoal", self.send_goal_request, self.send_goal_response)
-        self.get_result = ServiceType(f"{type_name}_GetResult", self.get_result_request, self.get_result_response)
+        self.get_result = ServiceType(
+            f"{type_name}_GetResult", self.get_result_request, self.get_result_response
+        )
 
 
 def action_key(action_name: str, part: str) -> str:
@@ -228,7 +234,9 @@ class ActionServer(Generic[G, R, F]):
         self.active_goal: ServerGoalHandle[G, R, F] | None = None
         self._finished: dict[str, ServerGoalHandle[G, R, F]] = {}
         self._waiting: dict[str, list[zenoh.Query]] = {}
-        self._feedback = node.create_publisher(action.feedback_message, action_key(name, "feedback"), RELIABLE)
+        self._feedback = node.create_publisher(
+            action.feedback_message, action_key(name, "feedback"), RELIABLE
+        )
         self._status = node.create_publisher(GoalStatusArray, action_key(name, "status"), BLOCKING)
         node.create_service(action.send_goal, action_key(name, "send_goal"), self._handle_send_goal)
         node.create_service(CANCEL_GOAL, action_key(name, "cancel_goal"), self._handle_cancel)
@@ -240,7 +248,9 @@ class ActionServer(Generic[G, R, F]):
 
     def _handle_send_goal(self, request: Any) -> Any:
         self._on_goal(request.goal)  # ValueError -> the client gets the reason
-        handle: ServerGoalHandle[G, R, F] = ServerGoalHandle(self, request.goal_id, request.goal, self.node.now_msg())
+        handle: ServerGoalHandle[G, R, F] = ServerGoalHandle(
+            self, request.goal_id, request.goal, self.node.now_msg()
+        )
         previous = self.active_goal
         if previous is not None and previous.active:
             previous.cancel_requested = True
@@ -254,11 +264,17 @@ class ActionServer(Generic[G, R, F]):
         goal = self.active_goal
         wanted = request.goal_info.goal_id
         if goal is None or not goal.active:
-            code = CancelGoalResponse.ERROR_GOAL_TERMINATED if goal else CancelGoalResponse.ERROR_UNKNOWN_GOAL_ID
+            code = (
+                CancelGoalResponse.ERROR_GOAL_TERMINATED if goal else CancelGoalResponse.ERROR_UNKNOWN_GOAL_ID
+            )
             return CancelGoalResponse(return_code=code)
         if not wanted.is_zero() and wanted.hex() != goal.id_hex:
             known = wanted.hex() in self._finished
-            code = CancelGoalResponse.ERROR_GOAL_TERMINATED if known else CancelGoalResponse.ERROR_UNKNOWN_GOAL_ID
+            code = (
+                CancelGoalResponse.ERROR_GOAL_TERMINATED
+                if known
+                else CancelGoalResponse.ERROR_UNKNOWN_GOAL_ID
+            )
             return CancelGoalResponse(return_code=code)
         goal.cancel_requested = True
         self._set_status(goal, GoalStatusCode.CANCELING)
@@ -268,7 +284,9 @@ class ActionServer(Generic[G, R, F]):
     def _on_result_query(self, query: zenoh.Query) -> None:
         payload = query.payload
         try:
-            request = self.action.get_result_request.decode(payload.to_bytes() if payload is not None else b"")
+            request = self.action.get_result_request.decode(
+                payload.to_bytes() if payload is not None else b""
+            )
         except MessageError as exc:
             self.node.reject(self._result_key, exc.at(key=self._result_key))
             query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
@@ -289,7 +307,11 @@ class ActionServer(Generic[G, R, F]):
     def _reply_result(self, query: zenoh.Query, handle: ServerGoalHandle[G, R, F]) -> None:
         response = self.action.get_result_response(status=int(handle.status), result=handle.result)
         try:
-            query.reply(self._result_key, response.encode(), encoding=encoding_for(self.action.get_result_response.TYPE_NAME))
+            query.reply(
+                self._result_key,
+                response.encode(),
+                encoding=encoding_for(self.action.get_result_response.TYPE_NAME),
+            )
         finally:
             query.drop()
 
@@ -363,7 +385,9 @@ class ActionClient(Generic[G, R, F]):
         self.lock = threading.Lock()
         self._goals: dict[str, ClientGoal[R, F]] = {}
         self._feedback_cbs: dict[str, Callable[[F], None]] = {}
-        node.create_subscription(action.feedback_message, action_key(name, "feedback"), self._on_feedback, RELIABLE)
+        node.create_subscription(
+            action.feedback_message, action_key(name, "feedback"), self._on_feedback, RELIABLE
+        )
         node.create_subscription(GoalStatusArray, action_key(name, "status"), self._on_status, RELIABLE)
         self._server_key = node.key(action_key(name, "send_goal"))
 
@@ -378,7 +402,9 @@ class ActionClient(Generic[G, R, F]):
         deadline = time.monotonic() + timeout_s
         while True:
             remaining_s = deadline - time.monotonic()
-            replies = self.node.session.liveliness().get(token_pattern, timeout=max(0.05, min(remaining_s, 1.0)))
+            replies = self.node.session.liveliness().get(
+                token_pattern, timeout=max(0.05, min(remaining_s, 1.0))
+            )
             if any(r.ok is not None for r in replies):
                 return True
             if time.monotonic() + SERVER_POLL_S >= deadline:
@@ -418,10 +444,14 @@ class ActionClient(Generic[G, R, F]):
             elif on_done is not None:
                 on_done(handle)
 
-        self.node.call_async(self.action.send_goal, action_key(self.name, "send_goal"), request, accepted, timeout_s)
+        self.node.call_async(
+            self.action.send_goal, action_key(self.name, "send_goal"), request, accepted, timeout_s
+        )
         return handle
 
-    def _request_result(self, handle: ClientGoal[R, F], on_done: Callable[[ClientGoal[R, F]], None] | None) -> None:
+    def _request_result(
+        self, handle: ClientGoal[R, F], on_done: Callable[[ClientGoal[R, F]], None] | None
+    ) -> None:
         request = self.action.get_result_request(goal_id=handle.goal_id)
 
         def got(response: Any, error: ServiceError | None) -> None:
@@ -435,15 +465,26 @@ class ActionClient(Generic[G, R, F]):
             if on_done is not None:
                 on_done(handle)
 
-        self.node.call_async(self.action.get_result, action_key(self.name, "get_result"), request, got, timeout_s=3600.0)
+        self.node.call_async(
+            self.action.get_result, action_key(self.name, "get_result"), request, got, timeout_s=3600.0
+        )
 
-    def cancel_goal(self, handle: ClientGoal[R, F] | None = None, timeout_s: float = 5.0,
-                    on_done: Callable[[CancelGoalResponse | None, ServiceError | None], None] | None = None) -> None:
+    def cancel_goal(
+        self,
+        handle: ClientGoal[R, F] | None = None,
+        timeout_s: float = 5.0,
+        on_done: Callable[[CancelGoalResponse | None, ServiceError | None], None] | None = None,
+    ) -> None:
         """Ask the server to cancel ``handle`` (or every goal when ``None``); returns at once."""
         goal_id = handle.goal_id if handle is not None else UUID()
         request = CancelGoalRequest(GoalInfo(goal_id, Time()))
-        self.node.call_async(CANCEL_GOAL, action_key(self.name, "cancel_goal"), request,
-                             on_done or (lambda _r, _e: None), timeout_s)
+        self.node.call_async(
+            CANCEL_GOAL,
+            action_key(self.name, "cancel_goal"),
+            request,
+            on_done or (lambda _r, _e: None),
+            timeout_s,
+        )
 
     def _on_feedback(self, msg: Any) -> None:
         key = msg.goal_id.hex()

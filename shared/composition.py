@@ -35,14 +35,23 @@ class Member:
 
     @property
     def label(self) -> str:
-        return f"{self.options.namespace}/{self.options.node_name}" if self.options.namespace else self.options.node_name
+        return (
+            f"{self.options.namespace}/{self.options.node_name}"
+            if self.options.namespace
+            else self.options.node_name
+        )
 
 
 def configure_group_logging(members: list[Member]) -> None:
     """One stream; each line prefixed with its node's ``[namespace/name]``, as a service alone writes it."""
     level = min(logging.getLevelName(m.options.log_level) for m in members)
-    logging.basicConfig(level=level, format="%(asctime)s %(levelname)s [%(name)s] %(message)s",
-                        datefmt="%H:%M:%S", stream=sys.stderr, force=True)
+    logging.basicConfig(
+        level=level,
+        format="%(asctime)s %(levelname)s [%(name)s] %(message)s",
+        datefmt="%H:%M:%S",
+        stream=sys.stderr,
+        force=True,
+    )
     for member in members:
         logging.getLogger(member.label).setLevel(member.options.log_level)
 
@@ -73,8 +82,13 @@ def serve_group(members: list[Member], *, install_signal_handlers: bool = True) 
         try:
             for member in members:
                 logger = logging.getLogger(member.label)
-                node = Node(member.options.node_name, session, member.options.namespace,
-                            use_sim_time=member.params.use_sim_time, logger=logger)
+                node = Node(
+                    member.options.node_name,
+                    session,
+                    member.options.namespace,
+                    use_sim_time=member.params.use_sim_time,
+                    logger=logger,
+                )
                 hold_to_contract(node)
                 service = member.spec.build(node, member.params)
                 attach_parameters(node, member.params, service)  # closed with the node

@@ -26,7 +26,7 @@ def format_validation_error(error: ValidationError, source: str | Path, root: st
         where = ".".join(parts) or "(top level)"
         reason = item["msg"]
         if reason.startswith("Value error, "):
-            reason = reason[len("Value error, "):]
+            reason = reason[len("Value error, ") :]
         if item["type"] == "extra_forbidden":
             reason = "unknown key"
         lines.append(f"{source}: {where}: {reason}")

@@ -55,7 +55,7 @@ def sequence_number(attachment: zenoh.ZBytes | bytes | None) -> int | None:
 def publisher_id(attachment: zenoh.ZBytes | bytes | None) -> bytes | None:
     """The publisher's id from a zendock sample's attachment (``None`` when the sample has none)."""
     raw = _attachment_bytes(attachment)
-    return raw[_SEQ.size:] if raw is not None and len(raw) == ATTACHMENT_SIZE else None
+    return raw[_SEQ.size :] if raw is not None and len(raw) == ATTACHMENT_SIZE else None
 
 
 def _attachment_bytes(attachment: zenoh.ZBytes | bytes | None) -> bytes | None:

@@ -108,7 +108,9 @@ class Publisher(Generic[M]):
 
     def publish(self, msg: M) -> None:
         if type(msg) is not self.msg_type and not isinstance(msg, self.msg_type):
-            raise MessageError(f"publisher expects {self.msg_type.TYPE_NAME}, got {type(msg).__name__}", key=self.key)
+            raise MessageError(
+                f"publisher expects {self.msg_type.TYPE_NAME}, got {type(msg).__name__}", key=self.key
+            )
         try:
             payload = msg.encode()
         except MessageError as exc:
@@ -138,7 +140,9 @@ class Publisher(Generic[M]):
         Zenoh calls it on one of its own threads, as soon as the router tells of the change: a service that
         makes costly messages only on demand follows the demand at once instead of polling for it.
         """
-        listener: Any = self._publisher.declare_matching_listener(lambda status: callback(bool(status.matching)))
+        listener: Any = self._publisher.declare_matching_listener(
+            lambda status: callback(bool(status.matching))
+        )
         self._matching_listeners.append(listener)  # a listener lives as long as its reference
 
     def undeclare(self) -> None:
@@ -227,7 +231,8 @@ class Subscription(Generic[M]):
         self._lock = threading.Lock()
         self._encoding = encoding_for(msg_type.TYPE_NAME)
         self._decode: Callable[[str, bytes], Any] = (
-            _payload_bytes if undecoded else functools.partial(SHARED_DECODES.decode, msg_type))
+            _payload_bytes if undecoded else functools.partial(SHARED_DECODES.decode, msg_type)
+        )
         self._received = node.stats.received
         self._dropped = node.stats.dropped
         executor = node.executor
@@ -276,7 +281,9 @@ class Subscription(Generic[M]):
         # Run it now unless one of ours is queued (order is kept); the executor declines when it is busy.
         # zenoh-python calls one subscription's callback from one thread, so reading our state needs no lock.
         if not (self._scheduled or self._queue) and (
-            self._try_run_now(self._callback, key, msg) if self._with_key else self._try_run_now(self._callback, msg)
+            self._try_run_now(self._callback, key, msg)
+            if self._with_key
+            else self._try_run_now(self._callback, msg)
         ):
             return
         with self._lock:
@@ -324,7 +331,9 @@ class ServiceServer(Generic[Req, Res]):
     logs and counts it as a failed callback.
     """
 
-    def __init__(self, node: Node, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res]) -> None:
+    def __init__(
+        self, node: Node, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res]
+    ) -> None:
         self._node = node
         self.srv = srv
         self.key = node.key(name)
@@ -347,12 +356,16 @@ class ServiceServer(Generic[Req, Res]):
         try:
             response = self._handler(request)
             if not isinstance(response, self.srv.response):
-                raise ServiceError(f"handler returned {type(response).__name__}, expected {self.srv.response.__name__}")
+                raise ServiceError(
+                    f"handler returned {type(response).__name__}, expected {self.srv.response.__name__}"
+                )
             query.reply(self.key, response.encode(), encoding=encoding_for(self.srv.response.TYPE_NAME))
         except (ServiceError, ValueError) as exc:
             query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
         except Exception as exc:  # a bug in a handler: answer, then let the executor log it; keep serving
-            query.reply_err(f"internal error: {type(exc).__name__}: {exc}".encode(), encoding=zenoh.Encoding("text/plain"))
+            query.reply_err(
+                f"internal error: {type(exc).__name__}: {exc}".encode(), encoding=zenoh.Encoding("text/plain")
+            )
             raise
         finally:
             query.drop()

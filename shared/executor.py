@@ -136,7 +136,9 @@ class Executor:
                     if timer.due():
                         self._run(timer.fire, ())
                 sim_deadlines = [t.next_due for t in timers if t.uses_sim_time and not t.cancelled]
-                self.next_sim_due = min((d if d is not None else 0.0 for d in sim_deadlines), default=float("inf"))
+                self.next_sim_due = min(
+                    (d if d is not None else 0.0 for d in sim_deadlines), default=float("inf")
+                )
 
     # --- internals --------------------------------------------------------------------------------
 

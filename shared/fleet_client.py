@@ -58,8 +58,14 @@ class FleetAnswer:
     def from_response(cls, response: ReserveDockResponse) -> FleetAnswer:
         pose = np.asarray(response.holding_pose, dtype=float)
         holding = Pose2D.from_seq(pose) if pose.size == 3 and np.all(np.isfinite(pose)) else None
-        return cls(bool(response.granted), response.dock_id, int(response.queue_position), response.reason,
-                   bool(response.asked_to_leave), holding)
+        return cls(
+            bool(response.granted),
+            response.dock_id,
+            int(response.queue_position),
+            response.reason,
+            bool(response.asked_to_leave),
+            holding,
+        )
 
 
 class FleetClient:
@@ -72,24 +78,43 @@ class FleetClient:
         self.reserve_key = topic_key(fleet_namespace, topics.FLEET_RESERVE_DOCK)
         self.release_key = topic_key(fleet_namespace, topics.FLEET_RELEASE_DOCK)
 
-    def reserve(self, battery: float, dock_id: str = "", path_lengths: Mapping[str, float] | None = None, *,
-                on_answer: Callable[[FleetAnswer | None, ServiceError | None], Any]) -> None:
+    def reserve(
+        self,
+        battery: float,
+        dock_id: str = "",
+        path_lengths: Mapping[str, float] | None = None,
+        *,
+        on_answer: Callable[[FleetAnswer | None, ServiceError | None], Any],
+    ) -> None:
         """Ask for ``dock_id`` ("" : the nearest free one by ``path_lengths``, dock id -> metres; a dock left
         out is out of reach, None: all reachable) at charge ``battery`` (0..1); asking again renews."""
         lengths = dict(path_lengths or {})
-        request = ReserveDockRequest(robot=self.robot, battery=float(battery), dock_id=dock_id,
-                                     dock_ids=list(lengths), path_lengths=np.asarray(list(lengths.values()), dtype=float))
+        request = ReserveDockRequest(
+            robot=self.robot,
+            battery=float(battery),
+            dock_id=dock_id,
+            dock_ids=list(lengths),
+            path_lengths=np.asarray(list(lengths.values()), dtype=float),
+        )
 
         def answered(response: ReserveDockResponse | None, error: ServiceError | None) -> None:
             on_answer(FleetAnswer.from_response(response) if response is not None else None, error)
 
-        self._node.call_async(RESERVE_DOCK, self.reserve_key, request, answered, timeout_s=ANSWER_TIMEOUT_S,
-                              absolute=True)
+        self._node.call_async(
+            RESERVE_DOCK, self.reserve_key, request, answered, timeout_s=ANSWER_TIMEOUT_S, absolute=True
+        )
 
     def release(self, *, on_done: Callable[[str | None, ServiceError | None], Any]) -> None:
         """Give back the robot's dock; ``on_done`` gets the dock it held ("" if none)."""
+
         def answered(response: ReleaseDockResponse | None, error: ServiceError | None) -> None:
             on_done(response.dock_id if response is not None else None, error)
 
-        self._node.call_async(RELEASE_DOCK, self.release_key, ReleaseDockRequest(robot=self.robot), answered,
-                              timeout_s=ANSWER_TIMEOUT_S, absolute=True)
+        self._node.call_async(
+            RELEASE_DOCK,
+            self.release_key,
+            ReleaseDockRequest(robot=self.robot),
+            answered,
+            timeout_s=ANSWER_TIMEOUT_S,
+            absolute=True,
+        )

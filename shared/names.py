@@ -100,5 +100,7 @@ def parse_token_key(token_key: str) -> GraphEntry | None:
     if kind == "node" and len(parts) == 4:
         return GraphEntry("node", decode_chunk(parts[2]), decode_chunk(parts[3]))
     if kind in ENDPOINT_KINDS and len(parts) >= 6:
-        return GraphEntry(kind, decode_chunk(parts[2]), decode_chunk(parts[3]), decode_chunk(parts[4]), "/".join(parts[5:]))
+        return GraphEntry(
+            kind, decode_chunk(parts[2]), decode_chunk(parts[3]), decode_chunk(parts[4]), "/".join(parts[5:])
+        )
     return None

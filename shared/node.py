@@ -136,7 +136,9 @@ class Node:
         self.endpoint_check: Callable[[str, str, str], None] | None = None
         self._clock_sub: Subscription[Clock] | None = None
         if use_sim_time:
-            self._clock_sub = self.create_subscription(Clock, "clock", self._on_clock, QoS(depth=1), inline=True)
+            self._clock_sub = self.create_subscription(
+                Clock, "clock", self._on_clock, QoS(depth=1), inline=True
+            )
 
     # --- naming and time ---------------------------------------------------------------------------
 
@@ -187,7 +189,9 @@ class Node:
 
     def create_timer(self, period_s: float, callback: Callable[[], Any], *, wall: bool = False) -> Timer:
         """A periodic callback on sim time when the node uses it (``wall=True`` forces wall time)."""
-        timer = Timer(self._executor, period_s, callback, sim_clock=self if self.use_sim_time and not wall else None)
+        timer = Timer(
+            self._executor, period_s, callback, sim_clock=self if self.use_sim_time and not wall else None
+        )
         self._executor.add_timer(timer)
         return timer
 
@@ -219,7 +223,9 @@ class Node:
 
         def finished() -> None:
             if not replies:
-                self._executor.post(on_done, None, ServiceUnavailable(f"{key}: no service answered within {timeout_s:g} s"))
+                self._executor.post(
+                    on_done, None, ServiceUnavailable(f"{key}: no service answered within {timeout_s:g} s")
+                )
                 return
             try:
                 response = decode_reply(srv, key, replies[0])
@@ -281,16 +287,27 @@ class Node:
         """Announce the node (its liveliness token): launchers treat this as healthy. From then on the node
         also answers ``@zendock/stats/<ns>/<node>`` with its message counters (JSON)."""
         if self._node_token is None:
-            self._node_token = self.session.liveliness().declare_token(node_token_key(self.namespace, self.name))
-            self._stats_queryable = self.session.declare_queryable(stats_key(self.namespace, self.name),
-                                                                   self._on_stats_query)
+            self._node_token = self.session.liveliness().declare_token(
+                node_token_key(self.namespace, self.name)
+            )
+            self._stats_queryable = self.session.declare_queryable(
+                stats_key(self.namespace, self.name), self._on_stats_query
+            )
 
     def _on_stats_query(self, query: zenoh.Query) -> None:
         """Zenoh's thread: copies of the counters (dict copies are atomic enough under the GIL), one reply."""
         stats = self.stats
-        body = {"node": self.name, "namespace": self.namespace, "published": dict(stats.published),
-                "received": dict(stats.received), "dropped": dict(stats.dropped), "rejected": dict(stats.rejected),
-                "callback_errors": stats.callback_errors, "extra": dict(stats.extra), "now": self.now()}
+        body = {
+            "node": self.name,
+            "namespace": self.namespace,
+            "published": dict(stats.published),
+            "received": dict(stats.received),
+            "dropped": dict(stats.dropped),
+            "rejected": dict(stats.rejected),
+            "callback_errors": stats.callback_errors,
+            "extra": dict(stats.extra),
+            "now": self.now(),
+        }
         try:
             query.reply(query.key_expr, json.dumps(body))
         except zenoh.ZError:  # the querier left
@@ -346,7 +363,10 @@ class Node:
         where = traceback.extract_tb(exc.__traceback__)[-1] if exc.__traceback__ else None
         site = f"{where.filename}:{where.lineno}" if where else "?"
         self._ratelimited.error(
-            f"callback:{site}", "callback failed (%d so far): %s: %s\n%s",
-            self.stats.callback_errors, type(exc).__name__, exc, "".join(traceback.format_exception(exc)).rstrip(),
+            f"callback:{site}",
+            "callback failed (%d so far): %s: %s\n%s",
+            self.stats.callback_errors,
+            type(exc).__name__,
+            exc,
+            "".join(traceback.format_exception(exc)).rstrip(),
         )
-

@@ -39,8 +39,13 @@ class ParameterListener(Protocol):
 
 
 def descriptor(info: ParameterInfo) -> ParameterDescriptor:
-    return ParameterDescriptor(name=info.name, value_json=info.value_json, settable=info.settable,
-                               applies=info.applies, description=info.description)
+    return ParameterDescriptor(
+        name=info.name,
+        value_json=info.value_json,
+        settable=info.settable,
+        applies=info.applies,
+        description=info.description,
+    )
 
 
 class ParameterServer:
@@ -59,13 +64,17 @@ class ParameterServer:
         return ListParametersResponse(parameters=[descriptor(info) for info in self.table.describe()])
 
     def _on_get(self, request: GetParameterRequest) -> GetParameterResponse:
-        return GetParameterResponse(parameter=descriptor(self.table.get(request.name)))  # ParameterRefused: error reply
+        return GetParameterResponse(
+            parameter=descriptor(self.table.get(request.name))
+        )  # ParameterRefused: error reply
 
     def _on_set(self, request: SetParameterRequest) -> SetParameterResponse:
         try:
             value = json.loads(request.value_json)
         except (ValueError, RecursionError):
-            return SetParameterResponse(successful=False, reason=f"{request.name}: value is not JSON: {request.value_json!r}")
+            return SetParameterResponse(
+                successful=False, reason=f"{request.name}: value is not JSON: {request.value_json!r}"
+            )
         try:
             info = self.table.set(request.name, value)
         except ParameterRefused as exc:

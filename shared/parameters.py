@@ -97,8 +97,10 @@ class ParameterTable:
 
     def __init__(self, params: BaseModel) -> None:
         self._params = params
-        self._fields = {name: (description, settable, applies)
-                        for name, description, settable, applies in _leaves(type(params))}
+        self._fields = {
+            name: (description, settable, applies)
+            for name, description, settable, applies in _leaves(type(params))
+        }
         self._listeners: list[tuple[frozenset[str], Listener]] = []
 
     @property
@@ -130,7 +132,8 @@ class ParameterTable:
         if not self._fields[name][1]:
             raise ParameterRefused(
                 f"{name}: read at start-up only, cannot change while running "
-                f"(settable: {', '.join(self.settable_names()) or 'none'})")
+                f"(settable: {', '.join(self.settable_names()) or 'none'})"
+            )
         parent_path, _, leaf = name.rpartition(".")
         live_parent = self._walk(self._params, parent_path)
         candidate = live_parent.model_copy()
@@ -162,7 +165,8 @@ class ParameterTable:
     def _check_known(self, name: str) -> None:
         if name not in self._fields:
             raise ParameterRefused(
-                f"{name}: no such parameter (settable: {', '.join(self.settable_names()) or 'none'})")
+                f"{name}: no such parameter (settable: {', '.join(self.settable_names()) or 'none'})"
+            )
 
     @staticmethod
     def _walk(model: BaseModel, dotted: str) -> BaseModel:

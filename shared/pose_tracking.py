@@ -114,7 +114,7 @@ class PoseTrack:
 
     def _pair(self, pose: Pose2D, t: float) -> Pose2D | None:
         """The map -> odom correction of a localisation sample: see the module docstring."""
-        candidates = self._odom[bisect.bisect_left(self._odom_times, t - PAIRING_WINDOW_S):]
+        candidates = self._odom[bisect.bisect_left(self._odom_times, t - PAIRING_WINDOW_S) :]
         if not candidates:
             return None
         estimates = [pose.compose(sample.pose.inverse()) for sample in candidates]

@@ -24,11 +24,13 @@ def matrix_from_quaternion(x: float, y: float, z: float, w: float) -> np.ndarray
     if not n > 1e-9 or not math.isfinite(n):
         raise ValueError(f"quaternion ({x}, {y}, {z}, {w}) has no rotation (norm {n})")
     x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def quaternion_from_pitch(pitch_rad: float) -> tuple[float, float, float, float]:
@@ -48,7 +50,9 @@ class Rigid3:
         return cls(np.eye(3), np.zeros(3))
 
     @classmethod
-    def from_parts(cls, translation: tuple[float, float, float], quaternion: tuple[float, float, float, float]) -> Rigid3:
+    def from_parts(
+        cls, translation: tuple[float, float, float], quaternion: tuple[float, float, float, float]
+    ) -> Rigid3:
         return cls(matrix_from_quaternion(*quaternion), np.asarray(translation, dtype=np.float64))
 
     def compose(self, child: Rigid3) -> Rigid3:
@@ -61,8 +65,11 @@ class Rigid3:
 
     def to_pose2d(self) -> Pose2D:
         """The floor-plane pose of this frame, its heading being where its x axis points."""
-        return Pose2D(float(self.translation[0]), float(self.translation[1]),
-                      math.atan2(self.rotation[1, 0], self.rotation[0, 0]))
+        return Pose2D(
+            float(self.translation[0]),
+            float(self.translation[1]),
+            math.atan2(self.rotation[1, 0], self.rotation[0, 0]),
+        )
 
 
 class StaticTransforms:
@@ -90,5 +97,10 @@ class StaticTransforms:
         return None
 
 
-__all__ = ["OPTICAL_FROM_LINK_QUATERNION", "Rigid3", "StaticTransforms", "matrix_from_quaternion",
-           "quaternion_from_pitch"]
+__all__ = [
+    "OPTICAL_FROM_LINK_QUATERNION",
+    "Rigid3",
+    "StaticTransforms",
+    "matrix_from_quaternion",
+    "quaternion_from_pitch",
+]

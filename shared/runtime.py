@@ -121,7 +121,9 @@ class ServiceOptions:
     log_level: str = "INFO"
 
     def session_spec(self) -> SessionSpec:
-        return SessionSpec(mode="client", connect=self.connect, listen=self.listen, config_file=self.zenoh_config)
+        return SessionSpec(
+            mode="client", connect=self.connect, listen=self.listen, config_file=self.zenoh_config
+        )
 
 
 def parse_parameter_value(text: str) -> Any:
@@ -183,17 +185,36 @@ def set_dotted(values: dict[str, Any], name: str, value: Any, model: type[BaseMo
 def build_arg_parser(service_name: str, description: str = "") -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=f"python -m services.{service_name}", description=description)
     env_connect = [e for e in os.environ.get("ZENDOCK_CONNECT", "").split(",") if e.strip()]
-    parser.add_argument("--namespace", default=os.environ.get("ZENDOCK_NAMESPACE", ""), help="robot namespace")
-    parser.add_argument("--connect", action="append", default=None, metavar="ENDPOINT",
-                        help=f"Zenoh endpoint to connect to (repeatable; default {DEFAULT_ROUTER_ENDPOINT})")
-    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT", help="Zenoh endpoint to listen on")
-    parser.add_argument("--zenoh-config", default=os.environ.get("ZENDOCK_ZENOH_CONFIG") or None, metavar="FILE",
-                        help="Zenoh json5 configuration file (env ZENDOCK_ZENOH_CONFIG)")
+    parser.add_argument(
+        "--namespace", default=os.environ.get("ZENDOCK_NAMESPACE", ""), help="robot namespace"
+    )
+    parser.add_argument(
+        "--connect",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help=f"Zenoh endpoint to connect to (repeatable; default {DEFAULT_ROUTER_ENDPOINT})",
+    )
+    parser.add_argument(
+        "--listen", action="append", default=[], metavar="ENDPOINT", help="Zenoh endpoint to listen on"
+    )
+    parser.add_argument(
+        "--zenoh-config",
+        default=os.environ.get("ZENDOCK_ZENOH_CONFIG") or None,
+        metavar="FILE",
+        help="Zenoh json5 configuration file (env ZENDOCK_ZENOH_CONFIG)",
+    )
     parser.add_argument("--config", default=None, metavar="FILE", help="YAML file of parameters")
-    parser.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter")
+    parser.add_argument(
+        "-p", "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter"
+    )
     parser.add_argument("--node-name", default=service_name, help="name of the node on the bus")
-    parser.add_argument("--log-level", default="INFO", type=str.upper,
-                        choices=["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"])
+    parser.add_argument(
+        "--log-level",
+        default="INFO",
+        type=str.upper,
+        choices=["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"],
+    )
     parser.set_defaults(_env_connect=env_connect)
     return parser
 
@@ -294,7 +315,9 @@ def serve(
         log.info("stopped before the router answered")
         return 0
     with opened as session:
-        node = Node(options.node_name, session, options.namespace, use_sim_time=params.use_sim_time, logger=log)
+        node = Node(
+            options.node_name, session, options.namespace, use_sim_time=params.use_sim_time, logger=log
+        )
         nodes.append(node)
         hold_to_contract(node)
         if stopped.is_set():

@@ -90,8 +90,9 @@ def beacon_starts(world: World, n: int, seed: int) -> list[Pose2D]:
     return _draw(n, draw, f"{world.name}: could not find {n} collision-free starts in front of the dock")
 
 
-def _crosses(a: tuple[float, float], b: tuple[float, float],
-             segment: tuple[tuple[float, float], tuple[float, float]]) -> bool:
+def _crosses(
+    a: tuple[float, float], b: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]
+) -> bool:
     """Whether the open segment a-b crosses ``segment`` (touching at b, the beacon on its own face, does not)."""
     (px, py), (qx, qy) = segment
     dx, dy, sx, sy = b[0] - a[0], b[1] - a[1], qx - px, qy - py
@@ -103,5 +104,7 @@ def _crosses(a: tuple[float, float], b: tuple[float, float],
     return 1e-6 < t < 1.0 - 1e-6 and 0.0 <= u <= 1.0
 
 
-def distance_to_segment(p: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]) -> float:
+def distance_to_segment(
+    p: tuple[float, float], segment: tuple[tuple[float, float], tuple[float, float]]
+) -> float:
     return float(distances_to_segment(np.array([p]), np.array(segment[0]), np.array(segment[1]))[0])

@@ -175,7 +175,12 @@ class World(_Strict):
     @model_validator(mode="before")
     @classmethod
     def _first_of_fleet_is_robot(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "robot" not in data and isinstance(data.get("robots"), list) and data["robots"]:
+        if (
+            isinstance(data, dict)
+            and "robot" not in data
+            and isinstance(data.get("robots"), list)
+            and data["robots"]
+        ):
             first = data["robots"][0]
             if isinstance(first, dict) and "start" in first:
                 return {**data, "robot": {"start": first["start"]}}
@@ -186,18 +191,24 @@ class World(_Strict):
         seen: set[str] = set()
         for i, robot in enumerate(self.robots):
             if not ROBOT_NAME.fullmatch(robot.name):
-                raise ValueError(f"robots.{i}.name must be a namespace (a letter, then letters, digits or _), "
-                                 f"got {robot.name!r}")
+                raise ValueError(
+                    f"robots.{i}.name must be a namespace (a letter, then letters, digits or _), "
+                    f"got {robot.name!r}"
+                )
             if robot.name in seen:
                 raise ValueError(f"robot name {robot.name!r} appears twice in robots")
             seen.add(robot.name)
             if not self.contains(robot.start[0], robot.start[1]):
-                raise ValueError(f"robots.{i} ({robot.name}) start {list(robot.start[:2])} is outside bounds "
-                                 f"{list(self.bounds)}")
+                raise ValueError(
+                    f"robots.{i} ({robot.name}) start {list(robot.start[:2])} is outside bounds "
+                    f"{list(self.bounds)}"
+                )
             for j, waypoint in enumerate(robot.patrol):
                 if not self.contains(waypoint[0], waypoint[1]):
-                    raise ValueError(f"robots.{i} ({robot.name}) patrol.{j} {list(waypoint[:2])} is outside bounds "
-                                     f"{list(self.bounds)}")
+                    raise ValueError(
+                        f"robots.{i} ({robot.name}) patrol.{j} {list(waypoint[:2])} is outside bounds "
+                        f"{list(self.bounds)}"
+                    )
         for i, pose in enumerate(self.holding):
             _finite(pose, f"holding.{i}")
             if not self.contains(pose[0], pose[1]):
@@ -217,7 +228,9 @@ class World(_Strict):
         _finite(v, "bounds")
         xmin, ymin, xmax, ymax = v
         if not (xmax > xmin and ymax > ymin):
-            raise ValueError(f"bounds must be [xmin, ymin, xmax, ymax] with xmax > xmin and ymax > ymin, got {list(v)}")
+            raise ValueError(
+                f"bounds must be [xmin, ymin, xmax, ymax] with xmax > xmin and ymax > ymin, got {list(v)}"
+            )
         return v
 
     @field_validator("walls", "glass")
@@ -237,9 +250,13 @@ class World(_Strict):
                 raise ValueError(f"dock id {dock.id!r} appears twice")
             seen.add(dock.id)
             if not self.contains(dock.pose[0], dock.pose[1]):
-                raise ValueError(f"dock {dock.id!r} at {list(dock.pose[:2])} is outside bounds {list(self.bounds)}")
+                raise ValueError(
+                    f"dock {dock.id!r} at {list(dock.pose[:2])} is outside bounds {list(self.bounds)}"
+                )
         if not self.contains(self.robot.start[0], self.robot.start[1]):
-            raise ValueError(f"robot.start {list(self.robot.start[:2])} is outside bounds {list(self.bounds)}")
+            raise ValueError(
+                f"robot.start {list(self.robot.start[:2])} is outside bounds {list(self.bounds)}"
+            )
         return self
 
     def contains(self, x: float, y: float) -> bool:
@@ -321,18 +338,30 @@ def dock_markers(world: World) -> list[DockMarker]:
     for i, dock in enumerate(world.docks):
         marker_id = i if dock.marker_id is None else dock.marker_id
         if marker_id in seen:
-            raise ConfigError(f"world {world.name!r}: docks {seen[marker_id]!r} and {dock.id!r} share marker id {marker_id}")
+            raise ConfigError(
+                f"world {world.name!r}: docks {seen[marker_id]!r} and {dock.id!r} share marker id {marker_id}"
+            )
         seen[marker_id] = dock.id
         centre_height = max(DOCK_GEOMETRY.marker_height_m, dock.marker_size_m / 2 + 0.02)
-        markers.append(DockMarker(dock.id, marker_id, dock.marker_size_m, DOCK_GEOMETRY.marker_pose(dock),
-                                  centre_height, world.aruco_dictionary))
+        markers.append(
+            DockMarker(
+                dock.id,
+                marker_id,
+                dock.marker_size_m,
+                DOCK_GEOMETRY.marker_pose(dock),
+                centre_height,
+                world.aruco_dictionary,
+            )
+        )
     return markers
 
 
 def parse_world(data: Any, source: str | Path = "<world>") -> World:
     """Validate a decoded world document; raises :class:`ConfigError` naming the file and field."""
     if not isinstance(data, dict):
-        raise ConfigError(f"{source}: a world file must be a mapping with name, bounds, walls, ...; got {type(data).__name__}")
+        raise ConfigError(
+            f"{source}: a world file must be a mapping with name, bounds, walls, ...; got {type(data).__name__}"
+        )
     try:
         world = World.model_validate(data)
     except ValidationError as exc:

@@ -88,8 +88,14 @@ def launch_stack(tmp_path: Path, namespace: str) -> Iterator:
         endpoint = free_endpoint()
         variables = {"ZENOH_LISTEN": endpoint, "ZENOH_CONNECT": endpoint, **(env or {})}
         stack = load_stack(REPO_ROOT / "deploy" / "stack.yaml", env=variables, project_dir=REPO_ROOT)
-        launcher = Launcher(stack, services=("router", *services), project_dir=tmp_path / f"stack{len(launchers)}",
-                            working_dir=REPO_ROOT, namespace=namespace, project_name=f"test{len(launchers)}")
+        launcher = Launcher(
+            stack,
+            services=("router", *services),
+            project_dir=tmp_path / f"stack{len(launchers)}",
+            working_dir=REPO_ROOT,
+            namespace=namespace,
+            project_name=f"test{len(launchers)}",
+        )
         launchers.append(launcher)
         launcher.up()
         launcher.wait_healthy(timeout_s=healthy_timeout_s)

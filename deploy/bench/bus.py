@@ -59,7 +59,9 @@ class _Echo:
     def __init__(self, mode: str, endpoint: str) -> None:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "deploy.bench.echo", mode, endpoint],
-            stdout=subprocess.PIPE, text=True, start_new_session=True,
+            stdout=subprocess.PIPE,
+            text=True,
+            start_new_session=True,
         )
         assert self.proc.stdout is not None
         if self.proc.stdout.readline().strip() != "ready":
@@ -130,8 +132,11 @@ def _measure(endpoint: str, rounds: int) -> tuple[list[float], list[float]]:
     """Typed and raw round trips from one process: a zendock node on one session, raw zenoh on another."""
     typed_arrived, raw_arrived = threading.Event(), threading.Event()
     spec = SessionSpec(connect=(endpoint,))
-    with open_session(spec) as typed_session, open_session(spec) as raw_session, \
-            Node("bench_ping", typed_session) as node:
+    with (
+        open_session(spec) as typed_session,
+        open_session(spec) as raw_session,
+        Node("bench_ping", typed_session) as node,
+    ):
         ping = node.create_publisher(Twist, ping_key("typed"), RELIABLE)
         node.create_subscription(Twist, pong_key("typed"), lambda _m: typed_arrived.set(), RELIABLE)
         spinner = threading.Thread(target=node.spin, daemon=True)

@@ -30,8 +30,12 @@ def node_counters(session: Any, timeout_s: float = 3.0) -> dict[str, dict[str, A
     found: dict[str, dict[str, Any]] = {}
     import zenoh  # noqa: PLC0415
 
-    replies = session.get(STATS_QUERY, timeout=timeout_s, target=zenoh.QueryTarget.ALL,
-                          consolidation=zenoh.ConsolidationMode.NONE)
+    replies = session.get(
+        STATS_QUERY,
+        timeout=timeout_s,
+        target=zenoh.QueryTarget.ALL,
+        consolidation=zenoh.ConsolidationMode.NONE,
+    )
     for reply in replies:
         if reply.ok is None:
             continue
@@ -46,7 +50,9 @@ def node_counters(session: Any, timeout_s: float = 3.0) -> dict[str, dict[str, A
 
 def _sim_now(session: Any, robot: str) -> float:
     try:
-        return call_service(session, "simulator/state", SIM_STATE, SimStateRequest(robot=robot)).stamp.to_sec()
+        return call_service(
+            session, "simulator/state", SIM_STATE, SimStateRequest(robot=robot)
+        ).stamp.to_sec()
     except ServiceError:
         return math.nan
 
@@ -55,7 +61,7 @@ def robot_relative(key: str, robots: list[str]) -> str:
     """``r0/odom`` -> ``odom``: one robot's keys under one name, whichever robot."""
     for robot in robots:
         if key.startswith(f"{robot}/"):
-            return key[len(robot) + 1:]
+            return key[len(robot) + 1 :]
     return key
 
 
@@ -108,7 +114,9 @@ class MessageCount:
     cpu_after: dict[str, dict[str, float]] = field(default_factory=dict)
 
     @contextmanager
-    def tap(self, session: Any, robots: list[str], processes: Any = None, endpoint: str = "") -> Iterator[None]:
+    def tap(
+        self, session: Any, robots: list[str], processes: Any = None, endpoint: str = ""
+    ) -> Iterator[None]:
         """Entered with the stack healthy, left after the last trial (``run_trials``' ``tap``); ``processes()``
         gives the stack's ``(service, pid)`` pairs for the CPU split (the router's ``endpoint`` is not needed)."""
         self.robots = list(robots)
@@ -133,7 +141,9 @@ class MessageCount:
         nodes: dict[str, float] = {}
 
         def row_of(key: str) -> dict[str, Any]:
-            return keys.setdefault(robot_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()})
+            return keys.setdefault(
+                robot_relative(key, self.robots), {"published": 0.0, "delivered": 0.0, "by": set()}
+            )
 
         for label, body in self.after.items():
             old = self.before.get(label, {})
@@ -146,24 +156,33 @@ class MessageCount:
                 row["delivered"] += n / per
                 row["by"].add(node)
             nodes[node] = nodes.get(node, 0.0) + sum(received.values()) / per
-        rows = {key: {"published_per_sim_s": round(row["published"], 1),
-                      "delivered_per_sim_s": round(row["delivered"], 1),
-                      "subscribers": sorted(row["by"])}
-                for key, row in sorted(keys.items(), key=lambda kv: -kv[1]["delivered"])}
+        rows = {
+            key: {
+                "published_per_sim_s": round(row["published"], 1),
+                "delivered_per_sim_s": round(row["delivered"], 1),
+                "subscribers": sorted(row["by"]),
+            }
+            for key, row in sorted(keys.items(), key=lambda kv: -kv[1]["delivered"])
+        }
         pacing = {}
         for label, body in self.after.items():
             old_extra = self.before.get(label, {}).get("extra", {})
             for key, value in (body.get("extra") or {}).items():
                 if key.startswith("pacing_held_s"):
-                    pacing[key.replace("pacing_held_s", "held_wall_s")] = round(value - old_extra.get(key, 0.0), 2)
+                    pacing[key.replace("pacing_held_s", "held_wall_s")] = round(
+                        value - old_extra.get(key, 0.0), 2
+                    )
                 elif key == "pacing_holds":
                     pacing["holds"] = int(value - old_extra.get(key, 0.0))
         held = sum(v for k, v in pacing.items() if k.startswith("held_wall_s_"))
         cpu: dict[str, dict[str, float]] = {}
         for name, split in self.cpu_after.items():
             old_split = self.cpu_before.get(name, {})
-            row = {kind: round(1000 * (v - old_split.get(kind, 0.0)) / self.sim_s, 2) for kind, v in split.items()
-                   if kind != "gone"}
+            row = {
+                kind: round(1000 * (v - old_split.get(kind, 0.0)) / self.sim_s, 2)
+                for kind, v in split.items()
+                if kind != "gone"
+            }
             row["all"] = round(sum(row.values()), 2)
             for robot in self.robots:  # trials name a robot's services <service>_<robot>
                 name = name.removesuffix(f"_{robot}")
@@ -177,7 +196,9 @@ class MessageCount:
             "robots": len(self.robots),
             "published_per_sim_s_per_robot": round(sum(r["published"] for r in keys.values()), 1),
             "delivered_per_sim_s_per_robot": round(sum(r["delivered"] for r in keys.values()), 1),
-            "received_per_sim_s_by_node": {n: round(v, 1) for n, v in sorted(nodes.items(), key=lambda kv: -kv[1])},
+            "received_per_sim_s_by_node": {
+                n: round(v, 1) for n, v in sorted(nodes.items(), key=lambda kv: -kv[1])
+            },
             "keys": rows,
             #: CPU milliseconds per simulated second by service, in its Python and its Zenoh threads.
             "cpu_ms_per_sim_s": cpu,

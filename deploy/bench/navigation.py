@@ -96,22 +96,39 @@ class _Odometer:
 
 def _shortest_path_length_m(world_file: str, start: Pose2D, goal: tuple[float, float, float]) -> float:
     """The planner's own shortest collision-free path (glass included), run as a tool process."""
-    argv = ["--world", str(REPO_ROOT / world_file), "--start", *map(str, start.as_tuple()), "--goal", *map(str, goal)]
+    argv = [
+        "--world",
+        str(REPO_ROOT / world_file),
+        "--start",
+        *map(str, start.as_tuple()),
+        "--goal",
+        *map(str, goal),
+    ]
     return float(run_tool("services.planner.lower_bound", argv).last_json()["path_length_m"])
 
 
-def _drive_world(world_file: str, goals: tuple[tuple[float, float, float], ...], rtf: float,
-                 timeout_s: float, log_dir: Path) -> list[RouteResult]:
+def _drive_world(
+    world_file: str,
+    goals: tuple[tuple[float, float, float], ...],
+    rtf: float,
+    timeout_s: float,
+    log_dir: Path,
+) -> list[RouteResult]:
     world = load_world(REPO_ROOT / world_file)
     endpoint, namespace = f"tcp/127.0.0.1:{free_port()}", "bench"
     results = []
     with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))):
         world_path = str(REPO_ROOT / world_file)
-        stack = ServiceGroup(endpoint, namespace, {
-            "simulator": ["--world", world_path, "-p", f"rtf={rtf}"],
-            "pose": ["-p", "use_sim_time=true"],
-            "planner": ["-p", "use_sim_time=true", "-p", f"world={world_path}"],
-        }, log_dir)
+        stack = ServiceGroup(
+            endpoint,
+            namespace,
+            {
+                "simulator": ["--world", world_path, "-p", f"rtf={rtf}"],
+                "pose": ["-p", "use_sim_time=true"],
+                "planner": ["-p", "use_sim_time=true", "-p", f"world={world_path}"],
+            },
+            log_dir,
+        )
         try:
             with open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
                 node = Node("bench_navigation", session, namespace)
@@ -137,15 +154,19 @@ def _drive_world(world_file: str, goals: tuple[tuple[float, float, float], ...],
                     after = state()
                     feedback = nav.get_feedback()
                     outcome = nav.get_result()
-                    results.append(RouteResult(
-                        world=world.name, start=start, goal=goal,
-                        outcome=outcome.name if outcome is not TaskResult.UNKNOWN else "TIMEOUT",
-                        time_s=after.stamp.to_sec() - before.stamp.to_sec(),
-                        driven_m=odometer.stop(),
-                        shortest_m=_shortest_path_length_m(world_file, start, goal),
-                        collisions=after.collisions - before.collisions,
-                        recoveries=feedback.number_of_recoveries if feedback is not None else 0,
-                    ))
+                    results.append(
+                        RouteResult(
+                            world=world.name,
+                            start=start,
+                            goal=goal,
+                            outcome=outcome.name if outcome is not TaskResult.UNKNOWN else "TIMEOUT",
+                            time_s=after.stamp.to_sec() - before.stamp.to_sec(),
+                            driven_m=odometer.stop(),
+                            shortest_m=_shortest_path_length_m(world_file, start, goal),
+                            collisions=after.collisions - before.collisions,
+                            recoveries=feedback.number_of_recoveries if feedback is not None else 0,
+                        )
+                    )
                 node.shutdown()
                 node.close()
         finally:
@@ -153,8 +174,11 @@ def _drive_world(world_file: str, goals: tuple[tuple[float, float, float], ...],
     return results
 
 
-def run_navigation_bench(rtf: float = 5.0, timeout_s: float = 120.0,
-                         routes: dict[str, tuple[tuple[float, float, float], ...]] | None = None) -> list[RouteResult]:
+def run_navigation_bench(
+    rtf: float = 5.0,
+    timeout_s: float = 120.0,
+    routes: dict[str, tuple[tuple[float, float, float], ...]] | None = None,
+) -> list[RouteResult]:
     """Drive every route at ``rtf`` times real time; ``timeout_s`` (wall) per goal."""
     results: list[RouteResult] = []
     with tempfile.TemporaryDirectory(prefix="zendock-bench-nav-") as tmp:

@@ -129,12 +129,19 @@ def run_perception_bench(frames_per_point: int = 12) -> dict[str, Any]:
         endpoint, namespace = f"tcp/127.0.0.1:{free_port()}", "bench"
         points: list[Viewpoint] = []
         skipped: list[dict[str, Any]] = []
-        with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
-                ServiceGroup(endpoint, namespace, {
+        with (
+            open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))),
+            ServiceGroup(
+                endpoint,
+                namespace,
+                {
                     "simulator": ["--world", str(world_file), "-p", "rtf=1", "-p", "detection.source=aruco"],
                     "perception": ["-p", f"dock_database={world_file}"],
-                }, Path(tmp)) as stack, \
-                open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
+                },
+                Path(tmp),
+            ) as stack,
+            open_session(SessionSpec(mode="client", connect=(endpoint,))) as session,
+        ):
             node = Node("bench_perception", session, namespace)
             spin_in_background(node)
             watcher = _Watcher(node)
@@ -148,8 +155,13 @@ def run_perception_bench(frames_per_point: int = 12) -> dict[str, Any]:
             for range_m in RANGES_M:
                 for angle_deg in ANGLES_DEG:
                     robot = viewpoint_pose(marker, range_m, math.radians(angle_deg))
-                    reply = call_service(session, f"{namespace}/simulator/teleport", TELEPORT,
-                                         TeleportRequest(robot="", x=robot.x, y=robot.y, yaw=robot.yaw), timeout_s=10.0)
+                    reply = call_service(
+                        session,
+                        f"{namespace}/simulator/teleport",
+                        TELEPORT,
+                        TeleportRequest(robot="", x=robot.x, y=robot.y, yaw=robot.yaw),
+                        timeout_s=10.0,
+                    )
                     if not reply.success:  # close and far to the side the robot would stand in the dock
                         skipped.append({"range_m": range_m, "angle_deg": angle_deg, "reason": reply.message})
                         continue
@@ -172,8 +184,15 @@ def _cpu_s(process: psutil.Process) -> float:
     return float(times.user + times.system)
 
 
-def _measure(watcher: _Watcher, dock: Pose2D, robot: Pose2D, range_m: float, angle_deg: float,
-             frames_wanted: int, stack: ServiceGroup) -> Viewpoint:
+def _measure(
+    watcher: _Watcher,
+    dock: Pose2D,
+    robot: Pose2D,
+    range_m: float,
+    angle_deg: float,
+    frames_wanted: int,
+    stack: ServiceGroup,
+) -> Viewpoint:
     # Frames from before the teleport are not this viewpoint's, and the perception service's memory of the
     # marker's last pose (CONTINUITY_S) must lapse: each viewpoint is a fresh sighting, not a robot that
     # jumped, which no real one does.

@@ -29,7 +29,10 @@ class ServiceGroup:
             with open(log_dir / f"{name}.log", "wb") as log:
                 self.procs[name] = subprocess.Popen(
                     [sys.executable, "-m", f"services.{name}", *common, *args],
-                    cwd=REPO_ROOT, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                    cwd=REPO_ROOT,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    start_new_session=True,
                 )
 
     def tails(self, lines: int = 15) -> str:

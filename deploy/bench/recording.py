@@ -47,10 +47,22 @@ class RecordingTap:
     @contextmanager
     def tap(self, session: Any, robots: list[str], processes: Any, endpoint: str) -> Iterator[None]:
         self.robots = list(robots)
-        command = [sys.executable, "-m", "deploy.cli", "record", "-o", str(self.output), "--world", str(self.world),
-                   "--connect", endpoint]
+        command = [
+            sys.executable,
+            "-m",
+            "deploy.cli",
+            "record",
+            "-o",
+            str(self.output),
+            "--world",
+            str(self.world),
+            "--connect",
+            endpoint,
+        ]
         env = {**os.environ, "ZENDOCK_NAMESPACE": ""}
-        recorder = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+        recorder = subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
+        )
         started = time.monotonic()
         sampler = PeakRssSampler(lambda: [("recorder", recorder.pid)])  # as the campaign samples its services
         try:
@@ -106,4 +118,3 @@ class RecordingTap:
             "file_mb": round(self.output.stat().st_size / 1e6, 1),
             "keys": dict(sorted(keys.items(), key=lambda kv: (-kv[1]["lost"], kv[0]))),
         }
-

@@ -63,12 +63,18 @@ def _battery(header: Header) -> Message:
 
 def _scan(header: Header) -> Message:
     ranges = np.linspace(0.2, 8.0, 360, dtype=np.float32)
-    return LaserScan(header, -math.pi, math.pi, math.tau / 360, 0.0, 0.1, 0.12, 12.0, ranges, np.zeros(0, np.float32))
+    return LaserScan(
+        header, -math.pi, math.pi, math.tau / 360, 0.0, 0.1, 0.12, 12.0, ranges, np.zeros(0, np.float32)
+    )
 
 
 def _tf(header: Header) -> Message:
-    return TFMessage([TransformStamped(header, "base_link", Transform()),
-                      TransformStamped(Header(header.stamp, "map"), "odom", Transform())])
+    return TFMessage(
+        [
+            TransformStamped(header, "base_link", Transform()),
+            TransformStamped(Header(header.stamp, "map"), "odom", Transform()),
+        ]
+    )
 
 
 _PIXELS = np.random.default_rng(1).integers(0, 255, 640 * 480, dtype=np.uint8)
@@ -113,16 +119,25 @@ def run_stack_rtf(world: str, seconds: float = 10.0) -> dict[str, float]:
     out: dict[str, float] = {}
     with tempfile.TemporaryDirectory(prefix="zendock-bench-ros2-rtf-") as tmp:
         endpoint = f"tcp/127.0.0.1:{free_port()}"
-        with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
-                ServiceGroup(endpoint, NAMESPACE, {
+        with (
+            open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))),
+            ServiceGroup(
+                endpoint,
+                NAMESPACE,
+                {
                     "simulator": ["--world", world, "-p", "rtf=max"],
                     "battery": ["-p", "use_sim_time=true"],
                     "pose": ["-p", "use_sim_time=true"],
-                }, Path(tmp)) as stack, \
-                open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
+                },
+                Path(tmp),
+            ) as stack,
+            open_session(SessionSpec(mode="client", connect=(endpoint,))) as session,
+        ):
             latest = [0.0]
             clock = session.declare_subscriber(
-                f"{NAMESPACE}/clock", lambda s: latest.__setitem__(0, Clock.decode(s.payload.to_bytes()).clock.to_sec()))
+                f"{NAMESPACE}/clock",
+                lambda s: latest.__setitem__(0, Clock.decode(s.payload.to_bytes()).clock.to_sec()),
+            )
 
             def rtf() -> float:
                 time.sleep(1.0)  # settle
@@ -145,9 +160,18 @@ def run_stack_rtf(world: str, seconds: float = 10.0) -> dict[str, float]:
                     held: list[Any] = []
                     for i, (topic, ros_type) in enumerate(wanted, start=1):
                         type_hash = ros_types.type_hash(ros_type)
-                        held.append(session.declare_subscriber(data_key(0, topic, ros_type, type_hash), lambda _s: None))
-                        held.append(session.liveliness().declare_token(Endpoint(
-                            node, i, EntityKind.SUBSCRIPTION, topic, ros_type, type_hash, SENSOR_DATA).token_key()))
+                        held.append(
+                            session.declare_subscriber(
+                                data_key(0, topic, ros_type, type_hash), lambda _s: None
+                            )
+                        )
+                        held.append(
+                            session.liveliness().declare_token(
+                                Endpoint(
+                                    node, i, EntityKind.SUBSCRIPTION, topic, ros_type, type_hash, SENSOR_DATA
+                                ).token_key()
+                            )
+                        )
                     out[label] = rtf()
                     for entity in held:
                         entity.undeclare()
@@ -160,16 +184,26 @@ def run_stack_rtf(world: str, seconds: float = 10.0) -> dict[str, float]:
 def run_ros2_bench(messages: int = 1000, burst_s: float = 2.0) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="zendock-bench-ros2-") as tmp:
         endpoint = f"tcp/127.0.0.1:{free_port()}"
-        with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
-                ServiceGroup(endpoint, NAMESPACE, {"ros2_bridge": []}, Path(tmp)) as stack, \
-                open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
+        with (
+            open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))),
+            ServiceGroup(endpoint, NAMESPACE, {"ros2_bridge": []}, Path(tmp)) as stack,
+            open_session(SessionSpec(mode="client", connect=(endpoint,))) as session,
+        ):
             bridge = psutil.Process(stack.procs["ros2_bridge"].pid)
-            results = {case.topic: _measure(session, bridge, case, messages, burst_s, stack) for case in CASES}
+            results = {
+                case.topic: _measure(session, bridge, case, messages, burst_s, stack) for case in CASES
+            }
     return {"messages_per_case": messages, "cases": results}
 
 
-def _measure(session: zenoh.Session, bridge: psutil.Process, case: Case, messages: int, burst_s: float,
-             stack: ServiceGroup) -> dict[str, Any]:
+def _measure(
+    session: zenoh.Session,
+    bridge: psutil.Process,
+    case: Case,
+    messages: int,
+    burst_s: float,
+    stack: ServiceGroup,
+) -> dict[str, Any]:
     msg_type = type(case.make(Header()))
     ros_type = msg_type.TYPE_NAME
     topic = "/" + case.topic
@@ -197,7 +231,8 @@ def _measure(session: zenoh.Session, bridge: psutil.Process, case: Case, message
     direct_sub = session.declare_subscriber(key, on_direct)
     node = GraphNode(0, str(session.info.zid()), 0, "bench_ros2_peer")
     token = session.liveliness().declare_token(
-        Endpoint(node, 1, EntityKind.SUBSCRIPTION, topic, ros_type, type_hash, SENSOR_DATA).token_key())
+        Endpoint(node, 1, EntityKind.SUBSCRIPTION, topic, ros_type, type_hash, SENSOR_DATA).token_key()
+    )
     publisher = session.declare_publisher(key, encoding=encoding_for(ros_type))
     try:
         # Wait until the bridge forwards (it saw the token and subscribed): probe with index 0.

@@ -49,8 +49,12 @@ PROBE = Path(__file__).with_name("ros2_dds_probe.py")
 def _stats(samples: list[float]) -> dict[str, Any]:
     if not samples:
         return {"n": 0}
-    return {"n": len(samples), "p50_ms": round(median(samples), 2), "p90_ms": round(percentile(samples, 0.9), 2),
-            "max_ms": round(max(samples), 2)}
+    return {
+        "n": len(samples),
+        "p50_ms": round(median(samples), 2),
+        "p90_ms": round(percentile(samples, 0.9), 2),
+        "max_ms": round(max(samples), 2),
+    }
 
 
 def _direct_round_trips(session: zenoh.Session, namespace: str, count: int) -> list[float]:
@@ -101,11 +105,18 @@ def run(rtf: str = "1", seconds: float = 10.0, round_trips: int = 20) -> dict[st
     with tempfile.TemporaryDirectory(prefix="zendock-bench-dds-") as tmp:
         project = Path(tmp)
         endpoint = free_endpoint()
-        environment = {**StackConfig(detector="synthetic", rtf=rtf).environment(endpoint, project),
-                       "ROS_DOMAIN_ID": str(domain)}
+        environment = {
+            **StackConfig(detector="synthetic", rtf=rtf).environment(endpoint, project),
+            "ROS_DOMAIN_ID": str(domain),
+        }
         stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
-        launcher = Launcher(stack, profiles=["ros2-dds"], project_dir=project, working_dir=REPO_ROOT,
-                            project_name="zendock-bench")
+        launcher = Launcher(
+            stack,
+            profiles=["ros2-dds"],
+            project_dir=project,
+            working_dir=REPO_ROOT,
+            project_name="zendock-bench",
+        )
         with launcher, open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
             launcher.wait_healthy(timeout_s=90.0)
             pid = launcher.status("ros2_dds").pid
@@ -124,9 +135,13 @@ def run(rtf: str = "1", seconds: float = 10.0, round_trips: int = 20) -> dict[st
 
             env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTHON"))}
             env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-            probe = subprocess.Popen([str(ROS2_PYTHON), str(PROBE), "--seconds", str(seconds),
-                                      "--round-trips", str(round_trips)],
-                                     stdout=subprocess.PIPE, text=True, cwd=REPO_ROOT, env=env)
+            probe = subprocess.Popen(
+                [str(ROS2_PYTHON), str(PROBE), "--seconds", str(seconds), "--round-trips", str(round_trips)],
+                stdout=subprocess.PIPE,
+                text=True,
+                cwd=REPO_ROOT,
+                env=env,
+            )
             phases: dict[str, dict[str, Any]] = {}
             marks: dict[str, tuple[float, float, int]] = {}  # phase -> (wall, cpu seconds, rss) at its start
             assert probe.stdout is not None
@@ -142,23 +157,38 @@ def run(rtf: str = "1", seconds: float = 10.0, round_trips: int = 20) -> dict[st
         (t0, c0, _), (t1, c1, rss) = marks[start], marks[end]
         return {"cpu_percent": round(100.0 * (c1 - c0) / (t1 - t0), 1), "rss_mb": round(rss / 2**20, 1)}
 
-    added = [(ros - zendock_arrivals[stamp]) / 1e6 for stamp, ros in phases["battery"]["arrivals"]
-             if stamp in zendock_arrivals]
+    added = [
+        (ros - zendock_arrivals[stamp]) / 1e6
+        for stamp, ros in phases["battery"]["arrivals"]
+        if stamp in zendock_arrivals
+    ]
     dds_one_way = [(arrival - stamp) / 1e6 for stamp, arrival in phases["dds_battery"]["arrivals"]]
     return {
         "rtf": rtf,
-        "cmd_vel_odom_round_trip": {"through_face": _stats(phases["cmd_vel"]["round_trips_ms"]),
-                                    "zendock_direct": _stats(direct),
-                                    "rclpy_to_rclpy": _stats(phases["dds_round_trip"]["round_trips_ms"])},
-        "battery_status_latency": {"added_by_face": _stats(added), "rclpy_to_rclpy_one_way": _stats(dds_one_way)},
-        "face": {"idle": cpu_between("idle", "idle_end"), "forwarding_sensors": cpu_between("sensors", "sensors_end"),
-                 "rates_hz": phases["sensors_end"]["rates_hz"]},
+        "cmd_vel_odom_round_trip": {
+            "through_face": _stats(phases["cmd_vel"]["round_trips_ms"]),
+            "zendock_direct": _stats(direct),
+            "rclpy_to_rclpy": _stats(phases["dds_round_trip"]["round_trips_ms"]),
+        },
+        "battery_status_latency": {
+            "added_by_face": _stats(added),
+            "rclpy_to_rclpy_one_way": _stats(dds_one_way),
+        },
+        "face": {
+            "idle": cpu_between("idle", "idle_end"),
+            "forwarding_sensors": cpu_between("sensors", "sensors_end"),
+            "rates_hz": phases["sensors_end"]["rates_hz"],
+        },
     }
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m deploy.bench.ros2_dds", description=__doc__.splitlines()[0])
-    parser.add_argument("--rtf", default="1", help="the simulator's real-time factor (default 1: real sensor rates)")
+    parser = argparse.ArgumentParser(
+        prog="python -m deploy.bench.ros2_dds", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "--rtf", default="1", help="the simulator's real-time factor (default 1: real sensor rates)"
+    )
     parser.add_argument("--seconds", type=float, default=10.0, help="length of each measuring phase")
     parser.add_argument("--round-trips", type=int, default=20)
     args = parser.parse_args(argv)

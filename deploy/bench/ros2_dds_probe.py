@@ -59,14 +59,18 @@ def sensors(node: Node, seconds: float) -> None:
     spin_for(node, seconds)
     emit(phase="idle_end", at=time.time_ns())
     counts = {topic: 0 for topic, _, _ in SENSORS}
-    subs = [node.create_subscription(cls, topic, lambda _m, t=topic: counts.__setitem__(t, counts[t] + 1), qos)
-            for topic, cls, qos in SENSORS]
+    subs = [
+        node.create_subscription(cls, topic, lambda _m, t=topic: counts.__setitem__(t, counts[t] + 1), qos)
+        for topic, cls, qos in SENSORS
+    ]
     spin_for(node, 2.0)  # matched, forwarding
     for topic in counts:
         counts[topic] = 0
     emit(phase="sensors", at=time.time_ns())
     spin_for(node, seconds)
-    emit(phase="sensors_end", at=time.time_ns(), rates_hz={t: round(n / seconds, 1) for t, n in counts.items()})
+    emit(
+        phase="sensors_end", at=time.time_ns(), rates_hz={t: round(n / seconds, 1) for t, n in counts.items()}
+    )
     for sub in subs:
         node.destroy_subscription(sub)
 
@@ -74,8 +78,13 @@ def sensors(node: Node, seconds: float) -> None:
 def battery(node: Node, topic: str, seconds: float, phase: str) -> None:
     arrivals: list[tuple[int, int]] = []
     sub = node.create_subscription(
-        BatteryState, topic,
-        lambda m: arrivals.append((m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec, time.time_ns())), 10)
+        BatteryState,
+        topic,
+        lambda m: arrivals.append(
+            (m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec, time.time_ns())
+        ),
+        10,
+    )
     spin_for(node, seconds)
     node.destroy_subscription(sub)
     emit(phase=phase, arrivals=arrivals)

@@ -50,8 +50,9 @@ def _import_s(module: str) -> float:
     """Seconds the import itself takes, timed inside the interpreter (its exit, which unloads Zenoh and
     numpy, is not part of a service's start)."""
     code = f"import time; t = time.perf_counter(); import {module}; print(time.perf_counter() - t)"
-    done = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, check=True, capture_output=True,
-                          text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=REPO_ROOT, check=True, capture_output=True, text=True, timeout=120
+    )
     return float(done.stdout.strip().splitlines()[-1])
 
 
@@ -62,14 +63,28 @@ def _to_token(service: str, args: list[str], endpoint: str, namespace: str, sess
     watcher = session.liveliness().declare_subscriber(key, lambda sample: seen.set())
     try:
         start = time.perf_counter()
-        proc = subprocess.Popen([sys.executable, "-m", f"services.{service}", "--connect", endpoint,
-                                 "--namespace", namespace, *args],
-                                cwd=REPO_ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                start_new_session=True)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                f"services.{service}",
+                "--connect",
+                endpoint,
+                "--namespace",
+                namespace,
+                *args,
+            ],
+            cwd=REPO_ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            start_new_session=True,
+        )
         try:
             if not seen.wait(60.0):
                 proc.kill()
-                raise RuntimeError(f"{service} never declared its token: {proc.communicate()[1].decode()[-500:]}")
+                raise RuntimeError(
+                    f"{service} never declared its token: {proc.communicate()[1].decode()[-500:]}"
+                )
             elapsed = time.perf_counter() - start
         finally:
             if proc.poll() is None:
@@ -86,8 +101,14 @@ def _to_token(service: str, args: list[str], endpoint: str, namespace: str, sess
 
 def top_imports(module: str, count: int = 5) -> list[tuple[str, float]]:
     """The module's heaviest direct imports by cumulative time (ms), from ``python -X importtime``."""
-    done = subprocess.run([sys.executable, "-X", "importtime", "-c", f"import {module}"], cwd=REPO_ROOT,
-                          capture_output=True, text=True, timeout=120, check=True)
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", f"import {module}"],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
     rows = []
     for line in done.stderr.splitlines():
         if not line.startswith("import time:") or "cumulative" in line:
@@ -106,8 +127,21 @@ def top_imports(module: str, count: int = 5) -> list[tuple[str, float]]:
 def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="zendock-bench-startup-") as tmp:
         map_yaml = Path(tmp) / "map.yaml"
-        subprocess.run([sys.executable, "-m", "services.planner.map_save", "--world", str(SEED_ROOM),
-                        "-o", str(map_yaml)], cwd=REPO_ROOT, check=True, capture_output=True, timeout=120)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "services.planner.map_save",
+                "--world",
+                str(SEED_ROOM),
+                "-o",
+                str(map_yaml),
+            ],
+            cwd=REPO_ROOT,
+            check=True,
+            capture_output=True,
+            timeout=120,
+        )
         commands = _service_args(map_yaml)
         wanted = services or list(commands)
         unknown = sorted(set(wanted) - set(commands))
@@ -115,15 +149,19 @@ def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> di
             raise ValueError(f"unknown service(s) {', '.join(unknown)}; choose from {', '.join(commands)}")
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         report: dict[str, Any] = {"repeats": repeats, "services": {}}
-        with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
-                open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
+        with (
+            open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))),
+            open_session(SessionSpec(mode="client", connect=(endpoint,))) as session,
+        ):
             interpreter = median(_timed([sys.executable, "-c", "pass"]) for _ in range(repeats))
             report["interpreter_ms"] = round(1000 * interpreter, 1)
             for service in wanted:
                 module = f"services.{service}.node"
                 imports = median(_import_s(module) for _ in range(repeats))
-                ready = [_to_token(service, commands[service], endpoint, f"startup{i}", session)
-                         for i in range(repeats)]
+                ready = [
+                    _to_token(service, commands[service], endpoint, f"startup{i}", session)
+                    for i in range(repeats)
+                ]
                 report["services"][service] = {
                     "interpreter_ms": round(1000 * interpreter, 1),
                     "imports_ms": round(1000 * imports, 1),

@@ -60,9 +60,15 @@ def _bench_docking(args: argparse.Namespace) -> int:
     report = _tool_json("docking", "services.docking.bench", argv)
     if report is None:
         return 1
-    summary = {f"{name} {key}": value for name, row in report.get("controllers", {}).items()
-               for key, value in row.items() if isinstance(value, (int, float, str))}
-    _print(summary or report, args.json, "final approach on the kinematic model: seed vs Nav2 defaults vs tuned")
+    summary = {
+        f"{name} {key}": value
+        for name, row in report.get("controllers", {}).items()
+        for key, value in row.items()
+        if isinstance(value, (int, float, str))
+    }
+    _print(
+        summary or report, args.json, "final approach on the kinematic model: seed vs Nav2 defaults vs tuned"
+    )
     return 0
 
 
@@ -77,21 +83,41 @@ def _bench_ir(args: argparse.Namespace) -> int:
         print(strict_json.dumps(report))
         return 0
     table = Table(title="infrared docking from beacon starts, kinematic model with the simulator's beacon")
-    for column in ("world", "docked", "collisions", "time median", "time p95", "lateral median", "lateral p95"):
+    for column in (
+        "world",
+        "docked",
+        "collisions",
+        "time median",
+        "time p95",
+        "lateral median",
+        "lateral p95",
+    ):
         table.add_column(column, justify="right")
     for name, row in {**report["worlds"], "all": report["summary"]}.items():
-        table.add_row(name, f"{row['docked']}/{row['n']}", str(row["collisions"]), f"{row['median_time_s']} s",
-                      f"{row['p95_time_s']} s", f"{row['median_lateral_error_m']} m", f"{row['p95_lateral_error_m']} m")
+        table.add_row(
+            name,
+            f"{row['docked']}/{row['n']}",
+            str(row["collisions"]),
+            f"{row['median_time_s']} s",
+            f"{row['p95_time_s']} s",
+            f"{row['median_lateral_error_m']} m",
+            f"{row['p95_lateral_error_m']} m",
+        )
     Console().print(table)
     for failure in report["failures"]:
-        print(f"failed from {tuple(round(v, 2) for v in failure['start'])}: {failure['outcome']}; last states "
-              f"{' > '.join(failure['states'][-8:])}")
+        print(
+            f"failed from {tuple(round(v, 2) for v in failure['start'])}: {failure['outcome']}; last states "
+            f"{' > '.join(failure['states'][-8:])}"
+        )
     return 0
 
 
 def _bench_planner(args: argparse.Namespace) -> int:
-    planning = _tool_json("planner", "services.planner.bench",
-                          ["--repeats", str(args.repeats), "--resolution", str(args.resolution)])
+    planning = _tool_json(
+        "planner",
+        "services.planner.bench",
+        ["--repeats", str(args.repeats), "--resolution", str(args.resolution)],
+    )
     if planning is None:
         return 1
     result: dict = dict(planning)
@@ -122,16 +148,25 @@ def _bench_perception(args: argparse.Namespace) -> int:
     if args.json:
         print(strict_json.dumps(report))
         return 0
-    table = Table(title=f"dock from pixels: detection rate and error by distance (angles {report['angles_deg']} deg)")
+    table = Table(
+        title=f"dock from pixels: detection rate and error by distance (angles {report['angles_deg']} deg)"
+    )
     for column in ("distance", "detected", "position median", "position p95", "yaw median"):
         table.add_column(column, justify="right")
     for distance, row in report["by_range"].items():
-        table.add_row(distance, f"{100 * row['detection_rate']:.0f} %", f"{row['median_position_error_mm']} mm",
-                      f"{row['p95_position_error_mm']} mm", f"{row['median_yaw_error_deg']} deg")
+        table.add_row(
+            distance,
+            f"{100 * row['detection_rate']:.0f} %",
+            f"{row['median_position_error_mm']} mm",
+            f"{row['p95_position_error_mm']} mm",
+            f"{row['median_yaw_error_deg']} deg",
+        )
     Console().print(table)
-    print(f"all viewpoints: {100 * report['detection_rate']:.1f} % of frames; image to dock pose "
-          f"{report['median_latency_ms']} ms (median); render {report['render_ms_per_frame']} ms per frame; "
-          f"perception {report['perception_cpu_ms_per_frame']} ms CPU per frame")
+    print(
+        f"all viewpoints: {100 * report['detection_rate']:.1f} % of frames; image to dock pose "
+        f"{report['median_latency_ms']} ms (median); render {report['render_ms_per_frame']} ms per frame; "
+        f"perception {report['perception_cpu_ms_per_frame']} ms CPU per frame"
+    )
     return 0
 
 
@@ -140,17 +175,21 @@ def _print_dds(dds: dict) -> None:
     table = Table(title="DDS face (rclpy, Fast DDS): through the face against rclpy-to-rclpy, same run")
     for column in ("measure", "p50", "p90"):
         table.add_column(column, justify="right")
-    rows = [("cmd_vel -> odom, through the face", dds["cmd_vel_odom_round_trip"]["through_face"]),
-            ("cmd_vel -> odom, zendock direct", dds["cmd_vel_odom_round_trip"]["zendock_direct"]),
-            ("round trip rclpy -> rclpy", dds["cmd_vel_odom_round_trip"]["rclpy_to_rclpy"]),
-            ("battery_status: added by the face", dds["battery_status_latency"]["added_by_face"]),
-            ("BatteryState rclpy -> rclpy, one way", dds["battery_status_latency"]["rclpy_to_rclpy_one_way"])]
+    rows = [
+        ("cmd_vel -> odom, through the face", dds["cmd_vel_odom_round_trip"]["through_face"]),
+        ("cmd_vel -> odom, zendock direct", dds["cmd_vel_odom_round_trip"]["zendock_direct"]),
+        ("round trip rclpy -> rclpy", dds["cmd_vel_odom_round_trip"]["rclpy_to_rclpy"]),
+        ("battery_status: added by the face", dds["battery_status_latency"]["added_by_face"]),
+        ("BatteryState rclpy -> rclpy, one way", dds["battery_status_latency"]["rclpy_to_rclpy_one_way"]),
+    ]
     for label, stats in rows:
         table.add_row(label, f"{stats.get('p50_ms', 'n/a')} ms", f"{stats.get('p90_ms', 'n/a')} ms")
     Console().print(table)
     face = dds["face"]
-    print(f"DDS face: idle {face['idle']['cpu_percent']} % CPU, {face['idle']['rss_mb']} MB; forwarding the sensor "
-          f"topics {face['forwarding_sensors']['cpu_percent']} % CPU, {face['forwarding_sensors']['rss_mb']} MB")
+    print(
+        f"DDS face: idle {face['idle']['cpu_percent']} % CPU, {face['idle']['rss_mb']} MB; forwarding the sensor "
+        f"topics {face['forwarding_sensors']['cpu_percent']} % CPU, {face['forwarding_sensors']['rss_mb']} MB"
+    )
 
 
 def _bench_ros2(args: argparse.Namespace) -> int:
@@ -171,12 +210,28 @@ def _bench_ros2(args: argparse.Namespace) -> int:
         print(strict_json.dumps(report))
         return 0
     table = Table(title="ROS 2 bridge: latency zendock key -> rmw_zenoh subscriber, against the direct path")
-    for column in ("topic", "bytes", "bridge p50", "bridge p99", "direct p50", "added p50", "CPU/msg", "max msg/s"):
+    for column in (
+        "topic",
+        "bytes",
+        "bridge p50",
+        "bridge p99",
+        "direct p50",
+        "added p50",
+        "CPU/msg",
+        "max msg/s",
+    ):
         table.add_column(column, justify="right")
     for topic, row in report["cases"].items():
-        table.add_row(topic, str(row["payload_bytes"]), f"{row['bridge_p50_ms']} ms", f"{row['bridge_p99_ms']} ms",
-                      f"{row['direct_p50_ms']} ms", f"{row['added_p50_ms']} ms",
-                      f"{row['bridge_cpu_us_per_message']} us", str(row["burst_forwarded_per_s"]))
+        table.add_row(
+            topic,
+            str(row["payload_bytes"]),
+            f"{row['bridge_p50_ms']} ms",
+            f"{row['bridge_p99_ms']} ms",
+            f"{row['direct_p50_ms']} ms",
+            f"{row['added_p50_ms']} ms",
+            f"{row['bridge_cpu_us_per_message']} us",
+            str(row["burst_forwarded_per_s"]),
+        )
     Console().print(table)
     if "dds" in report:
         _print_dds(report["dds"])
@@ -196,26 +251,50 @@ def _bench_messages(args: argparse.Namespace) -> int:
         print(f"zendock bench messages: --world {world}: no such file", file=sys.stderr)
         return 2
     count = MessageCount()
-    options = TrialOptions(world=world.resolve(), n=args.n, detector=args.detector, seed=args.seed, rtf=args.rtf,
-                           compose="all" if args.compose else "")
+    options = TrialOptions(
+        world=world.resolve(),
+        n=args.n,
+        detector=args.detector,
+        seed=args.seed,
+        rtf=args.rtf,
+        compose="all" if args.compose else "",
+    )
     console = Console(stderr=True)
     try:
-        summary, _, run_dir = run_trials(options, log=lambda t: console.print(f"[dim]bench:[/] {t}"), tap=count.tap)
+        summary, _, run_dir = run_trials(
+            options, log=lambda t: console.print(f"[dim]bench:[/] {t}"), tap=count.tap
+        )
         report = count.report()
     except (RuntimeError, ValueError) as exc:
         print(f"zendock bench messages: {exc}", file=sys.stderr)
         return 1
-    report.update({"docked": f"{summary.successes}/{summary.n}", "achieved_rtf": summary.achieved_rtf,
-                   "detector": args.detector, "composed": bool(args.compose), "run_dir": str(run_dir)})
+    report.update(
+        {
+            "docked": f"{summary.successes}/{summary.n}",
+            "achieved_rtf": summary.achieved_rtf,
+            "detector": args.detector,
+            "composed": bool(args.compose),
+            "run_dir": str(run_dir),
+        }
+    )
     if args.json:
         print(strict_json.dumps(report))
         return 0
-    table = Table(title=f"messages per simulated second, one robot ({report['sim_s']} sim s, {report['docked']} docked)")
+    table = Table(
+        title=f"messages per simulated second, one robot ({report['sim_s']} sim s, {report['docked']} docked)"
+    )
     for column in ("key", "published", "delivered", "subscribers"):
         table.add_column(column, justify="left" if column in ("key", "subscribers") else "right")
     for key, row in report["keys"].items():
-        table.add_row(key, f"{row['published_per_sim_s']}", f"{row['delivered_per_sim_s']}", ", ".join(row["subscribers"]))
-    table.add_row("all", f"{report['published_per_sim_s_per_robot']}", f"{report['delivered_per_sim_s_per_robot']}", "")
+        table.add_row(
+            key,
+            f"{row['published_per_sim_s']}",
+            f"{row['delivered_per_sim_s']}",
+            ", ".join(row["subscribers"]),
+        )
+    table.add_row(
+        "all", f"{report['published_per_sim_s_per_robot']}", f"{report['delivered_per_sim_s_per_robot']}", ""
+    )
     Console().print(table)
     return 0
 
@@ -232,13 +311,23 @@ def _bench_record(args: argparse.Namespace) -> int:
     if not world.is_file():
         print(f"zendock bench record: --world {world}: no such file", file=sys.stderr)
         return 2
-    options = TrialOptions(world=world.resolve(), n=args.n, detector=args.detector, seed=args.seed, rtf=args.rtf,
-                           workers=args.workers)
+    options = TrialOptions(
+        world=world.resolve(),
+        n=args.n,
+        detector=args.detector,
+        seed=args.seed,
+        rtf=args.rtf,
+        workers=args.workers,
+    )
     console = Console(stderr=True)
-    scratch = Path(tempfile.mkdtemp(prefix="zendock-bench-record-"))  # the run directory is made by the campaign
+    scratch = Path(
+        tempfile.mkdtemp(prefix="zendock-bench-record-")
+    )  # the run directory is made by the campaign
     recorder = RecordingTap(output=scratch / "campaign.mcap", world=world.resolve())
     try:
-        summary, _, run_dir = run_trials(options, log=lambda t: console.print(f"[dim]bench:[/] {t}"), tap=recorder.tap)
+        summary, _, run_dir = run_trials(
+            options, log=lambda t: console.print(f"[dim]bench:[/] {t}"), tap=recorder.tap
+        )
         report = recorder.report()
     except (RuntimeError, ValueError) as exc:
         print(f"zendock bench record: {exc}", file=sys.stderr)
@@ -247,20 +336,32 @@ def _bench_record(args: argparse.Namespace) -> int:
     kept = run_dir / "campaign.mcap"
     shutil.move(str(recorder.output), kept)
     shutil.rmtree(scratch, ignore_errors=True)
-    report.update({"docked": f"{summary.successes}/{summary.n}", "achieved_rtf": summary.achieved_rtf,
-                   "detector": args.detector, "rtf": args.rtf, "workers": args.workers, "recording": str(kept)})
+    report.update(
+        {
+            "docked": f"{summary.successes}/{summary.n}",
+            "achieved_rtf": summary.achieved_rtf,
+            "detector": args.detector,
+            "rtf": args.rtf,
+            "workers": args.workers,
+            "recording": str(kept),
+        }
+    )
     if args.json:
         print(strict_json.dumps(report))
         return 0
-    table = Table(title=f"recording everything through {report['docked']} dockings ({args.detector}, rtf {args.rtf})")
+    table = Table(
+        title=f"recording everything through {report['docked']} dockings ({args.detector}, rtf {args.rtf})"
+    )
     for column in ("key", "recorded", "lost", "gaps"):
         table.add_column(column, justify="left" if column == "key" else "right")
     for key, row in report["keys"].items():
         table.add_row(key, str(row["recorded"]), str(row["lost"]), str(row["gaps"]))
     Console().print(table)
-    print(f"{report['recorded']} messages recorded, {report['lost']} lost in {report['gaps']} gap(s); images "
-          f"{report['images_recorded']} recorded, {report['images_lost']} lost; recorder peak RSS "
-          f"{report['recorder_peak_rss_mb']} MB, CPU {report['recorder_cpu_fraction']} of a core; {kept}")
+    print(
+        f"{report['recorded']} messages recorded, {report['lost']} lost in {report['gaps']} gap(s); images "
+        f"{report['images_recorded']} recorded, {report['images_lost']} lost; recorder peak RSS "
+        f"{report['recorder_peak_rss_mb']} MB, CPU {report['recorder_cpu_fraction']} of a core; {kept}"
+    )
     return 0
 
 
@@ -279,8 +380,14 @@ def _bench_startup(args: argparse.Namespace) -> int:
     for column in ("service", "interpreter", "imports", "session and ready", "to token", "max"):
         table.add_column(column, justify="left" if column == "service" else "right")
     for name, row in report["services"].items():
-        table.add_row(name, f"{row['interpreter_ms']} ms", f"{row['imports_ms']} ms", f"{row['session_and_ready_ms']} ms",
-                      f"{row['to_token_ms']} ms", f"{row['to_token_max_ms']} ms")
+        table.add_row(
+            name,
+            f"{row['interpreter_ms']} ms",
+            f"{row['imports_ms']} ms",
+            f"{row['session_and_ready_ms']} ms",
+            f"{row['to_token_ms']} ms",
+            f"{row['to_token_max_ms']} ms",
+        )
     Console().print(table)
     for name, row in report["services"].items():
         heavy = ", ".join(f"{module} {ms:.0f} ms" for module, ms in row["top_imports_ms"].items())
@@ -302,46 +409,72 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sim.add_argument("--json", action="store_true")
     sim.set_defaults(func=_bench_sim)
 
-    perception = verbs.add_parser("perception", help="dock detection from rendered camera images: rate, error, latency")
+    perception = verbs.add_parser(
+        "perception", help="dock detection from rendered camera images: rate, error, latency"
+    )
     perception.add_argument("--frames", type=int, default=12, help="frames per viewpoint")
     perception.add_argument("--json", action="store_true")
     perception.set_defaults(func=_bench_perception)
-    messages = verbs.add_parser("messages", help="messages per simulated second per key and subscriber, docking")
+    messages = verbs.add_parser(
+        "messages", help="messages per simulated second per key and subscriber, docking"
+    )
     messages.add_argument("--world", default="deploy/worlds/seed_room.yaml")
     messages.add_argument("--n", type=count, default=5, help="dockings from random starts")
-    messages.add_argument("--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max")
+    messages.add_argument(
+        "--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max"
+    )
     messages.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
     messages.add_argument("--seed", type=int, default=0)
     messages.add_argument("--compose", action="store_true", help="the robot's services in one process")
     messages.add_argument("--json", action="store_true")
     messages.set_defaults(func=_bench_messages)
-    record = verbs.add_parser("record", help="record everything, camera included, through a docking campaign: gaps")
+    record = verbs.add_parser(
+        "record", help="record everything, camera included, through a docking campaign: gaps"
+    )
     record.add_argument("--world", default="deploy/worlds/seed_room.yaml")
     record.add_argument("--n", type=count, default=3, help="dockings from random starts")
-    record.add_argument("--rtf", type=real_time_factor, default="1",
-                        help="simulator real-time factor, or max (1: as a real run)")
+    record.add_argument(
+        "--rtf",
+        type=real_time_factor,
+        default="1",
+        help="simulator real-time factor, or max (1: as a real run)",
+    )
     record.add_argument("--workers", type=count, default=1, help="robots docking side by side")
     record.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
     record.add_argument("--seed", type=int, default=0)
     record.add_argument("--json", action="store_true")
     record.set_defaults(func=_bench_record)
-    startup = verbs.add_parser("startup", help="where a service's start-up goes: interpreter, imports, session")
+    startup = verbs.add_parser(
+        "startup", help="where a service's start-up goes: interpreter, imports, session"
+    )
     startup.add_argument("services", nargs="*", metavar="SERVICE", help="default: the stack's robot services")
     startup.add_argument("--repeats", type=int, default=5, help="starts per service (medians)")
     startup.add_argument("--json", action="store_true")
     startup.set_defaults(func=_bench_startup)
-    ros2 = verbs.add_parser("ros2", help="the ROS 2 bridge: added latency, CPU per message, throughput by type")
+    ros2 = verbs.add_parser(
+        "ros2", help="the ROS 2 bridge: added latency, CPU per message, throughput by type"
+    )
     ros2.add_argument("--messages", type=int, default=1000, help="paced messages per type")
-    ros2.add_argument("--rtf-seconds", type=float, default=10.0,
-                      help="wall seconds per condition of the stack's real-time factor (0: skip)")
-    ros2.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world of the real-time-factor runs")
-    ros2.add_argument("--dds", action="store_true",
-                      help="also the DDS face on real rclpy (needs .venv-ros2: make ros2), beside rclpy-to-rclpy")
+    ros2.add_argument(
+        "--rtf-seconds",
+        type=float,
+        default=10.0,
+        help="wall seconds per condition of the stack's real-time factor (0: skip)",
+    )
+    ros2.add_argument(
+        "--world", default="deploy/worlds/seed_room.yaml", help="world of the real-time-factor runs"
+    )
+    ros2.add_argument(
+        "--dds",
+        action="store_true",
+        help="also the DDS face on real rclpy (needs .venv-ros2: make ros2), beside rclpy-to-rclpy",
+    )
     ros2.add_argument("--dds-seconds", type=float, default=10.0, help="length of each DDS measuring phase")
     ros2.add_argument("--json", action="store_true")
     ros2.set_defaults(func=_bench_ros2)
     planner = verbs.add_parser(
-        "planner", help="planning time on a 20 m room; time to goal with the real stack vs the shortest path")
+        "planner", help="planning time on a 20 m room; time to goal with the real stack vs the shortest path"
+    )
     planner.add_argument("--repeats", type=int, default=5, help="planning repeats per route (medians)")
     planner.add_argument("--resolution", type=float, default=0.05, help="costmap resolution, metres")
     planner.add_argument("--planning-only", action="store_true", help="skip the runs in the simulator")
@@ -349,14 +482,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     planner.add_argument("--timeout", type=float, default=120.0, help="wall seconds allowed per goal")
     planner.add_argument("--json", action="store_true")
     planner.set_defaults(func=_bench_planner)
-    docking = verbs.add_parser("docking", help="final approach: seed vs Nav2-default graceful vs tuned, kinematic model")
+    docking = verbs.add_parser(
+        "docking", help="final approach: seed vs Nav2-default graceful vs tuned, kinematic model"
+    )
     docking.add_argument("--latency", type=float, default=0.05, help="pose latency, s")
     docking.add_argument("--seed", type=int, default=0, help="noise seed")
     docking.add_argument("--json", action="store_true")
     docking.set_defaults(func=_bench_docking)
     ir = verbs.add_parser("ir", help="infrared docking from beacon starts in world files, kinematic model")
-    ir.add_argument("--world", action="append", metavar="FILE|DIR",
-                    help="world file or directory of them (repeatable; default deploy/worlds/unseen)")
+    ir.add_argument(
+        "--world",
+        action="append",
+        metavar="FILE|DIR",
+        help="world file or directory of them (repeatable; default deploy/worlds/unseen)",
+    )
     ir.add_argument("--n", type=int, default=20, help="beacon starts per world")
     ir.add_argument("--seed", type=int, default=1)
     ir.add_argument("--json", action="store_true")

@@ -22,9 +22,10 @@ def _run(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
-        "completion", help="print a shell completion script (bash or zsh)",
+        "completion",
+        help="print a shell completion script (bash or zsh)",
         description="Print a completion script for zendock's subcommands and options, generated from its "
-                    "argument parser. Load it with: source <(zendock completion bash)",
+        "argument parser. Load it with: source <(zendock completion bash)",
     )
     p.add_argument("shell", choices=sorted(SHELLS), help="the shell to complete in")
     p.set_defaults(func=_run)

@@ -21,7 +21,9 @@ from shared.contracts import CONTRACTS
 
 
 def _table(report, console: Console) -> None:
-    verdict = "[green]conforms[/]" if report.passed else f"[red]does not conform[/] ({len(report.failed())} failed)"
+    verdict = (
+        "[green]conforms[/]" if report.passed else f"[red]does not conform[/] ({len(report.failed())} failed)"
+    )
     table = Table(title=f"zendock conform {report.service}: {verdict} in {report.wall_s:.0f} s")
     table.add_column("check")
     table.add_column("result")
@@ -47,10 +49,17 @@ def _run(args: argparse.Namespace) -> int:
         raise ConfigError(f"no contract for {args.service!r} (one of: {', '.join(CONTRACTS)})")
     console = Console(stderr=args.json)
     progress = Console(stderr=True, highlight=False)
-    options = ConformOptions(world=world, rtf=args.rtf, runs_dir=Path(args.runs_dir) if args.runs_dir else None)
+    options = ConformOptions(
+        world=world, rtf=args.rtf, runs_dir=Path(args.runs_dir) if args.runs_dir else None
+    )
     reports = []
     for service in services:
-        report = run_conform(service, args.command_words or None, options, log=lambda text: progress.print(f"[dim]conform:[/] {text}"))
+        report = run_conform(
+            service,
+            args.command_words or None,
+            options,
+            log=lambda text: progress.print(f"[dim]conform:[/] {text}"),
+        )
         _table(report, console)
         reports.append(report)
     if args.json:
@@ -61,16 +70,24 @@ def _run(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "conform", help="check a program against a service's contract (a replacement, or zendock's own)",
+        "conform",
+        help="check a program against a service's contract (a replacement, or zendock's own)",
         description="Run the rest of a stack on a private router with COMMAND in place of SERVICE and check its "
         "contract: token, endpoints, rates, behaviour, bad requests, malformed payloads, SIGTERM, restart. "
-        "Example: zendock conform battery -- python my_battery.py")
+        "Example: zendock conform battery -- python my_battery.py",
+    )
     parser.add_argument("service", nargs="?", metavar="SERVICE", help=f"one of: {', '.join(CONTRACTS)}")
     parser.add_argument("--all", action="store_true", help="every zendock service against its own contract")
     parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file (needs a dock)")
     parser.add_argument("--rtf", type=real_time_factor, default="4", help="the simulator's real-time factor")
-    parser.add_argument("--runs-dir", metavar="DIR", help="where each run's directory goes (default: the temp dir)")
+    parser.add_argument(
+        "--runs-dir", metavar="DIR", help="where each run's directory goes (default: the temp dir)"
+    )
     parser.add_argument("--json", action="store_true", help="print the report as JSON on the last line")
-    parser.add_argument("command_words", nargs="*", metavar="-- COMMAND",
-                        help="the program and its arguments, after -- (default: zendock's own service)")
+    parser.add_argument(
+        "command_words",
+        nargs="*",
+        metavar="-- COMMAND",
+        help="the program and its arguments, after -- (default: zendock's own service)",
+    )
     parser.set_defaults(func=_run, takes_command=True)

@@ -36,7 +36,9 @@ def split_members(words: list[str]) -> list[list[str]]:
         else:
             groups[-1].append(word)
     if any(not g for g in groups):
-        raise ConfigError(f"each '{SEPARATOR}' must separate two services: SERVICE [ARGS...] {SEPARATOR} SERVICE ...")
+        raise ConfigError(
+            f"each '{SEPARATOR}' must separate two services: SERVICE [ARGS...] {SEPARATOR} SERVICE ..."
+        )
     return groups
 
 
@@ -77,9 +79,14 @@ def members_from(args: argparse.Namespace) -> list[Member]:
     first = members[0].options
     for member in members[1:]:
         if (member.options.connect, member.options.listen, member.options.zenoh_config) != (
-                first.connect, first.listen, first.zenoh_config):
-            raise ConfigError(f"{member.label}: every service of a group shares one session: give --connect, "
-                              "--listen and --zenoh-config to the group, not to one service")
+            first.connect,
+            first.listen,
+            first.zenoh_config,
+        ):
+            raise ConfigError(
+                f"{member.label}: every service of a group shares one session: give --connect, "
+                "--listen and --zenoh-config to the group, not to one service"
+            )
     return members
 
 
@@ -92,12 +99,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "container",
         help="several services in one process on one session (a component container)",
         description="Run services together: SERVICE [ARGS...] + SERVICE [ARGS...] ...; each takes the flags of "
-                    "python -m services.SERVICE.",
+        "python -m services.SERVICE.",
     )
     p.add_argument("--namespace", default=None, help="every service's namespace")
-    p.add_argument("--connect", action="append", default=None, metavar="ENDPOINT", help="Zenoh endpoint (repeatable)")
+    p.add_argument(
+        "--connect", action="append", default=None, metavar="ENDPOINT", help="Zenoh endpoint (repeatable)"
+    )
     p.add_argument("--zenoh-config", default=None, metavar="FILE", help="Zenoh json5 configuration file")
-    p.add_argument("--log-level", default=None, type=str.upper,
-                   choices=["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"])
+    p.add_argument(
+        "--log-level", default=None, type=str.upper, choices=["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"]
+    )
     p.add_argument("services", nargs=argparse.REMAINDER, metavar="SERVICE [ARGS...] [+ SERVICE ...]")
     p.set_defaults(func=_run)

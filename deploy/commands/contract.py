@@ -23,9 +23,17 @@ def _table(contract: Contract, console: Console) -> None:
     for column in ("kind", "key", "type", "rate (sim)", "when"):
         table.add_column(column)
     for t in contract.publishes:
-        table.add_row("publishes", t.name, t.type.TYPE_NAME, f"{t.rate_hz:g} Hz" if t.rate_hz else "events", t.when or "always")
+        table.add_row(
+            "publishes",
+            t.name,
+            t.type.TYPE_NAME,
+            f"{t.rate_hz:g} Hz" if t.rate_hz else "events",
+            t.when or "always",
+        )
     for t in contract.subscribes:
-        table.add_row("subscribes", ("*/" if t.fleet_wide else "") + t.name, t.type.TYPE_NAME, "", t.when or "always")
+        table.add_row(
+            "subscribes", ("*/" if t.fleet_wide else "") + t.name, t.type.TYPE_NAME, "", t.when or "always"
+        )
     for r in contract.serves:
         table.add_row("serves", r.name, r.type.type_name, "", r.when or "always")
     for r in contract.calls:
@@ -60,11 +68,19 @@ def _run(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "contract", help="what a service must publish, answer and survive (to write a replacement)",
+        "contract",
+        help="what a service must publish, answer and survive (to write a replacement)",
         description="Print a service's contract: its keys, types, rates, requests, actions, what the launcher "
-        "hands it and what zendock conform checks. Without SERVICE: the services that have one.")
-    parser.add_argument("service", nargs="?", metavar="SERVICE", help="a zendock service (battery, docking, ...)")
+        "hands it and what zendock conform checks. Without SERVICE: the services that have one.",
+    )
+    parser.add_argument(
+        "service", nargs="?", metavar="SERVICE", help="a zendock service (battery, docking, ...)"
+    )
     form = parser.add_mutually_exclusive_group()
-    form.add_argument("--json", action="store_true", help="the whole contract as JSON, with every type's JSON Schema")
-    form.add_argument("--markdown", action="store_true", help="the documentation page (docs/contracts/SERVICE.md)")
+    form.add_argument(
+        "--json", action="store_true", help="the whole contract as JSON, with every type's JSON Schema"
+    )
+    form.add_argument(
+        "--markdown", action="store_true", help="the documentation page (docs/contracts/SERVICE.md)"
+    )
     parser.set_defaults(func=_run)

@@ -42,8 +42,13 @@ def _print_report(report: dict, console: Console) -> None:
     ]
     if report.get("lower_bound_s_reason"):
         rows.insert(3, ("why no lower bound", report["lower_bound_s_reason"]))
-    rows += [(f"peak RSS {name}", f"{mb:.0f} MB") for name, mb in sorted(report.get("peak_rss_mb", {}).items())]
-    rows += [(f"{name} replaced by", command) for name, command in sorted(report.get("replaced_services", {}).items())]
+    rows += [
+        (f"peak RSS {name}", f"{mb:.0f} MB") for name, mb in sorted(report.get("peak_rss_mb", {}).items())
+    ]
+    rows += [
+        (f"{name} replaced by", command)
+        for name, command in sorted(report.get("replaced_services", {}).items())
+    ]
     for name, value in rows:
         table.add_row(name, value)
     console.print(table)
@@ -75,9 +80,12 @@ def _run(args: argparse.Namespace) -> int:
     # progress every 2 s on a terminal; with --json or into a pipe, a line every 10 s on stderr only
     interactive = not args.json and is_terminal(sys.stdout)
     progress_console = console if interactive else Console(stderr=True)
-    report = run_demo(options, log=lambda text: console.print(f"[dim]demo:[/] {text}"),
-                      status=lambda text: progress_console.print(f"[dim]demo:[/] {text}", highlight=False),
-                      status_period_s=progress_period_s(interactive)).as_dict()
+    report = run_demo(
+        options,
+        log=lambda text: console.print(f"[dim]demo:[/] {text}"),
+        status=lambda text: progress_console.print(f"[dim]demo:[/] {text}", highlight=False),
+        status_period_s=progress_period_s(interactive),
+    ).as_dict()
     _print_report(report, console)
     if args.json:
         print(strict_json.dumps(report))
@@ -85,19 +93,41 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("demo", help="dock once on the full stack and report (what `make run` runs)")
+    parser = subparsers.add_parser(
+        "demo", help="dock once on the full stack and report (what `make run` runs)"
+    )
     parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file")
-    parser.add_argument("--compose", action="store_true",
-                        help="the robot's services in one process (zendock container) instead of one process each")
-    parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
-                        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
-    parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
-                        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
-    parser.add_argument("--rtf", type=real_time_factor, default="1.0", help="real-time factor of the simulator, or max")
+    parser.add_argument(
+        "--compose",
+        action="store_true",
+        help="the robot's services in one process (zendock container) instead of one process each",
+    )
+    parser.add_argument(
+        "--controller",
+        choices=["graceful", "seed", "ir"],
+        default="graceful",
+        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)",
+    )
+    parser.add_argument(
+        "--detector",
+        choices=["aruco", "synthetic"],
+        default="aruco",
+        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth",
+    )
+    parser.add_argument(
+        "--rtf", type=real_time_factor, default="1.0", help="real-time factor of the simulator, or max"
+    )
     parser.add_argument("--seed", type=int, default=0, help="simulator noise seed")
-    parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"), help="start pose (map frame)")
-    parser.add_argument("--timeout", type=positive_number, default=300.0, metavar="SIM_SECONDS",
-                        help="give up this many sim seconds after the trigger")
+    parser.add_argument(
+        "--start", type=float, nargs=3, metavar=("X", "Y", "YAW"), help="start pose (map frame)"
+    )
+    parser.add_argument(
+        "--timeout",
+        type=positive_number,
+        default=300.0,
+        metavar="SIM_SECONDS",
+        help="give up this many sim seconds after the trigger",
+    )
     add_service_option(parser)
     parser.add_argument("--json", action="store_true", help="print the JSON report as the last line")
     parser.set_defaults(func=_run)

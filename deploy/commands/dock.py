@@ -83,8 +83,10 @@ def client_session(args: argparse.Namespace) -> zenoh.Session:
         mode="client",
         connect=endpoints(args.connect),
         config_file=getattr(args, "zenoh_config", None) or os.environ.get("ZENDOCK_ZENOH_CONFIG") or None,
-        overrides=(("connect/timeout_ms", json.dumps(int(args.connect_timeout * 1000))),
-                   ("connect/exit_on_failure", "true")),
+        overrides=(
+            ("connect/timeout_ms", json.dumps(int(args.connect_timeout * 1000))),
+            ("connect/exit_on_failure", "true"),
+        ),
     )
     try:
         return open_session(spec)
@@ -92,8 +94,9 @@ def client_session(args: argparse.Namespace) -> zenoh.Session:
         raise ConfigError(f"--zenoh-config: {exc}") from None
     except zenoh.ZError as exc:
         detail = str(exc).split(" at /")[0]
-        raise RouterUnreachable(f"cannot reach a Zenoh router at {', '.join(spec.connect)} ({detail}); "
-                                "is the stack up?") from None
+        raise RouterUnreachable(
+            f"cannot reach a Zenoh router at {', '.join(spec.connect)} ({detail}); is the stack up?"
+        ) from None
 
 
 def namespace_arg(args: argparse.Namespace) -> str:
@@ -104,11 +107,17 @@ def namespace_arg(args: argparse.Namespace) -> str:
         raise ConfigError(f"--namespace: {exc}") from None
 
 
-def describe_dock_feedback(feedback: DockRobotFeedback, distance_m: float | None = None) -> tuple[object, str]:
+def describe_dock_feedback(
+    feedback: DockRobotFeedback, distance_m: float | None = None
+) -> tuple[object, str]:
     """What changed (state, retries) and the line to print for it (with the distance to the dock, if known)."""
     state = STATE_NAMES.get(feedback.state, str(feedback.state))
-    line = dock_line(docking_time_s=feedback.docking_time.to_sec(), state=state, retries=feedback.num_retries,
-                     distance_m=distance_m)
+    line = dock_line(
+        docking_time_s=feedback.docking_time.to_sec(),
+        state=state,
+        retries=feedback.num_retries,
+        distance_m=distance_m,
+    )
     return (feedback.state, feedback.num_retries), line
 
 
@@ -119,7 +128,9 @@ class Approach:
     one, to the nearest of ``docks`` from where the robot first stood.
     """
 
-    def __init__(self, session: zenoh.Session, namespace: str, dock: Pose2D | None, docks: list[Pose2D]) -> None:
+    def __init__(
+        self, session: zenoh.Session, namespace: str, dock: Pose2D | None, docks: list[Pose2D]
+    ) -> None:
         self._dock, self._docks = dock, docks
         self._pose: Pose2D | None = None
         self.charging = threading.Event()
@@ -237,7 +248,11 @@ def run_action(
 
 
 def _succeeded(handle: ClientGoal[Any, Any]) -> bool:
-    return handle.status == GoalStatusCode.SUCCEEDED and handle.result is not None and bool(handle.result.success)
+    return (
+        handle.status == GoalStatusCode.SUCCEEDED
+        and handle.result is not None
+        and bool(handle.result.success)
+    )
 
 
 def _outcome(handle: ClientGoal[Any, Any]) -> str:
@@ -262,8 +277,12 @@ def dock_main(args: argparse.Namespace) -> int:
     if args.pose is not None:
         if not all(math.isfinite(v) for v in args.pose):
             raise ConfigError(f"--pose: expected three finite numbers, got {args.pose}")
-        goal.dock_pose = PoseStamped(Header(frame_id=topics.MAP_FRAME), Pose.from_pose2d(Pose2D.from_seq(args.pose)))
-    target = f"dock {args.dock_id!r}" if args.dock_id else ("the given pose" if args.pose else "the nearest dock")
+        goal.dock_pose = PoseStamped(
+            Header(frame_id=topics.MAP_FRAME), Pose.from_pose2d(Pose2D.from_seq(args.pose))
+        )
+    target = (
+        f"dock {args.dock_id!r}" if args.dock_id else ("the given pose" if args.pose else "the nearest dock")
+    )
     print(f"docking at {target}", flush=True)
     dock, docks = _dock_poses(args)
     # on a terminal a line every 2 s as the robot closes in; into a pipe only the changes of state
@@ -273,9 +292,17 @@ def dock_main(args: argparse.Namespace) -> int:
             approach = Approach(session, namespace, dock, docks)
             try:
                 code, handle = run_action(
-                    session, namespace, DOCK_ROBOT, topics.DOCK_ROBOT, goal, sys.stdout,
+                    session,
+                    namespace,
+                    DOCK_ROBOT,
+                    topics.DOCK_ROBOT,
+                    goal,
+                    sys.stdout,
                     describe_feedback=lambda fb: describe_dock_feedback(fb, approach.distance_m()),
-                    server_timeout_s=args.server_timeout, timeout_s=args.timeout, repeat_every_s=repeat_every_s)
+                    server_timeout_s=args.server_timeout,
+                    timeout_s=args.timeout,
+                    repeat_every_s=repeat_every_s,
+                )
                 charging = code == EXIT_OK and approach.charging.wait(CHARGING_WAIT_S)
             finally:
                 approach.close()
@@ -300,8 +327,16 @@ def undock_main(args: argparse.Namespace) -> int:
     print("undocking", flush=True)
     try:
         with client_session(args) as session:
-            code, handle = run_action(session, namespace, UNDOCK_ROBOT, topics.UNDOCK_ROBOT, goal, sys.stdout,
-                                      server_timeout_s=args.server_timeout, timeout_s=args.timeout)
+            code, handle = run_action(
+                session,
+                namespace,
+                UNDOCK_ROBOT,
+                topics.UNDOCK_ROBOT,
+                goal,
+                sys.stdout,
+                server_timeout_s=args.server_timeout,
+                timeout_s=args.timeout,
+            )
     except RouterUnreachable as exc:
         print(f"zendock undock: {exc}", file=sys.stderr)
         return EXIT_FAILED
@@ -312,44 +347,97 @@ def undock_main(args: argparse.Namespace) -> int:
 
 def add_connection_flags(group: argparse._ActionsContainer) -> None:
     """Where a command finds the bus: namespace, endpoints, connect timeout, Zenoh config (dock, health)."""
-    group.add_argument("--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)")
-    group.add_argument("--connect", action="append", metavar="ENDPOINT",
-                       help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-                            f"default {DEFAULT_ROUTER_ENDPOINT})")
-    group.add_argument("--connect-timeout", type=float, default=3.0, metavar="S",
-                       help="give up reaching the router after S seconds (default 3)")
-    group.add_argument("--zenoh-config", default=None, metavar="FILE",
-                       help="Zenoh json5 config, e.g. a secure profile user's (env ZENDOCK_ZENOH_CONFIG)")
+    group.add_argument(
+        "--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)"
+    )
+    group.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
+        f"default {DEFAULT_ROUTER_ENDPOINT})",
+    )
+    group.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=3.0,
+        metavar="S",
+        help="give up reaching the router after S seconds (default 3)",
+    )
+    group.add_argument(
+        "--zenoh-config",
+        default=None,
+        metavar="FILE",
+        help="Zenoh json5 config, e.g. a secure profile user's (env ZENDOCK_ZENOH_CONFIG)",
+    )
 
 
 def _bus_flags(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("bus")
     add_connection_flags(group)
-    group.add_argument("--server-timeout", type=float, default=10.0, metavar="S",
-                       help="wait this long for the docking service to answer (default 10)")
-    group.add_argument("--timeout", type=float, default=None, metavar="S",
-                       help="cancel and fail if there is no result after S wall seconds (default: wait)")
+    group.add_argument(
+        "--server-timeout",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="wait this long for the docking service to answer (default 10)",
+    )
+    group.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        metavar="S",
+        help="cancel and fail if there is no result after S wall seconds (default: wait)",
+    )
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    dock = subparsers.add_parser("dock", help="dock the robot (dock_robot action); exit 0 once charging",
-                                 description="Send a dock_robot goal, print its feedback, exit 0 on success.")
-    dock.add_argument("dock_id", nargs="?", default="", metavar="DOCK_ID", help="dock id (default: the nearest dock)")
-    dock.add_argument("--pose", type=float, nargs=3, metavar=("X", "Y", "YAW"),
-                      help="dock at this map pose instead of a database dock")
-    dock.add_argument("--world", default=None, metavar="FILE",
-                      help="world file the dock poses are read from, for the distance shown "
-                           "(env ZENDOCK_WORLD; default deploy/worlds/seed_room.yaml)")
-    dock.add_argument("--no-staging", action="store_true",
-                      help="the robot is already at the staging pose: skip the planner")
-    dock.add_argument("--max-staging-time", type=float, default=1000.0, metavar="S",
-                      help="time limit to reach the staging pose, seconds (default 1000)")
+    dock = subparsers.add_parser(
+        "dock",
+        help="dock the robot (dock_robot action); exit 0 once charging",
+        description="Send a dock_robot goal, print its feedback, exit 0 on success.",
+    )
+    dock.add_argument(
+        "dock_id", nargs="?", default="", metavar="DOCK_ID", help="dock id (default: the nearest dock)"
+    )
+    dock.add_argument(
+        "--pose",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "YAW"),
+        help="dock at this map pose instead of a database dock",
+    )
+    dock.add_argument(
+        "--world",
+        default=None,
+        metavar="FILE",
+        help="world file the dock poses are read from, for the distance shown "
+        "(env ZENDOCK_WORLD; default deploy/worlds/seed_room.yaml)",
+    )
+    dock.add_argument(
+        "--no-staging", action="store_true", help="the robot is already at the staging pose: skip the planner"
+    )
+    dock.add_argument(
+        "--max-staging-time",
+        type=float,
+        default=1000.0,
+        metavar="S",
+        help="time limit to reach the staging pose, seconds (default 1000)",
+    )
     _bus_flags(dock)
     dock.set_defaults(func=dock_main)
-    undock = subparsers.add_parser("undock", help="undock the robot (undock_robot action); exit 0 once off the dock",
-                                   description="Send an undock_robot goal, exit 0 on success.")
+    undock = subparsers.add_parser(
+        "undock",
+        help="undock the robot (undock_robot action); exit 0 once off the dock",
+        description="Send an undock_robot goal, exit 0 on success.",
+    )
     undock.add_argument("--dock-type", default="", help="dock type (default: any)")
-    undock.add_argument("--max-undocking-time", type=float, default=30.0, metavar="S",
-                        help="time limit to back off the dock, seconds (default 30)")
+    undock.add_argument(
+        "--max-undocking-time",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="time limit to back off the dock, seconds (default 30)",
+    )
     _bus_flags(undock)
     undock.set_defaults(func=undock_main)

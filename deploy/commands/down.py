@@ -58,5 +58,7 @@ def main(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("down", help="stop the stack and remove its runtime state")
     add_project_options(parser)
-    parser.add_argument("-t", "--timeout", type=float, default=DOWN_TIMEOUT_S, metavar="SECONDS", help="(default 180)")
+    parser.add_argument(
+        "-t", "--timeout", type=float, default=DOWN_TIMEOUT_S, metavar="SECONDS", help="(default 180)"
+    )
     parser.set_defaults(func=main)

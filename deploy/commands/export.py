@@ -66,7 +66,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "for Compose to interpolate.",
     )
     compose.add_argument("-f", "--file", metavar="STACK", help="the stack file")
-    compose.add_argument("--secure", action="store_true",
-                         help="the secure overlay (each service's own Zenoh user), layered on the compose file")
+    compose.add_argument(
+        "--secure",
+        action="store_true",
+        help="the secure overlay (each service's own Zenoh user), layered on the compose file",
+    )
     compose.add_argument("-o", "--output", metavar="FILE", help="write to FILE (default: standard output)")
     compose.set_defaults(func=_compose)

@@ -28,18 +28,28 @@ def _fraction(text: str) -> float:
     except ValueError:
         value = math.nan
     if not 0.3 < value <= 1.0:
-        raise argparse.ArgumentTypeError(f"must be a fraction in (0.3, 1], above the docking threshold 0.25, got {text}")
+        raise argparse.ArgumentTypeError(
+            f"must be a fraction in (0.3, 1], above the docking threshold 0.25, got {text}"
+        )
     return value
 
 
 def _table(report) -> Table:
-    table = Table(title=f"fleet in {report.world}: {report.sim_s:.0f} s simulated in {report.wall_s:.0f} s "
-                        f"(rtf {report.achieved_rtf})")
+    table = Table(
+        title=f"fleet in {report.world}: {report.sim_s:.0f} s simulated in {report.wall_s:.0f} s "
+        f"(rtf {report.achieved_rtf})"
+    )
     for column in ("robot", "distance", "dockings", "min battery", "waiting", "collisions"):
         table.add_column(column, justify="left" if column == "robot" else "right")
     for r in report.robots:
-        table.add_row(r.name, f"{r.distance_m:.0f} m", str(r.dockings), f"{100 * r.min_battery:.0f} %",
-                      f"{r.wait_s:.0f} s", str(r.collisions))
+        table.add_row(
+            r.name,
+            f"{r.distance_m:.0f} m",
+            str(r.dockings),
+            f"{100 * r.min_battery:.0f} %",
+            f"{r.wait_s:.0f} s",
+            str(r.collisions),
+        )
     return table
 
 
@@ -52,8 +62,15 @@ def live_table(sim_s: float, duration_s: float, robots) -> Table:
         charge = f"{100 * r.battery:.0f} %" if math.isfinite(r.battery) else "?"
         if r.charging:
             charge += " +"
-        table.add_row(r.name, charge, r.state or "?", str(r.dockings), f"{r.distance_m:.0f} m", f"{r.wait_s:.0f} s",
-                      str(r.collisions))
+        table.add_row(
+            r.name,
+            charge,
+            r.state or "?",
+            str(r.dockings),
+            f"{r.distance_m:.0f} m",
+            f"{r.wait_s:.0f} s",
+            str(r.collisions),
+        )
     return table
 
 
@@ -64,11 +81,20 @@ def _run(args: argparse.Namespace) -> int:
     world = Path(args.world)
     if not world.is_file():
         raise ConfigError(f"--world {world}: no such file")
-    options = FleetOptions(world=world.resolve(), robots=args.robots, duration_s=args.duration, rtf=args.rtf,
-                           seed=args.seed, detector=args.detector, drain_scale=args.drain_scale,
-                           charge_scale=args.charge_scale, resume_at=args.resume_at,
-                           replacements=check_replacements(args.replacements), compose=args.compose,
-                           **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
+    options = FleetOptions(
+        world=world.resolve(),
+        robots=args.robots,
+        duration_s=args.duration,
+        rtf=args.rtf,
+        seed=args.seed,
+        detector=args.detector,
+        drain_scale=args.drain_scale,
+        charge_scale=args.charge_scale,
+        resume_at=args.resume_at,
+        replacements=check_replacements(args.replacements),
+        compose=args.compose,
+        **({"runs_dir": args.runs_dir} if args.runs_dir else {}),
+    )
     console = Console(stderr=args.json)
     live_wanted = not args.json and is_terminal(sys.stdout)
     # a live table on a terminal; otherwise a line every 10 s on stderr, so stdout stays the report
@@ -83,11 +109,15 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         if live_wanted:
-            with Live(Text("fleet: starting the stack"), console=console, refresh_per_second=2,
-                      transient=True) as live:
+            with Live(
+                Text("fleet: starting the stack"), console=console, refresh_per_second=2, transient=True
+            ) as live:
                 report, run_dir = run_fleet(
-                    options, log=log, progress_period_s=LIVE_PERIOD_S,
-                    progress=lambda sim_s, robots: live.update(live_table(sim_s, options.duration_s, robots)))
+                    options,
+                    log=log,
+                    progress_period_s=LIVE_PERIOD_S,
+                    progress=lambda sim_s, robots: live.update(live_table(sim_s, options.duration_s, robots)),
+                )
         else:
             report, run_dir = run_fleet(options, log=log, progress=progress_line)
     except ConfigError:
@@ -96,10 +126,16 @@ def _run(args: argparse.Namespace) -> int:
         raise ConfigError(f"fleet in {world}: {exc}") from None
     console.print(_table(report))
     collisions = report.collisions
-    console.print(f"collisions: {collisions['robot_robot']} robot-robot, {collisions['robot_world']} robot-world; "
-                  f"reservation conflicts: {report.reservation_conflicts}; gave way {report.give_ways} time(s)"
-                  + (f", the longest {report.max_give_way_s} s, the median {report.median_give_way_s} s, "
-                     f"{report.long_give_ways} longer than {LONG_GIVE_WAY_S:g} s" if report.give_ways else ""))
+    console.print(
+        f"collisions: {collisions['robot_robot']} robot-robot, {collisions['robot_world']} robot-world; "
+        f"reservation conflicts: {report.reservation_conflicts}; gave way {report.give_ways} time(s)"
+        + (
+            f", the longest {report.max_give_way_s} s, the median {report.median_give_way_s} s, "
+            f"{report.long_give_ways} longer than {LONG_GIVE_WAY_S:g} s"
+            if report.give_ways
+            else ""
+        )
+    )
     for conflict in report.conflicts:
         console.print(f"  conflict at {conflict}")
     for error in report.errors:
@@ -112,33 +148,84 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("fleet", help="several robots patrol one room and share its docks, measured",
-                                   description="Run a fleet: each robot patrols, asks the fleet service for a dock "
-                                               "when low, charges, and patrols again. Reports per robot distance, "
-                                               "dockings, lowest charge, time waiting for a dock and collisions, "
-                                               "and the room's reservation conflicts.")
-    parser.add_argument("--world", default=DEFAULT_WORLD, metavar="FILE",
-                        help=f"a world with docks (and robots; default {DEFAULT_WORLD})")
-    parser.add_argument("--robots", type=count, default=None, metavar="N",
-                        help="how many robots (default: those the world lists; more are placed at seeded starts)")
-    parser.add_argument("--duration", type=positive_number, default=600.0, metavar="SIM_S",
-                        help="simulated seconds to run (default 600)")
-    parser.add_argument("--rtf", type=real_time_factor, default="4", help="simulator real-time factor, or max")
-    parser.add_argument("--seed", type=int, default=0, help="seed of generated starts, patrols and sensor noise")
-    parser.add_argument("--detector", choices=["aruco", "synthetic"], default="synthetic",
-                        help="how robots find their dock: the simulator's noisy truth, or ArUco in camera images")
-    parser.add_argument("--drain-scale", type=positive_number, default=8.0, metavar="X",
-                        help="batteries drain X times faster than the cell model, so an hour holds several charge "
-                             "cycles (default 8)")
-    parser.add_argument("--charge-scale", type=positive_number, default=16.0, metavar="X",
-                        help="docks charge X times faster than the cell model's 0.5 C (default 16)")
-    parser.add_argument("--resume-at", type=_fraction, default=0.8, metavar="FRACTION",
-                        help="charge at which a docked robot undocks and patrols again (default 0.8)")
-    parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
-                        help="where the run directory goes (default: runs/ in the repository)")
+    parser = subparsers.add_parser(
+        "fleet",
+        help="several robots patrol one room and share its docks, measured",
+        description="Run a fleet: each robot patrols, asks the fleet service for a dock "
+        "when low, charges, and patrols again. Reports per robot distance, "
+        "dockings, lowest charge, time waiting for a dock and collisions, "
+        "and the room's reservation conflicts.",
+    )
+    parser.add_argument(
+        "--world",
+        default=DEFAULT_WORLD,
+        metavar="FILE",
+        help=f"a world with docks (and robots; default {DEFAULT_WORLD})",
+    )
+    parser.add_argument(
+        "--robots",
+        type=count,
+        default=None,
+        metavar="N",
+        help="how many robots (default: those the world lists; more are placed at seeded starts)",
+    )
+    parser.add_argument(
+        "--duration",
+        type=positive_number,
+        default=600.0,
+        metavar="SIM_S",
+        help="simulated seconds to run (default 600)",
+    )
+    parser.add_argument(
+        "--rtf", type=real_time_factor, default="4", help="simulator real-time factor, or max"
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of generated starts, patrols and sensor noise"
+    )
+    parser.add_argument(
+        "--detector",
+        choices=["aruco", "synthetic"],
+        default="synthetic",
+        help="how robots find their dock: the simulator's noisy truth, or ArUco in camera images",
+    )
+    parser.add_argument(
+        "--drain-scale",
+        type=positive_number,
+        default=8.0,
+        metavar="X",
+        help="batteries drain X times faster than the cell model, so an hour holds several charge "
+        "cycles (default 8)",
+    )
+    parser.add_argument(
+        "--charge-scale",
+        type=positive_number,
+        default=16.0,
+        metavar="X",
+        help="docks charge X times faster than the cell model's 0.5 C (default 16)",
+    )
+    parser.add_argument(
+        "--resume-at",
+        type=_fraction,
+        default=0.8,
+        metavar="FRACTION",
+        help="charge at which a docked robot undocks and patrols again (default 0.8)",
+    )
+    parser.add_argument(
+        "--runs-dir",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="where the run directory goes (default: runs/ in the repository)",
+    )
     add_service_option(parser)
-    parser.add_argument("--compose", nargs="?", const="all", default="", choices=["all", "light"],
-                        help="each robot's services in one process (zendock container): all of them (the default "
-                             "with the flag), or only the light ones (battery, pose)")
+    parser.add_argument(
+        "--compose",
+        nargs="?",
+        const="all",
+        default="",
+        choices=["all", "light"],
+        help="each robot's services in one process (zendock container): all of them (the default "
+        "with the flag), or only the light ones (battery, pose)",
+    )
     parser.add_argument("--json", action="store_true", help="print the report as JSON on the last line")
     parser.set_defaults(func=_run)

@@ -42,22 +42,29 @@ def print_summary(report: FuzzReport) -> None:
     from rich.table import Table  # noqa: PLC0415
 
     summary = report.as_dict()
-    table = Table(title=f"zendock fuzz: {summary['sent']} sent in {summary['elapsed_s']:.1f} s "
-                        f"(seed {report.seed}, stopped by {report.stopped_by})")
+    table = Table(
+        title=f"zendock fuzz: {summary['sent']} sent in {summary['elapsed_s']:.1f} s "
+        f"(seed {report.seed}, stopped by {report.stopped_by})"
+    )
     for column in ("key", "kind", "type", "sent", "replies ok/err/none"):
         table.add_column(column, justify="right" if column in ("sent",) else "left")
     for key, entry in summary["keys"].items():
         replies = entry.get("replies")
         table.add_row(
-            key if entry["announced"] else f"{key} (not announced)", entry["kind"], entry["type"] or "?",
-            str(entry["sent"]), f"{replies['ok']}/{replies['error']}/{replies['none']}" if replies else "",
+            key if entry["announced"] else f"{key} (not announced)",
+            entry["kind"],
+            entry["type"] or "?",
+            str(entry["sent"]),
+            f"{replies['ok']}/{replies['error']}/{replies['none']}" if replies else "",
         )
     console = Console()
     console.print(table)
     console.print(f"payload kinds: {summary['kinds']}")
     if summary["decoder_errors"]:
-        console.print(f"[bold red]{summary['decoder_errors']} payloads broke a decoder with something other than "
-                      "a MessageError[/]: see --json, keys.*.decoder_errors")
+        console.print(
+            f"[bold red]{summary['decoder_errors']} payloads broke a decoder with something other than "
+            "a MessageError[/]: see --json, keys.*.decoder_errors"
+        )
     if summary["skipped_wildcard_keys"]:
         console.print(f"skipped (wildcard subscriptions): {', '.join(summary['skipped_wildcard_keys'])}")
 
@@ -73,15 +80,21 @@ def main(args: argparse.Namespace) -> int:
         report = run_fuzz(options, progress)
     except zenoh.ZError as exc:
         detail = str(exc).split(" at /")[0]
-        print(f"zendock fuzz: cannot reach a Zenoh router at {', '.join(options.connect)} ({detail})", file=sys.stderr)
+        print(
+            f"zendock fuzz: cannot reach a Zenoh router at {', '.join(options.connect)} ({detail})",
+            file=sys.stderr,
+        )
         return 1
     if args.json:
         print(report.to_json())
     else:
         print_summary(report)
     if report.announced == 0:
-        print(f"zendock fuzz: no zendock service announced itself in namespace {options.namespace!r}; "
-              "is the stack up, and is --namespace right?", file=sys.stderr)
+        print(
+            f"zendock fuzz: no zendock service announced itself in namespace {options.namespace!r}; "
+            "is the stack up, and is --namespace right?",
+            file=sys.stderr,
+        )
         return 1
     return 0
 
@@ -91,22 +104,48 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "fuzz",
         help="send malformed messages and requests to a running stack",
         description="Send malformed payloads (from each key's schema) to every key and request endpoint "
-                    "of a running stack on this machine, and report what was sent.",
+        "of a running stack on this machine, and report what was sent.",
     )
-    parser.add_argument("--connect", action="append", metavar="ENDPOINT",
-                        help="loopback Zenoh endpoint (repeatable; default: ZENDOCK_CONNECT, ZENOH_CONNECT, "
-                             "tcp/127.0.0.1:7447)")
+    parser.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="loopback Zenoh endpoint (repeatable; default: ZENDOCK_CONNECT, ZENOH_CONNECT, "
+        "tcp/127.0.0.1:7447)",
+    )
     parser.add_argument("--namespace", default=None, help="robot namespace (default: ZENDOCK_NAMESPACE)")
     parser.add_argument("--messages", type=int, default=5000, help="how many to send in all (default 5000)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed: the same seed sends the same payloads")
-    parser.add_argument("--rate", type=float, default=0.0, help="messages per second (default 0: as fast as possible)")
-    parser.add_argument("--time-limit", type=float, default=300.0, metavar="S",
-                        help="stop after S seconds whatever the count (default 300)")
-    parser.add_argument("--query-timeout", type=float, default=1.0, metavar="S",
-                        help="how long a request waits for its reply (default 1)")
-    parser.add_argument("--huge-budget", type=int, default=4, metavar="N",
-                        help="at most N arrays over the size limit, 4 MB each (default 4)")
-    parser.add_argument("--zenoh-config", metavar="FILE",
-                        help="Zenoh json5 file applied first, e.g. deploy/zenoh/secure/operator.json5")
+    parser.add_argument(
+        "--seed", type=int, default=0, help="random seed: the same seed sends the same payloads"
+    )
+    parser.add_argument(
+        "--rate", type=float, default=0.0, help="messages per second (default 0: as fast as possible)"
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=300.0,
+        metavar="S",
+        help="stop after S seconds whatever the count (default 300)",
+    )
+    parser.add_argument(
+        "--query-timeout",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="how long a request waits for its reply (default 1)",
+    )
+    parser.add_argument(
+        "--huge-budget",
+        type=int,
+        default=4,
+        metavar="N",
+        help="at most N arrays over the size limit, 4 MB each (default 4)",
+    )
+    parser.add_argument(
+        "--zenoh-config",
+        metavar="FILE",
+        help="Zenoh json5 file applied first, e.g. deploy/zenoh/secure/operator.json5",
+    )
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.set_defaults(func=main)

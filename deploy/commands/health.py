@@ -45,12 +45,21 @@ def health_main(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("health", help="exit 0 when the named nodes' liveliness tokens are up "
-                                                  "(a container health check)",
-                                   description="Exit 0 when every named node's liveliness token is up on the bus.")
-    parser.add_argument("nodes", nargs="+", metavar="NODE", help="node name (a service's node is named like it)")
+    parser = subparsers.add_parser(
+        "health",
+        help="exit 0 when the named nodes' liveliness tokens are up (a container health check)",
+        description="Exit 0 when every named node's liveliness token is up on the bus.",
+    )
+    parser.add_argument(
+        "nodes", nargs="+", metavar="NODE", help="node name (a service's node is named like it)"
+    )
     add_connection_flags(parser)
-    parser.add_argument("--timeout", type=float, default=2.0, metavar="S",
-                        help="wait this long for the router's answer (default 2)")
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=2.0,
+        metavar="S",
+        help="wait this long for the router's answer (default 2)",
+    )
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing when healthy")
     parser.set_defaults(func=health_main)

@@ -48,27 +48,51 @@ Verb = Callable[[argparse.Namespace, BusOptions], int]
 def _bus_flags() -> argparse.ArgumentParser:
     flags = argparse.ArgumentParser(add_help=False)
     group = flags.add_argument_group("bus")
-    group.add_argument("--connect", action="append", metavar="ENDPOINT",
-                       help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-                            f"default {DEFAULT_ROUTER_ENDPOINT})")
-    group.add_argument("--namespace", default=None, metavar="NS",
-                       help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)")
-    group.add_argument("--connect-timeout", type=float, default=DEFAULT_CONNECT_TIMEOUT_S, metavar="S",
-                       help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})")
+    group.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
+        f"default {DEFAULT_ROUTER_ENDPOINT})",
+    )
+    group.add_argument(
+        "--namespace",
+        default=None,
+        metavar="NS",
+        help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)",
+    )
+    group.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=DEFAULT_CONNECT_TIMEOUT_S,
+        metavar="S",
+        help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})",
+    )
     return flags
 
 
 def _monitor_flags(sim_time: bool, default_window: int) -> argparse.ArgumentParser:
     flags = argparse.ArgumentParser(add_help=False)
     flags.add_argument("keys", nargs="+", metavar="KEY", help="key(s) to watch; wildcards allowed")
-    flags.add_argument("-w", "--window", type=int, default=default_window,
-                       help=f"messages in the statistics window (default {default_window})")
+    flags.add_argument(
+        "-w",
+        "--window",
+        type=int,
+        default=default_window,
+        help=f"messages in the statistics window (default {default_window})",
+    )
     if sim_time:
-        flags.add_argument("--sim-time", action="store_true",
-                           help="measure on the namespace's clock key instead of the wall clock")
+        flags.add_argument(
+            "--sim-time",
+            action="store_true",
+            help="measure on the namespace's clock key instead of the wall clock",
+        )
     flags.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds")
-    flags.add_argument("--json", action="store_true",
-                       help="print only a JSON summary at the end (for scripts and benchmarks)")
+    flags.add_argument(
+        "--json",
+        action="store_true",
+        help="print only a JSON summary at the end (for scripts and benchmarks)",
+    )
     return flags
 
 
@@ -86,8 +110,11 @@ def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
 
 
 def _list(args: argparse.Namespace, options: BusOptions) -> int:
-    return run_list(options, ListFormat(show_types=args.show_types, verbose=args.verbose,
-                                        include_hidden=args.include_hidden), sys.stdout)
+    return run_list(
+        options,
+        ListFormat(show_types=args.show_types, verbose=args.verbose, include_hidden=args.include_hidden),
+        sys.stdout,
+    )
 
 
 def _echo(args: argparse.Namespace, options: BusOptions) -> int:
@@ -157,65 +184,119 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     verbs.required = True
     bus = _bus_flags()
 
-    p = verbs.add_parser("list", parents=[bus], help="keys in use, from the services' liveliness tokens",
-                         description="Keys in use; services and actions are marked. --namespace limits the list.")
+    p = verbs.add_parser(
+        "list",
+        parents=[bus],
+        help="keys in use, from the services' liveliness tokens",
+        description="Keys in use; services and actions are marked. --namespace limits the list.",
+    )
     p.add_argument("-t", "--show-types", action="store_true", help="show each key's type")
     p.add_argument("-v", "--verbose", action="store_true", help="show types and the nodes on each key")
-    p.add_argument("-a", "--include-hidden", "--include-hidden-topics", dest="include_hidden", action="store_true",
-                   help="also list hidden keys: those with a part starting with _ (an action's _action/... parts)")
+    p.add_argument(
+        "-a",
+        "--include-hidden",
+        "--include-hidden-topics",
+        dest="include_hidden",
+        action="store_true",
+        help="also list hidden keys: those with a part starting with _ (an action's _action/... parts)",
+    )
     p.set_defaults(func=_dispatch(_list))
 
-    p = verbs.add_parser("echo", parents=[bus], help="print messages on a key",
-                         description="Print messages on KEY as YAML-like blocks separated by '---'.")
+    p = verbs.add_parser(
+        "echo",
+        parents=[bus],
+        help="print messages on a key",
+        description="Print messages on KEY as YAML-like blocks separated by '---'.",
+    )
     p.add_argument("key", metavar="KEY", help="key to print; wildcards (*, **) allowed")
     count = p.add_mutually_exclusive_group()
     count.add_argument("--once", action="store_true", help="print one message and exit")
     count.add_argument("--times", type=int, metavar="N", help="print N messages and exit")
-    p.add_argument("--timeout", type=float, metavar="S", help="give up after S seconds (exit 1 if nothing came)")
+    p.add_argument(
+        "--timeout", type=float, metavar="S", help="give up after S seconds (exit 1 if nothing came)"
+    )
     p.add_argument("--field", metavar="PATH", help="print only this field: dotted path, list items by index")
     style = p.add_mutually_exclusive_group()
     style.add_argument("--csv", action="store_true", help="one comma-separated line per message")
     style.add_argument("--raw", action="store_true", help="print payloads as hex, undecoded")
-    p.add_argument("--array-limit", type=int, default=DEFAULT_ARRAY_LIMIT, metavar="N",
-                   help=f"print at most N items of an array (default {DEFAULT_ARRAY_LIMIT}; 0: all)")
+    p.add_argument(
+        "--array-limit",
+        type=int,
+        default=DEFAULT_ARRAY_LIMIT,
+        metavar="N",
+        help=f"print at most N items of an array (default {DEFAULT_ARRAY_LIMIT}; 0: all)",
+    )
     p.add_argument("--show-key", action="store_true", help="precede each message by its key and type")
     p.add_argument("--show-sequence", action="store_true", help="also show the publisher's sequence number")
     p.set_defaults(func=_dispatch(_echo))
 
-    p = verbs.add_parser("hz", parents=[bus, _monitor_flags(True, DEFAULT_RATE_WINDOW)],
-                         help="message rate on keys", description="Average rate, min, max and std dev of the "
-                         "intervals between messages, printed every second.")
+    p = verbs.add_parser(
+        "hz",
+        parents=[bus, _monitor_flags(True, DEFAULT_RATE_WINDOW)],
+        help="message rate on keys",
+        description="Average rate, min, max and std dev of the "
+        "intervals between messages, printed every second.",
+    )
     p.set_defaults(func=_dispatch(_hz))
 
-    p = verbs.add_parser("bw", parents=[bus, _monitor_flags(False, DEFAULT_BW_WINDOW)],
-                         help="bandwidth used by keys", description="Bytes per second and message sizes, "
-                         "printed every second.")
+    p = verbs.add_parser(
+        "bw",
+        parents=[bus, _monitor_flags(False, DEFAULT_BW_WINDOW)],
+        help="bandwidth used by keys",
+        description="Bytes per second and message sizes, printed every second.",
+    )
     p.set_defaults(func=_dispatch(_bw))
 
-    p = verbs.add_parser("delay", parents=[bus, _monitor_flags(True, DEFAULT_RATE_WINDOW)],
-                         help="receive time minus header.stamp",
-                         description="Delay between header.stamp and receipt (wall clock, or --sim-time).")
+    p = verbs.add_parser(
+        "delay",
+        parents=[bus, _monitor_flags(True, DEFAULT_RATE_WINDOW)],
+        help="receive time minus header.stamp",
+        description="Delay between header.stamp and receipt (wall clock, or --sim-time).",
+    )
     p.set_defaults(func=_dispatch(_delay))
 
-    p = verbs.add_parser("info", parents=[bus], help="type and nodes on a key",
-                         description="Type, publishers, subscribers and servers on KEY (wildcards allowed).")
+    p = verbs.add_parser(
+        "info",
+        parents=[bus],
+        help="type and nodes on a key",
+        description="Type, publishers, subscribers and servers on KEY (wildcards allowed).",
+    )
     p.add_argument("key", metavar="KEY")
     p.set_defaults(func=_dispatch(_info))
 
-    p = verbs.add_parser("pub", parents=[bus], help="publish a message on a key",
-                         description="Publish TYPE (looked up from the key's tokens when omitted) built from "
-                         "YAML values merged over the type's defaults, e.g. "
-                         "zendock keys pub cmd_vel '{linear: {x: 0.2}}' --once.")
+    p = verbs.add_parser(
+        "pub",
+        parents=[bus],
+        help="publish a message on a key",
+        description="Publish TYPE (looked up from the key's tokens when omitted) built from "
+        "YAML values merged over the type's defaults, e.g. "
+        "zendock keys pub cmd_vel '{linear: {x: 0.2}}' --once.",
+    )
     p.add_argument("key", metavar="KEY")
-    p.add_argument("type_and_values", nargs="*", metavar="ARG",
-                   help="[TYPE] [VALUES]: message type (e.g. geometry_msgs/msg/Twist) and YAML values")
-    p.add_argument("-r", "--rate", type=float, default=DEFAULT_RATE_HZ, metavar="HZ",
-                   help=f"publishing rate (default {DEFAULT_RATE_HZ:g} Hz)")
+    p.add_argument(
+        "type_and_values",
+        nargs="*",
+        metavar="ARG",
+        help="[TYPE] [VALUES]: message type (e.g. geometry_msgs/msg/Twist) and YAML values",
+    )
+    p.add_argument(
+        "-r",
+        "--rate",
+        type=float,
+        default=DEFAULT_RATE_HZ,
+        metavar="HZ",
+        help=f"publishing rate (default {DEFAULT_RATE_HZ:g} Hz)",
+    )
     count = p.add_mutually_exclusive_group()
     count.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
     count.add_argument("-t", "--times", type=int, metavar="N", help="publish N messages and exit")
-    p.add_argument("--wait-matching", type=float, default=DEFAULT_WAIT_MATCHING_S, metavar="S",
-                   help="with --once/--times, wait up to S seconds for a subscriber first "
-                        f"(default {DEFAULT_WAIT_MATCHING_S:g})")
+    p.add_argument(
+        "--wait-matching",
+        type=float,
+        default=DEFAULT_WAIT_MATCHING_S,
+        metavar="S",
+        help="with --once/--times, wait up to S seconds for a subscriber first "
+        f"(default {DEFAULT_WAIT_MATCHING_S:g})",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="do not print each message")
     p.set_defaults(func=_dispatch(_pub))

@@ -75,6 +75,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         parser = subparsers.add_parser(command, help=text, description=text)
         add_project_options(parser)
         if command == "kill":
-            parser.add_argument("-s", "--signal", type=_signal_number, default=int(signal.SIGKILL), help="(default KILL)")
+            parser.add_argument(
+                "-s", "--signal", type=_signal_number, default=int(signal.SIGKILL), help="(default KILL)"
+            )
         parser.add_argument("services", nargs="+" if command != "stop" else "*", metavar="SERVICE")
         parser.set_defaults(func=main)

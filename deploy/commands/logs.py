@@ -35,12 +35,17 @@ def main(args: argparse.Namespace) -> int:
         return 2
     missing = [s for s in services if s not in available]
     if missing:
-        print(f"zendock logs: no logs for {', '.join(missing)} in {logs_dir} (not started yet?)", file=sys.stderr)
+        print(
+            f"zendock logs: no logs for {', '.join(missing)} in {logs_dir} (not started yet?)",
+            file=sys.stderr,
+        )
         return 1
     printer = Printer(sys.stdout, services, colour=False if args.no_color else None)
 
     def show(line: LogLine) -> None:
-        printer.line(line.service, f"{line.stamp} {line.text}" if args.timestamps and line.stamp else line.text)
+        printer.line(
+            line.service, f"{line.stamp} {line.text}" if args.timestamps and line.stamp else line.text
+        )
 
     followers = [Follower(logs_dir, s) for s in services] if args.follow else []
     for line in merge_by_time([tail(logs_dir, s, args.tail) for s in services]):

@@ -75,8 +75,11 @@ def run_nav(
     try:
         session = open_session(spec)
     except zenoh.ZError:
-        print(f"zendock nav: cannot reach a Zenoh router at {', '.join(connect)} within "
-              f"{CONNECT_TIMEOUT_S:g} s; is the stack up?", file=err)
+        print(
+            f"zendock nav: cannot reach a Zenoh router at {', '.join(connect)} within "
+            f"{CONNECT_TIMEOUT_S:g} s; is the stack up?",
+            file=err,
+        )
         return 1
     with session:
         node = Node("zendock_nav", session, namespace)
@@ -85,8 +88,11 @@ def run_nav(
         try:
             if not nav.wait_until_active(server_timeout_s):
                 where = f"namespace {namespace!r}" if namespace else "the root namespace"
-                print(f"zendock nav: no navigation server in {where} within {server_timeout_s:g} s "
-                      "(is the planner running?)", file=err)
+                print(
+                    f"zendock nav: no navigation server in {where} within {server_timeout_s:g} s "
+                    "(is the planner running?)",
+                    file=err,
+                )
                 return 1
             goal = Pose2D(x, y, yaw)
             nav.go_to_pose(goal)
@@ -115,11 +121,21 @@ def _follow(nav: NavigationClient, timeout_s: float, out: TextIO, err: TextIO) -
             print(f"zendock nav: goal not reached within {timeout_s:g} s: canceled", file=err)
             return 1
         feedback = nav.get_feedback()
-        if feedback is not None and feedback is not last_shown and time.monotonic() - last_print >= PRINT_PERIOD_S:
+        if (
+            feedback is not None
+            and feedback is not last_shown
+            and time.monotonic() - last_print >= PRINT_PERIOD_S
+        ):
             last_shown, last_print = feedback, time.monotonic()
-            recoveries = f", {feedback.number_of_recoveries} recoveries" if feedback.number_of_recoveries else ""
-            print(f"distance remaining {feedback.distance_remaining:6.2f} m, "
-                  f"about {feedback.estimated_time_remaining.to_sec():5.1f} s{recoveries}", file=out, flush=True)
+            recoveries = (
+                f", {feedback.number_of_recoveries} recoveries" if feedback.number_of_recoveries else ""
+            )
+            print(
+                f"distance remaining {feedback.distance_remaining:6.2f} m, "
+                f"about {feedback.estimated_time_remaining.to_sec():5.1f} s{recoveries}",
+                file=out,
+                flush=True,
+            )
         time.sleep(0.05)
     result = nav.get_result()
     if result is TaskResult.SUCCEEDED:
@@ -152,23 +168,47 @@ def _nav(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"zendock nav: --namespace: {exc}", file=sys.stderr)
         return 2
-    return run_nav(args.x, args.y, args.yaw, connect=_endpoints(args.connect), namespace=namespace,
-                   timeout_s=args.timeout, server_timeout_s=args.server_timeout)
+    return run_nav(
+        args.x,
+        args.y,
+        args.yaw,
+        connect=_endpoints(args.connect),
+        namespace=namespace,
+        timeout_s=args.timeout,
+        server_timeout_s=args.server_timeout,
+    )
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "nav", help="drive to a map pose with the planner (X Y YAW), printing the distance remaining",
+        "nav",
+        help="drive to a map pose with the planner (X Y YAW), printing the distance remaining",
         description="Send a navigate_to_pose goal and follow it to the end. Exit 0 when it succeeds.",
     )
     parser.add_argument("x", type=float, help="goal x in the map frame, metres")
     parser.add_argument("y", type=float, help="goal y in the map frame, metres")
     parser.add_argument("yaw", type=float, help="goal heading, radians")
-    parser.add_argument("--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)")
-    parser.add_argument("--connect", action="append", metavar="ENDPOINT",
-                        help="Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT)")
-    parser.add_argument("--timeout", type=float, default=300.0, metavar="S",
-                        help="cancel and fail if the goal is not reached within S seconds (default 300)")
-    parser.add_argument("--server-timeout", type=float, default=10.0, metavar="S",
-                        help="wait this long for the navigation server (default 10)")
+    parser.add_argument(
+        "--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)"
+    )
+    parser.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=300.0,
+        metavar="S",
+        help="cancel and fail if the goal is not reached within S seconds (default 300)",
+    )
+    parser.add_argument(
+        "--server-timeout",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="wait this long for the navigation server (default 10)",
+    )
     parser.set_defaults(func=_nav)

@@ -38,18 +38,28 @@ def _flags(given_after_verb: bool) -> argparse.ArgumentParser:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     nodes = subparsers.add_parser(
-        "nodes", parents=[_flags(False)], help="nodes on the bus and their endpoints (like ros2 node)",
+        "nodes",
+        parents=[_flags(False)],
+        help="nodes on the bus and their endpoints (like ros2 node)",
         description="Nodes on the bus, from the liveliness tokens their endpoints declare (as keys list reads "
-                    "them). Without a verb: list.",
+        "them). Without a verb: list.",
     )
     verbs = nodes.add_subparsers(dest="nodes_verb", metavar="VERB")
-    p = verbs.add_parser("list", parents=[_flags(True)], help="the nodes (/<ns>/<name>)",
-                         description="The nodes up, one per line; --namespace limits the list.")
+    p = verbs.add_parser(
+        "list",
+        parents=[_flags(True)],
+        help="the nodes (/<ns>/<name>)",
+        description="The nodes up, one per line; --namespace limits the list.",
+    )
     p.set_defaults(func=_run)
-    p = verbs.add_parser("info", parents=[_flags(True)], help="a node's publishers, subscriptions, services, actions",
-                         description="A node's publishers, subscriptions, services and actions, with their keys "
-                                     "and types. NODE is /<ns>/<name> as nodes list prints it, or a name in "
-                                     "--namespace.")
+    p = verbs.add_parser(
+        "info",
+        parents=[_flags(True)],
+        help="a node's publishers, subscriptions, services, actions",
+        description="A node's publishers, subscriptions, services and actions, with their keys "
+        "and types. NODE is /<ns>/<name> as nodes list prints it, or a name in "
+        "--namespace.",
+    )
     p.add_argument("node", metavar="NODE")
     p.set_defaults(func=_run)
     nodes.set_defaults(func=_run)

@@ -32,10 +32,11 @@ def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     param = subparsers.add_parser(
-        "param", help="list, get and set a running node's parameters (like ros2 param)",
+        "param",
+        help="list, get and set a running node's parameters (like ros2 param)",
         description="A running node's parameters. Only those its service marks runtime-settable change; "
-                    "list shows which and when a change applies. NODE is /<ns>/<name> as nodes list prints it, "
-                    "or a name in --namespace.",
+        "list shows which and when a change applies. NODE is /<ns>/<name> as nodes list prints it, "
+        "or a name in --namespace.",
         epilog="Exit codes: 0 done, 1 the node did not answer, 2 refused (the reason is printed).",
     )
     verbs = param.add_subparsers(dest="param_verb", metavar="VERB")
@@ -53,9 +54,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print JSON, with settable and description")
     p.set_defaults(func=_dispatch(lambda a, o: run_param_get(o, a.node, a.name, a.json, sys.stdout)))
 
-    p = verbs.add_parser("set", parents=[bus], help="change a runtime-settable parameter",
-                         description="Set NAME to VALUE (YAML, as -p NAME=VALUE at start-up), validated by the "
-                                     "node as at start-up.")
+    p = verbs.add_parser(
+        "set",
+        parents=[bus],
+        help="change a runtime-settable parameter",
+        description="Set NAME to VALUE (YAML, as -p NAME=VALUE at start-up), validated by the "
+        "node as at start-up.",
+    )
     p.add_argument("node", metavar="NODE")
     p.add_argument("name", metavar="NAME")
     p.add_argument("value", metavar="VALUE")

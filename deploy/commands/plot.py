@@ -34,8 +34,10 @@ def _run(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"zendock plot: cannot write {args.output}: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    print(f"{path}: {len(picture.trajectory)} poses, {len(picture.planned_paths)} plan(s), "
-          f"{len(picture.sonar_hits)} sonar hits, {len(picture.battery)} battery readings")
+    print(
+        f"{path}: {len(picture.trajectory)} poses, {len(picture.planned_paths)} plan(s), "
+        f"{len(picture.sonar_hits)} sonar hits, {len(picture.battery)} battery readings"
+    )
     return 0
 
 
@@ -48,6 +50,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("file", metavar="FILE.mcap", help="a recording made by zendock record")
     p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="picture to write")
     p.add_argument("--world", metavar="FILE", help="world file to draw (default: the one in the recording)")
-    p.add_argument("--namespace", default=None, metavar="NS", help="robot to draw (default: the recording's namespace)")
+    p.add_argument(
+        "--namespace", default=None, metavar="NS", help="robot to draw (default: the recording's namespace)"
+    )
     p.add_argument("--dpi", type=int, default=120, help="resolution (default 120)")
     p.set_defaults(func=_run)

@@ -35,7 +35,9 @@ def current_statuses(paths: RuntimePaths) -> tuple[list[ServiceStatus], bool]:
     statuses = []
     for status in recorded_statuses(paths):
         if status.pid is not None and process_matches(status.pid, status.pid_create_time) is None:
-            status = ServiceStatus(status.name, "exited", None, status.restarts, "none", "exited", None, "gone")
+            status = ServiceStatus(
+                status.name, "exited", None, status.restarts, "none", "exited", None, "gone"
+            )
         statuses.append(status)
     return statuses, False
 
@@ -55,11 +57,18 @@ def ps_table(statuses: list[ServiceStatus]) -> Table:
         if nested:
             table.add_row(Text(f"{namespace}/"))
         for s in (s for s in statuses if s.namespace == namespace):
-            detail = s.detail or (f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else "")
+            detail = s.detail or (
+                f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else ""
+            )
             if s.members:  # one process: its services start, crash and restart together
                 detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
             name = f"  {s.name}" if nested else s.name
-            table.add_row(*(Text(cell) for cell in (name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail)))
+            table.add_row(
+                *(
+                    Text(cell)
+                    for cell in (name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail)
+                )
+            )
     return table
 
 
@@ -74,12 +83,17 @@ def main(args: argparse.Namespace) -> int:
     _, paths, _ = resolve_project(args)
     stack_file = find_stack_file(args)
     if (stack_file is None or not stack_file.is_file()) and not paths.state_dir.exists():
-        raise no_stack_file(stack_file)  # outside a project: nothing to list, and an empty table would hide it
+        raise no_stack_file(
+            stack_file
+        )  # outside a project: nothing to list, and an empty table would hide it
     statuses, live = current_statuses(paths)
     if args.services:
         statuses = [s for s in statuses if s.name in args.services]
     if statuses and not live:
-        print("zendock ps: the supervisor is not running (stale state); `zendock down` cleans up", file=sys.stderr)
+        print(
+            "zendock ps: the supervisor is not running (stale state); `zendock down` cleans up",
+            file=sys.stderr,
+        )
     if args.json:
         print(json.dumps([s.ps_json() for s in statuses]))
     else:
@@ -90,7 +104,11 @@ def main(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("ps", help="list the services and their state")
     add_project_options(parser)
-    parser.add_argument("--json", action="store_true", help='a JSON array of {"name","state","pid","restarts","health","exit_code","started_at","members",'
-                             '"namespace"}')
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help='a JSON array of {"name","state","pid","restarts","health","exit_code","started_at","members",'
+        '"namespace"}',
+    )
     parser.add_argument("services", nargs="*", metavar="SERVICE")
     parser.set_defaults(func=main)

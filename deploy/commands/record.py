@@ -68,8 +68,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"zendock record: cannot write {args.output}: {exc.strerror or exc}", file=sys.stderr)
         return 1
     print(format_summary(result.rows, result.duration_s))
-    print(f"wrote {result.path} ({result.received} messages, {result.view_messages} Foxglove view messages; "
-          f"writer backlog peaked at {result.stats.max_backlog})")
+    print(
+        f"wrote {result.path} ({result.received} messages, {result.view_messages} Foxglove view messages; "
+        f"writer backlog peaked at {result.stats.max_backlog})"
+    )
     if result.skipped:
         left = ", ".join(f"{n} {t}" for t, n in sorted(result.skipped.items()))
         print(f"not in the ROS 2 bag (no ROS 2 type): {left}")
@@ -83,15 +85,29 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Record keys into an MCAP file: msgpack payloads for exact replay, Foxglove channels for viewing.",
     )
     p.add_argument("keys", nargs="*", metavar="KEY", help="keys to record (wildcards allowed; default: all)")
-    p.add_argument("-o", "--output", metavar="FILE.mcap", help="output file (default zendock_<date>_<time>.mcap)")
+    p.add_argument(
+        "-o", "--output", metavar="FILE.mcap", help="output file (default zendock_<date>_<time>.mcap)"
+    )
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
-    p.add_argument("--world", metavar="FILE", default=os.environ.get("ZENDOCK_WORLD") or None,
-                   help="world file to store with the recording, for plots and viewers (default $ZENDOCK_WORLD)")
-    p.add_argument("--no-views", action="store_true", help="record only the raw payloads, no Foxglove channels")
+    p.add_argument(
+        "--world",
+        metavar="FILE",
+        default=os.environ.get("ZENDOCK_WORLD") or None,
+        help="world file to store with the recording, for plots and viewers (default $ZENDOCK_WORLD)",
+    )
+    p.add_argument(
+        "--no-views", action="store_true", help="record only the raw payloads, no Foxglove channels"
+    )
     p.add_argument("--compression", choices=sorted(COMPRESSIONS), default="zstd", help="chunk compression")
-    p.add_argument("--format", choices=["zendock", "ros2"], default="zendock",
-                   help="zendock: msgpack payloads and Foxglove views in one MCAP file; ros2: a ROS 2 bag "
-                        "(rosbag2 directory, MCAP storage, CDR) for ros2 bag, Foxglove and rosbags")
-    p.add_argument("--strict", action="store_true", help="exit 1 if the sequence numbers show any lost message")
+    p.add_argument(
+        "--format",
+        choices=["zendock", "ros2"],
+        default="zendock",
+        help="zendock: msgpack payloads and Foxglove views in one MCAP file; ros2: a ROS 2 bag "
+        "(rosbag2 directory, MCAP storage, CDR) for ros2 bag, Foxglove and rosbags",
+    )
+    p.add_argument(
+        "--strict", action="store_true", help="exit 1 if the sequence numbers show any lost message"
+    )
     add_bus_flags(p)
     p.set_defaults(func=_run)

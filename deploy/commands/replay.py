@@ -47,16 +47,24 @@ def _run(args: argparse.Namespace) -> int:
     try:
         options = options_from(args)
         with open_recording(args.file) as recording, open_bus(options) as session:
-            replayer = Replayer(session, recording, rate=args.rate, loop=args.loop, keys=args.keys or (),
-                                namespace=target)
+            replayer = Replayer(
+                session, recording, rate=args.rate, loop=args.loop, keys=args.keys or (), namespace=target
+            )
             if not replayer.keys:
-                print(f"zendock replay: no recorded key matches {args.keys}; recorded: "
-                      f"{', '.join(sorted(recording.raw_keys())) or 'none'}", file=sys.stderr)
+                print(
+                    f"zendock replay: no recorded key matches {args.keys}; recorded: "
+                    f"{', '.join(sorted(recording.raw_keys())) or 'none'}",
+                    file=sys.stderr,
+                )
                 return 2
             for sig in (signal.SIGINT, signal.SIGTERM):
                 signal.signal(sig, lambda *_: replayer.stop())
-            print(f"replaying {len(replayer.keys)} key(s) from {args.file} at x{args.rate:g}"
-                  f"{' in a loop' if args.loop else ''} (Ctrl-C to stop)", file=sys.stderr, flush=True)
+            print(
+                f"replaying {len(replayer.keys)} key(s) from {args.file} at x{args.rate:g}"
+                f"{' in a loop' if args.loop else ''} (Ctrl-C to stop)",
+                file=sys.stderr,
+                flush=True,
+            )
             stats = replayer.run()
     except KeysError as exc:
         print(f"zendock replay: {exc}", file=sys.stderr)
@@ -77,7 +85,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("file", metavar="FILE.mcap", help="a recording made by zendock record")
     p.add_argument("--rate", type=float, default=1.0, metavar="R", help="play R times as fast (default 1)")
     p.add_argument("--loop", action="store_true", help="start over at the end, until stopped")
-    p.add_argument("--keys", nargs="+", metavar="KEY", help="replay only these keys (full or relative to the recording's namespace)")
-    p.add_argument("--remap-namespace", metavar="NS", help="publish in namespace NS instead of the recorded one")
+    p.add_argument(
+        "--keys",
+        nargs="+",
+        metavar="KEY",
+        help="replay only these keys (full or relative to the recording's namespace)",
+    )
+    p.add_argument(
+        "--remap-namespace", metavar="NS", help="publish in namespace NS instead of the recorded one"
+    )
     add_bus_flags(p)
     p.set_defaults(func=_run)

@@ -25,10 +25,19 @@ def router_spec(listen: Sequence[str], config_file: str | None) -> SessionSpec:
     """Listen endpoints win over the config file's; with neither, listen on the default loopback endpoint."""
     if not listen and not config_file:
         listen = (DEFAULT_ROUTER_ENDPOINT,)
-    overrides = () if config_file else (
-        ("transport/link/tx/queue/congestion_control/block/wait_before_close", str(BLOCKED_LINK_CLOSE_US)),
+    overrides = (
+        ()
+        if config_file
+        else (
+            (
+                "transport/link/tx/queue/congestion_control/block/wait_before_close",
+                str(BLOCKED_LINK_CLOSE_US),
+            ),
+        )
     )
-    return SessionSpec(mode="router", connect=(), listen=tuple(listen), config_file=config_file, overrides=overrides)
+    return SessionSpec(
+        mode="router", connect=(), listen=tuple(listen), config_file=config_file, overrides=overrides
+    )
 
 
 def run_router(spec: SessionSpec, stop: threading.Event) -> int:
@@ -70,5 +79,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="ENDPOINT",
         help=f"endpoint to listen on, repeatable (default {DEFAULT_ROUTER_ENDPOINT}, or the config file's)",
     )
-    parser.add_argument("--config", metavar="FILE", help="a Zenoh json5 config file (e.g. deploy/zenoh/router.json5)")
+    parser.add_argument(
+        "--config", metavar="FILE", help="a Zenoh json5 config file (e.g. deploy/zenoh/router.json5)"
+    )
     parser.set_defaults(func=main)

@@ -43,11 +43,24 @@ def _summary_table(summary: dict) -> Table:
         "max_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
         "median_glass_coverage": lambda v: f"{100 * v:.0f} %",
     }
-    for key in ("successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
-                "median_lateral_error_m",
-                "p95_lateral_error_m", "median_yaw_error_rad", "median_arrival_speed_mps", "max_arrival_speed_mps",
-                "collisions", "wall_s", "sim_s",
-                "median_false_glass_cells", "p95_false_glass_cells", "median_glass_coverage"):
+    for key in (
+        "successes",
+        "success_rate",
+        "median_dock_time_s",
+        "median_lower_bound_s",
+        "median_time_ratio",
+        "median_lateral_error_m",
+        "p95_lateral_error_m",
+        "median_yaw_error_rad",
+        "median_arrival_speed_mps",
+        "max_arrival_speed_mps",
+        "collisions",
+        "wall_s",
+        "sim_s",
+        "median_false_glass_cells",
+        "p95_false_glass_cells",
+        "median_glass_coverage",
+    ):
         value = summary[key]
         text = fmt[key](value) if key in fmt else (f"{value:.1f}" if isinstance(value, float) else str(value))
         table.add_row(key, text)
@@ -83,15 +96,28 @@ def _run(args: argparse.Namespace) -> int:
     for number, world in enumerate(worlds):
         # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
         starts = args.starts or ("beacon" if args.controller == "ir" else "room")
-        options = TrialOptions(world=world, n=args.n, controller=args.controller, detector=args.detector, starts=starts,
-                               seed=args.seed + 1000 * number,
-                               rtf=args.rtf, workers=args.workers, timeout_sim_s=args.timeout,
-                               chaos_period_s=args.chaos, compose=args.compose, shard=args.shard,
-                               replacements=check_replacements(args.replacements),
-                               **({"runs_dir": args.runs_dir} if args.runs_dir else {}))
+        options = TrialOptions(
+            world=world,
+            n=args.n,
+            controller=args.controller,
+            detector=args.detector,
+            starts=starts,
+            seed=args.seed + 1000 * number,
+            rtf=args.rtf,
+            workers=args.workers,
+            timeout_sim_s=args.timeout,
+            chaos_period_s=args.chaos,
+            compose=args.compose,
+            shard=args.shard,
+            replacements=check_replacements(args.replacements),
+            **({"runs_dir": args.runs_dir} if args.runs_dir else {}),
+        )
         try:
             summary, results, run_dir = _run_world(console, options, run_trials)
-        except (RuntimeError, ValueError) as exc:  # a world the campaign cannot run (no reachable start, no dock)
+        except (
+            RuntimeError,
+            ValueError,
+        ) as exc:  # a world the campaign cannot run (no reachable start, no dock)
             raise ConfigError(f"trials in {world}: {exc}") from None
         per_world.append((summary, results))
         _print_summary(console, summary)
@@ -162,74 +188,157 @@ def _run_world(console: Console, options, run_trials):
                 tally["docked"] += bool(result.docked)
                 done = tally["done"]
                 if done == 1 or done % TRIALS_PER_LINE == 0 or done == total:  # the first: the pace, early
-                    err.print(trials_line(world=options.world.stem, done=done, total=total,
-                                          successes=tally["docked"], elapsed_s=time.monotonic() - began))
+                    err.print(
+                        trials_line(
+                            world=options.world.stem,
+                            done=done,
+                            total=total,
+                            successes=tally["docked"],
+                            elapsed_s=time.monotonic() - began,
+                        )
+                    )
 
         return run_trials(options, log=log, progress=count)
-    with Progress(TextColumn(f"trials {options.world.stem}"), BarColumn(), MofNCompleteColumn(),
-                  TextColumn("{task.fields[docked]} docked"), TextColumn("{task.fields[last]}"),
-                  TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-                  console=Console(stderr=True), redirect_stdout=is_terminal(sys.stdout)) as bar:
+    with Progress(
+        TextColumn(f"trials {options.world.stem}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[docked]} docked"),
+        TextColumn("{task.fields[last]}"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        redirect_stdout=is_terminal(sys.stdout),
+    ) as bar:
         task = bar.add_task("trials", total=total, last="", docked=0)
 
         def advance(result) -> None:
             status = "docked" if result.docked else "FAILED"
             with lock:
                 tally["docked"] += bool(result.docked)
-                bar.update(task, advance=1, docked=tally["docked"],
-                           last=f"#{result.index} {status} {result.dock_time_s:.1f} s")
+                bar.update(
+                    task,
+                    advance=1,
+                    docked=tally["docked"],
+                    last=f"#{result.index} {status} {result.dock_time_s:.1f} s",
+                )
 
         return run_trials(options, log=log, progress=advance)
 
 
 def _print_summary(console: Console, summary) -> None:
-    data = {**summary.headline(), "controller": summary.controller, "world": summary.world,
-            "peak_rss_mb": summary.peak_rss_mb}
+    data = {
+        **summary.headline(),
+        "controller": summary.controller,
+        "world": summary.world,
+        "peak_rss_mb": summary.peak_rss_mb,
+    }
     console.print(_summary_table(data))
     if summary.chaos:
         chaos = summary.chaos
-        console.print(f"chaos: {chaos['kills']} kill -9, {chaos['recovered']} back healthy, recovery median "
-                      f"{chaos['median_recovery_s']} s, p95 {chaos['p95_recovery_s']} s, max {chaos['max_recovery_s']} s")
+        console.print(
+            f"chaos: {chaos['kills']} kill -9, {chaos['recovered']} back healthy, recovery median "
+            f"{chaos['median_recovery_s']} s, p95 {chaos['p95_recovery_s']} s, max {chaos['max_recovery_s']} s"
+        )
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("trials", help="Monte Carlo dockings from random starts on the full stack")
-    parser.add_argument("--world", action="append", metavar="FILE|DIR",
-                        help=f"world file or directory of them (repeat for a campaign across worlds; 'all': every shipped world); "
-                             f"default {DEFAULT_WORLD}")
+    parser.add_argument(
+        "--world",
+        action="append",
+        metavar="FILE|DIR",
+        help=f"world file or directory of them (repeat for a campaign across worlds; 'all': every shipped world); "
+        f"default {DEFAULT_WORLD}",
+    )
     parser.add_argument("--n", type=count, default=10, help="number of dockings (per world)")
-    parser.add_argument("--controller", choices=["graceful", "seed", "ir"], default="graceful",
-                        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)")
-    parser.add_argument("--starts", choices=["room", "beacon"], default=None,
-                        help="room: anywhere reachable, away from the dock; beacon: within 2 m in front of it "
-                             "(default: beacon for --controller ir, room otherwise)")
-    parser.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco",
-                        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the start poses and the simulator's noise")
-    parser.add_argument("--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max")
-    parser.add_argument("--workers", type=count, default=1, help="robots docking side by side in one simulator")
+    parser.add_argument(
+        "--controller",
+        choices=["graceful", "seed", "ir"],
+        default="graceful",
+        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)",
+    )
+    parser.add_argument(
+        "--starts",
+        choices=["room", "beacon"],
+        default=None,
+        help="room: anywhere reachable, away from the dock; beacon: within 2 m in front of it "
+        "(default: beacon for --controller ir, room otherwise)",
+    )
+    parser.add_argument(
+        "--detector",
+        choices=["aruco", "synthetic"],
+        default="aruco",
+        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth",
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the start poses and the simulator's noise"
+    )
+    parser.add_argument(
+        "--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max"
+    )
+    parser.add_argument(
+        "--workers", type=count, default=1, help="robots docking side by side in one simulator"
+    )
     parser.add_argument("--timeout", type=float, default=240.0, metavar="SIM_SECONDS", help="limit per trial")
-    parser.add_argument("--chaos", type=float, default=0.0, metavar="PERIOD_S",
-                        help="kill -9 a random robot service (with --compose: a robot's group process) every "
-                             "PERIOD_S wall seconds on average (0: off)")
-    parser.add_argument("--compose", nargs="?", const="all", default="", choices=["all", "light"],
-                        help="each robot's services in one process (zendock container): all of them (the default "
-                             "with the flag), or only the light ones (battery, pose)")
-    parser.add_argument("--shard", type=_shard, default="1/1", metavar="K/N",
-                        help="run only the K-th of N disjoint slices of the campaign (the same starts as the "
-                             "whole run; combine them with `zendock trials merge`)")
-    parser.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
-                        help="where run directories go (default: runs/ in the repository)")
+    parser.add_argument(
+        "--chaos",
+        type=float,
+        default=0.0,
+        metavar="PERIOD_S",
+        help="kill -9 a random robot service (with --compose: a robot's group process) every "
+        "PERIOD_S wall seconds on average (0: off)",
+    )
+    parser.add_argument(
+        "--compose",
+        nargs="?",
+        const="all",
+        default="",
+        choices=["all", "light"],
+        help="each robot's services in one process (zendock container): all of them (the default "
+        "with the flag), or only the light ones (battery, pose)",
+    )
+    parser.add_argument(
+        "--shard",
+        type=_shard,
+        default="1/1",
+        metavar="K/N",
+        help="run only the K-th of N disjoint slices of the campaign (the same starts as the "
+        "whole run; combine them with `zendock trials merge`)",
+    )
+    parser.add_argument(
+        "--runs-dir",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="where run directories go (default: runs/ in the repository)",
+    )
     add_service_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)
     verbs = parser.add_subparsers(dest="trials_verb", metavar="merge")
-    merge = verbs.add_parser("merge", help="combine shard runs into the campaign's one summary",
-                             description="Combine the reports of `zendock trials --shard K/N` runs into the one "
-                                         "summary, histograms and trials.json the unsharded campaign gives.")
-    merge.add_argument("paths", nargs="+", type=Path, metavar="PATH",
-                       help="a shard's trials.json, its run directory, or a directory holding shard runs")
-    merge.add_argument("--runs-dir", type=Path, default=None, metavar="DIR",
-                       help="where the merged run directory goes (default: runs/ in the repository)")
-    merge.add_argument("--json", action="store_true", help="print the merged summary as JSON on the last line")
+    merge = verbs.add_parser(
+        "merge",
+        help="combine shard runs into the campaign's one summary",
+        description="Combine the reports of `zendock trials --shard K/N` runs into the one "
+        "summary, histograms and trials.json the unsharded campaign gives.",
+    )
+    merge.add_argument(
+        "paths",
+        nargs="+",
+        type=Path,
+        metavar="PATH",
+        help="a shard's trials.json, its run directory, or a directory holding shard runs",
+    )
+    merge.add_argument(
+        "--runs-dir",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="where the merged run directory goes (default: runs/ in the repository)",
+    )
+    merge.add_argument(
+        "--json", action="store_true", help="print the merged summary as JSON on the last line"
+    )
     merge.set_defaults(func=_merge, command_path="trials merge")

@@ -32,9 +32,16 @@ FAILURE_LOG_LINES = 200
 
 
 def run_foreground(args: argparse.Namespace, stack: Stack, services: list[str], paths: RuntimePaths) -> int:
-    plan = plan_launch(stack, working_dir=args.working_dir or project_dir(args), namespace=args.namespace, connect=args.connect)
+    plan = plan_launch(
+        stack,
+        working_dir=args.working_dir or project_dir(args),
+        namespace=args.namespace,
+        connect=args.connect,
+    )
     printer = Printer(sys.stdout, services)
-    host = SupervisorHost(plan, services, paths, mode="foreground", on_line=printer.line, exit_when_settled=True)
+    host = SupervisorHost(
+        plan, services, paths, mode="foreground", on_line=printer.line, exit_when_settled=True
+    )
 
     def announce(text: str) -> None:
         print(f"zendock: {text}", file=sys.stderr, flush=True)
@@ -70,7 +77,9 @@ def wait_for_stack(
         reply = request(paths, "ps")
         statuses = [ServiceStatus.from_dict(item) for item in reply["services"] if item["name"] in services]
         for status in statuses:
-            if status.name not in settled and (_failed(status) or (is_ready(status) if healthy else _started(status))):
+            if status.name not in settled and (
+                _failed(status) or (is_ready(status) if healthy else _started(status))
+            ):
                 settled.add(status.name)
                 if on_settled is not None:
                     on_settled(status)
@@ -89,7 +98,13 @@ def status_word(status: ServiceStatus, *, wait: bool) -> str:
     if status.phase == "exited":
         return "completed"
     if wait:
-        return "healthy" if status.health == "healthy" else status.state if status.health == "none" else status.health
+        return (
+            "healthy"
+            if status.health == "healthy"
+            else status.state
+            if status.health == "none"
+            else status.health
+        )
     return "started" if status.starts else status.detail or status.state
 
 
@@ -138,7 +153,10 @@ def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePa
             except ControlError:
                 pass
         time.sleep(0.05)
-    print(f"zendock up: the supervisor did not answer within {DAEMON_START_TIMEOUT_S:g}s (see {paths.daemon_log})", file=sys.stderr)
+    print(
+        f"zendock up: the supervisor did not answer within {DAEMON_START_TIMEOUT_S:g}s (see {paths.daemon_log})",
+        file=sys.stderr,
+    )
     return 1
 
 
@@ -146,8 +164,10 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
     began = time.monotonic()
     if supervisor_info(paths) is not None:
         if args.replacements:  # the running supervisor keeps the stack it started with
-            raise ConfigError(f"--service: the project {stack.project_name} is already up with its own services; "
-                              "`zendock down` first")
+            raise ConfigError(
+                f"--service: the project {stack.project_name} is already up with its own services; "
+                "`zendock down` first"
+            )
         request(paths, "start", services=services)
     else:
         code = start_daemon(args, services, paths)
@@ -159,16 +179,23 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
         printed.add(status.name)
         print(status_line(status, wait=args.wait, elapsed_s=time.monotonic() - began), flush=True)
 
-    ok, statuses = wait_for_stack(paths, services, healthy=args.wait, timeout_s=args.wait_timeout, on_settled=report)
+    ok, statuses = wait_for_stack(
+        paths, services, healthy=args.wait, timeout_s=args.wait_timeout, on_settled=report
+    )
     for status in statuses:  # what the others were doing when the wait ended
         if status.name not in printed:
             print(status_line(status, wait=args.wait), flush=True)
     if not ok:
         failed = [s for s in statuses if _failed(s)]
-        reason = "; ".join(failure_reason(paths, s) for s in failed) or "; ".join(
-            not_ready_reason(paths, s, args.wait_timeout) for s in statuses if not is_ready(s)
-        ) or f"timed out after {args.wait_timeout:g}s"
-        print(f"zendock up: {reason}; see `zendock ps` and `zendock logs` (the stack stays up: `zendock down`)", file=sys.stderr)
+        reason = (
+            "; ".join(failure_reason(paths, s) for s in failed)
+            or "; ".join(not_ready_reason(paths, s, args.wait_timeout) for s in statuses if not is_ready(s))
+            or f"timed out after {args.wait_timeout:g}s"
+        )
+        print(
+            f"zendock up: {reason}; see `zendock ps` and `zendock logs` (the stack stays up: `zendock down`)",
+            file=sys.stderr,
+        )
         return 1
     return 0
 
@@ -196,7 +223,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_project_options(parser)
     add_stack_options(parser)
     add_launch_options(parser)
-    parser.add_argument("-d", "--detach", action="store_true", help="run in the background; return once started")
+    parser.add_argument(
+        "-d", "--detach", action="store_true", help="run in the background; return once started"
+    )
     parser.add_argument("--wait", action="store_true", help="detach and return once every service is healthy")
     parser.add_argument("--wait-timeout", type=float, default=120.0, metavar="SECONDS", help="(default 120)")
     parser.add_argument("services", nargs="*", metavar="SERVICE", help="only these (and their dependencies)")

@@ -74,8 +74,15 @@ class ConformReport:
         return [c.name for c in self.checks if not c.passed]
 
     def as_dict(self) -> dict[str, Any]:
-        return {"service": self.service, "command": self.command, "passed": self.passed, "wall_s": round(self.wall_s, 1),
-                "failed": self.failed(), "checks": [c.as_dict() for c in self.checks], "log": self.log}
+        return {
+            "service": self.service,
+            "command": self.command,
+            "passed": self.passed,
+            "wall_s": round(self.wall_s, 1),
+            "failed": self.failed(),
+            "checks": [c.as_dict() for c in self.checks],
+            "log": self.log,
+        }
 
 
 def _flags_for(service: str, stack: Any, world: Path) -> list[str]:
@@ -100,8 +107,12 @@ def _own_command(service: str, stack: Any) -> list[str]:
     return head
 
 
-def run_conform(service: str, command: list[str] | None, options: ConformOptions,
-                log: Callable[[str], None] = lambda _text: None) -> ConformReport:
+def run_conform(
+    service: str,
+    command: list[str] | None,
+    options: ConformOptions,
+    log: Callable[[str], None] = lambda _text: None,
+) -> ConformReport:
     """Run every check of ``service``'s contract against ``command`` (default: zendock's own service)."""
     contract = CONTRACTS.get(service)
     if contract is None:
@@ -113,46 +124,81 @@ def run_conform(service: str, command: list[str] | None, options: ConformOptions
     namespace = "" if service in FLEET_WIDE else ROBOT_NAMESPACE
     domain_id = random.randint(100, 200)
     endpoint = free_endpoint()
-    env = {"ZENOH_LISTEN": endpoint, "ZENOH_CONNECT": endpoint, "ZENDOCK_WORLD": str(world_path),
-           "ZENDOCK_RTF": options.rtf, "ZENDOCK_DETECTOR": "aruco" if service == "perception" else "synthetic",
-           "ROS_DOMAIN_ID": str(domain_id)}
+    env = {
+        "ZENOH_LISTEN": endpoint,
+        "ZENOH_CONNECT": endpoint,
+        "ZENDOCK_WORLD": str(world_path),
+        "ZENDOCK_RTF": options.rtf,
+        "ZENDOCK_DETECTOR": "aruco" if service == "perception" else "synthetic",
+        "ROS_DOMAIN_ID": str(domain_id),
+    }
     runs_dir = options.runs_dir or Path(tempfile.gettempdir())
     runs_dir.mkdir(parents=True, exist_ok=True)
     run_dir = Path(tempfile.mkdtemp(prefix=f"conform-{service}-", dir=runs_dir))
     stack = load_stack(DEFAULT_STACK, env=env, project_dir=run_dir)
     words = command or _own_command(service, stack)
-    argv = resolve_argv([absolute_if_file(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]) + _flags_for(service, stack, world_path)
+    argv = resolve_argv(
+        [absolute_if_file(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]
+    ) + _flags_for(service, stack, world_path)
     report = ConformReport(service, argv, log=str(run_dir / "candidate.log"))
     # what it needs, and what zendock's own waits for in the stack file (the planner: the map step)
     own_dependencies = set(stack.services[service].depends_on) if service in stack.services else set()
     rest = sorted((set(contract.needs) | own_dependencies) - {service}, key=list(stack.services).index)
     selected = stack.select(["router", *rest])
-    candidate_env = {**os.environ, "ZENDOCK_CONNECT": endpoint, "ZENDOCK_NAMESPACE": namespace,
-                     "ROS_DOMAIN_ID": str(domain_id)}
+    candidate_env = {
+        **os.environ,
+        "ZENDOCK_CONNECT": endpoint,
+        "ZENDOCK_NAMESPACE": namespace,
+        "ROS_DOMAIN_ID": str(domain_id),
+    }
     candidate = Candidate(argv, candidate_env, run_dir / "candidate.log", run_dir)
     start = time.monotonic()
     who = "zendock's own" if command is None else " ".join(words)
-    log(f"{service}: {who}; beside it: {', '.join(rest) or 'the router'} on {endpoint}, run directory {run_dir}")
+    log(
+        f"{service}: {who}; beside it: {', '.join(rest) or 'the router'} on {endpoint}, run directory {run_dir}"
+    )
     # Steps the service waits to see finish (the planner: the map written): a step still running counts as
     # ready to wait_healthy, and the candidate would start before the map is there.
     own = stack.services.get(service)
-    own_steps = [name for name, dependency in (own.depends_on.items() if own else ())
-                 if dependency.condition == "service_completed_successfully"]
-    with Launcher(stack, services=selected, project_dir=run_dir / "stack", working_dir=run_dir,
-                  namespace=ROBOT_NAMESPACE, project_name="conform") as launcher:
+    own_steps = [
+        name
+        for name, dependency in (own.depends_on.items() if own else ())
+        if dependency.condition == "service_completed_successfully"
+    ]
+    with Launcher(
+        stack,
+        services=selected,
+        project_dir=run_dir / "stack",
+        working_dir=run_dir,
+        namespace=ROBOT_NAMESPACE,
+        project_name="conform",
+    ) as launcher:
         launcher.wait_healthy(timeout_s=90.0)
         for step in own_steps:
             launcher.wait_state(step, "exited", timeout_s=90.0)
         with open_session(SessionSpec(connect=(endpoint,))) as session:
             probe = Probe(session, ROBOT_NAMESPACE)
-            ctx = Context(contract, candidate, probe, world, namespace, ROBOT_NAMESPACE,
-                          sim="simulator" in contract.needs or service == "simulator", domain_id=domain_id)
+            ctx = Context(
+                contract,
+                candidate,
+                probe,
+                world,
+                namespace,
+                ROBOT_NAMESPACE,
+                sim="simulator" in contract.needs or service == "simulator",
+                domain_id=domain_id,
+            )
             try:
                 try:
                     candidate.start()
                 except OSError as exc:  # no such program, not executable
-                    report.checks.append(Check("starts: announces its node token", False,
-                                               f"could not run {argv[0]}: {exc.strerror or exc}"))
+                    report.checks.append(
+                        Check(
+                            "starts: announces its node token",
+                            False,
+                            f"could not run {argv[0]}: {exc.strerror or exc}",
+                        )
+                    )
                 else:
                     _run_checks(ctx, report, log)
             finally:
@@ -181,4 +227,3 @@ def _run_checks(ctx: Context, report: ConformReport, log: Callable[[str], None])
     if ctx.candidate.running:
         add(check_sigterm(ctx))
     add(check_restart(ctx))
-

@@ -35,24 +35,49 @@ def message_types(contract: Contract) -> list[type[Message]]:
 
 
 def _topic(topic: Topic) -> dict[str, Any]:
-    return {"key": topic.name, "type": topic.type.TYPE_NAME, "qos": asdict(topic.qos), "rate_hz": topic.rate_hz,
-            "required": topic.required, "when": topic.when, "about": topic.about,
-            **({"fleet_wide": True} if topic.fleet_wide else {})}
+    return {
+        "key": topic.name,
+        "type": topic.type.TYPE_NAME,
+        "qos": asdict(topic.qos),
+        "rate_hz": topic.rate_hz,
+        "required": topic.required,
+        "when": topic.when,
+        "about": topic.about,
+        **({"fleet_wide": True} if topic.fleet_wide else {}),
+    }
 
 
 def _request(request: Request) -> dict[str, Any]:
-    return {"key": request.name, "type": request.type.type_name, "request": request.type.request.TYPE_NAME,
-            "response": request.type.response.TYPE_NAME, "required": request.required, "when": request.when,
-            "about": request.about}
+    return {
+        "key": request.name,
+        "type": request.type.type_name,
+        "request": request.type.request.TYPE_NAME,
+        "response": request.type.response.TYPE_NAME,
+        "required": request.required,
+        "when": request.when,
+        "about": request.about,
+    }
 
 
 def _action(action: Action) -> dict[str, Any]:
     base = f"{action.name}/_action"
-    return {"name": action.name, "type": action.type.type_name, "goal": action.type.goal.TYPE_NAME,
-            "result": action.type.result.TYPE_NAME, "feedback": action.type.feedback.TYPE_NAME,
-            "keys": {"send_goal": f"{base}/send_goal", "cancel_goal": f"{base}/cancel_goal",
-                     "get_result": f"{base}/get_result", "feedback": f"{base}/feedback", "status": f"{base}/status"},
-            "required": action.required, "when": action.when, "about": action.about}
+    return {
+        "name": action.name,
+        "type": action.type.type_name,
+        "goal": action.type.goal.TYPE_NAME,
+        "result": action.type.result.TYPE_NAME,
+        "feedback": action.type.feedback.TYPE_NAME,
+        "keys": {
+            "send_goal": f"{base}/send_goal",
+            "cancel_goal": f"{base}/cancel_goal",
+            "get_result": f"{base}/get_result",
+            "feedback": f"{base}/feedback",
+            "status": f"{base}/status",
+        },
+        "required": action.required,
+        "when": action.when,
+        "about": action.about,
+    }
 
 
 def contract_json(contract: Contract, with_schemas: bool = True) -> dict[str, Any]:
@@ -60,9 +85,11 @@ def contract_json(contract: Contract, with_schemas: bool = True) -> dict[str, An
     body: dict[str, Any] = {
         "service": contract.service,
         "summary": contract.summary,
-        "launch": {"environment": ENVIRONMENT,
-                   "flags": [{"flag": f.name, "about": f.about} for f in COMMON_FLAGS],
-                   "parameters": [{"name": f.name, "about": f.about, "needed": f.needed} for f in contract.flags]},
+        "launch": {
+            "environment": ENVIRONMENT,
+            "flags": [{"flag": f.name, "about": f.about} for f in COMMON_FLAGS],
+            "parameters": [{"name": f.name, "about": f.about, "needed": f.needed} for f in contract.flags],
+        },
         "announces": list(ANNOUNCEMENTS),
         "publishes": [_topic(t) for t in contract.publishes],
         "subscribes": [_topic(t) for t in contract.subscribes],
@@ -101,49 +128,89 @@ def _schema_link(type_name: str) -> str:
 
 def contract_markdown(contract: Contract) -> str:
     """The contract as a documentation page (``docs/contracts/<service>.md``)."""
-    out = [f"# {contract.service}", "",
-           "<!-- Generated from shared/contracts by `python -m deploy.docs_site`. Do not edit. -->", "",
-           contract.summary, "",
-           f"Check a program against it: `zendock conform {contract.service} -- COMMAND ...`. "
-           f"Run it in a stack: `zendock demo --service {contract.service}=COMMAND`. "
-           "Keys are relative to the robot's namespace; the rules every service follows are on "
-           "[the contracts page](index.md).", ""]
+    out = [
+        f"# {contract.service}",
+        "",
+        "<!-- Generated from shared/contracts by `python -m deploy.docs_site`. Do not edit. -->",
+        "",
+        contract.summary,
+        "",
+        f"Check a program against it: `zendock conform {contract.service} -- COMMAND ...`. "
+        f"Run it in a stack: `zendock demo --service {contract.service}=COMMAND`. "
+        "Keys are relative to the robot's namespace; the rules every service follows are on "
+        "[the contracts page](index.md).",
+        "",
+    ]
 
     def topics_table(title: str, rows: tuple[Topic, ...]) -> None:
         if not rows:
             return
-        out.extend([f"## {title}", "", "| key | type | delivery | rate (sim) | when | about |",
-                    "|---|---|---|---|---|---|"])
+        out.extend(
+            [
+                f"## {title}",
+                "",
+                "| key | type | delivery | rate (sim) | when | about |",
+                "|---|---|---|---|---|---|",
+            ]
+        )
         for t in rows:
             rate = f"{t.rate_hz:g} Hz" if t.rate_hz else "on events"
             key = f"`*/{t.name}` (every robot)" if t.fleet_wide else f"`{t.name}`"
-            out.append(f"| {key} | {_schema_link(t.type.TYPE_NAME)} | {_qos_words(t)} | {rate} | "
-                       f"{_md_cell(t.when or 'always')} | {_md_cell(t.about)} |")
+            out.append(
+                f"| {key} | {_schema_link(t.type.TYPE_NAME)} | {_qos_words(t)} | {rate} | "
+                f"{_md_cell(t.when or 'always')} | {_md_cell(t.about)} |"
+            )
         out.append("")
 
     def requests_table(title: str, rows: tuple[Request, ...]) -> None:
         if not rows:
             return
-        out.extend([f"## {title}", "", "| key | type | request | response | when | about |", "|---|---|---|---|---|---|"])
+        out.extend(
+            [
+                f"## {title}",
+                "",
+                "| key | type | request | response | when | about |",
+                "|---|---|---|---|---|---|",
+            ]
+        )
         for r in rows:
-            out.append(f"| `{r.name}` | `{r.type.type_name}` | {_schema_link(r.type.request.TYPE_NAME)} | "
-                       f"{_schema_link(r.type.response.TYPE_NAME)} | {_md_cell(r.when or 'always')} | {_md_cell(r.about)} |")
+            out.append(
+                f"| `{r.name}` | `{r.type.type_name}` | {_schema_link(r.type.request.TYPE_NAME)} | "
+                f"{_schema_link(r.type.response.TYPE_NAME)} | {_md_cell(r.when or 'always')} | {_md_cell(r.about)} |"
+            )
         out.append("")
 
     def actions_table(title: str, rows: tuple[Action, ...]) -> None:
         if not rows:
             return
-        out.extend([f"## {title}", "", "| action | type | goal | result | feedback | about |", "|---|---|---|---|---|---|"])
+        out.extend(
+            [
+                f"## {title}",
+                "",
+                "| action | type | goal | result | feedback | about |",
+                "|---|---|---|---|---|---|",
+            ]
+        )
         for a in rows:
-            out.append(f"| `{a.name}` | `{a.type.type_name}` | {_schema_link(a.type.goal.TYPE_NAME)} | "
-                       f"{_schema_link(a.type.result.TYPE_NAME)} | {_schema_link(a.type.feedback.TYPE_NAME)} | "
-                       f"{_md_cell(a.about)} |")
-        out.extend(["", "Keys: `<action>/_action/send_goal`, `cancel_goal` and `get_result` (requests), "
-                    "`feedback` and `status` (topics), as the [contracts page](index.md#actions) describes.", ""])
+            out.append(
+                f"| `{a.name}` | `{a.type.type_name}` | {_schema_link(a.type.goal.TYPE_NAME)} | "
+                f"{_schema_link(a.type.result.TYPE_NAME)} | {_schema_link(a.type.feedback.TYPE_NAME)} | "
+                f"{_md_cell(a.about)} |"
+            )
+        out.extend(
+            [
+                "",
+                "Keys: `<action>/_action/send_goal`, `cancel_goal` and `get_result` (requests), "
+                "`feedback` and `status` (topics), as the [contracts page](index.md#actions) describes.",
+                "",
+            ]
+        )
 
     topics_table("Publishes", contract.publishes)
-    topics_table("Subscribes (what it may read: zendock's own reads these, a replacement what it needs)",
-                 contract.subscribes)
+    topics_table(
+        "Subscribes (what it may read: zendock's own reads these, a replacement what it needs)",
+        contract.subscribes,
+    )
     if contract.subscribes_on_demand:
         out.extend(["It also subscribes on demand to whatever a client of its own asks for.", ""])
     requests_table("Serves", contract.serves)
@@ -151,7 +218,10 @@ def contract_markdown(contract: Contract) -> str:
     actions_table("Serves actions", contract.serves_actions)
     actions_table("Uses actions", contract.uses_actions)
     out.extend(["## Parameters the launcher may pass", "", "| `-p` name | needed | about |", "|---|---|---|"])
-    out += [f"| `{f.name}` | {'yes' if f.needed else 'may be ignored'} | {_md_cell(f.about)} |" for f in contract.flags]
+    out += [
+        f"| `{f.name}` | {'yes' if f.needed else 'may be ignored'} | {_md_cell(f.about)} |"
+        for f in contract.flags
+    ]
     out.append("")
     if contract.behaviour:
         beside = ", ".join(contract.needs) or "the router alone"
@@ -167,15 +237,21 @@ def contract_markdown(contract: Contract) -> str:
 
 def index_markdown() -> str:
     """``docs/contracts/index.md``: what every service gets, announces and must survive; the wire; the list."""
-    out = ["# Contracts", "",
-           "<!-- Generated from shared/contracts by `python -m deploy.docs_site`. Do not edit. -->", "",
-           "Each zendock service has a contract, defined once in code (`shared/contracts/`): the keys it publishes "
-           "and subscribes, the requests and actions it serves and uses, what the launcher hands it and what it "
-           "must survive. zendock's own services are held to theirs while they run; these pages are rendered from "
-           "the same data. Write a replacement in any language from them, check it with "
-           "`zendock conform SERVICE -- COMMAND`, and run it with `--service SERVICE=COMMAND` on `zendock up`, "
-           "`demo`, `trials` and `fleet`.", "",
-           "| service | what it does |", "|---|---|"]
+    out = [
+        "# Contracts",
+        "",
+        "<!-- Generated from shared/contracts by `python -m deploy.docs_site`. Do not edit. -->",
+        "",
+        "Each zendock service has a contract, defined once in code (`shared/contracts/`): the keys it publishes "
+        "and subscribes, the requests and actions it serves and uses, what the launcher hands it and what it "
+        "must survive. zendock's own services are held to theirs while they run; these pages are rendered from "
+        "the same data. Write a replacement in any language from them, check it with "
+        "`zendock conform SERVICE -- COMMAND`, and run it with `--service SERVICE=COMMAND` on `zendock up`, "
+        "`demo`, `trials` and `fleet`.",
+        "",
+        "| service | what it does |",
+        "|---|---|",
+    ]
     out += [f"| [{c.service}]({c.service}.md) | {_md_cell(c.summary)} |" for c in CONTRACTS.values()]
     out.extend(["", "## What the launcher hands every service", "", "| environment | meaning |", "|---|---|"])
     out += [f"| `{name}` | {_md_cell(about)} |" for name, about in ENVIRONMENT.items()]
@@ -187,14 +263,22 @@ def index_markdown() -> str:
     out += [f"- {line}" for line in DUTIES]
     out.extend(["", "## The wire", ""])
     out += [f"- {line}" for line in WIRE_RULES]
-    out.extend(["", "Each message type's JSON Schema is under [`schemas/`](schemas/index.md).", "",
-                "## Actions", "",
-                "An action `<name>` is five keys: the requests `<name>/_action/send_goal` "
-                "(`{goal_id: {uuid: uint8[16]}, goal}` -> `{accepted, stamp}`), `<name>/_action/cancel_goal` "
-                "(`action_msgs/srv/CancelGoal`) and `<name>/_action/get_result` (`{goal_id}` -> `{status, result}`, "
-                "answered when the goal ends), and the topics `<name>/_action/feedback` (`{goal_id, feedback}`) and "
-                "`<name>/_action/status` (`action_msgs/msg/GoalStatusArray`). Status codes are action_msgs': "
-                "1 accepted, 2 executing, 3 canceling, 4 succeeded, 5 canceled, 6 aborted.", ""])
+    out.extend(
+        [
+            "",
+            "Each message type's JSON Schema is under [`schemas/`](schemas/index.md).",
+            "",
+            "## Actions",
+            "",
+            "An action `<name>` is five keys: the requests `<name>/_action/send_goal` "
+            "(`{goal_id: {uuid: uint8[16]}, goal}` -> `{accepted, stamp}`), `<name>/_action/cancel_goal` "
+            "(`action_msgs/srv/CancelGoal`) and `<name>/_action/get_result` (`{goal_id}` -> `{status, result}`, "
+            "answered when the goal ends), and the topics `<name>/_action/feedback` (`{goal_id, feedback}`) and "
+            "`<name>/_action/status` (`action_msgs/msg/GoalStatusArray`). Status codes are action_msgs': "
+            "1 accepted, 2 executing, 3 canceling, 4 succeeded, 5 canceled, 6 aborted.",
+            "",
+        ]
+    )
     return "\n".join(out)
 
 
@@ -211,10 +295,15 @@ def all_message_types() -> list[type[Message]]:
 
 
 def schemas_index() -> str:
-    out = ["# Message schemas", "",
-           "<!-- Generated from shared/contracts by `python -m deploy.docs_site`. Do not edit. -->", "",
-           "JSON Schema (2020-12) of each message type's payload once msgpack-decoded; the "
-           "[wire rules](../index.md#the-wire) say what a schema cannot.", ""]
+    out = [
+        "# Message schemas",
+        "",
+        "<!-- Generated from shared/contracts by `python -m deploy.docs_site`. Do not edit. -->",
+        "",
+        "JSON Schema (2020-12) of each message type's payload once msgpack-decoded; the "
+        "[wire rules](../index.md#the-wire) say what a schema cannot.",
+        "",
+    ]
     out += [f"- [`{cls.TYPE_NAME}`]({schema_file_name(cls.TYPE_NAME)})" for cls in all_message_types()]
     return "\n".join(out) + "\n"
 
@@ -232,9 +321,16 @@ def rendered_files() -> dict[str, str]:
 def stale_files(directory: Path = CONTRACTS_DIR) -> list[str]:
     """Generated files that are missing, differ, or should not be there."""
     wanted = rendered_files()
-    problems = [name for name, text in wanted.items()
-                if not (directory / name).is_file() or (directory / name).read_text(encoding="utf-8") != text]
-    present = {str(p.relative_to(directory)) for p in directory.rglob("*") if p.is_file()} if directory.is_dir() else set()
+    problems = [
+        name
+        for name, text in wanted.items()
+        if not (directory / name).is_file() or (directory / name).read_text(encoding="utf-8") != text
+    ]
+    present = (
+        {str(p.relative_to(directory)) for p in directory.rglob("*") if p.is_file()}
+        if directory.is_dir()
+        else set()
+    )
     return sorted(problems + [name for name in present - set(wanted)])
 
 

@@ -25,8 +25,14 @@ from shared.schema import Message, MessageError
 M = TypeVar("M", bound=Message)
 
 #: Payloads no service may choke on: not msgpack, msgpack of the wrong shape, a map of unknown fields, nothing.
-MALFORMED_PAYLOADS: tuple[bytes, ...] = (b"\xc1\xc1\xc1", msgpack.packb([1, 2, 3]), msgpack.packb({"nonsense": 1}),
-                                         b"", msgpack.packb({"header": "not a header"}), b"\xff" * 64)
+MALFORMED_PAYLOADS: tuple[bytes, ...] = (
+    b"\xc1\xc1\xc1",
+    msgpack.packb([1, 2, 3]),
+    msgpack.packb({"nonsense": 1}),
+    b"",
+    msgpack.packb({"header": "not a header"}),
+    b"\xff" * 64,
+)
 
 
 @dataclass
@@ -87,7 +93,9 @@ class Probe:
         replies = self.session.liveliness().get(key_expr, timeout=timeout_s)
         return any(reply.ok is not None for reply in replies)
 
-    def wait_node(self, namespace: str, node: str, timeout_s: float, alive: Callable[[], bool]) -> float | None:
+    def wait_node(
+        self, namespace: str, node: str, timeout_s: float, alive: Callable[[], bool]
+    ) -> float | None:
         """Seconds until the node's ready token appears, or ``None`` (timeout, or ``alive()`` turned false)."""
         start = time.monotonic()
         key = node_token_key(namespace, node)
@@ -144,7 +152,9 @@ class Probe:
             sub.undeclare()
         return tally
 
-    def wait_for(self, key: str, msg_type: type[M], predicate: Callable[[M], bool], timeout_s: float) -> M | None:
+    def wait_for(
+        self, key: str, msg_type: type[M], predicate: Callable[[M], bool], timeout_s: float
+    ) -> M | None:
         """The first message on ``key`` for which ``predicate`` holds, or ``None`` after ``timeout_s`` (wall)."""
         found: list[M] = []
         event = threading.Event()
@@ -169,7 +179,9 @@ class Probe:
 
     def query_raw(self, key: str, payload: bytes, timeout_s: float = 3.0) -> tuple[str, str]:
         """``("error", text)``, ``("ok", encoding)`` or ``("silent", "")`` for a raw request."""
-        for reply in self.session.get(key, payload=payload, timeout=timeout_s, target=zenoh.QueryTarget.BEST_MATCHING):
+        for reply in self.session.get(
+            key, payload=payload, timeout=timeout_s, target=zenoh.QueryTarget.BEST_MATCHING
+        ):
             if reply.err is not None:
                 return "error", reply.err.payload.to_bytes().decode("utf-8", "replace")[:200]
             if reply.ok is not None:

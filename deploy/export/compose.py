@@ -44,8 +44,12 @@ BUILD = {
     "args": {"BASE": "${ZENDOCK_BASE_IMAGE:-python:3.11-slim-bookworm}"},
 }
 ROUTER_PORTS = [f"${{ZENOH_PUBLISH_ADDR:-127.0.0.1}}:${{ZENOH_PUBLISH_PORT:-{ROUTER_PORT}}}:{ROUTER_PORT}"]
-ROUTER_TEST = ["CMD", "python3", "-c",
-               f"import socket; socket.create_connection(('127.0.0.1', {ROUTER_PORT}), 2).close()"]
+ROUTER_TEST = [
+    "CMD",
+    "python3",
+    "-c",
+    f"import socket; socket.create_connection(('127.0.0.1', {ROUTER_PORT}), 2).close()",
+]
 #: A container health check every 10 s; a service has a minute to start (imports, first map), the router 10 s.
 HEALTH = {"interval": "10s", "timeout": "8s", "retries": 3, "start_period": "60s"}
 ROUTER_START_PERIOD = "10s"
@@ -134,8 +138,18 @@ def _service(name: str, spec: ServiceSpec, namespace: str, volumes: list[str]) -
     out["restart"] = str(spec.restart)
     out["stop_grace_period"] = format_duration(spec.stop_grace_period)
     out["networks"] = [NETWORK]
-    ports = ROUTER_PORTS if router else next(
-        (published for module, (_, published) in SERVED.items() if command[:3] == ["python", "-m", module]), None)
+    ports = (
+        ROUTER_PORTS
+        if router
+        else next(
+            (
+                published
+                for module, (_, published) in SERVED.items()
+                if command[:3] == ["python", "-m", module]
+            ),
+            None,
+        )
+    )
     if ports:
         out["ports"] = list(ports)
     if volumes:
@@ -168,8 +182,11 @@ def compose_document(stack: Stack) -> dict[str, Any]:
         own: list[str] = []
         services[name] = _service(name, spec, stack.namespace, own)
         volumes.extend(volume for volume in own if volume not in volumes)
-    document: dict[str, Any] = {"name": stack.project_name, "services": services,
-                                "networks": {NETWORK: {"driver": "bridge"}}}
+    document: dict[str, Any] = {
+        "name": stack.project_name,
+        "services": services,
+        "networks": {NETWORK: {"driver": "bridge"}},
+    }
     if volumes:
         document["volumes"] = {volume.split(":", 1)[0]: {} for volume in volumes}
     return document

@@ -66,8 +66,10 @@ class Conflict:
     holder: str
 
     def describe(self) -> str:
-        return (f"{self.sim_s:.1f} s: {self.robot} mated with dock {self.dock_id} held by "
-                f"{self.holder or 'nobody'}")
+        return (
+            f"{self.sim_s:.1f} s: {self.robot} mated with dock {self.dock_id} held by "
+            f"{self.holder or 'nobody'}"
+        )
 
 
 class FleetMonitor:
@@ -87,13 +89,25 @@ class FleetMonitor:
         subs: list[Any] = []
         for robot in robots:
             subs += [
-                session.declare_subscriber(key(robot, topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth, robot)),
-                session.declare_subscriber(key(robot, topics.BATTERY_STATUS), self._decoder(BatteryState, self._on_battery, robot)),
-                session.declare_subscriber(key(robot, topics.DOCK_CONTACT), self._decoder(DockContact, self._on_contact, robot)),
-                session.declare_subscriber(key(robot, topics.COLLISIONS), self._decoder(CollisionEvent, self._on_collision, robot)),
-                session.declare_subscriber(key(robot, "docking/state"), self._decoder(String, self._on_state, robot)),
+                session.declare_subscriber(
+                    key(robot, topics.GROUND_TRUTH_POSE), self._decoder(PoseStamped, self._on_truth, robot)
+                ),
+                session.declare_subscriber(
+                    key(robot, topics.BATTERY_STATUS), self._decoder(BatteryState, self._on_battery, robot)
+                ),
+                session.declare_subscriber(
+                    key(robot, topics.DOCK_CONTACT), self._decoder(DockContact, self._on_contact, robot)
+                ),
+                session.declare_subscriber(
+                    key(robot, topics.COLLISIONS), self._decoder(CollisionEvent, self._on_collision, robot)
+                ),
+                session.declare_subscriber(
+                    key(robot, "docking/state"), self._decoder(String, self._on_state, robot)
+                ),
             ]
-        subs.append(session.declare_subscriber(key(robots[0], topics.CLOCK), self._decoder(Clock, self._on_clock, "")))
+        subs.append(
+            session.declare_subscriber(key(robots[0], topics.CLOCK), self._decoder(Clock, self._on_clock, ""))
+        )
         fleet_key = topic_key(namespace, topics.FLEET_DOCKS)
         subs.append(session.declare_subscriber(fleet_key, self._decoder(FleetDocks, self._on_docks, "")))
         self._subscribers = subs
@@ -166,7 +180,10 @@ class FleetMonitor:
             tally.collision_kinds[msg.kind] = tally.collision_kinds.get(msg.kind, 0) + 1
             if msg.kind == "robot":
                 pair = sorted((robot, msg.other_robot))
-                seen = any(sorted((a, b)) == pair and abs(t - s) < PAIR_WINDOW_S for s, _, _, a, b in self.robot_contacts)
+                seen = any(
+                    sorted((a, b)) == pair and abs(t - s) < PAIR_WINDOW_S
+                    for s, _, _, a, b in self.robot_contacts
+                )
                 if not seen:
                     self.robot_contacts.append((t, msg.x, msg.y, robot, msg.other_robot))
 
@@ -191,11 +208,21 @@ class FleetMonitor:
 
     # --- reading --------------------------------------------------------------------------------------
 
-    def snapshot(self) -> tuple[float, list[RobotTally], list[Conflict], list[tuple[float, float, float, str, str]]]:
+    def snapshot(
+        self,
+    ) -> tuple[float, list[RobotTally], list[Conflict], list[tuple[float, float, float, str, str]]]:
         with self._lock:
-            robots = [RobotTally(**{**t.__dict__, "track": list(t.track), "collision_kinds": dict(t.collision_kinds),
-                                    "give_ways_s": list(t.give_ways_s)})
-                      for t in self.robots.values()]
+            robots = [
+                RobotTally(
+                    **{
+                        **t.__dict__,
+                        "track": list(t.track),
+                        "collision_kinds": dict(t.collision_kinds),
+                        "give_ways_s": list(t.give_ways_s),
+                    }
+                )
+                for t in self.robots.values()
+            ]
             return self.sim_s, robots, list(self.conflicts), list(self.robot_contacts)
 
     def holders(self) -> dict[str, str]:

@@ -80,9 +80,16 @@ class FleetReport:
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
-        data["robots"] = [{**r, "min_battery": round(r["min_battery"], 4), "distance_m": round(r["distance_m"], 1),
-                           "wait_s": round(r["wait_s"], 1), "give_ways_s": [round(g, 1) for g in r["give_ways_s"]]}
-                          for r in data["robots"]]
+        data["robots"] = [
+            {
+                **r,
+                "min_battery": round(r["min_battery"], 4),
+                "distance_m": round(r["distance_m"], 1),
+                "wait_s": round(r["wait_s"], 1),
+                "give_ways_s": [round(g, 1) for g in r["give_ways_s"]],
+            }
+            for r in data["robots"]
+        ]
         data["sim_s"], data["wall_s"] = round(self.sim_s, 1), round(self.wall_s, 1)
         return data
 
@@ -103,30 +110,46 @@ def run_fleet(
     robots = [r.name for r in world.robots]
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
-    stack_path.write_text(yaml.safe_dump(fleet_stack(options, endpoint, world_file, robots, run_dir / "state"),
-                                         sort_keys=False))
+    stack_path.write_text(
+        yaml.safe_dump(fleet_stack(options, endpoint, world_file, robots, run_dir / "state"), sort_keys=False)
+    )
     stack = apply_replacements(load_stack(stack_path, env={}, project_dir=REPO_ROOT), options.replacements)
-    log(f"{len(robots)} robot(s) and {len(world.docks)} dock(s) in {world.name} for {options.duration_s:g} s of "
+    log(
+        f"{len(robots)} robot(s) and {len(world.docks)} dock(s) in {world.name} for {options.duration_s:g} s of "
         f"simulated time, rtf {options.rtf}, detector {options.detector}; run directory {run_dir}"
-        + "".join(f"; {r.name} replaced by `{r.command}`" for r in options.replacements))
+        + "".join(f"; {r.name} replaced by `{r.command}`" for r in options.replacements)
+    )
     errors: list[str] = []
     wall_start = time.monotonic()
-    with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="fleet") as launcher:
+    with Launcher(
+        stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="fleet"
+    ) as launcher:
         launcher.wait_healthy(timeout_s=180.0)
         sampler = PeakRssSampler(lambda: [(s.name, s.pid) for s in launcher.ps()])
         with sampler, open_session(SessionSpec(connect=(endpoint,))) as session:
             monitor = FleetMonitor(session, robots)
             try:
                 _stagger_charges(session, robots, options.seed, errors)
-                sim_start, sim_end, wall_run = _watch(monitor, options.duration_s, progress, progress_period_s)
+                sim_start, sim_end, wall_run = _watch(
+                    monitor, options.duration_s, progress, progress_period_s
+                )
                 sim_now, tallies, conflicts, contacts = monitor.snapshot()
             finally:
                 monitor.close()
         for status in launcher.ps():
             (run_dir / f"{status.name}.log").write_text("\n".join(launcher.logs(status.name)) + "\n")
     sim_s = sim_end - sim_start
-    report = _report(world, tallies, conflicts, contacts, sim_s, time.monotonic() - wall_start,
-                     sim_s / max(wall_run, 1e-9), dict(sampler.peak_mb), errors)
+    report = _report(
+        world,
+        tallies,
+        conflicts,
+        contacts,
+        sim_s,
+        time.monotonic() - wall_start,
+        sim_s / max(wall_run, 1e-9),
+        dict(sampler.peak_mb),
+        errors,
+    )
     report.replaced_services = replacements_report(options.replacements)
     (run_dir / "fleet.json").write_text(strict_json.dumps(report.to_json(), indent=2) + "\n")
     # Every robot's ground-truth track (x, y every 10 cm), for reading a run afterwards.
@@ -146,14 +169,23 @@ def _stagger_charges(session: Any, robots: list[str], seed: int, errors: list[st
     for i, robot in enumerate(order):
         charge = high - (high - low) * i / max(1, len(robots) - 1)
         try:
-            call_service(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
-                         SetBatteryStateRequest(percentage=charge), timeout_s=10.0)
+            call_service(
+                session,
+                topic_key(robot, "battery/set_state"),
+                SET_BATTERY_STATE,
+                SetBatteryStateRequest(percentage=charge),
+                timeout_s=10.0,
+            )
         except ServiceError as exc:
             errors.append(f"{robot}: starting charge not set: {exc}")
 
 
-def _watch(monitor: FleetMonitor, duration_s: float, progress: Callable[[float, list[RobotTally]], None] | None,
-           progress_period_s: float = PROGRESS_PERIOD_S) -> tuple[float, float, float]:
+def _watch(
+    monitor: FleetMonitor,
+    duration_s: float,
+    progress: Callable[[float, list[RobotTally]], None] | None,
+    progress_period_s: float = PROGRESS_PERIOD_S,
+) -> tuple[float, float, float]:
     """Wait until the sim clock has run ``duration_s``; (sim start, sim end, wall seconds)."""
     deadline = time.monotonic() + 60.0
     while not math.isfinite(monitor.snapshot()[0]):
@@ -178,19 +210,50 @@ def _watch(monitor: FleetMonitor, duration_s: float, progress: Callable[[float, 
         time.sleep(0.5)
 
 
-def _report(world: World, tallies: list[RobotTally], conflicts: list[Conflict],
-            contacts: list[tuple[float, float, float, str, str]], sim_s: float, wall_s: float, rtf: float,
-            peak_rss_mb: dict[str, float], errors: list[str]) -> FleetReport:
-    robots = [RobotReport(t.name, t.distance_m, t.dockings, t.min_battery if math.isfinite(t.min_battery) else 0.0,
-                          t.wait_s, t.collisions, t.collision_kinds, t.give_ways_s) for t in tallies]
+def _report(
+    world: World,
+    tallies: list[RobotTally],
+    conflicts: list[Conflict],
+    contacts: list[tuple[float, float, float, str, str]],
+    sim_s: float,
+    wall_s: float,
+    rtf: float,
+    peak_rss_mb: dict[str, float],
+    errors: list[str],
+) -> FleetReport:
+    robots = [
+        RobotReport(
+            t.name,
+            t.distance_m,
+            t.dockings,
+            t.min_battery if math.isfinite(t.min_battery) else 0.0,
+            t.wait_s,
+            t.collisions,
+            t.collision_kinds,
+            t.give_ways_s,
+        )
+        for t in tallies
+    ]
     give_ways = [g for t in tallies for g in t.give_ways_s]
     world_hits = sum(n for t in tallies for kind, n in t.collision_kinds.items() if kind != "robot")
     return FleetReport(
-        world=world.name, robots=robots, docks=len(world.docks),
-        collisions={"total": world_hits + len(contacts), "robot_robot": len(contacts), "robot_world": world_hits},
-        reservation_conflicts=len(conflicts), conflicts=[c.describe() for c in conflicts],
-        give_ways=len(give_ways), max_give_way_s=round(max(give_ways), 1) if give_ways else None,
+        world=world.name,
+        robots=robots,
+        docks=len(world.docks),
+        collisions={
+            "total": world_hits + len(contacts),
+            "robot_robot": len(contacts),
+            "robot_world": world_hits,
+        },
+        reservation_conflicts=len(conflicts),
+        conflicts=[c.describe() for c in conflicts],
+        give_ways=len(give_ways),
+        max_give_way_s=round(max(give_ways), 1) if give_ways else None,
         median_give_way_s=round(statistics.median(give_ways), 1) if give_ways else None,
         long_give_ways=sum(1 for g in give_ways if g > LONG_GIVE_WAY_S),
-        sim_s=sim_s, wall_s=wall_s, achieved_rtf=round(rtf, 2), peak_rss_mb=peak_rss_mb, errors=errors,
+        sim_s=sim_s,
+        wall_s=wall_s,
+        achieved_rtf=round(rtf, 2),
+        peak_rss_mb=peak_rss_mb,
+        errors=errors,
     )

@@ -41,23 +41,62 @@ class FleetOptions:
     compose: str = ""
 
 
-def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: list[str], state_dir: Path) -> dict[str, Any]:
+def fleet_stack(
+    options: FleetOptions, endpoint: str, world_file: Path, robots: list[str], state_dir: Path
+) -> dict[str, Any]:
     """A stack file (as data) for ``robots`` sharing the room of ``world_file``."""
     world = str(world_file)
     py = ["python", "-m"]
     template: dict[str, Any] = {
-        "battery": {"command": [*py, "services.battery", "-p", "use_sim_time=true",
-                                "-p", f"drain_scale={options.drain_scale}", "-p", f"charge_scale={options.charge_scale}",
-                                "-p", f"state_file={state_dir}/${{ROBOT}}/battery.json", *FLEET_BATTERY_PARAMS]},
+        "battery": {
+            "command": [
+                *py,
+                "services.battery",
+                "-p",
+                "use_sim_time=true",
+                "-p",
+                f"drain_scale={options.drain_scale}",
+                "-p",
+                f"charge_scale={options.charge_scale}",
+                "-p",
+                f"state_file={state_dir}/${{ROBOT}}/battery.json",
+                *FLEET_BATTERY_PARAMS,
+            ]
+        },
         "pose": {"command": [*py, "services.pose", "-p", "use_sim_time=true"]},
-        "planner": {"command": [*py, "services.planner", "-p", "use_sim_time=true", "-p", f"map_yaml={state_dir}/map.yaml",
-                                "-p", f"glass_memory_file={state_dir}/${{ROBOT}}/glass_memory.npz",
-                                *FLEET_PLANNER_PARAMS],
-                    "depends_on": {"router": {"condition": "service_started"},
-                                   "map": {"condition": "service_completed_successfully"}}},
-        "docking": {"command": [*py, "services.docking", "-p", "use_sim_time=true", "-p", f"dock_database={world}",
-                                "-p", f"controller={options.controller}", "-p", "fleet=true",
-                                "-p", f"resume_at={options.resume_at}"]},
+        "planner": {
+            "command": [
+                *py,
+                "services.planner",
+                "-p",
+                "use_sim_time=true",
+                "-p",
+                f"map_yaml={state_dir}/map.yaml",
+                "-p",
+                f"glass_memory_file={state_dir}/${{ROBOT}}/glass_memory.npz",
+                *FLEET_PLANNER_PARAMS,
+            ],
+            "depends_on": {
+                "router": {"condition": "service_started"},
+                "map": {"condition": "service_completed_successfully"},
+            },
+        },
+        "docking": {
+            "command": [
+                *py,
+                "services.docking",
+                "-p",
+                "use_sim_time=true",
+                "-p",
+                f"dock_database={world}",
+                "-p",
+                f"controller={options.controller}",
+                "-p",
+                "fleet=true",
+                "-p",
+                f"resume_at={options.resume_at}",
+            ]
+        },
     }
     if options.detector == "aruco":
         template["perception"] = {"command": [*py, "services.perception", "-p", f"dock_database={world}"]}
@@ -67,10 +106,23 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
         service["healthcheck"] = {"liveliness": True, "timeout": "60s"}
     services: dict[str, Any] = {
         "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
-        "map": {"command": ["zendock", "map", "save", "--world", world, "-o", f"{state_dir}/map.yaml"], "restart": "no"},
+        "map": {
+            "command": ["zendock", "map", "save", "--world", world, "-o", f"{state_dir}/map.yaml"],
+            "restart": "no",
+        },
         "simulator": {
-            "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
-                        "-p", f"seed={options.seed}", "-p", f"detection.source={options.detector}"],
+            "command": [
+                *py,
+                "services.simulator",
+                "--world",
+                world,
+                "-p",
+                f"rtf={options.rtf}",
+                "-p",
+                f"seed={options.seed}",
+                "-p",
+                f"detection.source={options.detector}",
+            ],
             "depends_on": {"router": {"condition": "service_started"}},
             "healthcheck": {"liveliness": True, "timeout": "60s"},
             "restart": "on-failure",
@@ -82,9 +134,16 @@ def fleet_stack(options: FleetOptions, endpoint: str, world_file: Path, robots: 
             "restart": "on-failure",
         },
     }
-    document: dict[str, Any] = {"name": "fleet", "namespace": "", "zenoh": {"connect": [endpoint]},
-                                "services": services, "x-robots": {"robots": list(robots), "services": template}}
+    document: dict[str, Any] = {
+        "name": "fleet",
+        "namespace": "",
+        "zenoh": {"connect": [endpoint]},
+        "services": services,
+        "x-robots": {"robots": list(robots), "services": template},
+    }
     grouped = members_to_compose(template, options.compose, {r.name for r in options.replacements})
     if grouped:
-        document["x-compose"] = {f"robot_{robot}": [f"{name}_{robot}" for name in grouped] for robot in robots}
+        document["x-compose"] = {
+            f"robot_{robot}": [f"{name}_{robot}" for name in grouped] for robot in robots
+        }
     return document

@@ -43,8 +43,10 @@ def fleet_world(world_path: Path, robots: int | None, seed: int, out: Path) -> t
         chosen += _extra_robots(world_path, world, chosen, n - len(chosen), rng)
     for i, robot in enumerate(chosen):
         if not robot.get("patrol"):
-            robot["patrol"] = [list(p.as_tuple()) for p in _patrol(world_path, world, Pose2D.from_seq(robot["start"]),
-                                                                     seed + 101 * (i + 1))]
+            robot["patrol"] = [
+                list(p.as_tuple())
+                for p in _patrol(world_path, world, Pose2D.from_seq(robot["start"]), seed + 101 * (i + 1))
+            ]
         robot["start"] = [float(v) for v in robot["start"]]
         robot["patrol"] = [[float(v) for v in p] for p in robot["patrol"]]
     effective = {**data, "robots": chosen}
@@ -53,14 +55,20 @@ def fleet_world(world_path: Path, robots: int | None, seed: int, out: Path) -> t
     return load_world(out), out
 
 
-def _extra_robots(world_path: Path, world: World, placed: list[dict[str, Any]], count: int,
-                  rng: random.Random) -> list[dict[str, Any]]:
+def _extra_robots(
+    world_path: Path, world: World, placed: list[dict[str, Any]], count: int, rng: random.Random
+) -> list[dict[str, Any]]:
     taken = {r["name"] for r in placed}
     names = (f"r{i}" for i in range(1, 10_000) if f"r{i}" not in taken)
     avoid = [tuple(r["start"][:2]) for r in placed] + [tuple(h[:2]) for h in world.holding]
-    candidates = [c for c in random_starts(world, 40 * count + 20, rng.randrange(1 << 30))
-                  if all(math.dist((c.x, c.y), a) >= KEEP_APART_M for a in avoid)]
-    reachable = _reachable_from(world_path, Pose2D.from_seq(placed[0]["start"]) if placed else None, candidates)
+    candidates = [
+        c
+        for c in random_starts(world, 40 * count + 20, rng.randrange(1 << 30))
+        if all(math.dist((c.x, c.y), a) >= KEEP_APART_M for a in avoid)
+    ]
+    reachable = _reachable_from(
+        world_path, Pose2D.from_seq(placed[0]["start"]) if placed else None, candidates
+    )
     extra: list[dict[str, Any]] = []
     for spot in reachable:
         if len(extra) == count:
@@ -75,13 +83,18 @@ def _extra_robots(world_path: Path, world: World, placed: list[dict[str, Any]], 
 
 def _patrol(world_path: Path, world: World, start: Pose2D, seed: int) -> list[Pose2D]:
     avoid = [tuple(h[:2]) for h in world.holding]
-    candidates = [c for c in random_starts(world, 30, seed)
-                  if all(math.dist((c.x, c.y), a) >= KEEP_APART_M for a in avoid)
-                  and all(math.dist((c.x, c.y), d.pose[:2]) >= PATROL_DOCK_CLEARANCE_M for d in world.docks)]
+    candidates = [
+        c
+        for c in random_starts(world, 30, seed)
+        if all(math.dist((c.x, c.y), a) >= KEEP_APART_M for a in avoid)
+        and all(math.dist((c.x, c.y), d.pose[:2]) >= PATROL_DOCK_CLEARANCE_M for d in world.docks)
+    ]
     reachable = _reachable_from(world_path, start, candidates)
     if len(reachable) < 2:
-        raise ConfigError(f"{world_path}: found only {len(reachable)} reachable patrol spots for a robot at "
-                          f"{[round(start.x, 2), round(start.y, 2)]}")
+        raise ConfigError(
+            f"{world_path}: found only {len(reachable)} reachable patrol spots for a robot at "
+            f"{[round(start.x, 2), round(start.y, 2)]}"
+        )
     # Spread over the room: each next waypoint the reachable spot farthest from those chosen.
     chosen = [max(reachable, key=lambda c: math.dist((c.x, c.y), (start.x, start.y)))]
     while len(chosen) < min(PATROL_WAYPOINTS, len(reachable)):

@@ -79,8 +79,12 @@ class KeyReport:
 
     def as_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
-            "kind": self.kind, "type": self.type_name, "announced": self.announced, "sent": self.sent,
-            "bytes": self.bytes, "kinds": dict(sorted(self.kinds.items())),
+            "kind": self.kind,
+            "type": self.type_name,
+            "announced": self.announced,
+            "sent": self.sent,
+            "bytes": self.bytes,
+            "kinds": dict(sorted(self.kinds.items())),
         }
         if self.kind == REQUEST:
             out["replies"] = {"ok": self.replies_ok, "error": self.replies_err, "none": self.no_reply}
@@ -214,8 +218,13 @@ class _Requests:
         if malformed.payload is not None:
             extra["payload"] = malformed.payload
         try:
-            self._session.get(target.key, zenoh.handlers.Callback(replies.append, done),
-                              timeout=self._timeout_s, target=zenoh.QueryTarget.ALL, **extra)
+            self._session.get(
+                target.key,
+                zenoh.handlers.Callback(replies.append, done),
+                timeout=self._timeout_s,
+                target=zenoh.QueryTarget.ALL,
+                **extra,
+            )
         except Exception:
             self._slots.release()
             raise
@@ -250,7 +259,8 @@ def fuzz_session(
         t.key: session.declare_publisher(
             t.key, congestion_control=zenoh.CongestionControl.BLOCK, reliability=zenoh.Reliability.RELIABLE
         )
-        for t in targets if t.kind == TOPIC
+        for t in targets
+        if t.kind == TOPIC
     }
     requests = _Requests(session, options.query_timeout_s, options.max_in_flight)
     order: list[Target] = []
@@ -271,7 +281,9 @@ def fuzz_session(
             malformed = _payload_for(factory, types, target)
             key_report = report.keys[target.key]
             if target.kind == TOPIC:
-                publishers[target.key].put(malformed.payload or b"", encoding=zenoh.Encoding(malformed.encoding))
+                publishers[target.key].put(
+                    malformed.payload or b"", encoding=zenoh.Encoding(malformed.encoding)
+                )
             elif not requests.send(target, malformed, key_report, deadline):
                 report.stopped_by = "time limit"
                 break

@@ -29,12 +29,41 @@ from shared.schema import MAX_ARRAY_LEN, Message, MessageError
 MSGPACK = "application/msgpack"
 #: Kinds that need the type's schema, and kinds that do not (the only ones for a key of unknown type).
 TYPED_KINDS = (
-    "missing_field", "unknown_field", "wrong_type", "non_finite", "out_of_range", "huge_array",
-    "long_array", "nested_garbage", "wrong_schema", "wrong_encoding",
+    "missing_field",
+    "unknown_field",
+    "wrong_type",
+    "non_finite",
+    "out_of_range",
+    "huge_array",
+    "long_array",
+    "nested_garbage",
+    "wrong_schema",
+    "wrong_encoding",
 )
-UNTYPED_KINDS = ("garbage", "empty", "truncated", "trailing_bytes", "length_lie", "wrong_top_level", "deep_nesting")
+UNTYPED_KINDS = (
+    "garbage",
+    "empty",
+    "truncated",
+    "trailing_bytes",
+    "length_lie",
+    "wrong_top_level",
+    "deep_nesting",
+)
 #: Integers no sized field accepts all of: enum codes, sign and width boundaries.
-OUT_OF_RANGE_INTS = (-1, 7, 256, -129, 65_536, 1_000_000_000, 2**31, -(2**31) - 1, 2**32, 2**63 - 1, -(2**63), 2**64 - 1)
+OUT_OF_RANGE_INTS = (
+    -1,
+    7,
+    256,
+    -129,
+    65_536,
+    1_000_000_000,
+    2**31,
+    -(2**31) - 1,
+    2**32,
+    2**63 - 1,
+    -(2**63),
+    2**64 - 1,
+)
 NON_FINITE = (math.nan, math.inf, -math.inf)
 #: msgpack's first byte 0xc1 is "never used": no decoder accepts it.
 NEVER_VALID = b"\xc1"
@@ -64,7 +93,9 @@ def encoding_of(type_name: str) -> str:
     return f"{MSGPACK};{type_name}"
 
 
-def decode_outcome(msg_type: type[Message], payload: bytes | None, empty_request: bytes = b"\x80") -> str | None:
+def decode_outcome(
+    msg_type: type[Message], payload: bytes | None, empty_request: bytes = b"\x80"
+) -> str | None:
     """How ``msg_type``'s decoder takes ``payload``: ``None`` accepted, ``""`` refused with a MessageError,
     else the exception that escaped it. A missing payload is read as ``empty_request``."""
     try:
@@ -241,7 +272,11 @@ class PayloadFactory:
         if path is None:
             return None
         current = _parent(wire, path)[path[-1]]
-        options = [v for v in ("text", None, True, [1, "x"], {"x": 1}, b"\x00\x01", 3, 2.5) if type(v) is not type(current)]
+        options = [
+            v
+            for v in ("text", None, True, [1, "x"], {"x": 1}, b"\x00\x01", 3, 2.5)
+            if type(v) is not type(current)
+        ]
         _replace(wire, path, self.rng.choice(options))
         return self._pack("wrong_type", wire, msg_type)
 
@@ -268,7 +303,9 @@ class PayloadFactory:
         path = self._pick(wire, lambda _p, v: isinstance(v, (list, bytes)))
         if path is None:
             return None
-        _replace(wire, path, bytes(MAX_ARRAY_LEN + 1) if self.rng.random() < 0.5 else [0] * (MAX_ARRAY_LEN + 1))
+        _replace(
+            wire, path, bytes(MAX_ARRAY_LEN + 1) if self.rng.random() < 0.5 else [0] * (MAX_ARRAY_LEN + 1)
+        )
         self.huge_left -= 1
         return self._pack("huge_array", wire, msg_type)
 
@@ -285,13 +322,15 @@ class PayloadFactory:
     def _nested_garbage(self, msg_type: type[Message]) -> Malformed | None:
         wire = self.example(msg_type)
         path = self._pick(wire, lambda _p, _v: True)
-        garbage = self.rng.choice([
-            _nest(DEEP_NESTING, []),
-            _nest(DEEP_NESTING, {}),
-            {"header": {"header": {"header": None}}},
-            [[{"x": [1, [2, [3]]]}]],
-            msgpack.ExtType(5, b"\x00\x01"),
-        ])
+        garbage = self.rng.choice(
+            [
+                _nest(DEEP_NESTING, []),
+                _nest(DEEP_NESTING, {}),
+                {"header": {"header": {"header": None}}},
+                [[{"x": [1, [2, [3]]]}]],
+                msgpack.ExtType(5, b"\x00\x01"),
+            ]
+        )
         if path is None:
             wire = garbage
         else:
@@ -325,7 +364,9 @@ class PayloadFactory:
         if kind == "trailing_bytes":
             return Malformed(kind, valid + self.rng.randbytes(self.rng.randrange(1, 16)), encoding)
         if kind == "length_lie":  # an array or map header claiming 2**32 - 1 entries, then little else
-            return Malformed(kind, self.rng.choice([b"\xdd", b"\xdf", b"\xdb"]) + b"\xff\xff\xff\xff" + valid[:8], encoding)
+            return Malformed(
+                kind, self.rng.choice([b"\xdd", b"\xdf", b"\xdb"]) + b"\xff\xff\xff\xff" + valid[:8], encoding
+            )
         if kind == "wrong_top_level":
             value = self.rng.choice([None, 42, -1.5, "cmd", True, [wire], b"\x00" * 8])
             return Malformed(kind, msgpack.packb(value, use_bin_type=True), encoding)

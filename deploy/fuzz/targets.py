@@ -23,9 +23,21 @@ GET_RESULT_EMPTY_REQUEST = b""
 CANCEL_GOAL_REQUEST = "action_msgs/srv/CancelGoal_Request"
 
 KNOWN_TOPICS = (
-    topics.CLOCK, topics.CMD_VEL, topics.ODOM, topics.TF, topics.TF_STATIC, topics.SCAN, topics.ULTRASONIC,
-    topics.BATTERY_STATUS, topics.POSE2D, topics.DOCK_CONTACT, topics.COLLISIONS, topics.GROUND_TRUTH_POSE,
-    topics.DETECTED_DOCK_POSE, topics.MAP, topics.PLAN,
+    topics.CLOCK,
+    topics.CMD_VEL,
+    topics.ODOM,
+    topics.TF,
+    topics.TF_STATIC,
+    topics.SCAN,
+    topics.ULTRASONIC,
+    topics.BATTERY_STATUS,
+    topics.POSE2D,
+    topics.DOCK_CONTACT,
+    topics.COLLISIONS,
+    topics.GROUND_TRUTH_POSE,
+    topics.DETECTED_DOCK_POSE,
+    topics.MAP,
+    topics.PLAN,
 )
 KNOWN_SERVICES = (topics.SIM_TELEPORT, topics.SIM_STATE, topics.BATTERY_SET_STATE)
 KNOWN_ACTIONS = (topics.NAVIGATE_TO_POSE, topics.DOCK_ROBOT, topics.UNDOCK_ROBOT)
@@ -51,13 +63,32 @@ def has_wildcards(key: str) -> bool:
 
 def action_targets(action_key: str, action_type: str | None, announced: bool) -> list[Target]:
     """The three request endpoints of an action (``shared.action``'s layout)."""
+
     def typed(suffix: str) -> str | None:
         return f"{action_type}_{suffix}" if action_type else None
 
     return [
-        Target(f"{action_key}/_action/send_goal", REQUEST, typed("SendGoal_Request"), SERVICE_EMPTY_REQUEST, announced),
-        Target(f"{action_key}/_action/get_result", REQUEST, typed("GetResult_Request"), GET_RESULT_EMPTY_REQUEST, announced),
-        Target(f"{action_key}/_action/cancel_goal", REQUEST, CANCEL_GOAL_REQUEST, SERVICE_EMPTY_REQUEST, announced),
+        Target(
+            f"{action_key}/_action/send_goal",
+            REQUEST,
+            typed("SendGoal_Request"),
+            SERVICE_EMPTY_REQUEST,
+            announced,
+        ),
+        Target(
+            f"{action_key}/_action/get_result",
+            REQUEST,
+            typed("GetResult_Request"),
+            GET_RESULT_EMPTY_REQUEST,
+            announced,
+        ),
+        Target(
+            f"{action_key}/_action/cancel_goal",
+            REQUEST,
+            CANCEL_GOAL_REQUEST,
+            SERVICE_EMPTY_REQUEST,
+            announced,
+        ),
     ]
 
 
@@ -68,9 +99,13 @@ def graph_targets(entries: Iterable[GraphEntry], namespace: str) -> list[Target]
         if entry.kind == "node" or entry.namespace != namespace:
             continue
         if entry.kind in ("sub", "pub"):
-            found.append(Target(entry.key, TOPIC, entry.type_name or None, None, announced=entry.kind == "sub"))
+            found.append(
+                Target(entry.key, TOPIC, entry.type_name or None, None, announced=entry.kind == "sub")
+            )
         elif entry.kind == "srv":
-            found.append(Target(entry.key, REQUEST, f"{entry.type_name}_Request", SERVICE_EMPTY_REQUEST, True))
+            found.append(
+                Target(entry.key, REQUEST, f"{entry.type_name}_Request", SERVICE_EMPTY_REQUEST, True)
+            )
         elif entry.kind == "act":
             found.extend(action_targets(entry.key, entry.type_name or None, True))
     return found
@@ -79,7 +114,9 @@ def graph_targets(entries: Iterable[GraphEntry], namespace: str) -> list[Target]
 def known_targets(namespace: str) -> list[Target]:
     """The names of :mod:`shared.topics` in ``namespace``, types unknown."""
     found = [Target(topic_key(namespace, name), TOPIC) for name in KNOWN_TOPICS]
-    found += [Target(topic_key(namespace, name), REQUEST, None, SERVICE_EMPTY_REQUEST) for name in KNOWN_SERVICES]
+    found += [
+        Target(topic_key(namespace, name), REQUEST, None, SERVICE_EMPTY_REQUEST) for name in KNOWN_SERVICES
+    ]
     for name in KNOWN_ACTIONS:
         found += action_targets(topic_key(namespace, name), None, False)
     return found
@@ -109,6 +146,10 @@ def merge_targets(targets: Iterable[Target], known_types: Iterable[str]) -> tupl
             type_name = target.type_name or seen.type_name
         else:
             type_name = seen.type_name
-        merged[slot] = replace(seen, type_name=type_name, announced=announced,
-                               empty_request=seen.empty_request if seen.empty_request is not None else target.empty_request)
+        merged[slot] = replace(
+            seen,
+            type_name=type_name,
+            announced=announced,
+            empty_request=seen.empty_request if seen.empty_request is not None else target.empty_request,
+        )
     return sorted(merged.values(), key=lambda t: (t.key, t.kind)), sorted(skipped)

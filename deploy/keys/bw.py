@@ -27,5 +27,7 @@ class BandwidthStats(KeyStats):
         return self._window.summary(monotonic_now_s)
 
 
-def run_bw(options: BusOptions, request: MonitorRequest, out: TextIO, stop: threading.Event | None = None) -> int:
+def run_bw(
+    options: BusOptions, request: MonitorRequest, out: TextIO, stop: threading.Event | None = None
+) -> int:
     return run_monitor("bw", options, request, BandwidthStats, out, stop)

@@ -37,7 +37,9 @@ class BusOptions:
     connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S
 
 
-def resolve_endpoints(flags: Sequence[str] | None, environ: Mapping[str, str] | None = None) -> tuple[str, ...]:
+def resolve_endpoints(
+    flags: Sequence[str] | None, environ: Mapping[str, str] | None = None
+) -> tuple[str, ...]:
     """``--connect`` flags win, then ``ZENDOCK_CONNECT``, then ``ZENOH_CONNECT``, then the default router."""
     if flags:
         return tuple(flags)

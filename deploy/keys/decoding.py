@@ -80,7 +80,9 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def decode_payload(key: str, payload: bytes, encoding: str = "", sequence: int | None = None) -> DecodedSample:
+def decode_payload(
+    key: str, payload: bytes, encoding: str = "", sequence: int | None = None
+) -> DecodedSample:
     """Decode one payload for display (see the module doc); never raises."""
     mime, schema = split_encoding(encoding)
     if mime.startswith(TEXT_MIMES):
@@ -89,8 +91,9 @@ def decode_payload(key: str, payload: bytes, encoding: str = "", sequence: int |
     try:
         plain = msgpack.unpackb(payload, raw=False, strict_map_key=False)
     except Exception:  # msgpack raises several unrelated types for garbage
-        return DecodedSample(key, payload, schema, note=undecodable_note(payload), sequence=sequence,
-                             undecodable=True)
+        return DecodedSample(
+            key, payload, schema, note=undecodable_note(payload), sequence=sequence, undecodable=True
+        )
     if not schema:
         return DecodedSample(key, payload, schema, value=plain, sequence=sequence)
     cls = known_types().get(schema)

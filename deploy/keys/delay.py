@@ -46,7 +46,9 @@ class DelayStats(KeyStats):
             return
         stamp_s = header_stamp_s(decoded.value)
         if stamp_s is None:
-            raise KeysError(f"{sample.key}: {decoded.type_label} has no header.stamp; delay needs stamped messages")
+            raise KeysError(
+                f"{sample.key}: {decoded.type_label} has no header.stamp; delay needs stamped messages"
+            )
         now_s = sim_now_s if sim_now_s is not None else sample.wall_s
         self._window.add(now_s - stamp_s)
 
@@ -54,5 +56,7 @@ class DelayStats(KeyStats):
         return self._window.summary()
 
 
-def run_delay(options: BusOptions, request: MonitorRequest, out: TextIO, stop: threading.Event | None = None) -> int:
+def run_delay(
+    options: BusOptions, request: MonitorRequest, out: TextIO, stop: threading.Event | None = None
+) -> int:
     return run_monitor("delay", options, request, DelayStats, out, stop)

@@ -38,7 +38,9 @@ class EchoRequest:
         if self.timeout_s is not None and not self.timeout_s > 0:
             raise KeysError(f"--timeout must be positive, got {self.timeout_s:g}", EXIT_USAGE)
         if self.fmt.raw and (self.fmt.csv or self.fmt.field):
-            raise KeysError("--raw prints whole payloads; it does not combine with --csv or --field", EXIT_USAGE)
+            raise KeysError(
+                "--raw prints whole payloads; it does not combine with --csv or --field", EXIT_USAGE
+            )
 
 
 class _Backlog:
@@ -65,7 +67,11 @@ class _Backlog:
 
 
 def run_echo(
-    options: BusOptions, request: EchoRequest, out: TextIO, err: TextIO | None = None, stop: threading.Event | None = None
+    options: BusOptions,
+    request: EchoRequest,
+    out: TextIO,
+    err: TextIO | None = None,
+    stop: threading.Event | None = None,
 ) -> int:
     """Print messages on the key until the count is reached, the timeout passes, ``stop`` is set or Ctrl-C."""
     request.check()

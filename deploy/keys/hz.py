@@ -30,5 +30,7 @@ class RateStats(KeyStats):
         return self._window.summary()
 
 
-def run_hz(options: BusOptions, request: MonitorRequest, out: TextIO, stop: threading.Event | None = None) -> int:
+def run_hz(
+    options: BusOptions, request: MonitorRequest, out: TextIO, stop: threading.Event | None = None
+) -> int:
     return run_monitor("hz", options, request, RateStats, out, stop)

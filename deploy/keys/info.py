@@ -49,7 +49,9 @@ def run_info(options: BusOptions, key_text: str, out: TextIO) -> int:
         graph = query_graph(session, GRAPH_TIMEOUT_S)
     entries = graph.matching(key)
     if not entries:
-        raise KeysError(f"unknown key {key!r}: nothing announces it ('zendock keys list' shows the keys in use)")
+        raise KeysError(
+            f"unknown key {key!r}: nothing announces it ('zendock keys list' shows the keys in use)"
+        )
     blocks = ["\n".join(info_lines(entry)) for entry in entries]
     out.write("\n\n".join(blocks) + "\n")
     out.flush()

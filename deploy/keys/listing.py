@@ -90,7 +90,9 @@ def run_list(options: BusOptions, fmt: ListFormat, out: TextIO, err: TextIO | No
     entries = [e for e in graph.in_namespace(options.namespace) if fmt.include_hidden or not is_hidden(e.key)]
     if not entries:
         where = f" in namespace {options.namespace!r}" if options.namespace else ""
-        err.write(f"zendock keys list: no keys announced{where} (the router answered; are services running?)\n")
+        err.write(
+            f"zendock keys list: no keys announced{where} (the router answered; are services running?)\n"
+        )
         return 0
     out.write("\n".join(list_lines(entries, fmt)) + "\n")
     out.flush()

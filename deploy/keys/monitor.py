@@ -66,7 +66,9 @@ class MonitorRequest:
         if self.window < 1:
             raise KeysError(f"--window must be at least 1, got {self.window}", EXIT_USAGE)
         if self.duration_s is not None and not (self.duration_s > 0 and math.isfinite(self.duration_s)):
-            raise KeysError(f"--duration must be a positive number of seconds, got {self.duration_s:g}", EXIT_USAGE)
+            raise KeysError(
+                f"--duration must be a positive number of seconds, got {self.duration_s:g}", EXIT_USAGE
+            )
 
 
 def run_monitor(
@@ -118,9 +120,13 @@ def run_monitor(
     missing = [s for s, summary in zip(stats, summaries, strict=True) if summary is None]
     if missing:
         if clock is not None and clock.now() is None:
-            raise KeysError(f"--sim-time: no time on {clock.key} within {elapsed:.1f} s (is a simulator running?)")
+            raise KeysError(
+                f"--sim-time: no time on {clock.key} within {elapsed:.1f} s (is a simulator running?)"
+            )
         names = ", ".join(f"{s.key} ({s.count} received)" for s in missing)
-        raise KeysError(f"{verb} needs {missing[0].needs} per key; not enough within {elapsed:.1f} s on: {names}")
+        raise KeysError(
+            f"{verb} needs {missing[0].needs} per key; not enough within {elapsed:.1f} s on: {names}"
+        )
     return 0
 
 
@@ -148,11 +154,17 @@ def _report_until_done(
                     _print_reports(stats, lock, printed_counts, out)
     except KeyboardInterrupt:
         pass
-    if not request.json and not fatal and any(s.count > printed for s, printed in zip(stats, printed_counts, strict=True)):
+    if (
+        not request.json
+        and not fatal
+        and any(s.count > printed for s, printed in zip(stats, printed_counts, strict=True))
+    ):
         _print_reports(stats, lock, printed_counts, out)
 
 
-def _print_reports(stats: list[KeyStats], lock: threading.Lock, printed_counts: list[int], out: TextIO) -> None:
+def _print_reports(
+    stats: list[KeyStats], lock: threading.Lock, printed_counts: list[int], out: TextIO
+) -> None:
     now = time.monotonic()
     lines = []
     with lock:
@@ -170,7 +182,11 @@ def _print_reports(stats: list[KeyStats], lock: threading.Lock, printed_counts: 
 
 
 def _json_summary(
-    verb: str, request: MonitorRequest, stats: list[KeyStats], summaries: list[Summary | None], elapsed_s: float
+    verb: str,
+    request: MonitorRequest,
+    stats: list[KeyStats],
+    summaries: list[Summary | None],
+    elapsed_s: float,
 ) -> dict[str, Any]:
     per_key: dict[str, Any] = {}
     for key_stats, summary in zip(stats, summaries, strict=True):

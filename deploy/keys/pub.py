@@ -77,12 +77,13 @@ def split_type_and_values(arguments: Sequence[str]) -> tuple[str | None, str]:
     if len(arguments) == 2:
         return arguments[0], arguments[1]
     raise KeysError(
-        f"expected KEY [TYPE] [VALUES], got {len(arguments) + 1} arguments (quote the YAML values)", EXIT_USAGE
+        f"expected KEY [TYPE] [VALUES], got {len(arguments) + 1} arguments (quote the YAML values)",
+        EXIT_USAGE,
     )
 
 
 def _relative_key(namespace: str, key: str) -> str:
-    return key[len(namespace) + 1:] if namespace else key
+    return key[len(namespace) + 1 :] if namespace else key
 
 
 def _is_matching(status: object) -> bool:
@@ -117,7 +118,9 @@ def wait_for_subscriber(session: zenoh.Session, key: str, timeout_s: float, stop
         probe.undeclare()
 
 
-def _choose_type(requested: type[Message] | None, announced: list[str], key: str, err: TextIO) -> type[Message]:
+def _choose_type(
+    requested: type[Message] | None, announced: list[str], key: str, err: TextIO
+) -> type[Message]:
     if requested is not None:
         if announced and requested.TYPE_NAME not in announced:
             err.write(
@@ -126,9 +129,13 @@ def _choose_type(requested: type[Message] | None, announced: list[str], key: str
             )
         return requested
     if not announced:
-        raise KeysError(f"no publisher or subscriber on {key} announces a type; give TYPE after the key", EXIT_USAGE)
+        raise KeysError(
+            f"no publisher or subscriber on {key} announces a type; give TYPE after the key", EXIT_USAGE
+        )
     if len(announced) > 1:
-        raise KeysError(f"{key} is announced with several types ({', '.join(announced)}); give TYPE", EXIT_USAGE)
+        raise KeysError(
+            f"{key} is announced with several types ({', '.join(announced)}); give TYPE", EXIT_USAGE
+        )
     return resolve_type(announced[0])
 
 

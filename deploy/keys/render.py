@@ -227,7 +227,11 @@ def write_sample(out: TextIO, sample: DecodedSample, fmt: EchoFormat) -> None:
 def flow_text(value: Any, array_limit: int = DEFAULT_ARRAY_LIMIT) -> str:
     """``value`` on one line in YAML flow style: ``{linear: {x: 0.2, y: 0.0}, angular: {...}}``."""
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{format_scalar(k)}: {flow_text(v, array_limit)}" for k, v in value.items()) + "}"
+        return (
+            "{"
+            + ", ".join(f"{format_scalar(k)}: {flow_text(v, array_limit)}" for k, v in value.items())
+            + "}"
+        )
     if isinstance(value, (list, tuple)):
         if all(_is_scalar(v) for v in value):
             return format_flow_list(value, array_limit)

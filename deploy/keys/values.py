@@ -85,7 +85,9 @@ def _list_item_class(annotation: Any) -> type[Message] | None:
     return None
 
 
-def merge_over_defaults(cls: type[Message], values: dict[str, Any], now_s: float, path: str = "") -> dict[str, Any]:
+def merge_over_defaults(
+    cls: type[Message], values: dict[str, Any], now_s: float, path: str = ""
+) -> dict[str, Any]:
     """The wire map of ``cls``'s defaults with ``values`` laid over it (see the module doc)."""
     try:
         merged = cls().to_dict()
@@ -96,8 +98,9 @@ def merge_over_defaults(cls: type[Message], values: dict[str, Any], now_s: float
         where = f"{path}.{name}" if path else str(name)
         if name not in fields:
             known = ", ".join(fields)
-            raise MessageError(f"unknown field for {cls.TYPE_NAME} (fields: {known})", type_name=cls.TYPE_NAME,
-                               field=where)
+            raise MessageError(
+                f"unknown field for {cls.TYPE_NAME} (fields: {known})", type_name=cls.TYPE_NAME, field=where
+            )
         annotation = fields[name]
         nested = _message_class(annotation)
         item_cls = _list_item_class(annotation)
@@ -109,7 +112,9 @@ def merge_over_defaults(cls: type[Message], values: dict[str, Any], now_s: float
             merged[name] = merge_over_defaults(nested, value, now_s, where)
         elif item_cls is not None and isinstance(value, list):
             merged[name] = [
-                merge_over_defaults(item_cls, item, now_s, f"{where}[{i}]") if isinstance(item, dict) else item
+                merge_over_defaults(item_cls, item, now_s, f"{where}[{i}]")
+                if isinstance(item, dict)
+                else item
                 for i, item in enumerate(value)
             ]
         else:

@@ -159,7 +159,9 @@ class Launcher:
 
     async def _main(self) -> None:
         on_line = self._printer.line if self._printer is not None else None
-        self._host = SupervisorHost(self.plan, self.services, self.paths, mode="api", backoff=self._backoff, on_line=on_line)
+        self._host = SupervisorHost(
+            self.plan, self.services, self.paths, mode="api", backoff=self._backoff, on_line=on_line
+        )
         run = asyncio.ensure_future(self._host.run())
         ready = asyncio.ensure_future(self._host.ready.wait())
         await asyncio.wait([run, ready], return_when=asyncio.FIRST_COMPLETED)
@@ -179,13 +181,16 @@ class Launcher:
             except RuntimeError:  # the loop stopped meanwhile
                 pass
             except TimeoutError:
-                raise TimeoutError(f"the stack {self.project} did not stop within {timeout_s}s: {self._still_active()}") from None
+                raise TimeoutError(
+                    f"the stack {self.project} did not stop within {timeout_s}s: {self._still_active()}"
+                ) from None
         thread.join(timeout_s)
         if thread.is_alive():
             raise TimeoutError(f"the supervisor of {self.project} did not stop within {timeout_s}s")
 
     def _still_active(self) -> str:
         """What a stuck ``down`` is waiting for: the services that have not ended, with their state."""
+
         async def statuses_now() -> list[ServiceStatus]:
             return self._supervisor().statuses()
 
@@ -269,10 +274,14 @@ class Launcher:
             if predicate(statuses):
                 return statuses
             if time.monotonic() >= deadline:
-                raise StackNotReady(f"{self.project}: timed out after {timeout_s}s waiting for {what}:\n{format_statuses(statuses.values())}")
+                raise StackNotReady(
+                    f"{self.project}: timed out after {timeout_s}s waiting for {what}:\n{format_statuses(statuses.values())}"
+                )
             time.sleep(0.05)
 
-    def wait_healthy(self, timeout_s: float = 30.0, services: Sequence[str] | None = None) -> dict[str, ServiceStatus]:
+    def wait_healthy(
+        self, timeout_s: float = 30.0, services: Sequence[str] | None = None
+    ) -> dict[str, ServiceStatus]:
         """Until every (given) service is running and healthy, or a one-shot step exited 0."""
         names = list(services) if services is not None else self.services
         try:
@@ -284,7 +293,9 @@ class Launcher:
         except StackNotReady as exc:
             statuses = {s.name: s for s in self.ps()}
             late = [name for name in names if name not in statuses or not is_ready(statuses[name])]
-            raise StackNotReady(str(exc), "; ".join(self._not_ready_line(name, timeout_s) for name in late)) from None
+            raise StackNotReady(
+                str(exc), "; ".join(self._not_ready_line(name, timeout_s) for name in late)
+            ) from None
 
     def _not_ready_line(self, name: str, timeout_s: float) -> str:
         """``docking not healthy after 90s (its last line: ...)``: often a replacement that never declared its
@@ -294,4 +305,6 @@ class Launcher:
 
     def wait_state(self, name: str, state: str, timeout_s: float = 30.0) -> ServiceStatus:
         """Until ``name`` is in ``state`` (running | restarting | exited | stopped)."""
-        return self.wait_until(lambda st: name in st and st[name].state == state, timeout_s, f"{name} to be {state}")[name]
+        return self.wait_until(
+            lambda st: name in st and st[name].state == state, timeout_s, f"{name} to be {state}"
+        )[name]

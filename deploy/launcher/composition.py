@@ -27,8 +27,11 @@ def members_to_compose(names: Iterable[str], compose: str, replaced: Container[s
     """Which of a robot's services ``--compose`` puts in its one process: all of them (``all``), the light
     ones (``light``) or none (``""``); a replaced service keeps a process of its own (a user's program is
     not a zendock container member)."""
-    return [name for name in names if name not in replaced
-            and (compose == "all" or (compose == "light" and name in LIGHT_SERVICES))]
+    return [
+        name
+        for name in names
+        if name not in replaced and (compose == "all" or (compose == "light" and name in LIGHT_SERVICES))
+    ]
 
 
 #: When two members depend on the same service with different conditions, the strictest holds.
@@ -102,19 +105,25 @@ def _group_service(where: str, group: str, members: list[tuple[str, Any]], names
         words = spec.get("command")
         words = shlex.split(words) if isinstance(words, str) else list(words or [])
         if len(words) < 3 or words[:2] != ["python", "-m"] or not words[2].startswith("services."):
-            raise CompositionError(f"{where}: {name}'s command is not 'python -m services.<name> ...': "
-                                   "only zendock's services run in a container")
+            raise CompositionError(
+                f"{where}: {name}'s command is not 'python -m services.<name> ...': "
+                "only zendock's services run in a container"
+            )
         command += [*(["+"] if i else []), words[2].removeprefix("services."), *[str(w) for w in words[3:]]]
         namespaces.add(spec.get("namespace"))
     if len(namespaces) > 1:
-        raise CompositionError(f"{where}: the members have different namespaces {sorted(map(str, namespaces))}")
+        raise CompositionError(
+            f"{where}: the members have different namespaces {sorted(map(str, namespaces))}"
+        )
     first = members[0][1]
     # The group is healthy when its last member's node is: the node its own check watches when it names one
     # (a robot template's ``docking_r1`` is the node ``docking``), else the node named like the service.
     last_check = members[-1][1].get("healthcheck")
     watched = last_check.get("liveliness") if isinstance(last_check, dict) else None
     last_name = watched if isinstance(watched, str) else members[-1][0]
-    timeouts = [m.get("healthcheck", {}).get("timeout") for _, m in members if isinstance(m.get("healthcheck"), dict)]
+    timeouts = [
+        m.get("healthcheck", {}).get("timeout") for _, m in members if isinstance(m.get("healthcheck"), dict)
+    ]
     service: dict[str, Any] = {
         "command": command,
         "depends_on": _merge_depends([m.get("depends_on") or {} for _, m in members], {}, exclude=names),
@@ -147,9 +156,8 @@ def _merge_depends(all_depends: list[Any], grouped: dict[str, str], exclude: set
                 continue
             condition = condition or {}
             known = merged.get(target)
-            if known is None or _STRICTNESS.get(condition.get("condition", "service_started"), 0) > _STRICTNESS.get(
-                    known.get("condition", "service_started"), 0):
+            if known is None or _STRICTNESS.get(
+                condition.get("condition", "service_started"), 0
+            ) > _STRICTNESS.get(known.get("condition", "service_started"), 0):
                 merged[target] = condition
     return merged
-
-

@@ -37,8 +37,12 @@ def build_parser() -> argparse.ArgumentParser:
 def add_launch_options(parser: argparse.ArgumentParser) -> None:
     """Launch-time overrides of the stack's settings (shared by ``up`` and the daemon)."""
     parser.add_argument("--namespace", help="override the stack's namespace (e.g. one robot per project)")
-    parser.add_argument("--connect", action="append", metavar="ENDPOINT", help="override zenoh.connect (repeatable)")
-    parser.add_argument("--working-dir", metavar="DIR", help="where services run (default: the project directory)")
+    parser.add_argument(
+        "--connect", action="append", metavar="ENDPOINT", help="override zenoh.connect (repeatable)"
+    )
+    parser.add_argument(
+        "--working-dir", metavar="DIR", help="where services run (default: the project directory)"
+    )
     add_service_option(parser)
 
 

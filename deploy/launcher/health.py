@@ -74,7 +74,9 @@ class LivelinessWatcher:
                     session.close()
                     return
                 self._session = session
-                self._subscriber = session.liveliness().declare_subscriber(NODE_TOKENS, self._on_sample, history=True)
+                self._subscriber = session.liveliness().declare_subscriber(
+                    NODE_TOKENS, self._on_sample, history=True
+                )
             self.connected.set()
             return
 

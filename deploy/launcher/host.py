@@ -153,7 +153,13 @@ class SupervisorHost:
         if op == "ps":
             pass
         elif op == "info":
-            return {"ok": True, "project": self.plan.project, "pid": os.getpid(), "mode": self.mode, "services": list(sup.runners)}
+            return {
+                "ok": True,
+                "project": self.plan.project,
+                "pid": os.getpid(),
+                "mode": self.mode,
+                "services": list(sup.runners),
+            }
         elif op == "start":
             order = sup.start(names or self.services)
             await sup.wait_started(order, START_WAIT_S)
@@ -164,7 +170,11 @@ class SupervisorHost:
             await sup.wait_started(names or list(sup.runners), START_WAIT_S)
         elif op == "kill":
             signalled = sup.kill(names or list(sup.runners), int(request.get("signal", signal.SIGKILL)))
-            return {"ok": True, "signalled": signalled, "services": [status.to_dict() for status in sup.statuses()]}
+            return {
+                "ok": True,
+                "signalled": signalled,
+                "services": [status.to_dict() for status in sup.statuses()],
+            }
         elif op == "down":
             await self.down()
             statuses = {status.name: status for status in sup.statuses()}

@@ -41,7 +41,9 @@ class RotatingLog:
     a service's output never reaches another handler. As there, ``backups=0`` never rolls over.
     """
 
-    def __init__(self, path: Path, max_bytes: int = DEFAULT_MAX_BYTES, backups: int = DEFAULT_BACKUPS) -> None:
+    def __init__(
+        self, path: Path, max_bytes: int = DEFAULT_MAX_BYTES, backups: int = DEFAULT_BACKUPS
+    ) -> None:
         self.path = path
         self.max_bytes = max_bytes
         self.backups = backups
@@ -111,7 +113,11 @@ def failure_line(lines: list[str]) -> str | None:
     else the last line the service printed. None when it printed nothing.
     """
     starts = [i for i, text in enumerate(lines) if text.startswith(f"{EVENT_PREFIX}started")]
-    output = [text for text in lines[starts[-1] + 1 if starts else 0:] if text.strip() and not text.startswith(EVENT_PREFIX)]
+    output = [
+        text
+        for text in lines[starts[-1] + 1 if starts else 0 :]
+        if text.strip() and not text.startswith(EVENT_PREFIX)
+    ]
     if not output:
         return None
     if any(text.startswith("Traceback") for text in output):
@@ -121,7 +127,11 @@ def failure_line(lines: list[str]) -> str | None:
 
 def merge_by_time(per_service: list[list[LogLine]]) -> list[LogLine]:
     """Interleave several services' lines by timestamp (stable within a service)."""
-    tagged = [(line.stamp, index, order, line) for index, lines in enumerate(per_service) for order, line in enumerate(lines)]
+    tagged = [
+        (line.stamp, index, order, line)
+        for index, lines in enumerate(per_service)
+        for order, line in enumerate(lines)
+    ]
     return [item[3] for item in sorted(tagged, key=lambda item: (item[0], item[1], item[2]))]
 
 

@@ -177,5 +177,9 @@ def plan_launch(
         )
     zenoh_config = str((root / stack.zenoh_config).resolve()) if stack.zenoh_config else None
     return LaunchPlan(
-        project=stack.project_name, namespace=stack_namespace, connect=endpoints, services=services, zenoh_config=zenoh_config
+        project=stack.project_name,
+        namespace=stack_namespace,
+        connect=endpoints,
+        services=services,
+        zenoh_config=zenoh_config,
     )

@@ -172,7 +172,9 @@ class ServiceProcess:
             self.remember_descendants()
             grace_s = max(grace_s, 0.0)
             self._stop_task = asyncio.ensure_future(
-                self._escalate([(signal.SIGINT, 0.0), (signal.SIGTERM, grace_s / 2), (signal.SIGKILL, grace_s)])
+                self._escalate(
+                    [(signal.SIGINT, 0.0), (signal.SIGTERM, grace_s / 2), (signal.SIGKILL, grace_s)]
+                )
             )
         return self._stop_task
 

@@ -22,15 +22,25 @@ STACK_FILE_NAMES = ("stack.yaml", "zendock.yaml", "deploy/stack.yaml")
 
 def add_project_options(parser: argparse.ArgumentParser, *, short_file_flag: bool = True) -> None:
     flags = ("-f", "--file") if short_file_flag else ("--file",)
-    parser.add_argument(*flags, dest="file", metavar="FILE", help="the stack file (default: deploy/stack.yaml)")
-    parser.add_argument("-p", "--project-name", metavar="NAME", help="the project name (default: the stack's name)")
-    parser.add_argument("--project-directory", metavar="DIR", help="where .env and .zendock/ live (default: .)")
+    parser.add_argument(
+        *flags, dest="file", metavar="FILE", help="the stack file (default: deploy/stack.yaml)"
+    )
+    parser.add_argument(
+        "-p", "--project-name", metavar="NAME", help="the project name (default: the stack's name)"
+    )
+    parser.add_argument(
+        "--project-directory", metavar="DIR", help="where .env and .zendock/ live (default: .)"
+    )
 
 
 def add_stack_options(parser: argparse.ArgumentParser) -> None:
     """Options that change what the stack file resolves to (up, config)."""
-    parser.add_argument("--env-file", metavar="FILE", help="variables for interpolation (default: ./.env if present)")
-    parser.add_argument("--profile", action="append", default=[], metavar="PROFILE", help="enable a profile (repeatable)")
+    parser.add_argument(
+        "--env-file", metavar="FILE", help="variables for interpolation (default: ./.env if present)"
+    )
+    parser.add_argument(
+        "--profile", action="append", default=[], metavar="PROFILE", help="enable a profile (repeatable)"
+    )
 
 
 def project_dir(args: argparse.Namespace) -> Path:
@@ -66,8 +76,9 @@ def load_project_stack(args: argparse.Namespace) -> Stack:
     replacements = getattr(args, "replacements", None) or []
     namespace = getattr(args, "namespace", None)
     if replacements and namespace is not None:  # {robot} is the namespace the service will run in
-        return replace(apply_replacements(replace(stack, namespace=namespace), replacements),
-                       namespace=stack.namespace)
+        return replace(
+            apply_replacements(replace(stack, namespace=namespace), replacements), namespace=stack.namespace
+        )
     return apply_replacements(stack, replacements)
 
 

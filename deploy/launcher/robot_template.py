@@ -44,8 +44,9 @@ def expand_robots(document: dict[str, Any]) -> dict[str, Any]:
         raise RobotTemplateError("x-robots.robots: expected a non-empty list of robot names")
     for robot in robots:
         if not ROBOT_NAME.fullmatch(robot):
-            raise RobotTemplateError(f"x-robots.robots: {robot!r} is not a robot name (a letter, then letters, "
-                                     "digits or _)")
+            raise RobotTemplateError(
+                f"x-robots.robots: {robot!r} is not a robot name (a letter, then letters, digits or _)"
+            )
     if len(set(robots)) != len(robots):
         raise RobotTemplateError("x-robots.robots: a robot is named twice")
     if not isinstance(templates, dict) or not templates:

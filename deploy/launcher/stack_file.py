@@ -49,7 +49,9 @@ Restart = Annotated[RestartPolicy, BeforeValidator(parse_restart_policy)]
 
 def _drop_extensions(data: Any) -> Any:
     if isinstance(data, dict):
-        return {key: value for key, value in data.items() if not (isinstance(key, str) and key.startswith("x-"))}
+        return {
+            key: value for key, value in data.items() if not (isinstance(key, str) and key.startswith("x-"))
+        }
     return data
 
 
@@ -280,7 +282,10 @@ class Stack:
         return {
             "name": self.project_name,
             "namespace": self.namespace,
-            "zenoh": {"connect": list(self.connect), **({"config": self.zenoh_config} if self.zenoh_config else {})},
+            "zenoh": {
+                "connect": list(self.connect),
+                **({"config": self.zenoh_config} if self.zenoh_config else {}),
+            },
             "services": services,
         }
 
@@ -426,7 +431,9 @@ def _reference_problems(parsed: StackFile) -> list[str]:
                 join_namespace(parsed.namespace, spec.namespace)
             except ValueError as exc:
                 problems.append(f"services.{name}.namespace: {exc}")
-    cycle = find_cycle({name: [d for d in spec.depends_on if d != name] for name, spec in parsed.services.items()})
+    cycle = find_cycle(
+        {name: [d for d in spec.depends_on if d != name] for name, spec in parsed.services.items()}
+    )
     if cycle:
         problems.append(f"services: dependency cycle: {' -> '.join(cycle)}")
     return problems

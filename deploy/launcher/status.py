@@ -59,9 +59,17 @@ class ServiceStatus:
             if self.started_at is not None
             else None
         )
-        return {"name": self.name, "state": self.state, "pid": self.pid, "restarts": self.restarts,
-                "health": self.health, "exit_code": self.exit_code, "started_at": started_at,
-                "members": list(self.members), "namespace": self.namespace}
+        return {
+            "name": self.name,
+            "state": self.state,
+            "pid": self.pid,
+            "restarts": self.restarts,
+            "health": self.health,
+            "exit_code": self.exit_code,
+            "started_at": started_at,
+            "members": list(self.members),
+            "namespace": self.namespace,
+        }
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

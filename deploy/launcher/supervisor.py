@@ -148,7 +148,11 @@ class ServiceRunner:
             self._healthy_this_run = True
         if health != self._health:
             previous, self._health = self._health, health
-            reportable = health in ("healthy", "unhealthy") or previous in ("healthy", "unhealthy") and health == "starting"
+            reportable = (
+                health in ("healthy", "unhealthy")
+                or previous in ("healthy", "unhealthy")
+                and health == "starting"
+            )
             if reportable and not self._stopping:
                 self.event(f"health: {health}")
             if notify:
@@ -159,8 +163,12 @@ class ServiceRunner:
         assert check is not None and check.test_argv is not None
         failures = 0
         while not self._checks_stopped:
-            ok = await run_check(check.test_argv, cwd=self.plan.cwd, env=dict(self.plan.env), timeout_s=check.test_timeout_s)
-            if self._checks_stopped:  # the stop's cancellation can be lost inside the check (3.11's wait_for did)
+            ok = await run_check(
+                check.test_argv, cwd=self.plan.cwd, env=dict(self.plan.env), timeout_s=check.test_timeout_s
+            )
+            if (
+                self._checks_stopped
+            ):  # the stop's cancellation can be lost inside the check (3.11's wait_for did)
                 return
             if ok:
                 failures = 0
@@ -274,12 +282,17 @@ class ServiceRunner:
                 async with asyncio.timeout(delay_s):
                     await self._wake.wait()
             self.next_start_at = None
-        self._set_phase(Phase.STOPPED, f"stopped ({_describe_exit(self.exit_code)})" if self.exit_code is not None else "stopped")
+        self._set_phase(
+            Phase.STOPPED,
+            f"stopped ({_describe_exit(self.exit_code)})" if self.exit_code is not None else "stopped",
+        )
         self.event("stopped")
 
     async def _run_once(self, launched_at: float) -> int:
         try:
-            process = await ServiceProcess.spawn(self.plan.argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output)
+            process = await ServiceProcess.spawn(
+                self.plan.argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output
+            )
         except OSError as exc:
             self.event(f"cannot start {self.plan.argv[0]}: {exc.strerror or exc}")
             return SPAWN_FAILED_EXIT
@@ -335,7 +348,9 @@ class Supervisor:
         self._on_change = on_change
         self._changed = asyncio.Event()
         self._watcher: LivelinessWatcher | None = None
-        self._dependents = {name: [n for n, p in plan.services.items() if name in p.depends_on] for name in plan.services}
+        self._dependents = {
+            name: [n for n, p in plan.services.items() if name in p.depends_on] for name in plan.services
+        }
 
     # -- plumbing ------------------------------------------------------------------------------------
     def emit_line(self, service: str, text: str) -> None:
@@ -364,7 +379,10 @@ class Supervisor:
         """Start the liveliness watcher when some service's health depends on a token."""
         if self.plan.liveliness_needed and self._watcher is None:
             self._watcher = LivelinessWatcher(
-                self.plan.connect, asyncio.get_running_loop(), self._on_tokens, config_file=self.plan.zenoh_config
+                self.plan.connect,
+                asyncio.get_running_loop(),
+                self._on_tokens,
+                config_file=self.plan.zenoh_config,
             )
             self._watcher.start()
 
@@ -373,9 +391,14 @@ class Supervisor:
         await self.stop(list(self.runners))
         if self._watcher is not None:
             watcher, self._watcher = self._watcher, None
-            closed = await asyncio.get_running_loop().run_in_executor(None, watcher.close_within, WATCHER_CLOSE_S)
+            closed = await asyncio.get_running_loop().run_in_executor(
+                None, watcher.close_within, WATCHER_CLOSE_S
+            )
             if not closed:
-                self.emit_line("zendock", f"the liveliness watcher's session did not close within {WATCHER_CLOSE_S:g}s; left to close")
+                self.emit_line(
+                    "zendock",
+                    f"the liveliness watcher's session did not close within {WATCHER_CLOSE_S:g}s; left to close",
+                )
         for runner in self.runners.values():
             runner.close_log()
 
@@ -400,7 +423,9 @@ class Supervisor:
             if ended and code == 0 and runner.starts:
                 return None
         if ended:
-            raise DependencyFailed(f"dependency {dependency} {runner.detail or 'exited'} ({condition} not met)")
+            raise DependencyFailed(
+                f"dependency {dependency} {runner.detail or 'exited'} ({condition} not met)"
+            )
         return f"{dependency} ({condition})"
 
     def with_dependencies(self, names: Iterable[str]) -> list[str]:
@@ -463,7 +488,11 @@ class Supervisor:
 
     def kill(self, names: Sequence[str], sig: int) -> list[str]:
         """Signal the process groups of running services; returns the ones signalled."""
-        return [name for name in self._check_names(names) if name in self.runners and self.runners[name].send_signal(sig)]
+        return [
+            name
+            for name in self._check_names(names)
+            if name in self.runners and self.runners[name].send_signal(sig)
+        ]
 
     async def wait_started(self, names: Sequence[str], timeout_s: float) -> bool:
         """Until each service has been started (or ended: it exited, its dependencies failed)."""
@@ -471,7 +500,10 @@ class Supervisor:
         def started() -> bool:
             return all(
                 name in self.runners
-                and (self.runners[name].phase in (Phase.RUNNING, Phase.RESTARTING) or not self.runners[name].active)
+                and (
+                    self.runners[name].phase in (Phase.RUNNING, Phase.RESTARTING)
+                    or not self.runners[name].active
+                )
                 for name in names
             )
 

@@ -10,13 +10,26 @@ from shared.session import DEFAULT_ROUTER_ENDPOINT
 
 def add_bus_flags(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("bus")
-    group.add_argument("--connect", action="append", metavar="ENDPOINT",
-                       help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-                            f"default {DEFAULT_ROUTER_ENDPOINT})")
-    group.add_argument("--namespace", default=None, metavar="NS",
-                       help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)")
-    group.add_argument("--connect-timeout", type=float, default=DEFAULT_CONNECT_TIMEOUT_S, metavar="S",
-                       help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})")
+    group.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
+        f"default {DEFAULT_ROUTER_ENDPOINT})",
+    )
+    group.add_argument(
+        "--namespace",
+        default=None,
+        metavar="NS",
+        help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)",
+    )
+    group.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=DEFAULT_CONNECT_TIMEOUT_S,
+        metavar="S",
+        help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})",
+    )
 
 
 def options_from(args: argparse.Namespace) -> BusOptions:

@@ -63,8 +63,9 @@ def message_encoding_of(mime: str) -> str:
 class McapLog:
     """An MCAP file being written; channels and schemas are registered on first use."""
 
-    def __init__(self, output: str | Path | IO[bytes], compression: str = "zstd",
-                 chunk_size: int = 1024 * 1024) -> None:
+    def __init__(
+        self, output: str | Path | IO[bytes], compression: str = "zstd", chunk_size: int = 1024 * 1024
+    ) -> None:
         if compression not in COMPRESSIONS:
             raise ValueError(f"compression must be one of {sorted(COMPRESSIONS)}, got {compression!r}")
         self._file: IO[bytes] | None = None
@@ -110,8 +111,13 @@ class McapLog:
             )
             self._raw_channels[(sample.key, sample.encoding)] = channel_id
         log_time = self._log_time(sample.log_time_ns)
-        self._writer.add_message(channel_id, log_time=log_time, data=sample.payload, publish_time=log_time,
-                                 sequence=(sample.sequence or 0) & 0xFFFFFFFF)
+        self._writer.add_message(
+            channel_id,
+            log_time=log_time,
+            data=sample.payload,
+            publish_time=log_time,
+            sequence=(sample.sequence or 0) & 0xFFFFFFFF,
+        )
         self.raw_messages += 1
         self.bytes_written += len(sample.payload)
 
@@ -121,8 +127,9 @@ class McapLog:
         if channel_id is None:
             schema = message.schema
             schema_id = self._schema_id(schema.name, schema.encoding, schema.data)
-            channel_id = self._writer.register_channel(topic=message.topic, message_encoding=schema.message_encoding,
-                                                       schema_id=schema_id)
+            channel_id = self._writer.register_channel(
+                topic=message.topic, message_encoding=schema.message_encoding, schema_id=schema_id
+            )
             self._view_channels[message.topic] = channel_id
         log_time = self._log_time(log_time_ns)
         self._writer.add_message(channel_id, log_time=log_time, data=message.data, publish_time=log_time)
@@ -133,8 +140,9 @@ class McapLog:
         self._writer.add_metadata(name, {k: str(v) for k, v in values.items()})
 
     def add_attachment(self, name: str, media_type: str, data: bytes, log_time_ns: int) -> None:
-        self._writer.add_attachment(create_time=log_time_ns, log_time=log_time_ns, name=name,
-                                    media_type=media_type, data=data)
+        self._writer.add_attachment(
+            create_time=log_time_ns, log_time=log_time_ns, name=name, media_type=media_type, data=data
+        )
 
     def finish(self) -> None:
         """Write the summary section and close the file (idempotent)."""

@@ -101,7 +101,8 @@ class Recording:
         """The recorded samples in arrival order, optionally only those on ``keys``."""
         wanted = set(keys) if keys else None
         topics = [
-            c.topic for c in self._summary.channels.values()
+            c.topic
+            for c in self._summary.channels.values()
             if RAW_KEY_METADATA in c.metadata and (wanted is None or c.metadata[RAW_KEY_METADATA] in wanted)
         ]
         if not topics:
@@ -139,5 +140,7 @@ class Recording:
         """The world file attached at recording time, if any."""
         for attachment in self._reader.iter_attachments():
             if attachment.name == WORLD_ATTACHMENT:
-                return parse_world(yaml.safe_load(attachment.data.decode()), f"{self.path}:{WORLD_ATTACHMENT}")
+                return parse_world(
+                    yaml.safe_load(attachment.data.decode()), f"{self.path}:{WORLD_ATTACHMENT}"
+                )
         return None

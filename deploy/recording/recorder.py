@@ -103,8 +103,13 @@ class BusRecorder:
     ``views``: also write the Foxglove-schema channels (conversion runs on the writer thread).
     """
 
-    def __init__(self, session: zenoh.Session, selectors: Sequence[str], mcap_log: McapLog | Ros2BagLog,
-                 views: bool = True) -> None:
+    def __init__(
+        self,
+        session: zenoh.Session,
+        selectors: Sequence[str],
+        mcap_log: McapLog | Ros2BagLog,
+        views: bool = True,
+    ) -> None:
         self._log = mcap_log
         self._views = views
         self._clock = _WallClock()
@@ -117,10 +122,13 @@ class BusRecorder:
         self._thread = threading.Thread(target=self._write_loop, name="mcap-writer", daemon=True)
         self._thread.start()
         self._subscribers = [
-            session.declare_subscriber(selector, zenoh.handlers.FifoChannel(FIFO_CAPACITY)) for selector in selectors
+            session.declare_subscriber(selector, zenoh.handlers.FifoChannel(FIFO_CAPACITY))
+            for selector in selectors
         ]
         self._readers = [
-            threading.Thread(target=self._read_loop, args=(sub.handler,), name=f"zenoh-reader-{i}", daemon=True)
+            threading.Thread(
+                target=self._read_loop, args=(sub.handler,), name=f"zenoh-reader-{i}", daemon=True
+            )
             for i, sub in enumerate(self._subscribers)
         ]
         for reader in self._readers:
@@ -140,13 +148,15 @@ class BusRecorder:
             stamp = sample.timestamp
             arrived = stamp.get_time_as_ntp64().as_nanos() if stamp is not None else self._clock.now_ns()
             attachment = sample.attachment
-            self._queue.put((
-                str(sample.key_expr),
-                str(sample.encoding),
-                sample.payload.to_bytes(),
-                attachment.to_bytes() if attachment is not None else None,
-                arrived,
-            ))
+            self._queue.put(
+                (
+                    str(sample.key_expr),
+                    str(sample.encoding),
+                    sample.payload.to_bytes(),
+                    attachment.to_bytes() if attachment is not None else None,
+                    arrived,
+                )
+            )
 
     # --- the writer thread ---------------------------------------------------------------------------
 

@@ -35,7 +35,7 @@ def remap_key(key: str, recorded_namespace: str, namespace: str | None) -> str:
     if namespace is None:
         return key
     recorded = normalise_namespace(recorded_namespace)
-    relative = key[len(recorded) + 1:] if recorded and key.startswith(recorded + "/") else key
+    relative = key[len(recorded) + 1 :] if recorded and key.startswith(recorded + "/") else key
     return topic_key(namespace, relative)
 
 
@@ -56,7 +56,9 @@ class ReplayStats:
 
 
 class _KeyPublisher:
-    def __init__(self, session: zenoh.Session, key: str, encoding: str, type_name: str, namespace: str) -> None:
+    def __init__(
+        self, session: zenoh.Session, key: str, encoding: str, type_name: str, namespace: str
+    ) -> None:
         self._publisher = session.declare_publisher(
             key,
             encoding=zenoh.Encoding(encoding) if encoding else zenoh.Encoding.ZENOH_BYTES,
@@ -64,7 +66,8 @@ class _KeyPublisher:
             congestion_control=zenoh.CongestionControl.BLOCK,
         )
         self._token = session.liveliness().declare_token(
-            endpoint_token_key("pub", namespace, REPLAY_NODE_NAME, type_name, key))
+            endpoint_token_key("pub", namespace, REPLAY_NODE_NAME, type_name, key)
+        )
         self._sequence = 0
         self._gid = publisher_gid(self._publisher.id)
 

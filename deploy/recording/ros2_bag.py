@@ -45,7 +45,7 @@ def is_ros2_bag(path: str | Path) -> bool:
 def ros_topic(key: str, namespace: str) -> str:
     """``robot/camera/image_raw`` in namespace ``robot`` -> ``/camera/image_raw``."""
     prefix = normalise_namespace(namespace)
-    relative = key[len(prefix) + 1:] if prefix and key.startswith(prefix + "/") else key
+    relative = key[len(prefix) + 1 :] if prefix and key.startswith(prefix + "/") else key
     return "/" + relative.strip("/")
 
 
@@ -118,9 +118,14 @@ class Ros2BagRecording:
         custom = _custom_data(self.path)
         self._namespace = normalise_namespace(custom.get(NAMESPACE_DATA, ""))
         store = ros_types.typestore()
-        self._connections = [c for c in self._reader.connections
-                             if c.msgtype in store.types and _zendock_type(c.msgtype) is not None]
-        self.unknown_types = sorted({c.msgtype for c in self._reader.connections} - {c.msgtype for c in self._connections})
+        self._connections = [
+            c
+            for c in self._reader.connections
+            if c.msgtype in store.types and _zendock_type(c.msgtype) is not None
+        ]
+        self.unknown_types = sorted(
+            {c.msgtype for c in self._reader.connections} - {c.msgtype for c in self._connections}
+        )
 
     def __enter__(self) -> Ros2BagRecording:
         return self
@@ -154,16 +159,26 @@ class Ros2BagRecording:
             try:
                 msg = ros_types.from_ros(ros_types.from_cdr(data, connection.msgtype), zendock_type)
             except (ros_types.Ros2TypeError, MessageError) as exc:
-                raise ConfigError(f"{self.path}: a {connection.msgtype} on {connection.topic} does not read: {exc}") from None
+                raise ConfigError(
+                    f"{self.path}: a {connection.msgtype} on {connection.topic} does not read: {exc}"
+                ) from None
             type_name = msg.TYPE_NAME
-            yield RawMessage(self._key(connection.topic), str(encoding_for(type_name)), type_name, msg.encode(),
-                             timestamp, 0)
+            yield RawMessage(
+                self._key(connection.topic),
+                str(encoding_for(type_name)),
+                type_name,
+                msg.encode(),
+                timestamp,
+                0,
+            )
 
 
 def _custom_data(bag: Path) -> dict[str, str]:
     """``custom_data`` of the bag's metadata.yaml (rosbag2's place for a recorder's own notes)."""
     try:
-        info = yaml.safe_load((bag / "metadata.yaml").read_text(encoding="utf-8"))["rosbag2_bagfile_information"]
+        info = yaml.safe_load((bag / "metadata.yaml").read_text(encoding="utf-8"))[
+            "rosbag2_bagfile_information"
+        ]
     except (OSError, yaml.YAMLError, KeyError, TypeError):
         return {}
     custom = info.get("custom_data") if isinstance(info, dict) else None

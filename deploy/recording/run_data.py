@@ -38,11 +38,15 @@ from shared.world import World
 class _Collected:
     """Series gathered in one pass over the recording."""
 
-    truth: list[tuple[float, float, float, float, float]] = field(default_factory=list)  # t_log, stamp, x, y, yaw
+    truth: list[tuple[float, float, float, float, float]] = field(
+        default_factory=list
+    )  # t_log, stamp, x, y, yaw
     believed: list[tuple[float, float, float, float]] = field(default_factory=list)  # t_log, x, y, yaw
     plans: list[np.ndarray] = field(default_factory=list)
     battery: list[tuple[float, float]] = field(default_factory=list)
-    ranges: list[tuple[float, float, float]] = field(default_factory=list)  # stamp, range, field of view (echoes)
+    ranges: list[tuple[float, float, float]] = field(
+        default_factory=list
+    )  # stamp, range, field of view (echoes)
     mount: Pose2D | None = None
     last_map: OccupancyGrid | None = None
 
@@ -102,9 +106,15 @@ def sonar_echoes(truth: np.ndarray, ranges: np.ndarray, mount: Pose2D) -> np.nda
     x = np.interp(ranges[:, 0], truth[:, 0], truth[:, 1])
     y = np.interp(ranges[:, 0], truth[:, 0], truth[:, 2])
     yaw = np.interp(ranges[:, 0], truth[:, 0], np.unwrap(truth[:, 3]))
-    return np.column_stack([x + mount.x * np.cos(yaw) - mount.y * np.sin(yaw),
-                            y + mount.x * np.sin(yaw) + mount.y * np.cos(yaw),
-                            yaw + mount.yaw, ranges[:, 1], ranges[:, 2]])
+    return np.column_stack(
+        [
+            x + mount.x * np.cos(yaw) - mount.y * np.sin(yaw),
+            y + mount.x * np.sin(yaw) + mount.y * np.cos(yaw),
+            yaw + mount.yaw,
+            ranges[:, 1],
+            ranges[:, 2],
+        ]
+    )
 
 
 def _map_image(grid: OccupancyGrid) -> MapImage:
@@ -116,8 +126,15 @@ def _map_image(grid: OccupancyGrid) -> MapImage:
 def run_picture(recording: Recording, namespace: str | None = None, world: World | None = None) -> RunPicture:
     """The run in ``recording`` for one robot (``namespace``: default, the recording's own)."""
     ns = recording.recording_info().get("namespace", "") if namespace is None else namespace
-    wanted = (topics.GROUND_TRUTH_POSE, topics.POSE2D, topics.PLAN, topics.BATTERY_STATUS, topics.ULTRASONIC,
-              topics.TF_STATIC, topics.MAP)
+    wanted = (
+        topics.GROUND_TRUTH_POSE,
+        topics.POSE2D,
+        topics.PLAN,
+        topics.BATTERY_STATUS,
+        topics.ULTRASONIC,
+        topics.TF_STATIC,
+        topics.MAP,
+    )
     keys = {topic_key(ns, t): t for t in wanted}
     start_ns, _ = recording.time_range_ns()
     data = _collect(recording.raw_messages([k for k in keys if k in recording.raw_keys()]), keys, start_ns)
@@ -125,7 +142,9 @@ def run_picture(recording: Recording, namespace: str | None = None, world: World
         truth = np.array(data.truth)
         timed = truth[:, [0, 2, 3]]
         mount = data.mount or Pose2D(0.0, 0.0, 0.0)
-        echoes = sonar_echoes(truth[np.argsort(truth[:, 1])][:, 1:5], np.array(data.ranges).reshape(-1, 3), mount)
+        echoes = sonar_echoes(
+            truth[np.argsort(truth[:, 1])][:, 1:5], np.array(data.ranges).reshape(-1, 3), mount
+        )
     else:
         timed = np.array(data.believed)[:, :3] if data.believed else np.zeros((0, 3))
         echoes = np.zeros((0, 5))

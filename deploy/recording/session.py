@@ -87,15 +87,20 @@ def record(
     else:
         mcap_log = McapLog(request.output, compression=request.compression)
     started_ns = time.time_ns()
-    mcap_log.add_metadata(RECORDING_METADATA, {
-        "namespace": namespace,
-        "selectors": ",".join(selectors),
-        "started": _dt.datetime.now(_dt.UTC).isoformat(timespec="milliseconds"),
-        "host": socket.gethostname(),
-        "world": str(request.world) if request.world is not None else "",
-    })
+    mcap_log.add_metadata(
+        RECORDING_METADATA,
+        {
+            "namespace": namespace,
+            "selectors": ",".join(selectors),
+            "started": _dt.datetime.now(_dt.UTC).isoformat(timespec="milliseconds"),
+            "host": socket.gethostname(),
+            "world": str(request.world) if request.world is not None else "",
+        },
+    )
     if world is not None and request.world is not None:
-        mcap_log.add_attachment(WORLD_ATTACHMENT, "application/yaml", Path(request.world).read_bytes(), started_ns)
+        mcap_log.add_attachment(
+            WORLD_ATTACHMENT, "application/yaml", Path(request.world).read_bytes(), started_ns
+        )
         if request.views:
             topic = view_topic(namespace, WORLD_VIEW_TOPIC)
             mcap_log.write_view(world_scene(topic, world, started_ns), started_ns)

@@ -33,16 +33,18 @@ def summarize(tracker: SequenceTracker, type_of: Callable[[str], str]) -> list[K
     rows = []
     for key in sorted(tracker.keys):
         tally = tracker.keys[key]
-        rows.append(KeySummary(
-            key=key,
-            type_name=type_of(key),
-            received=tally.received,
-            lost=tally.lost,
-            gaps=tuple(tally.gaps),
-            publishers=len(tally.streams),
-            unnumbered=tally.unnumbered,
-            duplicates=tally.duplicates,
-        ))
+        rows.append(
+            KeySummary(
+                key=key,
+                type_name=type_of(key),
+                received=tally.received,
+                lost=tally.lost,
+                gaps=tuple(tally.gaps),
+                publishers=len(tally.streams),
+                unnumbered=tally.unnumbered,
+                duplicates=tally.duplicates,
+            )
+        )
     return rows
 
 
@@ -55,7 +57,9 @@ def format_summary(rows: list[KeySummary], duration_s: float) -> str:
     for r in rows:
         rate = r.received / duration_s if duration_s > 0 else 0.0
         published = str(r.published) if r.received > r.unnumbered else "-"
-        lines.append(f"{r.key:<{width}}  {r.type_name or '-':<34} {r.received:>9} {published:>9} {r.lost:>6} {rate:>7.1f}")
+        lines.append(
+            f"{r.key:<{width}}  {r.type_name or '-':<34} {r.received:>9} {published:>9} {r.lost:>6} {rate:>7.1f}"
+        )
         if r.gaps:
             shown = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in r.gaps[:GAPS_SHOWN])
             more = f" and {len(r.gaps) - GAPS_SHOWN} more" if len(r.gaps) > GAPS_SHOWN else ""
@@ -70,10 +74,17 @@ def format_summary(rows: list[KeySummary], duration_s: float) -> str:
 def summary_metadata(rows: list[KeySummary], duration_s: float) -> dict[str, str]:
     """The summary as MCAP metadata: one JSON record per key, plus totals."""
     values = {
-        r.key: json.dumps({
-            "type": r.type_name, "received": r.received, "lost": r.lost, "publishers": r.publishers,
-            "unnumbered": r.unnumbered, "duplicates": r.duplicates, "gaps": [list(g) for g in r.gaps],
-        })
+        r.key: json.dumps(
+            {
+                "type": r.type_name,
+                "received": r.received,
+                "lost": r.lost,
+                "publishers": r.publishers,
+                "unnumbered": r.unnumbered,
+                "duplicates": r.duplicates,
+                "gaps": [list(g) for g in r.gaps],
+            }
+        )
         for r in rows
     }
     values["total_received"] = str(sum(r.received for r in rows))

@@ -24,8 +24,16 @@ from deploy.paths import REPO_ROOT
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
 WORLDS_DIR = REPO_ROOT / "deploy" / "worlds"
 #: The marker's arguments (anything else is a mistake, reported as such).
-MARKER_ARGUMENTS = ("world", "rtf", "detector", "controller", "seed", "localisation_error", "services",
-                    "healthy_timeout_s")
+MARKER_ARGUMENTS = (
+    "world",
+    "rtf",
+    "detector",
+    "controller",
+    "seed",
+    "localisation_error",
+    "services",
+    "healthy_timeout_s",
+)
 DETECTORS = ("aruco", "synthetic")
 
 
@@ -49,8 +57,14 @@ class StackConfig:
         """The stack file's variables (``deploy/stack.yaml``'s header lists them), as ``zendock demo`` sets them."""
         from deploy.demo import DemoOptions, stack_environment  # noqa: PLC0415 - only when a stack starts
 
-        options = DemoOptions(world=self.world, controller=self.controller, detector=self.detector, rtf=self.rtf,
-                              seed=self.seed, localisation_error=self.localisation_error)
+        options = DemoOptions(
+            world=self.world,
+            controller=self.controller,
+            detector=self.detector,
+            rtf=self.rtf,
+            seed=self.seed,
+            localisation_error=self.localisation_error,
+        )
         return stack_environment(options, endpoint, project_dir)
 
 
@@ -64,8 +78,10 @@ def resolve_world(value: str | Path, rootdir: Path) -> Path:
     if "/" not in text and not text.endswith((".yaml", ".yml")):
         path = WORLDS_DIR / f"{text}.yaml"
         if not path.is_file():
-            raise ValueError(f"world={text!r}: no shipped world of that name (one of: {', '.join(shipped_worlds())}), "
-                             "nor a path to a world file")
+            raise ValueError(
+                f"world={text!r}: no shipped world of that name (one of: {', '.join(shipped_worlds())}), "
+                "nor a path to a world file"
+            )
         return path
     path = Path(text) if Path(text).is_absolute() else rootdir / text
     if not path.is_file():
@@ -118,14 +134,20 @@ def merge_markers(marker_kwargs: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     for kwargs in marker_kwargs:
         unknown = sorted(set(kwargs) - set(MARKER_ARGUMENTS))
         if unknown:
-            raise ValueError(f"@pytest.mark.zendock: unknown argument(s) {', '.join(unknown)} "
-                             f"(known: {', '.join(MARKER_ARGUMENTS)})")
+            raise ValueError(
+                f"@pytest.mark.zendock: unknown argument(s) {', '.join(unknown)} "
+                f"(known: {', '.join(MARKER_ARGUMENTS)})"
+            )
         merged.update(kwargs)
     return merged
 
 
-def stack_config(marker: Mapping[str, Any], cli_services: Sequence[str] = (), cli_rtf: str | None = None,
-                 rootdir: Path = REPO_ROOT) -> StackConfig:
+def stack_config(
+    marker: Mapping[str, Any],
+    cli_services: Sequence[str] = (),
+    cli_rtf: str | None = None,
+    rootdir: Path = REPO_ROOT,
+) -> StackConfig:
     """The stack for one test: the (merged) marker's arguments, then the command line's."""
     defaults = StackConfig()
     world = resolve_world(marker["world"], rootdir) if "world" in marker else defaults.world

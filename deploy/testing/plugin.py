@@ -40,12 +40,21 @@ LOGS_ATTACHED_KEY = pytest.StashKey[bool]()
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("zendock", "zendock stacks (the zendock_stack fixture)")
-    group.addoption("--zendock-service", action="append", default=[], metavar="NAME=COMMAND",
-                    help="run COMMAND in place of zendock's service NAME in every stack of the run "
-                         "(repeatable; overrides a marker's services for the same NAME)")
-    group.addoption("--zendock-rtf", default=None, metavar="RTF",
-                    help="the simulator's real-time factor in every stack of the run (overrides markers; "
-                         "default: the marker's, else 4)")
+    group.addoption(
+        "--zendock-service",
+        action="append",
+        default=[],
+        metavar="NAME=COMMAND",
+        help="run COMMAND in place of zendock's service NAME in every stack of the run "
+        "(repeatable; overrides a marker's services for the same NAME)",
+    )
+    group.addoption(
+        "--zendock-rtf",
+        default=None,
+        metavar="RTF",
+        help="the simulator's real-time factor in every stack of the run (overrides markers; "
+        "default: the marker's, else 4)",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -69,8 +78,9 @@ def config_for(item: pytest.Item, config: pytest.Config) -> StackConfig:
     if any(marker.args for marker in markers):
         raise ValueError("@pytest.mark.zendock takes keyword arguments only (world=..., services=...)")
     merged = merge_markers([marker.kwargs for marker in reversed(markers)])
-    return stack_config(merged, config.getoption("zendock_service"), config.getoption("zendock_rtf"),
-                        config.rootpath)
+    return stack_config(
+        merged, config.getoption("zendock_service"), config.getoption("zendock_rtf"), config.rootpath
+    )
 
 
 def attach_logs(report: Any, logs_dir: Path, services: Sequence[str], lines: int = LOG_TAIL_LINES) -> int:
@@ -103,7 +113,9 @@ def zendock_stack(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Ze
     from deploy.testing.stack import StackUnhealthy, ZendockStack  # noqa: PLC0415
 
     try:
-        stack = ZendockStack(config_for(request.node, request.config), tmp_path / "zendock", request.config.rootpath)
+        stack = ZendockStack(
+            config_for(request.node, request.config), tmp_path / "zendock", request.config.rootpath
+        )
     except ValueError as exc:  # a marker's or an option's mistake, a ConfigError from the stack file
         problem = f"zendock stack: {exc}"
     else:

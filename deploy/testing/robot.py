@@ -83,7 +83,7 @@ class KeyRecording:
             msg = decode_sample(sample, self.msg_type)
         except MessageError as exc:
             with self._changed:
-                self.errors = [*self.errors[-KEEP + 1:], str(exc)]
+                self.errors = [*self.errors[-KEEP + 1 :], str(exc)]
                 self._changed.notify_all()
             return
         with self._changed:
@@ -106,14 +106,18 @@ class KeyRecording:
                 checked = self.count
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    raise WaitTimeout(self.describe(f"no message on {self.key} {what} within {timeout_s:g} s"))
+                    raise WaitTimeout(
+                        self.describe(f"no message on {self.key} {what} within {timeout_s:g} s")
+                    )
                 self._changed.wait(min(remaining, 0.5))
 
     def describe(self, headline: str) -> str:
         last = [repr(m)[:240] for m in self.messages[-3:]]
-        return (f"{headline}; {self.count} message(s) arrived, {len(self.errors)} undecodable"
-                + (f"; the last: {last}" if last else "")
-                + (f"; last decoding error: {self.errors[-1]}" if self.errors else ""))
+        return (
+            f"{headline}; {self.count} message(s) arrived, {len(self.errors)} undecodable"
+            + (f"; the last: {last}" if last else "")
+            + (f"; last decoding error: {self.errors[-1]}" if self.errors else "")
+        )
 
     def close(self) -> None:
         with contextlib.suppress(Exception):  # the session may be closing already
@@ -147,8 +151,12 @@ class Robot:
         self._spinner = spin_in_background(self.node)
         try:
             self.navigation = NavigationClient(self.node)
-            self._dock_client: ActionClient[Any, Any, Any] = ActionClient(self.node, DOCK_ROBOT, topics.DOCK_ROBOT)
-            self._undock_client: ActionClient[Any, Any, Any] = ActionClient(self.node, UNDOCK_ROBOT, topics.UNDOCK_ROBOT)
+            self._dock_client: ActionClient[Any, Any, Any] = ActionClient(
+                self.node, DOCK_ROBOT, topics.DOCK_ROBOT
+            )
+            self._undock_client: ActionClient[Any, Any, Any] = ActionClient(
+                self.node, UNDOCK_ROBOT, topics.UNDOCK_ROBOT
+            )
             self._recordings: dict[tuple[str, type[Message] | None], KeyRecording] = {}
             self._publishers: dict[tuple[str, type[Message]], Publisher[Any]] = {}
             self._battery = self.watch(topics.BATTERY_STATUS, BatteryState)
@@ -185,15 +193,27 @@ class Robot:
         :meth:`wait_for` also sees what arrived in between. Messages are decoded as ``msg_type``, or as
         the type their encoding names; without ``msg_type`` an existing recording of the key is reused."""
         full_key = self.node.key(key)
-        recording = next((r for (k, t), r in self._recordings.items()
-                          if k == full_key and (msg_type is None or t is msg_type)), None)
+        recording = next(
+            (
+                r
+                for (k, t), r in self._recordings.items()
+                if k == full_key and (msg_type is None or t is msg_type)
+            ),
+            None,
+        )
         if recording is None:
             recording = KeyRecording(self.session, full_key, msg_type)
             self._recordings[(full_key, msg_type)] = recording
         return recording
 
-    def wait_for(self, key: str, predicate: Callable[[Any], bool] = lambda _m: True, timeout_s: float = 30.0,
-                 msg_type: type[Message] | None = None, what: str = "matching the condition") -> Any:
+    def wait_for(
+        self,
+        key: str,
+        predicate: Callable[[Any], bool] = lambda _m: True,
+        timeout_s: float = 30.0,
+        msg_type: type[Message] | None = None,
+        what: str = "matching the condition",
+    ) -> Any:
         """The first message on ``key`` satisfying ``predicate``: the latest one already received, or one
         to come. Raises :class:`WaitTimeout` (an ``AssertionError``) after ``timeout_s`` wall seconds,
         listing how many messages came and the last ones."""
@@ -208,8 +228,13 @@ class Robot:
             self._publishers[(key, type(message))] = publisher
         publisher.publish(message)
 
-    def set_battery(self, percentage: float, drain_scale: float = math.nan, frozen: bool = False,
-                    timeout_s: float = REQUEST_TIMEOUT_S) -> SetBatteryStateResponse:
+    def set_battery(
+        self,
+        percentage: float,
+        drain_scale: float = math.nan,
+        frozen: bool = False,
+        timeout_s: float = REQUEST_TIMEOUT_S,
+    ) -> SetBatteryStateResponse:
         """Put the simulated battery at ``percentage`` (0..1) through ``battery/set_state``."""
         request = SetBatteryStateRequest(percentage=percentage, drain_scale=drain_scale, frozen=frozen)
         return self._call(SET_BATTERY_STATE, topics.BATTERY_SET_STATE, request, timeout_s)
@@ -223,14 +248,19 @@ class Robot:
         deadline = time.monotonic() + timeout_s
         while True:
             try:
-                return self.node.call(srv, name, request, timeout_s=min(5.0, max(deadline - time.monotonic(), 0.5)))
+                return self.node.call(
+                    srv, name, request, timeout_s=min(5.0, max(deadline - time.monotonic(), 0.5))
+                )
             except ServiceUnavailable as exc:
                 if time.monotonic() >= deadline:
-                    raise WaitTimeout(f"{self.node.key(name)}: no answer within {timeout_s:g} s ({exc})") from None
+                    raise WaitTimeout(
+                        f"{self.node.key(name)}: no answer within {timeout_s:g} s ({exc})"
+                    ) from None
                 time.sleep(0.2)  # nobody declared it yet: ask again shortly, not in a tight loop
 
-    def dock(self, dock_id: str | None = None, timeout_s: float = 300.0,
-             server_timeout_s: float = SERVER_TIMEOUT_S) -> DockRobotResult:
+    def dock(
+        self, dock_id: str | None = None, timeout_s: float = 300.0, server_timeout_s: float = SERVER_TIMEOUT_S
+    ) -> DockRobotResult:
         """Send a ``dock_robot`` goal (the nearest dock without ``dock_id``) and wait for its result.
 
         Returns the result (``success``, ``error_code``, ``num_retries``) however the goal ended; raises
@@ -240,22 +270,29 @@ class Robot:
         goal = DockRobotGoal(use_dock_id=True, dock_id=dock_id or "")
         return self._run_action(self._dock_client, goal, timeout_s, server_timeout_s)
 
-    def undock(self, timeout_s: float = 60.0, server_timeout_s: float = SERVER_TIMEOUT_S) -> UndockRobotResult:
+    def undock(
+        self, timeout_s: float = 60.0, server_timeout_s: float = SERVER_TIMEOUT_S
+    ) -> UndockRobotResult:
         """Send an ``undock_robot`` goal and wait for its result (as :meth:`dock`)."""
         return self._run_action(self._undock_client, UndockRobotGoal(), timeout_s, server_timeout_s)
 
-    def _run_action(self, client: ActionClient[Any, Any, Any], goal: Message, timeout_s: float,
-                    server_timeout_s: float) -> Any:
+    def _run_action(
+        self, client: ActionClient[Any, Any, Any], goal: Message, timeout_s: float, server_timeout_s: float
+    ) -> Any:
         if not client.server_ready(timeout_s=server_timeout_s):
-            raise WaitTimeout(f"no {client.name} server in namespace {self.namespace!r} within {server_timeout_s:g} s")
+            raise WaitTimeout(
+                f"no {client.name} server in namespace {self.namespace!r} within {server_timeout_s:g} s"
+            )
         done = threading.Event()
         handle: ClientGoal[Any, Any] = client.send_goal(goal, on_done=lambda _h: done.set())
         if not done.wait(timeout_s):
             client.cancel_goal(handle)
             done.wait(5.0)
             with client.lock:
-                raise WaitTimeout(f"{client.name}: no result within {timeout_s:g} s (status {handle.status.name}, "
-                                  f"last feedback {handle.feedback!r}); the goal was cancelled")
+                raise WaitTimeout(
+                    f"{client.name}: no result within {timeout_s:g} s (status {handle.status.name}, "
+                    f"last feedback {handle.feedback!r}); the goal was cancelled"
+                )
         with client.lock:
             if handle.accepted is False:
                 raise WaitTimeout(f"{client.name}: the goal was refused: {handle.rejection}")
@@ -263,8 +300,14 @@ class Robot:
                 raise WaitTimeout(f"{client.name}: no result: {handle.error or 'empty reply'}")
             return handle.result
 
-    def nav(self, x: float, y: float, yaw: float, timeout_s: float = 120.0,
-            server_timeout_s: float = SERVER_TIMEOUT_S) -> NavOutcome:
+    def nav(
+        self,
+        x: float,
+        y: float,
+        yaw: float,
+        timeout_s: float = 120.0,
+        server_timeout_s: float = SERVER_TIMEOUT_S,
+    ) -> NavOutcome:
         """Drive to the map pose ``(x, y, yaw)`` with the planner; returns how the goal ended.
 
         Raises :class:`WaitTimeout` when no planner answers, or the goal has not ended within ``timeout_s``
@@ -272,15 +315,19 @@ class Robot:
         """
         nav = self.navigation
         if not nav.wait_until_active(server_timeout_s):
-            raise WaitTimeout(f"no navigation server in namespace {self.namespace!r} within {server_timeout_s:g} s")
+            raise WaitTimeout(
+                f"no navigation server in namespace {self.namespace!r} within {server_timeout_s:g} s"
+            )
         nav.go_to_pose(Pose2D(x, y, yaw))
         deadline = time.monotonic() + timeout_s
         while not nav.is_task_complete():
             if time.monotonic() >= deadline:
                 feedback = nav.get_feedback()
                 nav.cancel_task()
-                raise WaitTimeout(f"navigate_to_pose ({x:g}, {y:g}, {yaw:g}) did not end within {timeout_s:g} s; "
-                                  f"last feedback {feedback!r}; the goal was cancelled")
+                raise WaitTimeout(
+                    f"navigate_to_pose ({x:g}, {y:g}, {yaw:g}) did not end within {timeout_s:g} s; "
+                    f"last feedback {feedback!r}; the goal was cancelled"
+                )
             time.sleep(0.05)  # polls the client's state; the node's thread fills it in
         return NavOutcome(nav.get_result(), nav.get_result_detail(), nav.failure_reason())
 
@@ -297,7 +344,10 @@ class Robot:
 
 def is_charging(battery: BatteryState) -> bool:
     """``battery_status`` says the robot charges (or is full on the dock)."""
-    return battery.power_supply_status in (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
+    return battery.power_supply_status in (
+        BatteryState.POWER_SUPPLY_STATUS_CHARGING,
+        BatteryState.POWER_SUPPLY_STATUS_FULL,
+    )
 
 
 __all__ = ["KeyRecording", "NavOutcome", "Robot", "WaitTimeout", "decode_sample", "is_charging"]

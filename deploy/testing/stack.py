@@ -62,8 +62,10 @@ def unhealthy_line(statuses: list[ServiceStatus], logs_dir: Path, timeout_s: flo
     culprit = (failed or waiting)[0]
     why = failure_line(log_texts(logs_dir, culprit.name, 200)) or "it printed nothing"
     detail = f", {culprit.detail}" if culprit.detail else ""
-    return (f"zendock stack not healthy within {timeout_s:g} s: {culprit.name} is {culprit.state} "
-            f"(health {culprit.health}, restarts {culprit.restarts}{detail}); its log: {why}")
+    return (
+        f"zendock stack not healthy within {timeout_s:g} s: {culprit.name} is {culprit.state} "
+        f"(health {culprit.health}, restarts {culprit.restarts}{detail}); its log: {why}"
+    )
 
 
 def _alive(process: psutil.Process) -> bool:
@@ -83,8 +85,12 @@ class ZendockStack:
         self.project_dir = project_dir
         self.endpoint = free_endpoint()
         project_dir.mkdir(parents=True, exist_ok=True)
-        stack = load_stack(DEFAULT_STACK, env=config.environment(self.endpoint, project_dir), project_dir=REPO_ROOT)
-        replaced = apply_replacements(stack, [Replacement(name, command) for name, command in config.services])
+        stack = load_stack(
+            DEFAULT_STACK, env=config.environment(self.endpoint, project_dir), project_dir=REPO_ROOT
+        )
+        replaced = apply_replacements(
+            stack, [Replacement(name, command) for name, command in config.services]
+        )
         stack = run_replacements_in(stack, replaced, rootdir)
         self.launcher = Launcher(stack, project_dir=project_dir, working_dir=REPO_ROOT, project_name=PROJECT)
         self.services: list[str] = list(self.launcher.services)

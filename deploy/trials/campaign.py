@@ -75,9 +75,15 @@ def _run_one(
     wall_start = time.monotonic()
     # Full battery first: leaving the dock with the last trial's low charge would trigger docking at
     # the moment of the teleport, before this trial's start is even in place.
-    _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
-                         SetBatteryStateRequest(percentage=1.0, drain_scale=options.drain_scale))
-    placed = _call_until_answered(session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot))
+    _call_until_answered(
+        session,
+        topic_key(robot, "battery/set_state"),
+        SET_BATTERY_STATE,
+        SetBatteryStateRequest(percentage=1.0, drain_scale=options.drain_scale),
+    )
+    placed = _call_until_answered(
+        session, "simulator/teleport", TELEPORT, TeleportRequest(*start.as_tuple(), robot=robot)
+    )
     if not placed.success:
         raise ServiceError(f"trial {index}: start {start}: {placed.message}")
     observer = RunObserver(session, robot)
@@ -85,10 +91,16 @@ def _run_one(
         # The robot may have been charging at the dock a moment ago: start only once the battery has
         # seen it leave, or the old CHARGING would end the new trial at once.
         if not observer.wait(lambda r: bool(r.battery) and not r.last_charging, timeout_s=30.0):
-            raise ServiceError(f"trial {index}: the battery still reports charging after the robot left the dock")
+            raise ServiceError(
+                f"trial {index}: the battery still reports charging after the robot left the dock"
+            )
         observer.arm()
-        _call_until_answered(session, topic_key(robot, "battery/set_state"), SET_BATTERY_STATE,
-                             SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale))
+        _call_until_answered(
+            session,
+            topic_key(robot, "battery/set_state"),
+            SET_BATTERY_STATE,
+            SetBatteryStateRequest(percentage=options.battery_start, drain_scale=options.drain_scale),
+        )
         started_sim = None
         deadline_wall = time.monotonic() + options.timeout_sim_s * 3 + 120.0
 
@@ -96,7 +108,9 @@ def _run_one(
             nonlocal started_sim
             if started_sim is None and record.sim_time_s > 0:
                 started_sim = record.sim_time_s
-            return record.charging or (started_sim is not None and record.sim_time_s - started_sim > options.timeout_sim_s)
+            return record.charging or (
+                started_sim is not None and record.sim_time_s - started_sim > options.timeout_sim_s
+            )
 
         while not observer.wait(finished, timeout_s=1.0) and time.monotonic() < deadline_wall:
             pass
@@ -126,7 +140,10 @@ def _run_one(
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)
     if glass is not None:
         counted = glass.report()
-        result.false_glass_cells, result.glass_coverage = float(counted.false_glass_cells), counted.glass_coverage
+        result.false_glass_cells, result.glass_coverage = (
+            float(counted.false_glass_cells),
+            counted.glass_coverage,
+        )
     return result, record
 
 
@@ -142,7 +159,10 @@ def run_trials(
     options: TrialOptions,
     log: Callable[[str], None] = print,
     progress: Callable[[TrialResult], None] | None = None,
-    tap: Callable[[Any, list[str], Callable[[], list[tuple[str, int | None]]], str], AbstractContextManager[Any]] | None = None,
+    tap: Callable[
+        [Any, list[str], Callable[[], list[tuple[str, int | None]]], str], AbstractContextManager[Any]
+    ]
+    | None = None,
 ) -> tuple[TrialsSummary, list[TrialResult], Path]:
     """Run every trial; returns the summary, each trial, and the run directory (report, histograms, logs).
 
@@ -168,19 +188,26 @@ def run_trials(
     robots = [f"r{i}" for i in range(workers)]
     endpoint = free_endpoint()
     stack_path = run_dir / "stack.yaml"
-    stack_path.write_text(yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False))
+    stack_path.write_text(
+        yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False)
+    )
     stack = apply_replacements(load_stack(stack_path, env={}, project_dir=REPO_ROOT), options.replacements)
     results: list[TrialResult] = []
     records: dict[int, RunRecord] = {}
     errors: list[str] = []
     wall_start = time.monotonic()
     sharded = f" (shard {options.shard}: {len(mine)} of {options.n})" if options.shard.count > 1 else ""
-    log(f"{options.n} trials{sharded} in {world.name} with {workers} robot(s), controller {options.controller}, "
+    log(
+        f"{options.n} trials{sharded} in {world.name} with {workers} robot(s), controller {options.controller}, "
         f"detector {options.detector}, {options.starts} starts, rtf {options.rtf}"
-        + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements))
-    with Launcher(stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials") as launcher:
+        + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements)
+    )
+    with Launcher(
+        stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials"
+    ) as launcher:
         launcher.wait_healthy(timeout_s=120.0)
         log(f"stack healthy after {time.monotonic() - wall_start:.0f} s; docking")
+
         def processes() -> list[tuple[str, int | None]]:
             return [(s.name, s.pid) for s in launcher.ps()]
 
@@ -189,9 +216,17 @@ def run_trials(
         for i, start in mine:
             todo.put((i, start))
         lock = threading.Lock()
-        chaos = ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed) if options.chaos_period_s > 0 else None
-        with sampler, open_session(SessionSpec(connect=(endpoint,))) as session, (chaos or _Nothing()), \
-                (tap(session, robots, processes, endpoint) if tap is not None else _Nothing()):
+        chaos = (
+            ChaosMonkey(launcher, robots, options.chaos_period_s, options.seed)
+            if options.chaos_period_s > 0
+            else None
+        )
+        with (
+            sampler,
+            open_session(SessionSpec(connect=(endpoint,))) as session,
+            chaos or _Nothing(),
+            tap(session, robots, processes, endpoint) if tap is not None else _Nothing(),
+        ):
             clock_start = _sim_clock(session, robots[0])
             wall_clock_start = time.monotonic()
 
@@ -202,12 +237,15 @@ def run_trials(
                     except queue.Empty:
                         return
                     try:
-                        result, record = _run_one(session, robot, index, start, options, world, run_dir / "state")
+                        result, record = _run_one(
+                            session, robot, index, start, options, world, run_dir / "state"
+                        )
                     except (ServiceError, OSError) as exc:
                         with lock:
                             errors.append(f"trial {index} ({robot}): {exc}")
-                        result = TrialResult(index, robot, start.as_tuple(), False, False, math.nan, math.nan,
-                                             math.nan, 0, 0.0)
+                        result = TrialResult(
+                            index, robot, start.as_tuple(), False, False, math.nan, math.nan, math.nan, 0, 0.0
+                        )
                         record = RunRecord()
                     with lock:
                         results.append(result)
@@ -229,7 +267,9 @@ def run_trials(
     pairs = []
     for r in results:
         record = records.get(r.index)
-        pose = record.pose_at(record.trigger_s) if record is not None and record.trigger_s is not None else None
+        pose = (
+            record.pose_at(record.trigger_s) if record is not None and record.trigger_s is not None else None
+        )
         pairs.append((pose or Pose2D(*r.start), world.docks[0].pose2d))
     try:
         for r, bound in zip(results, lower_bounds(options.world, pairs)):
@@ -242,8 +282,12 @@ def run_trials(
     summary.peak_rss_mb = dict(sampler.peak_mb)
     if chaos is not None:
         summary.chaos = chaos.report.summary()
-    report = {"summary": asdict(summary), "trials": [asdict(r) for r in results], "errors": errors,
-              "options": {f.name: str(getattr(options, f.name)) for f in fields(options)}}
+    report = {
+        "summary": asdict(summary),
+        "trials": [asdict(r) for r in results],
+        "errors": errors,
+        "options": {f.name: str(getattr(options, f.name)) for f in fields(options)},
+    }
     (run_dir / "trials.json").write_text(strict_json.dumps(report, summary_reasons(summary), indent=2) + "\n")
     from deploy.plotting import plot_trial_histograms  # noqa: PLC0415 - matplotlib is slow to import
 

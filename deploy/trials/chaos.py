@@ -84,7 +84,9 @@ class ChaosMonkey:
                 time.sleep(0.05)
 
 
-def chaos_victims(services: list[tuple[str, list[str]]], robots: list[str], victims: tuple[str, ...]) -> list[str]:
+def chaos_victims(
+    services: list[tuple[str, list[str]]], robots: list[str], victims: tuple[str, ...]
+) -> list[str]:
     """The processes to kill: each robot's ``<service>_<robot>`` for the victim services, and a composed
     group (``robot_<robot>``: one process) when it runs any of them, so a kill takes its members down together."""
     names = []

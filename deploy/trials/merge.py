@@ -23,8 +23,18 @@ from deploy.trials.summary import combine, summary_reasons
 
 #: The options that make two runs the same campaign; the rest (workers, rtf, compose, shard, where the runs
 #: went, the world file's own path on each machine) say only how it ran.
-CAMPAIGN_OPTIONS = ("n", "controller", "detector", "starts", "seed", "timeout_sim_s", "localisation_error",
-                    "battery_start", "drain_scale", "replacements")
+CAMPAIGN_OPTIONS = (
+    "n",
+    "controller",
+    "detector",
+    "starts",
+    "seed",
+    "timeout_sim_s",
+    "localisation_error",
+    "battery_start",
+    "drain_scale",
+    "replacements",
+)
 
 
 class MergeError(ValueError):
@@ -101,21 +111,27 @@ def _check_one_campaign(world: str, reports: list[ShardReport]) -> list[TrialRes
     for other in reports[1:]:
         for key in CAMPAIGN_OPTIONS:
             if first.options.get(key) != other.options.get(key):
-                raise MergeError(f"{world}: {first.path} and {other.path} are different campaigns "
-                                 f"({key} {first.options.get(key)} against {other.options.get(key)})")
+                raise MergeError(
+                    f"{world}: {first.path} and {other.path} are different campaigns "
+                    f"({key} {first.options.get(key)} against {other.options.get(key)})"
+                )
     owner: dict[int, Path] = {}
     trials: list[TrialResult] = []
     for report in reports:
         for trial in report.trials:
             if trial.index in owner:
-                raise MergeError(f"{world}: trial {trial.index} is in both {owner[trial.index]} and {report.path}")
+                raise MergeError(
+                    f"{world}: trial {trial.index} is in both {owner[trial.index]} and {report.path}"
+                )
             owner[trial.index] = report.path
             trials.append(trial)
     expected = int(first.options.get("n", len(trials)))
     missing = sorted(set(range(expected)) - set(owner))
     if missing:
         shown = ", ".join(map(str, missing[:10])) + (", ..." if len(missing) > 10 else "")
-        raise MergeError(f"{world}: {len(missing)} of {expected} trials missing ({shown}); is a shard not given?")
+        raise MergeError(
+            f"{world}: {len(missing)} of {expected} trials missing ({shown}); is a shard not given?"
+        )
     return sorted(trials, key=lambda t: t.index)
 
 
@@ -154,9 +170,14 @@ def write_merged(merged: dict[str, MergedWorld], runs_dir: Path) -> Path:
     for world, result in merged.items():
         world_dir = out / world if len(merged) > 1 else out
         world_dir.mkdir(parents=True, exist_ok=True)
-        report = {"summary": asdict(result.summary), "trials": [asdict(t) for t in result.trials],
-                  "errors": result.errors, "options": result.options}
+        report = {
+            "summary": asdict(result.summary),
+            "trials": [asdict(t) for t in result.trials],
+            "errors": result.errors,
+            "options": result.options,
+        }
         (world_dir / "trials.json").write_text(
-            strict_json.dumps(report, summary_reasons(result.summary), indent=2) + "\n")
+            strict_json.dumps(report, summary_reasons(result.summary), indent=2) + "\n"
+        )
         plot_trial_histograms(result.trials, world_dir / "histograms.png")
     return out

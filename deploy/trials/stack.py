@@ -13,7 +13,9 @@ from deploy.trials.records import TrialOptions
 GLASS_MEMORY_FILE = "glass_memory.npz"
 
 
-def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_dir: Path | None = None) -> dict[str, Any]:
+def trials_stack(
+    options: TrialOptions, endpoint: str, robots: list[str], state_dir: Path | None = None
+) -> dict[str, Any]:
     """A stack file (as data) with one simulator for all robots and each robot's own services.
 
     ``state_dir``: where each robot's planner keeps its glass memory and its battery its charge across
@@ -27,10 +29,22 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
         "map": {"command": ["zendock", "map", "save", "--world", world, "-o", map_file], "restart": "no"},
         "simulator": {
-            "command": [*py, "services.simulator", "--world", world, "-p", f"rtf={options.rtf}",
-                        "-p", f"seed={options.seed}", "-p", f"robots={json.dumps(robots)}",
-                        "-p", f"localisation.error={json.dumps(list(options.localisation_error))}",
-                        "-p", f"detection.source={options.detector}"],
+            "command": [
+                *py,
+                "services.simulator",
+                "--world",
+                world,
+                "-p",
+                f"rtf={options.rtf}",
+                "-p",
+                f"seed={options.seed}",
+                "-p",
+                f"robots={json.dumps(robots)}",
+                "-p",
+                f"localisation.error={json.dumps(list(options.localisation_error))}",
+                "-p",
+                f"detection.source={options.detector}",
+            ],
             "depends_on": {"router": {"condition": "service_started"}},
             "healthcheck": {"liveliness": True, "timeout": "30s"},
             "restart": "on-failure",
@@ -41,31 +55,56 @@ def trials_stack(options: TrialOptions, endpoint: str, robots: list[str], state_
         members: dict[str, list[str]] = {
             "battery": ["-p", "use_sim_time=true", *keep_charge],
             "pose": ["-p", "use_sim_time=true"],
-            "planner": ["-p", "use_sim_time=true", "-p", f"map_yaml={map_file}",
-                        *(["-p", f"glass_memory_file={state_dir / robot / GLASS_MEMORY_FILE}"] if state_dir else [])],
+            "planner": [
+                "-p",
+                "use_sim_time=true",
+                "-p",
+                f"map_yaml={map_file}",
+                *(["-p", f"glass_memory_file={state_dir / robot / GLASS_MEMORY_FILE}"] if state_dir else []),
+            ],
         }
         if options.detector == "aruco":
             members["perception"] = ["-p", f"dock_database={world}"]
-        members["docking"] = ["-p", "use_sim_time=true", "-p", f"dock_database={world}",
-                              "-p", f"controller={options.controller}"]
-        common: dict[str, Any] = {"depends_on": {"router": {"condition": "service_started"}}, "namespace": robot,
-                                  "restart": "on-failure"}
-        after_map = {"depends_on": {"router": {"condition": "service_started"},
-                                    "map": {"condition": "service_completed_successfully"}}}
-        grouped = {n: members[n] for n in members_to_compose(members, options.compose,
-                                                              {r.name for r in options.replacements})}
+        members["docking"] = [
+            "-p",
+            "use_sim_time=true",
+            "-p",
+            f"dock_database={world}",
+            "-p",
+            f"controller={options.controller}",
+        ]
+        common: dict[str, Any] = {
+            "depends_on": {"router": {"condition": "service_started"}},
+            "namespace": robot,
+            "restart": "on-failure",
+        }
+        after_map = {
+            "depends_on": {
+                "router": {"condition": "service_started"},
+                "map": {"condition": "service_completed_successfully"},
+            }
+        }
+        grouped = {
+            n: members[n]
+            for n in members_to_compose(members, options.compose, {r.name for r in options.replacements})
+        }
         if grouped:
             # The robot's services (all, or the light ones) share a process and a session (zendock
             # container); the group is healthy once its last member is up.
             command = ["zendock", "container"]
             for i, (name, args) in enumerate(grouped.items()):
                 command += [*(["+"] if i else []), name, *args]
-            services[f"robot_{robot}"] = {**common, **(after_map if "planner" in grouped else {}), "command": command,
-                                          "healthcheck": {"liveliness": list(grouped)[-1], "timeout": "60s"}}
+            services[f"robot_{robot}"] = {
+                **common,
+                **(after_map if "planner" in grouped else {}),
+                "command": command,
+                "healthcheck": {"liveliness": list(grouped)[-1], "timeout": "60s"},
+            }
             members = {n: a for n, a in members.items() if n not in grouped}
         for name, args in members.items():
             services[f"{name}_{robot}"] = {
-                **common, **(after_map if name == "planner" else {}),
+                **common,
+                **(after_map if name == "planner" else {}),
                 "healthcheck": {"liveliness": name, "timeout": "30s"},
                 "command": [*py, f"services.{name}", *args],
             }

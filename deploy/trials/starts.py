@@ -31,10 +31,10 @@ def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[
     bounds = lower_bounds(world_path, [(start, dock) for start in candidates])
     starts = [start for start, bound in zip(candidates, bounds) if math.isfinite(bound)][:n]
     if len(starts) < n:
-        raise RuntimeError(f"{world.name}: only {len(starts)} of {len(candidates)} random starts can reach the dock")
+        raise RuntimeError(
+            f"{world.name}: only {len(starts)} of {len(candidates)} random starts can reach the dock"
+        )
     return starts
-
-
 
 
 def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[float]:

@@ -11,13 +11,17 @@ from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from shared.world import World
 
 
-def summarise(results: list[TrialResult], wall_s: float, options: TrialOptions, world: World) -> TrialsSummary:
+def summarise(
+    results: list[TrialResult], wall_s: float, options: TrialOptions, world: World
+) -> TrialsSummary:
     summary = summarise_results(results, wall_s, options.controller, world.name)
     summary.replaced_services = replacements_report(options.replacements)
     return summary
 
 
-def summarise_results(results: list[TrialResult], wall_s: float, controller: str, world_name: str) -> TrialsSummary:
+def summarise_results(
+    results: list[TrialResult], wall_s: float, controller: str, world_name: str
+) -> TrialsSummary:
     """The summary of any set of trials: one world's, or a campaign's across worlds."""
     ok = [r for r in results if r.docked]
     false_glass = [r.false_glass_cells for r in results if math.isfinite(r.false_glass_cells)]
@@ -84,7 +88,8 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "median_arrival_speed_mps": none_docked or "no ground-truth track when the contacts mated",
         "max_arrival_speed_mps": none_docked or "no ground-truth track when the contacts mated",
         "arrival_speed_mps": "the contacts never mated, or no ground-truth track then",
-        "median_lower_bound_s": none_docked or "no docked trial has a lower bound (see errors in trials.json)",
+        "median_lower_bound_s": none_docked
+        or "no docked trial has a lower bound (see errors in trials.json)",
         "median_time_ratio": none_docked or "no docked trial has a lower bound (see errors in trials.json)",
         "success_rate": "no trials",
         "achieved_rtf": "the simulator's clock did not answer",

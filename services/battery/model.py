@@ -62,14 +62,22 @@ class BatteryParams:
         for name in ("capacity_ah", "charge_rate_c"):
             value = getattr(self, name)
             _require(math.isfinite(value) and value > 0.0, f"{name} must be a positive number, got {value!r}")
-        for name in ("base_current_a", "linear_current_a_per_mps", "angular_current_a_per_radps",
-                     "internal_resistance_ohm", "empty_voltage_v"):
+        for name in (
+            "base_current_a",
+            "linear_current_a_per_mps",
+            "angular_current_a_per_radps",
+            "internal_resistance_ohm",
+            "empty_voltage_v",
+        ):
             value = getattr(self, name)
             _require(math.isfinite(value) and value >= 0.0, f"{name} must be >= 0, got {value!r}")
-        _require(0.0 < self.taper_start_fraction < 1.0,
-                 f"taper_start_fraction must be within (0, 1), got {self.taper_start_fraction!r}")
         _require(
-            math.isfinite(self.full_voltage_v) and self.empty_voltage_v < self.nominal_voltage_v < self.full_voltage_v,
+            0.0 < self.taper_start_fraction < 1.0,
+            f"taper_start_fraction must be within (0, 1), got {self.taper_start_fraction!r}",
+        )
+        _require(
+            math.isfinite(self.full_voltage_v)
+            and self.empty_voltage_v < self.nominal_voltage_v < self.full_voltage_v,
             "voltages must rise from empty to nominal to full, got "
             f"empty_voltage_v={self.empty_voltage_v}, nominal_voltage_v={self.nominal_voltage_v}, "
             f"full_voltage_v={self.full_voltage_v}",
@@ -108,14 +116,21 @@ class BatteryParams:
 
 
 def _check_fraction(name: str, value: float) -> float:
-    _require(isinstance(value, (int, float)) and not isinstance(value, bool) and 0.0 <= value <= 1.0,
-             f"{name} must be within [0, 1], got {value!r}")
+    _require(
+        isinstance(value, (int, float)) and not isinstance(value, bool) and 0.0 <= value <= 1.0,
+        f"{name} must be within [0, 1], got {value!r}",
+    )
     return float(value)
 
 
 def _check_scale(name: str, value: float) -> float:
-    _require(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value >= 0.0,
-             f"{name} must be a finite number >= 0, got {value!r}")
+    _require(
+        isinstance(value, (int, float))
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and value >= 0.0,
+        f"{name} must be a finite number >= 0, got {value!r}",
+    )
     return float(value)
 
 

@@ -40,19 +40,39 @@ class Params(ServiceParams):
     initial_percentage: float = Field(1.0, ge=0.0, le=1.0, description="state of charge at start, 0..1")
     base_current_a: float = Field(0.4, ge=0.0, description="drain off the dock while standing still, A")
     linear_current_a_per_mps: float = Field(2.0, ge=0.0, description="extra drain per m/s of linear speed, A")
-    angular_current_a_per_radps: float = Field(0.5, ge=0.0, description="extra drain per rad/s of turn rate, A")
-    charge_rate_c: float = Field(0.5, gt=0.0, description="constant charging current as a multiple of capacity")
-    taper_start_fraction: float = Field(0.8, gt=0.0, lt=1.0, description="charge above which the current tapers")
+    angular_current_a_per_radps: float = Field(
+        0.5, ge=0.0, description="extra drain per rad/s of turn rate, A"
+    )
+    charge_rate_c: float = Field(
+        0.5, gt=0.0, description="constant charging current as a multiple of capacity"
+    )
+    taper_start_fraction: float = Field(
+        0.8, gt=0.0, lt=1.0, description="charge above which the current tapers"
+    )
     empty_voltage_v: float = Field(9.0, ge=0.0, description="open-circuit voltage when empty")
     nominal_voltage_v: float = Field(11.1, gt=0.0, description="open-circuit voltage at half charge")
     full_voltage_v: float = Field(12.6, gt=0.0, description="open-circuit voltage when full")
-    internal_resistance_ohm: float = Field(0.05, ge=0.0, description="series resistance: voltage sag under load")
-    drain_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge drains this many times faster",
-                               json_schema_extra=runtime_settable())
-    charge_scale: float = Field(1.0, ge=0.0, description="demo knob: the charge fills this many times faster",
-                                json_schema_extra=runtime_settable())
-    state_file: str = Field("", description="keep the charge in this file across restarts (empty: start from the parameters)")
-    publish_rate_hz: float = Field(10.0, ge=1.0, le=100.0, description="battery_status rate on the node's clock")
+    internal_resistance_ohm: float = Field(
+        0.05, ge=0.0, description="series resistance: voltage sag under load"
+    )
+    drain_scale: float = Field(
+        1.0,
+        ge=0.0,
+        description="demo knob: the charge drains this many times faster",
+        json_schema_extra=runtime_settable(),
+    )
+    charge_scale: float = Field(
+        1.0,
+        ge=0.0,
+        description="demo knob: the charge fills this many times faster",
+        json_schema_extra=runtime_settable(),
+    )
+    state_file: str = Field(
+        "", description="keep the charge in this file across restarts (empty: start from the parameters)"
+    )
+    publish_rate_hz: float = Field(
+        10.0, ge=1.0, le=100.0, description="battery_status rate on the node's clock"
+    )
     dock_contact_timeout_s: float = Field(1.0, gt=0.0, description="older dock_contact counts as not mated")
     odom_timeout_s: float = Field(1.0, gt=0.0, description="older odometry counts as standing still")
     max_step_s: float = Field(2.0, gt=0.0, description="clock steps longer than this are skipped (a leap)")
@@ -123,8 +143,12 @@ class BatteryService:
         self._state_saved_wall_s = 0.0
         stored = load_charge(self._state_path) if self._state_path is not None else None
         if stored is not None:
-            self._model.set_state(percentage=stored.percentage, drain_scale=stored.drain_scale,
-                                  charge_scale=stored.charge_scale, frozen=stored.frozen)
+            self._model.set_state(
+                percentage=stored.percentage,
+                drain_scale=stored.drain_scale,
+                charge_scale=stored.charge_scale,
+                frozen=stored.frozen,
+            )
             self._log.info("charge restored from %s: %.1f%%", params.state_file, 100.0 * stored.percentage)
             params.drain_scale, params.charge_scale = stored.drain_scale, stored.charge_scale
         self._clock = StepClock(params.max_step_s)
@@ -136,14 +160,21 @@ class BatteryService:
         self._server = node.create_service(SET_BATTERY_STATE, topics.BATTERY_SET_STATE, self._on_set_state)
         self._publisher = node.create_publisher(BatteryState, topics.BATTERY_STATUS, RELIABLE)
         self._odom_sub = node.create_subscription(Odometry, topics.ODOM, self._on_odom, SENSOR_DATA)
-        self._contact_sub = node.create_subscription(DockContact, topics.DOCK_CONTACT, self._on_dock_contact, QoS(depth=5))
+        self._contact_sub = node.create_subscription(
+            DockContact, topics.DOCK_CONTACT, self._on_dock_contact, QoS(depth=5)
+        )
         self._timer = node.create_timer(1.0 / params.publish_rate_hz, self._on_timer)
         self._clock_wait_timer = (
-            node.create_timer(CLOCK_WAIT_LOG_PERIOD_S, self._on_clock_wait, wall=True) if node.use_sim_time else None
+            node.create_timer(CLOCK_WAIT_LOG_PERIOD_S, self._on_clock_wait, wall=True)
+            if node.use_sim_time
+            else None
         )
         self._log.info(
             "battery %.2f Ah at %.0f%%, publishing %s at %g Hz on %s time",
-            params.capacity_ah, 100.0 * params.initial_percentage, self._publisher.key, params.publish_rate_hz,
+            params.capacity_ah,
+            100.0 * params.initial_percentage,
+            self._publisher.key,
+            params.publish_rate_hz,
             "sim" if node.use_sim_time else "wall",
         )
 
@@ -151,7 +182,9 @@ class BatteryService:
 
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
-        self._odom.update((math.hypot(twist.linear.x, twist.linear.y), abs(twist.angular.z)), self._node.now())
+        self._odom.update(
+            (math.hypot(twist.linear.x, twist.linear.y), abs(twist.angular.z)), self._node.now()
+        )
 
     def _on_dock_contact(self, msg: DockContact) -> None:
         self._contact.update(msg.mated, self._node.now())
@@ -187,7 +220,9 @@ class BatteryService:
             self._contact.forget()
             self._contact_was_fresh = False
         elif step.jumped_forward:
-            self._log.warning("clock leapt forward more than %g s: skipping that interval", self._clock.max_step_s)
+            self._log.warning(
+                "clock leapt forward more than %g s: skipping that interval", self._clock.max_step_s
+            )
         linear_mps, angular_radps = self._odom.get(now_s, (0.0, 0.0))
         self._model.step(step.dt_s, linear_mps, angular_radps, self._mated(now_s))
 
@@ -199,12 +234,17 @@ class BatteryService:
 
     def _keep_charge(self, force: bool = False) -> None:
         """Write the charge to the state file, at most every ``STATE_SAVE_PERIOD_S`` unless ``force``."""
-        if self._state_path is None or (not force and time.monotonic() - self._state_saved_wall_s < STATE_SAVE_PERIOD_S):
+        if self._state_path is None or (
+            not force and time.monotonic() - self._state_saved_wall_s < STATE_SAVE_PERIOD_S
+        ):
             return
         self._state_saved_wall_s = time.monotonic()
         model = self._model
         try:
-            save_charge(self._state_path, StoredCharge(model.percentage, model.drain_scale, model.charge_scale, model.frozen))
+            save_charge(
+                self._state_path,
+                StoredCharge(model.percentage, model.drain_scale, model.charge_scale, model.frozen),
+            )
         except OSError as exc:
             self._log.warning("charge not saved to %s: %s", self._state_path, exc)
 
@@ -231,11 +271,16 @@ class BatteryService:
         )
         self._log.info(
             "state set: %.4f, drain x%g, charge x%g%s",
-            self._model.percentage, self._model.drain_scale, self._model.charge_scale,
+            self._model.percentage,
+            self._model.drain_scale,
+            self._model.charge_scale,
             ", frozen" if self._model.frozen else "",
         )
         # The parameters say what is in force (``zendock param get battery drain_scale``).
-        self._params.drain_scale, self._params.charge_scale = self._model.drain_scale, self._model.charge_scale
+        self._params.drain_scale, self._params.charge_scale = (
+            self._model.drain_scale,
+            self._model.charge_scale,
+        )
         self._keep_charge(force=True)
         state = self._publish()
         return SetBatteryStateResponse(
@@ -260,8 +305,12 @@ class BatteryService:
             self._clock_wait_timer.cancel()
 
 
-SERVICE = ServiceSpec("battery", Params, BatteryService,
-                      description="Simulated battery: publishes battery_status, drains with motion, charges on the dock.")
+SERVICE = ServiceSpec(
+    "battery",
+    Params,
+    BatteryService,
+    description="Simulated battery: publishes battery_status, drains with motion, charges on the dock.",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

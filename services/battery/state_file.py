@@ -28,12 +28,17 @@ def load_charge(path: Path) -> StoredCharge | None:
     """What the file holds, or None when it is absent, unreadable or out of range."""
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        stored = StoredCharge(float(data["percentage"]), float(data["drain_scale"]), float(data["charge_scale"]),
-                              bool(data["frozen"]))
+        stored = StoredCharge(
+            float(data["percentage"]),
+            float(data["drain_scale"]),
+            float(data["charge_scale"]),
+            bool(data["frozen"]),
+        )
     except (OSError, ValueError, KeyError, TypeError):
         return None
     values_ok = 0.0 <= stored.percentage <= 1.0 and all(
-        math.isfinite(v) and v >= 0.0 for v in (stored.drain_scale, stored.charge_scale))
+        math.isfinite(v) and v >= 0.0 for v in (stored.drain_scale, stored.charge_scale)
+    )
     return stored if values_ok else None
 
 

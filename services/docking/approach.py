@@ -81,7 +81,9 @@ def dock_left_normal(dock_pose: Pose2D) -> tuple[float, float]:
     return (-math.sin(dock_pose.yaw), math.cos(dock_pose.yaw))
 
 
-def offset_along(dock_pose: Pose2D, ahead_m: float, left_m: float = 0.0, yaw_offset_rad: float = 0.0) -> Pose2D:
+def offset_along(
+    dock_pose: Pose2D, ahead_m: float, left_m: float = 0.0, yaw_offset_rad: float = 0.0
+) -> Pose2D:
     """The pose ``ahead_m`` along the dock's heading and ``left_m`` along its left normal."""
     hx, hy = dock_heading(dock_pose)
     lx, ly = dock_left_normal(dock_pose)

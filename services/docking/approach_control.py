@@ -74,7 +74,9 @@ class ApproachController(Protocol):
 class SeedApproach:
     """The line approach at 10 Hz: goals derived from the dock pose, bang-bang commands."""
 
-    def __init__(self, params: LineApproachParams | None = None, offsets: LineApproachOffsets = DEFAULT_LINE_OFFSETS):
+    def __init__(
+        self, params: LineApproachParams | None = None, offsets: LineApproachOffsets = DEFAULT_LINE_OFFSETS
+    ):
         self.params = params or LineApproachParams()
         self.offsets = offsets
         self.period_s = self.params.control_period_s
@@ -221,10 +223,15 @@ class GracefulApproach:
         return Velocity(command.linear_x_mps, command.angular_z_radps)
 
 
-def graceful_params_with_speed(max_speed_mps: float, base: GracefulDockParams = ZENDOCK_PARAMS) -> GracefulDockParams:
+def graceful_params_with_speed(
+    max_speed_mps: float, base: GracefulDockParams = ZENDOCK_PARAMS
+) -> GracefulDockParams:
     """The tuned docking parameters with a different top speed (the minimum speed is kept below it)."""
-    gains = replace(base.gains, v_linear_max_mps=max_speed_mps,
-                    v_linear_min_mps=min(base.gains.v_linear_min_mps, max_speed_mps))
+    gains = replace(
+        base.gains,
+        v_linear_max_mps=max_speed_mps,
+        v_linear_min_mps=min(base.gains.v_linear_min_mps, max_speed_mps),
+    )
     return replace(base, gains=gains)
 
 

@@ -69,12 +69,18 @@ def seed_goals_ahead(
     params = LineApproachParams()
     start_along = dock_frame_error(start_pose, dock_pose).along_m
     goals = line_approach(dock_pose, offsets).goals
-    ahead = [g for g in goals[:-1] if dock_frame_error(g, dock_pose).along_m > start_along + params.distance_tolerance_m]
+    ahead = [
+        g
+        for g in goals[:-1]
+        if dock_frame_error(g, dock_pose).along_m > start_along + params.distance_tolerance_m
+    ]
     return ahead + [goals[-1]]
 
 
 def _seed_factory(start: Pose2D, dock: Pose2D, latency_s: float, period_s: float) -> DockingController:
-    return LineApproachController(seed_goals_ahead(start, dock), LineApproachParams(control_period_s=period_s))
+    return LineApproachController(
+        seed_goals_ahead(start, dock), LineApproachParams(control_period_s=period_s)
+    )
 
 
 def _nav2_factory(start: Pose2D, dock: Pose2D, latency_s: float, period_s: float) -> DockingController:
@@ -93,8 +99,11 @@ def _zendock_factory(start: Pose2D, dock: Pose2D, latency_s: float, period_s: fl
 CONTROLLERS: dict[str, tuple[str, ControllerFactory, float]] = {
     "seed": ("line approach, bang-bang 0.08 m/s / 0.1 rad/s, 10 Hz", _seed_factory, 0.1),
     "graceful_nav2": ("graceful law, Nav2 docking defaults, target = dock pose, 20 Hz", _nav2_factory, 0.05),
-    "graceful_zendock": ("graceful law, ZENDOCK_TUNED, target past the plate, pose estimator, 20 Hz",
-                         _zendock_factory, 0.05),
+    "graceful_zendock": (
+        "graceful law, ZENDOCK_TUNED, target past the plate, pose estimator, 20 Hz",
+        _zendock_factory,
+        0.05,
+    ),
 }
 
 
@@ -107,7 +116,11 @@ def summarise(results: Sequence[ApproachResult]) -> dict[str, Any]:
         "mated": sum(r.mated for r in results),
     }
     if not reached:
-        return summary | {"median_time_s": None, "median_lateral_error_mm": None, "median_yaw_error_deg": None}
+        return summary | {
+            "median_time_s": None,
+            "median_lateral_error_mm": None,
+            "median_yaw_error_deg": None,
+        }
     lateral_mm = [abs(r.lateral_error_m) * 1000.0 for r in reached]
     yaw_deg = [abs(math.degrees(r.yaw_error_rad)) for r in reached]
     return summary | {
@@ -153,19 +166,35 @@ def compare_controllers(
         description, factory, period_s = CONTROLLERS[name]
         results = []
         for i, start in enumerate(starts):
-            run_sensing = PoseSensing(sensing.latency_s, sensing.position_noise_m, sensing.yaw_noise_rad, sensing.seed + i)
+            run_sensing = PoseSensing(
+                sensing.latency_s, sensing.position_noise_m, sensing.yaw_noise_rad, sensing.seed + i
+            )
             results.append(
                 simulate_approach(
-                    factory(start, dock_pose, sensing.latency_s, period_s), start, dock_pose, period_s,
-                    limits=limits, sensing=run_sensing, mating=mating, timeout_s=timeout_s,
+                    factory(start, dock_pose, sensing.latency_s, period_s),
+                    start,
+                    dock_pose,
+                    period_s,
+                    limits=limits,
+                    sensing=run_sensing,
+                    mating=mating,
+                    timeout_s=timeout_s,
                 )
             )
-        report["controllers"][name] = {"description": description, "control_period_s": period_s} | summarise(results)
+        report["controllers"][name] = {"description": description, "control_period_s": period_s} | summarise(
+            results
+        )
     if include_seed_full_run:
         approach = line_approach(dock_pose)
         full = simulate_approach(
-            LineApproachController(approach.goals), approach.staging_goal, dock_pose, CONTROLLERS["seed"][2],
-            limits=limits, sensing=sensing, mating=mating, timeout_s=max(timeout_s, 300.0),
+            LineApproachController(approach.goals),
+            approach.staging_goal,
+            dock_pose,
+            CONTROLLERS["seed"][2],
+            limits=limits,
+            sensing=sensing,
+            mating=mating,
+            timeout_s=max(timeout_s, 300.0),
         )
         report["seed_full_run"] = {
             "start_pose": list(approach.staging_goal.as_tuple()),
@@ -207,7 +236,9 @@ def format_comparison(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main(latency_s: float, position_noise_m: float, yaw_noise_deg: float, seed: int, as_json: bool = False) -> int:
+def main(
+    latency_s: float, position_noise_m: float, yaw_noise_deg: float, seed: int, as_json: bool = False
+) -> int:
     sensing = PoseSensing(latency_s, position_noise_m, math.radians(yaw_noise_deg), seed)
     report = compare_controllers(sensing=sensing)
     print(json.dumps(report, default=str) if as_json else format_comparison(report))
@@ -217,7 +248,9 @@ def main(latency_s: float, position_noise_m: float, yaw_noise_deg: float, seed: 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description="Compare docking controllers on the kinematic model.")
     parser.add_argument("--latency", type=float, default=0.05, help="pose latency, s")
-    parser.add_argument("--position-noise", type=float, default=0.002, help="pose position noise (1 sigma), m")
+    parser.add_argument(
+        "--position-noise", type=float, default=0.002, help="pose position noise (1 sigma), m"
+    )
     parser.add_argument("--yaw-noise", type=float, default=0.2, help="pose yaw noise (1 sigma), degrees")
     parser.add_argument("--seed", type=int, default=0, help="noise seed")
     parser.add_argument("--json", action="store_true", help="one JSON line instead of the table")

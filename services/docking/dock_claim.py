@@ -42,7 +42,9 @@ class ClaimState(enum.Enum):
 class DockClaim:
     """See the module docstring. Times are the node's clock, in seconds."""
 
-    def __init__(self, ask_period_s: float = 1.0, renew_period_s: float = 2.0, patience_s: float = 5.0) -> None:
+    def __init__(
+        self, ask_period_s: float = 1.0, renew_period_s: float = 2.0, patience_s: float = 5.0
+    ) -> None:
         self.ask_period_s = ask_period_s
         self.renew_period_s = renew_period_s
         self.patience_s = patience_s
@@ -131,7 +133,11 @@ class DockClaim:
 
     @property
     def asked_to_leave(self) -> bool:
-        return self.state is ClaimState.HOLDING and self.last_answer is not None and self.last_answer.asked_to_leave
+        return (
+            self.state is ClaimState.HOLDING
+            and self.last_answer is not None
+            and self.last_answer.asked_to_leave
+        )
 
 
 class AwaitPhase(enum.Enum):
@@ -188,8 +194,11 @@ class AwaitDock(Task[AwaitPhase]):
         # to reach a blocked holding pose would only block others).
         self._arrived = True
         self.enter(AwaitPhase.WAITING, inputs.now_s)
-        return self.hold("waiting for a dock" if outcome is NavOutcome.SUCCEEDED
-                         else "waiting for a dock short of the holding pose")
+        return self.hold(
+            "waiting for a dock"
+            if outcome is NavOutcome.SUCCEEDED
+            else "waiting for a dock short of the holding pose"
+        )
 
 
 #: A dock counts as taken when this many lidar returns fall within :data:`OCCUPIED_RADIUS_M` of its
@@ -209,7 +218,9 @@ def docks_seen_free(
     for dock_id, pose in docks:
         here = pose.relative_to(robot)
         if scan_points_base is not None and len(scan_points_base):
-            near = np.hypot(scan_points_base[:, 0] - here.x, scan_points_base[:, 1] - here.y) < OCCUPIED_RADIUS_M
+            near = (
+                np.hypot(scan_points_base[:, 0] - here.x, scan_points_base[:, 1] - here.y) < OCCUPIED_RADIUS_M
+            )
             if int(np.count_nonzero(near)) >= OCCUPIED_MIN_POINTS:
                 continue
         free.append((math.hypot(here.x, here.y), dock_id))

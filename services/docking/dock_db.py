@@ -55,7 +55,10 @@ class DockDatabase:
         try:
             return self._docks[dock_id]
         except KeyError:
-            raise DockingError(DockingErrorCode.DOCK_NOT_IN_DB, f"dock {dock_id!r} is not in the dock database {self.source} (known: {self.ids})") from None
+            raise DockingError(
+                DockingErrorCode.DOCK_NOT_IN_DB,
+                f"dock {dock_id!r} is not in the dock database {self.source} (known: {self.ids})",
+            ) from None
 
     def nearest(self, pose: Pose2D, dock_type: str | None = None) -> Dock:
         """The dock (of ``dock_type`` when given) whose pose is closest to ``pose``.
@@ -65,10 +68,14 @@ class DockDatabase:
         candidates = [d for d in self._docks.values() if dock_type is None or d.type == dock_type]
         if not candidates:
             what = f"of type {dock_type!r} " if dock_type is not None else ""
-            raise DockingError(DockingErrorCode.DOCK_NOT_VALID, f"no dock {what}in the dock database {self.source}")
+            raise DockingError(
+                DockingErrorCode.DOCK_NOT_VALID, f"no dock {what}in the dock database {self.source}"
+            )
         return min(candidates, key=lambda d: pose.distance_to(d.pose2d))
 
-    def choose(self, dock_id: str | None = None, robot_pose: Pose2D | None = None, dock_type: str | None = None) -> Dock:
+    def choose(
+        self, dock_id: str | None = None, robot_pose: Pose2D | None = None, dock_type: str | None = None
+    ) -> Dock:
         """By id when one is given, otherwise the nearest to ``robot_pose`` (or the only dock)."""
         if dock_id:
             return self.get(dock_id)
@@ -86,9 +93,13 @@ class DockDatabase:
 def parse_dock_db(data: Any, source: str | Path = "<docks>") -> DockDatabase:
     """Validate a decoded dock database (or world) document; raises :class:`ConfigError` naming file and field."""
     if not isinstance(data, dict):
-        raise ConfigError(f"{source}: a dock database must be a mapping with a 'docks' list; got {type(data).__name__}")
+        raise ConfigError(
+            f"{source}: a dock database must be a mapping with a 'docks' list; got {type(data).__name__}"
+        )
     if "docks" not in data:
-        raise ConfigError(f"{source}: docks: missing (expected docks: [{{id, pose: [x, y, yaw], type}}, ...])")
+        raise ConfigError(
+            f"{source}: docks: missing (expected docks: [{{id, pose: [x, y, yaw], type}}, ...])"
+        )
     entries = data["docks"]
     if not isinstance(entries, list):
         raise ConfigError(f"{source}: docks: must be a list of docks, got {type(entries).__name__}")
@@ -97,7 +108,9 @@ def parse_dock_db(data: Any, source: str | Path = "<docks>") -> DockDatabase:
     docks = []
     for i, entry in enumerate(entries):
         if not isinstance(entry, dict):
-            raise ConfigError(f"{source}: docks.{i}: must be a mapping {{id, pose, type}}, got {type(entry).__name__}")
+            raise ConfigError(
+                f"{source}: docks.{i}: must be a mapping {{id, pose, type}}, got {type(entry).__name__}"
+            )
         try:
             dock = Dock.model_validate(entry)
         except ValidationError as exc:

@@ -153,7 +153,10 @@ def marker_in_view(robot_pose: Pose2D, dock: Pose2D) -> bool:
     camera's view from ``robot_pose``: see ``DETECTION_VIEW_*``."""
     marker = dock.compose(Pose2D(ROBOT_FRONT_M, 0.0, 0.0))
     seen = marker.relative_to(robot_pose)
-    if math.hypot(seen.x, seen.y) >= DETECTION_VIEW_RANGE_M or abs(math.atan2(seen.y, seen.x)) >= DETECTION_VIEW_BEARING_RAD:
+    if (
+        math.hypot(seen.x, seen.y) >= DETECTION_VIEW_RANGE_M
+        or abs(math.atan2(seen.y, seen.x)) >= DETECTION_VIEW_BEARING_RAD
+    ):
         return False
     robot = robot_pose.relative_to(dock)  # in front of the marker: behind the dock's origin, along its axis
     return robot.x < 0.0 and math.atan2(abs(robot.y), -robot.x) < DETECTION_VIEW_OFF_NORMAL_RAD
@@ -186,7 +189,11 @@ _FEEDBACK = {
 def facing_dock_closely(robot_pose: Pose2D, dock_pose: Pose2D, zone_m: float) -> bool:
     """The robot is within ``zone_m`` of the dock pose, behind it and facing it (mid-approach or docked)."""
     error = dock_frame_error(robot_pose, dock_pose)
-    return robot_pose.distance_to(dock_pose) < zone_m and abs(error.yaw_rad) < math.pi / 2 and error.along_m <= 0.05
+    return (
+        robot_pose.distance_to(dock_pose) < zone_m
+        and abs(error.yaw_rad) < math.pi / 2
+        and error.along_m <= 0.05
+    )
 
 
 class DockingRun(Task[RunPhase]):
@@ -303,7 +310,9 @@ class DockingRun(Task[RunPhase]):
         now = inputs.now_s
         assert self.started_s is not None
         if now - self.started_s > self.config.max_docking_time_s:
-            return self._fail(DockingErrorCode.TIMEOUT, f"docking took longer than {self.config.max_docking_time_s:g} s")
+            return self._fail(
+                DockingErrorCode.TIMEOUT, f"docking took longer than {self.config.max_docking_time_s:g} s"
+            )
         handler = {
             RunPhase.STARTING: self._starting,
             RunPhase.RETREAT: self._retreat,
@@ -325,13 +334,17 @@ class DockingRun(Task[RunPhase]):
             return self._fail(exc.error_code, str(exc), retry=False)
         if dock is None:
             if self.phase_time_s(now) > self.config.start_timeout_s:
-                return self._fail(DockingErrorCode.TIMEOUT, "no robot pose to choose the nearest dock", retry=False)
+                return self._fail(
+                    DockingErrorCode.TIMEOUT, "no robot pose to choose the nearest dock", retry=False
+                )
             return None
         if inputs.robot_pose is None and self.phase_time_s(now) <= self.config.start_timeout_s:
             return None  # where the robot is decides the first move (backing off the dock, or staging)
         self.database_pose = dock
         self.tracker.expect(dock)
-        log.info("docking at %s (%.2f, %.2f, %.2f)", self.dock_id or "the given pose", dock.x, dock.y, dock.yaw)
+        log.info(
+            "docking at %s (%.2f, %.2f, %.2f)", self.dock_id or "the given pose", dock.x, dock.y, dock.yaw
+        )
         return self._begin_attempt(inputs)
 
     def _choose_dock(self, robot_pose: Pose2D | None) -> Pose2D | None:
@@ -339,7 +352,9 @@ class DockingRun(Task[RunPhase]):
         if request.dock_pose is not None:
             pose = request.dock_pose
             if not all(math.isfinite(v) for v in pose.as_tuple()):
-                raise DockingError(DockingErrorCode.DOCK_NOT_VALID, f"dock pose {pose.as_tuple()} is not finite")
+                raise DockingError(
+                    DockingErrorCode.DOCK_NOT_VALID, f"dock pose {pose.as_tuple()} is not finite"
+                )
             self.dock_id = ""
             return pose
         if request.dock_id:
@@ -361,9 +376,13 @@ class DockingRun(Task[RunPhase]):
             self.tracker.reset()  # the attempt failed: perceive afresh
         dock = self.dock_pose
         assert dock is not None
-        near = inputs.robot_pose is not None and facing_dock_closely(inputs.robot_pose, dock, self.config.retreat_zone_m)
+        near = inputs.robot_pose is not None and facing_dock_closely(
+            inputs.robot_pose, dock, self.config.retreat_zone_m
+        )
         self._realign = self._realign and near
-        self._retreat_to_staging = not self.request.navigate_to_staging_pose and self.num_retries > 0 and not self._realign
+        self._retreat_to_staging = (
+            not self.request.navigate_to_staging_pose and self.num_retries > 0 and not self._realign
+        )
         if near or self._retreat_to_staging:
             self.enter(RunPhase.RETREAT, now)
             return STOP
@@ -407,22 +426,28 @@ class DockingRun(Task[RunPhase]):
         if outcome is None:
             if self._ready_to_hand_over(inputs):
                 assert inputs.robot_pose is not None
-                log.info("handing over from navigation to the approach %.2f m from the staging pose",
-                         inputs.robot_pose.distance_to(self.approach.staging_pose(dock)))
+                log.info(
+                    "handing over from navigation to the approach %.2f m from the staging pose",
+                    inputs.robot_pose.distance_to(self.approach.staging_pose(dock)),
+                )
                 # One tick of perception (the planner is asked to let go meanwhile), then the approach
                 # starts on whatever dock pose there is: detections refine it on the way in.
                 self._handed_over = True
                 self._enter_perception(now)
                 return STOP
             if self.phase_time_s(now) > self.request.max_staging_time_s:
-                return self._fail(DockingErrorCode.FAILED_TO_STAGE,
-                                  f"staging took longer than {self.request.max_staging_time_s:g} s")
+                return self._fail(
+                    DockingErrorCode.FAILED_TO_STAGE,
+                    f"staging took longer than {self.request.max_staging_time_s:g} s",
+                )
             return Navigate(self.approach.staging_pose(dock), self._nav_key)
         if outcome is NavOutcome.SUCCEEDED:
             self._enter_perception(now)
             return STOP
         reason = inputs.nav.reason or outcome.value
-        return self._fail(DockingErrorCode.FAILED_TO_STAGE, f"navigation to the staging pose {outcome.value}: {reason}")
+        return self._fail(
+            DockingErrorCode.FAILED_TO_STAGE, f"navigation to the staging pose {outcome.value}: {reason}"
+        )
 
     def _ready_to_hand_over(self, inputs: TickInputs) -> bool:
         """Close to the staging pose, behind the dock, facing it or side-on where the approach curves in from:
@@ -449,8 +474,11 @@ class DockingRun(Task[RunPhase]):
     def _dock_in_view(self, now: float) -> bool:
         """Enough detections, the newest of them recent."""
         estimate = self.dock_estimate
-        return (estimate is not None and estimate.detections >= self.config.min_detections
-                and now - estimate.stamp_s <= self.config.detection_fresh_s)
+        return (
+            estimate is not None
+            and estimate.detections >= self.config.min_detections
+            and now - estimate.stamp_s <= self.config.detection_fresh_s
+        )
 
     def _enter_perception(self, now: float) -> None:
         if not self.config.continuous_perception:
@@ -471,11 +499,15 @@ class DockingRun(Task[RunPhase]):
             return self._start_control(now)
         if self.phase_time_s(now) > config.initial_perception_timeout_s:
             if not config.allow_blind_docking:
-                return self._fail(DockingErrorCode.FAILED_TO_DETECT_DOCK,
-                                  f"no detection of the dock within {config.initial_perception_timeout_s:g} s")
+                return self._fail(
+                    DockingErrorCode.FAILED_TO_DETECT_DOCK,
+                    f"no detection of the dock within {config.initial_perception_timeout_s:g} s",
+                )
             self.blind = True
-            log.warning("no detection of the dock within %g s: docking on the database pose",
-                        config.initial_perception_timeout_s)
+            log.warning(
+                "no detection of the dock within %g s: docking on the database pose",
+                config.initial_perception_timeout_s,
+            )
             return self._start_control(now)
         return STOP
 
@@ -499,8 +531,10 @@ class DockingRun(Task[RunPhase]):
             self._log_believed_error(now)
             return self._succeed("charging")
         if self.phase_time_s(now) > self.config.approach_timeout_s:
-            return self._fail(DockingErrorCode.FAILED_TO_CONTROL,
-                              f"not on the dock within {self.config.approach_timeout_s:g} s")
+            return self._fail(
+                DockingErrorCode.FAILED_TO_CONTROL,
+                f"not on the dock within {self.config.approach_timeout_s:g} s",
+            )
         if inputs.nav.busy:
             # Handed over while navigating: nothing is published until the planner has let go.
             self.approach.hold()
@@ -520,13 +554,23 @@ class DockingRun(Task[RunPhase]):
         command = self.approach.command(now, pose, inputs.pose_age_s, inputs.base_twist)
         if log.isEnabledFor(logging.DEBUG):
             error = dock_frame_error(pose, dock)
-            log.debug("approach t=%.3f along=%.3f lateral=%.4f yaw=%.4f age=%.3f twist=%s -> %s", now, error.along_m,
-                      error.lateral_m, error.yaw_rad, inputs.pose_age_s, inputs.base_twist, command)
+            log.debug(
+                "approach t=%.3f along=%.3f lateral=%.4f yaw=%.4f age=%.3f twist=%s -> %s",
+                now,
+                error.along_m,
+                error.lateral_m,
+                error.yaw_rad,
+                inputs.pose_age_s,
+                inputs.base_twist,
+                command,
+            )
         if isinstance(command, Arrival):
             if command is MISALIGNED:
                 self._realign = True
-                return self._fail(DockingErrorCode.FAILED_TO_CONTROL,
-                                  "came up to the plate off its axis: backing off to approach again")
+                return self._fail(
+                    DockingErrorCode.FAILED_TO_CONTROL,
+                    "came up to the plate off its axis: backing off to approach again",
+                )
             self.enter(RunPhase.WAIT_FOR_CHARGE, now)
             return STOP
         blocked = inputs.blocked_ahead if command.linear_x_mps > 0.0 else inputs.blocked_behind
@@ -535,8 +579,10 @@ class DockingRun(Task[RunPhase]):
             if self._blocked_since_s is None:
                 self._blocked_since_s = now
             elif now - self._blocked_since_s > self.config.obstacle_timeout_s:
-                return self._fail(DockingErrorCode.FAILED_TO_CONTROL,
-                                  f"an obstacle blocked the approach for {self.config.obstacle_timeout_s:g} s")
+                return self._fail(
+                    DockingErrorCode.FAILED_TO_CONTROL,
+                    f"an obstacle blocked the approach for {self.config.obstacle_timeout_s:g} s",
+                )
             return self.hold("obstacle ahead" if command.linear_x_mps > 0.0 else "obstacle behind")
         self._blocked_since_s = None
         return command
@@ -547,16 +593,23 @@ class DockingRun(Task[RunPhase]):
         if self._last_pose is None or dock is None:
             return
         error = dock_frame_error(self._last_pose, dock)
-        log.info("charging after %.2f s of approach; believed offset from the dock: along %.1f mm, lateral %.1f mm, "
-                 "yaw %.2f deg", self.phase_time_s(now), 1000.0 * error.along_m, 1000.0 * error.lateral_m,
-                 math.degrees(error.yaw_rad))
+        log.info(
+            "charging after %.2f s of approach; believed offset from the dock: along %.1f mm, lateral %.1f mm, "
+            "yaw %.2f deg",
+            self.phase_time_s(now),
+            1000.0 * error.along_m,
+            1000.0 * error.lateral_m,
+            math.degrees(error.yaw_rad),
+        )
 
     def _wait_for_charge(self, inputs: TickInputs) -> Intent:
         if inputs.charging:
             return self._succeed("charging")
         if self.phase_time_s(inputs.now_s) > self.config.wait_charge_timeout_s:
-            return self._fail(DockingErrorCode.FAILED_TO_CHARGE,
-                              f"on the dock but not charging after {self.config.wait_charge_timeout_s:g} s")
+            return self._fail(
+                DockingErrorCode.FAILED_TO_CHARGE,
+                f"on the dock but not charging after {self.config.wait_charge_timeout_s:g} s",
+            )
         return STOP
 
     def _retry(self, inputs: TickInputs) -> Intent:
@@ -580,8 +633,14 @@ class DockingRun(Task[RunPhase]):
         self.message = message
         if retry and code is not DockingErrorCode.TIMEOUT and self.num_retries < self.config.max_retries:
             self.num_retries += 1
-            log.warning("docking attempt failed (%d %s): %s; retry %d of %d", int(code), code.name, message,
-                        self.num_retries, self.config.max_retries)
+            log.warning(
+                "docking attempt failed (%d %s): %s; retry %d of %d",
+                int(code),
+                code.name,
+                message,
+                self.num_retries,
+                self.config.max_retries,
+            )
             self._nav_key = None
             self.enter(RunPhase.RETRY, self.now_s)
             return STOP

@@ -81,6 +81,7 @@ class Goal:
 
 # --- events: what happens ------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class DockGoal:
     goal: Goal
@@ -119,6 +120,7 @@ Event = DockGoal | UndockGoal | CancelGoal | FleetReserved | FleetReleased | Doc
 
 
 # --- effects: what the node does -----------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Drive:
@@ -173,16 +175,20 @@ Effects = list[Effect]
 class Executive:
     """See the module docstring."""
 
-    def __init__(self, params: Params, database: DockDatabase, room: World | None, namespace: str,
-                 log: logging.Logger) -> None:
+    def __init__(
+        self, params: Params, database: DockDatabase, room: World | None, namespace: str, log: logging.Logger
+    ) -> None:
         self.params = params
         self.database = database
         self.namespace = namespace
         self._log = log
         self._say = RateLimitedLogger(log, interval_s=5.0)
         name = namespace.rpartition("/")[2]
-        patrol = params.patrol or (next((list(r.patrol) for r in room.robots if r.name == name), [])
-                                   if room is not None and name else [])
+        patrol = params.patrol or (
+            next((list(r.patrol) for r in room.robots if r.name == name), [])
+            if room is not None and name
+            else []
+        )
         self.patrol = [Pose2D.from_seq(p) for p in patrol]
         self.mission = Mission(self.patrol, params.resume_at, params.low_battery_threshold, params.auto_dock)
         self.arbiter = DriveArbiter()
@@ -219,8 +225,11 @@ class Executive:
 
     def battery_reading(self, percentage: float, charging: bool) -> None:
         if self.mission.battery(percentage, charging):
-            self._log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * percentage,
-                           100.0 * self.params.low_battery_threshold)
+            self._log.info(
+                "battery at %.1f%%, below %.0f%%: going home",
+                100.0 * percentage,
+                100.0 * self.params.low_battery_threshold,
+            )
 
     def handle(self, event: Event, heard: Heard) -> Effects:
         """React to ``event`` at once (an action's goal replaces what runs before the next tick)."""
@@ -253,8 +262,9 @@ class Executive:
         out: Effects = []
         now = heard.now_s
         if heard.clock_reset:
-            self._log.warning("clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs",
-                              now)
+            self._log.warning(
+                "clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs", now
+            )
             self.mission.trigger.reset()  # a low battery after the reset sends the robot home again
             if self.task is not None:
                 self.task.cancel()
@@ -272,8 +282,13 @@ class Executive:
             if task.holding and task.holding != self._holding:
                 self._say.info(f"hold:{task.holding}", "holding still: %s", task.holding)
             if task.holding and self._log.isEnabledFor(logging.DEBUG):
-                self._log.debug("hold t=%.3f %s: localisation %.3f s old, odometry %.3f s old", now, task.holding,
-                                heard.localisation_age_s, heard.odometry_age_s)
+                self._log.debug(
+                    "hold t=%.3f %s: localisation %.3f s old, odometry %.3f s old",
+                    now,
+                    task.holding,
+                    heard.localisation_age_s,
+                    heard.odometry_age_s,
+                )
             self._holding = task.holding
             out.append(Drive(self._orders(intent, inputs)))
             self._report_feedback(task, now, out)
@@ -288,8 +303,9 @@ class Executive:
         if task.watches_obstacles and (robot is not None or not task.obstacles_need_map_pose):
             dock = task.dock_to_excuse()
             dock_in_base = dock.relative_to(robot) if dock is not None and robot is not None else None
-            blocked_ahead, blocked_behind = heard.blocked(dock_in_base, self.obstacles, self.params.use_lidar,
-                                                          self.params.use_sonar)
+            blocked_ahead, blocked_behind = heard.blocked(
+                dock_in_base, self.obstacles, self.params.use_lidar, self.params.use_sonar
+            )
         nav = heard.nav
         outcome = nav.outcome if not nav.busy and self.arbiter.nav_key is not None else None
         return TickInputs(
@@ -322,11 +338,17 @@ class Executive:
     def _follow_mission(self, heard: Heard, out: Effects) -> None:
         order = self.mission.decide(heard.now_s, self.task_kind)
         if order is MissionOrder.DOCK:
-            request = DockRequest(dock_id=self.params.dock_id, max_staging_time_s=self.params.max_staging_time_s)
+            request = DockRequest(
+                dock_id=self.params.dock_id, max_staging_time_s=self.params.max_staging_time_s
+            )
             self._begin_docking(request, None, heard, out)
         elif order is MissionOrder.UNDOCK:
-            self._log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
-            self._start(self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK, None, out)
+            self._log.info(
+                "charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage
+            )
+            self._start(
+                self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK, None, out
+            )
         elif order is MissionOrder.PATROL:
             self._log.info("patrolling from waypoint %d", self.mission.next_waypoint)
             self._start(Patrol(self.mission.patrol, self.mission.next_waypoint), TaskKind.PATROL, None, out)
@@ -344,7 +366,9 @@ class Executive:
         if granted is not None:
             self._start(self._docking_run(replace(request, dock_id=granted), heard), TaskKind.DOCK, goal, out)
         else:
-            self._log.info("asking the fleet for %s", f"dock {request.dock_id!r}" if request.dock_id else "a dock")
+            self._log.info(
+                "asking the fleet for %s", f"dock {request.dock_id!r}" if request.dock_id else "a dock"
+            )
             waiting = AwaitDock(request)
             self._start(waiting, TaskKind.DOCK, goal, out)
             self._awaiting = waiting
@@ -357,16 +381,24 @@ class Executive:
             granted = claim.granted_dock
             if granted is not None:
                 self._log.info("the fleet granted dock %s", granted)
-                self._start(self._docking_run(replace(waiting.request, dock_id=granted), heard), TaskKind.DOCK,
-                            self.goal, out)
+                self._start(
+                    self._docking_run(replace(waiting.request, dock_id=granted), heard),
+                    TaskKind.DOCK,
+                    self.goal,
+                    out,
+                )
             elif claim.fleet_down(now):
                 self._dock_without_fleet(claim, waiting, heard, out)
-        elif self.task is None and claim.granted_dock is None and heard.charging and not claim.release_pending:
+        elif (
+            self.task is None and claim.granted_dock is None and heard.charging and not claim.release_pending
+        ):
             # In a dock without a claim (started there, or the fleet lost its book): claim the dock it is in.
             if heard.latest_pose is not None:
                 claim.holds(now, self.database.nearest(heard.latest_pose).id)
         if claim.asked_to_leave and self.mission.leave_dock():
-            self._log.info("the fleet asks this robot to leave its dock for a robot whose battery is critical")
+            self._log.info(
+                "the fleet asks this robot to leave its dock for a robot whose battery is critical"
+            )
         if claim.reserve_due(now):
             if heard.battery is None or not 0.0 <= heard.battery <= 1.0:
                 return  # the fleet serves by charge: ask once the battery has spoken
@@ -387,8 +419,10 @@ class Executive:
             return {dock_id: robot.distance_to(pose) for dock_id, pose in docks.items()}
         staging = [self._approach.staging_pose(pose) for pose in docks.values()]
         found = self._room_paths.lengths(robot, staging)
-        return {dock_id: length + stage.distance_to(pose)
-                for (dock_id, pose), stage, length in zip(docks.items(), staging, found, strict=True)}
+        return {
+            dock_id: length + stage.distance_to(pose)
+            for (dock_id, pose), stage, length in zip(docks.items(), staging, found, strict=True)
+        }
 
     def _reserved(self, answer: FleetAnswer | None, error: Exception | None, now: float) -> None:
         claim = self.claim
@@ -403,8 +437,12 @@ class Executive:
         claim.answered(now, answer)
         if self._awaiting is not None and not answer.granted:
             if answer.queue_position:
-                self._say.info("queued", "waiting for a dock: number %d in the queue (%s)",
-                               answer.queue_position, answer.reason)
+                self._say.info(
+                    "queued",
+                    "waiting for a dock: number %d in the queue (%s)",
+                    answer.queue_position,
+                    answer.reason,
+                )
             self._awaiting.hold_at(answer.holding_pose)
 
     def _released(self, dock_id: str | None, error: Exception | None, now: float) -> None:
@@ -430,10 +468,13 @@ class Executive:
         if not free:
             self._say.warning("fleet-down", "the fleet is down and no dock is seen free: waiting")
             return
-        self._log.warning("the fleet has not answered for %g s: docking at %s, seen free", claim.patience_s, free[0])
+        self._log.warning(
+            "the fleet has not answered for %g s: docking at %s, seen free", claim.patience_s, free[0]
+        )
         claim.holds(heard.now_s, free[0])
-        self._start(self._docking_run(replace(waiting.request, dock_id=free[0]), heard), TaskKind.DOCK, self.goal,
-                    out)
+        self._start(
+            self._docking_run(replace(waiting.request, dock_id=free[0]), heard), TaskKind.DOCK, self.goal, out
+        )
 
     # --- traffic ---------------------------------------------------------------------------------------
 
@@ -442,8 +483,11 @@ class Executive:
         now = heard.now_s
         if self._giving_way is not None:
             other = next((p for p in heard.peers if p.name == self._giving_way.peer), None)
-            self._giving_way.peer_seen(other.pose if other else None, other is not None and other.active,
-                                       other is not None and other.giving_way)
+            self._giving_way.peer_seen(
+                other.pose if other else None,
+                other is not None and other.active,
+                other is not None and other.giving_way,
+            )
             return
         task = self.task
         if task is None or not task.under_way or heard.battery is None or heard.latest_pose is None:
@@ -452,8 +496,9 @@ class Executive:
         calm = {peer for peer, until in self._calm_until.items() if now < until}
         carry_on = {peer for peer, until in self._carry_on_until.items() if now < until}
         own_plan = heard.own_plan  # decoded only for a robot met face to face
-        met = must_give_way(me, self.namespace, heard.battery, list(heard.peers), self.walls, calm, carry_on,
-                            own_plan)
+        met = must_give_way(
+            me, self.namespace, heard.battery, list(heard.peers), self.walls, calm, carry_on, own_plan
+        )
         if met is None:
             return
         peer, meeting = met
@@ -472,10 +517,15 @@ class Executive:
         if meeting is Meeting.HEAD_ON:
             place = passing_place(me, peer, self.walls)
             if place is None:
-                self._say.warning("no-passing-place", "met %s head-on and must give way, but found no passing place: "
-                                  "stopping", peer.name)
+                self._say.warning(
+                    "no-passing-place",
+                    "met %s head-on and must give way, but found no passing place: stopping",
+                    peer.name,
+                )
         if place is not None:
-            self._log.info("met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y)
+            self._log.info(
+                "met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y
+            )
         elif meeting is Meeting.HEAD_ON_PRIORITY:
             self._log.info("met %s head-on (this robot has priority): waiting for it to back out", peer.name)
         elif meeting is Meeting.TOO_CLOSE:
@@ -491,13 +541,23 @@ class Executive:
         p = self.params
         if p.controller == "ir":
             try:
-                dock = request.dock_pose or self.database.choose(request.dock_id or None, heard.latest_pose,
-                                                                 request.dock_type or None).pose2d
+                dock = (
+                    request.dock_pose
+                    or self.database.choose(
+                        request.dock_id or None, heard.latest_pose, request.dock_type or None
+                    ).pose2d
+                )
             except DockingError:
                 dock = None  # no such dock in the database: infrared docking needs none
-            return IrDockingRun(max_time_s=min(p.max_docking_time_s, p.approach_timeout_s + 60.0), dock_pose=dock,
-                                staging_offset_m=p.staging_offset_m, max_staging_time_s=request.max_staging_time_s)
-        tracker = DockTracker(replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m)
+            return IrDockingRun(
+                max_time_s=min(p.max_docking_time_s, p.approach_timeout_s + 60.0),
+                dock_pose=dock,
+                staging_offset_m=p.staging_offset_m,
+                max_staging_time_s=request.max_staging_time_s,
+            )
+        tracker = DockTracker(
+            replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m
+        )
         return DockingRun(request, self.database, p.approach_controller(), p.docking_config(), tracker)
 
     def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
@@ -534,19 +594,30 @@ class Executive:
             if giving_way.unresolved:
                 self._carry_on_until[giving_way.peer] = heard.now_s + CARRY_ON_S
             if isinstance(giving_way.resume, DockRequest):
-                self._begin_docking(giving_way.resume, goal, heard, out)  # carry on docking (a patrol: the mission)
+                self._begin_docking(
+                    giving_way.resume, goal, heard, out
+                )  # carry on docking (a patrol: the mission)
             return
         # A give-way cancelled (its dock_robot goal, or a clock reset) ends what it interrupted: the goal is
         # answered as cancelled below, not resumed.
         self.mission.finished(kind, result.success, goal is not None, heard.now_s)
-        if self.claim is not None and ((kind is TaskKind.DOCK and not result.success)
-                                       or (kind is TaskKind.UNDOCK and result.success)):
+        if self.claim is not None and (
+            (kind is TaskKind.DOCK and not result.success) or (kind is TaskKind.UNDOCK and result.success)
+        ):
             self.claim.drop()  # out of the dock (or never got in): the dock is free for others
         level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
         feedback = task.dock_feedback(heard.now_s)
         took = f" after {feedback.docking_time_s:.1f} s" if feedback is not None else ""
-        self._log.log(level, "%s %s%s (code %d, %d retries)%s", kind.value, result.outcome.value, took,
-                      int(result.error_code), result.num_retries, f": {result.message}" if result.message else "")
+        self._log.log(
+            level,
+            "%s %s%s (code %d, %d retries)%s",
+            kind.value,
+            result.outcome.value,
+            took,
+            int(result.error_code),
+            result.num_retries,
+            f": {result.message}" if result.message else "",
+        )
         if goal is not None:
             out.append(GoalEnded(goal, result.outcome, _result_message(goal.action, task)))
 
@@ -560,11 +631,16 @@ class Executive:
         if key == self._feedback_key and now - self._feedback_published_s < self.params.feedback_period_s:
             return
         self._feedback_key, self._feedback_published_s = key, now
-        out.append(GoalFeedback(self.goal, DockRobotFeedback(
-            state=int(feedback.state),
-            docking_time=Duration.from_sec(feedback.docking_time_s),
-            num_retries=feedback.num_retries,
-        )))
+        out.append(
+            GoalFeedback(
+                self.goal,
+                DockRobotFeedback(
+                    state=int(feedback.state),
+                    docking_time=Duration.from_sec(feedback.docking_time_s),
+                    num_retries=feedback.num_retries,
+                ),
+            )
+        )
 
     def state_name(self, charging: bool) -> str:
         """What the service is doing, for ``docking/state``."""

@@ -337,7 +337,9 @@ class GracefulDockController:
             if base_twist is not None:
                 self.estimator.propagate(base_twist[0], base_twist[1], dt, measured_velocity=True)
             else:
-                self.estimator.propagate(self.last_command.linear_x_mps, self.last_command.angular_z_radps, dt)
+                self.estimator.propagate(
+                    self.last_command.linear_x_mps, self.last_command.angular_z_radps, dt
+                )
         return self.estimator.correct(measured_pose, pose_age_s)
 
     def compute(
@@ -399,7 +401,9 @@ class GracefulDockController:
         The law's curvature times ``r`` changes by ``k_delta + (1 + k_phi / (1 + (k_phi phi)^2)) cos(delta)``
         per radian of heading, which turns the curvature into the angle still to turn.
         """
-        slope = gains.k_delta + (1.0 + gains.k_phi / (1.0 + (gains.k_phi * polar.phi_rad) ** 2)) * math.cos(polar.delta_rad)
+        slope = gains.k_delta + (1.0 + gains.k_phi / (1.0 + (gains.k_phi * polar.phi_rad) ** 2)) * math.cos(
+            polar.delta_rad
+        )
         to_turn_rad = abs(command.curvature_per_m) * polar.r_m / max(slope, 1.0)
         w = min(gains.v_angular_max_radps, math.sqrt(2.0 * self.params.pivot_decel_radps2 * to_turn_rad))
         return VelocityCommand(0.0, math.copysign(w, command.curvature_per_m), command.curvature_per_m)
@@ -418,10 +422,14 @@ class GracefulDockController:
         # a command holds for a control period: the speed must still brake in time from where it ends,
         # v**2 <= contact**2 + 2 * a * (d - v * period), solved for v
         a_dt = p.approach_decel_mps2 * p.control_period_s
-        cap = max(contact_speed_mps,
-                  -a_dt + math.sqrt(a_dt**2 + contact_speed_mps**2 + 2.0 * p.approach_decel_mps2 * to_contact_m))
+        cap = max(
+            contact_speed_mps,
+            -a_dt + math.sqrt(a_dt**2 + contact_speed_mps**2 + 2.0 * p.approach_decel_mps2 * to_contact_m),
+        )
         speed = abs(command.linear_x_mps)
         if speed <= cap:
             return command
         scale = cap / speed
-        return VelocityCommand(command.linear_x_mps * scale, command.angular_z_radps * scale, command.curvature_per_m)
+        return VelocityCommand(
+            command.linear_x_mps * scale, command.angular_z_radps * scale, command.curvature_per_m
+        )

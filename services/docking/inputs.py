@@ -84,8 +84,9 @@ class Heard:
         """The lidar's returns in base_link (n x 2), when fresh."""
         return None if self.scan is None else self.scan.points
 
-    def blocked(self, dock_in_base: Pose2D | None, obstacles: ObstacleParams, use_lidar: bool,
-                use_sonar: bool) -> tuple[bool, bool]:
+    def blocked(
+        self, dock_in_base: Pose2D | None, obstacles: ObstacleParams, use_lidar: bool, use_sonar: bool
+    ) -> tuple[bool, bool]:
         """Whether something that is not the dock (``dock_in_base``) is in the way ahead and behind."""
         ahead = behind = False
         if use_lidar and self.scan_points is not None:
@@ -130,7 +131,9 @@ class InputCache:
         # An odometry jump (the robot was moved) makes the track ignore localisation for a while: the
         # localiser may still report where the robot was.
         self.track.add_odom(
-            OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z),
+            OdometrySample(
+                msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z
+            ),
             now_s,
         )
 
@@ -146,8 +149,11 @@ class InputCache:
 
     def infrared(self, msg: DockInfraRed, now_s: float) -> None:
         if msg.data.size != 3:
-            self._warn.warning("ir-dock", "ignored an ir_dock message with %d readings (expected right, central, "
-                               "left)", msg.data.size)
+            self._warn.warning(
+                "ir-dock",
+                "ignored an ir_dock message with %d readings (expected right, central, left)",
+                msg.data.size,
+            )
             return
         self._ir_dock = (int(msg.data[0]), int(msg.data[1]), int(msg.data[2]))
         self._ir_received_s = now_s
@@ -161,8 +167,14 @@ class InputCache:
 
     # --- what the executive sees ---------------------------------------------------------------------
 
-    def heard(self, now_s: float, nav: NavHeard = NavHeard(), peers: tuple[Peer, ...] = (), own_plan: PlanPoints = None,
-              clock_reset: bool = False) -> Heard:
+    def heard(
+        self,
+        now_s: float,
+        nav: NavHeard = NavHeard(),
+        peers: tuple[Peer, ...] = (),
+        own_plan: PlanPoints = None,
+        clock_reset: bool = False,
+    ) -> Heard:
         p = self.params
         track = self.track
         latest = track.latest()
@@ -180,8 +192,11 @@ class InputCache:
             pose_age_s=pose_age_s,
             base_twist=track.twist(now_s, SENSOR_MAX_AGE_S),
             battery=float(battery.percentage) if battery is not None else None,
-            charging=(battery is not None and now_s - self._battery_received_s <= p.battery_timeout_s
-                      and battery.power_supply_status in CHARGING_STATUSES),
+            charging=(
+                battery is not None
+                and now_s - self._battery_received_s <= p.battery_timeout_s
+                and battery.power_supply_status in CHARGING_STATUSES
+            ),
             scan=self._scan if now_s - self._scan_received_s <= SENSOR_MAX_AGE_S else None,
             sonar_range_m=self._sonar_range_m if now_s - self._sonar_received_s <= SENSOR_MAX_AGE_S else None,
             ir_dock=self._ir_dock if now_s - self._ir_received_s <= IR_MAX_AGE_S else None,
@@ -206,8 +221,13 @@ class DockSighting:
 class DockSightings:
     """The detection subscription, declared only while wanted; see the module docstring."""
 
-    def __init__(self, node: Node, track: PoseTrack, warn: RateLimitedLogger,
-                 on_sighting: Callable[[DockSighting], None]) -> None:
+    def __init__(
+        self,
+        node: Node,
+        track: PoseTrack,
+        warn: RateLimitedLogger,
+        on_sighting: Callable[[DockSighting], None],
+    ) -> None:
         self._node = node
         self._track = track
         self._warn = warn
@@ -223,16 +243,21 @@ class DockSightings:
         and the run's wish starts and ends once per approach (a lingering subscription cost about fifteen
         frames with no marker in them at every docking)."""
         if wanted and self._subscription is None:
-            self._subscription = self._node.create_subscription(PoseStamped, topics.DETECTED_DOCK_POSE,
-                                                                self._on_detection, SENSOR_DATA)
+            self._subscription = self._node.create_subscription(
+                PoseStamped, topics.DETECTED_DOCK_POSE, self._on_detection, SENSOR_DATA
+            )
         elif not wanted and self._subscription is not None:
             self._subscription.undeclare()
             self._subscription = None
 
     def _on_detection(self, msg: PoseStamped) -> None:
         if msg.header.frame_id not in ("", topics.BASE_FRAME):
-            self._warn.warning("detection-frame", "ignored a dock detection in frame %r (expected %s)",
-                               msg.header.frame_id, topics.BASE_FRAME)
+            self._warn.warning(
+                "detection-frame",
+                "ignored a dock detection in frame %r (expected %s)",
+                msg.header.frame_id,
+                topics.BASE_FRAME,
+            )
             return
         stamp_s = msg.header.stamp.to_sec()
         robot_at_stamp = self._track.pose_now_at(stamp_s)

@@ -105,13 +105,17 @@ class Room:
 
     def overlaps(self, pose: Pose2D, points: np.ndarray) -> bool:
         local = pose.inverse().transform_points(points)
-        return bool(np.any((np.abs(local[:, 0]) <= ROBOT_LENGTH_M / 2) & (np.abs(local[:, 1]) <= ROBOT_WIDTH_M / 2)))
+        return bool(
+            np.any((np.abs(local[:, 0]) <= ROBOT_LENGTH_M / 2) & (np.abs(local[:, 1]) <= ROBOT_WIDTH_M / 2))
+        )
 
     def blocked(self, pose: Pose2D, direction: float) -> bool:
         """Something within ``STOP_DISTANCE_M`` of the robot's front (``direction`` +1) or rear (-1)."""
         local = pose.inverse().transform_points(self.seen)
         along, side = direction * local[:, 0] - ROBOT_FRONT_M, np.abs(local[:, 1])
-        return bool(np.any((along > 0.0) & (along <= STOP_DISTANCE_M) & (side <= ROBOT_WIDTH_M / 2 + SIDE_MARGIN_M)))
+        return bool(
+            np.any((along > 0.0) & (along <= STOP_DISTANCE_M) & (side <= ROBOT_WIDTH_M / 2 + SIDE_MARGIN_M))
+        )
 
     def pressed_flush(self, pose: Pose2D, moved: Pose2D, pushed_m: float) -> Pose2D:
         """Where the plate leaves a robot that pushed ``pushed_m`` into it from ``pose``: no further along the
@@ -121,23 +125,31 @@ class Room:
         turn = min(abs(error), abs(pushed_m) / (ROBOT_WIDTH_M / 2))
         yaw = moved.yaw - math.copysign(turn, error)
         local = Pose2D(moved.x, moved.y, yaw).relative_to(self.dock)
-        reach = -(ROBOT_WIDTH_M / 2) * abs(math.sin(wrap_angle(yaw - self.dock.yaw)))  # a corner touches first
+        reach = -(ROBOT_WIDTH_M / 2) * abs(
+            math.sin(wrap_angle(yaw - self.dock.yaw))
+        )  # a corner touches first
         along = min(local.x, max(pose.relative_to(self.dock).x, reach))
         return self.dock.compose(Pose2D(along, local.y, local.yaw))
 
     def mated(self, pose: Pose2D) -> tuple[bool, Pose2D]:
         offset = pose.relative_to(self.dock)
         yaw = wrap_angle(pose.yaw - self.dock.yaw)
-        return (-MATING.contact_reach_m <= offset.x <= MATING.overshoot_slack_m
-                and abs(offset.y) <= MATING.max_lateral_error_m and abs(yaw) <= MATING.max_yaw_error_rad), offset
+        return (
+            -MATING.contact_reach_m <= offset.x <= MATING.overshoot_slack_m
+            and abs(offset.y) <= MATING.max_lateral_error_m
+            and abs(yaw) <= MATING.max_yaw_error_rad
+        ), offset
 
 
-def _is_edge_of(segment: tuple[tuple[float, float], tuple[float, float]], corners: list[tuple[float, float]]) -> bool:
+def _is_edge_of(
+    segment: tuple[tuple[float, float], tuple[float, float]], corners: list[tuple[float, float]]
+) -> bool:
     return all(any(math.dist(end, c) < 1e-9 for c in corners) for end in segment)
 
 
-def dock_from(room: Room, start: Pose2D, seed: int, max_time_s: float = 180.0,
-              drive: IrDriveParams | None = None) -> IrTrial:
+def dock_from(
+    room: Room, start: Pose2D, seed: int, max_time_s: float = 180.0, drive: IrDriveParams | None = None
+) -> IrTrial:
     """One infrared docking from ``start`` (see the module docstring)."""
     rng = np.random.default_rng(seed)
     params = InfraredParams()
@@ -149,17 +161,31 @@ def dock_from(room: Room, start: Pose2D, seed: int, max_time_s: float = 180.0,
     while True:
         mated, offset = room.mated(pose)
         readings, late = late, receiver_readings(pose, room.world.docks, room.occluders, params, rng)
-        intent = task.step(TickInputs(now_s=t, base_twist=(base.v_mps, base.w_radps), charging=mated,
-                                      blocked_ahead=room.blocked(pose, 1.0),
-                                      blocked_behind=room.blocked(pose, -1.0), ir_dock=readings))
+        intent = task.step(
+            TickInputs(
+                now_s=t,
+                base_twist=(base.v_mps, base.w_radps),
+                charging=mated,
+                blocked_ahead=room.blocked(pose, 1.0),
+                blocked_behind=room.blocked(pose, -1.0),
+                ir_dock=readings,
+            )
+        )
         state = task.drive.state.value
         if not states or states[-1] != state:
             states.append(state)
         if task.result is not None:
             docked = task.result.outcome is Outcome.SUCCEEDED
-            return IrTrial(start.as_tuple(), docked, t, abs(offset.y) if docked else math.nan,
-                           abs(wrap_angle(pose.yaw - room.dock.yaw)) if docked else math.nan, collisions,
-                           task.result.message or task.result.outcome.value, states)
+            return IrTrial(
+                start.as_tuple(),
+                docked,
+                t,
+                abs(offset.y) if docked else math.nan,
+                abs(wrap_angle(pose.yaw - room.dock.yaw)) if docked else math.nan,
+                collisions,
+                task.result.message or task.result.outcome.value,
+                states,
+            )
         command = intent if isinstance(intent, Velocity) else Velocity(0.0, 0.0)
         before = (base.x, base.y, base.yaw, base.v_mps, base.w_radps)
         base.step(command.linear_x_mps, command.angular_z_radps, DT_S)
@@ -187,12 +213,17 @@ def run(worlds: Sequence[Path], n: int, seed: int, max_time_s: float = 180.0) ->
         if not world.docks:
             raise ConfigError(f"{path}: the world has no dock")
         room = Room(world)
-        trials = [dock_from(room, start, seed + 1000 * number + i, max_time_s)
-                  for i, start in enumerate(beacon_starts(world, n, seed + 1000 * number))]
+        trials = [
+            dock_from(room, start, seed + 1000 * number + i, max_time_s)
+            for i, start in enumerate(beacon_starts(world, n, seed + 1000 * number))
+        ]
         everything += trials
         per_world[world.name] = _summary(trials)
-    return {"summary": _summary(everything), "worlds": per_world,
-            "failures": [asdict(t) for t in everything if not t.docked]}
+    return {
+        "summary": _summary(everything),
+        "worlds": per_world,
+        "failures": [asdict(t) for t in everything if not t.docked],
+    }
 
 
 def _summary(trials: list[IrTrial]) -> dict:
@@ -200,23 +231,36 @@ def _summary(trials: list[IrTrial]) -> dict:
     times = sorted(t.time_s for t in docked)
     lateral = sorted(t.lateral_error_m for t in docked)
     return {
-        "n": len(trials), "docked": len(docked), "success_rate": len(docked) / len(trials) if trials else math.nan,
+        "n": len(trials),
+        "docked": len(docked),
+        "success_rate": len(docked) / len(trials) if trials else math.nan,
         "collisions": sum(t.collisions for t in trials),
         "median_time_s": round(statistics.median(times), 2) if times else None,
         "p95_time_s": round(times[min(len(times) - 1, int(0.95 * len(times)))], 2) if times else None,
         "max_time_s": round(times[-1], 2) if times else None,
         "median_lateral_error_m": round(statistics.median(lateral), 4) if lateral else None,
-        "p95_lateral_error_m": round(lateral[min(len(lateral) - 1, int(0.95 * len(lateral)))], 4) if lateral else None,
+        "p95_lateral_error_m": round(lateral[min(len(lateral) - 1, int(0.95 * len(lateral)))], 4)
+        if lateral
+        else None,
     }
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m services.docking.ir_bench", description=__doc__.split("\n")[0])
-    parser.add_argument("--world", action="append", required=True, metavar="FILE|DIR",
-                        help="world file or directory of them (repeatable)")
+    parser = argparse.ArgumentParser(
+        prog="python -m services.docking.ir_bench", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument(
+        "--world",
+        action="append",
+        required=True,
+        metavar="FILE|DIR",
+        help="world file or directory of them (repeatable)",
+    )
     parser.add_argument("--n", type=int, default=20, help="beacon starts per world")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--max-time", type=float, default=180.0, help="the run's time limit (s), as the service's")
+    parser.add_argument(
+        "--max-time", type=float, default=180.0, help="the run's time limit (s), as the service's"
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     try:
@@ -228,12 +272,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(json.dumps(report))
         return 0
     for name, row in {**report["worlds"], "all": report["summary"]}.items():
-        print(f"{name:16s} {row['docked']}/{row['n']} docked, {row['collisions']} collisions, time median "
-              f"{row['median_time_s']} s p95 {row['p95_time_s']} max {row['max_time_s']}, lateral median "
-              f"{row['median_lateral_error_m']} p95 {row['p95_lateral_error_m']} m")
+        print(
+            f"{name:16s} {row['docked']}/{row['n']} docked, {row['collisions']} collisions, time median "
+            f"{row['median_time_s']} s p95 {row['p95_time_s']} max {row['max_time_s']}, lateral median "
+            f"{row['median_lateral_error_m']} p95 {row['p95_lateral_error_m']} m"
+        )
     for failure in report["failures"]:
-        print(f"failed from {tuple(round(v, 2) for v in failure['start'])}: {failure['outcome']}; states "
-              f"{' > '.join(failure['states'][-12:])}")
+        print(
+            f"failed from {tuple(round(v, 2) for v in failure['start'])}: {failure['outcome']}; states "
+            f"{' > '.join(failure['states'][-12:])}"
+        )
     return 0
 
 

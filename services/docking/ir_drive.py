@@ -204,8 +204,14 @@ class IrDockDrive:
             self._cross_after_back_off = False
             return self._to(IrState.FIND_STREAM, 0.0, 0.0)
         if self.state is IrState.BACK_OFF:
-            if mid & (CENTER | FAR) and (mid & CENTER or not mid & NEAR) and self._state_s >= p.min_back_off_s:
-                return self._aligned(right, mid, left)  # on the axis again, or out where there is room to correct
+            if (
+                mid & (CENTER | FAR)
+                and (mid & CENTER or not mid & NEAR)
+                and self._state_s >= p.min_back_off_s
+            ):
+                return self._aligned(
+                    right, mid, left
+                )  # on the axis again, or out where there is room to correct
             if self._state_s < p.max_back_off_s:
                 return self._to(IrState.BACK_OFF, -p.back_off_mps, self._towards_beacon(right, mid, left))
             return self._restart_scan(p.scan_turn_radps)
@@ -247,11 +253,15 @@ class IrDockDrive:
         # ... and the central receiver no longer sees the beacon: the emitter is then at least 25 degrees to
         # the side, and the drive crosses the axis instead of heading at the dock
         p = self.params
-        if self.dock_detector > 0:  # on the dock's right: turn clockwise until the left receiver sees the right field
+        if (
+            self.dock_detector > 0
+        ):  # on the dock's right: turn clockwise until the left receiver sees the right field
             if left & RIGHT and not mid:
                 return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
             return self._to(IrState.FIND_STREAM, 0.0, -p.find_turn_radps)
-        if right & LEFT and not mid:  # on the dock's left: counter-clockwise until the right receiver sees the left field
+        if (
+            right & LEFT and not mid
+        ):  # on the dock's left: counter-clockwise until the right receiver sees the left field
             return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
         return self._to(IrState.FIND_STREAM, 0.0, p.find_turn_radps)
 
@@ -260,7 +270,9 @@ class IrDockDrive:
         crossed = (left & LEFT) if self.dock_detector > 0 else (right & RIGHT)
         if crossed:
             # past the axis: turn back towards the dock until the central receiver sees the centre
-            return self._restart_scan(p.slow_scan_turn_radps if self.dock_detector > 0 else -p.slow_scan_turn_radps)
+            return self._restart_scan(
+                p.slow_scan_turn_radps if self.dock_detector > 0 else -p.slow_scan_turn_radps
+            )
         return self._to(IrState.GET_STREAM, p.get_stream_mps, 0.0)
 
     def _towards_beacon(self, right: int, mid: int, left: int) -> float:
@@ -287,8 +299,11 @@ class IrDockDrive:
         near = bool(mid & NEAR)
         bits = mid & (NEAR if near else FAR)
         side = (1 if bits & LEFT else 0) - (1 if bits & RIGHT else 0)  # +1: the dock's left, -1: its right
-        state, speed, turn = ((IrState.ALIGNED_NEAR, p.near_mps, p.near_turn_radps) if near
-                              else (IrState.ALIGNED_FAR, p.far_mps, p.far_turn_radps))
+        state, speed, turn = (
+            (IrState.ALIGNED_NEAR, p.near_mps, p.near_turn_radps)
+            if near
+            else (IrState.ALIGNED_FAR, p.far_mps, p.far_turn_radps)
+        )
         if side:
             self._side = side
             # on the dock's left, turn left: towards the axis; but not while the emitter already stands 5 or

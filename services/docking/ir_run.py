@@ -53,12 +53,22 @@ def within_beacon_reach(robot_pose: Pose2D, dock_pose: Pose2D) -> bool:
     """Whether the robot stands where the beacon's fields reach: in front of the dock's face, near its axis."""
     face = dock_pose.compose(Pose2D(ROBOT_FRONT_M, 0.0, math.pi))  # x out of the dock
     local = robot_pose.relative_to(face)
-    return local.x > 0.0 and math.hypot(local.x, local.y) <= IR_REACH_M and abs(math.atan2(local.y, local.x)) <= IR_REACH_BEARING_RAD
+    return (
+        local.x > 0.0
+        and math.hypot(local.x, local.y) <= IR_REACH_M
+        and abs(math.atan2(local.y, local.x)) <= IR_REACH_BEARING_RAD
+    )
 
 
 class IrDockingRun(Task[IrPhase]):
-    def __init__(self, params: IrDriveParams | None = None, max_time_s: float = 180.0, dock_pose: Pose2D | None = None,
-                 staging_offset_m: float = 0.7, max_staging_time_s: float = 120.0) -> None:
+    def __init__(
+        self,
+        params: IrDriveParams | None = None,
+        max_time_s: float = 180.0,
+        dock_pose: Pose2D | None = None,
+        staging_offset_m: float = 0.7,
+        max_staging_time_s: float = 120.0,
+    ) -> None:
         super().__init__(IrPhase.DOCKING)
         self.drive = IrDockDrive(params or IrDriveParams())
         self.max_time_s = max_time_s
@@ -102,13 +112,19 @@ class IrDockingRun(Task[IrPhase]):
             self.finish(Outcome.SUCCEEDED, message="charging")
             return Velocity(0.0, 0.0)
         if now - self.started_s > self.max_time_s:
-            self.finish(Outcome.FAILED, DockingErrorCode.TIMEOUT, f"not charging after {self.max_time_s:.0f} s"
-                        + self._story())
+            self.finish(
+                Outcome.FAILED,
+                DockingErrorCode.TIMEOUT,
+                f"not charging after {self.max_time_s:.0f} s" + self._story(),
+            )
             return Velocity(0.0, 0.0)
         if not self._began:
             self._began = True
-            if self.dock_pose is not None and inputs.robot_pose is not None \
-                    and not within_beacon_reach(inputs.robot_pose, self.dock_pose):
+            if (
+                self.dock_pose is not None
+                and inputs.robot_pose is not None
+                and not within_beacon_reach(inputs.robot_pose, self.dock_pose)
+            ):
                 self._nav_key = self.new_nav_key()
                 self.enter(IrPhase.NAV_TO_STAGING, now)
                 self.feedback_state = DockingState.NAV_TO_STAGING_POSE
@@ -125,13 +141,20 @@ class IrDockingRun(Task[IrPhase]):
         if inputs.blocked_behind and command.linear_mps < 0.0:
             command = self.drive.obstacle_behind() or command
         if command.state is not self._drive_state:  # the log tells where a long run spent its time
-            log.info("infrared: %s at %.2f s (readings %s)", command.state.value, self.docking_time_s(now),
-                     inputs.ir_dock)
+            log.info(
+                "infrared: %s at %.2f s (readings %s)",
+                command.state.value,
+                self.docking_time_s(now),
+                inputs.ir_dock,
+            )
             self._drive_state = command.state
             self._entered[command.state.value] = self._entered.get(command.state.value, 0) + 1
         if command.state is IrState.LOST:
-            self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_DETECT_DOCK,
-                        f"no dock beacon seen in {self.drive.params.max_blind_turns:g} turns")
+            self.finish(
+                Outcome.FAILED,
+                DockingErrorCode.FAILED_TO_DETECT_DOCK,
+                f"no dock beacon seen in {self.drive.params.max_blind_turns:g} turns",
+            )
             return Velocity(0.0, 0.0)
         aligned = command.state in (IrState.ALIGNED_FAR, IrState.ALIGNED_NEAR)
         self.feedback_state = DockingState.CONTROLLING if aligned else DockingState.INITIAL_PERCEPTION
@@ -151,8 +174,11 @@ class IrDockingRun(Task[IrPhase]):
         outcome = inputs.nav.finished(self._nav_key)
         if outcome is None:
             if self.phase_time_s(now) > self.max_staging_time_s:
-                self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_STAGE,
-                            f"staging took longer than {self.max_staging_time_s:g} s")
+                self.finish(
+                    Outcome.FAILED,
+                    DockingErrorCode.FAILED_TO_STAGE,
+                    f"staging took longer than {self.max_staging_time_s:g} s",
+                )
                 return Velocity(0.0, 0.0)
             return Navigate(graceful_staging_pose(self.dock_pose, self.staging_offset_m), self._nav_key)
         if outcome is NavOutcome.SUCCEEDED:
@@ -160,9 +186,19 @@ class IrDockingRun(Task[IrPhase]):
             self.feedback_state = DockingState.INITIAL_PERCEPTION
             self._last_tick_s = now
             return Velocity(0.0, 0.0)
-        self.finish(Outcome.FAILED, DockingErrorCode.FAILED_TO_STAGE,
-                    f"navigation to the staging pose {outcome.value}: {inputs.nav.reason or outcome.value}")
+        self.finish(
+            Outcome.FAILED,
+            DockingErrorCode.FAILED_TO_STAGE,
+            f"navigation to the staging pose {outcome.value}: {inputs.nav.reason or outcome.value}",
+        )
         return Velocity(0.0, 0.0)
 
 
-__all__ = ["IR_MAX_AGE_S", "IR_REACH_BEARING_RAD", "IR_REACH_M", "IrDockingRun", "IrPhase", "within_beacon_reach"]
+__all__ = [
+    "IR_MAX_AGE_S",
+    "IR_REACH_BEARING_RAD",
+    "IR_REACH_M",
+    "IrDockingRun",
+    "IrPhase",
+    "within_beacon_reach",
+]

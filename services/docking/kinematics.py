@@ -42,14 +42,23 @@ class RobotLimits:
     a_decel_mps2: float = 2.5
     alpha_decel_radps2: float = 6.0
 
-    def next_twist(self, v_mps: float, w_radps: float, target_v_mps: float, target_w_radps: float,
-                   dt_s: float) -> tuple[float, float]:
+    def next_twist(
+        self, v_mps: float, w_radps: float, target_v_mps: float, target_w_radps: float, dt_s: float
+    ) -> tuple[float, float]:
         """The twist after ``dt_s`` of steering ``(v, w)`` towards the (clamped) target within the limits;
         a non-finite target counts as a stop, as on the simulated base."""
-        target_v = min(max(target_v_mps, -self.v_max_mps), self.v_max_mps) if math.isfinite(target_v_mps) else 0.0
-        target_w = min(max(target_w_radps, -self.w_max_radps), self.w_max_radps) if math.isfinite(target_w_radps) else 0.0
-        return (_rate_limited(v_mps, target_v, self.a_max_mps2, self.a_decel_mps2, dt_s),
-                _rate_limited(w_radps, target_w, self.alpha_max_radps2, self.alpha_decel_radps2, dt_s))
+        target_v = (
+            min(max(target_v_mps, -self.v_max_mps), self.v_max_mps) if math.isfinite(target_v_mps) else 0.0
+        )
+        target_w = (
+            min(max(target_w_radps, -self.w_max_radps), self.w_max_radps)
+            if math.isfinite(target_w_radps)
+            else 0.0
+        )
+        return (
+            _rate_limited(v_mps, target_v, self.a_max_mps2, self.a_decel_mps2, dt_s),
+            _rate_limited(w_radps, target_w, self.alpha_max_radps2, self.alpha_decel_radps2, dt_s),
+        )
 
 
 def _rate_limited(previous: float, target: float, accel: float, decel: float, dt_s: float) -> float:
@@ -92,7 +101,9 @@ class DiffDriveModel:
         return Pose2D(self.x, self.y, wrap_angle(self.yaw))
 
     def step(self, cmd_v_mps: float, cmd_w_radps: float, dt_s: float) -> None:
-        self.v_mps, self.w_radps = self.limits.next_twist(self.v_mps, self.w_radps, cmd_v_mps, cmd_w_radps, dt_s)
+        self.v_mps, self.w_radps = self.limits.next_twist(
+            self.v_mps, self.w_radps, cmd_v_mps, cmd_w_radps, dt_s
+        )
         moved = Pose2D(self.x, self.y, self.yaw).advance(self.v_mps, self.w_radps, dt_s)
         self.x, self.y, self.yaw = moved.x, moved.y, moved.yaw
 
@@ -159,7 +170,9 @@ def simulate_approach(
     substeps = max(1, round(dt / physics_dt_s))
     h = dt / substeps
     times: list[float] = [0.0]
-    rows: list[tuple[float, float, float, float, float, float]] = [(0.0, robot.x, robot.y, robot.yaw, 0.0, 0.0)]
+    rows: list[tuple[float, float, float, float, float, float]] = [
+        (0.0, robot.x, robot.y, robot.yaw, 0.0, 0.0)
+    ]
     t = 0.0
     tick = 0
     stopped_since: float | None = None

@@ -112,9 +112,18 @@ class Mission:
             return MissionOrder.UNDOCK
         if not self.patrol:
             return None
-        if self.mode is MissionMode.CHARGING and math.isfinite(self.percentage) and self.percentage >= self.resume_at:
+        if (
+            self.mode is MissionMode.CHARGING
+            and math.isfinite(self.percentage)
+            and self.percentage >= self.resume_at
+        ):
             return MissionOrder.UNDOCK
-        if self.mode is MissionMode.ROAMING and math.isfinite(self.percentage) and not self.low and not self.charging:
+        if (
+            self.mode is MissionMode.ROAMING
+            and math.isfinite(self.percentage)
+            and not self.low
+            and not self.charging
+        ):
             return MissionOrder.PATROL
         return None
 

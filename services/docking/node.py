@@ -113,24 +113,39 @@ class DockingService:
         self.peers = PeerWatch(node, DOCKING_STATE) if self.executive.watches_traffic else None
         cache = self.inputs
         node.create_subscription(BatteryState, topics.BATTERY_STATUS, self._on_battery, QoS(depth=5))
-        node.create_subscription(Float64MultiArray, topics.POSE2D, lambda m: cache.pose(m.data, node.now()),
-                                 QoS(depth=5))
+        node.create_subscription(
+            Float64MultiArray, topics.POSE2D, lambda m: cache.pose(m.data, node.now()), QoS(depth=5)
+        )
         node.create_subscription(Odometry, topics.ODOM, lambda m: cache.odometry(m, node.now()), SENSOR_DATA)
-        node.create_subscription(LaserScan, topics.SCAN, lambda m: cache.scan(
-            m.ranges, m.angle_min, m.angle_increment, node.now()), SENSOR_DATA)
-        node.create_subscription(Range, topics.ULTRASONIC, lambda m: cache.sonar(m.range, node.now()), SENSOR_DATA)
+        node.create_subscription(
+            LaserScan,
+            topics.SCAN,
+            lambda m: cache.scan(m.ranges, m.angle_min, m.angle_increment, node.now()),
+            SENSOR_DATA,
+        )
+        node.create_subscription(
+            Range, topics.ULTRASONIC, lambda m: cache.sonar(m.range, node.now()), SENSOR_DATA
+        )
         node.create_subscription(TFMessage, topics.TF_STATIC, cache.tf_static, QoS(depth=20))
         if params.controller == "ir":
-            node.create_subscription(DockInfraRed, topics.IR_DOCK, lambda m: cache.infrared(m, node.now()),
-                                     SENSOR_DATA)
+            node.create_subscription(
+                DockInfraRed, topics.IR_DOCK, lambda m: cache.infrared(m, node.now()), SENSOR_DATA
+            )
         self.sightings = DockSightings(node, cache.track, self._say, self._event)
         self.dock_server = ActionServer(
-            node, DOCK_ROBOT, topics.DOCK_ROBOT, on_goal=_check_dock_goal, on_accepted=self._on_dock_goal,
+            node,
+            DOCK_ROBOT,
+            topics.DOCK_ROBOT,
+            on_goal=_check_dock_goal,
+            on_accepted=self._on_dock_goal,
             on_cancel=lambda handle: self._event(CancelGoal(Goal(handle, TaskKind.DOCK))),
             preempt_result=lambda: DockRobotResult(success=False),
         )
         self.undock_server = ActionServer(
-            node, UNDOCK_ROBOT, topics.UNDOCK_ROBOT, on_goal=_check_undock_goal,
+            node,
+            UNDOCK_ROBOT,
+            topics.UNDOCK_ROBOT,
+            on_goal=_check_undock_goal,
             on_accepted=self._on_undock_goal,
             on_cancel=lambda handle: self._event(CancelGoal(Goal(handle, TaskKind.UNDOCK))),
             preempt_result=lambda: UndockRobotResult(success=False),
@@ -139,8 +154,13 @@ class DockingService:
         self.timer = node.create_timer(self.period_s, self._on_tick)
         self._log.info(
             "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time%s",
-            params.controller, 1.0 / self.period_s, len(database), params.dock_database,
-            "on" if params.use_detection else "off", len(self.executive.patrol), "sim" if node.use_sim_time else "wall",
+            params.controller,
+            1.0 / self.period_s,
+            len(database),
+            params.dock_database,
+            "on" if params.use_detection else "off",
+            len(self.executive.patrol),
+            "sim" if node.use_sim_time else "wall",
             f", docks reserved with {self.fleet.reserve_key}" if params.fleet else "",
         )
 
@@ -179,23 +199,35 @@ class DockingService:
             return
         goal: DockRobotGoal = handle.goal
         handle.execute()
-        self._log.info("dock_robot: %s", f"dock {goal.dock_id!r}" if goal.use_dock_id and goal.dock_id
-                       else "the nearest dock" if goal.use_dock_id else "a given pose")
-        self._event(DockGoal(Goal(handle, TaskKind.DOCK), DockRequest(
-            dock_id=goal.dock_id if goal.use_dock_id else "",
-            dock_pose=None if goal.use_dock_id else goal.dock_pose.pose.to_pose2d(),
-            dock_type=goal.dock_type,
-            navigate_to_staging_pose=goal.navigate_to_staging_pose,
-            max_staging_time_s=goal.max_staging_time,
-        )))
+        self._log.info(
+            "dock_robot: %s",
+            f"dock {goal.dock_id!r}"
+            if goal.use_dock_id and goal.dock_id
+            else "the nearest dock"
+            if goal.use_dock_id
+            else "a given pose",
+        )
+        self._event(
+            DockGoal(
+                Goal(handle, TaskKind.DOCK),
+                DockRequest(
+                    dock_id=goal.dock_id if goal.use_dock_id else "",
+                    dock_pose=None if goal.use_dock_id else goal.dock_pose.pose.to_pose2d(),
+                    dock_type=goal.dock_type,
+                    navigate_to_staging_pose=goal.navigate_to_staging_pose,
+                    max_staging_time_s=goal.max_staging_time,
+                ),
+            )
+        )
 
     def _on_undock_goal(self, handle: GoalHandle) -> None:
         if not handle.active:
             return
         handle.execute()
         self._log.info("undock_robot")
-        self._event(UndockGoal(Goal(handle, TaskKind.UNDOCK), handle.goal.max_undocking_time,
-                               handle.goal.dock_type))
+        self._event(
+            UndockGoal(Goal(handle, TaskKind.UNDOCK), handle.goal.max_undocking_time, handle.goal.dock_type)
+        )
 
     # --- out -------------------------------------------------------------------------------------------
 
@@ -209,17 +241,24 @@ class DockingService:
                         if not self.nav.is_task_complete():
                             # The arbiter never allows this; a stop is still better than nothing if it happens.
                             self._say.error("overlap", "publishing cmd_vel while the planner holds a goal")
-                        self.cmd_vel.publish(Twist.planar(orders.publish.linear_x_mps,
-                                                          orders.publish.angular_z_radps))
+                        self.cmd_vel.publish(
+                            Twist.planar(orders.publish.linear_x_mps, orders.publish.angular_z_radps)
+                        )
                     if orders.send_goal is not None:
                         self.nav.go_to_pose(orders.send_goal, on_done=self._on_tick)
                 case WantDetections(wanted):
                     self.sightings.want(wanted)
                 case Reserve(battery, dock_id, lengths):
-                    self.fleet.reserve(battery, dock_id, lengths,
-                                       on_answer=lambda answer, error: self._event(FleetReserved(answer, error)))
+                    self.fleet.reserve(
+                        battery,
+                        dock_id,
+                        lengths,
+                        on_answer=lambda answer, error: self._event(FleetReserved(answer, error)),
+                    )
                 case Release():
-                    self.fleet.release(on_done=lambda dock_id, error: self._event(FleetReleased(dock_id, error)))
+                    self.fleet.release(
+                        on_done=lambda dock_id, error: self._event(FleetReleased(dock_id, error))
+                    )
                 case GoalFeedback(goal, feedback):
                     handle: GoalHandle = goal.handle  # type: ignore[assignment]
                     if handle.active:
@@ -254,7 +293,9 @@ class DockingService:
 
 def _check_dock_goal(goal: DockRobotGoal) -> None:
     if not goal.use_dock_id and goal.dock_pose.header.frame_id not in ("", topics.MAP_FRAME):
-        raise ValueError(f"dock_pose must be in the {topics.MAP_FRAME} frame, got {goal.dock_pose.header.frame_id!r}")
+        raise ValueError(
+            f"dock_pose must be in the {topics.MAP_FRAME} frame, got {goal.dock_pose.header.frame_id!r}"
+        )
     if not goal.max_staging_time > 0.0:
         raise ValueError(f"max_staging_time must be > 0, got {goal.max_staging_time}")
 
@@ -264,9 +305,12 @@ def _check_undock_goal(goal: UndockRobotGoal) -> None:
         raise ValueError(f"max_undocking_time must be > 0, got {goal.max_undocking_time}")
 
 
-SERVICE = ServiceSpec("docking", Params, DockingService,
-                      description="zendock docking: goes home to charge when the battery runs low; "
-                                  "dock_robot and undock_robot")
+SERVICE = ServiceSpec(
+    "docking",
+    Params,
+    DockingService,
+    description="zendock docking: goes home to charge when the battery runs low; dock_robot and undock_robot",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,60 +37,104 @@ class Params(ServiceParams):
         description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
     )
     controller: Literal["graceful", "seed", "ir"] = Field(
-        "graceful", description="final approach controller (ir: Kobuki's infrared docking, no map pose or camera)")
+        "graceful",
+        description="final approach controller (ir: Kobuki's infrared docking, no map pose or camera)",
+    )
     dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
     auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
     low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
     resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
-    patrol: list[tuple[float, float, float]] = Field(default_factory=list, description="patrol waypoints [x, y, yaw] (empty: "
-                                                         "those a fleet world in dock_database gives this robot)")
+    patrol: list[tuple[float, float, float]] = Field(
+        default_factory=list,
+        description="patrol waypoints [x, y, yaw] (empty: "
+        "those a fleet world in dock_database gives this robot)",
+    )
     max_retries: int = Field(3, ge=0, json_schema_extra=runtime_settable(NEXT_RUN))
     use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
     allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")
     min_detections: int = Field(3, ge=1)
     initial_perception_timeout_s: float = Field(2.0, gt=0.0)
     detection_filter_coef: float = Field(0.1, gt=0.0, le=1.0)
-    max_detection_offset_m: float = Field(0.5, gt=0.0, description="detections farther from the database pose are ignored")
-    max_staging_time_s: float = Field(120.0, gt=0.0, description="staging time limit of battery-triggered runs")
+    max_detection_offset_m: float = Field(
+        0.5, gt=0.0, description="detections farther from the database pose are ignored"
+    )
+    max_staging_time_s: float = Field(
+        120.0, gt=0.0, description="staging time limit of battery-triggered runs"
+    )
     approach_timeout_s: float = Field(120.0, gt=0.0, json_schema_extra=runtime_settable(NEXT_RUN))
-    obstacle_timeout_s: float = Field(20.0, gt=0.0, description="held by an obstacle this long, the attempt fails")
+    obstacle_timeout_s: float = Field(
+        20.0, gt=0.0, description="held by an obstacle this long, the attempt fails"
+    )
     wait_charge_timeout_s: float = Field(5.0, gt=0.0)
     max_docking_time_s: float = Field(600.0, gt=0.0)
     staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
     handover_distance_m: float = Field(
-        0.45, ge=0.0, description="graceful: the approach takes over from navigation this close to the staging "
+        0.45,
+        ge=0.0,
+        description="graceful: the approach takes over from navigation this close to the staging "
         "pose, with the dock in view (0: navigation always stops at the staging pose first)",
-        json_schema_extra=runtime_settable(NEXT_RUN))
-    max_approach_speed_mps: float = Field(0.5, gt=0.0, le=0.5, description="graceful approach top speed",
-                                          json_schema_extra=runtime_settable(NEXT_RUN))
-    undock_speed_mps: float = Field(0.2, gt=0.0, le=0.5, description="backing off the dock, m/s",
-                                    json_schema_extra=runtime_settable(NEXT_RUN))
+        json_schema_extra=runtime_settable(NEXT_RUN),
+    )
+    max_approach_speed_mps: float = Field(
+        0.5,
+        gt=0.0,
+        le=0.5,
+        description="graceful approach top speed",
+        json_schema_extra=runtime_settable(NEXT_RUN),
+    )
+    undock_speed_mps: float = Field(
+        0.2,
+        gt=0.0,
+        le=0.5,
+        description="backing off the dock, m/s",
+        json_schema_extra=runtime_settable(NEXT_RUN),
+    )
     max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
     max_localisation_age_s: float = Field(
-        2.0, gt=0.0, description="... unless odometry no older than max_pose_age_s carries a pose this old forward")
-    pose_latency_s: float = Field(0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives")
+        2.0,
+        gt=0.0,
+        description="... unless odometry no older than max_pose_age_s carries a pose this old forward",
+    )
+    pose_latency_s: float = Field(
+        0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives"
+    )
     max_control_pose_age_s: float = Field(
-        0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)")
+        0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)"
+    )
     #: The simulated base answers a command within a physics step or two of its arrival, and the pose the
     #: approach steers from is already brought up to its tick, so little is left to predict. On the shipped
     #: worlds' 42 room starts 0.15 s put the robot about 2 cm ahead of where it was: it braked early, crept
     #: the last centimetres, and steered into 2.4 / 4.1 mm of lateral error; 0.1, 0.05 and 0 gave
     #: 0.9 / 2.7, 0.6 / 1.4 and 0.6 / 1.6 mm. 0.05 leaves room for the bus's latency at higher speed-ups.
     command_delay_s: float = Field(
-        0.05, ge=0.0, le=1.0, description="graceful: dead time from cmd_vel to the base's response, predicted "
-        "through with the commands still on their way", json_schema_extra=runtime_settable(NEXT_RUN))
+        0.05,
+        ge=0.0,
+        le=1.0,
+        description="graceful: dead time from cmd_vel to the base's response, predicted "
+        "through with the commands still on their way",
+        json_schema_extra=runtime_settable(NEXT_RUN),
+    )
     pose_correction_gain: float = Field(
-        1.0, gt=0.0, le=1.0, description="graceful: how far each pose moves the approach's pose estimate "
-        "(1: the odometry-carried pose as it is, compensated for its age)", json_schema_extra=runtime_settable(NEXT_RUN))
+        1.0,
+        gt=0.0,
+        le=1.0,
+        description="graceful: how far each pose moves the approach's pose estimate "
+        "(1: the odometry-carried pose as it is, compensated for its age)",
+        json_schema_extra=runtime_settable(NEXT_RUN),
+    )
     battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
     obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
     use_lidar: bool = True
     use_sonar: bool = True
     feedback_period_s: float = Field(0.5, gt=0.0)
-    fleet: bool = Field(False, description="robots share docks: ask the fleet service (fleet/reserve_dock, one "
-                        "namespace up) for a dock before driving to one, and release it after undocking")
-    fleet_patience_s: float = Field(5.0, gt=0.0, description="fleet: no answer for this long, the fleet is down: "
-                                    "dock at a dock seen free")
+    fleet: bool = Field(
+        False,
+        description="robots share docks: ask the fleet service (fleet/reserve_dock, one "
+        "namespace up) for a dock before driving to one, and release it after undocking",
+    )
+    fleet_patience_s: float = Field(
+        5.0, gt=0.0, description="fleet: no answer for this long, the fleet is down: dock at a dock seen free"
+    )
 
     @field_validator("dock_database")
     @classmethod
@@ -101,8 +145,10 @@ class Params(ServiceParams):
     @model_validator(mode="after")
     def _consistent(self) -> Params:
         if self.resume_at <= self.low_battery_threshold:
-            raise ValueError(f"resume_at ({self.resume_at}) must be above low_battery_threshold "
-                             f"({self.low_battery_threshold})")
+            raise ValueError(
+                f"resume_at ({self.resume_at}) must be above low_battery_threshold "
+                f"({self.low_battery_threshold})"
+            )
         return self
 
     @property
@@ -132,7 +178,9 @@ class Params(ServiceParams):
             wait_for_detection=graceful,
             continuous_perception=graceful,
             max_control_pose_age_s=self.max_control_pose_age_s if graceful else None,
-            handover_distance_m=self.handover_distance_m if graceful and self.handover_distance_m > 0 else None,
+            handover_distance_m=self.handover_distance_m
+            if graceful and self.handover_distance_m > 0
+            else None,
             min_detections=self.min_detections,
             initial_perception_timeout_s=self.initial_perception_timeout_s,
             approach_timeout_s=self.approach_timeout_s,
@@ -145,4 +193,6 @@ class Params(ServiceParams):
 
     def undock_config(self) -> UndockConfig:
         """The undocking run's settings."""
-        return UndockConfig(staging_offset_m=self.staging_offset_m, gains=back_off_gains(self.undock_speed_mps))
+        return UndockConfig(
+            staging_offset_m=self.staging_offset_m, gains=back_off_gains(self.undock_speed_mps)
+        )

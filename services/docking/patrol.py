@@ -67,7 +67,12 @@ class Patrol(Task[PatrolPhase]):
         if outcome is NavOutcome.SUCCEEDED:
             self._advance()
             return Navigate(self.current_goal, self._key)
-        log.warning("patrol waypoint %d %s (%s); moving on in %g s", self.next_index, outcome.value,
-                    inputs.nav.reason or "no reason given", self.retry_delay_s)
+        log.warning(
+            "patrol waypoint %d %s (%s); moving on in %g s",
+            self.next_index,
+            outcome.value,
+            inputs.nav.reason or "no reason given",
+            self.retry_delay_s,
+        )
         self.enter(PatrolPhase.PAUSED, now)
         return None

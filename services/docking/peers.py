@@ -61,12 +61,23 @@ class PeerWatch:
             (topics.BATTERY_STATUS, BatteryState, self._on_battery),
             (state_topic, String, self._on_state),
         ):
-            node.create_subscription(msg_type, topic_key(fleet_namespace, f"*/{topic}"),
-                                     lambda key, msg, h=handler, t=topic: h(self._peer(key, t), msg),
-                                     QoS(depth=20), with_key=True, absolute=True)
-        node.create_subscription(Path, topic_key(fleet_namespace, f"*/{topics.PLAN}"),
-                                 lambda key, payload: self._on_plan(key, self._plan_holder(key), payload),
-                                 QoS(depth=20), with_key=True, absolute=True, undecoded=True)
+            node.create_subscription(
+                msg_type,
+                topic_key(fleet_namespace, f"*/{topic}"),
+                lambda key, msg, h=handler, t=topic: h(self._peer(key, t), msg),
+                QoS(depth=20),
+                with_key=True,
+                absolute=True,
+            )
+        node.create_subscription(
+            Path,
+            topic_key(fleet_namespace, f"*/{topics.PLAN}"),
+            lambda key, payload: self._on_plan(key, self._plan_holder(key), payload),
+            QoS(depth=20),
+            with_key=True,
+            absolute=True,
+            undecoded=True,
+        )
 
     def _peer(self, key: str, topic: str) -> _PeerState | None:
         name = key[: -len(topic) - 1] if key.endswith("/" + topic) else ""
@@ -122,6 +133,7 @@ class PeerWatch:
             if p.pose is None or now - p.pose_s > MAX_AGE_S:
                 continue
             plan = (lambda p=p: self._plan_points(p)) if now - p.plan_s <= MAX_AGE_S else None
-            peers.append(Peer(name, p.pose, p.battery, p.state in UNDER_WAY_STATES, plan,
-                              p.state == GIVING_WAY_STATE))
+            peers.append(
+                Peer(name, p.pose, p.battery, p.state in UNDER_WAY_STATES, plan, p.state == GIVING_WAY_STATE)
+            )
         return peers

@@ -76,7 +76,10 @@ class DockPoseFilter:
             return False
         p = self.params
         far = p.outlier_distance_m is not None and self._pose.distance_to(measurement) > p.outlier_distance_m
-        turned = p.outlier_yaw_rad is not None and abs(wrap_angle(measurement.yaw - self._pose.yaw)) > p.outlier_yaw_rad
+        turned = (
+            p.outlier_yaw_rad is not None
+            and abs(wrap_angle(measurement.yaw - self._pose.yaw)) > p.outlier_yaw_rad
+        )
         return far or turned
 
     def update(self, measurement: Pose2D, stamp_s: float) -> Pose2D:

@@ -34,13 +34,18 @@ class RoomPaths:
     def __init__(self, bounds: tuple[float, float, float, float], walls: Sequence[Segment]) -> None:
         xmin, ymin, xmax, ymax = bounds
         self.origin = (xmin, ymin)
-        self.shape = (max(1, int(math.ceil((ymax - ymin) / GRID_M))), max(1, int(math.ceil((xmax - xmin) / GRID_M))))
+        self.shape = (
+            max(1, int(math.ceil((ymax - ymin) / GRID_M))),
+            max(1, int(math.ceil((xmax - xmin) / GRID_M))),
+        )
         rows, cols = self.shape
         ys, xs = np.mgrid[0:rows, 0:cols]
         centres = np.column_stack([(xs.ravel() + 0.5) * GRID_M + xmin, (ys.ravel() + 0.5) * GRID_M + ymin])
         clearance = np.full(len(centres), np.inf)
         for a, b in walls:
-            clearance = np.minimum(clearance, distances_to_segment(centres, np.asarray(a, float), np.asarray(b, float)))
+            clearance = np.minimum(
+                clearance, distances_to_segment(centres, np.asarray(a, float), np.asarray(b, float))
+            )
         self.free = (clearance >= CLEARANCE_M).reshape(self.shape)
 
     def _cell(self, x: float, y: float) -> tuple[int, int] | None:

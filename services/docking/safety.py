@@ -40,7 +40,13 @@ class ObstacleParams:
     robot_width_m: float = ROBOT_WIDTH_M
 
     def __post_init__(self) -> None:
-        for name in ("stop_distance_m", "side_margin_m", "dock_margin_m", "sonar_dock_tolerance_m", "sonar_fov_rad"):
+        for name in (
+            "stop_distance_m",
+            "side_margin_m",
+            "dock_margin_m",
+            "sonar_dock_tolerance_m",
+            "sonar_fov_rad",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"ObstacleParams.{name} must be >= 0, got {value!r}")
@@ -69,9 +75,15 @@ class LidarReturns:
 
     __slots__ = ("_scan", "_points")
 
-    def __init__(self, ranges_m: np.ndarray, angle_min_rad: float, angle_increment_rad: float, mount: Pose2D) -> None:
-        self._scan: tuple[np.ndarray, float, float, Pose2D] | None = (ranges_m, angle_min_rad, angle_increment_rad,
-                                                                      mount)
+    def __init__(
+        self, ranges_m: np.ndarray, angle_min_rad: float, angle_increment_rad: float, mount: Pose2D
+    ) -> None:
+        self._scan: tuple[np.ndarray, float, float, Pose2D] | None = (
+            ranges_m,
+            angle_min_rad,
+            angle_increment_rad,
+            mount,
+        )
         self._points: np.ndarray | None = None
 
     @classmethod
@@ -124,7 +136,9 @@ def lidar_blocked(
     return bool(mask.any())
 
 
-def _ray_to_segment(origin: tuple[float, float], angle: float, a: tuple[float, float], b: tuple[float, float]) -> float:
+def _ray_to_segment(
+    origin: tuple[float, float], angle: float, a: tuple[float, float], b: tuple[float, float]
+) -> float:
     """Signed distance along the line of the ray from ``origin`` at ``angle`` to segment ``ab``.
 
     Negative when the segment is behind the origin; inf when the line misses the segment.
@@ -148,7 +162,11 @@ def expected_sonar_range(dock_in_base: Pose2D, params: ObstacleParams) -> float:
     b = dock_in_base.transform_point(ROBOT_FRONT_M, half)
     origin = (0.5 * params.robot_length_m, 0.0)
     n = params.sonar_rays
-    angles = [0.0] if n == 1 else [-0.5 * params.sonar_fov_rad + i * params.sonar_fov_rad / (n - 1) for i in range(n)]
+    angles = (
+        [0.0]
+        if n == 1
+        else [-0.5 * params.sonar_fov_rad + i * params.sonar_fov_rad / (n - 1) for i in range(n)]
+    )
     ranges = [_ray_to_segment(origin, angle, a, b) for angle in angles]
     return max(0.0, min(ranges))
 

@@ -178,8 +178,13 @@ class Task(abc.ABC, Generic[P]):
         self._nav_seq += 1
         return (self.task_id, self._nav_seq)
 
-    def finish(self, outcome: Outcome, code: DockingErrorCode = DockingErrorCode.NONE, message: str = "",
-               num_retries: int = 0) -> None:
+    def finish(
+        self,
+        outcome: Outcome,
+        code: DockingErrorCode = DockingErrorCode.NONE,
+        message: str = "",
+        num_retries: int = 0,
+    ) -> None:
         if self.result is None:
             self.message = message
             self.result = TaskResult(outcome, code, num_retries, message)
@@ -254,4 +259,3 @@ class Task(abc.ABC, Generic[P]):
     @abc.abstractmethod
     def tick(self, inputs: TickInputs) -> Intent:
         """One control period of the task: what to command now (each task defines it)."""
-

@@ -175,13 +175,23 @@ def clearance_between(a: Pose2D, b: Pose2D, walls: Walls) -> float:
     points = np.column_stack([np.linspace(a.x, b.x, steps), np.linspace(a.y, b.y, steps)])
     least = math.inf
     for start_xy, end_xy in walls:
-        least = min(least, float(distances_to_segment(points, np.asarray(start_xy, float), np.asarray(end_xy, float)).min()))
+        least = min(
+            least,
+            float(distances_to_segment(points, np.asarray(start_xy, float), np.asarray(end_xy, float)).min()),
+        )
     return least
 
 
-def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], walls: Walls,
-                  calm: Container[str] = (), carry_on: Container[str] = (),
-                  own_plan: PlanPoints = None) -> tuple[Peer, Meeting] | None:
+def must_give_way(
+    me: Pose2D,
+    name: str,
+    battery: float,
+    peers: Iterable[Peer],
+    walls: Walls,
+    calm: Container[str] = (),
+    carry_on: Container[str] = (),
+    own_plan: PlanPoints = None,
+) -> tuple[Peer, Meeting] | None:
     """The robot this one must give way to (or wait for) now, if any (the nearest), and how they meet;
     ``calm``: robots this one stopped for lately as too close, not stopped for again yet; ``carry_on``:
     robots this one waited for lately without the way clearing, not waited for again yet; ``own_plan``:
@@ -200,15 +210,27 @@ def must_give_way(me: Pose2D, name: str, battery: float, peers: Iterable[Peer], 
         priority = has_priority(name, battery, p.name, p.battery)
         distance = me.distance_to(p.pose)
         # The cheap tests first: the ways and the walls are measured only for robots near and face to face.
-        if (distance < MEET_DISTANCE_M and _ahead(me, p.pose) and _ahead(p.pose, me)
-                and _in_each_others_way(me, p, priority, my_way)
-                and clearance_between(me, p.pose, walls) < NARROW_CLEARANCE_M):
+        if (
+            distance < MEET_DISTANCE_M
+            and _ahead(me, p.pose)
+            and _ahead(p.pose, me)
+            and _in_each_others_way(me, p, priority, my_way)
+            and clearance_between(me, p.pose, walls) < NARROW_CLEARANCE_M
+        ):
             found.append((distance, p, Meeting.HEAD_ON_PRIORITY if priority else Meeting.HEAD_ON))
-        elif (not priority and p.under_way and distance < CROSSING_DISTANCE_M
-              and _ahead(me, p.pose, CROSSING_HALF_ANGLE_RAD)):
+        elif (
+            not priority
+            and p.under_way
+            and distance < CROSSING_DISTANCE_M
+            and _ahead(me, p.pose, CROSSING_HALF_ANGLE_RAD)
+        ):
             found.append((distance, p, Meeting.CROSSING))
-        elif (priority and p.name not in calm and distance < TOO_CLOSE_M
-              and _ahead(me, p.pose, TOO_CLOSE_HALF_ANGLE_RAD)):
+        elif (
+            priority
+            and p.name not in calm
+            and distance < TOO_CLOSE_M
+            and _ahead(me, p.pose, TOO_CLOSE_HALF_ANGLE_RAD)
+        ):
             found.append((distance, p, Meeting.TOO_CLOSE))
     if not found:
         return None
@@ -263,7 +285,9 @@ def _off_ways(points: np.ndarray, ways: list[np.ndarray]) -> np.ndarray:
 
 
 def _heading_line(pose: Pose2D) -> np.ndarray:
-    return np.asarray([pose.transform_point(d, 0.0) for d in np.linspace(0.0, MEET_DISTANCE_M, 8)], dtype=float)
+    return np.asarray(
+        [pose.transform_point(d, 0.0) for d in np.linspace(0.0, MEET_DISTANCE_M, 8)], dtype=float
+    )
 
 
 def _off_line(pose: Pose2D, line: np.ndarray) -> float:
@@ -285,14 +309,19 @@ def passing_place(me: Pose2D, peer: Peer, walls: Walls) -> Pose2D | None:
     cells = np.column_stack([xs.ravel(), ys.ravel()])
     clearance = np.full(len(cells), np.inf)
     for start_xy, end_xy in walls:
-        clearance = np.minimum(clearance, distances_to_segment(cells, np.asarray(start_xy, float),
-                                                               np.asarray(end_xy, float)))
+        clearance = np.minimum(
+            clearance, distances_to_segment(cells, np.asarray(start_xy, float), np.asarray(end_xy, float))
+        )
     to_peer = np.hypot(cells[:, 0] - peer.pose.x, cells[:, 1] - peer.pose.y)
     # Free to move through: clear of the walls and of the other robot's body (with the robots' size).
     free = (clearance >= WALL_CLEARANCE_M - 0.05) & (to_peer >= 0.55)
     way = _off_ways(cells, peer_way(peer))
-    good = (free & (clearance >= WALL_CLEARANCE_M) & (way >= CLEAR_OF_WAY_M + PLACE_MARGIN_M)
-            & (to_peer >= CLEAR_OF_ROBOT_M))
+    good = (
+        free
+        & (clearance >= WALL_CLEARANCE_M)
+        & (way >= CLEAR_OF_WAY_M + PLACE_MARGIN_M)
+        & (to_peer >= CLEAR_OF_ROBOT_M)
+    )
     free_grid, good_grid = free.reshape(n, n), good.reshape(n, n)
     start = (n // 2, n // 2)
     free_grid[start] = True  # the robot stands there
@@ -324,8 +353,14 @@ class GiveWay(Task[GiveWayPhase]):
     interrupted. The node tells it each tick where the other robot is (:meth:`peer_seen`).
     """
 
-    def __init__(self, peer: Peer, meeting: Meeting, place: Pose2D | None, resume: object,
-                 own_way: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        peer: Peer,
+        meeting: Meeting,
+        place: Pose2D | None,
+        resume: object,
+        own_way: np.ndarray | None = None,
+    ) -> None:
         super().__init__(GiveWayPhase.GOING if place is not None else GiveWayPhase.WAITING)
         self.peer = peer.name
         self.meeting = meeting
@@ -405,8 +440,9 @@ class GiveWay(Task[GiveWayPhase]):
             off_way = _off_line(peer, way) >= CLEAR_OF_WAY_M
             return off_way or not _ahead(me, peer) or me.distance_to(peer) >= CLEAR_DISTANCE_M
         if self.place is None:  # stopped for a crossing: until the other is out of the way in front
-            return (me.distance_to(peer) >= CROSSING_DISTANCE_M + 0.2
-                    or not _ahead(me, peer, CROSSING_HALF_ANGLE_RAD + math.radians(10.0)))
+            return me.distance_to(peer) >= CROSSING_DISTANCE_M + 0.2 or not _ahead(
+                me, peer, CROSSING_HALF_ANGLE_RAD + math.radians(10.0)
+            )
         return self._gone(me) or not _ahead(peer, me)
 
     def tick(self, inputs: TickInputs) -> Intent:
@@ -431,7 +467,9 @@ class GiveWay(Task[GiveWayPhase]):
                     # The way to the passing place can stay blocked for as long as the other stays away.
                     # Not sooner: a robot that passes 4 m away while this one backs out may turn back.
                     self.unresolved = True
-                    self.finish(Outcome.SUCCEEDED, message=f"{self.peer} went its way before the passing place")
+                    self.finish(
+                        Outcome.SUCCEEDED, message=f"{self.peer} went its way before the passing place"
+                    )
                     return None
                 return Navigate(self.place, self._key)
             self.enter(GiveWayPhase.WAITING, now)
@@ -447,9 +485,14 @@ class GiveWay(Task[GiveWayPhase]):
             return None
         if min(still_s, held_s) >= patience:
             self.unresolved = True
-            self.finish(Outcome.SUCCEEDED, message=f"{self.peer} stood still for {still_s:.1f} s: carrying on")
+            self.finish(
+                Outcome.SUCCEEDED, message=f"{self.peer} stood still for {still_s:.1f} s: carrying on"
+            )
             return None
         # Stopped, not merely driving nothing: the planner's goal of the task this one interrupted is
         # cancelled, and the base told zero.
-        return self.hold(f"waiting for {self.peer} to back out of the way" if self.meeting is Meeting.HEAD_ON_PRIORITY
-                         else f"giving way to {self.peer}")
+        return self.hold(
+            f"waiting for {self.peer} to back out of the way"
+            if self.meeting is Meeting.HEAD_ON_PRIORITY
+            else f"giving way to {self.peer}"
+        )

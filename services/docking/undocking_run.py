@@ -99,8 +99,11 @@ class UndockingRun(Task[UndockPhase]):
         now, pose = inputs.now_s, inputs.robot_pose
         assert self.target is not None and self.dock_pose is not None
         if self.phase_time_s(now) > self.max_undocking_time_s:
-            return self._end(Outcome.FAILED, DockingErrorCode.FAILED_TO_CONTROL,
-                             f"not clear of the dock within {self.max_undocking_time_s:g} s")
+            return self._end(
+                Outcome.FAILED,
+                DockingErrorCode.FAILED_TO_CONTROL,
+                f"not clear of the dock within {self.max_undocking_time_s:g} s",
+            )
         if pose is None:
             return self.hold("no robot pose")
         if inputs.blocked_behind:
@@ -115,7 +118,9 @@ class UndockingRun(Task[UndockPhase]):
         if not inputs.charging:
             return self._end(Outcome.SUCCEEDED, DockingErrorCode.NONE, "undocked")
         if self.phase_time_s(inputs.now_s) > self.config.confirm_timeout_s:
-            return self._end(Outcome.FAILED, DockingErrorCode.FAILED_TO_CONTROL, "off the dock but still charging")
+            return self._end(
+                Outcome.FAILED, DockingErrorCode.FAILED_TO_CONTROL, "off the dock but still charging"
+            )
         return STOP
 
     def _end(self, outcome: Outcome, code: DockingErrorCode, message: str) -> Intent:

@@ -157,7 +157,9 @@ class DockBook:
             self.claims[held] = Claim(robot, held, claim.since_s, max(claim.heard_s, now_s))
         waiting = self.queue.get(robot)
         if waiting is not None:
-            self.queue[robot] = Waiting(robot, waiting.battery, waiting.since_s, max(waiting.heard_s, now_s), waiting.spot)
+            self.queue[robot] = Waiting(
+                robot, waiting.battery, waiting.since_s, max(waiting.heard_s, now_s), waiting.spot
+            )
 
     def release(self, robot: str) -> str | None:
         """``robot`` gives its dock back (it undocked, or gave up); the dock it held, if any."""
@@ -186,13 +188,18 @@ class DockBook:
     def _reachable(self, path_lengths_m: dict[str, float] | None) -> dict[str, float]:
         if path_lengths_m is None:
             return dict.fromkeys(self.dock_ids, 0.0)
-        return {d: float(v) for d, v in path_lengths_m.items() if d in self.dock_ids and math.isfinite(v) and v >= 0}
+        return {
+            d: float(v)
+            for d, v in path_lengths_m.items()
+            if d in self.dock_ids and math.isfinite(v) and v >= 0
+        }
 
     def _ask_someone_to_leave(self, needy: str) -> None:
         if needy in self.leave_requests.values():
             return
         candidates = [
-            (self.batteries.get(c.robot, 0.0), c.robot) for c in self.claims.values()
+            (self.batteries.get(c.robot, 0.0), c.robot)
+            for c in self.claims.values()
             if self.batteries.get(c.robot, 0.0) >= self.charged_enough and c.robot not in self.leave_requests
         ]
         if candidates:

@@ -105,9 +105,13 @@ class MarkerFinder:
         # A box around a marker seen a frame ago is thresholded at two window sizes instead of three: the
         # same markers found for about two thirds of the cost, and a miss is searched for again in the
         # whole frame with all three.
-        self._box_detector = cv2.aruco.ArucoDetector(markers, _detector_parameters(BOX_THRESHOLD_WINDOW_MAX_PX))
+        self._box_detector = cv2.aruco.ArucoDetector(
+            markers, _detector_parameters(BOX_THRESHOLD_WINDOW_MAX_PX)
+        )
 
-    def find(self, grey: np.ndarray, regions: Sequence[tuple[int, int, int, int]] | None = None) -> list[MarkerSighting]:
+    def find(
+        self, grey: np.ndarray, regions: Sequence[tuple[int, int, int, int]] | None = None
+    ) -> list[MarkerSighting]:
         """Markers in the whole image, or only within ``regions`` (``(x0, y0, x1, y1)`` pixel boxes, end
         exclusive): the detector's cost grows with the pixels it thresholds, and a marker found a frame ago
         is still near where it was. Corners are refined on the whole image either way."""
@@ -152,14 +156,20 @@ def refine_corners(grey: np.ndarray, corners: np.ndarray, cells_across: int = 6)
     side = np.roll(quad, -1, axis=0) - quad  # (4, 2)
     t = side / np.linalg.norm(side, axis=1, keepdims=True)
     n = np.stack([-t[:, 1], t[:, 0]], axis=1)
-    outwards = np.sum((quad + side / 2.0 - centre) * n, axis=1) >= 0  # from the black border to the white surround
+    outwards = (
+        np.sum((quad + side / 2.0 - centre) * n, axis=1) >= 0
+    )  # from the black border to the white surround
     n[~outwards] *= -1.0
     base = quad[:, None, :] + along[None, :, None] * side[:, None, :]  # (4, K, 2)
     pts = base[:, :, None, :] + offsets[None, None, :, None] * n[:, None, None, :]  # (4, K, M, 2)
     K, M = len(along), len(offsets)
-    profile = cv2.remap(grey, pts[..., 0].reshape(4 * K, M).astype(np.float32),
-                        pts[..., 1].reshape(4 * K, M).astype(np.float32),
-                        cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float64)
+    profile = cv2.remap(
+        grey,
+        pts[..., 0].reshape(4 * K, M).astype(np.float32),
+        pts[..., 1].reshape(4 * K, M).astype(np.float32),
+        cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_REPLICATE,
+    ).astype(np.float64)
     dark = profile[:, :3].mean(axis=1, keepdims=True)
     light = profile[:, -3:].mean(axis=1, keepdims=True)
     contrast = (light - dark).reshape(4, K)
@@ -175,7 +185,9 @@ def refine_corners(grey: np.ndarray, corners: np.ndarray, cells_across: int = 6)
         return quad
     lines = []
     for i in range(4):
-        vx, vy, x0, y0 = cv2.fitLine(edge_points[i][steep[i]].astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01).ravel()
+        vx, vy, x0, y0 = cv2.fitLine(
+            edge_points[i][steep[i]].astype(np.float32), cv2.DIST_L2, 0, 0.01, 0.01
+        ).ravel()
         lines.append((np.array([x0, y0], dtype=np.float64), np.array([vx, vy], dtype=np.float64)))
     refined = np.empty_like(quad)
     for i in range(4):
@@ -197,11 +209,21 @@ def marker_object_points(size_m: float) -> np.ndarray:
     return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
 
 
-def marker_poses(sighting: MarkerSighting, size_m: float, camera_matrix: np.ndarray, distortion: np.ndarray,
-                 base_from_optical: Rigid3) -> list[MarkerPose]:
+def marker_poses(
+    sighting: MarkerSighting,
+    size_m: float,
+    camera_matrix: np.ndarray,
+    distortion: np.ndarray,
+    base_from_optical: Rigid3,
+) -> list[MarkerPose]:
     """Both IPPE solutions for the marker, in base_link, best reprojection first."""
     ok, rvecs, tvecs, errors = cv2.solvePnPGeneric(
-        marker_object_points(size_m), sighting.corners, camera_matrix, distortion, flags=cv2.SOLVEPNP_IPPE_SQUARE)
+        marker_object_points(size_m),
+        sighting.corners,
+        camera_matrix,
+        distortion,
+        flags=cv2.SOLVEPNP_IPPE_SQUARE,
+    )
     if not ok:
         return []
     poses = []
@@ -231,8 +253,14 @@ def upright_marker(pose: MarkerPose) -> Pose2D:
 _CORNER_SIGNS = ((-1.0, 1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, -1.0))
 
 
-def refine_upright(start: Pose2D, observed_norm: np.ndarray, size_m: float, centre_height_m: float,
-                   base_from_optical: Rigid3, iterations: int = 30) -> tuple[Pose2D, float]:
+def refine_upright(
+    start: Pose2D,
+    observed_norm: np.ndarray,
+    size_m: float,
+    centre_height_m: float,
+    base_from_optical: Rigid3,
+    iterations: int = 30,
+) -> tuple[Pose2D, float]:
     """Levenberg-Marquardt on the marker's three planar unknowns (x, y, heading), its height and uprightness known.
 
     ``observed_norm`` are the corners in normalised image coordinates (undistorted). Eight residuals for
@@ -244,13 +272,17 @@ def refine_upright(start: Pose2D, observed_norm: np.ndarray, size_m: float, cent
     projection, its exact Jacobian and the 3 x 3 normal equations are plain floats: about three times
     faster than central differences on arrays, with the same fit.
     """
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = base_from_optical.rotation.T.tolist()  # optical <- base
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = (
+        base_from_optical.rotation.T.tolist()
+    )  # optical <- base
     tx, ty, tz = base_from_optical.translation.tolist()
     h = size_m / 2.0
     corners = [(h * su, centre_height_m + h * sv - tz) for su, sv in _CORNER_SIGNS]
     observed = [tuple(p) for p in np.asarray(observed_norm, dtype=np.float64).reshape(4, 2).tolist()]
 
-    def project(x: float, y: float, yaw: float, with_jacobian: bool) -> tuple[list[float], list[tuple[float, float, float]]]:
+    def project(
+        x: float, y: float, yaw: float, with_jacobian: bool
+    ) -> tuple[list[float], list[tuple[float, float, float]]]:
         c, s = math.cos(yaw), math.sin(yaw)
         residual: list[float] = []
         jacobian: list[tuple[float, float, float]] = []
@@ -267,8 +299,12 @@ def refine_upright(start: Pose2D, observed_norm: np.ndarray, size_m: float, cent
                 # d(base)/d(x, y, yaw) = (1, 0, 0), (0, 1, 0), (-u cos, -u sin, 0); d(a / z) = (da - (a / z) dz) / z.
                 dbx, dby = -u * c, -u * s
                 dz_yaw = r20 * dbx + r21 * dby
-                jacobian.append(((r00 - pa * r20) / z, (r01 - pa * r21) / z, (r00 * dbx + r01 * dby - pa * dz_yaw) / z))
-                jacobian.append(((r10 - pb * r20) / z, (r11 - pb * r21) / z, (r10 * dbx + r11 * dby - pb * dz_yaw) / z))
+                jacobian.append(
+                    ((r00 - pa * r20) / z, (r01 - pa * r21) / z, (r00 * dbx + r01 * dby - pa * dz_yaw) / z)
+                )
+                jacobian.append(
+                    ((r10 - pb * r20) / z, (r11 - pb * r21) / z, (r10 * dbx + r11 * dby - pb * dz_yaw) / z)
+                )
         return residual, jacobian
 
     def squared(values: list[float]) -> float:
@@ -282,7 +318,10 @@ def refine_upright(start: Pose2D, observed_norm: np.ndarray, size_m: float, cent
         JtJ = [[math.fsum(row[i] * row[j] for row in J) for j in range(3)] for i in range(3)]
         Jtr = [math.fsum(row[i] * ri for row, ri in zip(J, r, strict=True)) for i in range(3)]
         while damping < 1e8:  # Levenberg-Marquardt: shorten the step until it helps
-            A = [[JtJ[i][j] + (damping * (JtJ[i][i] + 1e-12) if i == j else 0.0) for j in range(3)] for i in range(3)]
+            A = [
+                [JtJ[i][j] + (damping * (JtJ[i][i] + 1e-12) if i == j else 0.0) for j in range(3)]
+                for i in range(3)
+            ]
             delta = _solve3(A, [-v for v in Jtr])
             r_new, _ = project(x + delta[0], y + delta[1], yaw + delta[2], False)
             cost_new = squared(r_new)
@@ -318,7 +357,9 @@ def facing_seed(observed_norm: np.ndarray, size_m: float, base_from_optical: Rig
     ray = np.append(observed_norm.mean(axis=0), 1.0)
     centre = base_from_optical.apply(ray * (size_m / max(side, 1e-9)))
     camera = base_from_optical.translation
-    return Pose2D(float(centre[0]), float(centre[1]), math.atan2(camera[1] - centre[1], camera[0] - centre[0]))
+    return Pose2D(
+        float(centre[0]), float(centre[1]), math.atan2(camera[1] - centre[1], camera[0] - centre[0])
+    )
 
 
 #: Two fits this close in residual explain the corners about equally well: the marker's pose is ambiguous.
@@ -356,8 +397,14 @@ def choose_fit(fits: Sequence[tuple[float, Pose2D]], previous: Pose2D | None) ->
     return nearest if turn(runner_up) - turn(nearest) >= CONTINUITY_MARGIN_RAD else best
 
 
-def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.ndarray, distortion: np.ndarray,
-                base_from_optical: Rigid3, previous: Pose2D | None = None) -> DockSighting | None:
+def locate_dock(
+    sighting: MarkerSighting,
+    marker: DockMarker,
+    camera_matrix: np.ndarray,
+    distortion: np.ndarray,
+    base_from_optical: Rigid3,
+    previous: Pose2D | None = None,
+) -> DockSighting | None:
     """The dock a sighted marker belongs to, in base_link; None when no upright pose explains the corners.
 
     Each upright IPPE solution, and a face-on guess (:func:`facing_seed`), seeds a planar refinement
@@ -365,16 +412,23 @@ def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.
     a square seen from the side, unless the fits are nearly as good: then ``previous`` (the dock's pose in
     base_link a moment ago, when known) picks the one that continues it (:func:`choose_fit`).
     """
-    poses = [p for p in marker_poses(sighting, marker.size_m, camera_matrix, distortion, base_from_optical)
-             if p.tilt_rad <= MAX_TILT_RAD]
+    poses = [
+        p
+        for p in marker_poses(sighting, marker.size_m, camera_matrix, distortion, base_from_optical)
+        if p.tilt_rad <= MAX_TILT_RAD
+    ]
     if not poses:
         return None
-    observed = cv2.undistortPoints(sighting.corners.reshape(-1, 1, 2), camera_matrix, distortion).reshape(-1, 2)
+    observed = cv2.undistortPoints(sighting.corners.reshape(-1, 1, 2), camera_matrix, distortion).reshape(
+        -1, 2
+    )
     focal = float(camera_matrix[0, 0])
     seeds = [upright_marker(p) for p in poses] + [facing_seed(observed, marker.size_m, base_from_optical)]
     fits = []
     for seed in seeds:
-        fitted, residual = refine_upright(seed, observed, marker.size_m, marker.centre_height_m, base_from_optical)
+        fitted, residual = refine_upright(
+            seed, observed, marker.size_m, marker.centre_height_m, base_from_optical
+        )
         fits.append((residual, fitted))
     previous_marker = previous.compose(_DOCK_FROM_MARKER.inverse()) if previous is not None else None
     residual, fitted = choose_fit(fits, previous_marker)
@@ -390,5 +444,18 @@ def locate_dock(sighting: MarkerSighting, marker: DockMarker, camera_matrix: np.
     )
 
 
-__all__ = ["DockSighting", "MarkerFinder", "MarkerPose", "MarkerSighting", "choose_fit", "choose_pose", "facing_seed", "locate_dock",
-           "marker_object_points", "marker_poses", "refine_corners", "refine_upright", "upright_marker"]
+__all__ = [
+    "DockSighting",
+    "MarkerFinder",
+    "MarkerPose",
+    "MarkerSighting",
+    "choose_fit",
+    "choose_pose",
+    "facing_seed",
+    "locate_dock",
+    "marker_object_points",
+    "marker_poses",
+    "refine_corners",
+    "refine_upright",
+    "upright_marker",
+]

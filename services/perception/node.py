@@ -56,13 +56,20 @@ _MARKER_ON_DOCK = Pose2D(ROBOT_FRONT_M, 0.0, math.pi)
 class Params(ServiceParams):
     """Parameters of ``python -m services.perception``."""
 
-    dock_database: str = Field(description="dock database or world file: docks with their marker ids and sizes")
+    dock_database: str = Field(
+        description="dock database or world file: docks with their marker ids and sizes"
+    )
     max_range_m: float = Field(3.5, gt=0, description="markers farther than this are not reported")
     max_reprojection_error_px: float = Field(2.0, gt=0, description="fits worse than this are refused")
     dock_detector: Literal["aruco", "synthetic"] = Field(
-        "aruco", description="synthetic: the simulator reports docks itself and this service stays idle")
-    opencv_threads: int = Field(1, ge=0, description="threads OpenCV may use (0: one per core); one costs "
-                                "20 % less CPU a frame where the cores are busy")
+        "aruco", description="synthetic: the simulator reports docks itself and this service stays idle"
+    )
+    opencv_threads: int = Field(
+        1,
+        ge=0,
+        description="threads OpenCV may use (0: one per core); one costs "
+        "20 % less CPU a frame where the cores are busy",
+    )
 
 
 class PerceptionService:
@@ -97,21 +104,30 @@ class PerceptionService:
                 pub.on_matching_change(lambda _matching: node.post(self._follow_demand))
             self._follow_demand()
         else:
-            node.log.info("dock_detector is %s: the simulator reports docks, this service stays idle",
-                          params.dock_detector)
-        node.log.info("%d dock marker(s) (%s) from %s", len(self.markers), world.aruco_dictionary,
-                      params.dock_database)
+            node.log.info(
+                "dock_detector is %s: the simulator reports docks, this service stays idle",
+                params.dock_detector,
+            )
+        node.log.info(
+            "%d dock marker(s) (%s) from %s", len(self.markers), world.aruco_dictionary, params.dock_database
+        )
 
     def _follow_demand(self) -> None:
-        wanted = any(pub.has_subscribers() for pub in (self.detected_pub, self.detections_pub, self.debug_pub))
+        wanted = any(
+            pub.has_subscribers() for pub in (self.detected_pub, self.detections_pub, self.debug_pub)
+        )
         if wanted and self._image_sub is None:
-            self._image_sub = self.node.create_subscription(Image, topics.CAMERA_IMAGE, self._on_image, IMAGE_QOS)
+            self._image_sub = self.node.create_subscription(
+                Image, topics.CAMERA_IMAGE, self._on_image, IMAGE_QOS
+            )
             self.node.log.info("someone wants dock detections: reading %s", topics.CAMERA_IMAGE)
         elif not wanted and self._image_sub is not None:
             self._image_sub.undeclare()
             self._image_sub = None
-            self.node.log.info("no one wants dock detections: no longer reading images; frames so far %s",
-                               dict(sorted(self.counts.items())))
+            self.node.log.info(
+                "no one wants dock detections: no longer reading images; frames so far %s",
+                dict(sorted(self.counts.items())),
+            )
 
     # --- inputs --------------------------------------------------------------------------------------
 
@@ -120,7 +136,9 @@ class PerceptionService:
         if K is None or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0 or K[2, 2] != 1.0:
             self._refuse("camera-info", "ignored camera_info with an unusable K %s", list(msg.k))
             return
-        if msg.distortion_model not in ("", "plumb_bob", "rational_polynomial") or not np.all(np.isfinite(msg.d)):
+        if msg.distortion_model not in ("", "plumb_bob", "rational_polynomial") or not np.all(
+            np.isfinite(msg.d)
+        ):
             self._refuse("camera-info", "ignored camera_info with distortion model %r", msg.distortion_model)
             return
         self._camera_matrix = K
@@ -132,8 +150,13 @@ class PerceptionService:
             try:
                 transform = Rigid3.from_parts((t.x, t.y, t.z), (q.x, q.y, q.z, q.w))
             except ValueError as exc:
-                self._refuse("tf", "ignored a tf_static entry %s -> %s: %s", item.header.frame_id,
-                             item.child_frame_id, exc)
+                self._refuse(
+                    "tf",
+                    "ignored a tf_static entry %s -> %s: %s",
+                    item.header.frame_id,
+                    item.child_frame_id,
+                    exc,
+                )
                 continue
             self.frames.set(item.header.frame_id, item.child_frame_id, transform)
 
@@ -149,7 +172,9 @@ class PerceptionService:
             return
         base_from_camera = self.frames.lookup(topics.BASE_FRAME, msg.header.frame_id)
         if base_from_camera is None:
-            self._refuse("no-mount", "no tf_static chain from %s to %s yet", msg.header.frame_id, topics.BASE_FRAME)
+            self._refuse(
+                "no-mount", "no tf_static chain from %s to %s yet", msg.header.frame_id, topics.BASE_FRAME
+            )
             return
         stamp_s = msg.header.stamp.to_sec()
         sightings = self._find(grey, stamp_s)
@@ -175,23 +200,33 @@ class PerceptionService:
         self.search.update(sightings, stamp_s, whole_frame=True)
         return sightings
 
-    def _locate(self, sightings: list[MarkerSighting], base_from_camera: Rigid3, stamp_s: float) -> list[DockSighting]:
+    def _locate(
+        self, sightings: list[MarkerSighting], base_from_camera: Rigid3, stamp_s: float
+    ) -> list[DockSighting]:
         assert self._camera_matrix is not None
         found = []
         for sighting in sightings:
             marker = self.markers.get(sighting.marker_id)
             if marker is None:
-                self._refuse("unknown-marker", "marker %d is not in the dock database (known: %s)",
-                             sighting.marker_id, sorted(self.markers))
+                self._refuse(
+                    "unknown-marker",
+                    "marker %d is not in the dock database (known: %s)",
+                    sighting.marker_id,
+                    sorted(self.markers),
+                )
                 continue
             last = self._previous.get(sighting.marker_id)
             previous = last[1] if last is not None and 0.0 <= stamp_s - last[0] <= CONTINUITY_S else None
-            dock = locate_dock(sighting, marker, self._camera_matrix, self._distortion, base_from_camera, previous)
+            dock = locate_dock(
+                sighting, marker, self._camera_matrix, self._distortion, base_from_camera, previous
+            )
             if dock is None:
                 self._refuse("not-upright", "marker %d: no upright pose fits its corners", sighting.marker_id)
                 continue
             if dock.reprojection_error_px > self.params.max_reprojection_error_px:
-                self._refuse("poor-fit", "marker %d: fit error %.2f px", sighting.marker_id, dock.reprojection_error_px)
+                self._refuse(
+                    "poor-fit", "marker %d: fit error %.2f px", sighting.marker_id, dock.reprojection_error_px
+                )
                 continue
             if dock.marker_range_m > self.params.max_range_m:
                 self.counts["too-far"] += 1
@@ -209,12 +244,25 @@ class PerceptionService:
         out_header = Header(header.stamp, topics.BASE_FRAME)
         self.detected_pub.publish(PoseStamped(out_header, Pose.from_pose2d(found[0].dock_in_base)))
         for dock in found:
-            self.detections_pub.publish(DockDetection(
-                out_header, dock.dock_id, dock.marker_id, Pose.from_pose2d(dock.dock_in_base),
-                dock.reprojection_error_px, dock.marker_range_m))
+            self.detections_pub.publish(
+                DockDetection(
+                    out_header,
+                    dock.dock_id,
+                    dock.marker_id,
+                    Pose.from_pose2d(dock.dock_in_base),
+                    dock.reprojection_error_px,
+                    dock.marker_range_m,
+                )
+            )
 
-    def _publish_debug(self, header: Header, grey: np.ndarray, sightings: list[MarkerSighting],
-                       found: list[DockSighting], base_from_camera: Rigid3) -> None:
+    def _publish_debug(
+        self,
+        header: Header,
+        grey: np.ndarray,
+        sightings: list[MarkerSighting],
+        found: list[DockSighting],
+        base_from_camera: Rigid3,
+    ) -> None:
         assert self._camera_matrix is not None
         canvas = cv2.cvtColor(grey, cv2.COLOR_GRAY2RGB)
         if sightings:
@@ -226,12 +274,26 @@ class PerceptionService:
             # The marker's frame from the dock pose, drawn back into the image: what perception believes.
             pose = dock.dock_in_base.compose(_MARKER_ON_DOCK)
             camera_from_base = _invert(base_from_camera)
-            rotation = np.array([[-np.sin(pose.yaw), 0.0, np.cos(pose.yaw)], [np.cos(pose.yaw), 0.0, np.sin(pose.yaw)],
-                                 [0.0, 1.0, 0.0]])
-            marker_in_camera = camera_from_base.compose(Rigid3(rotation, np.array([pose.x, pose.y, marker.centre_height_m])))
+            rotation = np.array(
+                [
+                    [-np.sin(pose.yaw), 0.0, np.cos(pose.yaw)],
+                    [np.cos(pose.yaw), 0.0, np.sin(pose.yaw)],
+                    [0.0, 1.0, 0.0],
+                ]
+            )
+            marker_in_camera = camera_from_base.compose(
+                Rigid3(rotation, np.array([pose.x, pose.y, marker.centre_height_m]))
+            )
             rvec, _ = cv2.Rodrigues(marker_in_camera.rotation)
-            cv2.drawFrameAxes(canvas, self._camera_matrix, self._distortion, rvec, marker_in_camera.translation,
-                              marker.size_m * 0.75, 2)
+            cv2.drawFrameAxes(
+                canvas,
+                self._camera_matrix,
+                self._distortion,
+                rvec,
+                marker_in_camera.translation,
+                marker.size_m * 0.75,
+                2,
+            )
         height, width = grey.shape
         self.debug_pub.publish(Image(header, height, width, "rgb8", 0, width * 3, canvas.reshape(-1)))
 
@@ -254,8 +316,12 @@ def _invert(t: Rigid3) -> Rigid3:
     return Rigid3(t.rotation.T, -t.rotation.T @ t.translation)
 
 
-SERVICE = ServiceSpec("perception", Params, PerceptionService,
-                      description="zendock perception: ArUco markers in camera images -> dock poses")
+SERVICE = ServiceSpec(
+    "perception",
+    Params,
+    PerceptionService,
+    description="zendock perception: ArUco markers in camera images -> dock poses",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,8 +29,12 @@ Box = tuple[int, int, int, int]
 class SearchRegions:
     """The boxes to search in the next frame, from the markers found in the last one."""
 
-    def __init__(self, min_margin_px: int = MIN_MARGIN_PX, memory_s: float = MEMORY_S,
-                 full_search_every: int = FULL_SEARCH_EVERY) -> None:
+    def __init__(
+        self,
+        min_margin_px: int = MIN_MARGIN_PX,
+        memory_s: float = MEMORY_S,
+        full_search_every: int = FULL_SEARCH_EVERY,
+    ) -> None:
         self.min_margin_px = min_margin_px
         self.memory_s = memory_s
         self.full_search_every = full_search_every
@@ -48,7 +52,10 @@ class SearchRegions:
             lo, hi = corners.min(axis=0), corners.max(axis=0)
             margin = max(float(np.max(hi - lo)), float(self.min_margin_px))
             x0, y0 = (int(max(0.0, np.floor(v - margin))) for v in lo)
-            x1, y1 = int(min(width, np.ceil(hi[0] + margin) + 1)), int(min(height, np.ceil(hi[1] + margin) + 1))
+            x1, y1 = (
+                int(min(width, np.ceil(hi[0] + margin) + 1)),
+                int(min(height, np.ceil(hi[1] + margin) + 1)),
+            )
             if x1 > x0 and y1 > y0:
                 boxes.append((x0, y0, x1, y1))
         return boxes or None

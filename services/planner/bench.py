@@ -119,7 +119,9 @@ def main(argv: list[str] | None = None) -> int:
     import argparse  # noqa: PLC0415
     import json  # noqa: PLC0415
 
-    parser = argparse.ArgumentParser(prog="python -m services.planner.bench", description="planning time benchmark")
+    parser = argparse.ArgumentParser(
+        prog="python -m services.planner.bench", description="planning time benchmark"
+    )
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--resolution", type=float, default=0.05)
     args = parser.parse_args(argv)

@@ -308,8 +308,11 @@ class LayeredCostmap:
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
         """Free the cells under the robot in the dynamic layers (nav2 ``footprint_clearing_enabled``)."""
         p = self.params
-        self._set_cells(self._obstacle, self._frame.cells_under_rectangle(pose, p.robot_length_m, p.robot_width_m),
-                        FREE_SPACE)
+        self._set_cells(
+            self._obstacle,
+            self._frame.cells_under_rectangle(pose, p.robot_length_m, p.robot_width_m),
+            FREE_SPACE,
+        )
 
     def combined_costs(self) -> np.ndarray:
         """Layers merged by maximum, before inflation (unknown in a layer defers to the others)."""
@@ -349,8 +352,10 @@ class LayeredCostmap:
         window_columns = slice(max(0, columns.start - reach), min(width, columns.stop + reach))
         part = inflate(master[window_rows, window_columns], self._frame.resolution_m, self.params)
         costs = last.costs.copy()
-        costs[rows, columns] = part[rows.start - window_rows.start : rows.stop - window_rows.start,
-                                    columns.start - window_columns.start : columns.stop - window_columns.start]
+        costs[rows, columns] = part[
+            rows.start - window_rows.start : rows.stop - window_rows.start,
+            columns.start - window_columns.start : columns.stop - window_columns.start,
+        ]
         return _snapshot(self._frame, costs)
 
     def _set_cells(self, layer: np.ndarray, cells: np.ndarray, value: int) -> None:

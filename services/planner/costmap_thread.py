@@ -60,8 +60,13 @@ class LockedPoseTrack:
 class CostmapThread:
     """Runs :meth:`CostmapUpdater.update` on its own thread when asked; see the module docstring."""
 
-    def __init__(self, layers: CostmapUpdater, on_updated: Callable[[float], None], log: logging.Logger,
-                 record_cpu_s: Callable[[float], None] = lambda _s: None) -> None:
+    def __init__(
+        self,
+        layers: CostmapUpdater,
+        on_updated: Callable[[float], None],
+        log: logging.Logger,
+        record_cpu_s: Callable[[float], None] = lambda _s: None,
+    ) -> None:
         self.layers = layers
         self.lock = threading.Lock()
         #: The newest inflated cost grid (None before a map), and the cells the sonar heard glass in.
@@ -118,7 +123,9 @@ class CostmapThread:
                 with self.lock:
                     self.layers.update(now)
                     self._publish()
-            except Exception:  # a bug in one update must not end the costmap: report it, keep the last snapshot
+            except (
+                Exception
+            ):  # a bug in one update must not end the costmap: report it, keep the last snapshot
                 self._log.exception("costmap update failed")
                 continue
             self._record_cpu_s(time.thread_time() - started)

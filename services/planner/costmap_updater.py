@@ -72,7 +72,9 @@ def glass_speed_limit(params: Params, pose: Pose2D | None, heard_xy: np.ndarray)
     dx, dy = heard_xy[:, 0] - pose.x, heard_xy[:, 1] - pose.y
     distance = np.hypot(dx, dy)
     along = dx * math.cos(pose.yaw) + dy * math.sin(pose.yaw)
-    ahead = (along > math.cos(GLASS_SLOWDOWN_HALF_ANGLE_RAD) * distance) & (distance < p.glass_slowdown_radius_m)
+    ahead = (along > math.cos(GLASS_SLOWDOWN_HALF_ANGLE_RAD) * distance) & (
+        distance < p.glass_slowdown_radius_m
+    )
     if not ahead.any():
         return None
     distance_m = float(np.min(distance[ahead]))
@@ -105,10 +107,12 @@ class CostmapUpdater:
         )
         self._glass_saved_wall_s = 0.0
         self._applied_glass: np.ndarray | None = None
-        self._mounts = SensorMounts({
-            topics.LIDAR_FRAME: Pose2D(*params.lidar_mount),
-            topics.ULTRASONIC_FRAME: Pose2D(*params.ultrasonic_mount),
-        })
+        self._mounts = SensorMounts(
+            {
+                topics.LIDAR_FRAME: Pose2D(*params.lidar_mount),
+                topics.ULTRASONIC_FRAME: Pose2D(*params.ultrasonic_mount),
+            }
+        )
         #: Sensor data handed over by the callbacks, taken by :meth:`update` (on another thread, see
         #: :mod:`services.planner.costmap_thread`): deques, whose append and popleft need no lock.
         self._pending_scan: deque[LaserScan] = deque(maxlen=1)
@@ -127,15 +131,20 @@ class CostmapUpdater:
         self._base_map = occupancy
         if self.glass is None or self.glass.frame != occupancy.frame:
             self.glass = GlassMemory(
-                occupancy.frame, self._params.costmap_params(), self._params.glass_suspicion_radius_m,
+                occupancy.frame,
+                self._params.costmap_params(),
+                self._params.glass_suspicion_radius_m,
                 model=RangeSensorModel(trusted_range_m=self._params.glass_trusted_range_m),
                 echo_hold_s=self._params.glass_echo_hold_s,
             )
             kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
             if kept is not None:
                 self.glass.restore(kept)
-                self._log.info("glass memory restored from %s (%d cells marked)",
-                               self._params.glass_memory_file, int(np.count_nonzero(kept == LETHAL_OBSTACLE)))
+                self._log.info(
+                    "glass memory restored from %s (%d cells marked)",
+                    self._params.glass_memory_file,
+                    int(np.count_nonzero(kept == LETHAL_OBSTACLE)),
+                )
         self._applied_glass = None
         if self.costmap is None:
             self.costmap = LayeredCostmap(occupancy, self._params.costmap_params())
@@ -161,7 +170,9 @@ class CostmapUpdater:
         p = self._params
         if pose is None or self.glass is None or p.glass_slowdown_radius_m <= 0:
             return None
-        return glass_speed_limit(p, pose, self.glass.heard_cells_xy((pose.x, pose.y), p.glass_slowdown_radius_m))
+        return glass_speed_limit(
+            p, pose, self.glass.heard_cells_xy((pose.x, pose.y), p.glass_slowdown_radius_m)
+        )
 
     def heard_glass_xy(self) -> np.ndarray:
         """Centres ``(N, 2)`` of the cells the sonar heard glass in round the robot as of the last update:
@@ -193,8 +204,12 @@ class CostmapUpdater:
             if sensor is not None:
                 stride = self._params.scan_beam_stride
                 endpoints, hits = laser_scan_points(
-                    sensor.as_tuple(), scan.angle_min, scan.angle_increment * stride, scan.ranges[::stride],
-                    scan.range_min, scan.range_max,
+                    sensor.as_tuple(),
+                    scan.angle_min,
+                    scan.angle_increment * stride,
+                    scan.ranges[::stride],
+                    scan.range_min,
+                    scan.range_max,
                 )
                 costmap.update_with_scan((sensor.x, sensor.y), endpoints, hits)
                 self._lidar_hits = (scan.header.stamp.to_sec(), endpoints[hits])
@@ -222,7 +237,10 @@ class CostmapUpdater:
         """Fold the glass memory into the costmap's static layer, when it changed (and keep it on file)."""
         if self.costmap is None or self._base_map is None or self.glass is None:
             return
-        if self._glass_store is not None and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S:
+        if (
+            self._glass_store is not None
+            and time.monotonic() - self._glass_saved_wall_s >= GLASS_SAVE_PERIOD_S
+        ):
             self._glass_saved_wall_s = time.monotonic()
             try:
                 self._glass_store.save_if_changed(self._base_map, self.glass.sonar_layer)
@@ -272,7 +290,9 @@ class CostmapUpdater:
         mount = self._mounts.get(header.frame_id)
         if robot is None or mount is None:
             if mount is None:
-                self._say.warning(f"frame:{header.frame_id}", "no mount known for sensor frame %r", header.frame_id)
+                self._say.warning(
+                    f"frame:{header.frame_id}", "no mount known for sensor frame %r", header.frame_id
+                )
             return None
         return robot.compose(mount)
 
@@ -293,13 +313,24 @@ class CostmapUpdater:
         fresh = abs(reading.header.stamp.to_sec() - hits_stamp_s) <= LIDAR_FOR_SONAR_MAX_AGE_S
         if echo and not fresh and may_wait:
             return False
-        if echo and fresh and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits):
+        if (
+            echo
+            and fresh
+            and echo_explained_by_lidar(sensor.as_tuple(), reading.range, reading.field_of_view, hits)
+        ):
             glass.add_clear_view(
-                sensor.as_tuple(), reading.range - glass.frame.resolution_m, reading.field_of_view, reading.min_range
+                sensor.as_tuple(),
+                reading.range - glass.frame.resolution_m,
+                reading.field_of_view,
+                reading.min_range,
             )
             return True
         glass.add_reading(
-            sensor.as_tuple(), reading.range, reading.field_of_view, reading.min_range, reading.max_range,
+            sensor.as_tuple(),
+            reading.range,
+            reading.field_of_view,
+            reading.min_range,
+            reading.max_range,
             stamp_s=reading.header.stamp.to_sec(),
         )
         return True

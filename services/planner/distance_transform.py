@@ -47,8 +47,10 @@ def bounds_of(mask: np.ndarray, margin: int) -> tuple[slice, slice] | None:
     if len(rows) == 0:
         return None
     height, width = mask.shape
-    return (slice(max(0, int(rows[0]) - margin), min(height, int(rows[-1]) + 1 + margin)),
-            slice(max(0, int(columns[0]) - margin), min(width, int(columns[-1]) + 1 + margin)))
+    return (
+        slice(max(0, int(rows[0]) - margin), min(height, int(rows[-1]) + 1 + margin)),
+        slice(max(0, int(columns[0]) - margin), min(width, int(columns[-1]) + 1 + margin)),
+    )
 
 
 def _squared_distance_within(marks: np.ndarray, reach: int) -> np.ndarray:

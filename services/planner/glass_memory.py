@@ -98,9 +98,13 @@ class GlassMemory:
             return
         self._apply(sensor_pose, range_m if echo else max_range_m, field_of_view_rad, echo)
         if echo and stamp_s is not None and self.echo_hold_s > 0:
-            self._held.append((stamp_s + self.echo_hold_s, self._arc_cells(sensor_pose, range_m, field_of_view_rad)))
+            self._held.append(
+                (stamp_s + self.echo_hold_s, self._arc_cells(sensor_pose, range_m, field_of_view_rad))
+            )
 
-    def _arc_cells(self, sensor_pose: tuple[float, float, float], range_m: float, fov_rad: float) -> np.ndarray:
+    def _arc_cells(
+        self, sensor_pose: tuple[float, float, float], range_m: float, fov_rad: float
+    ) -> np.ndarray:
         """On-grid cells ``(N, 2)`` the arc across the cone at ``range_m`` passes through."""
         sx, sy, syaw = sensor_pose
         count = max(2, math.ceil(fov_rad * range_m / (0.5 * self.frame.resolution_m)) + 1)
@@ -129,14 +133,20 @@ class GlassMemory:
         return mask
 
     def add_clear_view(
-        self, sensor_pose: tuple[float, float, float], clear_to_m: float, field_of_view_rad: float, min_range_m: float
+        self,
+        sensor_pose: tuple[float, float, float],
+        clear_to_m: float,
+        field_of_view_rad: float,
+        min_range_m: float,
     ) -> None:
         """The sonar saw nothing but what the lidar sees: nothing in the cone before ``clear_to_m``."""
         if not (math.isfinite(clear_to_m) and clear_to_m > min_range_m and field_of_view_rad > 0):
             return
         self._apply(sensor_pose, clear_to_m, field_of_view_rad, echo=False)
 
-    def _apply(self, sensor_pose: tuple[float, float, float], reach_m: float, fov_rad: float, echo: bool) -> None:
+    def _apply(
+        self, sensor_pose: tuple[float, float, float], reach_m: float, fov_rad: float, echo: bool
+    ) -> None:
         res = self.frame.resolution_m
         band_m = res  # the arc crosses cells whose centres lie up to half a cell off it
         sx, sy, syaw = sensor_pose
@@ -157,7 +167,14 @@ class GlassMemory:
         # the evidence goes to the arc cells that may have (the rest of the arc, renormalised).
         candidates = current > self.model.clear_log_odds
         free, occupied = reading_evidence(
-            distance, bearing, reach_m, half_fov, echo, self.model, band_m, candidates=candidates,
+            distance,
+            bearing,
+            reach_m,
+            half_fov,
+            echo,
+            self.model,
+            band_m,
+            candidates=candidates,
             cell_reach_m=res * math.sqrt(0.5) + SENSOR_POSE_MARGIN_M,
         )
         # Looked at: every cell whose centre the cone covered, out to the echo. Suspicion ("a pane probably
@@ -224,7 +241,9 @@ class GlassMemory:
         iy, ix = np.nonzero(suspected)
         return self.frame.cells_to_world(np.stack([ix, iy], axis=1))
 
-    def heard_cells_xy(self, near_xy: tuple[float, float] | None = None, radius_m: float = math.inf) -> np.ndarray:
+    def heard_cells_xy(
+        self, near_xy: tuple[float, float] | None = None, radius_m: float = math.inf
+    ) -> np.ndarray:
         """Centres ``(N, 2)`` of every cell the sonar has heard glass in: suspected, marked, or on a held
         arc. The robot slows near them: where one pane is known its unheard end is near, and a plan that
         rounds a pane's end keeps changing as the end is heard (the robot once clipped ends at full speed

@@ -62,8 +62,13 @@ class GlassStore:
         buffer = io.BytesIO()
         frame = occupancy.frame
         # The grid's geometry travels with the layer, so tools can place its cells without the map.
-        np.savez(buffer, map=np.array(self._fingerprint_of(occupancy)), sonar=layer,
-                 resolution=np.array(frame.resolution_m), origin=np.array(frame.origin, dtype=float))
+        np.savez(
+            buffer,
+            map=np.array(self._fingerprint_of(occupancy)),
+            sonar=layer,
+            resolution=np.array(frame.resolution_m),
+            origin=np.array(frame.origin, dtype=float),
+        )
         write_atomically(self.path, buffer.getvalue())
         self._saved = layer.copy()
         return True

@@ -92,7 +92,9 @@ class GlobalPlanner:
         poses = arrive_along_heading(grid, path.poses, self.params.goal_heading, start_pose.yaw)
         if poses is path.poses:
             return path
-        return replace(path, poses=poses, length_m=path_length_m(poses), planning_time_s=time.perf_counter() - t0)
+        return replace(
+            path, poses=poses, length_m=path_length_m(poses), planning_time_s=time.perf_counter() - t0
+        )
 
     def _roomy_path(self, grid: CostGrid, start_pose: Pose2D, goal_pose: Pose2D, t0: float) -> PlannedPath:
         """The A* path, or one with room to turn when that is not much longer (see the module docstring)."""
@@ -145,7 +147,9 @@ class GlobalPlanner:
                 tight[y0:y1, x0:x1] &= ~near
         if not tight.any():
             return None
-        return CostGrid(frame, np.where(tight, np.uint8(INSCRIBED_INFLATED_OBSTACLE), costs).astype(costs.dtype))
+        return CostGrid(
+            frame, np.where(tight, np.uint8(INSCRIBED_INFLATED_OBSTACLE), costs).astype(costs.dtype)
+        )
 
     def _search_grid(self, grid: CostGrid) -> CostGrid:
         if grid.costs.size <= self.params.max_full_resolution_cells or self.params.downsample_factor == 1:

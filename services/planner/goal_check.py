@@ -29,8 +29,15 @@ def goal_pose(goal: PoseStamped, accepted_frames: tuple[str, ...] = ACCEPTED_FRA
         wanted = " or ".join(repr(f) for f in accepted_frames)
         raise ValueError(f"goal frame_id {goal.header.frame_id!r} is not the map frame ({wanted})")
     p, q = goal.pose.position, goal.pose.orientation
-    numbers = {"position.x": p.x, "position.y": p.y, "position.z": p.z,
-               "orientation.x": q.x, "orientation.y": q.y, "orientation.z": q.z, "orientation.w": q.w}
+    numbers = {
+        "position.x": p.x,
+        "position.y": p.y,
+        "position.z": p.z,
+        "orientation.x": q.x,
+        "orientation.y": q.y,
+        "orientation.z": q.z,
+        "orientation.w": q.w,
+    }
     bad = [name for name, value in numbers.items() if not math.isfinite(value)]
     if bad:
         raise ValueError(f"goal pose is not finite: {', '.join(f'{n}={numbers[n]}' for n in bad)}")

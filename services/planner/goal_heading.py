@@ -76,14 +76,24 @@ class GoalHeadingParams:
             raise ValueError(f"lead_ins_m must be non-negative distances, got {self.lead_ins_m}")
         if not 0 <= self.max_cost < INSCRIBED_INFLATED_OBSTACLE:
             raise ValueError(f"max_cost must be in 0..252, got {self.max_cost}")
-        for name in ("end_radius_m", "opening_radius_m", "max_arc_rad", "spacing_m", "max_linear_mps",
-                     "max_angular_radps", "slow_radius_m", "min_curve_speed_mps", "max_corner_rad"):
+        for name in (
+            "end_radius_m",
+            "opening_radius_m",
+            "max_arc_rad",
+            "spacing_m",
+            "max_linear_mps",
+            "max_angular_radps",
+            "slow_radius_m",
+            "min_curve_speed_mps",
+            "max_corner_rad",
+        ):
             if not getattr(self, name) > 0.0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
 
 
-def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingParams | None = None,
-                         start_yaw: float | None = None) -> np.ndarray:
+def arrive_along_heading(
+    grid: CostGrid, poses: np.ndarray, params: GoalHeadingParams | None = None, start_yaw: float | None = None
+) -> np.ndarray:
     """``poses`` ``(N, 3)`` (goal last, with the goal's yaw) with its end replaced by the quickest line and
     arc that arrive along the goal's heading; ``poses`` itself when none is quicker or none fits.
     ``start_yaw``: the robot's heading at the path's start (a new end joined there turns from it)."""
@@ -110,8 +120,12 @@ def arrive_along_heading(grid: CostGrid, poses: np.ndarray, params: GoalHeadingP
         old_yaw = _yaw(_direction_after(xy, arc, j))
         from_start = j == 0 and start_yaw is not None
         came_yaw = old_yaw if start_yaw is None or not from_start else start_yaw
-        old_s = (_drive_time_s(replaced, p) + _corner_s(came_yaw, old_yaw, from_start, p)
-                 + arrival_turn / p.max_angular_radps + p.stop_and_turn_s)
+        old_s = (
+            _drive_time_s(replaced, p)
+            + _corner_s(came_yaw, old_yaw, from_start, p)
+            + arrival_turn / p.max_angular_radps
+            + p.stop_and_turn_s
+        )
         limits = _cost_limits(grid, replaced, xy[0], goal, p)
         for lead_in, lead_yaw in _openings(xy[j], came_yaw, from_start, p):
             for radius_m in p.turning_radii_m:
@@ -137,8 +151,9 @@ def _near_ends(points: np.ndarray, start: np.ndarray, goal: np.ndarray, radius_m
     return (np.hypot(*(points - start).T) <= radius_m) | (np.hypot(*(points - goal).T) <= radius_m)
 
 
-def _cost_limits(grid: CostGrid, replaced: np.ndarray, start: np.ndarray, goal: np.ndarray,
-                 p: GoalHeadingParams) -> tuple[int, int]:
+def _cost_limits(
+    grid: CostGrid, replaced: np.ndarray, start: np.ndarray, goal: np.ndarray, p: GoalHeadingParams
+) -> tuple[int, int]:
     """The costs a new end may cross: ``(away from the ends, near them)``. Away from the ends, ``max_cost`` or
     what the replaced stretch crossed there, never inscribed or lethal; near the robot and the goal, also what
     the replaced stretch crossed near them (a robot standing close to a wall must still leave it)."""
@@ -147,8 +162,14 @@ def _cost_limits(grid: CostGrid, replaced: np.ndarray, start: np.ndarray, goal: 
     return away, max(away, _max_cost(grid, replaced[near]))
 
 
-def _within(grid: CostGrid, tail: np.ndarray, start: np.ndarray, goal: np.ndarray, limits: tuple[int, int],
-            p: GoalHeadingParams) -> bool:
+def _within(
+    grid: CostGrid,
+    tail: np.ndarray,
+    start: np.ndarray,
+    goal: np.ndarray,
+    limits: tuple[int, int],
+    p: GoalHeadingParams,
+) -> bool:
     near = _near_ends(tail, start, goal, p.end_radius_m)
     return _max_cost(grid, tail[~near]) <= limits[0] and _max_cost(grid, tail[near]) <= limits[1]
 
@@ -166,8 +187,9 @@ def _corner_s(from_yaw: float, to_yaw: float, standing: bool, p: GoalHeadingPara
     return corner / p.max_angular_radps if corner > p.max_corner_rad else 0.0
 
 
-def _openings(start: np.ndarray, yaw: float, from_start: bool,
-              p: GoalHeadingParams) -> list[tuple[np.ndarray, float]]:
+def _openings(
+    start: np.ndarray, yaw: float, from_start: bool, p: GoalHeadingParams
+) -> list[tuple[np.ndarray, float]]:
     """Ways to leave ``start``: as it is, and (from the robot's own pose) along arcs that turn it first, so a
     robot already on a curve can stay on one: ``(points, heading at the last point)``."""
     openings = [(start[None, :], yaw)]
@@ -198,8 +220,15 @@ def _direction_after(xy: np.ndarray, arc: np.ndarray, j: int, ahead_m: float = 0
     return xy[k] - xy[j]
 
 
-def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, radius_m: float, lead_m: float,
-                   side: float, p: GoalHeadingParams) -> np.ndarray | None:
+def _line_arc_lead(
+    start: np.ndarray,
+    goal: np.ndarray,
+    heading: np.ndarray,
+    radius_m: float,
+    lead_m: float,
+    side: float,
+    p: GoalHeadingParams,
+) -> np.ndarray | None:
     """Points from ``start``: straight to where it meets a circle of ``radius_m`` tangentially, round it
     (counter-clockwise for ``side`` +1) to the lead-in, then along ``heading`` to ``goal``; None when
     ``start`` is well inside the circle or the arc would circle round."""
@@ -230,8 +259,9 @@ def _line_arc_lead(start: np.ndarray, goal: np.ndarray, heading: np.ndarray, rad
     gaps = np.hypot(*np.diff(points, axis=0).T)
     points = points[np.concatenate([[True], gaps > 0.1 * p.spacing_m])]
     if np.hypot(*(points[-1] - goal)) > 0.0:  # the goal itself ends the path, exactly
-        points = np.concatenate([points[:-1] if np.hypot(*(points[-1] - goal)) < 0.1 * p.spacing_m else points,
-                                 goal[None, :]])
+        points = np.concatenate(
+            [points[:-1] if np.hypot(*(points[-1] - goal)) < 0.1 * p.spacing_m else points, goal[None, :]]
+        )
     return points
 
 

@@ -107,7 +107,9 @@ class GridFrame:
         centres = self.cells_to_world(cells)
         return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
 
-    def cells_under_rectangle(self, pose: tuple[float, float, float], length_m: float, width_m: float) -> np.ndarray:
+    def cells_under_rectangle(
+        self, pose: tuple[float, float, float], length_m: float, width_m: float
+    ) -> np.ndarray:
         """On-grid cells ``(N, 2)`` whose centres lie inside a ``length_m`` x ``width_m`` rectangle centred on
         ``pose`` and turned with its yaw (the robot's footprint)."""
         x, y, yaw = pose

@@ -45,7 +45,9 @@ def turns_rad(points: np.ndarray, start_yaw: float, goal_yaw: float) -> float:
     return total
 
 
-def lower_bound(grid: CostGrid, start: Pose2D, goal: Pose2D, max_linear_mps: float, max_angular_radps: float) -> dict:
+def lower_bound(
+    grid: CostGrid, start: Pose2D, goal: Pose2D, max_linear_mps: float, max_angular_radps: float
+) -> dict:
     points = shortest_path(grid, (start.x, start.y), (goal.x, goal.y))
     length = path_length_m(points)
     turn = turns_rad(points, start.yaw, goal.yaw)
@@ -57,7 +59,9 @@ def lower_bound(grid: CostGrid, start: Pose2D, goal: Pose2D, max_linear_mps: flo
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m services.planner.lower_bound", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m services.planner.lower_bound", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--world", required=True)
     parser.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"))
     parser.add_argument("--goal", type=float, nargs=3, metavar=("X", "Y", "YAW"))
@@ -72,12 +76,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"{parser.prog}: {exc}", file=sys.stderr)
         return 2
-    queries = ([{"start": args.start, "goal": args.goal}] if not args.batch
-               else [json.loads(line) for line in sys.stdin if line.strip()])
+    queries = (
+        [{"start": args.start, "goal": args.goal}]
+        if not args.batch
+        else [json.loads(line) for line in sys.stdin if line.strip()]
+    )
     failed = 0
     for query in queries:
         try:
-            result = lower_bound(grid, Pose2D(*query["start"]), Pose2D(*query["goal"]), args.max_linear, args.max_angular)
+            result = lower_bound(
+                grid, Pose2D(*query["start"]), Pose2D(*query["goal"]), args.max_linear, args.max_angular
+            )
         except (PlanningError, KeyError, TypeError, ValueError) as exc:
             failed += 1
             result = {"error": str(exc), "lower_bound_s": None}

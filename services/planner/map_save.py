@@ -64,11 +64,20 @@ def _save(args: argparse.Namespace) -> int:
 def build_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """The flags of ``map save`` (shared by this module's main and the ``zendock`` CLI)."""
     parser.add_argument("--world", required=True, help="world file (deploy/worlds/*.yaml)")
-    parser.add_argument("-o", "--output", default=".", metavar="DIR|FILE.yaml",
-                        help="output directory, or the map's .yaml path (default: .)")
+    parser.add_argument(
+        "-o",
+        "--output",
+        default=".",
+        metavar="DIR|FILE.yaml",
+        help="output directory, or the map's .yaml path (default: .)",
+    )
     parser.add_argument("--resolution", type=float, default=0.05, help="metres per cell (default: 0.05)")
-    parser.add_argument("--padding", type=float, default=0.5,
-                        help="unknown margin around the world's bounds, metres (default: 0.5)")
+    parser.add_argument(
+        "--padding",
+        type=float,
+        default=0.5,
+        help="unknown margin around the world's bounds, metres (default: 0.5)",
+    )
     return parser
 
 

@@ -42,7 +42,12 @@ class MapServer:
         frame = occupancy.frame
         self._log.info(
             "map from %s: %d x %d cells at %g m, origin (%.2f, %.2f)",
-            source, frame.width, frame.height, frame.resolution_m, frame.origin[0], frame.origin[1],
+            source,
+            frame.width,
+            frame.height,
+            frame.resolution_m,
+            frame.origin[0],
+            frame.origin[1],
         )
         self.publish()
 
@@ -66,7 +71,11 @@ class MapServer:
         except ConfigError as exc:
             self._log.warning("load_map: %s", exc)
             image_problem = "image" in str(exc) or "PGM" in str(exc)
-            code = LoadMapResponse.RESULT_INVALID_MAP_DATA if image_problem else LoadMapResponse.RESULT_INVALID_MAP_METADATA
+            code = (
+                LoadMapResponse.RESULT_INVALID_MAP_DATA
+                if image_problem
+                else LoadMapResponse.RESULT_INVALID_MAP_METADATA
+            )
             return LoadMapResponse(result=code)
         self.set_map(occupancy, url)
         assert self._map_msg is not None

@@ -131,7 +131,9 @@ class NavOrders:
 class NavigationRun:
     """One goal, from acceptance to its end; see the module docstring."""
 
-    def __init__(self, goal: Pose2D, params: Params, now_s: float, next_generation: Callable[[], int]) -> None:
+    def __init__(
+        self, goal: Pose2D, params: Params, now_s: float, next_generation: Callable[[], int]
+    ) -> None:
         self.goal = goal
         self.params = params
         #: Numbers attempts uniquely across goals (a goal's stale plan must not reach the next goal).
@@ -147,8 +149,9 @@ class NavigationRun:
         self.ended: NavEnd | None = None
         self.follower = RegulatedPurePursuit(params.follower_params())
         self._backup = BackUp(params.backup_params())
-        self._progress = ProgressChecker(params.required_movement_m, params.required_rotation_rad,
-                                         params.progress_timeout_s)
+        self._progress = ProgressChecker(
+            params.required_movement_m, params.required_rotation_rad, params.progress_timeout_s
+        )
         self._last_plan_request_s = -math.inf
         self._replan_wanted = False
         self._blocked_since_s: float | None = None
@@ -193,7 +196,8 @@ class NavigationRun:
             return orders
         if outcome.path is None:
             code = {
-                "goal": NavigateErrorCode.GOAL_OCCUPIED, "start": NavigateErrorCode.START_OCCUPIED,
+                "goal": NavigateErrorCode.GOAL_OCCUPIED,
+                "start": NavigateErrorCode.START_OCCUPIED,
             }.get(outcome.blocked_end, NavigateErrorCode.NO_VALID_PATH)
             log.warning("planning failed: %s", outcome.error)
             if snap.pose is None:
@@ -210,7 +214,9 @@ class NavigationRun:
             self.phase = Phase.FOLLOWING
             self._blocked_since_s = None
             self._progress.reset()
-            log.info("following a %.2f m path (planned in %.0f ms)", path.length_m, 1000.0 * path.planning_time_s)
+            log.info(
+                "following a %.2f m path (planned in %.0f ms)", path.length_m, 1000.0 * path.planning_time_s
+            )
         return orders
 
     def replan(self, snap: NavSnapshot) -> NavOrders:
@@ -250,8 +256,12 @@ class NavigationRun:
         self._last_tick_s = now
         self.clock_s += dt
         if p.navigation_timeout_s > 0 and now - self.started_s > p.navigation_timeout_s:
-            self._end(orders, Ending.ABORTED, NavigateErrorCode.TIMEOUT,
-                      f"goal not reached within navigation_timeout_s={p.navigation_timeout_s:g} s")
+            self._end(
+                orders,
+                Ending.ABORTED,
+                NavigateErrorCode.TIMEOUT,
+                f"goal not reached within navigation_timeout_s={p.navigation_timeout_s:g} s",
+            )
             return orders
         pose = self._fresh_pose(snap, orders)
         if pose is None or snap.grid is None:
@@ -292,7 +302,9 @@ class NavigationRun:
     def _request_plan(self, snap: NavSnapshot, orders: NavOrders, urgent: bool = False) -> None:
         """Plan from the current pose, or remember to once the request in flight is back."""
         in_flight = snap.planning_in_flight or orders.plan_from is not None
-        if in_flight or (urgent and snap.now_s - self._last_plan_request_s < self.params.min_replan_interval_s):
+        if in_flight or (
+            urgent and snap.now_s - self._last_plan_request_s < self.params.min_replan_interval_s
+        ):
             self._replan_wanted = True
             return
         if snap.pose is None or snap.grid is None:
@@ -321,8 +333,12 @@ class NavigationRun:
         # Also on the wall clock: at 30x real time a pose pipeline lagging under load is not a lost pose.
         lost_s = min(snap.now_s - self._pose_lost_since_s, snap.wall_s - self._pose_lost_since_wall_s)
         if lost_s > p.no_pose_timeout_s:
-            self._end(orders, Ending.ABORTED, NavigateErrorCode.NO_POSE,
-                      f"no robot pose on {topics.POSE2D} for {p.no_pose_timeout_s:g} s")
+            self._end(
+                orders,
+                Ending.ABORTED,
+                NavigateErrorCode.NO_POSE,
+                f"no robot pose on {topics.POSE2D} for {p.no_pose_timeout_s:g} s",
+            )
         return None
 
     def _follow(self, snap: NavSnapshot, pose: Pose2D, dt: float, orders: NavOrders) -> None:
@@ -341,8 +357,13 @@ class NavigationRun:
             orders.cmd = (0.0, 0.0)
             return
         if command.status is FollowStatus.GOAL_REACHED:
-            log.info("goal reached at (%.3f, %.3f, %.3f) after %.1f s",
-                     pose.x, pose.y, pose.yaw, snap.now_s - self.started_s)
+            log.info(
+                "goal reached at (%.3f, %.3f, %.3f) after %.1f s",
+                pose.x,
+                pose.y,
+                pose.yaw,
+                snap.now_s - self.started_s,
+            )
             self._end(orders, Ending.SUCCEEDED, NavigateErrorCode.NONE, "")
             return
         if command.status is FollowStatus.COLLISION_AHEAD:
@@ -351,15 +372,21 @@ class NavigationRun:
                 self._blocked_since_s = self.clock_s
                 log.info("collision ahead: stopped, replanning")
             if self.clock_s - self._blocked_since_s > p.blocked_timeout_s:
-                self._start_recovery(pose, NavigateErrorCode.STUCK,
-                                     f"an obstacle blocked the way for {p.blocked_timeout_s:g} s", orders)
+                self._start_recovery(
+                    pose,
+                    NavigateErrorCode.STUCK,
+                    f"an obstacle blocked the way for {p.blocked_timeout_s:g} s",
+                    orders,
+                )
             elif not self.follower.xy_goal_reached:
                 self._request_plan(snap, orders, urgent=True)
             return
         self._blocked_since_s = None
         orders.cmd = (command.linear_mps, command.angular_radps)
         if not self._progress.check(pose, self.clock_s):
-            self._start_recovery(pose, NavigateErrorCode.STUCK, f"no progress for {p.progress_timeout_s:g} s", orders)
+            self._start_recovery(
+                pose, NavigateErrorCode.STUCK, f"no progress for {p.progress_timeout_s:g} s", orders
+            )
             return
         if (
             snap.now_s - self._last_plan_request_s >= p.replan_period_s
@@ -375,7 +402,12 @@ class NavigationRun:
             return
         self.recoveries += 1
         self.recovering_from_planning = code in PLANNING_FAILURES
-        log.warning("recovery %d of %d (%s): backing up, clearing, replanning", self.recoveries, p.max_recoveries, reason)
+        log.warning(
+            "recovery %d of %d (%s): backing up, clearing, replanning",
+            self.recoveries,
+            p.max_recoveries,
+            reason,
+        )
         self.generation = self._next_generation()
         self.plan = None
         self._replan_wanted = False
@@ -413,4 +445,6 @@ class NavigationRun:
         velocity = snap.velocity or snap.last_cmd
         speed = abs(velocity[0])
         eta = remaining / (speed if speed > ETA_MIN_SPEED_MPS else self.params.max_linear_vel_mps)
-        orders.feedback = NavFeedback(pose, max(0.0, snap.now_s - self.started_s), eta, self.recoveries, remaining)
+        orders.feedback = NavFeedback(
+            pose, max(0.0, snap.now_s - self.started_s), eta, self.recoveries, remaining
+        )

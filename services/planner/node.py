@@ -106,8 +106,10 @@ class _Durations:
         if not self.count:
             return "never ran"
         p99 = sorted(self.recent)[int(0.99 * (len(self.recent) - 1))]
-        return (f"{self.count} runs, mean {1000 * self.total_s / self.count:.2f} ms, "
-                f"p99 {1000 * p99:.2f} ms, max {1000 * self.max_s:.2f} ms")
+        return (
+            f"{self.count} runs, mean {1000 * self.total_s / self.count:.2f} ms, "
+            f"p99 {1000 * p99:.2f} ms, max {1000 * self.max_s:.2f} ms"
+        )
 
 
 def _result(code: NavigateErrorCode, message: str = "") -> NavigateToPoseResult:
@@ -129,9 +131,15 @@ class PlannerService:
         self._control_time = _Durations()
         self._costmap_time = _Durations()
         self._layers = CostmapUpdater(params, self._shared_track, node.log)
-        self._costmap = CostmapThread(self._layers, lambda _update_s: node.post(self._on_costmap_updated), node.log,
-                                      self._costmap_time.add)
-        self._worker = PlanningWorker(params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome))
+        self._costmap = CostmapThread(
+            self._layers,
+            lambda _update_s: node.post(self._on_costmap_updated),
+            node.log,
+            self._costmap_time.add,
+        )
+        self._worker = PlanningWorker(
+            params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome)
+        )
         self._planning_in_flight = False
         self._generations = itertools.count(1)
         self._run: NavigationRun | None = None
@@ -150,8 +158,12 @@ class PlannerService:
         node.create_subscription(TFMessage, topics.TF_STATIC, self._layers.add_mounts, QoS(depth=5))
         node.create_service(CLEAR_ENTIRE_COSTMAP, CLEAR_COSTMAPS_SERVICE, self._on_clear_costmaps)
         self._action = ActionServer(
-            node, NAVIGATE_TO_POSE, topics.NAVIGATE_TO_POSE,
-            on_goal=self._on_goal, on_accepted=self._on_accepted, on_cancel=self._on_cancel,
+            node,
+            NAVIGATE_TO_POSE,
+            topics.NAVIGATE_TO_POSE,
+            on_goal=self._on_goal,
+            on_accepted=self._on_accepted,
+            on_cancel=self._on_cancel,
             preempt_result=lambda: _result(NavigateErrorCode.PREEMPTED, "preempted by a newer goal"),
         )
         self._timers = [
@@ -160,14 +172,20 @@ class PlannerService:
         ]
         self._map_server = MapServer(node, params.map_publish_period_s, self._on_map)
         if params.costmap_publish_period_s > 0:
-            self._timers.append(node.create_timer(params.costmap_publish_period_s, self._publish_costmap, wall=True))
+            self._timers.append(
+                node.create_timer(params.costmap_publish_period_s, self._publish_costmap, wall=True)
+            )
         if occupancy is not None:
             self._map_server.set_map(occupancy, source)
         else:
-            self._log.warning("no map_yaml or world given: goals are refused until map_server/load_map loads one")
+            self._log.warning(
+                "no map_yaml or world given: goals are refused until map_server/load_map loads one"
+            )
         self._log.info(
             "navigating on %s time: control %g Hz, costmap %g Hz, replan every %g s",
-            "sim" if node.use_sim_time else "wall", params.controller_rate_hz, params.costmap_update_rate_hz,
+            "sim" if node.use_sim_time else "wall",
+            params.controller_rate_hz,
+            params.costmap_update_rate_hz,
             params.replan_period_s,
         )
 
@@ -207,7 +225,9 @@ class PlannerService:
 
     def _on_odom(self, msg: Odometry) -> None:
         twist = msg.twist.twist
-        sample = OdometrySample(msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z)
+        sample = OdometrySample(
+            msg.header.stamp.to_sec(), msg.pose.pose.to_pose2d(), twist.linear.x, twist.angular.z
+        )
         with self._shared_track.lock:
             self._tracker.add_odom(sample, self._node.now())
 
@@ -315,13 +335,17 @@ class PlannerService:
             self._costmap.change(self._layers.clear, orders.clear, orders.clear_around)
         if orders.feedback is not None and handle is not None:
             feedback = orders.feedback
-            handle.publish_feedback(NavigateToPoseFeedback(
-                current_pose=PoseStamped(Header.at(now, topics.MAP_FRAME), Pose.from_pose2d(feedback.pose)),
-                navigation_time=Duration.from_sec(feedback.navigation_time_s),
-                estimated_time_remaining=Duration.from_sec(feedback.estimated_time_remaining_s),
-                number_of_recoveries=feedback.number_of_recoveries,
-                distance_remaining=feedback.distance_remaining_m,
-            ))
+            handle.publish_feedback(
+                NavigateToPoseFeedback(
+                    current_pose=PoseStamped(
+                        Header.at(now, topics.MAP_FRAME), Pose.from_pose2d(feedback.pose)
+                    ),
+                    navigation_time=Duration.from_sec(feedback.navigation_time_s),
+                    estimated_time_remaining=Duration.from_sec(feedback.estimated_time_remaining_s),
+                    number_of_recoveries=feedback.number_of_recoveries,
+                    distance_remaining=feedback.distance_remaining_m,
+                )
+            )
         if orders.end is not None and handle is not None:
             self._run = self._handle = None
             result = _result(orders.end.code, orders.end.message)
@@ -350,8 +374,11 @@ class PlannerService:
     # --- shutdown ---------------------------------------------------------------------------------
 
     def close(self) -> None:
-        self._log.info("CPU per control tick: %s; per costmap update: %s", self._control_time.summary(),
-                       self._costmap_time.summary())
+        self._log.info(
+            "CPU per control tick: %s; per costmap update: %s",
+            self._control_time.summary(),
+            self._costmap_time.summary(),
+        )
         if self._run is not None:
             self._carry_out(self._run.abort(NavigateErrorCode.UNKNOWN, "the planner is shutting down"))
         for timer in self._timers:
@@ -363,14 +390,20 @@ class PlannerService:
 
 def _add_flags(parser: Any) -> dict[str, str]:
     parser.add_argument("--map", default=None, help="map_server YAML file (same as -p map_yaml=FILE)")
-    parser.add_argument("--world", default=None, help="world file rasterised into the map (same as -p world=FILE)")
+    parser.add_argument(
+        "--world", default=None, help="world file rasterised into the map (same as -p world=FILE)"
+    )
     return {"map": "map_yaml", "world": "world"}
 
 
-SERVICE = ServiceSpec("planner", Params, PlannerService,
-                      description="Navigation: map server, layered costmap, A* planner and regulated pure pursuit "
-                                  "behind the navigate_to_pose action.",
-                      add_flags=_add_flags)
+SERVICE = ServiceSpec(
+    "planner",
+    Params,
+    PlannerService,
+    description="Navigation: map server, layered costmap, A* planner and regulated pure pursuit "
+    "behind the navigate_to_pose action.",
+    add_flags=_add_flags,
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,68 +37,112 @@ class Params(ServiceParams):
     world: str = Field("", description="world file rasterised into the map when no map_yaml is given")
     map_resolution_m: float = Field(0.05, gt=0.0, description="cell size when rasterising the world")
     map_publish_period_s: float = Field(5.0, gt=0.0, description="republish the map this often (wall clock)")
-    costmap_publish_period_s: float = Field(1.0, ge=0.0, description="publish the costmap this often (0: never)")
+    costmap_publish_period_s: float = Field(
+        1.0, ge=0.0, description="publish the costmap this often (0: never)"
+    )
     # robot and goal
     robot_length_m: float = Field(ROBOT_LENGTH_M, gt=0.0, description="footprint length along x")
     robot_width_m: float = Field(ROBOT_WIDTH_M, gt=0.0, description="footprint width along y")
-    max_linear_vel_mps: float = Field(0.5, gt=0.0, description="top speed", json_schema_extra=runtime_settable(NEXT_GOAL))
-    max_angular_vel_radps: float = Field(1.5, gt=0.0, description="top turn rate",
-                                         json_schema_extra=runtime_settable(NEXT_GOAL))
+    max_linear_vel_mps: float = Field(
+        0.5, gt=0.0, description="top speed", json_schema_extra=runtime_settable(NEXT_GOAL)
+    )
+    max_angular_vel_radps: float = Field(
+        1.5, gt=0.0, description="top turn rate", json_schema_extra=runtime_settable(NEXT_GOAL)
+    )
     max_linear_accel_mps2: float = Field(1.0, gt=0.0)
     max_linear_decel_mps2: float = Field(1.5, gt=0.0)
     max_angular_accel_radps2: float = Field(3.0, gt=0.0)
     regulated_linear_scaling_min_radius_m: float = Field(
-        0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower")
+        0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower"
+    )
     cost_scaling_dist_m: float = Field(
-        0.4, gt=0.0, description="closer than this to an obstacle the speed falls in proportion to the distance")
+        0.4,
+        gt=0.0,
+        description="closer than this to an obstacle the speed falls in proportion to the distance",
+    )
     approach_velocity_scaling_dist_m: float = Field(
-        0.3, gt=0.0, description="over this last stretch of the path the speed falls in proportion to what is left")
+        0.3,
+        gt=0.0,
+        description="over this last stretch of the path the speed falls in proportion to what is left",
+    )
     open_loop_acceleration: bool = Field(
-        True, description="ramp from the last command (true) or from the measured twist, which lags (false)")
+        True, description="ramp from the last command (true) or from the measured twist, which lags (false)"
+    )
     xy_goal_tolerance_m: float = Field(0.05, gt=0.0)
     yaw_goal_tolerance_rad: float = Field(0.05, gt=0.0)
     trans_stopped_velocity_mps: float = Field(
-        0.05, gt=0.0, description="the goal counts as reached only when moving slower than this ...")
+        0.05, gt=0.0, description="the goal counts as reached only when moving slower than this ..."
+    )
     rot_stopped_velocity_radps: float = Field(0.1, gt=0.0, description="... and turning slower than this")
     # costmap
     inflation_radius_m: float = Field(
-        0.55, ge=0.0, description="obstacles cost this far out",
-        json_schema_extra=runtime_settable("at once: the costmap is inflated again and the next plan uses it"))
+        0.55,
+        ge=0.0,
+        description="obstacles cost this far out",
+        json_schema_extra=runtime_settable(
+            "at once: the costmap is inflated again and the next plan uses it"
+        ),
+    )
     cost_scaling_factor: float = Field(3.0, gt=0.0)
     obstacle_max_range_m: float = Field(2.5, ge=0.0, description="lidar hits further than this do not mark")
     raytrace_max_range_m: float = Field(3.0, ge=0.0, description="lidar beams clear up to this far")
-    costmap_update_rate_hz: float = Field(5.0, gt=0.0, description="sensor data folded in this often (sim time)")
-    scan_beam_stride: int = Field(1, ge=1, description="use every n-th lidar beam (2 halves the lidar's cost)")
+    costmap_update_rate_hz: float = Field(
+        5.0, gt=0.0, description="sensor data folded in this often (sim time)"
+    )
+    scan_beam_stride: int = Field(
+        1, ge=1, description="use every n-th lidar beam (2 halves the lidar's cost)"
+    )
     idle_costmap_update_rate_hz: float = Field(1.0, gt=0.0, description="the same without an active goal")
     use_range_layer: bool = Field(
-        True, description="fold the ultrasonic range into the costmap (off: glass is invisible, for experiments)")
+        True,
+        description="fold the ultrasonic range into the costmap (off: glass is invisible, for experiments)",
+    )
     glass_memory_file: str = Field(
-        "", description="keep the sonar's glass in this file across restarts (empty: forget it on exit)")
+        "", description="keep the sonar's glass in this file across restarts (empty: forget it on exit)"
+    )
     glass_suspicion_radius_m: float = Field(
-        0.3, ge=0.0, description="unlooked-at floor this close to glass the sonar heard counts as glass (0: off)")
+        0.3,
+        ge=0.0,
+        description="unlooked-at floor this close to glass the sonar heard counts as glass (0: off)",
+    )
     glass_echo_hold_s: float = Field(
-        2.0, ge=0.0, description="each unexplained sonar echo's whole arc counts as glass this long (sim "
-        "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)")
+        2.0,
+        ge=0.0,
+        description="each unexplained sonar echo's whole arc counts as glass this long (sim "
+        "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)",
+    )
     glass_trusted_range_m: float = Field(
-        2.0, gt=0.0, description="a sonar echo from this far gives the glass memory half the evidence of a near "
+        2.0,
+        gt=0.0,
+        description="a sonar echo from this far gives the glass memory half the evidence of a near "
         "one, from 0.5 m farther an eighth (Nav2's phi): a far echo's arc is wide and mostly open floor; far "
-        "glass is still held for glass_echo_hold_s")
+        "glass is still held for glass_echo_hold_s",
+    )
     glass_slowdown_radius_m: float = Field(
-        0.8, ge=0.0, description="closer than this to glass the sonar has heard ahead, the speed falls in "
-        "proportion to the distance (0: off)")
+        0.8,
+        ge=0.0,
+        description="closer than this to glass the sonar has heard ahead, the speed falls in "
+        "proportion to the distance (0: off)",
+    )
     glass_slowdown_min_speed_mps: float = Field(0.15, gt=0.0, description="... but never below this")
     lidar_mount: tuple[float, float, float] = Field(
-        (0.10, 0.0, 0.0), description="base_link -> lidar_link until tf_static says otherwise")
+        (0.10, 0.0, 0.0), description="base_link -> lidar_link until tf_static says otherwise"
+    )
     ultrasonic_mount: tuple[float, float, float] = Field(
-        (0.20, 0.0, 0.0), description="base_link -> ultrasonic_link until tf_static says otherwise")
+        (0.20, 0.0, 0.0), description="base_link -> ultrasonic_link until tf_static says otherwise"
+    )
     # planning
     cost_weight: float = Field(3.0, ge=0.0, description="how strongly inflation cost lengthens a step")
     allow_unknown: bool = False
     arrive_along_goal_heading: bool = Field(
-        True, description="a path that would arrive more than 1.6 rad off the goal's heading ends along it where "
-        "there is room, instead of turning on the spot at the goal")
+        True,
+        description="a path that would arrive more than 1.6 rad off the goal's heading ends along it where "
+        "there is room, instead of turning on the spot at the goal",
+    )
     prefer_room_to_turn: bool = Field(
-        True, description="avoid gaps only the inscribed circle fits through when a path with room to turn exists")
+        True,
+        description="avoid gaps only the inscribed circle fits through when a path with room to turn exists",
+    )
     snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
     replan_period_s: float = Field(1.0, gt=0.0, description="replan this often while following (sim time)")
     min_replan_interval_s: float = Field(0.2, ge=0.0, description="urgent replans no more often than this")
@@ -107,10 +151,16 @@ class Params(ServiceParams):
     feedback_rate_hz: float = Field(5.0, gt=0.0)
     pose_timeout_s: float = Field(0.5, gt=0.0, description="an older pose holds the robot still ...")
     carried_pose_timeout_s: float = Field(
-        2.0, gt=0.0, description="... unless fresh odometry carries it forward: then only a map pose older than this")
+        2.0,
+        gt=0.0,
+        description="... unless fresh odometry carries it forward: then only a map pose older than this",
+    )
     no_pose_timeout_s: float = Field(
-        5.0, gt=0.0, description="abort with NO_POSE after this long without one (sim and wall time)")
-    navigation_timeout_s: float = Field(0.0, ge=0.0, description="abort with TIMEOUT after this long (0: never)")
+        5.0, gt=0.0, description="abort with NO_POSE after this long without one (sim and wall time)"
+    )
+    navigation_timeout_s: float = Field(
+        0.0, ge=0.0, description="abort with TIMEOUT after this long (0: never)"
+    )
     # recovery
     progress_timeout_s: float = Field(10.0, gt=0.0, description="stuck if no progress for this long")
     required_movement_m: float = Field(0.25, gt=0.0, description="progress: move this far ...")
@@ -121,7 +171,8 @@ class Params(ServiceParams):
     backup_speed_mps: float = Field(0.1, gt=0.0)
     recovery_wait_s: float = Field(0.5, ge=0.0, description="after clearing, let the sensors refill")
     recovery_glass_clear_radius_m: float = Field(
-        1.0, gt=0.0, description="recoveries that clear glass memory forget it only this close to the robot")
+        1.0, gt=0.0, description="recoveries that clear glass memory forget it only this close to the robot"
+    )
 
     @field_validator("map_yaml")
     @classmethod
@@ -165,8 +216,11 @@ class Params(ServiceParams):
     def planner_params(self) -> GlobalPlannerParams:
         """Search and smoothing share ``cost_weight`` and ``allow_unknown`` (see GlobalPlannerParams)."""
         costmap = self.costmap_params()
-        room_to_turn = int(inflation_cost(costmap.circumscribed_radius_m, costmap.inscribed_radius_m,
-                                          costmap.cost_scaling_factor))
+        room_to_turn = int(
+            inflation_cost(
+                costmap.circumscribed_radius_m, costmap.inscribed_radius_m, costmap.cost_scaling_factor
+            )
+        )
         return GlobalPlannerParams(
             astar=self.astar_params(),
             smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),

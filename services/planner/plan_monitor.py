@@ -62,7 +62,9 @@ class ActivePlan:
 class ProgressChecker:
     """nav2 ``SimpleProgressChecker`` with rotation counted as progress (turning in place is work)."""
 
-    def __init__(self, required_movement_m: float, required_rotation_rad: float, time_allowance_s: float) -> None:
+    def __init__(
+        self, required_movement_m: float, required_rotation_rad: float, time_allowance_s: float
+    ) -> None:
         self.required_movement_m = required_movement_m
         self.required_rotation_rad = required_rotation_rad
         self.time_allowance_s = time_allowance_s

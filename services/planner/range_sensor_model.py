@@ -79,7 +79,9 @@ class RangeSensorModel:
         if not (self.range_band_m > 0.0 and self.max_log_odds > 0.0):
             raise ValueError("RangeSensorModel.range_band_m and max_log_odds must be positive")
         if not (math.isfinite(self.trusted_range_m) and self.trusted_range_m > 0.0):
-            raise ValueError(f"RangeSensorModel.trusted_range_m must be positive, got {self.trusted_range_m!r}")
+            raise ValueError(
+                f"RangeSensorModel.trusted_range_m must be positive, got {self.trusted_range_m!r}"
+            )
 
     @property
     def mark_log_odds(self) -> float:

@@ -19,7 +19,10 @@ from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, World
 
 
 def solid_grid(
-    world: World, resolution_m: float = 0.05, robot_length_m: float = ROBOT_LENGTH_M, robot_width_m: float = ROBOT_WIDTH_M
+    world: World,
+    resolution_m: float = 0.05,
+    robot_length_m: float = ROBOT_LENGTH_M,
+    robot_width_m: float = ROBOT_WIDTH_M,
 ) -> CostGrid:
     """Every surface the robot can touch (glass too), inflated to the inscribed radius only."""
     solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
@@ -44,7 +47,9 @@ def shortest_path(grid: CostGrid, start_xy: tuple[float, float], goal_xy: tuple[
     An end inside the inscribed zone (a docking pose, see :data:`END_SNAP_RADIUS_M`) is reached from the
     nearest free cell by a straight leg; the path's other points all lie in free space.
     """
-    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=END_SNAP_RADIUS_M)).plan(grid, start_xy, goal_xy)
+    found = AStarPlanner(AStarParams(cost_weight=0.0, snap_radius_m=END_SNAP_RADIUS_M)).plan(
+        grid, start_xy, goal_xy
+    )
     points = shortcut_path(grid, found.points_xy, SmoothingParams(max_cost=252, cost_weight=0.0))
     if found.goal_snapped:
         points = np.concatenate([points, np.asarray(goal_xy, dtype=float)[None, :]])

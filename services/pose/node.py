@@ -83,12 +83,19 @@ class PoseService:
         self._last_tick_s: float | None = None
         self._publisher = node.create_publisher(Float64MultiArray, topics.POSE2D, RELIABLE)
         self._tf_sub = node.create_subscription(TFMessage, topics.TF, self._on_tf, TF_QOS)
-        self._tf_static_sub = node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, TF_STATIC_QOS)
+        self._tf_static_sub = node.create_subscription(
+            TFMessage, topics.TF_STATIC, self._on_tf_static, TF_STATIC_QOS
+        )
         self._timer = node.create_timer(1.0 / params.publish_rate_hz, self._on_timer)
-        self._clock_wait_timer = node.create_timer(5.0, self._on_clock_wait, wall=True) if node.use_sim_time else None
+        self._clock_wait_timer = (
+            node.create_timer(5.0, self._on_clock_wait, wall=True) if node.use_sim_time else None
+        )
         self._log.info(
             "publishing %s -> %s as %s at %g Hz on %s time",
-            params.reference_frame, params.target_frame, self._publisher.key, params.publish_rate_hz,
+            params.reference_frame,
+            params.target_frame,
+            self._publisher.key,
+            params.publish_rate_hz,
             "sim" if node.use_sim_time else "wall",
         )
 
@@ -102,16 +109,23 @@ class PoseService:
         for item in msg.transforms:
             try:
                 reset = self._buffer.set_transform(
-                    item.header.frame_id, item.child_frame_id, item.header.stamp.to_sec(), rigid_transform(item),
+                    item.header.frame_id,
+                    item.child_frame_id,
+                    item.header.stamp.to_sec(),
+                    rigid_transform(item),
                     static=static,
                 )
             except ValueError as exc:
-                self._say.warning(f"bad:{item.header.frame_id}->{item.child_frame_id}", "ignored a transform: %s", exc)
+                self._say.warning(
+                    f"bad:{item.header.frame_id}->{item.child_frame_id}", "ignored a transform: %s", exc
+                )
                 continue
             if reset:
                 self._log.warning(
                     "transform %s -> %s went back in time to %.3f s (a reset?): cleared the tf history",
-                    item.header.frame_id, item.child_frame_id, item.header.stamp.to_sec(),
+                    item.header.frame_id,
+                    item.child_frame_id,
+                    item.header.stamp.to_sec(),
                 )
 
     def _on_timer(self) -> None:
@@ -161,8 +175,12 @@ class PoseService:
             self._clock_wait_timer.cancel()
 
 
-SERVICE = ServiceSpec("pose", Params, PoseService,
-                      description="Keeps a tf buffer and publishes the map -> target_frame pose as [x, y, yaw].")
+SERVICE = ServiceSpec(
+    "pose",
+    Params,
+    PoseService,
+    description="Keeps a tf buffer and publishes the map -> target_frame pose as [x, y, yaw].",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -108,7 +108,11 @@ class RigidTransform:
 
     def transform_point(self, point: Vec3) -> Vec3:
         moved = _rotate(self.rotation, point)
-        return (self.translation[0] + moved[0], self.translation[1] + moved[1], self.translation[2] + moved[2])
+        return (
+            self.translation[0] + moved[0],
+            self.translation[1] + moved[1],
+            self.translation[2] + moved[2],
+        )
 
     def interpolate(self, other: RigidTransform, fraction: float) -> RigidTransform:
         """Linear in translation, slerp in rotation; ``fraction`` 0 gives self, 1 gives other."""
@@ -211,7 +215,13 @@ class TfBuffer:
     # --- feeding ---------------------------------------------------------------------------------
 
     def set_transform(
-        self, parent_frame: str, child_frame: str, stamp_s: float, transform: RigidTransform, *, static: bool = False
+        self,
+        parent_frame: str,
+        child_frame: str,
+        stamp_s: float,
+        transform: RigidTransform,
+        *,
+        static: bool = False,
     ) -> bool:
         """Add one transform (``parent -> child`` at ``stamp_s``). Returns True if it reset the dynamic history.
 
@@ -285,7 +295,9 @@ class TfBuffer:
             time_s = self._latest_common_time(up_from_source + up_from_target)
         ancestor_from_source = self._compose_up(up_from_source, time_s)
         ancestor_from_target = self._compose_up(up_from_target, time_s)
-        return StampedTransform(target, source, time_s, ancestor_from_target.inverse().compose(ancestor_from_source))
+        return StampedTransform(
+            target, source, time_s, ancestor_from_target.inverse().compose(ancestor_from_source)
+        )
 
     # --- internals -------------------------------------------------------------------------------
 
@@ -296,7 +308,9 @@ class TfBuffer:
         link = self._links.get(frame)
         while link is not None:
             if link.parent in seen:
-                raise ConnectivityError(f"the frame tree has a loop through {link.parent}: {' -> '.join(chain)}")
+                raise ConnectivityError(
+                    f"the frame tree has a loop through {link.parent}: {' -> '.join(chain)}"
+                )
             chain.append(link.parent)
             seen.add(link.parent)
             link = self._links.get(link.parent)

@@ -50,11 +50,16 @@ class RelayedAction:
 
 def _relayed(action: bridge_routes.BridgedAction) -> RelayedAction:
     parts = interfaces.action_parts(action.ros_type)
-    return RelayedAction(action.name, action.ros_type, action.owner, (
-        RelayedService("send_goal", parts["send_goal"], action.zendock.send_goal, REQUEST_WAIT_S),
-        RelayedService("cancel_goal", parts["cancel_goal"], CANCEL_GOAL, REQUEST_WAIT_S),
-        RelayedService("get_result", parts["get_result"], action.zendock.get_result, RESULT_WAIT_S),
-    ))
+    return RelayedAction(
+        action.name,
+        action.ros_type,
+        action.owner,
+        (
+            RelayedService("send_goal", parts["send_goal"], action.zendock.send_goal, REQUEST_WAIT_S),
+            RelayedService("cancel_goal", parts["cancel_goal"], CANCEL_GOAL, REQUEST_WAIT_S),
+            RelayedService("get_result", parts["get_result"], action.zendock.get_result, RESULT_WAIT_S),
+        ),
+    )
 
 
 #: zendock's actions (:data:`shared.ros2.bridge_routes.ACTIONS`) as rmw_zenoh's services.
@@ -64,8 +69,15 @@ ACTIONS: tuple[RelayedAction, ...] = tuple(_relayed(action) for action in bridge
 class ActionRelay:
     """Serves one ROS 2 action's services by asking zendock's server of the same name."""
 
-    def __init__(self, node: Node, action: RelayedAction, domain_id: int, ros_name: str,
-                 refuse: Callable[..., None], count: Callable[[str], None]) -> None:
+    def __init__(
+        self,
+        node: Node,
+        action: RelayedAction,
+        domain_id: int,
+        ros_name: str,
+        refuse: Callable[..., None],
+        count: Callable[[str], None],
+    ) -> None:
         self.node = node
         self.action = action
         self.ros_name = ros_name
@@ -73,10 +85,16 @@ class ActionRelay:
         self._count = count
         self._queryables: list[Any] = []
         for service in action.services:
-            key = data_key(domain_id, f"{ros_name}/_action/{service.part}", service.ros_type,
-                           ros_types.type_hash(service.ros_type))
+            key = data_key(
+                domain_id,
+                f"{ros_name}/_action/{service.part}",
+                service.ros_type,
+                ros_types.type_hash(service.ros_type),
+            )
             # complete: rmw_zenoh clients ask with target ALL_COMPLETE, as for any service
-            self._queryables.append(node.session.declare_queryable(key, self._handler(service), complete=True))
+            self._queryables.append(
+                node.session.declare_queryable(key, self._handler(service), complete=True)
+            )
 
     def _handler(self, service: RelayedService) -> Callable[[zenoh.Query], None]:
         def on_query(query: zenoh.Query) -> None:
@@ -92,7 +110,11 @@ class ActionRelay:
         try:
             caller = Attachment.decode(attachment)
         except ValueError as exc:
-            self._fail(query, f"action-attachment-{service.part}", f"{where}: a request needs rmw_zenoh's attachment ({exc})")
+            self._fail(
+                query,
+                f"action-attachment-{service.part}",
+                f"{where}: a request needs rmw_zenoh's attachment ({exc})",
+            )
             return
         request_type, response_type = interfaces.service_parts(service.ros_type)
         try:
@@ -103,7 +125,11 @@ class ActionRelay:
         self._count(f"action {where}")
 
         def answered(response: Any, error: ServiceError | None) -> None:
-            if service.part == "send_goal" and error is not None and not isinstance(error, ServiceUnavailable):
+            if (
+                service.part == "send_goal"
+                and error is not None
+                and not isinstance(error, ServiceUnavailable)
+            ):
                 # The server answered but would not take the goal (e.g. a bad max_staging_time): to ROS 2
                 # that is a rejected goal, what ``ros2 action send_goal`` reports as "Goal was rejected".
                 self._refuse(f"action-rejected-{service.part}", "%s: goal rejected: %s", where, error)
@@ -117,13 +143,17 @@ class ActionRelay:
                 self._fail(query, f"action-response-{service.part}", f"{where}: {exc}")
                 return
             try:
-                query.reply(query.key_expr, reply,
-                            attachment=Attachment(caller.sequence_number, time.time_ns(), caller.gid).encode())
+                query.reply(
+                    query.key_expr,
+                    reply,
+                    attachment=Attachment(caller.sequence_number, time.time_ns(), caller.gid).encode(),
+                )
             finally:
                 query.drop()
 
-        self.node.call_async(service.zendock, action_key(self.action.name, service.part), request, answered,
-                             service.wait_s)
+        self.node.call_async(
+            service.zendock, action_key(self.action.name, service.part), request, answered, service.wait_s
+        )
 
     def _fail(self, query: zenoh.Query, kind: str, reason: str) -> None:
         self._refuse(kind, "%s", reason)

@@ -46,7 +46,10 @@ class PeerSubscriptions:
         if len(parts) < 6 or parts[5] != EntityKind.SUBSCRIPTION:
             return None
         endpoint = parse_endpoint_token(token_key)
-        if (endpoint.kind is not EntityKind.SUBSCRIPTION or endpoint.node.session_id == self.own_session_id
-                or endpoint.node.domain_id != self.domain_id):
+        if (
+            endpoint.kind is not EntityKind.SUBSCRIPTION
+            or endpoint.node.session_id == self.own_session_id
+            or endpoint.node.domain_id != self.domain_id
+        ):
             return None
         return endpoint

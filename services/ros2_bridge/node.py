@@ -82,10 +82,17 @@ FIRST_SEQUENCE_NUMBER = 1
 class Params(ServiceParams):
     """Parameters of ``python -m services.ros2_bridge``."""
 
-    domain_id: int = Field(default_factory=default_domain_id, ge=0, le=232,
-                           description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
-    ros_namespace: str = Field("/", description="ROS 2 namespace the zendock robot's topics and nodes appear "
-                                                "in, in rcl's canonical form (/ or /robot)")
+    domain_id: int = Field(
+        default_factory=default_domain_id,
+        ge=0,
+        le=232,
+        description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)",
+    )
+    ros_namespace: str = Field(
+        "/",
+        description="ROS 2 namespace the zendock robot's topics and nodes appear "
+        "in, in rcl's canonical form (/ or /robot)",
+    )
 
     @field_validator("ros_namespace")
     @classmethod
@@ -131,25 +138,43 @@ class Ros2Bridge:
         self.actions = [self._open_action(action) for action in ACTIONS]
         # zendock's services, past and future: which of them ROS 2 sees.
         self._services_watch = self.session.liveliness().declare_subscriber(
-            node_token_key(node.namespace, "*"), self._on_service_token, history=True)
+            node_token_key(node.namespace, "*"), self._on_service_token, history=True
+        )
         # Peers' subscriptions, past and future: what to forward.
         self._graph_watch = self.session.liveliness().declare_subscriber(
-            f"{ADMIN_SPACE}/{params.domain_id}/**", self._on_graph_token, history=True)
+            f"{ADMIN_SPACE}/{params.domain_id}/**", self._on_graph_token, history=True
+        )
         node.create_timer(STATS_PERIOD_S, self._report_stats, wall=True)
-        node.log.info("ROS 2 domain %d, namespace %s: %d topics out, %d in, %d actions, session %s",
-                      params.domain_id, params.ros_namespace, len(OUTBOUND), len(INBOUND), len(ACTIONS),
-                      self.session_id)
+        node.log.info(
+            "ROS 2 domain %d, namespace %s: %d topics out, %d in, %d actions, session %s",
+            params.domain_id,
+            params.ros_namespace,
+            len(OUTBOUND),
+            len(INBOUND),
+            len(ACTIONS),
+            self.session_id,
+        )
 
     # --- the graph zendock shows to ROS 2 ---------------------------------------------------------
 
     def _graph_nodes(self) -> dict[str, GraphNode]:
-        owners = [BRIDGE_NODE, *(r.owner for r in OUTBOUND), *(i.owner for i in INBOUND), *(a.owner for a in ACTIONS)]
-        return {name: GraphNode(self.params.domain_id, self.session_id, i, name, self.params.ros_namespace)
-                for i, name in enumerate(dict.fromkeys(owners))}
+        owners = [
+            BRIDGE_NODE,
+            *(r.owner for r in OUTBOUND),
+            *(i.owner for i in INBOUND),
+            *(a.owner for a in ACTIONS),
+        ]
+        return {
+            name: GraphNode(self.params.domain_id, self.session_id, i, name, self.params.ros_namespace)
+            for i, name in enumerate(dict.fromkeys(owners))
+        }
 
-    def _declare_endpoint(self, owner: str, kind: EntityKind, topic: str, ros_type: str, type_hash: str,
-                          qos: QosProfile) -> Endpoint:
-        endpoint = Endpoint(self.graph.nodes[owner], next(self._entity_ids), kind, topic, ros_type, type_hash, qos)
+    def _declare_endpoint(
+        self, owner: str, kind: EntityKind, topic: str, ros_type: str, type_hash: str, qos: QosProfile
+    ) -> Endpoint:
+        endpoint = Endpoint(
+            self.graph.nodes[owner], next(self._entity_ids), kind, topic, ros_type, type_hash, qos
+        )
         self.graph.add(endpoint)
         return endpoint
 
@@ -172,17 +197,22 @@ class Ros2Bridge:
     def _open_outlet(self, route: Route) -> None:
         topic = self.ros_topic(route.ros_topic)
         type_hash = ros_types.type_hash(route.ros_type)
-        endpoint = self._declare_endpoint(route.owner, EntityKind.PUBLISHER, topic, route.ros_type, type_hash,
-                                          route.qos)
+        endpoint = self._declare_endpoint(
+            route.owner, EntityKind.PUBLISHER, topic, route.ros_type, type_hash, route.qos
+        )
         best_effort = route.qos.reliability is Reliability.BEST_EFFORT
         key = data_key(self.params.domain_id, topic, route.ros_type, type_hash)
         options: dict[str, Any] = {
             "reliability": zenoh.Reliability.BEST_EFFORT if best_effort else zenoh.Reliability.RELIABLE,
-            "congestion_control": zenoh.CongestionControl.DROP if best_effort else zenoh.CongestionControl.BLOCK,
+            "congestion_control": zenoh.CongestionControl.DROP
+            if best_effort
+            else zenoh.CongestionControl.BLOCK,
         }
         publisher: zenoh.Publisher | zenoh.ext.AdvancedPublisher
         if route.latched:
-            publisher = zenoh.ext.declare_advanced_publisher(self.session, key, **options, **_transient_local(route.qos))
+            publisher = zenoh.ext.declare_advanced_publisher(
+                self.session, key, **options, **_transient_local(route.qos)
+            )
         else:
             publisher = self.session.declare_publisher(key, **options)
         outlet = _Outlet(route, topic, type_hash, publisher, entity_gid(endpoint.token_key()))
@@ -193,7 +223,8 @@ class Ros2Bridge:
     def _feed(self, outlet: _Outlet) -> None:
         qos = SENSOR_DATA if outlet.route.qos.reliability is Reliability.BEST_EFFORT else QoS(depth=10)
         outlet.feed = self.node.create_subscription(
-            outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos)
+            outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos
+        )
 
     def _forward(self, outlet: _Outlet, msg: Any) -> None:
         # A transient-local publisher's cache must hold the last messages before anyone asks for them.
@@ -229,8 +260,11 @@ class Ros2Bridge:
         wanted = self.peers.wanted(outlet.topic)
         if wanted and outlet.feed is None:
             self._feed(outlet)
-            self.node.log.info("a ROS 2 node subscribes to %s: forwarding %s", outlet.topic,
-                               self.node.key(outlet.route.zendock_topic))
+            self.node.log.info(
+                "a ROS 2 node subscribes to %s: forwarding %s",
+                outlet.topic,
+                self.node.key(outlet.route.zendock_topic),
+            )
         elif not wanted and outlet.feed is not None and not outlet.route.latched:
             outlet.feed.undeclare()
             outlet.feed = None
@@ -238,9 +272,17 @@ class Ros2Bridge:
 
     def _check_type(self, outlet: _Outlet, endpoint: Endpoint) -> None:
         if endpoint.ros_type != outlet.route.ros_type or endpoint.type_hash != outlet.type_hash:
-            self._refuse("type-mismatch", "node %s subscribes to %s as %s (%s); zendock publishes %s (%s): "
-                         "their samples will not match", endpoint.node.name, outlet.topic, endpoint.ros_type,
-                         endpoint.type_hash, outlet.route.ros_type, outlet.type_hash)
+            self._refuse(
+                "type-mismatch",
+                "node %s subscribes to %s as %s (%s); zendock publishes %s (%s): "
+                "their samples will not match",
+                endpoint.node.name,
+                outlet.topic,
+                endpoint.ros_type,
+                endpoint.type_hash,
+                outlet.route.ros_type,
+                outlet.type_hash,
+            )
 
     # --- ROS 2 -> zendock -------------------------------------------------------------------------
 
@@ -250,8 +292,9 @@ class Ros2Bridge:
         topic = self.ros_topic(ros_topic)
         by_dds_type = {dds_type_name(i.ros_type): (i, ros_types.type_hash(i.ros_type)) for i in accepted}
         for inbound, type_hash in by_dds_type.values():
-            self._declare_endpoint(inbound.owner, EntityKind.SUBSCRIPTION, topic, inbound.ros_type, type_hash,
-                                   ROS_RELIABLE)
+            self._declare_endpoint(
+                inbound.owner, EntityKind.SUBSCRIPTION, topic, inbound.ros_type, type_hash, ROS_RELIABLE
+            )
 
         def on_sample(sample: zenoh.Sample) -> None:
             self.node.post(self._receive, topic, by_dds_type, str(sample.key_expr), sample.payload.to_bytes())
@@ -259,16 +302,29 @@ class Ros2Bridge:
         key = f"{self.params.domain_id}/{topic.strip('/')}/*/*"
         self._subscribers.append(self.session.declare_subscriber(key, on_sample))
 
-    def _receive(self, topic: str, by_dds_type: dict[str, tuple[Inbound, str]], key: str, payload: bytes) -> None:
+    def _receive(
+        self, topic: str, by_dds_type: dict[str, tuple[Inbound, str]], key: str, payload: bytes
+    ) -> None:
         dds_type, sent_hash = key.rsplit("/", 2)[-2:]
         if dds_type not in by_dds_type:
-            self._refuse(f"type-{topic}", "refused %s as %s: zendock takes %s there", topic, dds_type,
-                         " or ".join(i.ros_type for i, _ in by_dds_type.values()))
+            self._refuse(
+                f"type-{topic}",
+                "refused %s as %s: zendock takes %s there",
+                topic,
+                dds_type,
+                " or ".join(i.ros_type for i, _ in by_dds_type.values()),
+            )
             return
         inbound, type_hash = by_dds_type[dds_type]
         if sent_hash != type_hash:
-            self._refuse(f"hash-{topic}", "refused %s: type hash %s is not Jazzy's %s for %s", topic, sent_hash,
-                         type_hash, inbound.ros_type)
+            self._refuse(
+                f"hash-{topic}",
+                "refused %s: type hash %s is not Jazzy's %s for %s",
+                topic,
+                sent_hash,
+                type_hash,
+                inbound.ros_type,
+            )
             return
         try:
             ros_msg = ros_types.from_cdr(payload, inbound.ros_type)
@@ -289,8 +345,14 @@ class Ros2Bridge:
     def _open_action(self, action: Any) -> ActionRelay:
         name = self.ros_topic(action.name)
         for service in action.services:
-            self._declare_endpoint(action.owner, EntityKind.SERVICE, f"{name}/_action/{service.part}",
-                                   service.ros_type, ros_types.type_hash(service.ros_type), ROS_RELIABLE)
+            self._declare_endpoint(
+                action.owner,
+                EntityKind.SERVICE,
+                f"{name}/_action/{service.part}",
+                service.ros_type,
+                ros_types.type_hash(service.ros_type),
+                ROS_RELIABLE,
+            )
         return ActionRelay(self.node, action, self.params.domain_id, name, self._refuse, self._count)
 
     def _count(self, what: str) -> None:
@@ -325,13 +387,18 @@ def _transient_local(qos: QosProfile) -> dict[str, Any]:
     under ``@adv/pub`` so late subscribers detect the publisher, and, when reliable, sporadic heartbeats."""
     options: dict[str, Any] = {"cache": zenoh.ext.CacheConfig(qos.depth), "publisher_detection": True}
     if qos.reliability is Reliability.RELIABLE:
-        options["sample_miss_detection"] = zenoh.ext.MissDetectionConfig(heartbeat=None,
-                                                                          sporadic_heartbeat=HEARTBEAT_PERIOD_S)
+        options["sample_miss_detection"] = zenoh.ext.MissDetectionConfig(
+            heartbeat=None, sporadic_heartbeat=HEARTBEAT_PERIOD_S
+        )
     return options
 
 
-SERVICE = ServiceSpec("ros2_bridge", Params, Ros2Bridge,
-                      description="zendock ROS 2 bridge: zendock's keys on rmw_zenoh's wire (ROS 2 Jazzy)")
+SERVICE = ServiceSpec(
+    "ros2_bridge",
+    Params,
+    Ros2Bridge,
+    description="zendock ROS 2 bridge: zendock's keys on rmw_zenoh's wire (ROS 2 Jazzy)",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

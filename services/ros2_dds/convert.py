@@ -27,14 +27,26 @@ from shared.schema import Message, MessageError
 
 #: rosidl's primitive names -> (array.array typecode, numpy dtype).
 _PRIMITIVES: dict[str, tuple[str, Any]] = {
-    "boolean": ("", np.bool_), "octet": ("B", np.uint8), "char": ("B", np.uint8),
-    "int8": ("b", np.int8), "uint8": ("B", np.uint8), "int16": ("h", np.int16), "uint16": ("H", np.uint16),
-    "int32": ("i", np.int32), "uint32": ("I", np.uint32), "int64": ("q", np.int64), "uint64": ("Q", np.uint64),
-    "float": ("f", np.float32), "double": ("d", np.float64),
+    "boolean": ("", np.bool_),
+    "octet": ("B", np.uint8),
+    "char": ("B", np.uint8),
+    "int8": ("b", np.int8),
+    "uint8": ("B", np.uint8),
+    "int16": ("h", np.int16),
+    "uint16": ("H", np.uint16),
+    "int32": ("i", np.int32),
+    "uint32": ("I", np.uint32),
+    "int64": ("q", np.int64),
+    "uint64": ("Q", np.uint64),
+    "float": ("f", np.float32),
+    "double": ("d", np.float64),
 }
 _FLOATS = {"float", "double"}
-_BOUNDS = {name: (int(np.iinfo(dtype).min), int(np.iinfo(dtype).max))
-           for name, (_, dtype) in _PRIMITIVES.items() if name != "boolean" and name not in _FLOATS}
+_BOUNDS = {
+    name: (int(np.iinfo(dtype).min), int(np.iinfo(dtype).max))
+    for name, (_, dtype) in _PRIMITIVES.items()
+    if name != "boolean" and name not in _FLOATS
+}
 _STRINGS = re.compile(r"^w?string(<=\d+)?$")
 _SEQUENCE = re.compile(r"^sequence<(.+?)(?:, ?\d+)?>$")
 _ARRAY = re.compile(r"^(.+)\[(\d+)\]$")
@@ -76,7 +88,9 @@ def to_ros(msg: Any, cls: type) -> Any:
     except ConversionError:
         raise
     except (AssertionError, TypeError, ValueError, OverflowError, AttributeError) as exc:
-        raise ConversionError(f"{type(msg).__name__} does not fit {cls.__name__}: {exc or type(exc).__name__}") from None
+        raise ConversionError(
+            f"{type(msg).__name__} does not fit {cls.__name__}: {exc or type(exc).__name__}"
+        ) from None
 
 
 def _to_ros(msg: Any, cls: type, path: str) -> Any:
@@ -93,7 +107,9 @@ def _to_ros(msg: Any, cls: type, path: str) -> Any:
         except ConversionError:
             raise
         except (AssertionError, TypeError, ValueError, OverflowError) as exc:
-            raise ConversionError(f"{cls.__name__}.{where} ({ros_type}): {exc or 'refused by rclpy'}") from None
+            raise ConversionError(
+                f"{cls.__name__}.{where} ({ros_type}): {exc or 'refused by rclpy'}"
+            ) from None
     return out
 
 
@@ -144,7 +160,9 @@ def from_ros(ros_msg: Any, zendock_type: type[Message]) -> Any:
     except MessageError as exc:
         raise ConversionError(str(exc)) from None
     except (TypeError, ValueError, AttributeError) as exc:
-        raise ConversionError(f"{type(ros_msg).__name__} does not fit {zendock_type.__name__}: {exc}") from None
+        raise ConversionError(
+            f"{type(ros_msg).__name__} does not fit {zendock_type.__name__}: {exc}"
+        ) from None
 
 
 def _carried(ros_msg: Any, zendock_type: type[Message]) -> dict[str, Any]:

@@ -68,30 +68,45 @@ FACE_NODE = "ros2_dds"
 ACCEPT_WAIT_S = 10.0
 EXECUTOR_THREADS = 8
 #: The zendock services shown as ROS 2 nodes (every owner in the tables).
-OWNERS: tuple[str, ...] = tuple(dict.fromkeys(
-    [r.owner for r in TOPICS] + [i.owner for i in INBOUND] + [a.owner for a in ACTIONS]))
+OWNERS: tuple[str, ...] = tuple(
+    dict.fromkeys([r.owner for r in TOPICS] + [i.owner for i in INBOUND] + [a.owner for a in ACTIONS])
+)
 
 
 class Params(ServiceParams):
     """Parameters of ``python -m services.ros2_dds``."""
 
-    domain_id: int = Field(default_factory=default_domain_id, ge=0, le=232,
-                           description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
+    domain_id: int = Field(
+        default_factory=default_domain_id,
+        ge=0,
+        le=232,
+        description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)",
+    )
     discovery_range: Literal["LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT"] = Field(
-        "LOCALHOST", description="ROS_AUTOMATIC_DISCOVERY_RANGE of the rclpy context (default: loopback only)")
-    demand_poll_s: float = Field(0.2, gt=0.0, le=5.0,
-                                 description="how often the ROS 2 subscription count of each topic is read")
+        "LOCALHOST", description="ROS_AUTOMATIC_DISCOVERY_RANGE of the rclpy context (default: loopback only)"
+    )
+    demand_poll_s: float = Field(
+        0.2, gt=0.0, le=5.0, description="how often the ROS 2 subscription count of each topic is read"
+    )
 
 
 def rclpy_qos(profile: QosProfile) -> Any:
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415
 
     return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST, depth=profile.depth,
-        reliability=(ReliabilityPolicy.BEST_EFFORT if profile.reliability is Reliability.BEST_EFFORT
-                     else ReliabilityPolicy.RELIABLE),
-        durability=(DurabilityPolicy.TRANSIENT_LOCAL if profile.durability is Durability.TRANSIENT_LOCAL
-                    else DurabilityPolicy.VOLATILE))
+        history=HistoryPolicy.KEEP_LAST,
+        depth=profile.depth,
+        reliability=(
+            ReliabilityPolicy.BEST_EFFORT
+            if profile.reliability is Reliability.BEST_EFFORT
+            else ReliabilityPolicy.RELIABLE
+        ),
+        durability=(
+            DurabilityPolicy.TRANSIENT_LOCAL
+            if profile.durability is Durability.TRANSIENT_LOCAL
+            else DurabilityPolicy.VOLATILE
+        ),
+    )
 
 
 @dataclass
@@ -157,7 +172,8 @@ class Ros2Dds:
         # --- zendock side
         self._commands = RosCommands(node, self._refuse, self._navigate)
         self.clients: dict[str, ActionClient[Any, Any, Any]] = {
-            a.name: ActionClient(node, a.zendock, a.name) for a in ACTIONS}
+            a.name: ActionClient(node, a.zendock, a.name) for a in ACTIONS
+        }
         self.outlets = [_Outlet(route, ros_class(route.ros_type)) for route in TOPICS]
         for outlet in self.outlets:
             if outlet.route.latched:
@@ -166,21 +182,30 @@ class Ros2Dds:
         self._relays: dict[int, _Relay] = {}  # id(ROS goal message) -> relay, until execute takes it
         self._active: list[_Relay] = []
         self._services_watch = node.session.liveliness().declare_subscriber(
-            node_token_key(node.namespace, "*"), self._on_service_token, history=True)
+            node_token_key(node.namespace, "*"), self._on_service_token, history=True
+        )
         node.create_timer(params.demand_poll_s, self._poll_demand, wall=True)
         node.create_timer(STATS_PERIOD_S, self._report_stats, wall=True)
-        node.log.info("ROS 2 domain %d (rclpy, %s, discovery %s): %d topics out, %d in, %d actions",
-                      params.domain_id, os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp"),
-                      params.discovery_range, len(TOPICS), len(INBOUND), len(ACTIONS))
+        node.log.info(
+            "ROS 2 domain %d (rclpy, %s, discovery %s): %d topics out, %d in, %d actions",
+            params.domain_id,
+            os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp"),
+            params.discovery_range,
+            len(TOPICS),
+            len(INBOUND),
+            len(ACTIONS),
+        )
 
     def _participant(self, threads: int) -> int:
         """A new rclpy context (a DDS participant) with its executor spinning on a thread; its index."""
         context = self._rclpy.Context()
-        self._rclpy.init(context=context, domain_id=self.params.domain_id,
-                         signal_handler_options=self._signal_options)
+        self._rclpy.init(
+            context=context, domain_id=self.params.domain_id, signal_handler_options=self._signal_options
+        )
         executor = self._executor_class(num_threads=threads, context=context)
-        thread = threading.Thread(target=self._spin, args=(executor,), daemon=True,
-                                  name=f"rclpy-executor-{len(self.contexts)}")
+        thread = threading.Thread(
+            target=self._spin, args=(executor,), daemon=True, name=f"rclpy-executor-{len(self.contexts)}"
+        )
         self.contexts.append(context)
         self.executors.append(executor)
         self._threads.append(thread)
@@ -197,8 +222,12 @@ class Ros2Dds:
             except Exception as exc:
                 if self._closing:
                     return
-                self._say.warning("rclpy-callback", "an rclpy callback failed (spinning on): %s: %s",
-                                  type(exc).__name__, exc)
+                self._say.warning(
+                    "rclpy-callback",
+                    "an rclpy callback failed (spinning on): %s: %s",
+                    type(exc).__name__,
+                    exc,
+                )
 
     # --- the graph: a node per zendock service that is up --------------------------------------------
 
@@ -227,25 +256,38 @@ class Ros2Dds:
             group = ReentrantCallbackGroup()
             for outlet in self.outlets:
                 if outlet.route.owner == owner:
-                    outlet.publisher = rnode.create_publisher(outlet.ros_class, outlet.route.ros_topic,
-                                                              rclpy_qos(outlet.route.qos))
+                    outlet.publisher = rnode.create_publisher(
+                        outlet.ros_class, outlet.route.ros_topic, rclpy_qos(outlet.route.qos)
+                    )
                     if outlet.last is not None:
                         outlet.publisher.publish(outlet.last)
             for inbound in INBOUND:
                 if inbound.owner == owner and inbound.ros_type != TWIST_STAMPED:  # that one: _poll_stamped
-                    rnode.create_subscription(ros_class(inbound.ros_type), inbound.ros_topic,
-                                              self._inlet(inbound), rclpy_qos(QosProfile()), callback_group=group)
+                    rnode.create_subscription(
+                        ros_class(inbound.ros_type),
+                        inbound.ros_topic,
+                        self._inlet(inbound),
+                        rclpy_qos(QosProfile()),
+                        callback_group=group,
+                    )
             for action in ACTIONS:
                 if action.owner != owner:
                     continue
-                face.action_servers.append(ActionServer(
-                    rnode, ros_class(action.ros_type), action.name,
-                    execute_callback=lambda handle, a=action: self._execute(a, handle),
-                    goal_callback=lambda goal, a=action: (GoalResponse.ACCEPT if self._accept(a, goal)
-                                                          else GoalResponse.REJECT),
-                    cancel_callback=lambda handle, a=action: (CancelResponse.ACCEPT if self._cancel(a, handle)
-                                                              else CancelResponse.REJECT),
-                    callback_group=group))
+                face.action_servers.append(
+                    ActionServer(
+                        rnode,
+                        ros_class(action.ros_type),
+                        action.name,
+                        execute_callback=lambda handle, a=action: self._execute(a, handle),
+                        goal_callback=lambda goal, a=action: (
+                            GoalResponse.ACCEPT if self._accept(a, goal) else GoalResponse.REJECT
+                        ),
+                        cancel_callback=lambda handle, a=action: (
+                            CancelResponse.ACCEPT if self._cancel(a, handle) else CancelResponse.REJECT
+                        ),
+                        callback_group=group,
+                    )
+                )
             self.executors[0].add_node(rnode)
             self.faces[owner] = face
 
@@ -262,7 +304,10 @@ class Ros2Dds:
                         outlet.feed = None
             for server in face.action_servers:
                 server.destroy()
-            for executor, rnode in [(self.executors[0], face.node), *((self.executors[-1], e) for e in face.extra)]:
+            for executor, rnode in [
+                (self.executors[0], face.node),
+                *((self.executors[-1], e) for e in face.extra),
+            ]:
                 executor.remove_node(rnode)
                 rnode.destroy_node()
 
@@ -277,13 +322,17 @@ class Ros2Dds:
                 wanted = outlet.publisher is not None and outlet.publisher.get_subscription_count() > 0
                 if wanted and outlet.feed is None:
                     self._feed(outlet)
-                    self.node.log.info("a ROS 2 node subscribes to /%s: forwarding %s", outlet.route.ros_topic,
-                                       self.node.key(outlet.route.zendock_topic))
+                    self.node.log.info(
+                        "a ROS 2 node subscribes to /%s: forwarding %s",
+                        outlet.route.ros_topic,
+                        self.node.key(outlet.route.zendock_topic),
+                    )
                 elif not wanted and outlet.feed is not None:
                     outlet.feed.undeclare()
                     outlet.feed = None
-                    self.node.log.info("no ROS 2 subscription to /%s left: no longer forwarding it",
-                                       outlet.route.ros_topic)
+                    self.node.log.info(
+                        "no ROS 2 subscription to /%s left: no longer forwarding it", outlet.route.ros_topic
+                    )
 
     def _poll_stamped(self) -> None:
         """/cmd_vel as TwistStamped, once a ROS 2 node publishes it so: a DDS participant cannot have a topic
@@ -299,24 +348,34 @@ class Ros2Dds:
                 if len(self.contexts) < 2:  # made the first time it is needed: a participant costs
                     self._participant(2)
                 extra = self._rclpy.create_node(f"{inbound.owner}_twist_stamped", context=self.contexts[1])
-                extra.create_subscription(ros_class(inbound.ros_type), inbound.ros_topic, self._inlet(inbound),
-                                          rclpy_qos(QosProfile()))
+                extra.create_subscription(
+                    ros_class(inbound.ros_type),
+                    inbound.ros_topic,
+                    self._inlet(inbound),
+                    rclpy_qos(QosProfile()),
+                )
                 face.extra.append(extra)
                 self.executors[1].add_node(extra)
-            self.node.log.info("a ROS 2 node publishes /%s as %s: taking it too", inbound.ros_topic,
-                               inbound.ros_type)
+            self.node.log.info(
+                "a ROS 2 node publishes /%s as %s: taking it too", inbound.ros_topic, inbound.ros_type
+            )
 
     def _feed(self, outlet: _Outlet) -> None:
         qos = SENSOR_DATA if outlet.route.qos.reliability is Reliability.BEST_EFFORT else QoS(depth=10)
         outlet.feed = self.node.create_subscription(
-            outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos)
+            outlet.route.zendock_type, outlet.route.zendock_topic, lambda msg: self._forward(outlet, msg), qos
+        )
 
     def _forward(self, outlet: _Outlet, msg: Any) -> None:
         try:
             ros_msg = to_ros(msg, outlet.ros_class)
         except ConversionError as exc:
-            self._refuse(f"encode-{outlet.route.ros_topic}", "could not put /%s on ROS 2: %s",
-                         outlet.route.ros_topic, exc)
+            self._refuse(
+                f"encode-{outlet.route.ros_topic}",
+                "could not put /%s on ROS 2: %s",
+                outlet.route.ros_topic,
+                exc,
+            )
             return
         with self._lock:
             if outlet.route.latched:
@@ -325,9 +384,15 @@ class Ros2Dds:
                 return
             try:
                 outlet.publisher.publish(ros_msg)
-            except Exception as exc:  # rclpy's C conversion of a value convert did not catch: refused, not fatal
-                self._refuse(f"publish-{outlet.route.ros_topic}", "could not publish /%s: %s",
-                             outlet.route.ros_topic, exc)
+            except (
+                Exception
+            ) as exc:  # rclpy's C conversion of a value convert did not catch: refused, not fatal
+                self._refuse(
+                    f"publish-{outlet.route.ros_topic}",
+                    "could not publish /%s: %s",
+                    outlet.route.ros_topic,
+                    exc,
+                )
                 return
         self._count(f"out /{outlet.route.ros_topic}")
 
@@ -368,8 +433,12 @@ class Ros2Dds:
         sent = threading.Event()
 
         def send() -> None:
-            relay.zendock_goal = client.send_goal(goal, on_feedback=lambda fb: self._feedback(relay, fb),
-                                                  on_done=lambda _h: relay.done.set(), timeout_s=ACCEPT_WAIT_S)
+            relay.zendock_goal = client.send_goal(
+                goal,
+                on_feedback=lambda fb: self._feedback(relay, fb),
+                on_done=lambda _h: relay.done.set(),
+                timeout_s=ACCEPT_WAIT_S,
+            )
             sent.set()
 
         self.node.post(send)
@@ -384,8 +453,12 @@ class Ros2Dds:
                     break
             time.sleep(0.002)
         else:
-            self._refuse(f"goal-timeout-{action.name}", "%s: zendock's server did not answer a goal in %.0f s",
-                         action.name, ACCEPT_WAIT_S)
+            self._refuse(
+                f"goal-timeout-{action.name}",
+                "%s: zendock's server did not answer a goal in %.0f s",
+                action.name,
+                ACCEPT_WAIT_S,
+            )
             return False
         if not accepted:
             self._refuse(f"goal-rejected-{action.name}", "%s: goal rejected: %s", action.name, why)
@@ -400,8 +473,12 @@ class Ros2Dds:
         try:
             ros_feedback = to_ros(feedback, ros_class(f"{relay.action.ros_type}_Feedback"))
         except ConversionError as exc:
-            self._refuse(f"feedback-{relay.action.name}", "could not put %s feedback on ROS 2: %s",
-                         relay.action.name, exc)
+            self._refuse(
+                f"feedback-{relay.action.name}",
+                "could not put %s feedback on ROS 2: %s",
+                relay.action.name,
+                exc,
+            )
             return
         with relay.lock:
             if relay.ros_handle is None:
@@ -411,8 +488,12 @@ class Ros2Dds:
         try:
             handle.publish_feedback(ros_feedback)
         except Exception as exc:  # the goal ended meanwhile, or rclpy's C conversion refused a value
-            self._refuse(f"feedback-publish-{relay.action.name}", "could not publish %s feedback: %s",
-                         relay.action.name, exc)
+            self._refuse(
+                f"feedback-publish-{relay.action.name}",
+                "could not publish %s feedback: %s",
+                relay.action.name,
+                exc,
+            )
             return
         self._count(f"feedback {relay.action.name}")
 
@@ -449,7 +530,9 @@ class Ros2Dds:
             try:
                 ros_result = to_ros(result, result_class) if result is not None else result_class()
             except ConversionError as exc:
-                self._refuse(f"result-{action.name}", "could not put a %s result on ROS 2: %s", action.name, exc)
+                self._refuse(
+                    f"result-{action.name}", "could not put a %s result on ROS 2: %s", action.name, exc
+                )
                 ros_result, status = result_class(), GoalStatusCode.ABORTED
             if status == GoalStatusCode.SUCCEEDED:
                 ros_handle.succeed()
@@ -457,8 +540,12 @@ class Ros2Dds:
                 ros_handle.canceled()
             else:
                 if error or not status.terminal:
-                    self._refuse(f"goal-lost-{action.name}", "%s: zendock's goal ended without a result: %s",
-                                 action.name, error or "its server went away")
+                    self._refuse(
+                        f"goal-lost-{action.name}",
+                        "%s: zendock's goal ended without a result: %s",
+                        action.name,
+                        error or "its server went away",
+                    )
                 ros_handle.abort()
             self._count(f"result {action.name} {status.name}")
             return ros_result
@@ -504,8 +591,12 @@ class Ros2Dds:
             context.try_shutdown()
 
 
-SERVICE = ServiceSpec("ros2_dds", Params, Ros2Dds,
-                      description="zendock's ROS 2 DDS face: real rclpy nodes (Jazzy, Fast DDS) for zendock's services")
+SERVICE = ServiceSpec(
+    "ros2_dds",
+    Params,
+    Ros2Dds,
+    description="zendock's ROS 2 DDS face: real rclpy nodes (Jazzy, Fast DDS) for zendock's services",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -81,7 +81,9 @@ def bench_simulation(
                     calls[name] += 1
         if i % every["render"] == 0:
             t0 = clock()
-            renderer.render(sim.pose, Motion(sim.twist.linear_mps, sim.twist.angular_radps), sim.other_footprints())
+            renderer.render(
+                sim.pose, Motion(sim.twist.linear_mps, sim.twist.angular_radps), sim.other_footprints()
+            )
             spent["render"] += clock() - t0
             calls["render"] += 1
     wall_s = clock() - started

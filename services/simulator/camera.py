@@ -47,7 +47,9 @@ class CameraParams(ComponentParams):
     simulator renders frames only while someone subscribes (``enabled: false``: no camera at all).
     """
 
-    enabled: bool = Field(True, description="render camera/image_raw and camera/camera_info (while subscribed)")
+    enabled: bool = Field(
+        True, description="render camera/image_raw and camera/camera_info (while subscribed)"
+    )
     width: int = Field(640, ge=16, le=4096)
     height: int = Field(480, ge=16, le=4096)
     horizontal_fov_rad: float = Field(math.radians(70.0), gt=0.1, lt=2.6)
@@ -59,8 +61,12 @@ class CameraParams(ComponentParams):
     exposure_s: float = Field(0.008, ge=0, description="exposure time: sets motion blur")
     gain: float = Field(1.0, gt=0)
     near_m: float = 0.01
-    opencv_threads: int = Field(1, ge=0, description="threads OpenCV may use for the simulator's process (0: one "
-                                "per core); one costs 10-20 % less CPU a frame where the cores are busy")
+    opencv_threads: int = Field(
+        1,
+        ge=0,
+        description="threads OpenCV may use for the simulator's process (0: one "
+        "per core); one costs 10-20 % less CPU a frame where the cores are busy",
+    )
 
     @property
     def focal_px(self) -> float:
@@ -115,7 +121,10 @@ class Scene:
         b = np.array([s.b for s in surfaces], dtype=np.float64).reshape(-1, 2)
         d = b - a
         return cls(
-            tuple(surfaces), tuple(markers), a, d,
+            tuple(surfaces),
+            tuple(markers),
+            a,
+            d,
             np.array([s.height_m for s in surfaces], dtype=np.float64),
             np.array([s.albedo for s in surfaces], dtype=np.float64),
             np.arctan2(d[:, 0], -d[:, 1]) if len(surfaces) else np.zeros(0),
@@ -198,14 +207,19 @@ class ReadNoise:
             self._bank *= np.float32(sigma)
             self._sigma = sigma
         start = int(rng.integers(0, n))
-        return self._bank[start:start + n]
+        return self._bank[start : start + n]
 
 
 class CameraRenderer:
     """Renders ``scene`` through a camera with ``params``: :meth:`render` gives a mono8 image."""
 
-    def __init__(self, scene: Scene, params: CameraParams, rng: np.random.Generator | None = None,
-                 noise: ReadNoise | None = None) -> None:
+    def __init__(
+        self,
+        scene: Scene,
+        params: CameraParams,
+        rng: np.random.Generator | None = None,
+        noise: ReadNoise | None = None,
+    ) -> None:
         """``noise``: a bank shared with the other cameras of the process (one is made when None)."""
         self.scene = scene
         self.params = params
@@ -221,29 +235,40 @@ class CameraRenderer:
         """Where the marker's corners (ArUco's order) fall in the image, exactly; None when behind the camera.
         The yardstick for corner accuracy."""
         level = self._level
-        pts = _project(marker_corners_world(marker), self.camera_pose(robot_pose), self.params.mount_z_m, level)
+        pts = _project(
+            marker_corners_world(marker), self.camera_pose(robot_pose), self.params.mount_z_m, level
+        )
         if pts is None or level.warp is None:
             return pts
         return cv2.perspectiveTransform(pts.reshape(-1, 1, 2), level.warp).reshape(-1, 2)
 
-    def render(self, robot_pose: Pose2D, motion: Motion = Motion(),
-               others: Sequence[np.ndarray] = ()) -> np.ndarray:
+    def render(
+        self, robot_pose: Pose2D, motion: Motion = Motion(), others: Sequence[np.ndarray] = ()
+    ) -> np.ndarray:
         """The camera's image (uint8, height x width) with the robot's base_link at ``robot_pose``;
         ``others``: the footprints (4 x 2 corners) of other robots in the room, drawn as dark boxes."""
         p = self.params
         level = self._level
         scene = self.scene
         if len(others):
-            bodies = [Surface(tuple(c[i]), tuple(c[(i + 1) % 4]), ROBOT_BODY_HEIGHT_M, ROBOT_BODY_ALBEDO)
-                      for c in others for i in range(4)]
+            bodies = [
+                Surface(tuple(c[i]), tuple(c[(i + 1) % 4]), ROBOT_BODY_HEIGHT_M, ROBOT_BODY_ALBEDO)
+                for c in others
+                for i in range(4)
+            ]
             scene = Scene.from_surfaces([*scene.surfaces, *bodies], list(scene.markers))
         # The level view comes column by column (its transpose): a level camera's columns are runs of flat
         # grey. The sensor model works on it as it is, and one uint8 transpose at the end gives the image.
         image = self._render_level(self.camera_pose(robot_pose), level, scene)
         by_column = level.warp is None
         if level.warp is not None:
-            image = cv2.warpPerspective(cv2.transpose(image), level.warp, (p.width, p.height),
-                                        flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            image = cv2.warpPerspective(
+                cv2.transpose(image),
+                level.warp,
+                (p.width, p.height),
+                flags=cv2.INTER_LINEAR,
+                borderMode=cv2.BORDER_REPLICATE,
+            )
         # ``image`` is a fresh array: scaled, blurred and clipped in place.
         if p.gain != 1.0:
             image *= np.float32(p.gain)
@@ -288,7 +313,9 @@ class CameraRenderer:
         else:
             if k < o_depth.shape[1]:  # the k nearest of each column, then those k in order
                 order = np.argpartition(o_depth, k - 1, axis=1)[:, :k]
-                order = np.take_along_axis(order, np.argsort(np.take_along_axis(o_depth, order, axis=1), axis=1), axis=1)
+                order = np.take_along_axis(
+                    order, np.argsort(np.take_along_axis(o_depth, order, axis=1), axis=1), axis=1
+                )
             else:
                 order = np.argsort(o_depth, axis=1)
             layer_depth = np.take_along_axis(o_depth, order, axis=1)
@@ -315,8 +342,16 @@ class CameraRenderer:
         self._paint_glass(image, depth, nearest_depth, cy, f, h_cam, scene)
         return image
 
-    def _paint_glass(self, image: np.ndarray, depth: np.ndarray, nearest_opaque: np.ndarray,
-                     cy: float, f: float, h_cam: float, scene: Scene) -> None:
+    def _paint_glass(
+        self,
+        image: np.ndarray,
+        depth: np.ndarray,
+        nearest_opaque: np.ndarray,
+        cy: float,
+        f: float,
+        h_cam: float,
+        scene: Scene,
+    ) -> None:
         glass = ~scene.opaque
         if not glass.any():
             return
@@ -333,8 +368,17 @@ class CameraRenderer:
             sub = image[cols]
             image[cols] = np.where(mask, 0.88 * sub + 0.12 * 235.0, sub)
 
-    def _paint_marker(self, image: np.ndarray, columns: np.ndarray, start: np.ndarray, end: np.ndarray,
-                      camera: Pose2D, scene: Scene, marker_index: int, view: _LevelView) -> None:
+    def _paint_marker(
+        self,
+        image: np.ndarray,
+        columns: np.ndarray,
+        start: np.ndarray,
+        end: np.ndarray,
+        camera: Pose2D,
+        scene: Scene,
+        marker_index: int,
+        view: _LevelView,
+    ) -> None:
         """Replace the face's flat white with the marker, warped by the homography of its corners. The face
         shows in rows ``[start, end)`` of each of ``columns`` (ascending)."""
         marker = scene.markers[marker_index]
@@ -360,10 +404,18 @@ class CameraRenderer:
         # Warp onto a grid ``ss`` times finer over the face's bounding box, then average each ss x ss block:
         # every pixel gets the ink's area coverage, so the marker's edges fall where its corners project.
         # Fine pixel (i, j) has its centre at image ((i + 0.5) / ss - 0.5 + x0, ...).
-        to_fine = np.array([[ss, 0, ss * (0.5 - x0) - 0.5], [0, ss, ss * (0.5 - y0) - 0.5], [0, 0, 1]], dtype=np.float64)
+        to_fine = np.array(
+            [[ss, 0, ss * (0.5 - x0) - 0.5], [0, ss, ss * (0.5 - y0) - 0.5], [0, 0, 1]], dtype=np.float64
+        )
         H = to_fine @ cv2.getPerspectiveTransform(src, pts.astype(np.float32))
-        fine = cv2.warpPerspective(texture, H, (int(x1 - x0) * ss, int(y1 - y0) * ss), flags=cv2.INTER_LINEAR,
-                                   borderMode=cv2.BORDER_CONSTANT, borderValue=255)
+        fine = cv2.warpPerspective(
+            texture,
+            H,
+            (int(x1 - x0) * ss, int(y1 - y0) * ss),
+            flags=cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=255,
+        )
         if ss > 1:
             fine = cv2.resize(fine, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_AREA)
         # The face's lit white times the ink's reflectance, one float32 temporary for the whole box.
@@ -395,7 +447,9 @@ class _ColumnSpans:
     height: int
 
     @classmethod
-    def of_layers(cls, running_top: np.ndarray, hit: np.ndarray, foot_row: np.ndarray, height: int) -> _ColumnSpans:
+    def of_layers(
+        cls, running_top: np.ndarray, hit: np.ndarray, foot_row: np.ndarray, height: int
+    ) -> _ColumnSpans:
         """``running_top``: (W, k) the highest top row of the layers up to each, nearest first (non-increasing);
         ``hit``: which layers exist; ``foot_row``: the nearest layer's foot row in each column."""
         W, k = running_top.shape
@@ -403,10 +457,10 @@ class _ColumnSpans:
         bounds[:, 0] = 0
         # Layer j shows from the first row under every nearer layer's top; a missing layer from row 0.
         first_row = np.where(hit, np.clip(np.ceil(running_top), 0, height), 0)
-        bounds[:, 1:k + 1] = first_row[:, ::-1]
+        bounds[:, 1 : k + 1] = first_row[:, ::-1]
         # Rows at or above the nearest layer's foot show layers; the floor shows below it.
         bounds[:, k + 1] = np.clip(np.floor(foot_row) + 1, 0, height)
-        np.minimum(bounds, bounds[:, k + 1:], out=bounds)
+        np.minimum(bounds, bounds[:, k + 1 :], out=bounds)
         return cls(bounds, height)
 
     def of_layer(self, columns: np.ndarray, layer: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -420,7 +474,7 @@ class _ColumnSpans:
         W, k = layer_grey.shape
         grey = np.empty((W, k + 2), dtype=np.float32)
         grey[:, 0] = np.nan
-        grey[:, 1:k + 1] = layer_grey[:, ::-1]
+        grey[:, 1 : k + 1] = layer_grey[:, ::-1]
         grey[:, k + 1] = np.nan
         lengths = np.diff(self.bounds, axis=1, append=self.height)
         by_column = np.repeat(grey.ravel(), lengths.ravel()).reshape(W, self.height)
@@ -446,14 +500,29 @@ class _LevelView:
         f = p.focal_px
         cx, cy = p.centre_px
         if p.pitch_rad == 0.0:
-            return cls(p.width, p.height, f, cx, cy, None, np.arange(p.height, dtype=np.float64),
-                       (np.arange(p.width) - cx) / f)
+            return cls(
+                p.width,
+                p.height,
+                f,
+                cx,
+                cy,
+                None,
+                np.arange(p.height, dtype=np.float64),
+                (np.arange(p.width) - cx) / f,
+            )
         K = p.intrinsics()
         # The pitched camera's rays in the level camera's frame (optical axes: x right, y down, z ahead).
         c, s = math.cos(p.pitch_rad), math.sin(p.pitch_rad)
         R = np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])  # pitched optical -> level optical
-        corners = np.array([[-0.5, -0.5, 1], [p.width - 0.5, -0.5, 1], [p.width - 0.5, p.height - 0.5, 1],
-                            [-0.5, p.height - 0.5, 1]], dtype=np.float64).T
+        corners = np.array(
+            [
+                [-0.5, -0.5, 1],
+                [p.width - 0.5, -0.5, 1],
+                [p.width - 0.5, p.height - 0.5, 1],
+                [-0.5, p.height - 0.5, 1],
+            ],
+            dtype=np.float64,
+        ).T
         level = R @ np.linalg.inv(K) @ corners
         rows = f * level[1] / level[2] + cy
         cols = f * level[0] / level[2] + cx
@@ -462,12 +531,21 @@ class _LevelView:
         width, height = right - left, bottom - top
         Kc = np.array([[f, 0.0, cx - left], [0.0, f, cy - top], [0.0, 0.0, 1.0]])
         warp = Kc @ R @ np.linalg.inv(K)  # output pixel -> canvas pixel
-        return cls(width, height, f, cx - left, cy - top, np.linalg.inv(warp) / 1.0,
-                   np.arange(height, dtype=np.float64), (np.arange(width) - (cx - left)) / f)
+        return cls(
+            width,
+            height,
+            f,
+            cx - left,
+            cy - top,
+            np.linalg.inv(warp) / 1.0,
+            np.arange(height, dtype=np.float64),
+            (np.arange(width) - (cx - left)) / f,
+        )
 
 
-def _intersect(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, d: np.ndarray,
-               near: float) -> tuple[np.ndarray, np.ndarray]:
+def _intersect(
+    origin: np.ndarray, rays: np.ndarray, a: np.ndarray, d: np.ndarray, near: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Depth along each ray (in units of the ray vector) to each segment, inf when it misses; and where along."""
     # origin + t r = a + u d  ->  t r - u d = a - origin
     rx, ry = rays[:, 0:1], rays[:, 1:2]
@@ -529,5 +607,13 @@ def marker_texture(dictionary: str, marker_id: int, size_px: int) -> np.ndarray:
     return img
 
 
-__all__ = ["CameraParams", "CameraRenderer", "Motion", "Scene", "Surface", "build_scene", "marker_corners_world",
-           "marker_texture"]
+__all__ = [
+    "CameraParams",
+    "CameraRenderer",
+    "Motion",
+    "Scene",
+    "Surface",
+    "build_scene",
+    "marker_corners_world",
+    "marker_texture",
+]

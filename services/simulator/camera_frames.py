@@ -33,7 +33,9 @@ def camera_info(params: CameraParams) -> CameraInfo:
 
 def camera_mount_transforms(params: CameraParams, stamp: Time) -> list[TransformStamped]:
     """base_link -> camera_link -> camera_optical_frame, for ``tf_static``."""
-    mount = Transform(Vector3(params.mount_x_m, 0.0, params.mount_z_m), Quaternion(*quaternion_from_pitch(params.pitch_rad)))
+    mount = Transform(
+        Vector3(params.mount_x_m, 0.0, params.mount_z_m), Quaternion(*quaternion_from_pitch(params.pitch_rad))
+    )
     optical = Transform(Vector3(), Quaternion(*OPTICAL_FROM_LINK_QUATERNION))
     return [
         TransformStamped(Header(stamp, topics.BASE_FRAME), topics.CAMERA_FRAME, mount),

@@ -112,16 +112,31 @@ class Channel:
 def tf_message(robot: SimRobot, now: float) -> TFMessage:
     """map -> odom (the simulated localiser) and odom -> base_link (odometry), stamped ``now``."""
     stamp = Time.from_sec(now)
-    return TFMessage([
-        TransformStamped(Header(stamp, topics.MAP_FRAME), topics.ODOM_FRAME, Transform.from_pose2d(robot.sim.map_to_odom())),
-        TransformStamped(Header(stamp, topics.ODOM_FRAME), topics.BASE_FRAME, Transform.from_pose2d(robot.sim.odom_pose)),
-    ])
+    return TFMessage(
+        [
+            TransformStamped(
+                Header(stamp, topics.MAP_FRAME),
+                topics.ODOM_FRAME,
+                Transform.from_pose2d(robot.sim.map_to_odom()),
+            ),
+            TransformStamped(
+                Header(stamp, topics.ODOM_FRAME),
+                topics.BASE_FRAME,
+                Transform.from_pose2d(robot.sim.odom_pose),
+            ),
+        ]
+    )
 
 
 def contact_message(robot: SimRobot, now: float) -> DockContact:
     c = robot.sim.dock_contact()
-    finite = [v if v is not None and math.isfinite(v) else 0.0 for v in (c.lateral_error_m, c.yaw_error_rad, c.along_error_m)]
-    return DockContact(Header.at(now, topics.MAP_FRAME), c.dock_id or "", bool(c.mated), bool(c.touching), *finite)
+    finite = [
+        v if v is not None and math.isfinite(v) else 0.0
+        for v in (c.lateral_error_m, c.yaw_error_rad, c.along_error_m)
+    ]
+    return DockContact(
+        Header.at(now, topics.MAP_FRAME), c.dock_id or "", bool(c.mated), bool(c.touching), *finite
+    )
 
 
 def channel_table(params: Params) -> list[Channel]:
@@ -136,8 +151,10 @@ def channel_table(params: Params) -> list[Channel]:
             (topics.LIDAR_FRAME, Pose2D(p.lidar.mount_x_m, p.lidar.mount_y_m, 0.0)),
             (topics.ULTRASONIC_FRAME, Pose2D(p.ultrasonic.mount_x_m, 0.0, 0.0)),
         ]
-        transforms = [TransformStamped(Header(stamp, topics.BASE_FRAME), child, Transform.from_pose2d(mount))
-                      for child, mount in mounts]
+        transforms = [
+            TransformStamped(Header(stamp, topics.BASE_FRAME), child, Transform.from_pose2d(mount))
+            for child, mount in mounts
+        ]
         pub.publish(TFMessage(transforms + camera_mount_transforms(camera_params, stamp)))
 
     def tf(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
@@ -145,44 +162,52 @@ def channel_table(params: Params) -> list[Channel]:
 
     def odom(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
         twist = robot.sim.twist
-        pub.publish(Odometry(
-            Header(stamp, topics.ODOM_FRAME),
-            topics.BASE_FRAME,
-            PoseWithCovariance(Pose.from_pose2d(robot.sim.odom_pose)),
-            TwistWithCovariance(Twist.planar(twist.linear_mps, twist.angular_radps)),
-        ))
+        pub.publish(
+            Odometry(
+                Header(stamp, topics.ODOM_FRAME),
+                topics.BASE_FRAME,
+                PoseWithCovariance(Pose.from_pose2d(robot.sim.odom_pose)),
+                TwistWithCovariance(Twist.planar(twist.linear_mps, twist.angular_radps)),
+            )
+        )
 
     def scan(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
         s = robot.sim.lidar_scan()
         n = len(s.ranges_m)
-        pub.publish(LaserScan(
-            header=Header(stamp, topics.LIDAR_FRAME),
-            angle_min=s.angle_min_rad,
-            angle_max=s.angle_min_rad + s.angle_increment_rad * (n - 1),
-            angle_increment=s.angle_increment_rad,
-            time_increment=0.0,
-            scan_time=scan_period_s,
-            range_min=s.range_min_m,
-            range_max=s.range_max_m,
-            ranges=np.asarray(s.ranges_m, dtype=np.float32),
-            intensities=np.zeros(0, dtype=np.float32),
-        ))
+        pub.publish(
+            LaserScan(
+                header=Header(stamp, topics.LIDAR_FRAME),
+                angle_min=s.angle_min_rad,
+                angle_max=s.angle_min_rad + s.angle_increment_rad * (n - 1),
+                angle_increment=s.angle_increment_rad,
+                time_increment=0.0,
+                scan_time=scan_period_s,
+                range_min=s.range_min_m,
+                range_max=s.range_max_m,
+                ranges=np.asarray(s.ranges_m, dtype=np.float32),
+                intensities=np.zeros(0, dtype=np.float32),
+            )
+        )
 
     def ultrasonic(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
         p = robot.sim.params.ultrasonic
-        pub.publish(Range(
-            header=Header(stamp, topics.ULTRASONIC_FRAME),
-            radiation_type=Range.ULTRASOUND,
-            field_of_view=p.field_of_view_rad,
-            min_range=p.range_min_m,
-            max_range=p.range_max_m,
-            range=float(robot.sim.ultrasonic_range()),
-        ))
+        pub.publish(
+            Range(
+                header=Header(stamp, topics.ULTRASONIC_FRAME),
+                radiation_type=Range.ULTRASOUND,
+                field_of_view=p.field_of_view_rad,
+                min_range=p.range_min_m,
+                max_range=p.range_max_m,
+                range=float(robot.sim.ultrasonic_range()),
+            )
+        )
 
     def capture_detection(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
         detection = robot.sim.detect_dock()
         if detection is not None:
-            msg = PoseStamped(Header.at(now, topics.BASE_FRAME), Pose.from_pose2d(detection.dock_pose_in_base))
+            msg = PoseStamped(
+                Header.at(now, topics.BASE_FRAME), Pose.from_pose2d(detection.dock_pose_in_base)
+            )
             robot.pending_detections.append((now + params.detection.latency_s, msg))
 
     def release_detections(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
@@ -197,12 +222,22 @@ def channel_table(params: Params) -> list[Channel]:
     def image(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
         assert robot.camera is not None
         twist = robot.sim.twist
-        pixels = robot.camera.render(robot.sim.pose, Motion(twist.linear_mps, twist.angular_radps),
-                                     robot.sim.other_footprints())
+        pixels = robot.camera.render(
+            robot.sim.pose, Motion(twist.linear_mps, twist.angular_radps), robot.sim.other_footprints()
+        )
         robot.frames_rendered += 1
         height, width = pixels.shape
-        pub.publish(Image(Header(stamp, topics.CAMERA_OPTICAL_FRAME), height, width, "mono8", 0, width,
-                          pixels.reshape(-1)))
+        pub.publish(
+            Image(
+                Header(stamp, topics.CAMERA_OPTICAL_FRAME),
+                height,
+                width,
+                "mono8",
+                0,
+                width,
+                pixels.reshape(-1),
+            )
+        )
 
     def contact(robot: SimRobot, pub: Publisher[Any], now: float, stamp: Time) -> None:
         pub.publish(contact_message(robot, now))
@@ -227,12 +262,27 @@ def channel_table(params: Params) -> list[Channel]:
     if params.detection.source == "synthetic":
         # Captured only while someone listens, as the contract says: in a fleet most robots are not docking,
         # and six robots' detections at 15 Hz were 6 % of the simulator's time, for nobody.
-        table.append(Channel(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA, params.detection.rate_hz,
-                             capture_detection, on_demand=True))
+        table.append(
+            Channel(
+                topics.DETECTED_DOCK_POSE,
+                PoseStamped,
+                SENSOR_DATA,
+                params.detection.rate_hz,
+                capture_detection,
+                on_demand=True,
+            )
+        )
     table.append(Channel(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA, None, release_detections))
     if camera_params.enabled:
         table += [
-            Channel(topics.CAMERA_INFO, CameraInfo, SENSOR_DATA, camera_params.rate_hz, camera_info_, on_demand=True),
+            Channel(
+                topics.CAMERA_INFO,
+                CameraInfo,
+                SENSOR_DATA,
+                camera_params.rate_hz,
+                camera_info_,
+                on_demand=True,
+            ),
             Channel(topics.CAMERA_IMAGE, Image, SENSOR_DATA, camera_params.rate_hz, image, on_demand=True),
         ]
     table += [

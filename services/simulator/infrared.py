@@ -55,7 +55,9 @@ class Receiver:
 
 
 class InfraredParams(ComponentParams):
-    rate_hz: float = Field(20.0, gt=0, description="the receivers' readings (ir_dock) per second, while subscribed")
+    rate_hz: float = Field(
+        20.0, gt=0, description="the receivers' readings (ir_dock) per second, while subscribed"
+    )
     near_range_m: float = Field(0.6, gt=0)
     far_range_m: float = 2.5
     centre_half_angle_rad: float = math.radians(5.0)
@@ -68,7 +70,9 @@ class InfraredParams(ComponentParams):
         Receiver(0.13, 0.0, 0.0, math.radians(25.0)),
         Receiver(0.10, 0.10, math.radians(60.0), math.radians(55.0)),
     )
-    dropout: float = Field(0.03, ge=0.0, lt=1.0, description="probability a bit a receiver should see drops out")
+    dropout: float = Field(
+        0.03, ge=0.0, lt=1.0, description="probability a bit a receiver should see drops out"
+    )
 
     @model_validator(mode="after")
     def _ranges(self) -> InfraredParams:
@@ -96,8 +100,13 @@ def fields_at(x: float, y: float, params: InfraredParams) -> int:
     return bits
 
 
-def receiver_readings(robot_pose: Pose2D, docks: Sequence[Dock], occluders: SegmentSet, params: InfraredParams,
-                      rng: np.random.Generator) -> tuple[int, int, int]:
+def receiver_readings(
+    robot_pose: Pose2D,
+    docks: Sequence[Dock],
+    occluders: SegmentSet,
+    params: InfraredParams,
+    rng: np.random.Generator,
+) -> tuple[int, int, int]:
     """What the right, central and left receivers read with the robot at ``robot_pose``."""
     readings = []
     for receiver in params.receivers:
@@ -123,5 +132,15 @@ def receiver_readings(robot_pose: Pose2D, docks: Sequence[Dock], occluders: Segm
     return readings[0], readings[1], readings[2]
 
 
-__all__ = ["FAR_CENTER", "FAR_LEFT", "FAR_RIGHT", "NEAR_CENTER", "NEAR_LEFT", "NEAR_RIGHT", "InfraredParams",
-           "Receiver", "fields_at", "receiver_readings"]
+__all__ = [
+    "FAR_CENTER",
+    "FAR_LEFT",
+    "FAR_RIGHT",
+    "NEAR_CENTER",
+    "NEAR_LEFT",
+    "NEAR_RIGHT",
+    "InfraredParams",
+    "Receiver",
+    "fields_at",
+    "receiver_readings",
+]

@@ -76,13 +76,17 @@ class SimulatorService:
                 elif room is None:
                     sim = room = SimWorld(self.world, params.drive, sim_params, start=start, name=ns)
                 else:
-                    assert start is not None, "a shared room's robots are the world's fleet, each with its start"
+                    assert start is not None, (
+                        "a shared room's robots are the world's fleet, each with its start"
+                    )
                     sim = room.join(ns, start, sim_params)
             except PoseInCollisionError as exc:
                 raise ConfigError(f"{params.world}: {exc}") from None
             robot = SimRobot(ns, sim, f"{ns}/" if ns else "")
             if scene is not None:
-                robot.camera = CameraRenderer(scene, params.camera, np.random.default_rng([params.seed, i, 7]), noise)
+                robot.camera = CameraRenderer(
+                    scene, params.camera, np.random.default_rng([params.seed, i, 7]), noise
+                )
             self._declare(robot)
             self.robots[ns] = robot
         self.dt_s = params.dt_s
@@ -115,11 +119,18 @@ class SimulatorService:
         t = robot.topic
         self.channels.declare(node, robot)
         robot.pubs[topics.COLLISIONS] = node.create_publisher(CollisionEvent, t(topics.COLLISIONS), BLOCKING)
-        node.create_subscription(Twist, t(topics.CMD_VEL), lambda msg, r=robot: self._on_cmd_vel(r, msg), QoS(depth=1))
+        node.create_subscription(
+            Twist, t(topics.CMD_VEL), lambda msg, r=robot: self._on_cmd_vel(r, msg), QoS(depth=1)
+        )
         if self.params.pacing.to_drivers and self.params.pacing.to_pose:
             # Only the arrival time is kept: one float store, safe on Zenoh's thread (no executor hand-off).
-            node.create_subscription(Float64MultiArray, t(topics.POSE2D), lambda _msg, r=robot: self._on_pose(r),
-                                     QoS(depth=1), inline=True)
+            node.create_subscription(
+                Float64MultiArray,
+                t(topics.POSE2D),
+                lambda _msg, r=robot: self._on_pose(r),
+                QoS(depth=1),
+                inline=True,
+            )
 
     def _on_cmd_vel(self, robot: SimRobot, msg: Twist) -> None:
         robot.cmd_v = msg.linear.x
@@ -153,8 +164,15 @@ class SimulatorService:
         robot.sim.believe(belief)
         robot.pubs[topics.TF].publish(tf_message(robot, self.time_s))
         error = robot.sim.params.localisation_error
-        self.node.log.info("localiser set to believe (%.3f, %.3f, %.3f): error now (%.3f m, %.3f m, %.3f rad)",
-                           belief.x, belief.y, belief.yaw, error.x, error.y, error.yaw)
+        self.node.log.info(
+            "localiser set to believe (%.3f, %.3f, %.3f): error now (%.3f m, %.3f m, %.3f rad)",
+            belief.x,
+            belief.y,
+            belief.yaw,
+            error.x,
+            error.y,
+            error.yaw,
+        )
         return SetLocalisationResponse(success=True, message="")
 
     def _on_state(self, request: SimStateRequest) -> SimStateResponse:
@@ -186,8 +204,12 @@ class SimulatorService:
             with self.node.exclusive():
                 self._step_once()
             if now - reported_at[0] >= RTF_REPORT_PERIOD_S:
-                self._log.info("%s", rate_report(self.time_s - reported_at[1], now - reported_at[0],
-                                                 self.params.rtf, self._pacer))
+                self._log.info(
+                    "%s",
+                    rate_report(
+                        self.time_s - reported_at[1], now - reported_at[0], self.params.rtf, self._pacer
+                    ),
+                )
                 reported_at = (now, self.time_s)
 
     def _drivers(self) -> list[Driver]:
@@ -220,12 +242,25 @@ class SimulatorService:
     def _publish_collisions(self, robot: SimRobot) -> None:
         for event in robot.sim.drain_collisions():
             robot.collisions_total += 1
-            robot.pubs[topics.COLLISIONS].publish(CollisionEvent(
-                Header.at(event.time_s, topics.MAP_FRAME), event.kind, robot.collisions_total, event.x_m, event.y_m,
-                other_robot=event.other_robot or ""))
+            robot.pubs[topics.COLLISIONS].publish(
+                CollisionEvent(
+                    Header.at(event.time_s, topics.MAP_FRAME),
+                    event.kind,
+                    robot.collisions_total,
+                    event.x_m,
+                    event.y_m,
+                    other_robot=event.other_robot or "",
+                )
+            )
             what = f"robot {event.other_robot}" if event.other_robot else event.kind
-            self._log.warning("%scollision with %s at (%.2f, %.2f), %.2f m/s", robot.prefix, what, event.x_m,
-                              event.y_m, event.speed_mps)
+            self._log.warning(
+                "%scollision with %s at (%.2f, %.2f), %.2f m/s",
+                robot.prefix,
+                what,
+                event.x_m,
+                event.y_m,
+                event.speed_mps,
+            )
 
     def close(self) -> None:
         self._running = False
@@ -238,9 +273,13 @@ def _add_flags(parser: Any) -> dict[str, str]:
     return {"world": "world", "rtf": "rtf"}
 
 
-SERVICE = ServiceSpec("simulator", Params, SimulatorService,
-                      description="zendock simulator: physics, clock, odometry, tf and sensors",
-                      add_flags=_add_flags)
+SERVICE = ServiceSpec(
+    "simulator",
+    Params,
+    SimulatorService,
+    description="zendock simulator: physics, clock, odometry, tf and sensors",
+    add_flags=_add_flags,
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -40,15 +40,21 @@ MAX_SLEEP_S = 0.05
 class PacingParams(ComponentParams):
     """``pacing.*``: whether and how long the world waits for late drivers and poses."""
 
-    to_drivers: bool = Field(True, description="wait (briefly) for a moving robot's late command instead of "
-                             "driving it blind")
-    to_pose: bool = Field(True, description="with to_drivers: also wait (briefly) for a robot's late "
-                          "map_to_base_link_pose2d")
+    to_drivers: bool = Field(
+        True, description="wait (briefly) for a moving robot's late command instead of driving it blind"
+    )
+    to_pose: bool = Field(
+        True, description="with to_drivers: also wait (briefly) for a robot's late map_to_base_link_pose2d"
+    )
     #: A moving robot's driver is late once its last command is this old (sim seconds): three periods
     #: of a 20 Hz controller.
-    driver_gap_s: float = Field(0.15, gt=0, description="a moving robot's command older than this (sim) is late")
+    driver_gap_s: float = Field(
+        0.15, gt=0, description="a moving robot's command older than this (sim) is late"
+    )
     #: The longest wait for one late command (wall seconds).
-    driver_wait_max_s: float = Field(0.1, ge=0, description="wait at most this long (wall) for one late command")
+    driver_wait_max_s: float = Field(
+        0.1, ge=0, description="wait at most this long (wall) for one late command"
+    )
     #: A robot's pose is late once this old (sim seconds): three periods of the 10 Hz pose.
     pose_gap_s: float = Field(0.3, gt=0, description="a robot's pose older than this (sim) is late")
 
@@ -85,7 +91,8 @@ class DriverPacer:
         """True: do not step yet. Call again (after a short sleep) until it says False."""
         gap = self.params.driver_gap_s
         late = tuple(
-            (d.name, d.last_command_s) for d in drivers
+            (d.name, d.last_command_s)
+            for d in drivers
             if d.moving and sim_now_s - d.last_command_s > (gap if d.gap_s is None else d.gap_s)
         )
         if not late:
@@ -105,7 +112,9 @@ class DriverPacer:
         seconds = max(0.0, seconds)
         self.held_s += seconds
         # what the wait that just ended was for (``hold`` has already forgotten it: nothing is late now)
-        kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._last_late}) or ["?"]
+        kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._last_late}) or [
+            "?"
+        ]
         kind = "+".join(kinds)
         self.held_by_kind[kind] = self.held_by_kind.get(kind, 0.0) + seconds
 
@@ -177,5 +186,6 @@ def rate_report(sim_s: float, wall_s: float, target: float | str, pacer: DriverP
     if pacer is not None:
         kinds = ", ".join(f"{kind} {s:.1f} s" for kind, s in sorted(pacer.held_by_kind.items()))
         waits = f"; waited for late drivers {pacer.holds} times, {pacer.held_s:.1f} s in all" + (
-            f" ({kinds})" if kinds else "")
+            f" ({kinds})" if kinds else ""
+        )
     return f"real-time factor {achieved:.1f} over the last {wall_s:.0f} s (target {target}){waits}"

@@ -29,17 +29,25 @@ from shared.world import load_world
 
 
 class ClockParams(ComponentParams):
-    rate_hz: float = Field(20.0, gt=0, description="sim-time clock rate: the stack's fastest sim-time timer "
-                           "(planner and docking control, 20 Hz); every sim-time node receives every tick")
+    rate_hz: float = Field(
+        20.0,
+        gt=0,
+        description="sim-time clock rate: the stack's fastest sim-time timer "
+        "(planner and docking control, 20 Hz); every sim-time node receives every tick",
+    )
 
 
 class OdomParams(ComponentParams):
-    rate_hz: float = Field(20.0, gt=0, description="odometry rate: the control timers' 20 Hz (they read the latest)")
+    rate_hz: float = Field(
+        20.0, gt=0, description="odometry rate: the control timers' 20 Hz (they read the latest)"
+    )
     noise: float = Field(0.0, ge=0, description="relative std dev of each wheel's travel per step (0: exact)")
 
 
 class TfParams(ComponentParams):
-    rate_hz: float = Field(20.0, gt=0, description="tf rate: twice the pose service's 10 Hz, on the clock's ticks")
+    rate_hz: float = Field(
+        20.0, gt=0, description="tf rate: twice the pose service's 10 Hz, on the clock's ticks"
+    )
     static_rate_hz: float = Field(1.0, gt=0, description="tf_static (sensor mounts) rate")
 
 
@@ -56,7 +64,10 @@ class DriveParams(DiffDriveParams):
     """The drive's geometry and limits (Gazebo diff_drive / ros2_control names) and its command watchdog."""
 
     cmd_vel_timeout_s: float = Field(
-        0.3, gt=0, description="watchdog: brake when no command for this long (standing still 0.5 s after the last)")
+        0.3,
+        gt=0,
+        description="watchdog: brake when no command for this long (standing still 0.5 s after the last)",
+    )
 
 
 class DetectionParams(FiducialCameraParams):
@@ -68,7 +79,9 @@ class DetectionParams(FiducialCameraParams):
     #: The synthetic detector sees the marker down to 2 cm (the camera is 5 cm from it when docked).
     range_min_m: float = Field(0.02, ge=0)
     rate_hz: float = Field(15.0, gt=0, description="synthetic detections per second (sim time)")
-    latency_s: float = Field(0.05, ge=0, description="a synthetic detection is published this long after capture")
+    latency_s: float = Field(
+        0.05, ge=0, description="a synthetic detection is published this long after capture"
+    )
 
 
 class Params(ServiceParams):
@@ -76,7 +89,9 @@ class Params(ServiceParams):
 
     world: str = Field(description="world file (deploy/worlds/*.yaml)")
     rtf: float | str = Field(1.0, description="real-time factor: a positive number, or 'max'")
-    robots: list[str] = Field(default_factory=list, description="robot namespaces served (empty: the node's own)")
+    robots: list[str] = Field(
+        default_factory=list, description="robot namespaces served (empty: the node's own)"
+    )
     seed: int = 0
     dt_s: float = Field(0.01, gt=0, le=0.05)
     clock: ClockParams = ClockParams()
@@ -136,5 +151,13 @@ class Params(ServiceParams):
         )
 
 
-__all__ = ["ClockParams", "DetectionParams", "DriveParams", "GroundTruthParams", "LocalisationParams", "OdomParams",
-           "Params", "TfParams"]
+__all__ = [
+    "ClockParams",
+    "DetectionParams",
+    "DriveParams",
+    "GroundTruthParams",
+    "LocalisationParams",
+    "OdomParams",
+    "Params",
+    "TfParams",
+]

@@ -104,7 +104,9 @@ class _Obstacle:
     dock: Dock | None = None
 
 
-def _contact_centre(points: Sequence[pymunk.ContactPoint], fallback: tuple[float, float]) -> tuple[float, float]:
+def _contact_centre(
+    points: Sequence[pymunk.ContactPoint], fallback: tuple[float, float]
+) -> tuple[float, float]:
     """The mean of a contact's points (each midway between the two shapes), or ``fallback`` without any."""
     if not points:
         return fallback
@@ -204,10 +206,15 @@ class SimWorld:
             self._robot_edges = _RobotEdges()
             self._add_obstacles()
             self.space.on_collision(
-                ROBOT_COLLISION_TYPE, OBSTACLE_COLLISION_TYPE, begin=self._room_begin, separate=self._room_separate
+                ROBOT_COLLISION_TYPE,
+                OBSTACLE_COLLISION_TYPE,
+                begin=self._room_begin,
+                separate=self._room_separate,
             )
             self.space.on_collision(
-                ROBOT_COLLISION_TYPE, ROBOT_COLLISION_TYPE, begin=self._room_robots_begin,
+                ROBOT_COLLISION_TYPE,
+                ROBOT_COLLISION_TYPE,
+                begin=self._room_robots_begin,
                 separate=self._room_robots_separate,
             )
         else:
@@ -229,8 +236,9 @@ class SimWorld:
         self, name: str, start: Pose2D, params: SimParams | None = None, drive: DiffDriveParams | None = None
     ) -> SimWorld:
         """Another robot, ``name``, in this robot's room at ``start``: the same space and obstacles."""
-        return SimWorld(self.world, drive or self.drive.params, params or self.params, start=start, name=name,
-                        room=self)
+        return SimWorld(
+            self.world, drive or self.drive.params, params or self.params, start=start, name=name, room=self
+        )
 
     @property
     def shares_room(self) -> bool:
@@ -429,10 +437,23 @@ class SimWorld:
             last = robot._last_separation_s.get(other.shape)
             if last is not None and robot.time_s - last < robot.params.collision_debounce_s:
                 continue
-            speed = float(abs(robot.body.velocity_at_world_point((cx, cy)) - other.body.velocity_at_world_point((cx, cy))))
+            speed = float(
+                abs(
+                    robot.body.velocity_at_world_point((cx, cy))
+                    - other.body.velocity_at_world_point((cx, cy))
+                )
+            )
             robot.collision_counts["robot"] += 1
-            robot._events.append(CollisionEvent(kind="robot", time_s=robot.time_s, x_m=float(cx), y_m=float(cy),
-                                                speed_mps=speed, other_robot=other.name))
+            robot._events.append(
+                CollisionEvent(
+                    kind="robot",
+                    time_s=robot.time_s,
+                    x_m=float(cx),
+                    y_m=float(cy),
+                    speed_mps=speed,
+                    other_robot=other.name,
+                )
+            )
 
     def _room_robots_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
@@ -499,18 +520,23 @@ class SimWorld:
     def ultrasonic_range(self, pose: Pose2D | None = None) -> float:
         """The front ultrasonic reading from ``pose`` (default: true pose); sees opaque surfaces and glass."""
         at = self.pose if pose is None else pose
-        return sensors.ultrasonic_range(at, self._with_others(self.sonar_visible), self.params.ultrasonic, self.rng)
+        return sensors.ultrasonic_range(
+            at, self._with_others(self.sonar_visible), self.params.ultrasonic, self.rng
+        )
 
     def dock_infrared(self, pose: Pose2D | None = None) -> tuple[int, int, int]:
         """The right, central and left infrared receivers' readings from ``pose`` (default: true pose)."""
         at = self.pose if pose is None else pose
-        return infrared.receiver_readings(at, self.world.docks, self._with_others(self.opaque), self.params.infrared,
-                                          self.rng)
+        return infrared.receiver_readings(
+            at, self.world.docks, self._with_others(self.opaque), self.params.infrared, self.rng
+        )
 
     def detect_docks(self, pose: Pose2D | None = None) -> list[sensors.DockDetection]:
         """Every dock the camera reads from ``pose`` (default: true pose), nearest first; glass hides none."""
         at = self.pose if pose is None else pose
-        return sensors.detect_docks(at, self.world.docks, self._with_others(self.opaque), self.params.camera, self.rng)
+        return sensors.detect_docks(
+            at, self.world.docks, self._with_others(self.opaque), self.params.camera, self.rng
+        )
 
     def detect_dock(
         self, pose: Pose2D | None = None, dock_id: str | None = None

@@ -43,7 +43,9 @@ class SegmentSet:
     def concat(cls, *sets: SegmentSet) -> SegmentSet:
         if not sets:
             return cls([])
-        return cls.from_arrays(np.concatenate([s.start for s in sets]), np.concatenate([s.delta for s in sets]))
+        return cls.from_arrays(
+            np.concatenate([s.start for s in sets]), np.concatenate([s.delta for s in sets])
+        )
 
 
 def cast_rays(origin_xy: tuple[float, float], angles_rad: np.ndarray, segments: SegmentSet) -> np.ndarray:

@@ -57,14 +57,25 @@ class Params(ServiceParams):
     """Parameters of ``python -m services.viz`` (``-p name=value``)."""
 
     use_sim_time: bool = Field(True, description="stamp and broadcast on the simulator's clock")
-    host: str = Field("127.0.0.1", description="address to serve on (loopback: only this machine can connect)")
+    host: str = Field(
+        "127.0.0.1", description="address to serve on (loopback: only this machine can connect)"
+    )
     port: int = Field(8765, ge=0, le=65535, description="WebSocket port (0: any free port)")
-    world: str | None = Field(None, description="world file to draw walls, glass, boxes, docks and staging poses")
-    staging_offset_m: float = Field(DEFAULT_STAGING_OFFSET_M, ge=0.0, description="staging pose behind each dock")
-    time_broadcast_hz: float = Field(10.0, gt=0.0, le=100.0, description="how often viewers are told the time")
-    robots: list[str] = Field(default_factory=list, description="a fleet's robots (namespaces under the node's) "
-                              "shown side by side, each one's frames under its name (r1/base_link) below the "
-                              "shared map; empty: the node's own namespace, one robot")
+    world: str | None = Field(
+        None, description="world file to draw walls, glass, boxes, docks and staging poses"
+    )
+    staging_offset_m: float = Field(
+        DEFAULT_STAGING_OFFSET_M, ge=0.0, description="staging pose behind each dock"
+    )
+    time_broadcast_hz: float = Field(
+        10.0, gt=0.0, le=100.0, description="how often viewers are told the time"
+    )
+    robots: list[str] = Field(
+        default_factory=list,
+        description="a fleet's robots (namespaces under the node's) "
+        "shown side by side, each one's frames under its name (r1/base_link) below the "
+        "shared map; empty: the node's own namespace, one robot",
+    )
 
     @field_validator("world")
     @classmethod
@@ -85,11 +96,16 @@ class VizService:
         try:
             self._view = LiveView(params.host, params.port, self._now_ns, self._on_viewer_subscribed)
         except RuntimeError as exc:  # the SDK's FoxgloveError: the port is taken, the address is not ours
-            raise ConfigError(f"cannot serve on {params.host}:{params.port}: {exc} (choose another with --port)") from None
+            raise ConfigError(
+                f"cannot serve on {params.host}:{params.port}: {exc} (choose another with --port)"
+            ) from None
         self._world_topic = view_topic(node.namespace, WORLD_VIEW_TOPIC)
         #: Each robot shown: its name (the frame prefix, "" for a lone robot) and its namespace.
-        self._robots = ([(r, topic_key(node.namespace, r)) for r in params.robots] if params.robots
-                        else [("", node.namespace)])
+        self._robots = (
+            [(r, topic_key(node.namespace, r)) for r in params.robots]
+            if params.robots
+            else [("", node.namespace)]
+        )
         self._map_received = False
         self._publish_scenes()
         #: On-demand views (camera frames): the Foxglove topic, and the bus subscription while a viewer watches.
@@ -106,8 +122,12 @@ class VizService:
         self._time_timer = node.create_timer(1.0 / params.time_broadcast_hz, self._broadcast_time, wall=True)
         self._map_timer = node.create_timer(MAP_REQUEST_PERIOD_S, self._request_map, wall=True)
         self._request_map()
-        self._log.info("Foxglove WebSocket on ws://%s:%d (open it in Foxglove or Lichtblick)%s",
-                       params.host, self._view.port, f", world {self._world.name}" if self._world else "")
+        self._log.info(
+            "Foxglove WebSocket on ws://%s:%d (open it in Foxglove or Lichtblick)%s",
+            params.host,
+            self._view.port,
+            f", world {self._world.name}" if self._world else "",
+        )
 
     @property
     def port(self) -> int:
@@ -131,8 +151,13 @@ class VizService:
     def _subscribe(self, view: View, robot: str, namespace: str) -> Subscription[Any]:
         qos = SENSOR_DATA if view.sensor else LATCHED_QOS if view.latched else STATE_QOS
         return self._node.create_subscription(
-            view.msg_type, topic_key(namespace, view.topic),
-            lambda key, msg, v=view, r=robot: self._on_message(v, key, msg, r), qos, with_key=True, absolute=True)
+            view.msg_type,
+            topic_key(namespace, view.topic),
+            lambda key, msg, v=view, r=robot: self._on_message(v, key, msg, r),
+            qos,
+            with_key=True,
+            absolute=True,
+        )
 
     def _follow_viewers(self) -> None:
         """Subscribe to an on-demand stream while a viewer watches it, so frames are made only then."""
@@ -157,8 +182,14 @@ class VizService:
         if self._map_received:
             self._map_timer.cancel()
             return
-        self._node.call_async(GET_MAP, topic_key(self._robots[0][1], GET_MAP_SERVICE), GetMapRequest(),
-                              self._on_map_reply, timeout_s=2.0, absolute=True)
+        self._node.call_async(
+            GET_MAP,
+            topic_key(self._robots[0][1], GET_MAP_SERVICE),
+            GetMapRequest(),
+            self._on_map_reply,
+            timeout_s=2.0,
+            absolute=True,
+        )
 
     def _on_map_reply(self, response: GetMapResponse | None, error: ServiceError | None) -> None:
         if response is None or self._map_received:
@@ -202,9 +233,13 @@ def _add_flags(parser: Any) -> dict[str, str]:
     return {"port": "port", "host": "host", "world": "world"}
 
 
-SERVICE = ServiceSpec("viz", Params, VizService,
-                      description="Live view: zendock topics on a Foxglove WebSocket server",
-                      add_flags=_add_flags)
+SERVICE = ServiceSpec(
+    "viz",
+    Params,
+    VizService,
+    description="Live view: zendock topics on a Foxglove WebSocket server",
+    add_flags=_add_flags,
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -109,25 +109,34 @@ class Contract:
         out += [("srv", r.name, r.type.type_name, r.required) for r in self.serves]
         for a in self.serves_actions:
             base = f"{a.name}/_action"
-            out += [("act", a.name, a.type.type_name, a.required),
-                    ("srv", f"{base}/send_goal", a.type.send_goal.type_name, a.required),
-                    ("srv", f"{base}/cancel_goal", "action_msgs/srv/CancelGoal", a.required),
-                    ("srv", f"{base}/get_result", a.type.get_result.type_name, False),
-                    ("pub", f"{base}/feedback", a.type.feedback_message.TYPE_NAME, a.required),
-                    ("pub", f"{base}/status", "action_msgs/msg/GoalStatusArray", a.required)]
+            out += [
+                ("act", a.name, a.type.type_name, a.required),
+                ("srv", f"{base}/send_goal", a.type.send_goal.type_name, a.required),
+                ("srv", f"{base}/cancel_goal", "action_msgs/srv/CancelGoal", a.required),
+                ("srv", f"{base}/get_result", a.type.get_result.type_name, False),
+                ("pub", f"{base}/feedback", a.type.feedback_message.TYPE_NAME, a.required),
+                ("pub", f"{base}/status", "action_msgs/msg/GoalStatusArray", a.required),
+            ]
         for a in self.uses_actions:
             base = f"{a.name}/_action"
-            out += [("sub", f"{base}/feedback", a.type.feedback_message.TYPE_NAME, False),
-                    ("sub", f"{base}/status", "action_msgs/msg/GoalStatusArray", False)]
+            out += [
+                ("sub", f"{base}/feedback", a.type.feedback_message.TYPE_NAME, False),
+                ("sub", f"{base}/status", "action_msgs/msg/GoalStatusArray", False),
+            ]
         return out
 
     def required_endpoints(self) -> list[tuple[str, str, str]]:
         """What every implementation must declare: what it publishes, serves and offers as actions. What it
         subscribes is what it may read: zendock's own reads all of it, a replacement what it needs."""
-        return [(kind, key, type_name) for kind, key, type_name, required in self.endpoints()
-                if required and kind != "sub"]
+        return [
+            (kind, key, type_name)
+            for kind, key, type_name, required in self.endpoints()
+            if required and kind != "sub"
+        ]
 
-    def check_endpoint(self, kind: str, type_name: str, key: str, node_name: str, namespace: str | None = None) -> None:
+    def check_endpoint(
+        self, kind: str, type_name: str, key: str, node_name: str, namespace: str | None = None
+    ) -> None:
         """Raise :class:`ContractViolation` unless the contract names this endpoint (``key`` is the full key).
 
         With ``namespace`` the key must be the name in exactly that namespace (``zendock conform`` knows
@@ -175,7 +184,10 @@ ENVIRONMENT: dict[str, str] = {
 COMMON_FLAGS: tuple[Flag, ...] = (
     Flag("--namespace NS", "the robot's namespace; overrides ZENDOCK_NAMESPACE"),
     Flag("--connect ENDPOINT", "repeatable; overrides ZENDOCK_CONNECT"),
-    Flag("-p NAME=VALUE", "repeatable; a parameter, the value in YAML; a replacement ignores the names it does not use"),
+    Flag(
+        "-p NAME=VALUE",
+        "repeatable; a parameter, the value in YAML; a replacement ignores the names it does not use",
+    ),
 )
 #: What a service announces on the bus, so launchers, ``zendock nodes`` and the ROS 2 bridge see it.
 ANNOUNCEMENTS: tuple[str, ...] = (

@@ -50,32 +50,46 @@ DOCKING_STATE = "docking/state"
 #: Camera images: best effort, only the latest.
 IMAGE_QOS = QoS(reliable=False, block=False, depth=1)
 CLOCK_QOS = QoS(reliable=True, depth=1)
-USE_SIM_TIME = Flag("use_sim_time", "follow the simulator's clock on `clock` (zendock's stacks always set true)", needed=True)
+USE_SIM_TIME = Flag(
+    "use_sim_time", "follow the simulator's clock on `clock` (zendock's stacks always set true)", needed=True
+)
 DOCK_DATABASE = Flag("dock_database", "the world file: its docks (pose, marker id, size) and staging offsets")
 
 BATTERY = Contract(
     service="battery",
     summary="A simulated battery: drains with motion, charges while the robot is mated with a dock.",
     publishes=(
-        Topic(topics.BATTERY_STATUS, BatteryState, RELIABLE, rate_hz=10.0,
-              about="the charge; power_supply_status CHARGING (1) while mated, DISCHARGING (2) otherwise, FULL (4)"),
+        Topic(
+            topics.BATTERY_STATUS,
+            BatteryState,
+            RELIABLE,
+            rate_hz=10.0,
+            about="the charge; power_supply_status CHARGING (1) while mated, DISCHARGING (2) otherwise, FULL (4)",
+        ),
     ),
     subscribes=(
         Topic(topics.ODOM, Odometry, SENSOR_DATA, rate_hz=20.0, about="the twist sets the motion load"),
         Topic(topics.DOCK_CONTACT, DockContact, QoS(depth=5), rate_hz=20.0, about="charging while `mated`"),
     ),
     serves=(
-        Request(topics.BATTERY_SET_STATE, SET_BATTERY_STATE,
-                about="set the charge and the drain/charge scales (NaN: leave as is); answers with the new state"),
+        Request(
+            topics.BATTERY_SET_STATE,
+            SET_BATTERY_STATE,
+            about="set the charge and the drain/charge scales (NaN: leave as is); answers with the new state",
+        ),
     ),
-    flags=(USE_SIM_TIME,
-           Flag("state_file", "keep the charge in this file across restarts"),
-           Flag("drain_scale", "the charge drains this many times faster"),
-           Flag("charge_scale", "the charge fills this many times faster"),
-           Flag("publish_rate_hz", "battery_status this often (10 Hz), and at once on a change of status")),
-    behaviour=("answers set_state: battery_status shows the charge it set",
-               "drains while the robot drives",
-               "charges while mated: CHARGING and a rising charge with the robot on the dock"),
+    flags=(
+        USE_SIM_TIME,
+        Flag("state_file", "keep the charge in this file across restarts"),
+        Flag("drain_scale", "the charge drains this many times faster"),
+        Flag("charge_scale", "the charge fills this many times faster"),
+        Flag("publish_rate_hz", "battery_status this often (10 Hz), and at once on a change of status"),
+    ),
+    behaviour=(
+        "answers set_state: battery_status shows the charge it set",
+        "drains while the robot drives",
+        "charges while mated: CHARGING and a rising charge with the robot on the dock",
+    ),
     needs=("simulator",),
 )
 
@@ -83,14 +97,22 @@ POSE = Contract(
     service="pose",
     summary="The robot's 2-D pose in the map, [x, y, yaw], from the tf tree (map -> odom -> base_link).",
     publishes=(
-        Topic(topics.POSE2D, Float64MultiArray, RELIABLE, rate_hz=10.0, about="data = [x_m, y_m, yaw_rad] in the map frame"),
+        Topic(
+            topics.POSE2D,
+            Float64MultiArray,
+            RELIABLE,
+            rate_hz=10.0,
+            about="data = [x_m, y_m, yaw_rad] in the map frame",
+        ),
     ),
     subscribes=(
         Topic(topics.TF, TFMessage, QoS(reliable=False, depth=100), rate_hz=20.0),
         Topic(topics.TF_STATIC, TFMessage, QoS(reliable=True, depth=20), rate_hz=1.0),
     ),
     flags=(USE_SIM_TIME,),
-    behaviour=("follows the robot: map_to_base_link_pose2d within 5 cm and 0.05 rad of the simulator's truth",),
+    behaviour=(
+        "follows the robot: map_to_base_link_pose2d within 5 cm and 0.05 rad of the simulator's truth",
+    ),
     needs=("simulator",),
 )
 
@@ -100,18 +122,44 @@ SIMULATOR = Contract(
     publishes=(
         Topic(topics.CLOCK, Clock, CLOCK_QOS, rate_hz=20.0, about="sim time: every other service's clock"),
         Topic(topics.ODOM, Odometry, RELIABLE, rate_hz=20.0),
-        Topic(topics.TF, TFMessage, RELIABLE, rate_hz=20.0, about="map -> odom (localisation) and odom -> base_link"),
+        Topic(
+            topics.TF,
+            TFMessage,
+            RELIABLE,
+            rate_hz=20.0,
+            about="map -> odom (localisation) and odom -> base_link",
+        ),
         Topic(topics.TF_STATIC, TFMessage, BLOCKING, rate_hz=1.0, about="the sensors' mounts on base_link"),
         Topic(topics.SCAN, LaserScan, SENSOR_DATA, rate_hz=10.0, about="the lidar: glass is invisible to it"),
         Topic(topics.ULTRASONIC, Range, SENSOR_DATA, rate_hz=20.0, about="the sonar: sees glass"),
         Topic(topics.DOCK_CONTACT, DockContact, RELIABLE, rate_hz=20.0, about="mated with a dock's contacts"),
-        Topic(topics.GROUND_TRUTH_POSE, PoseStamped, RELIABLE, rate_hz=20.0, about="the truth, for judging runs"),
-        Topic(topics.COLLISIONS, CollisionEvent, BLOCKING, about="each new contact with the world or a robot"),
-        Topic(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA,
-              about="with detection.source=synthetic: the true dock pose plus noise, while someone listens"),
-        Topic(topics.IR_DOCK, DockInfraRed, SENSOR_DATA, rate_hz=20.0, when="while someone listens",
-              about="the infrared receivers' near/far left/centre/right bits"),
-        Topic(topics.CAMERA_IMAGE, Image, SENSOR_DATA, rate_hz=15.0, when="with the camera enabled, while someone listens"),
+        Topic(
+            topics.GROUND_TRUTH_POSE, PoseStamped, RELIABLE, rate_hz=20.0, about="the truth, for judging runs"
+        ),
+        Topic(
+            topics.COLLISIONS, CollisionEvent, BLOCKING, about="each new contact with the world or a robot"
+        ),
+        Topic(
+            topics.DETECTED_DOCK_POSE,
+            PoseStamped,
+            SENSOR_DATA,
+            about="with detection.source=synthetic: the true dock pose plus noise, while someone listens",
+        ),
+        Topic(
+            topics.IR_DOCK,
+            DockInfraRed,
+            SENSOR_DATA,
+            rate_hz=20.0,
+            when="while someone listens",
+            about="the infrared receivers' near/far left/centre/right bits",
+        ),
+        Topic(
+            topics.CAMERA_IMAGE,
+            Image,
+            SENSOR_DATA,
+            rate_hz=15.0,
+            when="with the camera enabled, while someone listens",
+        ),
         Topic(topics.CAMERA_INFO, CameraInfo, SENSOR_DATA, rate_hz=15.0, when="with the camera enabled"),
     ),
     subscribes=(
@@ -123,13 +171,19 @@ SIMULATOR = Contract(
         Request(topics.SIM_STATE, SIM_STATE, about="the truth and counters"),
         Request(topics.SIM_SET_LOCALISATION, SET_LOCALISATION, about="set the map -> odom error"),
     ),
-    flags=(Flag("world", "the world file (as --world)", needed=True), Flag("rtf", "real-time factor, or max"),
-           Flag("seed", "noise seed"), Flag("robots", "robot namespaces served"),
-           Flag("localisation.error", "[x_m, y_m, yaw_rad] map -> odom error"),
-           Flag("detection.source", "aruco (camera images) or synthetic (noisy truth)")),
-    behaviour=("keeps the clock: sim time advances",
-               "drives: odom shows motion after cmd_vel",
-               "answers teleport: ground_truth_pose moves to the asked pose"),
+    flags=(
+        Flag("world", "the world file (as --world)", needed=True),
+        Flag("rtf", "real-time factor, or max"),
+        Flag("seed", "noise seed"),
+        Flag("robots", "robot namespaces served"),
+        Flag("localisation.error", "[x_m, y_m, yaw_rad] map -> odom error"),
+        Flag("detection.source", "aruco (camera images) or synthetic (noisy truth)"),
+    ),
+    behaviour=(
+        "keeps the clock: sim time advances",
+        "drives: odom shows motion after cmd_vel",
+        "answers teleport: ground_truth_pose moves to the asked pose",
+    ),
 )
 
 PLANNER = Contract(
@@ -139,7 +193,9 @@ PLANNER = Contract(
         Topic(topics.CMD_VEL, Twist, RELIABLE, when="while navigating", about="drives toward the goal"),
         Topic(topics.PLAN, Path, RELIABLE, about="the global plan, at each (re)plan"),
         Topic(topics.MAP, OccupancyGrid, RELIABLE, about="the static map, on start and on load_map"),
-        Topic(COSTMAP_TOPIC, OccupancyGrid, QoS(reliable=False, depth=1), about="the costmap with glass marks"),
+        Topic(
+            COSTMAP_TOPIC, OccupancyGrid, QoS(reliable=False, depth=1), about="the costmap with glass marks"
+        ),
     ),
     subscribes=(
         Topic(topics.POSE2D, Float64MultiArray, QoS(depth=1), rate_hz=10.0),
@@ -153,12 +209,23 @@ PLANNER = Contract(
         Request(LOAD_MAP_SERVICE, LOAD_MAP),
         Request(GET_MAP_SERVICE, GET_MAP),
     ),
-    serves_actions=(Action(topics.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE,
-                           about="one goal at a time: a new goal preempts the active one (CANCELED)"),),
-    flags=(USE_SIM_TIME, Flag("map_yaml", "the occupancy map (zendock map save)", needed=True),
-           Flag("glass_memory_file", "keep the glass marks across restarts"),
-           Flag("max_linear_vel_mps", "speed limit"), Flag("costmap_update_rate_hz", "sensor folding rate")),
-    behaviour=("navigates: a navigate_to_pose goal 1 m away gets feedback and SUCCEEDED, the robot within 25 cm of it",),
+    serves_actions=(
+        Action(
+            topics.NAVIGATE_TO_POSE,
+            NAVIGATE_TO_POSE,
+            about="one goal at a time: a new goal preempts the active one (CANCELED)",
+        ),
+    ),
+    flags=(
+        USE_SIM_TIME,
+        Flag("map_yaml", "the occupancy map (zendock map save)", needed=True),
+        Flag("glass_memory_file", "keep the glass marks across restarts"),
+        Flag("max_linear_vel_mps", "speed limit"),
+        Flag("costmap_update_rate_hz", "sensor folding rate"),
+    ),
+    behaviour=(
+        "navigates: a navigate_to_pose goal 1 m away gets feedback and SUCCEEDED, the robot within 25 cm of it",
+    ),
     needs=("simulator", "pose"),
 )
 
@@ -170,7 +237,9 @@ DOCKING = Contract(
         Topic(DOCKING_STATE, String, RELIABLE, about="the phase in words, at each change"),
     ),
     subscribes=(
-        Topic(topics.BATTERY_STATUS, BatteryState, QoS(depth=5), about="the trigger (below 25 %) and CHARGING"),
+        Topic(
+            topics.BATTERY_STATUS, BatteryState, QoS(depth=5), about="the trigger (below 25 %) and CHARGING"
+        ),
         Topic(topics.POSE2D, Float64MultiArray, QoS(depth=1)),
         Topic(topics.ODOM, Odometry, SENSOR_DATA),
         Topic(topics.SCAN, LaserScan, SENSOR_DATA),
@@ -178,21 +247,38 @@ DOCKING = Contract(
         Topic(topics.TF_STATIC, TFMessage, QoS(depth=20)),
         Topic(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA, when="while it wants dock detections"),
         Topic(topics.IR_DOCK, DockInfraRed, SENSOR_DATA, when="with controller=ir"),
-        Topic(topics.POSE2D, Float64MultiArray, QoS(depth=20), when="with fleet=true", fleet_wide=True,
-              about="the other robots' poses (*/map_to_base_link_pose2d)"),
+        Topic(
+            topics.POSE2D,
+            Float64MultiArray,
+            QoS(depth=20),
+            when="with fleet=true",
+            fleet_wide=True,
+            about="the other robots' poses (*/map_to_base_link_pose2d)",
+        ),
         Topic(topics.BATTERY_STATUS, BatteryState, QoS(depth=20), when="with fleet=true", fleet_wide=True),
         Topic(DOCKING_STATE, String, QoS(depth=20), when="with fleet=true", fleet_wide=True),
         Topic(topics.PLAN, Path, QoS(depth=20), when="with fleet=true", fleet_wide=True),
     ),
-    calls=(Request(topics.FLEET_RESERVE_DOCK, RESERVE_DOCK, when="with fleet=true"),
-           Request(topics.FLEET_RELEASE_DOCK, RELEASE_DOCK, when="with fleet=true")),
-    serves_actions=(Action(topics.DOCK_ROBOT, DOCK_ROBOT, about="dock at dock_id (or the nearest dock)"),
-                    Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT, about="back off the dock to the staging pose")),
+    calls=(
+        Request(topics.FLEET_RESERVE_DOCK, RESERVE_DOCK, when="with fleet=true"),
+        Request(topics.FLEET_RELEASE_DOCK, RELEASE_DOCK, when="with fleet=true"),
+    ),
+    serves_actions=(
+        Action(topics.DOCK_ROBOT, DOCK_ROBOT, about="dock at dock_id (or the nearest dock)"),
+        Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT, about="back off the dock to the staging pose"),
+    ),
     uses_actions=(Action(topics.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE, about="to the staging pose"),),
-    flags=(USE_SIM_TIME, DOCK_DATABASE, Flag("controller", "graceful, seed or ir: zendock's own approach laws"),
-           Flag("fleet", "share docks through the fleet service"), Flag("resume_at", "undock at this charge (fleet)")),
-    behaviour=("docks: a dock_robot goal from 1.5 m in front of the dock gets feedback and a successful result, "
-               "and battery_status says CHARGING (or FULL, when the charge was nearly full)",),
+    flags=(
+        USE_SIM_TIME,
+        DOCK_DATABASE,
+        Flag("controller", "graceful, seed or ir: zendock's own approach laws"),
+        Flag("fleet", "share docks through the fleet service"),
+        Flag("resume_at", "undock at this charge (fleet)"),
+    ),
+    behaviour=(
+        "docks: a dock_robot goal from 1.5 m in front of the dock gets feedback and a successful result, "
+        "and battery_status says CHARGING (or FULL, when the charge was nearly full)",
+    ),
     needs=("simulator", "battery", "pose", "planner"),
 )
 
@@ -200,10 +286,20 @@ PERCEPTION = Contract(
     service="perception",
     summary="The dock from pixels: ArUco markers in camera images become detected_dock_pose.",
     publishes=(
-        Topic(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA, about="the dock in base_link, from pixels alone"),
+        Topic(
+            topics.DETECTED_DOCK_POSE,
+            PoseStamped,
+            SENSOR_DATA,
+            about="the dock in base_link, from pixels alone",
+        ),
         Topic(topics.DOCK_DETECTIONS, DockDetection, RELIABLE, about="each detection with its quality"),
-        Topic(topics.ARUCO_DEBUG_IMAGE, Image, IMAGE_QOS, when="optional: a view for people",
-              about="the image with the markers drawn, while someone listens"),
+        Topic(
+            topics.ARUCO_DEBUG_IMAGE,
+            Image,
+            IMAGE_QOS,
+            when="optional: a view for people",
+            about="the image with the markers drawn, while someone listens",
+        ),
     ),
     subscribes=(
         Topic(topics.CAMERA_INFO, CameraInfo, QoS(depth=1)),
@@ -211,7 +307,9 @@ PERCEPTION = Contract(
         Topic(topics.CAMERA_IMAGE, Image, IMAGE_QOS, when="while someone listens to its detections"),
     ),
     flags=(DOCK_DATABASE, Flag("dock_detector", "aruco, or synthetic (then it stays idle)")),
-    behaviour=("sees the dock: with the robot 1 m in front of the dock, detected_dock_pose within 5 cm of the truth",),
+    behaviour=(
+        "sees the dock: with the robot 1 m in front of the dock, detected_dock_pose within 5 cm of the truth",
+    ),
     needs=("simulator",),
 )
 
@@ -237,7 +335,9 @@ VIZ = Contract(
     ),
     calls=(Request(GET_MAP_SERVICE, GET_MAP, about="the map, once, if none arrived"),),
     flags=(Flag("world", "the world file to draw (as --world)"), Flag("port", "WebSocket port (loopback)")),
-    notes=("Its behaviour is a WebSocket server for viewers, outside the bus; conform checks its endpoints only.",),
+    notes=(
+        "Its behaviour is a WebSocket server for viewers, outside the bus; conform checks its endpoints only.",
+    ),
 )
 
 FLEET = Contract(
@@ -261,8 +361,11 @@ ROS2_BRIDGE = Contract(
     publishes=(
         Topic(topics.CMD_VEL, Twist, RELIABLE, about="from ROS 2's /cmd_vel (Twist or TwistStamped)"),
     ),
-    uses_actions=(Action(topics.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE), Action(topics.DOCK_ROBOT, DOCK_ROBOT),
-                  Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT)),
+    uses_actions=(
+        Action(topics.NAVIGATE_TO_POSE, NAVIGATE_TO_POSE),
+        Action(topics.DOCK_ROBOT, DOCK_ROBOT),
+        Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT),
+    ),
     subscribes_on_demand=True,
     flags=(Flag("domain_id", "the ROS_DOMAIN_ID of its rmw_zenoh face", needed=True),),
     behaviour=("shows zendock to ROS 2: an rmw_zenoh node token for each zendock service",),
@@ -277,12 +380,16 @@ ROS2_DDS = replace(
     summary="zendock seen from ROS 2 on DDS (real rclpy, Fast DDS): nodes, topics, actions, forwarded only while wanted.",
     flags=(Flag("domain_id", "the ROS_DOMAIN_ID of its rclpy (DDS) face", needed=True),),
     behaviour=("shows zendock to ROS 2 on DDS: an rclpy node for each zendock service that is up",),
-    notes=("It subscribes to a robot's topics only while a ROS 2 subscriber matches (transient-local ones "
-           "always), and runs from .venv-ros2 (make ros2).",),
+    notes=(
+        "It subscribes to a robot's topics only while a ROS 2 subscriber matches (transient-local ones "
+        "always), and runs from .venv-ros2 (make ros2).",
+    ),
 )
 
-CONTRACTS: dict[str, Contract] = {c.service: c for c in (
-    BATTERY, DOCKING, FLEET, PERCEPTION, PLANNER, POSE, ROS2_BRIDGE, ROS2_DDS, SIMULATOR, VIZ)}
+CONTRACTS: dict[str, Contract] = {
+    c.service: c
+    for c in (BATTERY, DOCKING, FLEET, PERCEPTION, PLANNER, POSE, ROS2_BRIDGE, ROS2_DDS, SIMULATOR, VIZ)
+}
 
 
 def contract_for(service: str) -> Contract | None:

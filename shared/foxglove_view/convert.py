@@ -42,34 +42,46 @@ from shared.topics import MAP_FRAME
 #: A quarter turn about y: a cylinder's z axis (Foxglove's) onto the sensor's x axis (its line of sight).
 _Z_TO_X = fg.Quaternion(x=0.0, y=math.sqrt(0.5), z=0.0, w=math.sqrt(0.5))
 
-BATTERY_SCHEMA = json_schema("zendock.BatteryStatus", {
-    "percentage": {"type": "number", "description": "state of charge, 0..1"},
-    "voltage": {"type": ["number", "null"]},
-    "current": {"type": ["number", "null"]},
-    "charge": {"type": ["number", "null"]},
-    "power_supply_status": {"type": "integer"},
-    "status": {"type": "string"},
-})
-RANGE_SCHEMA = json_schema("zendock.Range", {
-    "range": {"type": ["number", "null"], "description": "metres; null when nothing is in range"},
-    "min_range": {"type": "number"},
-    "max_range": {"type": "number"},
-    "field_of_view": {"type": "number"},
-})
-DOCK_CONTACT_SCHEMA = json_schema("zendock.DockContact", {
-    "dock_id": {"type": "string"},
-    "mated": {"type": "boolean"},
-    "touching": {"type": "boolean"},
-    "lateral_error_m": {"type": "number"},
-    "yaw_error_rad": {"type": "number"},
-    "along_error_m": {"type": "number"},
-})
-COLLISION_SCHEMA = json_schema("zendock.CollisionEvent", {
-    "kind": {"type": "string"},
-    "count": {"type": "integer"},
-    "x": {"type": "number"},
-    "y": {"type": "number"},
-})
+BATTERY_SCHEMA = json_schema(
+    "zendock.BatteryStatus",
+    {
+        "percentage": {"type": "number", "description": "state of charge, 0..1"},
+        "voltage": {"type": ["number", "null"]},
+        "current": {"type": ["number", "null"]},
+        "charge": {"type": ["number", "null"]},
+        "power_supply_status": {"type": "integer"},
+        "status": {"type": "string"},
+    },
+)
+RANGE_SCHEMA = json_schema(
+    "zendock.Range",
+    {
+        "range": {"type": ["number", "null"], "description": "metres; null when nothing is in range"},
+        "min_range": {"type": "number"},
+        "max_range": {"type": "number"},
+        "field_of_view": {"type": "number"},
+    },
+)
+DOCK_CONTACT_SCHEMA = json_schema(
+    "zendock.DockContact",
+    {
+        "dock_id": {"type": "string"},
+        "mated": {"type": "boolean"},
+        "touching": {"type": "boolean"},
+        "lateral_error_m": {"type": "number"},
+        "yaw_error_rad": {"type": "number"},
+        "along_error_m": {"type": "number"},
+    },
+)
+COLLISION_SCHEMA = json_schema(
+    "zendock.CollisionEvent",
+    {
+        "kind": {"type": "string"},
+        "count": {"type": "integer"},
+        "x": {"type": "number"},
+        "y": {"type": "number"},
+    },
+)
 
 _BATTERY_STATUS_NAMES = {
     BatteryState.POWER_SUPPLY_STATUS_UNKNOWN: "unknown",
@@ -94,10 +106,15 @@ def frame_transforms(topic: str, msg: TFMessage) -> list[ViewMessage]:
             timestamp=timestamp(t.header.stamp),
             parent_frame_id=t.header.frame_id,
             child_frame_id=t.child_frame_id,
-            translation=fg.Vector3(x=t.transform.translation.x, y=t.transform.translation.y,
-                                   z=t.transform.translation.z),
-            rotation=fg.Quaternion(x=t.transform.rotation.x, y=t.transform.rotation.y,
-                                   z=t.transform.rotation.z, w=t.transform.rotation.w),
+            translation=fg.Vector3(
+                x=t.transform.translation.x, y=t.transform.translation.y, z=t.transform.translation.z
+            ),
+            rotation=fg.Quaternion(
+                x=t.transform.rotation.x,
+                y=t.transform.rotation.y,
+                z=t.transform.rotation.z,
+                w=t.transform.rotation.w,
+            ),
         )
         for t in msg.transforms
     ]
@@ -194,7 +211,9 @@ def occupancy_grid(topic: str, msg: OccupancyGrid, costmap: bool = False) -> lis
     packed[:, 0] = cells.view(np.uint8)
     packed[:, 1:] = _cost_colors(cells) if costmap else _map_colors(cells)
     fields = [
-        fg.PackedElementField(name="cost" if costmap else "occupancy", offset=0, type=fg.PackedElementFieldNumericType.Int8),
+        fg.PackedElementField(
+            name="cost" if costmap else "occupancy", offset=0, type=fg.PackedElementFieldNumericType.Int8
+        ),
         fg.PackedElementField(name="red", offset=1, type=fg.PackedElementFieldNumericType.Uint8),
         fg.PackedElementField(name="green", offset=2, type=fg.PackedElementFieldNumericType.Uint8),
         fg.PackedElementField(name="blue", offset=3, type=fg.PackedElementFieldNumericType.Uint8),
@@ -228,8 +247,9 @@ def path_poses(topic: str, msg: Path) -> list[ViewMessage]:
 
 
 def pose_stamped(topic: str, msg: PoseStamped) -> list[ViewMessage]:
-    pose = fg.PoseInFrame(timestamp=timestamp(msg.header.stamp), frame_id=msg.header.frame_id,
-                          pose=foxglove_pose(msg.pose))
+    pose = fg.PoseInFrame(
+        timestamp=timestamp(msg.header.stamp), frame_id=msg.header.frame_id, pose=foxglove_pose(msg.pose)
+    )
     return [protobuf_view(topic, pose, stamp_ns(msg.header.stamp))]
 
 
@@ -239,8 +259,15 @@ RAW_IMAGE_SCHEMA = protobuf_schema(fg.RawImage)
 
 def raw_image(topic: str, msg: Image) -> list[ViewMessage]:
     """A camera frame as Foxglove's RawImage (mono8, rgb8, ... as they come: the same encodings)."""
-    image = fg.RawImage(timestamp=timestamp(msg.header.stamp), frame_id=msg.header.frame_id, width=msg.width,
-                        height=msg.height, encoding=msg.encoding, step=msg.step, data=msg.data.tobytes())
+    image = fg.RawImage(
+        timestamp=timestamp(msg.header.stamp),
+        frame_id=msg.header.frame_id,
+        width=msg.width,
+        height=msg.height,
+        encoding=msg.encoding,
+        step=msg.step,
+        data=msg.data.tobytes(),
+    )
     return [protobuf_view(topic, image, stamp_ns(msg.header.stamp))]
 
 

@@ -65,7 +65,9 @@ def json_schema(title: str, properties: dict[str, Any]) -> ViewSchema:
     return ViewSchema(title, "jsonschema", json.dumps(document, sort_keys=True).encode(), "json")
 
 
-def json_view(topic: str, schema: ViewSchema, record: dict[str, Any], stamp_ns: int | None = None) -> ViewMessage:
+def json_view(
+    topic: str, schema: ViewSchema, record: dict[str, Any], stamp_ns: int | None = None
+) -> ViewMessage:
     """A JSON record; NaN and infinities (unmeasured values) become ``null``, which JSON can carry."""
     clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()}
     return ViewMessage(topic, schema, json.dumps(clean, separators=(",", ":")).encode(), stamp_ns)

@@ -65,8 +65,14 @@ def _arrow(pose: Pose2D, color: fg.Color, length_m: float = 0.3) -> fg.ArrowPrim
 
 
 def _label(x: float, y: float, text: str) -> fg.TextPrimitive:
-    return fg.TextPrimitive(pose=_pose(x, y, 0.5, 0.0), billboard=True, font_size=14.0, scale_invariant=True,
-                         color=LABEL_COLOR, text=text)
+    return fg.TextPrimitive(
+        pose=_pose(x, y, 0.5, 0.0),
+        billboard=True,
+        font_size=14.0,
+        scale_invariant=True,
+        color=LABEL_COLOR,
+        text=text,
+    )
 
 
 def staging_pose(dock_pose: Pose2D, staging_offset_m: float = DEFAULT_STAGING_OFFSET_M) -> Pose2D:
@@ -74,47 +80,97 @@ def staging_pose(dock_pose: Pose2D, staging_offset_m: float = DEFAULT_STAGING_OF
     return dock_pose.compose(Pose2D(-staging_offset_m, 0.0, 0.0))
 
 
-def world_entities(world: World, stamp_ns: int = 0,
-                   staging_offset_m: float = DEFAULT_STAGING_OFFSET_M) -> list[fg.SceneEntity]:
+def world_entities(
+    world: World, stamp_ns: int = 0, staging_offset_m: float = DEFAULT_STAGING_OFFSET_M
+) -> list[fg.SceneEntity]:
     """Walls, glass, boxes and docks of ``world`` in the map frame (ids stable, so updates replace)."""
     ts = timestamp_from_ns(stamp_ns)
 
-    def entity(entity_id: str, cubes: list[fg.CubePrimitive] | None = None, arrows: list[fg.ArrowPrimitive] | None = None,
-               texts: list[fg.TextPrimitive] | None = None) -> fg.SceneEntity:
-        return fg.SceneEntity(timestamp=ts, frame_id=MAP_FRAME, id=entity_id, frame_locked=True, cubes=cubes,
-                              arrows=arrows, texts=texts)
+    def entity(
+        entity_id: str,
+        cubes: list[fg.CubePrimitive] | None = None,
+        arrows: list[fg.ArrowPrimitive] | None = None,
+        texts: list[fg.TextPrimitive] | None = None,
+    ) -> fg.SceneEntity:
+        return fg.SceneEntity(
+            timestamp=ts,
+            frame_id=MAP_FRAME,
+            id=entity_id,
+            frame_locked=True,
+            cubes=cubes,
+            arrows=arrows,
+            texts=texts,
+        )
 
-    walls = [_segment_cube(s, WALL_THICKNESS_M, WALL_HEIGHT_M, WALL_COLOR) for s in world.boundary_walls() + world.walls]
+    walls = [
+        _segment_cube(s, WALL_THICKNESS_M, WALL_HEIGHT_M, WALL_COLOR)
+        for s in world.boundary_walls() + world.walls
+    ]
     glass = [_segment_cube(s, WALL_THICKNESS_M, GLASS_HEIGHT_M, GLASS_COLOR) for s in world.glass]
     boxes = [
-        fg.CubePrimitive(pose=_pose(b.pose[0], b.pose[1], BOX_HEIGHT_M / 2.0, b.pose[2]),
-                         size=fg.Vector3(x=b.size[0], y=b.size[1], z=BOX_HEIGHT_M), color=BOX_COLOR)
+        fg.CubePrimitive(
+            pose=_pose(b.pose[0], b.pose[1], BOX_HEIGHT_M / 2.0, b.pose[2]),
+            size=fg.Vector3(x=b.size[0], y=b.size[1], z=BOX_HEIGHT_M),
+            color=BOX_COLOR,
+        )
         for b in world.boxes
     ]
     entities = [entity("walls", cubes=walls), entity("glass", cubes=glass), entity("boxes", cubes=boxes)]
     for dock in world.docks:
         body = DOCK_GEOMETRY.body_box(dock)
-        cube = fg.CubePrimitive(pose=_pose(body.pose[0], body.pose[1], DOCK_HEIGHT_M / 2.0, body.pose[2]),
-                                size=fg.Vector3(x=body.size[0], y=body.size[1], z=DOCK_HEIGHT_M), color=DOCK_COLOR)
+        cube = fg.CubePrimitive(
+            pose=_pose(body.pose[0], body.pose[1], DOCK_HEIGHT_M / 2.0, body.pose[2]),
+            size=fg.Vector3(x=body.size[0], y=body.size[1], z=DOCK_HEIGHT_M),
+            color=DOCK_COLOR,
+        )
         staging = staging_pose(dock.pose2d, staging_offset_m)
-        entities.append(entity(f"dock/{dock.id}", cubes=[cube], arrows=[_arrow(dock.pose2d, DOCK_COLOR)],
-                               texts=[_label(dock.pose[0], dock.pose[1], f"dock {dock.id}")]))
-        entities.append(entity(f"staging/{dock.id}", arrows=[_arrow(staging, STAGING_COLOR)],
-                               texts=[_label(staging.x, staging.y, f"staging {dock.id}")]))
+        entities.append(
+            entity(
+                f"dock/{dock.id}",
+                cubes=[cube],
+                arrows=[_arrow(dock.pose2d, DOCK_COLOR)],
+                texts=[_label(dock.pose[0], dock.pose[1], f"dock {dock.id}")],
+            )
+        )
+        entities.append(
+            entity(
+                f"staging/{dock.id}",
+                arrows=[_arrow(staging, STAGING_COLOR)],
+                texts=[_label(staging.x, staging.y, f"staging {dock.id}")],
+            )
+        )
     return entities
 
 
-def world_scene(topic: str, world: World, stamp_ns: int = 0,
-                staging_offset_m: float = DEFAULT_STAGING_OFFSET_M) -> ViewMessage:
-    return protobuf_view(topic, fg.SceneUpdate(entities=world_entities(world, stamp_ns, staging_offset_m)), stamp_ns)
+def world_scene(
+    topic: str, world: World, stamp_ns: int = 0, staging_offset_m: float = DEFAULT_STAGING_OFFSET_M
+) -> ViewMessage:
+    return protobuf_view(
+        topic, fg.SceneUpdate(entities=world_entities(world, stamp_ns, staging_offset_m)), stamp_ns
+    )
 
 
 def robot_scene(topic: str, stamp_ns: int = 0, frame_id: str = BASE_FRAME) -> ViewMessage:
     """The robot's footprint and heading, locked to its base frame."""
-    body = fg.CubePrimitive(pose=_pose(0.0, 0.0, ROBOT_HEIGHT_M / 2.0, 0.0),
-                            size=fg.Vector3(x=ROBOT_LENGTH_M, y=ROBOT_WIDTH_M, z=ROBOT_HEIGHT_M), color=ROBOT_COLOR)
-    heading = fg.ArrowPrimitive(pose=_pose(0.0, 0.0, ROBOT_HEIGHT_M + 0.01, 0.0), shaft_length=0.2, shaft_diameter=0.03,
-                                head_length=0.08, head_diameter=0.08, color=LABEL_COLOR)
-    entity = fg.SceneEntity(timestamp=timestamp_from_ns(stamp_ns), frame_id=frame_id, id="robot", frame_locked=True,
-                            cubes=[body], arrows=[heading])
+    body = fg.CubePrimitive(
+        pose=_pose(0.0, 0.0, ROBOT_HEIGHT_M / 2.0, 0.0),
+        size=fg.Vector3(x=ROBOT_LENGTH_M, y=ROBOT_WIDTH_M, z=ROBOT_HEIGHT_M),
+        color=ROBOT_COLOR,
+    )
+    heading = fg.ArrowPrimitive(
+        pose=_pose(0.0, 0.0, ROBOT_HEIGHT_M + 0.01, 0.0),
+        shaft_length=0.2,
+        shaft_diameter=0.03,
+        head_length=0.08,
+        head_diameter=0.08,
+        color=LABEL_COLOR,
+    )
+    entity = fg.SceneEntity(
+        timestamp=timestamp_from_ns(stamp_ns),
+        frame_id=frame_id,
+        id="robot",
+        frame_locked=True,
+        cubes=[body],
+        arrows=[heading],
+    )
     return protobuf_view(topic, fg.SceneUpdate(entities=[entity]), stamp_ns)

@@ -70,9 +70,22 @@ VIEWS: tuple[View, ...] = (
     View(topics.BATTERY_STATUS, BatteryState, convert.battery_status),
     View(topics.DOCK_CONTACT, DockContact, convert.dock_contact),
     View(topics.COLLISIONS, CollisionEvent, convert.collision, latched=True),
-    View(topics.CAMERA_IMAGE, Image, convert.raw_image, sensor=True, on_demand=True, schema=convert.RAW_IMAGE_SCHEMA),
-    View(topics.ARUCO_DEBUG_IMAGE, Image, convert.raw_image, sensor=True, on_demand=True,
-         schema=convert.RAW_IMAGE_SCHEMA),
+    View(
+        topics.CAMERA_IMAGE,
+        Image,
+        convert.raw_image,
+        sensor=True,
+        on_demand=True,
+        schema=convert.RAW_IMAGE_SCHEMA,
+    ),
+    View(
+        topics.ARUCO_DEBUG_IMAGE,
+        Image,
+        convert.raw_image,
+        sensor=True,
+        on_demand=True,
+        schema=convert.RAW_IMAGE_SCHEMA,
+    ),
 )
 
 

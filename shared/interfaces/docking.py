@@ -68,7 +68,9 @@ class UndockRobotFeedback(Message):
     pass
 
 
-DOCK_ROBOT = ActionType("opennav_docking_msgs/action/DockRobot", DockRobotGoal, DockRobotResult, DockRobotFeedback)
+DOCK_ROBOT = ActionType(
+    "opennav_docking_msgs/action/DockRobot", DockRobotGoal, DockRobotResult, DockRobotFeedback
+)
 UNDOCK_ROBOT = ActionType(
     "opennav_docking_msgs/action/UndockRobot", UndockRobotGoal, UndockRobotResult, UndockRobotFeedback
 )

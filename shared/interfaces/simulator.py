@@ -64,4 +64,6 @@ class SetLocalisationResponse(Message):
 
 TELEPORT = ServiceType("zendock_msgs/srv/Teleport", TeleportRequest, TeleportResponse)
 SIM_STATE = ServiceType("zendock_msgs/srv/SimState", SimStateRequest, SimStateResponse)
-SET_LOCALISATION = ServiceType("zendock_msgs/srv/SetLocalisation", SetLocalisationRequest, SetLocalisationResponse)
+SET_LOCALISATION = ServiceType(
+    "zendock_msgs/srv/SetLocalisation", SetLocalisationRequest, SetLocalisationResponse
+)

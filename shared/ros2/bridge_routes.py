@@ -54,8 +54,13 @@ class Route:
         return self.qos == LATCHED
 
 
-def _out(topic: str, zendock_type: type[Message], owner: str, qos: QosProfile = RELIABLE,
-         ros_type: str | None = None) -> Route:
+def _out(
+    topic: str,
+    zendock_type: type[Message],
+    owner: str,
+    qos: QosProfile = RELIABLE,
+    ros_type: str | None = None,
+) -> Route:
     return Route(topic, topic, zendock_type, ros_type or zendock_type.TYPE_NAME, owner, qos)
 
 
@@ -81,9 +86,19 @@ def _action_topics(action: BridgedAction) -> tuple[Route, ...]:
     """An action's feedback and status topics (its services are relayed by each face on its own)."""
     parts = interfaces.action_parts(action.ros_type)
     return (
-        _out(action_key(action.name, "feedback"), action.zendock.feedback_message, action.owner,
-             ros_type=parts["feedback"]),
-        _out(action_key(action.name, "status"), GoalStatusArray, action.owner, LATCHED, ros_type=parts["status"]),
+        _out(
+            action_key(action.name, "feedback"),
+            action.zendock.feedback_message,
+            action.owner,
+            ros_type=parts["feedback"],
+        ),
+        _out(
+            action_key(action.name, "status"),
+            GoalStatusArray,
+            action.owner,
+            LATCHED,
+            ros_type=parts["status"],
+        ),
     )
 
 
@@ -133,7 +148,9 @@ INBOUND: tuple[Inbound, ...] = (
     Inbound(topics.CMD_VEL, TWIST_STAMPED, "simulator", Twist),
     Inbound(GOAL_POSE, "geometry_msgs/msg/PoseStamped", "planner", PoseStamped),
     # zendock's localiser is the simulator's (map -> odom): it takes the estimate.
-    Inbound(INITIAL_POSE, "geometry_msgs/msg/PoseWithCovarianceStamped", "simulator", PoseWithCovarianceStamped),
+    Inbound(
+        INITIAL_POSE, "geometry_msgs/msg/PoseWithCovarianceStamped", "simulator", PoseWithCovarianceStamped
+    ),
 )
 
 

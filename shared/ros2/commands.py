@@ -41,28 +41,49 @@ class RosCommands:
     def goal_pose(self, goal: PoseStamped) -> None:
         frame = goal.header.frame_id.lstrip("/")
         if frame not in ("", topics.MAP_FRAME):
-            self._refuse("goal-frame", "refused a goal in frame %r: zendock plans in %r", goal.header.frame_id,
-                         topics.MAP_FRAME)
+            self._refuse(
+                "goal-frame",
+                "refused a goal in frame %r: zendock plans in %r",
+                goal.header.frame_id,
+                topics.MAP_FRAME,
+            )
             return
         target = goal.pose.to_pose2d()
-        self._node.log.info("goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw)
+        self._node.log.info(
+            "goal from ROS 2: navigating to (%.2f, %.2f, %.2f)", target.x, target.y, target.yaw
+        )
         self._navigate(goal)
 
     def initial_pose(self, estimate: PoseWithCovarianceStamped) -> None:
         frame = estimate.header.frame_id.lstrip("/")
         if frame not in ("", topics.MAP_FRAME):
-            self._refuse("initialpose-frame", "refused an initial pose in frame %r: zendock localises in %r",
-                         estimate.header.frame_id, topics.MAP_FRAME)
+            self._refuse(
+                "initialpose-frame",
+                "refused an initial pose in frame %r: zendock localises in %r",
+                estimate.header.frame_id,
+                topics.MAP_FRAME,
+            )
             return
         belief = estimate.pose.pose.to_pose2d()
 
         def done(reply: SetLocalisationResponse | None, error: ServiceError | None) -> None:
             if error is not None or reply is None or not reply.success:
-                self._refuse("initialpose-failed", "the simulator's localiser did not take the initial pose: %s",
-                             error or (reply.message if reply else "no reply"))
+                self._refuse(
+                    "initialpose-failed",
+                    "the simulator's localiser did not take the initial pose: %s",
+                    error or (reply.message if reply else "no reply"),
+                )
             else:
-                self._node.log.info("initial pose from ROS 2: the localiser now believes (%.2f, %.2f, %.2f)",
-                                    belief.x, belief.y, belief.yaw)
+                self._node.log.info(
+                    "initial pose from ROS 2: the localiser now believes (%.2f, %.2f, %.2f)",
+                    belief.x,
+                    belief.y,
+                    belief.yaw,
+                )
 
-        self._node.call_async(SET_LOCALISATION, topics.SIM_SET_LOCALISATION,
-                              SetLocalisationRequest(x=belief.x, y=belief.y, yaw=belief.yaw), done)
+        self._node.call_async(
+            SET_LOCALISATION,
+            topics.SIM_SET_LOCALISATION,
+            SetLocalisationRequest(x=belief.x, y=belief.y, yaw=belief.yaw),
+            done,
+        )

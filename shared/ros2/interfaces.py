@@ -71,12 +71,26 @@ def definitions() -> TypeDefs:
         defs.update(_messages(goal, f"{action}_Goal"))
         defs.update(_messages(result, f"{action}_Result"))
         defs.update(_messages(feedback, f"{action}_Feedback"))
-        defs.update(service_definitions(f"{action}_SendGoal", f"unique_identifier_msgs/UUID goal_id\n{action}_Goal goal",
-                             "bool accepted\nbuiltin_interfaces/Time stamp"))
-        defs.update(service_definitions(f"{action}_GetResult", "unique_identifier_msgs/UUID goal_id",
-                             f"int8 status\n{action}_Result result"))
-        defs.update(_messages(f"unique_identifier_msgs/UUID goal_id\n{action}_Feedback feedback",
-                              f"{action}_FeedbackMessage"))
+        defs.update(
+            service_definitions(
+                f"{action}_SendGoal",
+                f"unique_identifier_msgs/UUID goal_id\n{action}_Goal goal",
+                "bool accepted\nbuiltin_interfaces/Time stamp",
+            )
+        )
+        defs.update(
+            service_definitions(
+                f"{action}_GetResult",
+                "unique_identifier_msgs/UUID goal_id",
+                f"int8 status\n{action}_Result result",
+            )
+        )
+        defs.update(
+            _messages(
+                f"unique_identifier_msgs/UUID goal_id\n{action}_Feedback feedback",
+                f"{action}_FeedbackMessage",
+            )
+        )
     return defs
 
 
@@ -85,17 +99,29 @@ def service_definitions(service: str, request: str, response: str) -> TypeDefs:
     request_type, response_type = service_parts(service)
     defs = _messages(request, request_type)
     defs.update(_messages(response, response_type))
-    defs.update(_messages(f"service_msgs/ServiceEventInfo info\n{request_type}[<=1] request\n"
-                          f"{response_type}[<=1] response", f"{service}_Event"))
-    defs.update(_messages(f"{request_type} request_message\n{response_type} response_message\n"
-                          f"{service}_Event event_message", service))
+    defs.update(
+        _messages(
+            f"service_msgs/ServiceEventInfo info\n{request_type}[<=1] request\n{response_type}[<=1] response",
+            f"{service}_Event",
+        )
+    )
+    defs.update(
+        _messages(
+            f"{request_type} request_message\n{response_type} response_message\n"
+            f"{service}_Event event_message",
+            service,
+        )
+    )
     return defs
 
 
 def _messages(text: str, name: str) -> TypeDefs:
     has_fields = any(line.split("#", 1)[0].strip() for line in text.splitlines())
     parsed = get_types_from_msg(text if has_fields else _EMPTY, name)
-    return {_own_name(n): (consts, [(f, _own_desc(d)) for f, d in fields]) for n, (consts, fields) in parsed.items()}
+    return {
+        _own_name(n): (consts, [(f, _own_desc(d)) for f, d in fields])
+        for n, (consts, fields) in parsed.items()
+    }
 
 
 def _own_name(name: str) -> str:

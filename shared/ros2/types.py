@@ -27,9 +27,19 @@ M = TypeVar("M", bound=Message)
 _BASE, _NAME, _ARRAY, _SEQUENCE = 1, 2, 3, 4
 
 _NUMPY_OF = {
-    "bool": np.bool_, "byte": np.uint8, "char": np.uint8, "int8": np.int8, "uint8": np.uint8,
-    "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
-    "int64": np.int64, "uint64": np.uint64, "float32": np.float32, "float64": np.float64,
+    "bool": np.bool_,
+    "byte": np.uint8,
+    "char": np.uint8,
+    "int8": np.int8,
+    "uint8": np.uint8,
+    "int16": np.int16,
+    "uint16": np.uint16,
+    "int32": np.int32,
+    "uint32": np.uint32,
+    "int64": np.int64,
+    "uint64": np.uint64,
+    "float32": np.float32,
+    "float64": np.float64,
 }
 
 
@@ -43,8 +53,10 @@ def typestore() -> Typestore:
     per process, with every ``char`` a ``uint8`` (:func:`_char_as_uint8`)."""
     defs: dict[str, Any] = dict(get_typestore(Stores.ROS2_JAZZY).fielddefs)
     defs.update(interfaces.definitions())
-    defs = {name: (consts, [(field, _char_as_uint8(desc)) for field, desc in fields])
-            for name, (consts, fields) in defs.items()}
+    defs = {
+        name: (consts, [(field, _char_as_uint8(desc)) for field, desc in fields])
+        for name, (consts, fields) in defs.items()
+    }
     store = get_typestore(Stores.EMPTY)
     store.register(defs)
     return store
@@ -76,7 +88,7 @@ def jazzy_name(zendock_type: str) -> str:
     ``nav2_msgs/action/DockRobot_Goal``); other names are the same in both."""
     for ours, theirs in _ZENDOCK_PREFIXES:
         if zendock_type.startswith(ours):
-            return theirs + zendock_type[len(ours):]
+            return theirs + zendock_type[len(ours) :]
     return zendock_type
 
 
@@ -85,8 +97,8 @@ def zendock_name(ros_type: str) -> str:
     from shared.schema import registered_types  # noqa: PLC0415 - the registry fills as interfaces load
 
     for ours, theirs in _ZENDOCK_PREFIXES:
-        if ros_type.startswith(theirs) and ours + ros_type[len(theirs):] in registered_types():
-            return ours + ros_type[len(theirs):]
+        if ros_type.startswith(theirs) and ours + ros_type[len(theirs) :] in registered_types():
+            return ours + ros_type[len(theirs) :]
     return ros_type
 
 
@@ -167,7 +179,9 @@ def from_cdr(payload: bytes, ros_type: str) -> Any:
     """The rosbags message in ``payload``; :class:`Ros2TypeError` for bytes that are not one."""
     _require(ros_type)
     if len(payload) < 4 or payload[0] != 0 or payload[1] not in (0, 1):
-        raise Ros2TypeError(f"{ros_type}: not CDR (encapsulation header {bytes(payload[:4]).hex() or 'missing'})")
+        raise Ros2TypeError(
+            f"{ros_type}: not CDR (encapsulation header {bytes(payload[:4]).hex() or 'missing'})"
+        )
     try:
         return typestore().deserialize_cdr(payload, ros_type)
     except Exception as exc:  # rosbags raises several unrelated types for short or garbled bytes

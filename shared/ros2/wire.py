@@ -91,8 +91,9 @@ def namespace_error(namespace: str) -> str | None:
     if "//" in namespace:
         return f"{namespace!r} must not contain '//'"
     bad = next(t for t in namespace[1:].split("/") if not re.fullmatch(_TOKEN, t))
-    return (f"{namespace!r}: {bad!r} is not a ROS name token (letters, digits and '_', not starting with a "
-            f"digit)")
+    return (
+        f"{namespace!r}: {bad!r} is not a ROS name token (letters, digits and '_', not starting with a digit)"
+    )
 
 
 def qualified_name(namespace: str, name: str) -> str:
@@ -169,8 +170,10 @@ class GraphNode:
     enclave: str = "/"
 
     def token_key(self) -> str:
-        return (f"{ADMIN_SPACE}/{self.domain_id}/{self.session_id}/{self.node_id}/{self.node_id}/"
-                f"{EntityKind.NODE}/{mangle(self.enclave)}/{mangle(self.namespace)}/{mangle(self.name)}")
+        return (
+            f"{ADMIN_SPACE}/{self.domain_id}/{self.session_id}/{self.node_id}/{self.node_id}/"
+            f"{EntityKind.NODE}/{mangle(self.enclave)}/{mangle(self.namespace)}/{mangle(self.name)}"
+        )
 
 
 @dataclass(frozen=True)
@@ -187,9 +190,11 @@ class Endpoint:
 
     def token_key(self) -> str:
         n = self.node
-        return (f"{ADMIN_SPACE}/{n.domain_id}/{n.session_id}/{n.node_id}/{self.entity_id}/{self.kind}/"
-                f"{mangle(n.enclave)}/{mangle(n.namespace)}/{mangle(n.name)}/{mangle(self.topic)}/"
-                f"{dds_type_name(self.ros_type)}/{self.type_hash}/{self.qos.encode()}")
+        return (
+            f"{ADMIN_SPACE}/{n.domain_id}/{n.session_id}/{n.node_id}/{self.entity_id}/{self.kind}/"
+            f"{mangle(n.enclave)}/{mangle(n.namespace)}/{mangle(n.name)}/{mangle(self.topic)}/"
+            f"{dds_type_name(self.ros_type)}/{self.type_hash}/{self.qos.encode()}"
+        )
 
 
 def parse_endpoint_token(key: str) -> Endpoint:
@@ -201,10 +206,23 @@ def parse_endpoint_token(key: str) -> Endpoint:
         kind = EntityKind(parts[5])
         if kind is EntityKind.NODE:
             raise ValueError("a node token has no endpoint")
-        node = GraphNode(int(parts[1]), parts[2], int(parts[3]), demangle(parts[8]).lstrip("/"),
-                         demangle(parts[7]), demangle(parts[6]))
-        return Endpoint(node, int(parts[4]), kind, demangle(parts[9]), ros_type_name(parts[10]), parts[11],
-                        QosProfile.decode(parts[12]))
+        node = GraphNode(
+            int(parts[1]),
+            parts[2],
+            int(parts[3]),
+            demangle(parts[8]).lstrip("/"),
+            demangle(parts[7]),
+            demangle(parts[6]),
+        )
+        return Endpoint(
+            node,
+            int(parts[4]),
+            kind,
+            demangle(parts[9]),
+            ros_type_name(parts[10]),
+            parts[11],
+            QosProfile.decode(parts[12]),
+        )
     except ValueError as exc:
         raise ValueError(f"endpoint token {key!r}: {exc}") from None
 
@@ -243,4 +261,4 @@ class Attachment:
         sequence, stamp, size = _HEAD.unpack_from(data)
         if size != GID_SIZE:
             raise ValueError(f"attachment gid length {size}, expected {GID_SIZE}")
-        return cls(sequence, stamp, bytes(data[_HEAD.size:]))
+        return cls(sequence, stamp, bytes(data[_HEAD.size :]))

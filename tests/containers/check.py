@@ -53,10 +53,17 @@ class CheckFailed(AssertionError):
     pass
 
 
-def run(argv: list[str], *, env: dict[str, str] | None = None, timeout: float = 600.0, check: bool = True,
-        cwd: Path = REPO_ROOT) -> subprocess.CompletedProcess[str]:
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, cwd=cwd,
-                          env={**os.environ, **(env or {})})
+def run(
+    argv: list[str],
+    *,
+    env: dict[str, str] | None = None,
+    timeout: float = 600.0,
+    check: bool = True,
+    cwd: Path = REPO_ROOT,
+) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run(
+        argv, capture_output=True, text=True, timeout=timeout, cwd=cwd, env={**os.environ, **(env or {})}
+    )
     if check and done.returncode != 0:
         tail = "\n".join((done.stdout + done.stderr).strip().splitlines()[-15:])
         raise CheckFailed(f"{' '.join(argv)} exited {done.returncode}:\n{tail}")
@@ -99,6 +106,7 @@ class Steps:
 
 # --- podman here -----------------------------------------------------------------------------------------
 
+
 def ensure_podman() -> None:
     """Podman installed and configured for this sandbox, or ``Skip`` saying why it cannot be."""
     if os.geteuid() != 0:
@@ -108,9 +116,16 @@ def ensure_podman() -> None:
             raise Skip("podman is not installed and there is no apt-get to install it")
         print("installing podman, runc, catatonit and debootstrap from Debian's packages", flush=True)
         env = {"DEBIAN_FRONTEND": "noninteractive"}
-        if run(["apt-get", "update", "-qq"], env=env, check=False).returncode != 0 or run(
+        if (
+            run(["apt-get", "update", "-qq"], env=env, check=False).returncode != 0
+            or run(
                 ["apt-get", "install", "-y", "-qq", "podman", "runc", "catatonit", "debootstrap"],
-                env=env, check=False, timeout=900).returncode != 0:
+                env=env,
+                check=False,
+                timeout=900,
+            ).returncode
+            != 0
+        ):
             raise Skip("podman could not be installed from Debian's packages")
     if not CONTAINERS_CONF.exists():
         CONTAINERS_CONF.parent.mkdir(parents=True, exist_ok=True)
@@ -135,6 +150,7 @@ def zendock(*args: str, timeout: float = 600.0, check: bool = True) -> subproces
 
 # --- one compose project ----------------------------------------------------------------------------------
 
+
 class Project:
     """A compose project with its own name and published port, always brought down."""
 
@@ -151,8 +167,17 @@ class Project:
         return f"{self.name}_{service}_1"
 
     def containers(self) -> list[str]:
-        out = run(["podman", "ps", "-a", "--filter", f"label=io.podman.compose.project={self.name}",
-                   "--format", "{{.Names}}"]).stdout
+        out = run(
+            [
+                "podman",
+                "ps",
+                "-a",
+                "--filter",
+                f"label=io.podman.compose.project={self.name}",
+                "--format",
+                "{{.Names}}",
+            ]
+        ).stdout
         return out.split()
 
     def leftovers(self) -> list[str]:
@@ -179,7 +204,10 @@ class Project:
             raise CheckFailed(f"left after down: {', '.join(left)}")
 
     def healthy(self, service: str) -> bool:
-        return run(["podman", "healthcheck", "run", self.container(service)], check=False, timeout=60).returncode == 0
+        return (
+            run(["podman", "healthcheck", "run", self.container(service)], check=False, timeout=60).returncode
+            == 0
+        )
 
     def wait_healthy(self, services: tuple[str, ...], timeout_s: float = 180.0) -> None:
         pending = ["router", *services]
@@ -189,11 +217,16 @@ class Project:
             pending = [s for s in pending if not self.healthy(s)]
             if pending and time.monotonic() - said > 15.0:
                 said = time.monotonic()
-                print(f"   after {said - start:.0f} s still waiting for {', '.join(pending)} "
-                      f"({pending[0]}: {self.last_health_output(pending[0])})", flush=True)
+                print(
+                    f"   after {said - start:.0f} s still waiting for {', '.join(pending)} "
+                    f"({pending[0]}: {self.last_health_output(pending[0])})",
+                    flush=True,
+                )
             if pending and time.monotonic() > deadline:
-                raise CheckFailed(f"{self.name}: not healthy within {timeout_s:g} s: {', '.join(pending)}\n"
-                                  + self.logs(pending[0]))
+                raise CheckFailed(
+                    f"{self.name}: not healthy within {timeout_s:g} s: {', '.join(pending)}\n"
+                    + self.logs(pending[0])
+                )
             if pending:
                 time.sleep(2.0)
 
@@ -211,7 +244,9 @@ class Project:
         return json.loads(run(["podman", "inspect", self.container(service)]).stdout)[0]
 
 
-def wait_charging(endpoint: str, timeout_s: float, zenoh_config: str | None = None, full_too: bool = False) -> None:
+def wait_charging(
+    endpoint: str, timeout_s: float, zenoh_config: str | None = None, full_too: bool = False
+) -> None:
     """A ``battery_status`` saying CHARGING arrives on a session opened now (so it is a new one); with
     ``full_too``, FULL also counts (a restarted battery starts full, and says FULL only while mated)."""
     from shared.messages import BatteryState
@@ -246,11 +281,15 @@ def kill_service_process(project: Project, service: str) -> int:
 
 # --- the checks -------------------------------------------------------------------------------------------
 
+
 def check_default_stack(steps: Steps, tag: str) -> None:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    project = Project(f"zendock{tag}", [COMPOSE], {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4",
-                                                   "ZENDOCK_CONTROLLER": "graceful"})
+    project = Project(
+        f"zendock{tag}",
+        [COMPOSE],
+        {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4", "ZENDOCK_CONTROLLER": "graceful"},
+    )
     with project.up(steps, "stack"):
         with steps.step("stack up (compose up -d)"):
             project.compose("up", "-d")
@@ -277,23 +316,31 @@ def check_default_stack(steps: Steps, tag: str) -> None:
             wait_charging(endpoint, 60.0)
         with steps.step("kill -9 the battery service; back, still charging"):
             before = kill_service_process(project, "battery")
-            wait_until(lambda: int(project.inspect("battery").get("RestartCount", 0)) > before, 60.0,
-                       "the battery container restarting")
+            wait_until(
+                lambda: int(project.inspect("battery").get("RestartCount", 0)) > before,
+                60.0,
+                "the battery container restarting",
+            )
             project.wait_healthy(("battery",), 90.0)
             wait_charging(endpoint, 60.0, full_too=True)
         with steps.step("SIGTERM stops every service cleanly (compose stop)"):
             project.compose("stop", "-t", "10")
             codes = {s: project.inspect(s)["State"]["ExitCode"] for s in ("router", *SERVICES)}
             if any(codes.values()):
-                raise CheckFailed(f"exit codes after SIGTERM (0 expected; 137: killed at the timeout): {codes}")
+                raise CheckFailed(
+                    f"exit codes after SIGTERM (0 expected; 137: killed at the timeout): {codes}"
+                )
 
 
 def check_secure_stack(steps: Steps, tag: str) -> None:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     # another world than the default one: ZENDOCK_WORLD switches the simulator, the map and the docks
-    project = Project(f"zendocksecure{tag}", [COMPOSE, SECURE], {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4",
-                                                                 "ZENDOCK_WORLD": "deploy/worlds/corridor.yaml"})
+    project = Project(
+        f"zendocksecure{tag}",
+        [COMPOSE, SECURE],
+        {"ZENOH_PUBLISH_PORT": str(port), "ZENDOCK_RTF": "4", "ZENDOCK_WORLD": "deploy/worlds/corridor.yaml"},
+    )
     secure = REPO_ROOT / "deploy" / "zenoh" / "secure"
     with project.up(steps, "secure stack"):
         with steps.step("secure stack up and healthy"):
@@ -303,19 +350,64 @@ def check_secure_stack(steps: Steps, tag: str) -> None:
                 raise CheckFailed("ZENDOCK_WORLD did not reach the simulator:\n" + project.logs("simulator"))
         with steps.step("secure: no credentials refused, operator docks (corridor)"):
             network = f"{project.name}_bus"
-            plain = run(["podman", "run", "--rm", "--network", network, IMAGE, "zendock", "health", "simulator",
-                         "--connect", "tcp/router:7447", "--connect-timeout", "3"], check=False, timeout=120)
+            plain = run(
+                [
+                    "podman",
+                    "run",
+                    "--rm",
+                    "--network",
+                    network,
+                    IMAGE,
+                    "zendock",
+                    "health",
+                    "simulator",
+                    "--connect",
+                    "tcp/router:7447",
+                    "--connect-timeout",
+                    "3",
+                ],
+                check=False,
+                timeout=120,
+            )
             if plain.returncode == 0:
                 raise CheckFailed("a container without credentials got a session on the secure router")
-            viewer = run(["podman", "run", "--rm", "--network", network, "-e",
-                          "ZENDOCK_ZENOH_CONFIG=deploy/zenoh/secure/viewer.json5", IMAGE, "zendock", "health",
-                          "simulator", "--connect", "tcp/router:7447"], check=False, timeout=120)
+            viewer = run(
+                [
+                    "podman",
+                    "run",
+                    "--rm",
+                    "--network",
+                    network,
+                    "-e",
+                    "ZENDOCK_ZENOH_CONFIG=deploy/zenoh/secure/viewer.json5",
+                    IMAGE,
+                    "zendock",
+                    "health",
+                    "simulator",
+                    "--connect",
+                    "tcp/router:7447",
+                ],
+                check=False,
+                timeout=120,
+            )
             if viewer.returncode != 0:
                 raise CheckFailed(f"the viewer user was refused: {viewer.stderr.strip()}")
-            if zendock("health", "simulator", "--connect", endpoint, "--connect-timeout", "3",
-                       check=False).returncode == 0:
+            if (
+                zendock(
+                    "health", "simulator", "--connect", endpoint, "--connect-timeout", "3", check=False
+                ).returncode
+                == 0
+            ):
                 raise CheckFailed("the host got a session on the secure router without credentials")
-            zendock("dock", "--connect", endpoint, "--zenoh-config", str(secure / "operator.json5"), "--timeout", "300")
+            zendock(
+                "dock",
+                "--connect",
+                endpoint,
+                "--zenoh-config",
+                str(secure / "operator.json5"),
+                "--timeout",
+                "300",
+            )
             wait_charging(endpoint, 60.0, zenoh_config=str(secure / "viewer.json5"))
 
 
@@ -326,9 +418,18 @@ def check_sharded_trials(steps: Steps, tag: str) -> None:
     n, seed = 4, 3
     runs = Path(tempfile.mkdtemp(prefix="zendock-shards-"))
     os.chown(runs, USER_UID, USER_UID)
-    project = Project(f"zendocktrials{tag}", [SHARDS], {
-        "ZENDOCK_RUNS_DIR": str(runs), "ZENDOCK_TRIALS": str(n), "ZENDOCK_SEED": str(seed), "ZENDOCK_SHARDS": "2",
-        "ZENDOCK_DETECTOR": "synthetic", "ZENDOCK_RTF": "8"})
+    project = Project(
+        f"zendocktrials{tag}",
+        [SHARDS],
+        {
+            "ZENDOCK_RUNS_DIR": str(runs),
+            "ZENDOCK_TRIALS": str(n),
+            "ZENDOCK_SEED": str(seed),
+            "ZENDOCK_SHARDS": "2",
+            "ZENDOCK_DETECTOR": "synthetic",
+            "ZENDOCK_RTF": "8",
+        },
+    )
     try:
         with steps.step("two shard containers, trials each"):
             project.compose("up", timeout=1200)
@@ -343,7 +444,9 @@ def check_sharded_trials(steps: Steps, tag: str) -> None:
             want = [list(s.as_tuple()) for s in reachable_starts(world, load_world(world), n, seed)]
             got = [t["start"] for t in report["trials"]]
             if summary["n"] != n or got != want:
-                raise CheckFailed(f"merged shards: n {summary['n']}, starts {got}; the unsharded starts are {want}")
+                raise CheckFailed(
+                    f"merged shards: n {summary['n']}, starts {got}; the unsharded starts are {want}"
+                )
             print(f"   merged: {summary['successes']}/{summary['n']} docked, starts as unsharded")
     finally:
         project.down()
@@ -360,8 +463,20 @@ def main() -> int:
             with steps.step("base image (debootstrap, no registry)"):
                 run(["bash", str(BASE_SCRIPT), BASE_IMAGE], timeout=900)
         with steps.step("image build"):
-            run(["podman", "build", "--build-arg", f"BASE={BASE_IMAGE}", "-f", "deploy/docker/Dockerfile",
-                 "-t", IMAGE, "."], timeout=1800)
+            run(
+                [
+                    "podman",
+                    "build",
+                    "--build-arg",
+                    f"BASE={BASE_IMAGE}",
+                    "-f",
+                    "deploy/docker/Dockerfile",
+                    "-t",
+                    IMAGE,
+                    ".",
+                ],
+                timeout=1800,
+            )
         size = int(run(["podman", "image", "inspect", "--format", "{{.Size}}", IMAGE]).stdout.strip())
         print(f"   image {IMAGE}: {size / 1e6:.0f} MB", flush=True)
         check_default_stack(steps, tag)

@@ -25,8 +25,11 @@ pytestmark = pytest.mark.e2e
 
 
 def _no_stack_left(run_dir: Path) -> None:
-    leftovers = [p.info for p in psutil.process_iter(["pid", "cmdline"])
-                 if any(str(run_dir) in part for part in (p.info["cmdline"] or []))]
+    leftovers = [
+        p.info
+        for p in psutil.process_iter(["pid", "cmdline"])
+        if any(str(run_dir) in part for part in (p.info["cmdline"] or []))
+    ]
     assert not leftovers, f"processes left behind: {leftovers}"
 
 
@@ -39,8 +42,16 @@ def _assert_docked(report, run_dir: Path) -> None:  # type: ignore[no-untyped-de
 
 def test_seed_controller_docks_in_seed_room(tmp_path: Path) -> None:
     """The tutorial's own three-step approach (the composed robot docks in the graceful runs below)."""
-    report = run_demo(DemoOptions(world=WORLDS[0].parent / "seed_room.yaml", controller="seed", rtf="5",
-                                  runs_dir=tmp_path, timeout_sim_s=400.0), log=lambda _t: None)
+    report = run_demo(
+        DemoOptions(
+            world=WORLDS[0].parent / "seed_room.yaml",
+            controller="seed",
+            rtf="5",
+            runs_dir=tmp_path,
+            timeout_sim_s=400.0,
+        ),
+        log=lambda _t: None,
+    )
     _assert_docked(report, tmp_path)
     assert (Path(report.run_dir) / "trajectory.png").stat().st_size > 10_000
     _no_stack_left(tmp_path)
@@ -54,14 +65,18 @@ LOW_BATTERY = 0.2
 DOCK_WITHIN_S = 200.0
 
 
-@pytest.mark.parametrize("world", [pytest.param(w, id=w.stem, marks=pytest.mark.zendock(world=str(w), **GRACEFUL))
-                                   for w in WORLDS])
-def test_graceful_controller_docks_in_every_shipped_world(world: Path, zendock_stack: ZendockStack,
-                                                          zendock_robot: Robot) -> None:
+@pytest.mark.parametrize(
+    "world", [pytest.param(w, id=w.stem, marks=pytest.mark.zendock(world=str(w), **GRACEFUL)) for w in WORLDS]
+)
+def test_graceful_controller_docks_in_every_shipped_world(
+    world: Path, zendock_stack: ZendockStack, zendock_robot: Robot
+) -> None:
     """Process per service, through the plugin: low battery, then CHARGING, mated on ground truth."""
     zendock_robot.wait_for(topics.BATTERY_STATUS, timeout_s=30.0, what="(the battery service publishing)")
     zendock_robot.set_battery(LOW_BATTERY)
-    zendock_robot.wait_for(topics.BATTERY_STATUS, is_charging, timeout_s=DOCK_WITHIN_S, what="saying CHARGING")
+    zendock_robot.wait_for(
+        topics.BATTERY_STATUS, is_charging, timeout_s=DOCK_WITHIN_S, what="saying CHARGING"
+    )
     truth = zendock_robot.sim_state()
     contact = truth.contact
     assert contact.mated, f"charging but not mated on ground truth: {truth}"
@@ -76,7 +91,16 @@ COMPOSED_WORLDS = [w for w in WORLDS if w.stem in ("glass_room", "angled_dock")]
 
 @pytest.mark.parametrize("world", COMPOSED_WORLDS, ids=lambda p: p.stem)
 def test_graceful_controller_docks_composed(world: Path, tmp_path: Path) -> None:
-    report = run_demo(DemoOptions(world=world, controller="graceful", rtf="4", runs_dir=tmp_path,
-                                  localisation_error=(0.03, -0.02, 0.02), compose=True), log=lambda _t: None)
+    report = run_demo(
+        DemoOptions(
+            world=world,
+            controller="graceful",
+            rtf="4",
+            runs_dir=tmp_path,
+            localisation_error=(0.03, -0.02, 0.02),
+            compose=True,
+        ),
+        log=lambda _t: None,
+    )
     _assert_docked(report, tmp_path)
     _no_stack_left(tmp_path)

@@ -29,7 +29,9 @@ class Counter:
     def __init__(self, node: Node) -> None:
         self.goal: ServerGoalHandle | None = None
         self.value = 0.0
-        self.server = ActionServer(node, COUNT, "count_to", on_goal=self.check, on_accepted=self.start, on_cancel=self.cancel)
+        self.server = ActionServer(
+            node, COUNT, "count_to", on_goal=self.check, on_accepted=self.start, on_cancel=self.cancel
+        )
         node.create_timer(0.01, self.step, wall=True)
 
     def check(self, goal: Float64) -> None:
@@ -56,7 +58,10 @@ class Counter:
 
 @pytest.fixture
 def client_and_server(router_endpoint: str, namespace: str) -> Iterator[ActionClient]:
-    with open_session(SessionSpec(connect=(router_endpoint,))) as s1, open_session(SessionSpec(connect=(router_endpoint,))) as s2:
+    with (
+        open_session(SessionSpec(connect=(router_endpoint,))) as s1,
+        open_session(SessionSpec(connect=(router_endpoint,))) as s2,
+    ):
         server_node, client_node = Node("counter", s1, namespace), Node("client", s2, namespace)
         Counter(server_node)
         server_node.declare_ready()
@@ -71,14 +76,21 @@ def client_and_server(router_endpoint: str, namespace: str) -> Iterator[ActionCl
 def _send(client: ActionClient, target: float) -> tuple[ClientGoal, threading.Event, list[float]]:
     done = threading.Event()
     feedback: list[float] = []
-    handle = client.send_goal(Float64(target), on_feedback=lambda f: feedback.append(f.data), on_done=lambda _h: done.set())
+    handle = client.send_goal(
+        Float64(target), on_feedback=lambda f: feedback.append(f.data), on_done=lambda _h: done.set()
+    )
     return handle, done, feedback
 
 
-def test_server_ready_waits_for_a_server_that_comes_up_while_it_asks(router_endpoint: str, namespace: str) -> None:
+def test_server_ready_waits_for_a_server_that_comes_up_while_it_asks(
+    router_endpoint: str, namespace: str
+) -> None:
     """A liveliness query sees only the tokens the router has when it arrives: ``server_ready`` asks again
     until its timeout, so a server that starts a moment after the client began waiting is found."""
-    with open_session(SessionSpec(connect=(router_endpoint,))) as s1, open_session(SessionSpec(connect=(router_endpoint,))) as s2:
+    with (
+        open_session(SessionSpec(connect=(router_endpoint,))) as s1,
+        open_session(SessionSpec(connect=(router_endpoint,))) as s2,
+    ):
         client_node = Node("client", s2, namespace)
         client = ActionClient(client_node, COUNT, "count_to")
         assert not client.server_ready(0.2), "a server answered before any was started"

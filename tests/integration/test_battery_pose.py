@@ -82,13 +82,18 @@ class FakeSimulator:
         with self._lock:
             until_s = self.sim_time_s + duration_s
             if not self._lock.wait_for(lambda: self.sim_time_s >= until_s, timeout_s):
-                raise AssertionError(f"sim time stuck at {self.sim_time_s:.3f} s, waiting for {until_s:.3f} s")
+                raise AssertionError(
+                    f"sim time stuck at {self.sim_time_s:.3f} s, waiting for {until_s:.3f} s"
+                )
 
     @staticmethod
     def _transforms(links: list[tuple[str, str, Pose2D]], stamp: Time) -> TFMessage:
-        return TFMessage([
-            TransformStamped(Header(stamp, parent), child, Transform.from_pose2d(pose)) for parent, child, pose in links
-        ])
+        return TFMessage(
+            [
+                TransformStamped(Header(stamp, parent), child, Transform.from_pose2d(pose))
+                for parent, child, pose in links
+            ]
+        )
 
     def _tick(self, now_s: float) -> None:
         stamp = Time.from_sec(now_s)
@@ -96,7 +101,9 @@ class FakeSimulator:
         twist = TwistWithCovariance(twist=Twist.planar(self.linear_mps, 0.0))
         self._odom.publish(Odometry(header=Header(stamp, "odom"), child_frame_id="base_link", twist=twist))
         if self.contact is not None:
-            self._contact.publish(DockContact(header=Header(stamp, "base_link"), dock_id="home", mated=self.contact))
+            self._contact.publish(
+                DockContact(header=Header(stamp, "base_link"), dock_id="home", mated=self.contact)
+            )
         if self.tf_links:
             self._tf.publish(self._transforms(self.tf_links, stamp))
         if self.static_links and now_s >= self._next_static_s:
@@ -117,19 +124,31 @@ def sim(bus: zenoh.Session, namespace: str) -> Iterator[FakeSimulator]:
 
 
 def wait_for_log(proc: ServiceProcess, text: str, timeout_s: float = 10.0) -> None:
-    wait_until(lambda: text in proc.output(), timeout_s, lambda: f"{text!r} not in output:\n{proc.output()[-3000:]}")
+    wait_until(
+        lambda: text in proc.output(), timeout_s, lambda: f"{text!r} not in output:\n{proc.output()[-3000:]}"
+    )
 
 
 # --- battery ---------------------------------------------------------------------------------------
 
 
 def test_battery_drains_charges_and_answers_set_state(
-    spawn, bus: zenoh.Session, namespace: str, sim: FakeSimulator  # type: ignore[no-untyped-def]
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,
+    sim: FakeSimulator,  # type: ignore[no-untyped-def]
 ) -> None:
     status = KeyRecorder(bus, topic_key(namespace, topics.BATTERY_STATUS), BatteryState)
     battery = spawn(
-        "battery", "-p", "use_sim_time=true", "-p", "initial_percentage=0.8",
-        "-p", "drain_scale=100", "-p", "charge_scale=100",
+        "battery",
+        "-p",
+        "use_sim_time=true",
+        "-p",
+        "initial_percentage=0.8",
+        "-p",
+        "drain_scale=100",
+        "-p",
+        "charge_scale=100",
     )
 
     # A valid BatteryState, discharging at the base load.
@@ -149,7 +168,9 @@ def test_battery_drains_charges_and_answers_set_state(
     # Charges while mated.
     sim.set(linear_mps=0.0, contact=True)
     charging = status.wait_for(
-        lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_CHARGING, timeout_s=5.0, after=status.count
+        lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_CHARGING,
+        timeout_s=5.0,
+        after=status.count,
     )
     assert charging.current == pytest.approx(1.0)
     status.wait_for(lambda m: m.percentage > charging.percentage + 0.002, timeout_s=5.0, after=status.count)
@@ -162,23 +183,30 @@ def test_battery_drains_charges_and_answers_set_state(
     wait_for_log(battery, f"rejected message on {contact_key}")
     sim.set(contact=False)
     status.wait_for(
-        lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_DISCHARGING, timeout_s=5.0,
+        lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_DISCHARGING,
+        timeout_s=5.0,
         after=status.count,
     )
     assert battery.alive()
 
     # A silent dock_contact counts as open contacts.
     sim.set(contact=True)
-    status.wait_for(lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_CHARGING, 5.0, status.count)
+    status.wait_for(
+        lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_CHARGING, 5.0, status.count
+    )
     sim.set(contact=None)
-    status.wait_for(lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_DISCHARGING, 5.0, status.count)
+    status.wait_for(
+        lambda m: m.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_DISCHARGING, 5.0, status.count
+    )
     wait_for_log(battery, "no dock_contact for more than 1 s")
 
     # set_state: just above a quarter with a demo drain, then a clean downward crossing.
     service_key = topic_key(namespace, topics.BATTERY_SET_STATE)
     sim.set(linear_mps=0.5)
     mark = status.count
-    reply = call_service(bus, service_key, SET_BATTERY_STATE, SetBatteryStateRequest(percentage=0.26, drain_scale=20.0))
+    reply = call_service(
+        bus, service_key, SET_BATTERY_STATE, SetBatteryStateRequest(percentage=0.26, drain_scale=20.0)
+    )
     assert reply.state.percentage == pytest.approx(0.26, abs=1e-6)
     assert (reply.drain_scale, reply.charge_scale, reply.frozen) == (20.0, 100.0, False)
     above = status.wait_for(lambda m: 0.25 <= m.percentage <= 0.26 + 1e-6, timeout_s=5.0, after=mark)
@@ -243,12 +271,17 @@ BASE_TO_LIDAR = Pose2D(0.12, 0.0, 0.0)
 def close_to(msg: Float64MultiArray, expected: Pose2D, tol: float = 1e-6) -> bool:
     x, y, yaw = (float(v) for v in msg.data)
     return (
-        abs(x - expected.x) < tol and abs(y - expected.y) < tol and abs(math.remainder(yaw - expected.yaw, 2 * math.pi)) < tol
+        abs(x - expected.x) < tol
+        and abs(y - expected.y) < tol
+        and abs(math.remainder(yaw - expected.yaw, 2 * math.pi)) < tol
     )
 
 
 def test_pose_waits_for_tf_then_publishes_map_to_base_link(
-    spawn, bus: zenoh.Session, namespace: str, sim: FakeSimulator  # type: ignore[no-untyped-def]
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,
+    sim: FakeSimulator,  # type: ignore[no-untyped-def]
 ) -> None:
     poses = KeyRecorder(bus, topic_key(namespace, topics.POSE2D), Float64MultiArray)
     pose = spawn("pose", "-p", "use_sim_time=true")
@@ -280,7 +313,10 @@ def test_pose_waits_for_tf_then_publishes_map_to_base_link(
 
 
 def test_pose_of_lidar_link_through_tf_static(
-    spawn, bus: zenoh.Session, namespace: str, sim: FakeSimulator  # type: ignore[no-untyped-def]
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,
+    sim: FakeSimulator,  # type: ignore[no-untyped-def]
 ) -> None:
     poses = KeyRecorder(bus, topic_key(namespace, topics.POSE2D), Float64MultiArray)
     sim.set(

@@ -17,7 +17,10 @@ def _live_echo_pids() -> set[int]:
     """Bench echo processes still running (a process that ends while being looked at does not count)."""
     found = set()
     for proc in psutil.process_iter(["cmdline", "status"]):
-        if "deploy.bench.echo" in (proc.info["cmdline"] or []) and proc.info["status"] != psutil.STATUS_ZOMBIE:
+        if (
+            "deploy.bench.echo" in (proc.info["cmdline"] or [])
+            and proc.info["status"] != psutil.STATUS_ZOMBIE
+        ):
             found.add(proc.pid)
     return found
 

@@ -36,18 +36,28 @@ def test_sigterm_to_demo_brings_its_stack_down(tmp_path: Path) -> None:
     env = {**os.environ, "ZENDOCK_TEST_MARK": mark, "NO_COLOR": "1", "PYTHONPATH": str(REPO_ROOT)}
     demo = subprocess.Popen(
         [sys.executable, "-m", "deploy.cli", "demo", "--rtf", "1", "--timeout", "600"],
-        cwd=REPO_ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        cwd=REPO_ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
-        wait_until(lambda: {"services.simulator", "services.docking"} <= set(_services(mark)), 90.0,
-                   lambda: f"the demo's stack did not come up; running: {_services(mark)}")
+        wait_until(
+            lambda: {"services.simulator", "services.docking"} <= set(_services(mark)),
+            90.0,
+            lambda: f"the demo's stack did not come up; running: {_services(mark)}",
+        )
         demo.send_signal(signal.SIGTERM)
         try:
             demo.wait(60)
         except subprocess.TimeoutExpired:
             raise AssertionError("zendock demo did not exit within 60 s of SIGTERM") from None
-        wait_until(lambda: not marked_processes(mark), 15.0,
-                   lambda: f"left behind after SIGTERM: {[(p.pid, p.cmdline()) for p in marked_processes(mark)]}")
+        wait_until(
+            lambda: not marked_processes(mark),
+            15.0,
+            lambda: f"left behind after SIGTERM: {[(p.pid, p.cmdline()) for p in marked_processes(mark)]}",
+        )
     finally:
         if demo.poll() is None:
             demo.kill()
@@ -60,8 +70,11 @@ def test_a_service_still_waiting_for_its_router_ends_on_sigterm_with_0(tmp_path)
     answers, so the service connects on a helper thread and its main thread still runs the SIGTERM handler."""
     log = tmp_path / "battery.log"
     with log.open("wb") as out:
-        proc = subprocess.Popen([sys.executable, "-m", "services.battery", "--connect", f"tcp/127.0.0.1:{free_port()}"],
-                                stdout=out, stderr=subprocess.STDOUT)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "services.battery", "--connect", f"tcp/127.0.0.1:{free_port()}"],
+            stdout=out,
+            stderr=subprocess.STDOUT,
+        )
     try:
         wait_until(lambda: "connecting to" in log.read_text(), 20.0, lambda: log.read_text())
         proc.send_signal(signal.SIGTERM)

@@ -24,10 +24,18 @@ def _account(report) -> str:  # type: ignore[no-untyped-def]
 ROS2_READY = (REPO_ROOT / ".venv-ros2" / ".ros2-ready").exists()
 
 
-@pytest.mark.parametrize("service", [
-    pytest.param(name, marks=pytest.mark.skipif(name == "ros2_dds" and not ROS2_READY,
-                                                reason=".venv-ros2 is missing: `make ros2` builds it"))
-    for name in CONTRACTS])
+@pytest.mark.parametrize(
+    "service",
+    [
+        pytest.param(
+            name,
+            marks=pytest.mark.skipif(
+                name == "ros2_dds" and not ROS2_READY, reason=".venv-ros2 is missing: `make ros2` builds it"
+            ),
+        )
+        for name in CONTRACTS
+    ],
+)
 def test_every_zendock_service_passes_its_own_kit(service: str, tmp_path: Path) -> None:
     report = run_conform(service, None, ConformOptions(runs_dir=tmp_path))
     assert report.passed, _account(report)
@@ -40,7 +48,9 @@ def test_a_broken_replacement_fails_with_the_checks_it_breaks_named(tmp_path: Pa
     assert set(report.failed()) == {
         "endpoints: announces every required one",  # no endpoint tokens
         "publishes battery_status",  # 2 Hz of wall time, not 10 Hz of sim time
-        "answers set_state", "drains while the robot drives", "charges while mated",  # no set_state, a fixed charge
+        "answers set_state",
+        "drains while the robot drives",
+        "charges while mated",  # no set_state, a fixed charge
         "bad requests get an error reply",  # nothing answers
         "SIGTERM: exit 0 within 2 s",  # ignores it
     }, _account(report)

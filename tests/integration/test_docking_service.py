@@ -69,14 +69,20 @@ class TeleportNavigator:
         self.node = Node("fake_planner", session, namespace, use_sim_time=True)
         self.dwell_s = dwell_s
         self.robot = robot
-        self._teleport_key = topic_key(namespace.rpartition("/")[0] if robot else namespace, topics.SIM_TELEPORT)
+        self._teleport_key = topic_key(
+            namespace.rpartition("/")[0] if robot else namespace, topics.SIM_TELEPORT
+        )
         self.goals: list[Pose2D] = []
         self.canceled = 0
         self._lock = threading.Lock()
         self._arrived: list[tuple[float, ServerGoalHandle]] = []  # type: ignore[type-arg]
         self.server = ActionServer(
-            self.node, NAVIGATE_TO_POSE, topics.NAVIGATE_TO_POSE,
-            on_goal=lambda _goal: None, on_accepted=self._go, on_cancel=self._cancel,
+            self.node,
+            NAVIGATE_TO_POSE,
+            topics.NAVIGATE_TO_POSE,
+            on_goal=lambda _goal: None,
+            on_accepted=self._go,
+            on_cancel=self._cancel,
         )
         self.node.create_timer(0.02, self._succeed_arrived)
         self._thread = spin_in_background(self.node)
@@ -94,7 +100,9 @@ class TeleportNavigator:
                 return
             if error is not None or not getattr(reply, "success", False):
                 reason = str(error) if error else getattr(reply, "message", "")
-                handle.abort(NavigateToPoseResult(error_code=NavigateErrorCode.GOAL_OCCUPIED, error_msg=reason))
+                handle.abort(
+                    NavigateToPoseResult(error_code=NavigateErrorCode.GOAL_OCCUPIED, error_msg=reason)
+                )
             else:
                 self._arrived.append((self.node.now() + self.dwell_s, handle))
                 self._succeed_arrived()
@@ -157,13 +165,23 @@ class Stack:
         self.clock.wait_for(lambda m: m.clock.to_sec() >= until, timeout_s=30.0, after=self.clock.count)
 
     def teleport(self, pose: Pose2D) -> None:
-        reply = call_service(self.bus, self.key(topics.SIM_TELEPORT), TELEPORT,
-                             TeleportRequest(x=pose.x, y=pose.y, yaw=pose.yaw), timeout_s=5.0)
+        reply = call_service(
+            self.bus,
+            self.key(topics.SIM_TELEPORT),
+            TELEPORT,
+            TeleportRequest(x=pose.x, y=pose.y, yaw=pose.yaw),
+            timeout_s=5.0,
+        )
         assert reply.success, reply.message
 
     def set_battery(self, **fields: float) -> None:
-        call_service(self.bus, self.key(topics.BATTERY_SET_STATE), SET_BATTERY_STATE,
-                     SetBatteryStateRequest(**fields), timeout_s=5.0)
+        call_service(
+            self.bus,
+            self.key(topics.BATTERY_SET_STATE),
+            SET_BATTERY_STATE,
+            SetBatteryStateRequest(**fields),
+            timeout_s=5.0,
+        )
 
     def start_docking(self, *params: str) -> ServiceProcess:
         args = ["-p", "use_sim_time=true", "-p", f"dock_database={SEED_ROOM}"]
@@ -197,8 +215,9 @@ def stack(spawn, bus: zenoh.Session, namespace: str, router_endpoint: str) -> It
     navigators: list[TeleportNavigator] = []
     recorders: list[KeyRecorder] = []  # type: ignore[type-arg]
 
-    def _start(sim: tuple[str, ...] = (), battery: tuple[str, ...] = (), world: str = SEED_ROOM,
-               dwell_s: float = 0.0) -> Stack:
+    def _start(
+        sim: tuple[str, ...] = (), battery: tuple[str, ...] = (), world: str = SEED_ROOM, dwell_s: float = 0.0
+    ) -> Stack:
         def record(topic: str, msg_type: type) -> KeyRecorder:  # type: ignore[type-arg]
             recorder = KeyRecorder(bus, topic_key(namespace, topic), msg_type, keep=5000)
             recorders.append(recorder)
@@ -210,8 +229,12 @@ def stack(spawn, bus: zenoh.Session, namespace: str, router_endpoint: str) -> It
         battery_args = ["-p", "use_sim_time=true"]
         for param in battery:
             battery_args += ["-p", param]
-        recorded = (record(topics.BATTERY_STATUS, BatteryState), record(topics.CMD_VEL, Twist),
-                    record(DOCKING_STATE, String), record(topics.CLOCK, Clock))
+        recorded = (
+            record(topics.BATTERY_STATUS, BatteryState),
+            record(topics.CMD_VEL, Twist),
+            record(DOCKING_STATE, String),
+            record(topics.CLOCK, Clock),
+        )
         spawn("simulator", *sim_args)
         spawn("battery", *battery_args)
         spawn("pose", "-p", "use_sim_time=true")
@@ -229,7 +252,7 @@ def stack(spawn, bus: zenoh.Session, namespace: str, router_endpoint: str) -> It
 
 def since(recorder: KeyRecorder[M], mark: int) -> list[M]:
     """What ``recorder`` received after its count was ``mark``."""
-    return recorder.messages[len(recorder.messages) - (recorder.count - mark):]
+    return recorder.messages[len(recorder.messages) - (recorder.count - mark) :]
 
 
 def _contact_report(truth: SimStateResponse) -> str:
@@ -265,15 +288,19 @@ def test_seed_docks_when_the_battery_crosses_the_threshold(stack) -> None:  # ty
     # machine the first attempt may miss. Backing off must come from a logged retry; every other command
     # is the line approach's.
     backing = {c for c in commands if c[0] < 0.0}
-    retries = [line for line in log.splitlines() if "; retry " in line]  # "attempt failed (...): ...; retry 1 of 3"
+    retries = [
+        line for line in log.splitlines() if "; retry " in line
+    ]  # "attempt failed (...): ...; retry 1 of 3"
     assert not backing or retries, f"backed off without a retry: {sorted(backing)[:5]}\n{log[-3000:]}"
     approach = set(commands) - backing
     assert approach <= {(0.0, 0.0), (0.08, 0.0), (0.0, 0.1), (0.0, -0.1)}, f"{approach}\n{log[-3000:]}"
     assert {(0.08, 0.0), (0.0, -0.1)} <= approach, f"{approach}\n{log[-3000:]}"
     rate_hz = len(commands) / took_s
     assert 8.0 < rate_hz < 12.0, f"{len(commands)} commands in {took_s:.1f} s of sim time"
-    print(f"\nseed: charging {took_s:.1f} s (sim) after the line approach started; {_contact_report(truth)}"
-          + "".join(f"\n  {line}" for line in retries))
+    print(
+        f"\nseed: charging {took_s:.1f} s (sim) after the line approach started; {_contact_report(truth)}"
+        + "".join(f"\n  {line}" for line in retries)
+    )
 
 
 def test_graceful_docks_with_detection_despite_localisation_error(stack) -> None:  # type: ignore[no-untyped-def]
@@ -285,8 +312,10 @@ def test_graceful_docks_with_detection_despite_localisation_error(stack) -> None
     took_s = s.sim_time() - started_s
     s.wait_state("DOCKED", timeout_s=10.0)
     truth = s.docked_cleanly()
-    print(f"\ngraceful, detection, localisation error [0.03,-0.02,0.02]: charging {took_s:.1f} s (sim) after "
-          f"the approach started; {_contact_report(truth)}")
+    print(
+        f"\ngraceful, detection, localisation error [0.03,-0.02,0.02]: charging {took_s:.1f} s (sim) after "
+        f"the approach started; {_contact_report(truth)}"
+    )
 
 
 #: Large enough that the contacts cannot mate when the robot believes it: 6 cm to the side, 0.03 rad.
@@ -297,8 +326,13 @@ LARGE_LOCALISATION_ERROR = "[0.03,0.06,0.03]"
 @pytest.mark.parametrize("detection", [True, False], ids=["detection", "blind"])
 def test_detection_is_what_docks_a_mislocalised_robot(stack, detection: bool) -> None:  # type: ignore[no-untyped-def]
     # Blind: the simulator leaves detection to a perception service, and none runs.
-    s: Stack = stack(sim=(f"localisation.error={LARGE_LOCALISATION_ERROR}", f"detection.source={'synthetic' if detection else 'aruco'}"),
-                     battery=("initial_percentage=0.2",))
+    s: Stack = stack(
+        sim=(
+            f"localisation.error={LARGE_LOCALISATION_ERROR}",
+            f"detection.source={'synthetic' if detection else 'aruco'}",
+        ),
+        battery=("initial_percentage=0.2",),
+    )
     s.start_docking("max_retries=1", "wait_charge_timeout_s=2")
     after = s.wait_state("CONTROLLING", timeout_s=30.0)
     if detection:
@@ -319,7 +353,9 @@ def test_detection_is_what_docks_a_mislocalised_robot(stack, detection: bool) ->
 
 def test_obstacle_in_the_approach_holds_the_robot(stack, tmp_path) -> None:  # type: ignore[no-untyped-def]
     world = yaml.safe_load(Path(SEED_ROOM).read_text())
-    world["boxes"].append({"pose": [-0.9, 1.15, 0.0], "size": [0.1, 0.1]})  # a pillar between staging and dock
+    world["boxes"].append(
+        {"pose": [-0.9, 1.15, 0.0], "size": [0.1, 0.1]}
+    )  # a pillar between staging and dock
     path = tmp_path / "pillar_room.yaml"
     path.write_text(yaml.safe_dump(world))
     s: Stack = stack(world=str(path), battery=("initial_percentage=0.2",))
@@ -330,7 +366,11 @@ def test_obstacle_in_the_approach_holds_the_robot(stack, tmp_path) -> None:  # t
     commands = since(s.cmd_vel, first_cmd)
     assert commands and all(m.linear.x <= 0.0 for m in commands), "drove towards the pillar"
     log = s.docking_log()
-    assert "holding still: obstacle ahead" in log and "code 905" in log and "an obstacle blocked the approach" in log
+    assert (
+        "holding still: obstacle ahead" in log
+        and "code 905" in log
+        and "an obstacle blocked the approach" in log
+    )
     truth = s.sim_state()
     assert truth.collisions == 0 and not truth.contact.mated
 
@@ -341,7 +381,10 @@ def test_obstacle_in_the_approach_holds_the_robot(stack, tmp_path) -> None:  # t
 def _zendock(s: Stack, *args: str, timeout_s: float = 60.0) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "deploy.cli", *args, "--namespace", s.namespace, "--connect", s.router],
-        cwd=REPO_ROOT, capture_output=True, text=True, timeout=timeout_s,
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
     )
 
 
@@ -364,7 +407,7 @@ def test_zendock_dock_and_undock_from_the_command_line(stack) -> None:  # type: 
     # The pose comes at 10 Hz: a state or two may be printed before the command has heard it (here the robot
     # starts at the staging pose, and the first two states came 0.1 s apart). From then on every line has it.
     with_distance = [line.endswith(" m") for line in state_lines]
-    assert True in with_distance[:3] and all(with_distance[with_distance.index(True):]), docked.stdout
+    assert True in with_distance[:3] and all(with_distance[with_distance.index(True) :]), docked.stdout
     s.wait_charging(timeout_s=10.0)
     s.docked_cleanly()
 
@@ -380,8 +423,14 @@ def test_zendock_dock_and_undock_from_the_command_line(stack) -> None:  # type: 
 
 
 def _ros2_peer(s: Stack, *args: str, timeout_s: float = 120.0) -> list[dict[str, object]]:
-    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, *args],
-                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=timeout_s, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, *args],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        check=False,
+    )
     lines = [json.loads(line) for line in done.stdout.splitlines() if line.strip()]
     assert lines, f"ros2_peer {' '.join(args)} printed nothing:\n{done.stderr[-3000:]}"
     return lines
@@ -402,11 +451,19 @@ def test_a_ros2_action_client_docks_the_robot_through_the_bridge(stack) -> None:
     unknown = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "nowhere", "max_staging_time": 1000}')
     assert unknown[0] == {"accepted": True}, unknown
     assert unknown[1]["status"] == int(GoalStatusCode.ABORTED), unknown
-    assert unknown[1]["result"] == {"success": False, "error_code": DockRobotResult.DOCK_NOT_IN_DB, "num_retries": 0,
-                                    "error_msg": ""}
+    assert unknown[1]["result"] == {
+        "success": False,
+        "error_code": DockRobotResult.DOCK_NOT_IN_DB,
+        "num_retries": 0,
+        "error_msg": "",
+    }
 
-    docked = _ros2_peer(s, *action, '{"use_dock_id": true, "dock_id": "home", "max_staging_time": 1000, '
-                                    '"navigate_to_staging_pose": true}')
+    docked = _ros2_peer(
+        s,
+        *action,
+        '{"use_dock_id": true, "dock_id": "home", "max_staging_time": 1000, '
+        '"navigate_to_staging_pose": true}',
+    )
     assert docked[0] == {"accepted": True}, docked
     assert docked[1]["status"] == int(GoalStatusCode.SUCCEEDED), docked
     assert docked[1]["result"]["success"] is True and docked[1]["feedback"] > 0, docked
@@ -422,22 +479,73 @@ def test_a_ros2_goal_pose_navigates_the_robot(stack) -> None:  # type: ignore[no
     wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
     goal = Pose2D(0.5, 2.0, 1.2)
     half = goal.yaw / 2
-    message = json.dumps({"header": {"frame_id": "map"}, "pose": {"position": {"x": goal.x, "y": goal.y},
-                                                                  "orientation": {"z": math.sin(half), "w": math.cos(half)}}})
+    message = json.dumps(
+        {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": goal.x, "y": goal.y},
+                "orientation": {"z": math.sin(half), "w": math.cos(half)},
+            },
+        }
+    )
     odd_frame = message.replace('"map"', '"odom"')
-    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, "pub", "/goal_pose",
-                           "geometry_msgs/msg/PoseStamped", odd_frame, "--rate", "5", "--seconds", "2"],
-                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=60, check=False)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tests.support.ros2_peer",
+            "--router",
+            s.router,
+            "pub",
+            "/goal_pose",
+            "geometry_msgs/msg/PoseStamped",
+            odd_frame,
+            "--rate",
+            "5",
+            "--seconds",
+            "2",
+        ],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
-    wait_until(lambda: "refused a goal in frame 'odom'" in bridge.output(), 10.0, lambda: bridge.output()[-2000:])
+    wait_until(
+        lambda: "refused a goal in frame 'odom'" in bridge.output(), 10.0, lambda: bridge.output()[-2000:]
+    )
     assert s.navigator.goals == []
-    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", s.router, "pub", "/goal_pose",
-                           "geometry_msgs/msg/PoseStamped", message, "--rate", "2", "--seconds", "2"],
-                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=60, check=False)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tests.support.ros2_peer",
+            "--router",
+            s.router,
+            "pub",
+            "/goal_pose",
+            "geometry_msgs/msg/PoseStamped",
+            message,
+            "--rate",
+            "2",
+            "--seconds",
+            "2",
+        ],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     wait_until(lambda: bool(s.navigator.goals), 10.0, lambda: bridge.output()[-2000:])
     reached = s.navigator.goals[-1]
-    assert abs(reached.x - goal.x) < 1e-6 and abs(reached.y - goal.y) < 1e-6 and abs(reached.yaw - goal.yaw) < 1e-6
+    assert (
+        abs(reached.x - goal.x) < 1e-6
+        and abs(reached.y - goal.y) < 1e-6
+        and abs(reached.yaw - goal.yaw) < 1e-6
+    )
     pose = s.sim_state().pose.to_pose2d()
     assert pose.distance_to(goal) < 0.05, pose
 
@@ -458,8 +566,11 @@ def test_cancel_mid_approach_stops_with_a_zero_command(stack) -> None:  # type: 
             if feedback.state == DockRobotFeedback.CONTROLLING:
                 controlling.set()
 
-        handle: ClientGoal = client.send_goal(DockRobotGoal(dock_id="home"), on_feedback=on_feedback,  # type: ignore[type-arg]
-                                              on_done=lambda _h: done.set())
+        handle: ClientGoal = client.send_goal(
+            DockRobotGoal(dock_id="home"),
+            on_feedback=on_feedback,  # type: ignore[type-arg]
+            on_done=lambda _h: done.set(),
+        )
         assert controlling.wait(30.0), "no CONTROLLING feedback"
         s.cmd_vel.wait_for(lambda m: m.linear.x > 0.0, timeout_s=10.0, after=s.cmd_vel.count)
         client.cancel_goal(handle)
@@ -516,7 +627,9 @@ def test_patrol_docks_when_low_and_resumes_when_charged(stack) -> None:  # type:
     s.wait_state("PATROLLING", timeout_s=20.0, after=after)
     resumed = len(s.navigator.goals_sent())
     wait_until(lambda: len(s.navigator.goals_sent()) > resumed, 20.0, lambda: s.navigator.goals_sent())
-    assert any(g.distance_to(Pose2D(*p)) < 1e-6 for g in s.navigator.goals_sent()[resumed - 1:] for p in patrol)
+    assert any(
+        g.distance_to(Pose2D(*p)) < 1e-6 for g in s.navigator.goals_sent()[resumed - 1 :] for p in patrol
+    )
     truth = s.sim_state()
     assert truth.collisions == 0 and not truth.contact.mated
 
@@ -530,5 +643,7 @@ def test_infrared_docking_needs_no_map_pose_and_no_camera(stack) -> None:  # typ
     s.start_docking("controller=ir")  # starts below the threshold: the first reading triggers
     s.wait_charging(timeout_s=120.0)
     truth = s.docked_cleanly()
-    assert s.navigator.goals == [], "infrared docking from within the beacon's reach asked the planner for a goal"
+    assert s.navigator.goals == [], (
+        "infrared docking from within the beacon's reach asked the planner for a goal"
+    )
     print(f"\nir: charging {s.sim_time() - started_s:.1f} s (sim) after the start; {_contact_report(truth)}")

@@ -37,8 +37,19 @@ def _fleet(*args: str, timeout_s: float = 240.0) -> subprocess.CompletedProcess[
 
 
 def test_two_robots_meeting_head_on_in_a_corridor_both_get_through(tmp_path: Path) -> None:
-    done = _fleet("--world", str(CORRIDOR), "--duration", "70", "--rtf", "4", "--seed", "3", "--runs-dir",
-                  str(tmp_path), "--json")
+    done = _fleet(
+        "--world",
+        str(CORRIDOR),
+        "--duration",
+        "70",
+        "--rtf",
+        "4",
+        "--seed",
+        "3",
+        "--runs-dir",
+        str(tmp_path),
+        "--json",
+    )
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     report = json.loads(done.stdout.splitlines()[-1])
     assert {"robots", "collisions", "reservation_conflicts", "sim_s", "wall_s"} <= set(report)
@@ -61,7 +72,9 @@ def test_bad_arguments_get_one_clear_message(tmp_path: Path) -> None:
     no_docks = tmp_path / "no_docks.yaml"
     no_docks.write_text("name: bare\nbounds: [0, 0, 5, 5]\nrobot: {start: [2, 2, 0]}\n")
     bare = _fleet("--world", str(no_docks), "--runs-dir", str(tmp_path), timeout_s=60.0)
-    assert bare.returncode == 2 and "needs docks" in bare.stderr and "Traceback" not in bare.stderr, bare.stderr
+    assert bare.returncode == 2 and "needs docks" in bare.stderr and "Traceback" not in bare.stderr, (
+        bare.stderr
+    )
     assert bare.stderr.count(str(no_docks)) == 1, "the file named once"
     bad = _fleet("--duration", "-5", timeout_s=60.0)
     assert bad.returncode == 2 and "--duration" in bad.stderr

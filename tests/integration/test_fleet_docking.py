@@ -46,7 +46,9 @@ def _world(tmp_path: Path) -> str:
 class _Robot:
     """One robot's services and what the test watches of it."""
 
-    def __init__(self, spawn, bus: zenoh.Session, namespace: str, name: str, world: str, *docking: str) -> None:  # type: ignore[no-untyped-def]
+    def __init__(
+        self, spawn, bus: zenoh.Session, namespace: str, name: str, world: str, *docking: str
+    ) -> None:  # type: ignore[no-untyped-def]
         self.bus, self.name, self.ns = bus, name, f"{namespace}/{name}"
         self.sim_ns = namespace
         self.battery = KeyRecorder(bus, topic_key(self.ns, topics.BATTERY_STATUS), BatteryState, keep=5000)
@@ -66,7 +68,13 @@ class _Robot:
         deadline = time.monotonic() + 10.0
         while True:
             try:
-                call_service(self.bus, key, SET_BATTERY_STATE, SetBatteryStateRequest(percentage=percentage), timeout_s=5.0)
+                call_service(
+                    self.bus,
+                    key,
+                    SET_BATTERY_STATE,
+                    SetBatteryStateRequest(percentage=percentage),
+                    timeout_s=5.0,
+                )
                 return
             except ServiceUnavailable:
                 if time.monotonic() > deadline:
@@ -81,8 +89,13 @@ class _Robot:
         self.battery.wait_for(lambda m: m.power_supply_status in CHARGING, timeout_s=timeout_s, after=after)
 
     def truth(self):  # type: ignore[no-untyped-def]
-        return call_service(self.bus, topic_key(self.sim_ns, topics.SIM_STATE), SIM_STATE,
-                            SimStateRequest(robot=self.name), timeout_s=5.0)
+        return call_service(
+            self.bus,
+            topic_key(self.sim_ns, topics.SIM_STATE),
+            SIM_STATE,
+            SimStateRequest(robot=self.name),
+            timeout_s=5.0,
+        )
 
     def close(self) -> None:
         self.navigator.close()
@@ -96,7 +109,9 @@ def test_two_robots_take_turns_at_one_dock(spawn, bus: zenoh.Session, namespace:
     queue = KeyRecorder(bus, f"{namespace}/fleet/queue", FleetQueue, keep=5000)
     spawn("simulator", "--world", world, "-p", "rtf=5")
     spawn("fleet", "-p", f"world={world}", "-p", "publish_period_s=0.5")
-    robots = {name: _Robot(spawn, bus, namespace, name, world, f"patrol={PATROLS[name]}") for name in ("r1", "r2")}
+    robots = {
+        name: _Robot(spawn, bus, namespace, name, world, f"patrol={PATROLS[name]}") for name in ("r1", "r2")
+    }
     r1, r2 = robots["r1"], robots["r2"]
     try:
         for robot in robots.values():
@@ -110,8 +125,11 @@ def test_two_robots_take_turns_at_one_dock(spawn, bus: zenoh.Session, namespace:
         r2.wait_state("WAITING_FOR_DOCK", timeout_s=20.0)
         queue.wait_for(lambda m: [q.robot for q in m.robots] == [r2.ns], timeout_s=10.0)
         # The waiting robot goes to the room's holding pose, out of the dock's way.
-        wait_until(lambda: any(g.distance_to(HOLDING) < 1e-6 for g in r2.navigator.goals_sent()), 10.0,
-                   lambda: f"r2's planner goals: {r2.navigator.goals_sent()}")
+        wait_until(
+            lambda: any(g.distance_to(HOLDING) < 1e-6 for g in r2.navigator.goals_sent()),
+            10.0,
+            lambda: f"r2's planner goals: {r2.navigator.goals_sent()}",
+        )
         assert not any(m.power_supply_status in CHARGING for m in r2.battery.messages)
 
         # r1 charged: it undocks to patrol again and releases the dock, which goes to r2.
@@ -135,8 +153,12 @@ def test_two_robots_take_turns_at_one_dock(spawn, bus: zenoh.Session, namespace:
         queue.close()
 
 
-def test_with_the_fleet_down_a_robot_docks_at_a_dock_it_sees_free(spawn, bus: zenoh.Session, namespace: str,  # type: ignore[no-untyped-def]
-                                                                  tmp_path: Path) -> None:
+def test_with_the_fleet_down_a_robot_docks_at_a_dock_it_sees_free(
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,  # type: ignore[no-untyped-def]
+    tmp_path: Path,
+) -> None:
     world = _world(tmp_path)
     spawn("simulator", "--world", world, "-p", "rtf=5")
     robot = _Robot(spawn, bus, namespace, "r1", world, "fleet_patience_s=2")
@@ -153,7 +175,8 @@ def test_with_the_fleet_down_a_robot_docks_at_a_dock_it_sees_free(spawn, bus: ze
 
 
 def test_a_robot_whose_docking_service_is_killed_keeps_its_dock_and_docks_after_restart(  # type: ignore[no-untyped-def]
-        spawn, bus: zenoh.Session, namespace: str, tmp_path: Path) -> None:
+    spawn, bus: zenoh.Session, namespace: str, tmp_path: Path
+) -> None:
     world = _world(tmp_path)
     docks = KeyRecorder(bus, f"{namespace}/fleet/docks", FleetDocks, keep=5000)
     spawn("simulator", "--world", world, "-p", "rtf=5")
@@ -173,12 +196,15 @@ def test_a_robot_whose_docking_service_is_killed_keeps_its_dock_and_docks_after_
         killed_at, killed_wall = docks.count, time.monotonic()
         r1.docking.start()
         r1.wait_charging(timeout_s=60.0)
-        print(f"\nkill -9 of r1's docking service while it held the dock: charging {time.monotonic() - killed_wall:.1f} s "
-              "(wall) after the kill, the dock r1's throughout")
+        print(
+            f"\nkill -9 of r1's docking service while it held the dock: charging {time.monotonic() - killed_wall:.1f} s "
+            "(wall) after the kill, the dock r1's throughout"
+        )
         assert r1.truth().contact.mated
-        after_kill = docks.messages[len(docks.messages) - (docks.count - killed_at):]
-        assert after_kill and all(m.docks[0].robot == r1.ns for m in after_kill), \
+        after_kill = docks.messages[len(docks.messages) - (docks.count - killed_at) :]
+        assert after_kill and all(m.docks[0].robot == r1.ns for m in after_kill), (
             "the dock stayed r1's while its docking service was down and restarting"
+        )
         # Nothing else stalled: r2 still waits for the dock, its service alive and saying so.
         mark = r2.state.count
         r2.state.wait_for(lambda m: m.data == "WAITING_FOR_DOCK", timeout_s=10.0, after=mark)

@@ -32,8 +32,12 @@ def _world(tmp_path: Path) -> str:
 
 
 def _reserve(bus: zenoh.Session, ns: str, robot: str, battery: float, **lengths: float):  # type: ignore[no-untyped-def]
-    request = ReserveDockRequest(robot=f"{ns}/{robot}", battery=battery, dock_ids=list(lengths),
-                                 path_lengths=np.array(list(lengths.values()), dtype=float))
+    request = ReserveDockRequest(
+        robot=f"{ns}/{robot}",
+        battery=battery,
+        dock_ids=list(lengths),
+        path_lengths=np.array(list(lengths.values()), dtype=float),
+    )
     return call_service(bus, f"{ns}/fleet/reserve_dock", RESERVE_DOCK, request, timeout_s=5.0)
 
 
@@ -53,37 +57,68 @@ def test_reservations_queue_and_leases(spawn, bus: zenoh.Session, namespace: str
         assert not third.granted and third.queue_position == 1 and "taken" in third.reason
         queued = queue.wait_for(lambda m: [r.robot for r in m.robots] == [f"{namespace}/r3"], timeout_s=5.0)
         assert queued.robots[0].battery == np.float64(0.15)
-        held = docks.wait_for(lambda m: {d.dock_id: d.robot for d in m.docks}.get("west") == f"{namespace}/r2",
-                              timeout_s=5.0)
-        assert {d.dock_id: d.robot for d in held.docks} == {"east": f"{namespace}/r1", "west": f"{namespace}/r2"}
+        held = docks.wait_for(
+            lambda m: {d.dock_id: d.robot for d in m.docks}.get("west") == f"{namespace}/r2", timeout_s=5.0
+        )
+        assert {d.dock_id: d.robot for d in held.docks} == {
+            "east": f"{namespace}/r1",
+            "west": f"{namespace}/r2",
+        }
         # r1 is not seen alive: after the lease its dock is free, and r2 (alive) keeps its own.
-        freed = docks.wait_for(lambda m: {d.dock_id: d.robot for d in m.docks}.get("east") == "", timeout_s=10.0,
-                               after=docks.count)
+        freed = docks.wait_for(
+            lambda m: {d.dock_id: d.robot for d in m.docks}.get("east") == "",
+            timeout_s=10.0,
+            after=docks.count,
+        )
         assert {d.dock_id: d.robot for d in freed.docks}["west"] == f"{namespace}/r2"
         granted = _reserve(bus, namespace, "r3", 0.14)
         assert (granted.granted, granted.dock_id) == (True, "east")
-        released = call_service(bus, f"{namespace}/fleet/release_dock", RELEASE_DOCK,
-                                ReleaseDockRequest(robot=f"{namespace}/r2"), timeout_s=5.0)
+        released = call_service(
+            bus,
+            f"{namespace}/fleet/release_dock",
+            RELEASE_DOCK,
+            ReleaseDockRequest(robot=f"{namespace}/r2"),
+            timeout_s=5.0,
+        )
         assert released.dock_id == "west"
     finally:
         alive.undeclare()
 
 
-def test_bad_requests_get_a_reason_and_the_service_lives_on(spawn, bus: zenoh.Session, namespace: str,  # type: ignore[no-untyped-def]
-                                                            tmp_path: Path) -> None:
+def test_bad_requests_get_a_reason_and_the_service_lives_on(
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,  # type: ignore[no-untyped-def]
+    tmp_path: Path,
+) -> None:
     docks = KeyRecorder(bus, f"{namespace}/fleet/docks", FleetDocks)
     spawn("fleet", "-p", f"world={_world(tmp_path)}")
     docks.wait_for(timeout_s=20.0)
-    mismatched = ReserveDockRequest(robot="r1", battery=0.2, dock_ids=["west", "east"], path_lengths=np.array([1.0]))
+    mismatched = ReserveDockRequest(
+        robot="r1", battery=0.2, dock_ids=["west", "east"], path_lengths=np.array([1.0])
+    )
     reply = call_service(bus, f"{namespace}/fleet/reserve_dock", RESERVE_DOCK, mismatched, timeout_s=5.0)
     assert not reply.granted and "path lengths" in reply.reason
     assert "fraction" in _reserve(bus, namespace, "r1", 7.0).reason
-    assert "no dock 'nope'" in call_service(
-        bus, f"{namespace}/fleet/reserve_dock", RESERVE_DOCK,
-        ReserveDockRequest(robot="r1", battery=0.2, dock_id="nope"), timeout_s=5.0).reason
+    assert (
+        "no dock 'nope'"
+        in call_service(
+            bus,
+            f"{namespace}/fleet/reserve_dock",
+            RESERVE_DOCK,
+            ReserveDockRequest(robot="r1", battery=0.2, dock_id="nope"),
+            timeout_s=5.0,
+        ).reason
+    )
     bus.put(f"{namespace}/fleet/reserve_dock", b"\x00garbage")
     try:
-        call_service(bus, f"{namespace}/fleet/release_dock", RELEASE_DOCK, ReleaseDockRequest(robot="r9"), timeout_s=5.0)
+        call_service(
+            bus,
+            f"{namespace}/fleet/release_dock",
+            RELEASE_DOCK,
+            ReleaseDockRequest(robot="r9"),
+            timeout_s=5.0,
+        )
     except ServiceError as exc:  # pragma: no cover - the failure's message says what broke
         raise AssertionError(f"the fleet stopped answering after garbage: {exc}") from None
     wait_until(lambda: docks.latest() is not None, 5.0, "no fleet/docks")

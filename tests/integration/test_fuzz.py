@@ -41,20 +41,40 @@ def test_services_survive_malformed_input(  # type: ignore[no-untyped-def]
         "docking": KeyRecorder(bus, f"{namespace}/docking/state", String),
     }
     nodes = {f"@zendock/node/{namespace}/{name}" for name in services}
-    wait_until(lambda: nodes <= set(liveliness_keys(bus, f"@zendock/node/{namespace}/*")), 30.0,
-               lambda: f"ready: {liveliness_keys(bus, f'@zendock/node/{namespace}/*')}")
+    wait_until(
+        lambda: nodes <= set(liveliness_keys(bus, f"@zendock/node/{namespace}/*")),
+        30.0,
+        lambda: f"ready: {liveliness_keys(bus, f'@zendock/node/{namespace}/*')}",
+    )
 
-    report = run_fuzz(FuzzOptions(connect=(router_endpoint,), namespace=namespace, messages=MESSAGES, seed=7,
-                                  time_limit_s=20.0))
+    report = run_fuzz(
+        FuzzOptions(
+            connect=(router_endpoint,), namespace=namespace, messages=MESSAGES, seed=7, time_limit_s=20.0
+        )
+    )
     summary = report.as_dict()
     assert summary["sent"] == MESSAGES and summary["stopped_by"] == "count", summary
-    assert summary["decoder_errors"] == 0, {k: v["decoder_errors"] for k, v in summary["keys"].items() if "decoder_errors" in v}
+    assert summary["decoder_errors"] == 0, {
+        k: v["decoder_errors"] for k, v in summary["keys"].items() if "decoder_errors" in v
+    }
     keys = summary["keys"]
-    for key in ("cmd_vel", "odom", "tf", "clock", "scan", "battery_status", "simulator/teleport",
-                "dock_robot/_action/send_goal", "dock_robot/_action/get_result", "undock_robot/_action/cancel_goal"):
+    for key in (
+        "cmd_vel",
+        "odom",
+        "tf",
+        "clock",
+        "scan",
+        "battery_status",
+        "simulator/teleport",
+        "dock_robot/_action/send_goal",
+        "dock_robot/_action/get_result",
+        "undock_robot/_action/cancel_goal",
+    ):
         entry = keys[f"{namespace}/{key}"]
         assert entry["announced"] and entry["type"] and entry["sent"] > 50, (key, entry)
-    assert {"missing_field", "wrong_type", "non_finite", "out_of_range", "truncated", "wrong_schema"} <= set(summary["kinds"])
+    assert {"missing_field", "wrong_type", "non_finite", "out_of_range", "truncated", "wrong_schema"} <= set(
+        summary["kinds"]
+    )
     # every malformed request got an error reply, none was answered as valid
     assert summary["replies"]["ok"] == 0, summary["replies"]
     teleport = keys[f"{namespace}/simulator/teleport"]["replies"]
@@ -80,10 +100,11 @@ def test_services_survive_malformed_input(  # type: ignore[no-untyped-def]
         for key, count in lines.items():
             assert count <= most_lines_per_key < keys[key]["sent"] / 10, (name, key, count, keys[key]["sent"])
 
-
     # the command line: a short run, reported as JSON
     capsys.readouterr()
-    code = main(["fuzz", "--connect", router_endpoint, "--namespace", namespace, "--messages", "300", "--json"])
+    code = main(
+        ["fuzz", "--connect", router_endpoint, "--namespace", namespace, "--messages", "300", "--json"]
+    )
     printed = json.loads(capsys.readouterr().out)
     assert code == 0 and printed["sent"] == 300 and printed["announced_targets"] >= 20, printed
     assert all(proc.alive() for proc in services.values())

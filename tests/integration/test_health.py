@@ -9,8 +9,9 @@ from tests.support.processes import wait_until
 
 
 def _health(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "deploy.cli", "health", *args], capture_output=True, text=True,
-                          timeout=60)
+    return subprocess.run(
+        [sys.executable, "-m", "deploy.cli", "health", *args], capture_output=True, text=True, timeout=60
+    )
 
 
 def test_health_follows_the_services_token(spawn, router_endpoint: str, namespace: str) -> None:  # type: ignore[no-untyped-def]
@@ -26,7 +27,9 @@ def test_health_follows_the_services_token(spawn, router_endpoint: str, namespac
 
 def test_health_without_a_router_is_one_line_and_exit_1() -> None:
     done = _health("battery", "--connect", "tcp/127.0.0.1:9", "--connect-timeout", "0.5")
-    assert done.returncode == 1 and done.stderr.count("\n") == 1 and "cannot reach a Zenoh router" in done.stderr
+    assert (
+        done.returncode == 1 and done.stderr.count("\n") == 1 and "cannot reach a Zenoh router" in done.stderr
+    )
 
 
 def test_health_refuses_a_missing_zenoh_config_by_name() -> None:

@@ -49,19 +49,26 @@ class Talker:
         self.node.create_subscription(Twist, "cmd_in", lambda _msg: None)
         self.node.create_service(CANCEL_GOAL, "cancel_all", lambda _request: CancelGoalResponse())
         # an action's internal part: hidden from ``keys list`` unless -a, as ros2 hides _-prefixed names
-        self.node.create_service(CANCEL_GOAL, "dock/_action/cancel_goal", lambda _request: CancelGoalResponse())
+        self.node.create_service(
+            CANCEL_GOAL, "dock/_action/cancel_goal", lambda _request: CancelGoalResponse()
+        )
         garbage = session.declare_publisher(f"{namespace}/garbage", encoding=encoding_for(TWIST))
         wrong_shape = session.declare_publisher(f"{namespace}/wrong_shape", encoding=encoding_for(TWIST))
         self.node.create_timer(0.05, lambda: twist.publish(TALKER_TWIST))
-        self.node.create_timer(0.1, lambda: battery.publish(BatteryState(header=now_header("base_link"),
-                                                                          percentage=0.5, voltage=12.5)))
+        self.node.create_timer(
+            0.1,
+            lambda: battery.publish(
+                BatteryState(header=now_header("base_link"), percentage=0.5, voltage=12.5)
+            ),
+        )
         self.node.create_timer(0.1, lambda: garbage.put(GARBAGE))
         self.node.create_timer(0.1, lambda: wrong_shape.put(msgpack.packb({"linear": {"x": "fast"}})))
         if clock_speed is not None:
             clock = self.node.create_publisher(Clock, "clock")
             start = time.monotonic()
-            self.node.create_timer(0.01, lambda: clock.publish(Clock(Time.from_sec((time.monotonic() - start)
-                                                                                     * clock_speed))))
+            self.node.create_timer(
+                0.01, lambda: clock.publish(Clock(Time.from_sec((time.monotonic() - start) * clock_speed)))
+            )
         self.node.declare_ready()
         self._thread = threading.Thread(target=self.node.spin, name="talker", daemon=True)
         self._thread.start()
@@ -82,11 +89,16 @@ class Talker:
         self.node.close()
 
 
-def _start_talker(router_endpoint: str, bus: zenoh.Session, namespace: str, clock_speed: float | None) -> Talker:
+def _start_talker(
+    router_endpoint: str, bus: zenoh.Session, namespace: str, clock_speed: float | None
+) -> Talker:
     talker = Talker(bus, namespace, clock_speed)
     with open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as observer:
-        wait_until(lambda: talker.expected_tokens() <= set(liveliness_keys(observer, timeout_s=0.5)), 10.0,
-                   lambda: f"talker tokens not on the router: {liveliness_keys(observer)}")
+        wait_until(
+            lambda: talker.expected_tokens() <= set(liveliness_keys(observer, timeout_s=0.5)),
+            10.0,
+            lambda: f"talker tokens not on the router: {liveliness_keys(observer)}",
+        )
     return talker
 
 
@@ -118,7 +130,10 @@ def test_list_shows_keys_types_and_nodes(talker: Talker, keys, namespace: str) -
     code, out, _ = keys("list")
     assert code == 0
     assert out.splitlines() == [
-        f"{namespace}/battery_status", f"{namespace}/cancel_all (service)", f"{namespace}/cmd_in", f"{namespace}/cmd_vel",
+        f"{namespace}/battery_status",
+        f"{namespace}/cancel_all (service)",
+        f"{namespace}/cmd_in",
+        f"{namespace}/cmd_vel",
     ]
     for flag in ("-a", "--include-hidden"):
         code, out, _ = keys("list", flag)
@@ -128,7 +143,7 @@ def test_list_shows_keys_types_and_nodes(talker: Talker, keys, namespace: str) -
     code, out, _ = keys("list", "-v")
     lines = out.splitlines()
     at = lines.index(f"{namespace}/cmd_vel [{TWIST}]")
-    assert lines[at + 1:at + 3] == [f"  publishers (1): /{namespace}/talker", "  subscribers (0):"]
+    assert lines[at + 1 : at + 3] == [f"  publishers (1): /{namespace}/talker", "  subscribers (0):"]
     assert f"  service servers (1): /{namespace}/talker" in lines
     code, out, _ = keys("info", "cancel_all")
     assert "Service server count: 1" in out and "Type: action_msgs/srv/CancelGoal" in out
@@ -143,8 +158,13 @@ def test_list_in_an_empty_namespace_says_so(talker: Talker, router_endpoint: str
 def test_info_counts_publishers_and_subscribers(talker: Talker, keys, namespace: str) -> None:  # type: ignore[no-untyped-def]
     code, out, _ = keys("info", "/cmd_vel")
     assert code == 0
-    assert out.splitlines() == [f"Key: {namespace}/cmd_vel", f"Type: {TWIST}", "Publisher count: 1",
-                                f"    /{namespace}/talker", "Subscription count: 0"]
+    assert out.splitlines() == [
+        f"Key: {namespace}/cmd_vel",
+        f"Type: {TWIST}",
+        "Publisher count: 1",
+        f"    /{namespace}/talker",
+        "Subscription count: 0",
+    ]
     code, out, _ = keys("info", "cmd_in")
     assert "Publisher count: 0" in out and "Subscription count: 1" in out
     code, _, err = keys("info", "no_such_key")
@@ -154,8 +174,10 @@ def test_info_counts_publishers_and_subscribers(talker: Talker, keys, namespace:
 def test_echo_once_decodes_the_message(talker: Talker, keys) -> None:  # type: ignore[no-untyped-def]
     code, out, _ = keys("echo", "/cmd_vel", "--once")
     assert code == 0 and out.rstrip().endswith("---")
-    assert yaml.safe_load(out.split("---")[0]) == {"linear": {"x": 0.2, "y": 0.0, "z": 0.0},
-                                                   "angular": {"x": 0.0, "y": 0.0, "z": -0.1}}
+    assert yaml.safe_load(out.split("---")[0]) == {
+        "linear": {"x": 0.2, "y": 0.0, "z": 0.0},
+        "angular": {"x": 0.0, "y": 0.0, "z": -0.1},
+    }
     code, out, _ = keys("echo", "battery_status", "--times", "2", "--field", "header.frame_id")
     assert code == 0 and out.split() == ["base_link", "---", "base_link", "---"]
     code, out, _ = keys("echo", "cmd_vel", "--once", "--csv")
@@ -173,7 +195,9 @@ def test_echo_shows_bad_payloads_without_crashing(talker: Talker, keys, namespac
     code, out, _ = keys("echo", "garbage", "--once", "--raw")
     assert out.split() == [GARBAGE.hex(), "---"]
     code, out, _ = keys("echo", "**", "--times", "12")  # every key, good and bad, each labelled
-    assert code == 0 and f"# {namespace}/garbage [{TWIST}]" in out and f"# {namespace}/cmd_vel [{TWIST}]" in out
+    assert (
+        code == 0 and f"# {namespace}/garbage [{TWIST}]" in out and f"# {namespace}/cmd_vel [{TWIST}]" in out
+    )
 
 
 def test_echo_errors(talker: Talker, keys, namespace: str) -> None:  # type: ignore[no-untyped-def]
@@ -251,7 +275,9 @@ def test_pub_validates_before_sending(talker: Talker, keys, bus: zenoh.Session, 
 def test_pub_needs_a_type_nobody_announced(talker: Talker, keys) -> None:  # type: ignore[no-untyped-def]
     code, _, err = keys("pub", "fresh_key", "{data: 1.5}", "--once")
     assert code == 2 and "give TYPE" in err
-    code, _, err = keys("pub", "fresh_key", "std_msgs/msg/Float64", "{data: 1.5}", "--once", "--wait-matching", "0.2")
+    code, _, err = keys(
+        "pub", "fresh_key", "std_msgs/msg/Float64", "{data: 1.5}", "--once", "--wait-matching", "0.2"
+    )
     assert code == 0 and "no subscriber on" in err
 
 
@@ -264,7 +290,9 @@ def test_pub_declares_its_own_token(talker: Talker, router_endpoint: str, namesp
     token = endpoint_token_key("pub", namespace, f"keys_pub_{os.getpid()}", TWIST, f"{namespace}/cmd_vel")
     try:
         with open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as observer:
-            wait_until(lambda: token in liveliness_keys(observer, timeout_s=0.5), 10.0, "no token from keys pub")
+            wait_until(
+                lambda: token in liveliness_keys(observer, timeout_s=0.5), 10.0, "no token from keys pub"
+            )
         code, out, _ = keys("info", "cmd_vel")
         assert code == 0 and "Publisher count: 2" in out and f"/{namespace}/keys_pub_{os.getpid()}" in out
     finally:
@@ -275,11 +303,16 @@ def test_pub_declares_its_own_token(talker: Talker, router_endpoint: str, namesp
 
 def test_admin_space_shows_keys_without_tokens(namespace: str, capsys) -> None:  # type: ignore[no-untyped-def]
     endpoint = f"tcp/127.0.0.1:{free_port()}"
-    router = SessionSpec(mode="router", connect=(), listen=(endpoint,), overrides=(("adminspace/enabled", "true"),))
+    router = SessionSpec(
+        mode="router", connect=(), listen=(endpoint,), overrides=(("adminspace/enabled", "true"),)
+    )
     with open_session(router), open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
         raw = session.declare_publisher(f"{namespace}/raw_camera")
-        wait_until(lambda: any(r.ok is not None for r in session.get(f"@/*/router/publisher/{namespace}/**")), 10.0,
-                   "the router's admin space never listed the publisher")
+        wait_until(
+            lambda: any(r.ok is not None for r in session.get(f"@/*/router/publisher/{namespace}/**")),
+            10.0,
+            "the router's admin space never listed the publisher",
+        )
         code = cli.main(["keys", "list", "-t", "--connect", endpoint, "--namespace", namespace])
         raw.undeclare()
     assert code == 0
@@ -290,11 +323,27 @@ def test_unreachable_router_is_one_line_and_exit_1() -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     started = time.monotonic()
     result = subprocess.run(
-        [sys.executable, "-m", "deploy.cli", "keys", "echo", "cmd_vel", "--once", "--connect", endpoint,
-         "--connect-timeout", "1"],
-        cwd=REPO_ROOT, capture_output=True, text=True, timeout=30,
+        [
+            sys.executable,
+            "-m",
+            "deploy.cli",
+            "keys",
+            "echo",
+            "cmd_vel",
+            "--once",
+            "--connect",
+            endpoint,
+            "--connect-timeout",
+            "1",
+        ],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=30,
     )
     assert result.returncode == 1, result.stderr
-    assert result.stderr.startswith(f"zendock keys echo: cannot reach a Zenoh router at {endpoint} within 1 s")
+    assert result.stderr.startswith(
+        f"zendock keys echo: cannot reach a Zenoh router at {endpoint} within 1 s"
+    )
     assert len(result.stderr.strip().splitlines()) == 1 and result.stdout == ""
     assert time.monotonic() - started < 15

@@ -60,10 +60,27 @@ class Probe:
         self.trace_path = trace_path
         self._stderr = open(log_path, "ab")  # noqa: SIM115 - closed in stop()
         self.proc = subprocess.Popen(
-            ["ip", "netns", "exec", netns, sys.executable, "-m", "tests.support.multihost_probe",
-             "--connect", connect, "--namespace", ROBOT],
-            cwd=REPO_ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._stderr,
-            env={**os.environ, "PYTHONUNBUFFERED": "1"}, start_new_session=True, text=True, bufsize=1,
+            [
+                "ip",
+                "netns",
+                "exec",
+                netns,
+                sys.executable,
+                "-m",
+                "tests.support.multihost_probe",
+                "--connect",
+                connect,
+                "--namespace",
+                ROBOT,
+            ],
+            cwd=REPO_ROOT,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+            start_new_session=True,
+            text=True,
+            bufsize=1,
         )
         self._lines: queue.Queue[dict[str, Any]] = queue.Queue()
         self.latest: dict[str, Any] = {}
@@ -108,16 +125,24 @@ class Probe:
             pass
         return self.latest
 
-    def wait(self, kind: str, predicate: Callable[[dict[str, Any]], bool], timeout_s: float, what: str,
-             on_status: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+    def wait(
+        self,
+        kind: str,
+        predicate: Callable[[dict[str, Any]], bool],
+        timeout_s: float,
+        what: str,
+        on_status: Callable[[dict[str, Any]], None] | None = None,
+    ) -> dict[str, Any]:
         """The first record of ``kind`` matching ``predicate``; ``on_status`` sees every status meanwhile."""
         deadline = time.monotonic() + timeout_s
         while True:
             record = self.next_record(deadline)
             if record is None:
                 alive = "running" if self.proc.poll() is None else f"exited {self.proc.returncode}"
-                raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}; probe {alive}; "
-                                     f"last status {self.latest}; events {self.events[-5:]}")
+                raise AssertionError(
+                    f"timed out after {timeout_s:g} s waiting for {what}; probe {alive}; "
+                    f"last status {self.latest}; events {self.events[-5:]}"
+                )
             if record.get("kind") == "status" and on_status is not None:
                 on_status(record)
             if record.get("kind") == kind and predicate(record):
@@ -160,19 +185,34 @@ class Hosts:
         return proc
 
     def service(self, netns: str, name: str, connect: str, *params: str) -> NetnsProcess:
-        return self.run(netns, f"services.{name}", "--connect", connect, "--namespace", ROBOT, *params, label=name)
+        return self.run(
+            netns, f"services.{name}", "--connect", connect, "--namespace", ROBOT, *params, label=name
+        )
 
     def router(self, netns: str, listen: str, connect: str | None, label: str) -> NetnsProcess:
         args = ["router", "--listen", listen]
         if connect is not None:
             config = self.log_dir / f"{label}.json5"
-            config.write_text(json.dumps({
-                "mode": "router",
-                "connect": {"endpoints": [connect], "timeout_ms": -1, "exit_on_failure": False,
-                            "retry": {"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2}},
-                "scouting": {"multicast": {"enabled": False}},
-                "transport": {"shared_memory": {"enabled": False}},
-            }, indent=2))
+            config.write_text(
+                json.dumps(
+                    {
+                        "mode": "router",
+                        "connect": {
+                            "endpoints": [connect],
+                            "timeout_ms": -1,
+                            "exit_on_failure": False,
+                            "retry": {
+                                "period_init_ms": 250,
+                                "period_max_ms": 1000,
+                                "period_increase_factor": 2,
+                            },
+                        },
+                        "scouting": {"multicast": {"enabled": False}},
+                        "transport": {"shared_memory": {"enabled": False}},
+                    },
+                    indent=2,
+                )
+            )
             args += ["--config", str(config)]
         return self.run(netns, "deploy.cli", *args, label=label)
 
@@ -220,13 +260,20 @@ def hosts(tmp_path: Path, request: pytest.FixtureRequest) -> Iterator[Hosts]:
 
 def _speed_stopped(status: dict[str, Any]) -> bool:
     linear, angular = status.get("linear_mps"), status.get("angular_radps")
-    return linear is not None and abs(linear) < STOPPED_LINEAR_MPS and abs(angular or 0.0) < STOPPED_ANGULAR_RPS
+    return (
+        linear is not None and abs(linear) < STOPPED_LINEAR_MPS and abs(angular or 0.0) < STOPPED_ANGULAR_RPS
+    )
 
 
 def _healthy(status: dict[str, Any]) -> bool:
     nodes = set(status["nodes"])
-    return (HOST_A_NODES | HOST_B_NODES) <= nodes and status["sim_time_s"] is not None \
-        and status["odom_count"] > 0 and status["battery_percentage"] is not None and status["pose2d_count"] > 0
+    return (
+        (HOST_A_NODES | HOST_B_NODES) <= nodes
+        and status["sim_time_s"] is not None
+        and status["odom_count"] > 0
+        and status["battery_percentage"] is not None
+        and status["pose2d_count"] > 0
+    )
 
 
 def test_robot_brakes_when_the_hosts_are_cut_apart_and_docks_once_they_meet_again(hosts: Hosts) -> None:
@@ -241,8 +288,13 @@ def test_robot_brakes_when_the_hosts_are_cut_apart_and_docks_once_they_meet_agai
     probe = hosts.probe(a, ROUTER_A)
 
     probe.wait("ready", lambda _r: True, 30, "the probe's session in host A")
-    probe.wait("status", _healthy, 60, f"nodes {sorted(HOST_A_NODES | HOST_B_NODES)} seen from host A, "
-               "with clock, odom, battery_status and map_to_base_link_pose2d")
+    probe.wait(
+        "status",
+        _healthy,
+        60,
+        f"nodes {sorted(HOST_A_NODES | HOST_B_NODES)} seen from host A, "
+        "with clock, odom, battery_status and map_to_base_link_pose2d",
+    )
 
     probe.command("trigger 0.26 20")
     triggered = probe.wait("trigger", lambda _r: True, 15, "the battery/set_state reply")
@@ -267,12 +319,19 @@ def test_robot_brakes_when_the_hosts_are_cut_apart_and_docks_once_they_meet_agai
 
     held = probe.wait(
         "status",
-        lambda s: s["odom_time_s"] >= cut_s + STOP_WITHIN_SIM_S + STAY_STOPPED_SIM_S and len(settled(fresh)) >= MIN_SAMPLES,
-        40, f"{MIN_SAMPLES} odometry samples over {STAY_STOPPED_SIM_S} s of sim time with the link down",
-        on_status=keep_fresh)
+        lambda s: (
+            s["odom_time_s"] >= cut_s + STOP_WITHIN_SIM_S + STAY_STOPPED_SIM_S
+            and len(settled(fresh)) >= MIN_SAMPLES
+        ),
+        40,
+        f"{MIN_SAMPLES} odometry samples over {STAY_STOPPED_SIM_S} s of sim time with the link down",
+        on_status=keep_fresh,
+    )
     first_stop = next((s for s in fresh if _speed_stopped(s)), None)
-    summary = (f"cut at sim {cut_s:.2f} s driving {at_cut['linear_mps']:.2f} m/s; first stopped odometry at "
-               f"{first_stop['odom_time_s'] if first_stop else None}; {len(fresh)} fresh samples while cut")
+    summary = (
+        f"cut at sim {cut_s:.2f} s driving {at_cut['linear_mps']:.2f} m/s; first stopped odometry at "
+        f"{first_stop['odom_time_s'] if first_stop else None}; {len(fresh)} fresh samples while cut"
+    )
     moving = [s for s in settled(fresh) if not _speed_stopped(s)]
     assert not moving, f"still moving {STOP_WITHIN_SIM_S} s after the cut: {moving[:3]} ({summary})"
     coast_m = max(math.dist((at_cut["x_m"], at_cut["y_m"]), (s["x_m"], s["y_m"])) for s in fresh)
@@ -282,6 +341,10 @@ def test_robot_brakes_when_the_hosts_are_cut_apart_and_docks_once_they_meet_agai
     hosts.pair.set_link(up=True)
     docked = probe.wait(
         "status",
-        lambda s: s["power_supply_status"] == BatteryState.POWER_SUPPLY_STATUS_CHARGING and s["mated"] is True,
-        90, "CHARGING with the contacts mated after the link came back")
+        lambda s: (
+            s["power_supply_status"] == BatteryState.POWER_SUPPLY_STATUS_CHARGING and s["mated"] is True
+        ),
+        90,
+        "CHARGING with the contacts mated after the link came back",
+    )
     assert docked["collisions"] == 0, f"collisions during the run: {probe.events}"

@@ -19,7 +19,10 @@ ECHO = ServiceType("zendock_msgs/srv/Echo", Twist, Twist)
 
 @pytest.fixture
 def node_pair(router_endpoint: str, namespace: str) -> Iterator[tuple[Node, Node]]:
-    with open_session(SessionSpec(connect=(router_endpoint,))) as s1, open_session(SessionSpec(connect=(router_endpoint,))) as s2:
+    with (
+        open_session(SessionSpec(connect=(router_endpoint,))) as s1,
+        open_session(SessionSpec(connect=(router_endpoint,))) as s2,
+    ):
         a, b = Node("talker", s1, namespace), Node("listener", s2, namespace, use_sim_time=True)
         spinner = threading.Thread(target=b.spin, daemon=True)
         spinner.start()
@@ -47,8 +50,11 @@ def test_typed_pub_sub_and_rejection(node_pair: tuple[Node, Node], bus: zenoh.Se
     listener.create_subscription(Twist, "cmd_vel", on_twist, RELIABLE)
     pub = talker.create_publisher(Twist, "cmd_vel")
     token = f"/sub/{listener.namespace}/listener/geometry_msgs%msg%Twist/{listener.namespace}/cmd_vel"
-    wait_until(lambda: any(k.endswith(token) for k in liveliness_keys(bus)), 5.0,
-               lambda: f"no token ending {token}: {liveliness_keys(bus)}")
+    wait_until(
+        lambda: any(k.endswith(token) for k in liveliness_keys(bus)),
+        5.0,
+        lambda: f"no token ending {token}: {liveliness_keys(bus)}",
+    )
     for bad in (b"garbage", Bool(True).encode()):
         bus.put(talker.key("cmd_vel"), bad)
     for i in range(3):
@@ -57,7 +63,11 @@ def test_typed_pub_sub_and_rejection(node_pair: tuple[Node, Node], bus: zenoh.Se
     assert [m.linear.x for m in got] == pytest.approx([0.0, 0.1, 0.2])
     # the bad payloads come through another session: they may arrive after the good ones
     rejected = listener.stats.rejected
-    wait_until(lambda: rejected.get(talker.key("cmd_vel"), 0) >= 2, 5.0, lambda: f"rejections so far: {dict(rejected)}")
+    wait_until(
+        lambda: rejected.get(talker.key("cmd_vel"), 0) >= 2,
+        5.0,
+        lambda: f"rejections so far: {dict(rejected)}",
+    )
     assert rejected[talker.key("cmd_vel")] == 2
 
 
@@ -65,7 +75,10 @@ def test_sequence_numbers_attached(node_pair: tuple[Node, Node], bus: zenoh.Sess
     talker, _ = node_pair
     seqs: list[int | None] = []
     done = threading.Event()
-    sub = bus.declare_subscriber(talker.key("seq"), lambda s: (seqs.append(sequence_number(s.attachment)), len(seqs) == 3 and done.set()))
+    sub = bus.declare_subscriber(
+        talker.key("seq"),
+        lambda s: (seqs.append(sequence_number(s.attachment)), len(seqs) == 3 and done.set()),
+    )
     pub = talker.create_publisher(Bool, "seq")
     # the raw subscriber declares no token: wait until the publisher's route to it is up
     wait_until(pub.has_subscribers, 5.0, "the publisher never matched the subscriber")
@@ -132,7 +145,9 @@ def test_a_timer_at_the_clocks_own_rate_fires_on_every_tick(node_pair: tuple[Nod
     for step in range(0, 2000, 5):  # a 0.01 s step, a clock every 5 steps
         fired.clear()
         clock.publish(Clock(Time.from_sec(step * 0.01)))
-        fired.wait(0.5 if ticks else 0.05)  # a clock that does not fire the timer makes the gap the assert reports
+        fired.wait(
+            0.5 if ticks else 0.05
+        )  # a clock that does not fire the timer makes the gap the assert reports
         if done.is_set():
             break
     _wait(done, "thirty ticks")
@@ -152,13 +167,20 @@ def test_a_node_answers_with_its_counters(node_pair: tuple[Node, Node], bus: zen
     wait_until(pub.has_subscribers, 5.0, "the publisher never matched the subscriber")
     for _ in range(3):
         pub.publish(Bool(True))
-    wait_until(lambda: listener.stats.received.get(talker.key("counted"), 0) == 3, 5.0,
-               lambda: f"received so far: {listener.stats.received}")
+    wait_until(
+        lambda: listener.stats.received.get(talker.key("counted"), 0) == 3,
+        5.0,
+        lambda: f"received so far: {listener.stats.received}",
+    )
     by_node: dict[tuple[str, str], dict] = {}
 
     def both_answered() -> bool:
-        replies = bus.get("@zendock/stats/**", timeout=2.0, target=zenoh.QueryTarget.ALL,
-                          consolidation=zenoh.ConsolidationMode.NONE)
+        replies = bus.get(
+            "@zendock/stats/**",
+            timeout=2.0,
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+        )
         for reply in replies:
             if reply.ok is not None:
                 body = json.loads(reply.ok.payload.to_bytes())
@@ -181,8 +203,11 @@ def test_callback_exception_does_not_stop_the_node(node_pair: tuple[Node, Node],
 
     listener.create_subscription(Bool, "flaky", flaky)
     # the token follows the subscriber on the same session: once the router has it, puts are routed
-    wait_until(lambda: any("/sub/" in k and k.endswith("/flaky") for k in liveliness_keys(bus)), 5.0,
-               "the subscription's token never appeared")
+    wait_until(
+        lambda: any("/sub/" in k and k.endswith("/flaky") for k in liveliness_keys(bus)),
+        5.0,
+        "the subscription's token never appeared",
+    )
     pub = talker.create_publisher(Bool, "flaky")
     pub.publish(Bool(True))
     pub.publish(Bool(False))
@@ -199,13 +224,18 @@ def test_requests(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
         return Twist.planar(req.linear.x * 2, 0.0)
 
     listener.create_service(ECHO, "double", handler)
-    wait_until(lambda: any("/srv/" in k and k.endswith("/double") for k in liveliness_keys(bus)), 5.0,
-               "the service's token never appeared")
+    wait_until(
+        lambda: any("/srv/" in k and k.endswith("/double") for k in liveliness_keys(bus)),
+        5.0,
+        "the service's token never appeared",
+    )
     assert talker.call(ECHO, "double", Twist.planar(1.5, 0.0)).linear.x == 3.0
     with pytest.raises(ServiceError, match="must be positive"):
         talker.call(ECHO, "double", Twist.planar(-1.0, 0.0))
     replies = list(bus.get(listener.key("double"), payload=b"\xc1", timeout=2.0))
-    assert replies and replies[0].err is not None and "not valid msgpack" in replies[0].err.payload.to_string()
+    assert (
+        replies and replies[0].err is not None and "not valid msgpack" in replies[0].err.payload.to_string()
+    )
     with pytest.raises(ServiceError, match="no service answered"):
         call_service(bus, listener.key("absent"), ECHO, Twist(), timeout_s=0.5)
 
@@ -213,7 +243,9 @@ def test_requests(node_pair: tuple[Node, Node], bus: zenoh.Session) -> None:
     done = threading.Event()
     talker_spin = threading.Thread(target=talker.spin, daemon=True)
     talker_spin.start()
-    talker.call_async(ECHO, "double", Twist.planar(2.0, 0.0), lambda r, e: (results.append((r, e)), done.set()))
+    talker.call_async(
+        ECHO, "double", Twist.planar(2.0, 0.0), lambda r, e: (results.append((r, e)), done.set())
+    )
     _wait(done, "the asynchronous reply")
     talker.shutdown()
     talker_spin.join(5)
@@ -244,11 +276,17 @@ def test_keys_deletes_and_declared_types(node_pair: tuple[Node, Node], bus: zeno
 
     listener.create_subscription(Twist, "robot/cmd_vel", exact.append, RELIABLE)
     listener.create_subscription(Twist, "*/cmd_vel", on_keyed, RELIABLE, with_key=True)
-    wait_until(lambda: sum("cmd_vel" in k for k in liveliness_keys(bus)) >= 2, 5.0, "the subscriptions' tokens")
+    wait_until(
+        lambda: sum("cmd_vel" in k for k in liveliness_keys(bus)) >= 2, 5.0, "the subscriptions' tokens"
+    )
     key = talker.key("robot/cmd_vel")
     bus.delete(key)
     bus.put(key, b"")
-    bus.put(key, Twist.planar(9.0, 0.0).encode(), encoding=zenoh.Encoding("application/msgpack;geometry_msgs/msg/Point"))
+    bus.put(
+        key,
+        Twist.planar(9.0, 0.0).encode(),
+        encoding=zenoh.Encoding("application/msgpack;geometry_msgs/msg/Point"),
+    )
     talker.create_publisher(Twist, "robot/cmd_vel").publish(Twist.planar(1.0, 0.0))
     talker.create_publisher(Twist, "other/cmd_vel").publish(Twist.planar(2.0, 0.0))
     _wait(done, "two twists on the wildcard")
@@ -276,7 +314,11 @@ def test_an_undecoded_subscription_gets_the_payload_and_still_refuses_another_ty
     listener.create_subscription(Twist, "*/cmd_vel", on_payload, RELIABLE, with_key=True, undecoded=True)
     wait_until(lambda: any("cmd_vel" in k for k in liveliness_keys(bus)), 5.0, "the subscription's token")
     key = talker.key("robot/cmd_vel")
-    bus.put(key, Twist.planar(9.0, 0.0).encode(), encoding=zenoh.Encoding("application/msgpack;geometry_msgs/msg/Point"))
+    bus.put(
+        key,
+        Twist.planar(9.0, 0.0).encode(),
+        encoding=zenoh.Encoding("application/msgpack;geometry_msgs/msg/Point"),
+    )
     rejected = listener.stats.rejected
     wait_until(lambda: rejected.get(key, 0) >= 1, 5.0, lambda: f"rejections so far: {dict(rejected)}")
     talker.create_publisher(Twist, "robot/cmd_vel").publish(Twist.planar(1.0, 0.0))

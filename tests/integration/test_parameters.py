@@ -43,8 +43,12 @@ def _drop_over(status: KeyRecorder[BatteryState], seconds: float) -> float:
     return start.percentage - end.percentage
 
 
-def test_param_list_get_set_on_a_running_battery(spawn, bus: zenoh.Session, namespace: str,  # type: ignore[no-untyped-def]
-                                                 zendock) -> None:
+def test_param_list_get_set_on_a_running_battery(
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,  # type: ignore[no-untyped-def]
+    zendock,
+) -> None:
     status = KeyRecorder(bus, topic_key(namespace, topics.BATTERY_STATUS), BatteryState)
     spawn("battery", "-p", "initial_percentage=0.9")
     status.wait_for(timeout_s=20.0)
@@ -63,8 +67,11 @@ def test_param_list_get_set_on_a_running_battery(spawn, bus: zenoh.Session, name
     assert f"    {namespace}/battery/_param/set: zendock_msgs/srv/SetParameter" in lines
     assert lines.index("  Publishers:") < lines.index("  Subscriptions:") < lines.index("  Services:")
     code, out, _ = zendock("nodes", "info", node, "--json")
-    assert code == 0 and {"key": f"{namespace}/dock_contact", "type": "zendock_msgs/msg/DockContact"} in (
-        json.loads(out)["subscriptions"])
+    assert (
+        code == 0
+        and {"key": f"{namespace}/dock_contact", "type": "zendock_msgs/msg/DockContact"}
+        in (json.loads(out)["subscriptions"])
+    )
 
     # param list: every parameter, with its value and whether it is settable.
     code, out, _ = zendock("param", "list", node)
@@ -90,8 +97,9 @@ def test_param_list_get_set_on_a_running_battery(spawn, bus: zenoh.Session, name
     # A bad value, a read-only parameter and an unknown name are refused with the reason, exit 2.
     code, out, err = zendock("param", "set", "battery", "drain_scale", "-1")
     assert (code, out) == (2, "")
-    assert err == (f"zendock param set: {node}: drain_scale: Input should be greater than or equal to 0 "
-                   "(got -1)\n")
+    assert err == (
+        f"zendock param set: {node}: drain_scale: Input should be greater than or equal to 0 (got -1)\n"
+    )
     code, _, err = zendock("param", "set", "battery", "capacity_ah", "3")
     assert code == 2 and err.startswith(f"zendock param set: {node}: capacity_ah: read at start-up only")
     code, _, err = zendock("param", "set", "battery", "drain", "3")

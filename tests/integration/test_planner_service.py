@@ -86,7 +86,9 @@ def _start_stack(spawn, world: str, *planner_args: str):  # type: ignore[no-unty
 
 
 def _wait_done(nav: NavigationClient, timeout_s: float = GOAL_TIMEOUT_S) -> TaskResult:
-    wait_until(nav.is_task_complete, timeout_s, lambda: f"goal still running; last feedback {nav.get_feedback()}")
+    wait_until(
+        nav.is_task_complete, timeout_s, lambda: f"goal still running; last feedback {nav.get_feedback()}"
+    )
     return nav.get_result()
 
 
@@ -133,7 +135,9 @@ def test_goal_behind_a_wall_is_reached_and_bad_goals_are_refused(  # type: ignor
     # The map is published, and served on request to late joiners.
     published = maps.wait_for(timeout_s=20.0)
     served = call_service(bus, f"{namespace}/{GET_MAP_SERVICE}", GET_MAP, GetMapRequest()).map
-    assert (served.info.width, served.info.height) == (published.info.width, published.info.height) == (140, 112)
+    assert (
+        (served.info.width, served.info.height) == (published.info.width, published.info.height) == (140, 112)
+    )
     np.testing.assert_array_equal(served.data, map_from_world(world).data.ravel())
 
     # Malformed goals are refused, each with its reason, and nothing moves.
@@ -147,8 +151,13 @@ def test_goal_behind_a_wall_is_reached_and_bad_goals_are_refused(  # type: ignor
         assert _wait_done(nav, 10.0) is TaskResult.FAILED
         assert reason in nav.failure_reason(), nav.failure_reason()
     for axis in ("x", "y"):
-        replies = list(bus.get(f"{namespace}/navigate_to_pose/_action/send_goal",
-                               payload=_raw_goal_with_nan(axis), timeout=5.0))
+        replies = list(
+            bus.get(
+                f"{namespace}/navigate_to_pose/_action/send_goal",
+                payload=_raw_goal_with_nan(axis),
+                timeout=5.0,
+            )
+        )
         assert replies and replies[0].err is not None, "a NaN goal was not refused"
         assert "finite" in replies[0].err.payload.to_string()
     assert cmd_vel.count == 0, "a refused goal moved the robot"
@@ -174,9 +183,25 @@ def test_goal_behind_a_wall_is_reached_and_bad_goals_are_refused(  # type: ignor
     # The command line drives it to the tutorial's staging pose.
     staging = Pose2D(0.0, 2.0, -math.pi / 2)
     cli = subprocess.run(
-        [sys.executable, "-m", "deploy.cli", "nav", str(staging.x), str(staging.y), str(staging.yaw),
-         "--namespace", namespace, "--connect", router_endpoint, "--timeout", str(GOAL_TIMEOUT_S)],
-        cwd=REPO_ROOT, capture_output=True, text=True, timeout=GOAL_TIMEOUT_S + 30,
+        [
+            sys.executable,
+            "-m",
+            "deploy.cli",
+            "nav",
+            str(staging.x),
+            str(staging.y),
+            str(staging.yaw),
+            "--namespace",
+            namespace,
+            "--connect",
+            router_endpoint,
+            "--timeout",
+            str(GOAL_TIMEOUT_S),
+        ],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=GOAL_TIMEOUT_S + 30,
     )
     assert cli.returncode == 0, cli.stdout + cli.stderr
     assert "distance remaining" in cli.stdout and "goal reached" in cli.stdout, cli.stdout
@@ -245,7 +270,9 @@ def test_glass_absent_from_the_map_is_found_and_avoided(  # type: ignore[no-unty
     (gx1, gy), (gx2, _) = world.glass[0]
     collisions = KeyRecorder(bus, f"{namespace}/collisions", CollisionEvent)
     costmaps = KeyRecorder(bus, f"{namespace}/{COSTMAP_TOPIC}", OccupancyGrid, keep=3)
-    planner = _start_stack(spawn, GLASS_ROOM, "-p", f"world={GLASS_ROOM}", "-p", "costmap_publish_period_s=0.5")
+    planner = _start_stack(
+        spawn, GLASS_ROOM, "-p", f"world={GLASS_ROOM}", "-p", "costmap_publish_period_s=0.5"
+    )
     nav = NavigationClient(nav_node)
     assert nav.wait_until_active(30.0)
 
@@ -276,8 +303,16 @@ def test_a_robot_put_down_facing_a_wall_finds_no_glass_there(  # type: ignore[no
     costmaps = KeyRecorder(bus, f"{namespace}/{COSTMAP_TOPIC}", OccupancyGrid, keep=3)
     clock = KeyRecorder(bus, f"{namespace}/clock", Clock, keep=1)
     # Idle costmap updates 2 s apart: sonar readings from the new place wait that long to be folded in.
-    planner = _start_stack(spawn, GLASS_ROOM, "-p", f"world={GLASS_ROOM}", "-p", "costmap_publish_period_s=0.5",
-                           "-p", "idle_costmap_update_rate_hz=0.5")
+    planner = _start_stack(
+        spawn,
+        GLASS_ROOM,
+        "-p",
+        f"world={GLASS_ROOM}",
+        "-p",
+        "costmap_publish_period_s=0.5",
+        "-p",
+        "idle_costmap_update_rate_hz=0.5",
+    )
     costmaps.wait_for(timeout_s=30.0)
     occupancy = map_from_world(load_world(GLASS_ROOM))
     frame = occupancy.frame
@@ -286,18 +321,27 @@ def test_a_robot_put_down_facing_a_wall_finds_no_glass_there(  # type: ignore[no
     occupied = centres[occupancy.data.ravel() > 50]
     # 0.47 m from two walls, facing the corner between them: three corners of the room.
     for put_down in (Pose2D(-2.53, 4.52, -2.57), Pose2D(2.53, 4.52, -0.57), Pose2D(2.53, 0.9, 0.57)):
-        reply = call_service(bus, f"{namespace}/{SIM_TELEPORT}", TELEPORT,
-                             TeleportRequest(x=put_down.x, y=put_down.y, yaw=put_down.yaw), timeout_s=5.0)
+        reply = call_service(
+            bus,
+            f"{namespace}/{SIM_TELEPORT}",
+            TELEPORT,
+            TeleportRequest(x=put_down.x, y=put_down.y, yaw=put_down.yaw),
+            timeout_s=5.0,
+        )
         assert reply.success, reply.message
         teleported_s = clock.wait_for(timeout_s=5.0, after=clock.count).clock.to_sec()
-        clock.wait_for(lambda m, t=teleported_s: m.clock.to_sec() > t + 5.0, timeout_s=30.0, after=clock.count)
+        clock.wait_for(
+            lambda m, t=teleported_s: m.clock.to_sec() > t + 5.0, timeout_s=30.0, after=clock.count
+        )
         costmap = costmaps.wait_for(timeout_s=10.0, after=costmaps.count)
         costs = np.asarray(costmap.data).reshape(costmap.info.height, costmap.info.width)
         near = centres[np.hypot(centres[:, 0] - put_down.x, centres[:, 1] - put_down.y) < 0.7]
         floor = near[[np.hypot(*(occupied - c).T).min() >= 0.22 for c in near]]  # beyond walls' inflation
         cells = frame.world_to_cells(floor)
         blocked = floor[costs[cells[:, 1], cells[:, 0]] >= 99]
-        assert len(blocked) == 0, f"put down at {put_down}: open floor counted as an obstacle at {np.round(blocked, 2).tolist()}"
+        assert len(blocked) == 0, (
+            f"put down at {put_down}: open floor counted as an obstacle at {np.round(blocked, 2).tolist()}"
+        )
     _assert_no_errors(planner)
 
 

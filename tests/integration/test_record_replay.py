@@ -27,14 +27,33 @@ from tests.support.processes import REPO_ROOT, free_port, wait_until
 
 GLASS_ROOM = REPO_ROOT / "deploy/worlds/glass_room.yaml"
 RECORD_S = 3.0
-EXPECTED_KEYS = ("clock", "tf", "tf_static", "odom", "scan", "ultrasonic", "dock_contact", "ground_truth_pose",
-                 "battery_status")
-EXPECTED_VIEWS = {"scan": "foxglove.LaserScan", "tf": "foxglove.FrameTransforms", "ultrasonic": "foxglove.SceneUpdate",
-                  "world": "foxglove.SceneUpdate", "battery_status": "zendock.BatteryStatus"}
+EXPECTED_KEYS = (
+    "clock",
+    "tf",
+    "tf_static",
+    "odom",
+    "scan",
+    "ultrasonic",
+    "dock_contact",
+    "ground_truth_pose",
+    "battery_status",
+)
+EXPECTED_VIEWS = {
+    "scan": "foxglove.LaserScan",
+    "tf": "foxglove.FrameTransforms",
+    "ultrasonic": "foxglove.SceneUpdate",
+    "world": "foxglove.SceneUpdate",
+    "battery_status": "zendock.BatteryStatus",
+}
 
 
-def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, namespace: str,  # type: ignore[no-untyped-def]
-                                                    router_endpoint: str, tmp_path: Path) -> None:
+def test_record_a_live_stack_then_replay_it_exactly(
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,  # type: ignore[no-untyped-def]
+    router_endpoint: str,
+    tmp_path: Path,
+) -> None:
     clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
     battery = KeyRecorder(bus, f"{namespace}/battery_status", BatteryState)
     spawn("simulator", "--world", str(GLASS_ROOM), "-p", "rtf=2")
@@ -51,15 +70,20 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
     clock.close()
     battery.close()
     # the recorder gets a session of its own, as ``zendock record`` does: no other callbacks on its link
-    with open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as recorder_session, \
-            open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as other:
+    with (
+        open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as recorder_session,
+        open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as other,
+    ):
         # The state and sensor keys, not the camera: its images (300 kB at 15 Hz) keep the recorder's
         # interpreter busy enough that its session falls behind and the router drops best-effort samples
         # for it (measured; see the README's recording notes).
         witnesses = [other.declare_subscriber(f"{namespace}/{k}", witness) for k in EXPECTED_KEYS]
-        result = record(recorder_session, namespace,
-                        RecordRequest(path, keys=EXPECTED_KEYS, duration_s=RECORD_S, world=GLASS_ROOM),
-                        threading.Event())
+        result = record(
+            recorder_session,
+            namespace,
+            RecordRequest(path, keys=EXPECTED_KEYS, duration_s=RECORD_S, world=GLASS_ROOM),
+            threading.Event(),
+        )
         for subscriber in witnesses:
             subscriber.undeclare()
 
@@ -89,10 +113,15 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
         assert numbers == sorted(numbers), f"{key}: numbers out of order"
         window = set(range(numbers[0], numbers[-1] + 1))
         missing = window - set(numbers)
-        assert not (witnessed[key] & missing), f"{key}: the recorder missed {sorted(witnessed[key] & missing)}"
+        assert not (witnessed[key] & missing), (
+            f"{key}: the recorder missed {sorted(witnessed[key] & missing)}"
+        )
         assert len(numbers) == by_key[key].received and len(missing) == by_key[key].lost
-    view_schemas = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()
-                    if RAW_KEY_METADATA not in c.metadata}
+    view_schemas = {
+        c.topic: summary.schemas[c.schema_id].name
+        for c in summary.channels.values()
+        if RAW_KEY_METADATA not in c.metadata
+    }
     for topic, schema_name in EXPECTED_VIEWS.items():
         assert view_schemas[f"/{namespace}/{topic}"] == schema_name
     assert view_counts[f"/{namespace}/scan"] == len(sequences[f"{namespace}/scan"])
@@ -100,9 +129,11 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
     # replay into a fresh bus, moved to another namespace: same payloads, same order, same types
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     received: dict[str, list[tuple[bytes, str, int]]] = defaultdict(list)
-    with open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))), \
-            open_session(SessionSpec(mode="client", connect=(endpoint,))) as player, \
-            open_session(SessionSpec(mode="client", connect=(endpoint,))) as listener:
+    with (
+        open_session(SessionSpec(mode="router", connect=(), listen=(endpoint,))),
+        open_session(SessionSpec(mode="client", connect=(endpoint,))) as player,
+        open_session(SessionSpec(mode="client", connect=(endpoint,))) as listener,
+    ):
         lock = threading.Lock()
 
         def on_sample(sample: zenoh.Sample) -> None:
@@ -124,13 +155,18 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
         with Recording(path) as recording:
             recorded = defaultdict(list)
             for message in recording.raw_messages():
-                recorded[message.key.replace(namespace, "replayed", 1)].append((message.payload, message.encoding))
+                recorded[message.key.replace(namespace, "replayed", 1)].append(
+                    (message.payload, message.encoding)
+                )
             replayer = Replayer(player, recording, rate=4.0, namespace="replayed")
             stats = replayer.run()
         total = sum(len(v) for v in recorded.values())
         assert stats.published == total
-        wait_until(lambda: sum(len(v) for v in received.values()) >= total, 10.0,
-                   lambda: f"{sum(len(v) for v in received.values())} of {total} replayed samples arrived")
+        wait_until(
+            lambda: sum(len(v) for v in received.values()) >= total,
+            10.0,
+            lambda: f"{sum(len(v) for v in received.values())} of {total} replayed samples arrived",
+        )
         subscriber.undeclare()
     assert set(received) == set(recorded)
     for key, samples in recorded.items():
@@ -138,9 +174,13 @@ def test_record_a_live_stack_then_replay_it_exactly(spawn, bus: zenoh.Session, n
         assert [s for _, _, s in received[key]] == list(range(1, len(samples) + 1))
 
 
-def test_a_ros2_bag_reads_in_rosbags_with_the_same_messages_and_replays(spawn, bus: zenoh.Session,  # type: ignore[no-untyped-def]
-                                                                       namespace: str, router_endpoint: str,
-                                                                       tmp_path: Path) -> None:
+def test_a_ros2_bag_reads_in_rosbags_with_the_same_messages_and_replays(
+    spawn,
+    bus: zenoh.Session,  # type: ignore[no-untyped-def]
+    namespace: str,
+    router_endpoint: str,
+    tmp_path: Path,
+) -> None:
     """``zendock record --format ros2``: a rosbag2 directory rosbags reads with its own Jazzy types."""
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
@@ -154,8 +194,12 @@ def test_a_ros2_bag_reads_in_rosbags_with_the_same_messages_and_replays(spawn, b
     battery.wait_for(timeout_s=20.0)
     path = tmp_path / "bag"
     with open_session(SessionSpec(mode="client", connect=(router_endpoint,))) as recorder_session:
-        result = record(recorder_session, namespace, RecordRequest(path, duration_s=RECORD_S, format="ros2"),
-                        threading.Event())
+        result = record(
+            recorder_session,
+            namespace,
+            RecordRequest(path, duration_s=RECORD_S, format="ros2"),
+            threading.Event(),
+        )
     assert (path / "metadata.yaml").is_file() and list(path.glob("*.mcap")), sorted(path.iterdir())
     assert "zendock_msgs/msg/DockContact" in result.skipped  # zendock's own type: no ROS 2 definition
 
@@ -163,14 +207,23 @@ def test_a_ros2_bag_reads_in_rosbags_with_the_same_messages_and_replays(spawn, b
     with Reader(path) as reader:
         topics = {c.topic: c.msgtype for c in reader.connections}
         assert topics["/battery_status"] == "sensor_msgs/msg/BatteryState"
-        assert topics["/scan"] == "sensor_msgs/msg/LaserScan" and topics["/clock"] == "rosgraph_msgs/msg/Clock"
+        assert (
+            topics["/scan"] == "sensor_msgs/msg/LaserScan" and topics["/clock"] == "rosgraph_msgs/msg/Clock"
+        )
         stamps = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in battery.messages}
-        bag_battery = [jazzy.deserialize_cdr(data, "sensor_msgs/msg/BatteryState") for c, _t, data in
-                       reader.messages(connections=[c for c in reader.connections if c.topic == "/battery_status"])]
+        bag_battery = [
+            jazzy.deserialize_cdr(data, "sensor_msgs/msg/BatteryState")
+            for c, _t, data in reader.messages(
+                connections=[c for c in reader.connections if c.topic == "/battery_status"]
+            )
+        ]
     assert bag_battery
     for msg in bag_battery:
         ours = stamps[(msg.header.stamp.sec, msg.header.stamp.nanosec)]
-        assert abs(msg.percentage - ours.percentage) < 1e-6 and msg.power_supply_status == ours.power_supply_status
+        assert (
+            abs(msg.percentage - ours.percentage) < 1e-6
+            and msg.power_supply_status == ours.power_supply_status
+        )
 
     # zendock replay plays the bag back as zendock messages, into another namespace
     target = f"{namespace}_replay"

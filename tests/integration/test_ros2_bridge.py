@@ -26,8 +26,14 @@ SEED_ROOM = str(REPO_ROOT / "deploy/worlds/seed_room.yaml")
 
 def _peer(router: str, *args: str, timeout_s: float = 60.0) -> list[Any]:
     """Run the peer to the end; its JSON lines (failing with its output when it fails)."""
-    done = subprocess.run([sys.executable, "-m", "tests.support.ros2_peer", "--router", router, *args],
-                          capture_output=True, text=True, timeout=timeout_s, cwd=REPO_ROOT, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "tests.support.ros2_peer", "--router", router, *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        cwd=REPO_ROOT,
+        check=False,
+    )
     assert done.returncode == 0, f"ros2_peer {' '.join(args)} failed:\n{done.stdout}\n{done.stderr[-3000:]}"
     return [json.loads(line) for line in done.stdout.splitlines() if line.strip()]
 
@@ -43,8 +49,13 @@ def _publisher_token(bus: zenoh.Session, topic: str) -> str:
 
 @contextmanager
 def _publishing(router: str, *args: str) -> Iterator[subprocess.Popen[str]]:
-    proc = subprocess.Popen([sys.executable, "-m", "tests.support.ros2_peer", "--router", router, "pub", *args],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO_ROOT)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "tests.support.ros2_peer", "--router", router, "pub", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO_ROOT,
+    )
     try:
         yield proc
     finally:
@@ -52,8 +63,9 @@ def _publishing(router: str, *args: str) -> Iterator[subprocess.Popen[str]]:
         proc.communicate(timeout=10)
 
 
-def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zenoh.Session, namespace: str,
-                                                                  router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
+def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(
+    spawn, bus: zenoh.Session, namespace: str, router_endpoint: str
+) -> None:  # type: ignore[no-untyped-def]
     ours = KeyRecorder(bus, f"{namespace}/battery_status", BatteryState)
     battery = spawn("battery")
     bridge = spawn("ros2_bridge")
@@ -68,9 +80,15 @@ def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zen
 
     # What rides with each sample, seen by a plain Zenoh subscriber on the data key while the peer echoes.
     attachments: list[Attachment] = []
-    key = data_key(0, "/battery_status", "sensor_msgs/msg/BatteryState",
-                   ros_types.type_hash("sensor_msgs/msg/BatteryState"))
-    raw = bus.declare_subscriber(key, lambda s: attachments.append(Attachment.decode(s.attachment.to_bytes())))
+    key = data_key(
+        0,
+        "/battery_status",
+        "sensor_msgs/msg/BatteryState",
+        ros_types.type_hash("sensor_msgs/msg/BatteryState"),
+    )
+    raw = bus.declare_subscriber(
+        key, lambda s: attachments.append(Attachment.decode(s.attachment.to_bytes()))
+    )
     echoed = _peer(router_endpoint, "echo", "/battery_status", "sensor_msgs/msg/BatteryState", "--count", "3")
     assert len(echoed) == 3
     raw.undeclare()
@@ -85,15 +103,19 @@ def test_a_ros2_peer_lists_zendock_topics_and_echoes_the_battery(spawn, bus: zen
         assert same, f"no zendock battery message stamped {stamp}"
         assert math.isclose(msg["percentage"], same[0].percentage, rel_tol=1e-6)
         assert msg["power_supply_status"] == same[0].power_supply_status
-    wait_until(lambda: "no ROS 2 subscription to /battery_status left" in bridge.output(), 10.0,
-               lambda: bridge.output()[-2000:])
+    wait_until(
+        lambda: "no ROS 2 subscription to /battery_status left" in bridge.output(),
+        10.0,
+        lambda: bridge.output()[-2000:],
+    )
     battery.stop()
     wait_until(lambda: "zendock's battery is gone" in bridge.output(), 10.0, lambda: bridge.output()[-2000:])
     assert _peer(router_endpoint, "nodes")[0] == ["ros2_bridge"]
 
 
-def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh.Session, namespace: str,
-                                                                router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
+def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(
+    spawn, bus: zenoh.Session, namespace: str, router_endpoint: str
+) -> None:  # type: ignore[no-untyped-def]
     truth = KeyRecorder(bus, f"{namespace}/ground_truth_pose", PoseStamped)
     tf_static = KeyRecorder(bus, f"{namespace}/tf_static", TFMessage)
     # tf_static every 10 s: a late subscriber's first one comes from the bridge's cache, not a fresh one.
@@ -102,7 +124,11 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
     key = data_key(0, "/tf_static", "tf2_msgs/msg/TFMessage", ros_types.type_hash("tf2_msgs/msg/TFMessage"))
     put_at: dict[int, float] = {}  # sequence number -> when the bridge's put reached the bus
     raw = bus.declare_subscriber(
-        key, lambda s: put_at.setdefault(Attachment.decode(s.attachment.to_bytes()).sequence_number, time.monotonic()))
+        key,
+        lambda s: put_at.setdefault(
+            Attachment.decode(s.attachment.to_bytes()).sequence_number, time.monotonic()
+        ),
+    )
     start = truth.wait_for(timeout_s=30.0).pose.to_pose2d()
     wait_until(lambda: "zendock's simulator is up" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
     listed = _peer(router_endpoint, "topics", "--wait-for", "/scan")[0]
@@ -115,42 +141,94 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
     believed.wait_for(timeout_s=30.0)
     estimate = Pose2D(start.x + 0.3, start.y - 0.2, start.yaw + 0.4)
     half = estimate.yaw / 2
-    _peer(router_endpoint, "pub", "/initialpose", "geometry_msgs/msg/PoseWithCovarianceStamped",
-          json.dumps({"header": {"frame_id": "map"}, "pose": {"pose": {
-              "position": {"x": estimate.x, "y": estimate.y},
-              "orientation": {"z": math.sin(half), "w": math.cos(half)}}}}), "--rate", "2", "--seconds", "1")
-    believed.wait_for(lambda m: math.hypot(m.data[0] - estimate.x, m.data[1] - estimate.y) < 0.01
-                      and abs(math.remainder(m.data[2] - estimate.yaw, math.tau)) < 0.01, timeout_s=20.0)
+    _peer(
+        router_endpoint,
+        "pub",
+        "/initialpose",
+        "geometry_msgs/msg/PoseWithCovarianceStamped",
+        json.dumps(
+            {
+                "header": {"frame_id": "map"},
+                "pose": {
+                    "pose": {
+                        "position": {"x": estimate.x, "y": estimate.y},
+                        "orientation": {"z": math.sin(half), "w": math.cos(half)},
+                    }
+                },
+            }
+        ),
+        "--rate",
+        "2",
+        "--seconds",
+        "1",
+    )
+    believed.wait_for(
+        lambda m: (
+            math.hypot(m.data[0] - estimate.x, m.data[1] - estimate.y) < 0.01
+            and abs(math.remainder(m.data[2] - estimate.yaw, math.tau)) < 0.01
+        ),
+        timeout_s=20.0,
+    )
     assert truth.latest().pose.to_pose2d().distance_to(start) < 0.01  # type: ignore[union-attr]
 
     def moved(msg: PoseStamped) -> bool:
         pose = msg.pose.to_pose2d()
         return math.hypot(pose.x - start.x, pose.y - start.y) > 0.05
 
-    with _publishing(router_endpoint, "/cmd_vel", "geometry_msgs/msg/Twist", '{"linear": {"x": 0.2}}',
-                     "--seconds", "20"):
+    with _publishing(
+        router_endpoint, "/cmd_vel", "geometry_msgs/msg/Twist", '{"linear": {"x": 0.2}}', "--seconds", "20"
+    ):
         truth.wait_for(moved, timeout_s=30.0, after=truth.count)
 
     # TwistStamped, as Jazzy's controllers send it: turn on the spot.
     heading = truth.wait_for(timeout_s=10.0, after=truth.count).pose.to_pose2d().yaw
-    with _publishing(router_endpoint, "/cmd_vel", "geometry_msgs/msg/TwistStamped",
-                     '{"twist": {"angular": {"z": 0.8}}}', "--seconds", "20"):
-        truth.wait_for(lambda m: abs(math.remainder(m.pose.to_pose2d().yaw - heading, math.tau)) > 0.2,
-                       timeout_s=30.0, after=truth.count)
+    with _publishing(
+        router_endpoint,
+        "/cmd_vel",
+        "geometry_msgs/msg/TwistStamped",
+        '{"twist": {"angular": {"z": 0.8}}}',
+        "--seconds",
+        "20",
+    ):
+        truth.wait_for(
+            lambda m: abs(math.remainder(m.pose.to_pose2d().yaw - heading, math.tau)) > 0.2,
+            timeout_s=30.0,
+            after=truth.count,
+        )
 
     # A type hash that is not Jazzy's, and bytes that are not CDR: refused by name, the bridge lives on.
-    with _publishing(router_endpoint, "/cmd_vel", "geometry_msgs/msg/Twist", '{"linear": {"x": 0.2}}',
-                     "--type-hash", "RIHS01_" + "00" * 32, "--seconds", "20"):
+    with _publishing(
+        router_endpoint,
+        "/cmd_vel",
+        "geometry_msgs/msg/Twist",
+        '{"linear": {"x": 0.2}}',
+        "--type-hash",
+        "RIHS01_" + "00" * 32,
+        "--seconds",
+        "20",
+    ):
         wait_until(lambda: "is not Jazzy's" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
     twist_hash = ros_types.type_hash("geometry_msgs/msg/Twist")
     bus.put(data_key(0, "/cmd_vel", "geometry_msgs/msg/Twist", twist_hash), b"\x00\x01\x00\x00\x01")
-    bus.put(data_key(0, "/goal_pose", "geometry_msgs/msg/PoseStamped",
-                     ros_types.type_hash("geometry_msgs/msg/PoseStamped")), b"\x93garbage")
+    bus.put(
+        data_key(
+            0,
+            "/goal_pose",
+            "geometry_msgs/msg/PoseStamped",
+            ros_types.type_hash("geometry_msgs/msg/PoseStamped"),
+        ),
+        b"\x93garbage",
+    )
     bus.put(f"0/cmd_vel/geometry_msgs::msg::dds_::Vector3_/{twist_hash}", b"\x00\x01\x00\x00" + bytes(24))
-    wait_until(lambda: "refused a message on /cmd_vel" in bridge.output()
-               and "refused a message on /goal_pose" in bridge.output()
-               and "refused /cmd_vel as geometry_msgs::msg::dds_::Vector3_" in bridge.output(), 30.0,
-               lambda: bridge.output()[-2000:])
+    wait_until(
+        lambda: (
+            "refused a message on /cmd_vel" in bridge.output()
+            and "refused a message on /goal_pose" in bridge.output()
+            and "refused /cmd_vel as geometry_msgs::msg::dds_::Vector3_" in bridge.output()
+        ),
+        30.0,
+        lambda: bridge.output()[-2000:],
+    )
     assert bridge.alive(), "the bridge died on bad input"
 
     # /tf_static is transient local: a subscriber joining late gets the cached message from the bridge's
@@ -164,20 +242,27 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(spawn, bus: zenoh
     # SubscriptionData::init): history of `depth` samples with detect_late_publishers, subscriber detection,
     # recovery on the publisher's heartbeats.
     subscriber = zenoh.ext.declare_advanced_subscriber(
-        bus, key, late.append,
+        bus,
+        key,
+        late.append,
         history=zenoh.ext.HistoryConfig(detect_late_publishers=True, max_samples=1),
         recovery=zenoh.ext.RecoveryConfig(periodic_queries=None, heartbeat=True),
-        subscriber_detection=True)
+        subscriber_detection=True,
+    )
     joined_at = time.monotonic()
     try:
         wait_until(lambda: bool(late), 5.0, "no cached /tf_static for a late subscriber")
     finally:
         subscriber.undeclare()
     cached = Attachment.decode(late[0].attachment.to_bytes())
-    assert put_at.get(cached.sequence_number, math.inf) < joined_at, "a fresh sample came first, not the cached one"
+    assert put_at.get(cached.sequence_number, math.inf) < joined_at, (
+        "a fresh sample came first, not the cached one"
+    )
     assert str(late[0].key_expr) == key
     assert cached.gid == entity_gid(_publisher_token(bus, "/tf_static"))
-    frames = {t.child_frame_id for t in ros_types.from_cdr(late[0].payload.to_bytes(),
-                                                           "tf2_msgs/msg/TFMessage").transforms}
+    frames = {
+        t.child_frame_id
+        for t in ros_types.from_cdr(late[0].payload.to_bytes(), "tf2_msgs/msg/TFMessage").transforms
+    }
     assert {t.child_frame_id for t in tf_static.messages[-1].transforms} == frames
     assert "camera_optical_frame" in frames

@@ -22,10 +22,14 @@ from tests.support.processes import REPO_ROOT
 ROS2_VENV = REPO_ROOT / ".venv-ros2"
 ROS2_PYTHON = ROS2_VENV / "bin" / "python"
 USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
-ROS2_READY = ROS2_PYTHON.exists() and any((ROS2_VENV / "lib").glob("python3.*/site-packages/nav2_msgs/action"))
+ROS2_READY = ROS2_PYTHON.exists() and any(
+    (ROS2_VENV / "lib").glob("python3.*/site-packages/nav2_msgs/action")
+)
 
 pytestmark = pytest.mark.skipif(
-    not ROS2_READY, reason=f"{ROS2_VENV} with rclpy and nav2_msgs is missing: `make ros2` builds it (about 5 min)")
+    not ROS2_READY,
+    reason=f"{ROS2_VENV} with rclpy and nav2_msgs is missing: `make ros2` builds it (about 5 min)",
+)
 
 
 @pytest.fixture
@@ -33,11 +37,14 @@ def dds_stack(tmp_path: Path) -> Iterator[tuple[Launcher, int]]:
     """The default stack (synthetic detector, rtf 4) plus ros2_dds on a random ROS 2 domain in 100-200."""
     domain = random.randint(100, 200)
     endpoint = free_endpoint()
-    environment = {**StackConfig(detector="synthetic", rtf="4").environment(endpoint, tmp_path),
-                   "ROS_DOMAIN_ID": str(domain)}
+    environment = {
+        **StackConfig(detector="synthetic", rtf="4").environment(endpoint, tmp_path),
+        "ROS_DOMAIN_ID": str(domain),
+    }
     stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
-    launcher = Launcher(stack, profiles=["ros2-dds"], project_dir=tmp_path, working_dir=REPO_ROOT,
-                        project_name="zendock-test")
+    launcher = Launcher(
+        stack, profiles=["ros2-dds"], project_dir=tmp_path, working_dir=REPO_ROOT, project_name="zendock-test"
+    )
     assert "ros2_dds" in launcher.services
     try:
         launcher.up()
@@ -52,8 +59,14 @@ def _run_user(launcher: Launcher, domain: int, timeout_s: float) -> tuple[dict[s
     env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTHON"))}
     env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.pop("ROS_LOCALHOST_ONLY", None)
-    user = subprocess.Popen([str(ROS2_PYTHON), str(USER_SCRIPT)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, cwd=REPO_ROOT, env=env)
+    user = subprocess.Popen(
+        [str(ROS2_PYTHON), str(USER_SCRIPT)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO_ROOT,
+        env=env,
+    )
     timer = threading.Timer(timeout_s, user.kill)
     timer.start()
     steps: dict[str, dict[str, Any]] = {}
@@ -85,8 +98,10 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
 
     def check(name: str) -> dict[str, Any]:
         step = steps.get(name)
-        assert step is not None, (f"the rclpy user never reported {name!r} (reported: {list(steps)});\n"
-                                  f"its stderr:\n{stderr[-3000:]}\nros2_dds:\n{face_log}")
+        assert step is not None, (
+            f"the rclpy user never reported {name!r} (reported: {list(steps)});\n"
+            f"its stderr:\n{stderr[-3000:]}\nros2_dds:\n{face_log}"
+        )
         assert step["ok"], f"{name}: {json.dumps(step)}\nros2_dds:\n{face_log}"
         return step
 
@@ -106,7 +121,11 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("bad_input")
     check("initial_pose")
     refusals = "\n".join(launcher.logs("ros2_dds"))
-    for refused in ("refused a message on /cmd_vel", "refused a goal in frame 'odom'", "refused a navigate_to_pose goal"):
+    for refused in (
+        "refused a message on /cmd_vel",
+        "refused a goal in frame 'odom'",
+        "refused a navigate_to_pose goal",
+    ):
         assert refused in refusals, f"ros2_dds did not log {refused!r}:\n{face_log}"
     left = check("planner_left")
     assert "planner" not in left["nodes"] and "battery" in left["nodes"], left
@@ -116,8 +135,14 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
 def test_every_message_the_face_carries_converts_both_ways() -> None:
     """zendock -> rclpy -> zendock gives the same message for every route and action part; what does not fit
     (a NaN, a uint16 out of range) is a ConversionError, never anything else."""
-    done = subprocess.run([str(ROS2_PYTHON), str(REPO_ROOT / "tests" / "support" / "ros2_convert_check.py")],
-                          capture_output=True, text=True, cwd=REPO_ROOT, timeout=120, check=False)
+    done = subprocess.run(
+        [str(ROS2_PYTHON), str(REPO_ROOT / "tests" / "support" / "ros2_convert_check.py")],
+        capture_output=True,
+        text=True,
+        cwd=REPO_ROOT,
+        timeout=120,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     cases = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     assert len(cases) >= 40, done.stdout

@@ -25,7 +25,18 @@ from tests.support.processes import REPO_ROOT, free_port, wait_until
 
 SECURE = REPO_ROOT / "deploy/zenoh/secure"
 SEED_ROOM = str(REPO_ROOT / "deploy/worlds/seed_room.yaml")
-USERS = ("simulator", "battery", "pose", "planner", "docking", "perception", "viz", "ros2_bridge", "operator", "viewer")
+USERS = (
+    "simulator",
+    "battery",
+    "pose",
+    "planner",
+    "docking",
+    "perception",
+    "viz",
+    "ros2_bridge",
+    "operator",
+    "viewer",
+)
 CONNECT_TIMEOUT_MS = 1000
 
 
@@ -101,17 +112,25 @@ def test_the_tls_router_enforces_the_same_list() -> None:
 
 
 def test_every_user_file_matches_the_credentials_file() -> None:
-    credentials = dict(line.split(":", 1) for line in (SECURE / "credentials.txt").read_text().splitlines() if line)
+    credentials = dict(
+        line.split(":", 1) for line in (SECURE / "credentials.txt").read_text().splitlines() if line
+    )
     assert set(credentials) == set(USERS)
     for folder in (SECURE, SECURE / "tls"):
         for user in USERS:
-            usrpwd = json.loads(str(zenoh.Config.from_file(str(folder / f"{user}.json5"))))["transport"]["auth"]["usrpwd"]
+            usrpwd = json.loads(str(zenoh.Config.from_file(str(folder / f"{user}.json5"))))["transport"][
+                "auth"
+            ]["usrpwd"]
             assert (usrpwd["user"], usrpwd["password"]) == (user, credentials[user]), folder / f"{user}.json5"
 
 
 def test_every_session_of_the_profile_has_the_default_sessions_transport() -> None:
     """Like zendock's default sessions (shared/session.py): no shared memory, TX_QUEUE_BATCHES send batches."""
-    files = [*SECURE.glob("*.json5"), *(SECURE / "tls").glob("*.json5"), REPO_ROOT / "deploy/zenoh/router.json5"]
+    files = [
+        *SECURE.glob("*.json5"),
+        *(SECURE / "tls").glob("*.json5"),
+        REPO_ROOT / "deploy/zenoh/router.json5",
+    ]
     assert len(files) == 3 + 2 * len(USERS)
     for path in files:
         transport = json.loads(str(zenoh.Config.from_file(str(path))))["transport"]
@@ -164,7 +183,9 @@ def _with_credentials(user: str, password: str, endpoint: str) -> zenoh.Config:
     [
         pytest.param(plain_client, id="no-credentials"),
         pytest.param(lambda ep: _with_credentials("planner", "not-the-password", ep), id="wrong-password"),
-        pytest.param(lambda ep: _with_credentials("intruder", "dev-only-planner-password", ep), id="unknown-user"),
+        pytest.param(
+            lambda ep: _with_credentials("intruder", "dev-only-planner-password", ep), id="unknown-user"
+        ),
     ],
 )
 def test_a_session_without_valid_credentials_cannot_open(router_endpoint: str, make) -> None:  # type: ignore[no-untyped-def]
@@ -175,7 +196,9 @@ def test_a_session_without_valid_credentials_cannot_open(router_endpoint: str, m
 # --- authorisation -----------------------------------------------------------------------------------
 
 
-def test_only_the_planner_and_docking_users_can_drive(sessions: dict[str, zenoh.Session], namespace: str) -> None:
+def test_only_the_planner_and_docking_users_can_drive(
+    sessions: dict[str, zenoh.Session], namespace: str
+) -> None:
     """Authenticated users without the right (battery, operator, viewer, the simulator) never reach cmd_vel."""
     key = f"{namespace}/cmd_vel"
     seen = KeyRecorder(sessions["viz"], key, Twist)
@@ -204,7 +227,11 @@ def test_only_the_ros2_bridge_user_speaks_ros2(sessions: dict[str, zenoh.Session
     seen: list[bytes] = []
     tokens: list[str] = []
     sub = sessions["viewer"].declare_subscriber(key, lambda s: seen.append(s.payload.to_bytes()))
-    watch = sessions["viewer"].liveliness().declare_subscriber("@ros2_lv/0/**", lambda s: tokens.append(str(s.key_expr)))
+    watch = (
+        sessions["viewer"]
+        .liveliness()
+        .declare_subscriber("@ros2_lv/0/**", lambda s: tokens.append(str(s.key_expr)))
+    )
     settle(sessions["viewer"])
     sessions["battery"].put(key, b"forged")
     forged_token = sessions["battery"].liveliness().declare_token(token_key + "_forged")
@@ -222,11 +249,17 @@ def test_only_the_owner_answers_requests(sessions: dict[str, zenoh.Session], nam
     """A queryable declared by the wrong user is never asked; a user without the right to ask gets nothing."""
     key = f"{namespace}/simulator/state"
     asked: list[str] = []
-    impostor = sessions["battery"].declare_queryable(key, lambda q: (asked.append("battery"), q.reply(key, b"fake")))
-    real = sessions["simulator"].declare_queryable(key, lambda q: (asked.append("simulator"), q.reply(key, b"real")))
+    impostor = sessions["battery"].declare_queryable(
+        key, lambda q: (asked.append("battery"), q.reply(key, b"fake"))
+    )
+    real = sessions["simulator"].declare_queryable(
+        key, lambda q: (asked.append("simulator"), q.reply(key, b"real"))
+    )
     settle(sessions["battery"])
     settle(sessions["simulator"])
-    replies = [r.ok.payload.to_bytes() for r in sessions["operator"].get(key, timeout=3.0) if r.ok is not None]
+    replies = [
+        r.ok.payload.to_bytes() for r in sessions["operator"].get(key, timeout=3.0) if r.ok is not None
+    ]
     assert replies == [b"real"] and asked == ["simulator"]
     # the viewer may not ask: its query is dropped at the router, nothing answers before the timeout
     assert [r for r in sessions["viewer"].get(key, timeout=0.5)] == []
@@ -246,8 +279,11 @@ def test_replies_need_their_own_right(namespace: str) -> None:
     conf.insert_json5("access_control", json.dumps(acl))
     key = f"{namespace}/simulator/state"
     asked: list[bool] = []
-    with zenoh.open(conf), zenoh.open(client_config("simulator", endpoint)) as simulator, \
-            zenoh.open(client_config("operator", endpoint)) as operator:
+    with (
+        zenoh.open(conf),
+        zenoh.open(client_config("simulator", endpoint)) as simulator,
+        zenoh.open(client_config("operator", endpoint)) as operator,
+    ):
         queryable = simulator.declare_queryable(key, lambda q: (asked.append(True), q.reply(key, b"state")))
         settle(simulator)
         assert [r for r in operator.get(key, timeout=1.0)] == []
@@ -283,12 +319,19 @@ def test_the_simulator_publishes_scan_to_a_viewer(spawn, router_endpoint: str, n
 def test_the_secure_stack_comes_up_healthy(tmp_path: Path, namespace: str) -> None:
     """The launcher's health checker logs in as the viewer (the stack's zenoh.config) and sees the services."""
     endpoint = free_endpoint()
-    stack = load_stack(REPO_ROOT / "deploy/stack-secure.yaml", env={"ZENOH_CONNECT": endpoint}, project_dir=tmp_path)
-    with Launcher(stack, services=["battery", "pose"], project_dir=tmp_path, working_dir=REPO_ROOT,
-                  namespace=namespace) as launched:
+    stack = load_stack(
+        REPO_ROOT / "deploy/stack-secure.yaml", env={"ZENOH_CONNECT": endpoint}, project_dir=tmp_path
+    )
+    with Launcher(
+        stack, services=["battery", "pose"], project_dir=tmp_path, working_dir=REPO_ROOT, namespace=namespace
+    ) as launched:
         assert launched.plan.zenoh_config == str(SECURE / "viewer.json5")
         launched.wait_healthy(timeout_s=30.0)
-        assert {s.name: s.health for s in launched.ps()} == {"router": "none", "battery": "healthy", "pose": "healthy"}
+        assert {s.name: s.health for s in launched.ps()} == {
+            "router": "none",
+            "battery": "healthy",
+            "pose": "healthy",
+        }
 
 
 # --- TLS ----------------------------------------------------------------------------------------------
@@ -299,8 +342,12 @@ def certs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     if shutil.which("openssl") is None:
         pytest.skip("openssl is not installed")
     folder = tmp_path_factory.mktemp("certs")
-    subprocess.run(["sh", str(SECURE / "make_certs.sh"), str(folder), "viewer", "simulator"], check=True,
-                   capture_output=True, timeout=60)
+    subprocess.run(
+        ["sh", str(SECURE / "make_certs.sh"), str(folder), "viewer", "simulator"],
+        check=True,
+        capture_output=True,
+        timeout=60,
+    )
     return folder
 
 
@@ -311,7 +358,9 @@ def tls_endpoint(certs: Path) -> Iterator[str]:
         yield endpoint
 
 
-def test_a_tls_client_with_the_test_ca_and_its_certificate_connects(tls_endpoint: str, certs: Path, namespace: str) -> None:
+def test_a_tls_client_with_the_test_ca_and_its_certificate_connects(
+    tls_endpoint: str, certs: Path, namespace: str
+) -> None:
     viewer = zenoh.open(client_config("viewer", tls_endpoint, tls=True, certs=certs))
     simulator = zenoh.open(client_config("simulator", tls_endpoint, tls=True, certs=certs))
     try:
@@ -327,12 +376,19 @@ def test_a_tls_client_with_the_test_ca_and_its_certificate_connects(tls_endpoint
 
 def _other_ca(tmp_path: Path) -> Path:
     folder = tmp_path / "other-ca"
-    subprocess.run(["sh", str(SECURE / "make_certs.sh"), str(folder), "viewer"], check=True, capture_output=True, timeout=60)
+    subprocess.run(
+        ["sh", str(SECURE / "make_certs.sh"), str(folder), "viewer"],
+        check=True,
+        capture_output=True,
+        timeout=60,
+    )
     return folder
 
 
 @pytest.mark.parametrize("case", ["no-ca", "no-client-certificate", "other-ca", "plain-tcp"])
-def test_a_tls_client_without_the_ca_or_certificate_fails(tls_endpoint: str, certs: Path, tmp_path: Path, case: str) -> None:
+def test_a_tls_client_without_the_ca_or_certificate_fails(
+    tls_endpoint: str, certs: Path, tmp_path: Path, case: str
+) -> None:
     conf = client_config("viewer", tls_endpoint, tls=True, certs=certs)
     if case == "no-ca":
         conf.insert_json5("transport/link/tls/root_ca_certificate", "null")
@@ -347,4 +403,3 @@ def test_a_tls_client_without_the_ca_or_certificate_fails(tls_endpoint: str, cer
         conf.insert_json5("connect/endpoints", json.dumps([re.sub("^tls/", "tcp/", tls_endpoint)]))
     with pytest.raises(zenoh.ZError, match="Unable to connect"):
         zenoh.open(conf).close()
-

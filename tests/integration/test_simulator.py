@@ -35,8 +35,14 @@ def _state(bus: zenoh.Session, ns: str):  # type: ignore[no-untyped-def]
 
 def test_every_key_carries_valid_messages(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
     expected = {
-        "clock": Clock, "odom": Odometry, "tf": TFMessage, "tf_static": TFMessage, "scan": LaserScan,
-        "ultrasonic": Range, "dock_contact": DockContact, "ground_truth_pose": PoseStamped,
+        "clock": Clock,
+        "odom": Odometry,
+        "tf": TFMessage,
+        "tf_static": TFMessage,
+        "scan": LaserScan,
+        "ultrasonic": Range,
+        "dock_contact": DockContact,
+        "ground_truth_pose": PoseStamped,
     }
     recorders = {k: KeyRecorder(bus, f"{namespace}/{k}", t) for k, t in expected.items()}
     spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=5")
@@ -48,7 +54,10 @@ def test_every_key_carries_valid_messages(spawn, bus: zenoh.Session, namespace: 
     sonar = recorders["ultrasonic"].latest()
     assert sonar is not None and sonar.radiation_type == Range.ULTRASOUND
     static = recorders["tf_static"].latest()
-    assert static is not None and {t.child_frame_id for t in static.transforms} >= {"lidar_link", "ultrasonic_link"}
+    assert static is not None and {t.child_frame_id for t in static.transforms} >= {
+        "lidar_link",
+        "ultrasonic_link",
+    }
 
 
 def test_cmd_vel_moves_the_robot_and_watchdog_stops_it(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
@@ -72,7 +81,9 @@ def test_cmd_vel_moves_the_robot_and_watchdog_stops_it(spawn, bus: zenoh.Session
     # commands stop: the watchdog halts the robot within 0.5 s of sim time
     odom.wait_for(lambda m: m.header.stamp.to_sec() > stopped_at + 0.5 + 0.2, timeout_s=20.0)
     after = [m for m in odom.messages if m.header.stamp.to_sec() > stopped_at + 0.5 + 0.1]
-    assert after and all(abs(m.twist.twist.linear.x) < 1e-3 for m in after), [m.twist.twist.linear.x for m in after]
+    assert after and all(abs(m.twist.twist.linear.x) < 1e-3 for m in after), [
+        m.twist.twist.linear.x for m in after
+    ]
     cmd.undeclare()
 
 
@@ -85,7 +96,9 @@ def test_sonar_sees_glass_that_lidar_does_not(spawn, bus: zenoh.Session, namespa
     scan.wait_for(timeout_s=20.0)
     # face the glass from 0.8 m away (robot's front at 0.6 m)
     x = (gx1 + gx2) / 2
-    reply = call_service(bus, f"{namespace}/simulator/teleport", TELEPORT, TeleportRequest(x=x, y=gy + 0.8, yaw=-math.pi / 2))
+    reply = call_service(
+        bus, f"{namespace}/simulator/teleport", TELEPORT, TeleportRequest(x=x, y=gy + 0.8, yaw=-math.pi / 2)
+    )
     assert reply.success, reply.message
     t0 = _state(bus, namespace).stamp.to_sec()
     s = sonar.wait_for(lambda m: m.header.stamp.to_sec() > t0 + 0.1, timeout_s=10.0)
@@ -100,7 +113,9 @@ def test_teleport_into_a_wall_is_refused(spawn, bus: zenoh.Session, namespace: s
     spawn("simulator", "--world", GLASS_ROOM)
     clock.wait_for(timeout_s=20.0)
     before = _state(bus, namespace).pose.position
-    reply = call_service(bus, f"{namespace}/simulator/teleport", TELEPORT, TeleportRequest(x=-2.99, y=1.0, yaw=0.0))
+    reply = call_service(
+        bus, f"{namespace}/simulator/teleport", TELEPORT, TeleportRequest(x=-2.99, y=1.0, yaw=0.0)
+    )
     assert not reply.success and "wall" in reply.message
     after = _state(bus, namespace).pose.position
     assert (after.x, after.y) == (before.x, before.y)
@@ -111,13 +126,18 @@ def test_bad_world_exits_2_with_one_clear_line(tmp_path) -> None:  # type: ignor
     bad.write_text("name: x\nbounds: [0, 0, -1, 1]\n")
     result = subprocess.run(
         [sys.executable, "-m", "services.simulator", "--world", str(bad), "--connect", "tcp/127.0.0.1:1"],
-        cwd=REPO_ROOT, capture_output=True, text=True, timeout=30,
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=30,
     )
     assert result.returncode == 2
     assert "bounds" in result.stderr and "xmax > xmin" in result.stderr
 
 
-def test_a_fleet_world_puts_its_robots_in_one_room(spawn, bus: zenoh.Session, namespace: str, tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_fleet_world_puts_its_robots_in_one_room(
+    spawn, bus: zenoh.Session, namespace: str, tmp_path
+) -> None:  # type: ignore[no-untyped-def]
     """Two robots of a world's ``robots`` list, each under its own namespace: each one's lidar sees the
     other, and when one drives into the other both report a collision naming the other."""
     world = tmp_path / "pair.yaml"
@@ -144,6 +164,8 @@ def test_a_fleet_world_puts_its_robots_in_one_room(spawn, bus: zenoh.Session, na
     theirs = collisions["r2"].wait_for(timeout_s=10.0)
     assert (mine.kind, mine.other_robot) == ("robot", "r2"), mine
     assert (theirs.kind, theirs.other_robot) == ("robot", "r1"), theirs
-    r2 = call_service(bus, f"{namespace}/simulator/state", SIM_STATE, SimStateRequest(robot="r2"), timeout_s=5.0)
+    r2 = call_service(
+        bus, f"{namespace}/simulator/state", SIM_STATE, SimStateRequest(robot="r2"), timeout_s=5.0
+    )
     assert r2.collisions == 1 and r2.pose.position.x > 0.5
     cmd.undeclare()

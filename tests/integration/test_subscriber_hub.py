@@ -41,8 +41,9 @@ def _thread_count() -> int:
     return len(os.listdir(f"/proc/{os.getpid()}/task"))
 
 
-def test_nodes_on_one_session_share_a_subscriber_per_key(session: zenoh.Session, bus: zenoh.Session,
-                                                          namespace: str) -> None:
+def test_nodes_on_one_session_share_a_subscriber_per_key(
+    session: zenoh.Session, bus: zenoh.Session, namespace: str
+) -> None:
     threads_before = _thread_count()
     nodes = [Node(f"n{i}", session, namespace, use_sim_time=True) for i in range(4)]
     got: list[list[float]] = [[] for _ in nodes]
@@ -59,8 +60,11 @@ def test_nodes_on_one_session_share_a_subscriber_per_key(session: zenoh.Session,
         for i in range(3):
             cmd_vel.put(Twist.planar(0.1 * (i + 1), 0.0).encode())
         _once_heard(bus, f"{namespace}/clock").put(Clock(Time.from_sec(2.5)).encode())
-        wait_until(lambda: all(len(seen) == 3 for seen in got) and all(n.now() == 2.5 for n in nodes), 5.0,
-                   lambda: f"samples so far {got}, clocks {[n.now() for n in nodes]}")
+        wait_until(
+            lambda: all(len(seen) == 3 for seen in got) and all(n.now() == 2.5 for n in nodes),
+            5.0,
+            lambda: f"samples so far {got}, clocks {[n.now() for n in nodes]}",
+        )
         assert all(seen == pytest.approx([0.1, 0.2, 0.3]) for seen in got), got
         assert all(n.stats.received[f"{namespace}/cmd_vel"] == 3 for n in nodes), "each node counts its own"
     finally:
@@ -69,8 +73,9 @@ def test_nodes_on_one_session_share_a_subscriber_per_key(session: zenoh.Session,
     assert SUBSCRIBER_HUB.subscriber_count(session) == 0, "the last node to close undeclares the subscribers"
 
 
-def test_a_member_that_leaves_takes_nothing_from_the_others(session: zenoh.Session, bus: zenoh.Session,
-                                                            namespace: str) -> None:
+def test_a_member_that_leaves_takes_nothing_from_the_others(
+    session: zenoh.Session, bus: zenoh.Session, namespace: str
+) -> None:
     stays, leaves = Node("stays", session, namespace), Node("leaves", session, namespace)
     kept: list[float] = []
     gone: list[float] = []
@@ -93,8 +98,9 @@ def test_a_member_that_leaves_takes_nothing_from_the_others(session: zenoh.Sessi
         leaves.close()
 
 
-def test_a_failing_member_does_not_stop_the_sample_reaching_the_next(session: zenoh.Session, bus: zenoh.Session,
-                                                                     namespace: str) -> None:
+def test_a_failing_member_does_not_stop_the_sample_reaching_the_next(
+    session: zenoh.Session, bus: zenoh.Session, namespace: str
+) -> None:
     hub = SubscriberHub()
     reached: list[bytes] = []
 
@@ -102,8 +108,10 @@ def test_a_failing_member_does_not_stop_the_sample_reaching_the_next(session: ze
         raise RuntimeError("a bug in one member")
 
     key = f"{namespace}/raw"
-    handles = [hub.subscribe(session, key, broken),
-               hub.subscribe(session, key, lambda s: reached.append(s.payload.to_bytes()))]
+    handles = [
+        hub.subscribe(session, key, broken),
+        hub.subscribe(session, key, lambda s: reached.append(s.payload.to_bytes())),
+    ]
     try:
         _once_heard(bus, key).put(b"x")
         wait_until(lambda: reached == [b"x"], 5.0, lambda: f"reached {reached}")
@@ -123,8 +131,9 @@ def test_a_closed_session_is_forgotten(router_endpoint: str, session: zenoh.Sess
     handle.undeclare()
 
 
-def test_a_subscription_the_contract_refuses_leaves_the_shared_subscriber(session: zenoh.Session,
-                                                                          namespace: str) -> None:
+def test_a_subscription_the_contract_refuses_leaves_the_shared_subscriber(
+    session: zenoh.Session, namespace: str
+) -> None:
     node = Node("strict", session, namespace)
 
     def refuse(kind: str, type_name: str, key: str) -> None:

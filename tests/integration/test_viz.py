@@ -32,7 +32,9 @@ def _connect(url: str, viz: ServiceProcess) -> FoxgloveTestClient:
     return clients[0]
 
 
-def _subscribe_until_each_delivers(client: FoxgloveTestClient, topics: list[str], timeout_s: float = 20.0) -> bool:
+def _subscribe_until_each_delivers(
+    client: FoxgloveTestClient, topics: list[str], timeout_s: float = 20.0
+) -> bool:
     """Subscribe to ``topics`` until each has delivered a message, or ``timeout_s``. The Foxglove server may
     advertise a channel a moment before it accepts subscriptions to it ("attempted to subscribe to unknown
     channel"): ask again for those still silent, as a viewer's user would."""
@@ -52,9 +54,13 @@ def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namesp
     viz = spawn("viz", "--world", GLASS_ROOM, "--port", str(port))
     url = f"ws://127.0.0.1:{port}"
     ns = f"/{namespace}"
-    wanted = {f"{ns}/scan": "foxglove.LaserScan", f"{ns}/tf": "foxglove.FrameTransforms",
-              f"{ns}/ultrasonic": "foxglove.SceneUpdate", f"{ns}/world": "foxglove.SceneUpdate",
-              f"{ns}/tf_static": "foxglove.FrameTransforms"}
+    wanted = {
+        f"{ns}/scan": "foxglove.LaserScan",
+        f"{ns}/tf": "foxglove.FrameTransforms",
+        f"{ns}/ultrasonic": "foxglove.SceneUpdate",
+        f"{ns}/world": "foxglove.SceneUpdate",
+        f"{ns}/tf_static": "foxglove.FrameTransforms",
+    }
     client = _connect(url, viz)
     try:
         assert client.subprotocol in SUBPROTOCOLS
@@ -63,10 +69,14 @@ def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namesp
         for topic, schema in wanted.items():
             channel = client.topics()[topic]
             assert (channel["schemaName"], channel["encoding"], channel["schemaEncoding"]) == (
-                schema, "protobuf", "protobuf"), channel
+                schema,
+                "protobuf",
+                "protobuf",
+            ), channel
         client.subscribe(*wanted)
-        assert client.pump_until(lambda c: all(c.received(t) for t in wanted) and c.times_ns, 20.0), (
-            {t: len(client.received(t)) for t in wanted})
+        assert client.pump_until(lambda c: all(c.received(t) for t in wanted) and c.times_ns, 20.0), {
+            t: len(client.received(t)) for t in wanted
+        }
         world = client.received(f"{ns}/world")[0].payload
         assert b"glass" in world and b"staging/home" in world  # latched: sent when the client subscribed
         scan = client.received(f"{ns}/scan")[-1]
@@ -87,8 +97,9 @@ def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namesp
         client.__exit__()
 
 
-def test_the_camera_is_rendered_only_while_a_viewer_watches_it(spawn, bus: zenoh.Session,
-                                                               namespace: str) -> None:  # type: ignore[no-untyped-def]
+def test_the_camera_is_rendered_only_while_a_viewer_watches_it(
+    spawn, bus: zenoh.Session, namespace: str
+) -> None:  # type: ignore[no-untyped-def]
     port = free_port()
     spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=1")
     viz = spawn("viz", "--world", GLASS_ROOM, "--port", str(port))
@@ -108,23 +119,36 @@ def test_the_camera_is_rendered_only_while_a_viewer_watches_it(spawn, bus: zenoh
 
 def test_a_fleet_is_shown_robot_by_robot_each_under_its_own_frames(spawn, namespace: str, tmp_path) -> None:  # type: ignore[no-untyped-def]
     world = tmp_path / "pair.yaml"
-    world.write_text("name: pair\nbounds: [0, 0, 6, 4]\ndocks:\n  - {id: d, pose: [0.6, 2.0, 3.14159]}\n"
-                     "robots:\n  - {name: r1, start: [2, 1, 0]}\n  - {name: r2, start: [4, 3, 3.14159]}\n")
+    world.write_text(
+        "name: pair\nbounds: [0, 0, 6, 4]\ndocks:\n  - {id: d, pose: [0.6, 2.0, 3.14159]}\n"
+        "robots:\n  - {name: r1, start: [2, 1, 0]}\n  - {name: r2, start: [4, 3, 3.14159]}\n"
+    )
     port = free_port()
     spawn("simulator", "--world", str(world), "-p", "rtf=2")
     viz = spawn("viz", "--world", str(world), "--port", str(port), "-p", "robots=[r1, r2]")
     ns = f"/{namespace}"
-    wanted = [f"{ns}/r1/scan", f"{ns}/r2/scan", f"{ns}/r1/tf", f"{ns}/r2/tf", f"{ns}/r1/robot", f"{ns}/r2/robot"]
+    wanted = [
+        f"{ns}/r1/scan",
+        f"{ns}/r2/scan",
+        f"{ns}/r1/tf",
+        f"{ns}/r2/tf",
+        f"{ns}/r1/robot",
+        f"{ns}/r2/robot",
+    ]
     client = _connect(f"ws://127.0.0.1:{port}", viz)
     try:
         assert client.pump_until(lambda c: set(wanted) <= set(c.topics()), 20.0), sorted(client.topics())
         # (Seen once in make test without asking again: r2/scan never came.)
         assert _subscribe_until_each_delivers(client, wanted), (
-            {t: len(client.received(t)) for t in wanted}, viz.output()[-1500:])
+            {t: len(client.received(t)) for t in wanted},
+            viz.output()[-1500:],
+        )
         for robot in ("r1", "r2"):
             transforms = client.received(f"{ns}/{robot}/tf")[-1].payload
             assert f"{robot}/base_link".encode() in transforms and f"{robot}/odom".encode() in transforms
-            assert client.received(f"{ns}/{robot}/scan")[-1].payload.count(f"{robot}/lidar_link".encode()) == 1
+            assert (
+                client.received(f"{ns}/{robot}/scan")[-1].payload.count(f"{robot}/lidar_link".encode()) == 1
+            )
             assert f"{robot}/base_link".encode() in client.received(f"{ns}/{robot}/robot")[0].payload
     finally:
         client.__exit__()

@@ -18,7 +18,9 @@ from tests.support.processes import REPO_ROOT
 SEED_ROOM = str(REPO_ROOT / "deploy/worlds/seed_room.yaml")
 
 
-def test_pose_matches_ground_truth_and_services_survive_a_restart(spawn, bus: zenoh.Session, namespace: str) -> None:  # type: ignore[no-untyped-def]
+def test_pose_matches_ground_truth_and_services_survive_a_restart(
+    spawn, bus: zenoh.Session, namespace: str
+) -> None:  # type: ignore[no-untyped-def]
     clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
     pose = KeyRecorder(bus, f"{namespace}/map_to_base_link_pose2d", Float64MultiArray)
     battery = KeyRecorder(bus, f"{namespace}/battery_status", BatteryState)

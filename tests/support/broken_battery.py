@@ -19,8 +19,10 @@ conf.insert_json5("connect/endpoints", json.dumps([os.environ["ZENDOCK_CONNECT"]
 conf.insert_json5("scouting/multicast/enabled", "false")
 s = zenoh.open(conf)
 token = s.liveliness().declare_token(f"@zendock/node/{ns or '%'}/battery")
-pub = s.declare_publisher(f"{ns}/battery_status" if ns else "battery_status",
-                          encoding=zenoh.Encoding("application/msgpack;sensor_msgs/msg/BatteryState"))
+pub = s.declare_publisher(
+    f"{ns}/battery_status" if ns else "battery_status",
+    encoding=zenoh.Encoding("application/msgpack;sensor_msgs/msg/BatteryState"),
+)
 while True:
     pub.put(BatteryState(percentage=0.9).encode())
     time.sleep(0.5)

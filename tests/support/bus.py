@@ -49,7 +49,9 @@ class KeyRecorder(Generic[M]):
         with self._cv:
             return self.messages[-1] if self.messages else None
 
-    def wait_for(self, predicate: Callable[[M], bool] = lambda _m: True, timeout_s: float = 10.0, after: int = 0) -> M:
+    def wait_for(
+        self, predicate: Callable[[M], bool] = lambda _m: True, timeout_s: float = 10.0, after: int = 0
+    ) -> M:
         """The first message (at or after index ``after`` of the ones seen) matching ``predicate``."""
         deadline = time.monotonic() + timeout_s
         checked = after
@@ -64,7 +66,9 @@ class KeyRecorder(Generic[M]):
                 if remaining <= 0:
                     break
                 self._cv.wait(min(remaining, 0.2))
-            raise AssertionError(self.describe(f"no matching {self.msg_type.TYPE_NAME} on {self.key} within {timeout_s:g} s"))
+            raise AssertionError(
+                self.describe(f"no matching {self.msg_type.TYPE_NAME} on {self.key} within {timeout_s:g} s")
+            )
 
     def describe(self, headline: str) -> str:
         tail = [repr(m)[:300] for m in self.messages[-3:]]
@@ -93,8 +97,12 @@ def wait_for_message(
         recorder.close()
 
 
-def liveliness_keys(session: zenoh.Session, pattern: str = "@zendock/**", timeout_s: float = 1.0) -> list[str]:
-    return [str(r.ok.key_expr) for r in session.liveliness().get(pattern, timeout=timeout_s) if r.ok is not None]
+def liveliness_keys(
+    session: zenoh.Session, pattern: str = "@zendock/**", timeout_s: float = 1.0
+) -> list[str]:
+    return [
+        str(r.ok.key_expr) for r in session.liveliness().get(pattern, timeout=timeout_s) if r.ok is not None
+    ]
 
 
 def drain(_: Any) -> None:

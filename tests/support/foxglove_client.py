@@ -47,7 +47,9 @@ class FoxgloveTestClient:
     _ws: ClientConnection | None = None
 
     def __enter__(self) -> FoxgloveTestClient:
-        self._ws = connect(self.url, subprotocols=list(SUBPROTOCOLS), open_timeout=10, max_size=None).__enter__()
+        self._ws = connect(
+            self.url, subprotocols=list(SUBPROTOCOLS), open_timeout=10, max_size=None
+        ).__enter__()
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -104,7 +106,7 @@ class FoxgloveTestClient:
         if frame[0] == OP_MESSAGE_DATA:
             _, sub_id, log_time = _MESSAGE_HEADER.unpack_from(frame)
             topic = self._subscriptions.get(sub_id, "?")
-            self.messages.append(ReceivedMessage(topic, log_time, bytes(frame[_MESSAGE_HEADER.size:])))
+            self.messages.append(ReceivedMessage(topic, log_time, bytes(frame[_MESSAGE_HEADER.size :])))
         elif frame[0] == OP_TIME:
             self.times_ns.append(_TIME.unpack_from(frame)[1])
 

@@ -39,19 +39,35 @@ class RobotWatch:
         self._lock = threading.Lock()
         self._emit = emit
         self.state: dict[str, Any] = {
-            "sim_time_s": None, "odom_time_s": None, "x_m": None, "y_m": None, "linear_mps": None,
-            "angular_radps": None, "odom_count": 0,
-            "battery_percentage": None, "power_supply_status": None, "mated": None, "contact_count": 0,
-            "collisions": 0, "pose2d_count": 0, "nodes": [],
+            "sim_time_s": None,
+            "odom_time_s": None,
+            "x_m": None,
+            "y_m": None,
+            "linear_mps": None,
+            "angular_radps": None,
+            "odom_count": 0,
+            "battery_percentage": None,
+            "power_supply_status": None,
+            "mated": None,
+            "contact_count": 0,
+            "collisions": 0,
+            "pose2d_count": 0,
+            "nodes": [],
         }
         self._nodes: set[str] = set()
         key = lambda name: topic_key(namespace, name)  # noqa: E731
         self._subscribers = [
             session.declare_subscriber(key(topics.CLOCK), self._decoded(Clock, self._on_clock)),
             session.declare_subscriber(key(topics.ODOM), self._decoded(Odometry, self._on_odom)),
-            session.declare_subscriber(key(topics.BATTERY_STATUS), self._decoded(BatteryState, self._on_battery)),
-            session.declare_subscriber(key(topics.DOCK_CONTACT), self._decoded(DockContact, self._on_contact)),
-            session.declare_subscriber(key(topics.COLLISIONS), self._decoded(CollisionEvent, self._on_collision)),
+            session.declare_subscriber(
+                key(topics.BATTERY_STATUS), self._decoded(BatteryState, self._on_battery)
+            ),
+            session.declare_subscriber(
+                key(topics.DOCK_CONTACT), self._decoded(DockContact, self._on_contact)
+            ),
+            session.declare_subscriber(
+                key(topics.COLLISIONS), self._decoded(CollisionEvent, self._on_collision)
+            ),
             session.declare_subscriber(key(topics.POSE2D), self._decoded(Float64MultiArray, self._on_pose2d)),
             session.liveliness().declare_subscriber(f"{GRAPH_PREFIX}/node/**", self._on_token, history=True),
         ]
@@ -92,7 +108,9 @@ class RobotWatch:
     def _on_collision(self, msg: CollisionEvent) -> None:
         with self._lock:
             self.state["collisions"] += 1
-        self._emit({"kind": "collision", "what": msg.kind, "x": msg.x, "y": msg.y, "t": msg.header.stamp.to_sec()})
+        self._emit(
+            {"kind": "collision", "what": msg.kind, "x": msg.x, "y": msg.y, "t": msg.header.stamp.to_sec()}
+        )
 
     def _on_pose2d(self, _msg: Float64MultiArray) -> None:
         with self._lock:
@@ -118,8 +136,12 @@ class RobotWatch:
 def trigger(session: zenoh.Session, namespace: str, percentage: float, drain_scale: float) -> dict[str, Any]:
     """Set the battery just above the low threshold, draining fast, as a demo run does."""
     try:
-        reply = call_service(session, topic_key(namespace, topics.BATTERY_SET_STATE), SET_BATTERY_STATE,
-                             SetBatteryStateRequest(percentage=percentage, drain_scale=drain_scale))
+        reply = call_service(
+            session,
+            topic_key(namespace, topics.BATTERY_SET_STATE),
+            SET_BATTERY_STATE,
+            SetBatteryStateRequest(percentage=percentage, drain_scale=drain_scale),
+        )
     except ServiceError as exc:
         return {"kind": "trigger", "ok": False, "error": str(exc)}
     return {"kind": "trigger", "ok": True, "percentage": reply.state.percentage}
@@ -129,7 +151,9 @@ def run(connect: str, namespace: str, period_s: float) -> int:
     out_lock = threading.Lock()
 
     def emit(record: dict[str, Any]) -> None:
-        line = json.dumps({k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()})
+        line = json.dumps(
+            {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()}
+        )
         with out_lock:
             sys.stdout.write(line + "\n")
             sys.stdout.flush()

@@ -55,8 +55,24 @@ class HostPair:
             raise NetnsUnavailable(f"ip netns add failed: {first.stderr.strip()}")
         try:
             _ip("netns", "add", pair.b)
-            _ip("link", "add", pair.veth_a, "netns", pair.a, "type", "veth", "peer", "name", pair.veth_b, "netns", pair.b)
-            for ns, dev, address in ((pair.a, pair.veth_a, HOST_A_ADDRESS), (pair.b, pair.veth_b, HOST_B_ADDRESS)):
+            _ip(
+                "link",
+                "add",
+                pair.veth_a,
+                "netns",
+                pair.a,
+                "type",
+                "veth",
+                "peer",
+                "name",
+                pair.veth_b,
+                "netns",
+                pair.b,
+            )
+            for ns, dev, address in (
+                (pair.a, pair.veth_a, HOST_A_ADDRESS),
+                (pair.b, pair.veth_b, HOST_B_ADDRESS),
+            ):
                 _ip("-n", ns, "link", "set", "lo", "up")
                 _ip("-n", ns, "addr", "add", f"{address}/{PREFIX_LENGTH}", "dev", dev)
                 _ip("-n", ns, "link", "set", dev, "up")
@@ -98,8 +114,9 @@ class NetnsProcess(ServiceProcess):
     session's process group holds everything it starts; :meth:`stop` signals that group.
     """
 
-    def __init__(self, netns: str, module: str, args: Sequence[str], log_path: Path,
-                 env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, netns: str, module: str, args: Sequence[str], log_path: Path, env: dict[str, str] | None = None
+    ) -> None:
         self.netns = netns
         super().__init__(module, args, log_path, env)
 

@@ -25,7 +25,9 @@ def free_port() -> int:
 class ServiceProcess:
     """One ``python -m services.<name>`` child; output goes to a log file the test can show on failure."""
 
-    def __init__(self, module: str, args: Sequence[str], log_path: Path, env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, module: str, args: Sequence[str], log_path: Path, env: dict[str, str] | None = None
+    ) -> None:
         self.module = module
         self.args = list(args)
         self.log_path = log_path

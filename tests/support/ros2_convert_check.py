@@ -83,15 +83,24 @@ def main() -> int:
         if inbound.ros_type != TWIST_STAMPED:
             check(f"in {inbound.ros_topic}", inbound.zendock_type, inbound.ros_type)
     for action in ACTIONS:
-        for part, zendock_type in (("Goal", action.zendock.goal), ("Result", action.zendock.result),
-                                   ("Feedback", action.zendock.feedback)):
+        for part, zendock_type in (
+            ("Goal", action.zendock.goal),
+            ("Result", action.zendock.result),
+            ("Feedback", action.zendock.feedback),
+        ):
             check(f"{action.name} {part}", zendock_type, f"{action.ros_type}_{part}")
     # Refused: a velocity zendock's validation does not take, a value rclpy's setter does not take.
     broken = ros_class("geometry_msgs/msg/Twist")()
     broken.linear.x = math.nan
-    for label, attempt in (("nan twist", lambda: from_ros(broken, Twist)),
-                           ("uint16 overflow", lambda: to_ros(
-                               ACTIONS[0].zendock.result(error_code=1 << 20), ros_class(f"{ACTIONS[0].ros_type}_Result")))):
+    for label, attempt in (
+        ("nan twist", lambda: from_ros(broken, Twist)),
+        (
+            "uint16 overflow",
+            lambda: to_ros(
+                ACTIONS[0].zendock.result(error_code=1 << 20), ros_class(f"{ACTIONS[0].ros_type}_Result")
+            ),
+        ),
+    ):
         try:
             attempt()
             print(json.dumps({"case": f"refuses {label}", "ok": False, "detail": "converted"}), flush=True)

@@ -36,8 +36,11 @@ def _plain(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return [None if isinstance(v, float) and not np.isfinite(v) else v for v in value.tolist()]
     if hasattr(value, "__dataclass_fields__"):
-        return {name: _plain(getattr(value, name)) for name in value.__dataclass_fields__ if name != "__msgtype__"
-                and not name.isupper()}
+        return {
+            name: _plain(getattr(value, name))
+            for name in value.__dataclass_fields__
+            if name != "__msgtype__" and not name.isupper()
+        }
     if isinstance(value, list):
         return [_plain(v) for v in value]
     if isinstance(value, float) and not np.isfinite(value):
@@ -98,8 +101,12 @@ def main(argv: list[str] | None = None) -> int:
     pub.add_argument("message", help="the message as JSON (missing fields are zero)")
     pub.add_argument("--rate", type=float, default=10.0)
     pub.add_argument("--seconds", type=float, default=3.0)
-    pub.add_argument("--type-hash", default="", help="announce and publish under this hash instead of Jazzy's")
-    act = sub.add_parser("action", help="send a goal, print the acceptance, the feedback count and the result")
+    pub.add_argument(
+        "--type-hash", default="", help="announce and publish under this hash instead of Jazzy's"
+    )
+    act = sub.add_parser(
+        "action", help="send a goal, print the acceptance, the feedback count and the result"
+    )
     act.add_argument("name")
     act.add_argument("type")
     act.add_argument("goal", help="the goal as JSON (missing fields are zero)")
@@ -113,17 +120,27 @@ def main(argv: list[str] | None = None) -> int:
 
             deadline = time.monotonic() + args.timeout
             while True:
-                found = get_topic_names_and_types(domain_id=args.domain, router_ip=session.router_ip,
-                                                  router_port=session.router_port)
-                if not args.wait_for or any(t == args.wait_for for t, _ in found) or time.monotonic() > deadline:
+                found = get_topic_names_and_types(
+                    domain_id=args.domain, router_ip=session.router_ip, router_port=session.router_port
+                )
+                if (
+                    not args.wait_for
+                    or any(t == args.wait_for for t, _ in found)
+                    or time.monotonic() > deadline
+                ):
                     break
                 time.sleep(0.2)
             print(json.dumps({topic: types for topic, types in found}), flush=True)
         elif args.command == "nodes":
             deadline = time.monotonic() + args.timeout
             while True:
-                names = sorted({str(r.ok.key_expr).split("/")[8] for r in session.liveliness.get(
-                    f"@ros2_lv/{args.domain}/*/*/*/NN/**", timeout=0.5) if r.ok is not None})
+                names = sorted(
+                    {
+                        str(r.ok.key_expr).split("/")[8]
+                        for r in session.liveliness.get(f"@ros2_lv/{args.domain}/*/*/*/NN/**", timeout=0.5)
+                        if r.ok is not None
+                    }
+                )
                 if not args.wait_for or args.wait_for in names or time.monotonic() > deadline:
                     break
                 time.sleep(0.2)
@@ -131,20 +148,43 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "info":
             from zenoh_ros2_sdk import get_topic_info
 
-            topic_info = get_topic_info(args.topic, domain_id=args.domain, router_ip=session.router_ip,
-                                        router_port=session.router_port, verbose=True)
-            print(json.dumps(None if topic_info is None else {
-                "types": topic_info.topic_types, "publishers": [
-                    {"node": p.node_name, "namespace": p.node_namespace, "qos": p.qos} for p in topic_info.publishers]}),
-                flush=True)
+            topic_info = get_topic_info(
+                args.topic,
+                domain_id=args.domain,
+                router_ip=session.router_ip,
+                router_port=session.router_port,
+                verbose=True,
+            )
+            print(
+                json.dumps(
+                    None
+                    if topic_info is None
+                    else {
+                        "types": topic_info.topic_types,
+                        "publishers": [
+                            {"node": p.node_name, "namespace": p.node_namespace, "qos": p.qos}
+                            for p in topic_info.publishers
+                        ],
+                    }
+                ),
+                flush=True,
+            )
         elif args.command == "echo":
             from zenoh_ros2_sdk import ROS2Subscriber
 
             received: list[Any] = []
-            subscriber = ROS2Subscriber(args.topic, args.type, received.append, msg_definition="",
-                                        domain_id=args.domain, router_ip=session.router_ip,
-                                        router_port=session.router_port, type_hash=jazzy.hash_rihs01(args.type),
-                                        qos=_qos(args.qos), node_name="zendock_test_echo")
+            subscriber = ROS2Subscriber(
+                args.topic,
+                args.type,
+                received.append,
+                msg_definition="",
+                domain_id=args.domain,
+                router_ip=session.router_ip,
+                router_port=session.router_port,
+                type_hash=jazzy.hash_rihs01(args.type),
+                qos=_qos(args.qos),
+                node_name="zendock_test_echo",
+            )
             deadline = time.monotonic() + args.timeout
             printed = 0
             while printed < args.count and time.monotonic() < deadline:
@@ -154,21 +194,35 @@ def main(argv: list[str] | None = None) -> int:
                 time.sleep(0.02)
             subscriber.close()
             if printed < args.count:
-                print(f"ros2_peer: {printed} of {args.count} messages on {args.topic} in {args.timeout} s",
-                      file=sys.stderr)
+                print(
+                    f"ros2_peer: {printed} of {args.count} messages on {args.topic} in {args.timeout} s",
+                    file=sys.stderr,
+                )
                 return 1
         elif args.command == "pub":
             from zenoh_ros2_sdk import ROS2Publisher
 
             type_hash = args.type_hash or jazzy.hash_rihs01(args.type)
-            publisher = ROS2Publisher(args.topic, args.type, msg_definition="", domain_id=args.domain,
-                                      router_ip=session.router_ip, router_port=session.router_port,
-                                      type_hash=type_hash, node_name="zendock_test_pub")
+            publisher = ROS2Publisher(
+                args.topic,
+                args.type,
+                msg_definition="",
+                domain_id=args.domain,
+                router_ip=session.router_ip,
+                router_port=session.router_port,
+                type_hash=type_hash,
+                node_name="zendock_test_pub",
+            )
             message = _fill(jazzy.types[args.type], json.loads(args.message), jazzy)
             end = time.monotonic() + args.seconds
             while time.monotonic() < end:
-                publisher.publish(**{name: getattr(message, name) for name in message.__dataclass_fields__
-                                     if name != "__msgtype__" and not name.isupper()})
+                publisher.publish(
+                    **{
+                        name: getattr(message, name)
+                        for name in message.__dataclass_fields__
+                        if name != "__msgtype__" and not name.isupper()
+                    }
+                )
                 time.sleep(1.0 / args.rate)
             publisher.close()
         elif args.command == "action":
@@ -203,24 +257,48 @@ def _action(session: Any, args: argparse.Namespace) -> int:
         session._registered_types[alias] = alias
     common = {"domain_id": args.domain, "router_ip": session.router_ip, "router_port": session.router_port}
     feedback: list[Any] = []
-    feedback_sub = ROS2Subscriber(f"{args.name}/_action/feedback", f"{args.type}_FeedbackMessage", feedback.append,
-                                  msg_definition="", type_hash=zendock_types.type_hash(f"{args.type}_FeedbackMessage"),
-                                  node_name="zendock_test_action", **common)
+    feedback_sub = ROS2Subscriber(
+        f"{args.name}/_action/feedback",
+        f"{args.type}_FeedbackMessage",
+        feedback.append,
+        msg_definition="",
+        type_hash=zendock_types.type_hash(f"{args.type}_FeedbackMessage"),
+        node_name="zendock_test_action",
+        **common,
+    )
     services = {"SendGoal": "send_goal", "GetResult": "get_result"}
-    clients = {part: ROS2ServiceClient(f"{args.name}/_action/{services[part]}", f"{args.type}_{part}", request_definition="x", response_definition="x",
-                                       type_hash=zendock_types.type_hash(f"{args.type}_{part}"),
-                                       node_name="zendock_test_action", timeout=args.timeout, **common)
-               for part in ("SendGoal", "GetResult")}
-    goal_id = ours.types["unique_identifier_msgs/msg/UUID"](uuid=np.frombuffer(uuidlib.uuid4().bytes, dtype=np.uint8))
+    clients = {
+        part: ROS2ServiceClient(
+            f"{args.name}/_action/{services[part]}",
+            f"{args.type}_{part}",
+            request_definition="x",
+            response_definition="x",
+            type_hash=zendock_types.type_hash(f"{args.type}_{part}"),
+            node_name="zendock_test_action",
+            timeout=args.timeout,
+            **common,
+        )
+        for part in ("SendGoal", "GetResult")
+    }
+    goal_id = ours.types["unique_identifier_msgs/msg/UUID"](
+        uuid=np.frombuffer(uuidlib.uuid4().bytes, dtype=np.uint8)
+    )
     goal = _fill(ours.types[f"{args.type}_Goal"], json.loads(args.goal), ours)
     accepted = clients["SendGoal"].call(goal_id=goal_id, goal=goal)
     print(json.dumps({"accepted": None if accepted is None else bool(accepted.accepted)}), flush=True)
     if accepted is None or not accepted.accepted:
         return 1
     result = clients["GetResult"].call(goal_id=goal_id)
-    print(json.dumps({"status": None if result is None else int(result.status),
-                      "result": None if result is None else _plain(result.result),
-                      "feedback": len(feedback)}), flush=True)
+    print(
+        json.dumps(
+            {
+                "status": None if result is None else int(result.status),
+                "result": None if result is None else _plain(result.result),
+                "feedback": len(feedback),
+            }
+        ),
+        flush=True,
+    )
     feedback_sub.close()
     for client in clients.values():
         client.close()

@@ -48,7 +48,9 @@ EXPECTED_TYPES = {
     "/initialpose": "geometry_msgs/msg/PoseWithCovarianceStamped",
 }
 CHARGING = BatteryState.POWER_SUPPLY_STATUS_CHARGING
-LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED = QoSProfile(
+    depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+)
 
 
 def report(step: str, ok: bool, **details: Any) -> None:
@@ -79,22 +81,37 @@ class User:
     def graph(self) -> None:
         def complete() -> bool:
             topics = dict(self.node.get_topic_names_and_types())
-            return (set(ZENDOCK_NODES) <= set(self.node.get_node_names())
-                    and all(t in topics for t in EXPECTED_TYPES))
+            return set(ZENDOCK_NODES) <= set(self.node.get_node_names()) and all(
+                t in topics for t in EXPECTED_TYPES
+            )
+
         self.spin_until(complete, 30.0)
         nodes = sorted(set(self.node.get_node_names()) - {self.node.get_name()})
         topics = {name: types for name, types in self.node.get_topic_names_and_types()}
-        wrong = {t: topics.get(t) for t, ros_type in EXPECTED_TYPES.items() if ros_type not in topics.get(t, [])}
-        report("graph", set(ZENDOCK_NODES) <= set(nodes) and not wrong, nodes=nodes,
-               topics={t: topics[t] for t in sorted(topics) if not t.startswith(("/rosout", "/parameter_events"))},
-               missing_nodes=sorted(set(ZENDOCK_NODES) - set(nodes)), wrong_topics=wrong)
+        wrong = {
+            t: topics.get(t) for t, ros_type in EXPECTED_TYPES.items() if ros_type not in topics.get(t, [])
+        }
+        report(
+            "graph",
+            set(ZENDOCK_NODES) <= set(nodes) and not wrong,
+            nodes=nodes,
+            topics={
+                t: topics[t] for t in sorted(topics) if not t.startswith(("/rosout", "/parameter_events"))
+            },
+            missing_nodes=sorted(set(ZENDOCK_NODES) - set(nodes)),
+            wrong_topics=wrong,
+        )
 
     def battery(self) -> None:
         got = self.collect(BatteryState, "/battery_status", 3, 15.0)
-        report("battery_status", len(got) >= 3, count=len(got),
-               percentage=got[-1].percentage if got else None,
-               power_supply_status=got[-1].power_supply_status if got else None,
-               frame_id=got[-1].header.frame_id if got else None)
+        report(
+            "battery_status",
+            len(got) >= 3,
+            count=len(got),
+            percentage=got[-1].percentage if got else None,
+            power_supply_status=got[-1].power_supply_status if got else None,
+            frame_id=got[-1].header.frame_id if got else None,
+        )
 
     def late_map(self) -> None:
         infos = self.node.get_publishers_info_by_topic("/map")
@@ -103,14 +120,21 @@ class User:
         got = self.collect(OccupancyGrid, "/map", 1, 10.0, LATCHED)
         after = time.monotonic() - started
         grid = got[0] if got else None
-        report("late_map", bool(got) and durability == ["TRANSIENT_LOCAL"], publisher_durability=durability,
-               after_s=round(after, 3), width=grid.info.width if grid else None,
-               height=grid.info.height if grid else None,
-               resolution=round(grid.info.resolution, 4) if grid else None,
-               cells=len(grid.data) if grid else None)
+        report(
+            "late_map",
+            bool(got) and durability == ["TRANSIENT_LOCAL"],
+            publisher_durability=durability,
+            after_s=round(after, 3),
+            width=grid.info.width if grid else None,
+            height=grid.info.height if grid else None,
+            resolution=round(grid.info.resolution, 4) if grid else None,
+            cells=len(grid.data) if grid else None,
+        )
 
     def clock(self) -> None:
-        sim = Node("sim_time_user", parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+        sim = Node(
+            "sim_time_user", parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)]
+        )
         got: list[Any] = []
         sub = sim.create_subscription(Clock, "/clock", got.append, 10)
         wall0 = time.monotonic()
@@ -124,9 +148,15 @@ class User:
         ratio = (stamps[-1] - stamps[0]) / wall if len(stamps) > 1 and wall > 0 else None
         sim.destroy_subscription(sub)
         sim.destroy_node()
-        report("clock", len(got) >= 20 and increasing and bool(stamps) and abs(now - stamps[-1]) < 1.0,
-               count=len(got), increasing=increasing, sim_seconds_per_wall_second=ratio and round(ratio, 2),
-               node_time=round(now, 3), last_clock=round(stamps[-1], 3) if stamps else None)
+        report(
+            "clock",
+            len(got) >= 20 and increasing and bool(stamps) and abs(now - stamps[-1]) < 1.0,
+            count=len(got),
+            increasing=increasing,
+            sim_seconds_per_wall_second=ratio and round(ratio, 2),
+            node_time=round(now, 3),
+            last_clock=round(stamps[-1], 3) if stamps else None,
+        )
 
     def _drive(self, msg_type: Any, forward: Any, step: str, seconds: float) -> None:
         odom: list[Odometry] = []
@@ -162,8 +192,9 @@ class User:
         got = self.collect(Float64MultiArray, "/map_to_base_link_pose2d", 1, 10.0)
         return tuple(got[-1].data[:3]) if got else None  # type: ignore[return-value]
 
-    def run_goal(self, client: ActionClient, goal: Any, timeout_s: float,
-                 cancel_after_feedback: bool = False) -> dict[str, Any]:
+    def run_goal(
+        self, client: ActionClient, goal: Any, timeout_s: float, cancel_after_feedback: bool = False
+    ) -> dict[str, Any]:
         if not client.wait_for_server(timeout_sec=15.0):
             return {"error": "action server not found"}
         feedback: list[Any] = []
@@ -183,8 +214,12 @@ class User:
         result = handle.get_result_async()
         self.spin_until(result.done, timeout_s)
         done = result.result()
-        out.update(status=done.status if done is not None else None, feedbacks=len(feedback),
-                   result=done.result if done is not None else None, last_feedback=feedback[-1] if feedback else None)
+        out.update(
+            status=done.status if done is not None else None,
+            feedbacks=len(feedback),
+            result=done.result if done is not None else None,
+            last_feedback=feedback[-1] if feedback else None,
+        )
         return out
 
     def navigate(self) -> None:
@@ -197,10 +232,14 @@ class User:
         pose = self.robot_pose()
         last = out.pop("last_feedback", None)
         result = out.pop("result", None)
-        report("navigate_to_pose", out.get("status") == GoalStatus.STATUS_SUCCEEDED and out.get("feedbacks", 0) > 0,
-               **out, error_code=result.error_code if result is not None else None,
-               distance_remaining=round(last.distance_remaining, 3) if last is not None else None,
-               pose_after=[round(v, 3) for v in pose] if pose else None)
+        report(
+            "navigate_to_pose",
+            out.get("status") == GoalStatus.STATUS_SUCCEEDED and out.get("feedbacks", 0) > 0,
+            **out,
+            error_code=result.error_code if result is not None else None,
+            distance_remaining=round(last.distance_remaining, 3) if last is not None else None,
+            pose_after=[round(v, 3) for v in pose] if pose else None,
+        )
         client.destroy()
 
     def goal_pose(self) -> None:
@@ -214,15 +253,22 @@ class User:
         self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
         pub.publish(goal)
         poses: list[Any] = []
-        sub = self.node.create_subscription(Float64MultiArray, "/map_to_base_link_pose2d",
-                                            lambda m: poses.append(tuple(m.data[:3])), 10)
+        sub = self.node.create_subscription(
+            Float64MultiArray, "/map_to_base_link_pose2d", lambda m: poses.append(tuple(m.data[:3])), 10
+        )
 
         def arrived() -> bool:
             return bool(poses) and math.hypot(poses[-1][0] - target[0], poses[-1][1] - target[1]) < 0.25
+
         ok = self.spin_until(arrived, 60.0)
         self.node.destroy_subscription(sub)
         self.node.destroy_publisher(pub)
-        report("goal_pose", ok, target=list(target), pose_after=[round(v, 3) for v in poses[-1]] if poses else None)
+        report(
+            "goal_pose",
+            ok,
+            target=list(target),
+            pose_after=[round(v, 3) for v in poses[-1]] if poses else None,
+        )
 
     def cancel(self) -> None:
         client = ActionClient(self.node, NavigateToPose, "/navigate_to_pose")
@@ -233,7 +279,11 @@ class User:
         out = self.run_goal(client, goal, 30.0, cancel_after_feedback=True)
         out.pop("last_feedback", None)
         out.pop("result", None)
-        report("cancel", out.get("status") == GoalStatus.STATUS_CANCELED and out.get("cancel_return_code") == 0, **out)
+        report(
+            "cancel",
+            out.get("status") == GoalStatus.STATUS_CANCELED and out.get("cancel_return_code") == 0,
+            **out,
+        )
         client.destroy()
 
     def dock(self) -> None:
@@ -244,12 +294,19 @@ class User:
         result = out.pop("result", None)
         battery = self.collect(BatteryState, "/battery_status", 2, 10.0)
         charging = bool(battery) and battery[-1].power_supply_status == CHARGING
-        report("dock_robot", out.get("status") == GoalStatus.STATUS_SUCCEEDED and bool(result and result.success)
-               and out.get("feedbacks", 0) > 0 and charging, **out,
-               success=bool(result.success) if result is not None else None,
-               error_code=result.error_code if result is not None else None,
-               last_feedback_state=last.state if last is not None else None,
-               power_supply_status=battery[-1].power_supply_status if battery else None, charging=charging)
+        report(
+            "dock_robot",
+            out.get("status") == GoalStatus.STATUS_SUCCEEDED
+            and bool(result and result.success)
+            and out.get("feedbacks", 0) > 0
+            and charging,
+            **out,
+            success=bool(result.success) if result is not None else None,
+            error_code=result.error_code if result is not None else None,
+            last_feedback_state=last.state if last is not None else None,
+            power_supply_status=battery[-1].power_supply_status if battery else None,
+            charging=charging,
+        )
         client.destroy()
 
     def bad_input(self) -> None:
@@ -258,7 +315,9 @@ class User:
         nan = float("nan")
         cmd = self.node.create_publisher(Twist, "/cmd_vel", 10)
         goal_pose = self.node.create_publisher(PoseStamped, "/goal_pose", 10)
-        self.spin_until(lambda: cmd.get_subscription_count() > 0 and goal_pose.get_subscription_count() > 0, 10.0)
+        self.spin_until(
+            lambda: cmd.get_subscription_count() > 0 and goal_pose.get_subscription_count() > 0, 10.0
+        )
         broken = Twist()
         broken.linear.x = nan
         elsewhere = PoseStamped()
@@ -278,8 +337,13 @@ class User:
         self.node.destroy_publisher(goal_pose)
         alive = "ros2_dds" in self.node.get_node_names()
         battery = self.collect(BatteryState, "/battery_status", 1, 10.0)
-        report("bad_input", out.get("accepted") is False and alive and bool(battery), nan_goal=out,
-               face_in_graph=alive, battery_after=len(battery))
+        report(
+            "bad_input",
+            out.get("accepted") is False and alive and bool(battery),
+            nan_goal=out,
+            face_in_graph=alive,
+            battery_after=len(battery),
+        )
 
     def initial_pose(self) -> None:
         """RViz's 2D Pose Estimate: the localiser believes the robot is there (the robot does not move)."""
@@ -297,27 +361,53 @@ class User:
         self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
         pub.publish(estimate)
         believed: list[Any] = []
-        sub = self.node.create_subscription(Float64MultiArray, "/map_to_base_link_pose2d",
-                                            lambda m: believed.append(tuple(m.data[:3])), 10)
+        sub = self.node.create_subscription(
+            Float64MultiArray, "/map_to_base_link_pose2d", lambda m: believed.append(tuple(m.data[:3])), 10
+        )
 
         def there() -> bool:
-            return bool(believed) and math.hypot(believed[-1][0] - target[0], believed[-1][1] - target[1]) < 0.05
+            return (
+                bool(believed) and math.hypot(believed[-1][0] - target[0], believed[-1][1] - target[1]) < 0.05
+            )
+
         ok = self.spin_until(there, 10.0)
         self.node.destroy_subscription(sub)
         self.node.destroy_publisher(pub)
-        report("initial_pose", ok, before=[round(v, 3) for v in before], estimate=[round(v, 3) for v in target],
-               believed=[round(v, 3) for v in believed[-1]] if believed else None)
+        report(
+            "initial_pose",
+            ok,
+            before=[round(v, 3) for v in before],
+            estimate=[round(v, 3) for v in target],
+            believed=[round(v, 3) for v in believed[-1]] if believed else None,
+        )
 
     def node_leaves(self) -> None:
         report("stop_planner", True)
         started = time.monotonic()
         gone = self.spin_until(lambda: "planner" not in self.node.get_node_names(), 30.0)
-        report("planner_left", gone, after_s=round(time.monotonic() - started, 3),
-               nodes=sorted(set(self.node.get_node_names()) - {self.node.get_name()}))
+        report(
+            "planner_left",
+            gone,
+            after_s=round(time.monotonic() - started, 3),
+            nodes=sorted(set(self.node.get_node_names()) - {self.node.get_name()}),
+        )
 
 
-STEPS = ("graph", "battery", "late_map", "clock", "drive", "drive_stamped", "navigate", "goal_pose", "cancel", "dock",
-         "bad_input", "initial_pose", "node_leaves")
+STEPS = (
+    "graph",
+    "battery",
+    "late_map",
+    "clock",
+    "drive",
+    "drive_stamped",
+    "navigate",
+    "goal_pose",
+    "cancel",
+    "dock",
+    "bad_input",
+    "initial_pose",
+    "node_leaves",
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -334,8 +424,11 @@ def main(argv: list[str] | None = None) -> int:
                 getattr(user, step)()
             except Exception as exc:  # one step's failure is reported; the next steps still run
                 report(step, False, error=f"{type(exc).__name__}: {exc}")
-            print(json.dumps({"step": f"{step}_time", "ok": True, "s": round(time.monotonic() - started, 2)}),
-                  file=sys.stderr, flush=True)
+            print(
+                json.dumps({"step": f"{step}_time", "ok": True, "s": round(time.monotonic() - started, 2)}),
+                file=sys.stderr,
+                flush=True,
+            )
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

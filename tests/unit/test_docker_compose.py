@@ -37,12 +37,15 @@ def _conditions(service: dict) -> dict[str, str]:
 
 
 @pytest.mark.parametrize(("stack", "committed", "secure"), GENERATED)
-def test_the_committed_compose_files_are_generated_from_the_stack_files(monkeypatch, stack, committed, secure) -> None:  # type: ignore[no-untyped-def]
+def test_the_committed_compose_files_are_generated_from_the_stack_files(
+    monkeypatch, stack, committed, secure
+) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.chdir(REPO_ROOT)
     generated = export_compose(stack, secure=secure, output=committed)
     flag = " --secure" if secure else ""
     assert generated == (REPO_ROOT / committed).read_text(), (
-        f"{committed} is out of date: zendock export compose{flag} -f {stack} -o {committed}")
+        f"{committed} is out of date: zendock export compose{flag} -f {stack} -o {committed}"
+    )
 
 
 def test_export_writes_the_file_and_bad_stacks_exit_2(monkeypatch, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
@@ -66,7 +69,9 @@ def test_compose_and_the_stack_file_have_the_same_services() -> None:
     assert host_only == {"ros2_dds"}
     only_compose = set(COMPOSE["services"]) - set(STACK["services"])
     only_stack = set(STACK["services"]) - set(COMPOSE["services"]) - host_only
-    assert not only_compose and not only_stack, f"only in compose: {only_compose}; only in the stack: {only_stack}"
+    assert not only_compose and not only_stack, (
+        f"only in compose: {only_compose}; only in the stack: {only_stack}"
+    )
 
 
 def test_each_service_has_the_stacks_dependencies_variables_and_profiles() -> None:
@@ -129,7 +134,9 @@ def test_the_dockerfile_takes_its_base_as_an_argument_and_runs_as_a_user() -> No
 
 
 def test_the_shard_compose_file_runs_every_shard_once_without_a_network() -> None:
-    shards = yaml.safe_load((REPO_ROOT / "deploy" / "batch" / "trials-shards.compose.yml").read_text())["services"]
+    shards = yaml.safe_load((REPO_ROOT / "deploy" / "batch" / "trials-shards.compose.yml").read_text())[
+        "services"
+    ]
     numbers = sorted(int(service["environment"]["SHARD"]) for service in shards.values())
     command = " ".join(next(iter(shards.values()))["command"])
     count = int(re.search(r"\$\{ZENDOCK_SHARDS:-(\d+)\}", command).group(1))  # type: ignore[union-attr]

@@ -33,7 +33,7 @@ GLASS_ROOM = REPO_ROOT / "deploy/worlds/glass_room.yaml"
 
 
 def _rgb(hex_color: str) -> np.ndarray:
-    return np.array([int(hex_color[i:i + 2], 16) for i in (1, 3, 5)], dtype=np.float64) / 255.0
+    return np.array([int(hex_color[i : i + 2], 16) for i in (1, 3, 5)], dtype=np.float64) / 255.0
 
 
 def _pixels_near(image: np.ndarray, hex_color: str, tolerance: float = 0.08) -> int:
@@ -46,15 +46,29 @@ def test_the_picture_is_a_png_with_the_room_in_its_colours(tmp_path: Path) -> No
     driven = np.column_stack([-1.0 + 0.5 * np.cos(t / 5.0), 4.0 - 0.15 * t])
     echoes = [(x, 2.0, np.pi / 2, 0.6, 0.5) for x in np.linspace(-1.5, 0.5, 30)]
     plan = [(-1.0, 4.2), (-2.4, 3.0), (-2.4, 2.0), (-1.0, 1.53)]
-    path = plot_run(load_world(GLASS_ROOM), tmp_path / "run.png", driven=driven, driven_times_s=t, plans=[plan],
-                    sonar_echoes=echoes, battery=[(ti, 1.0 - 0.01 * ti) for ti in t], battery_set=(0.0, 1.0),
-                    events=[(5.0, "docking triggered")], title="test run", dpi=80)
+    path = plot_run(
+        load_world(GLASS_ROOM),
+        tmp_path / "run.png",
+        driven=driven,
+        driven_times_s=t,
+        plans=[plan],
+        sonar_echoes=echoes,
+        battery=[(ti, 1.0 - 0.01 * ti) for ti in t],
+        battery_set=(0.0, 1.0),
+        events=[(5.0, "docking triggered")],
+        title="test run",
+        dpi=80,
+    )
     image = mpimg.imread(path)
     height, width = image.shape[:2]
     assert width >= 800 and height >= 400
     assert _pixels_near(image, "#000000", 0.1) > 500  # walls
-    for name, color in (("glass", GLASS_COLOR), ("dock", DOCK_COLOR), ("staging", STAGING_COLOR),
-                        ("plan", PLAN_COLOR)):
+    for name, color in (
+        ("glass", GLASS_COLOR),
+        ("dock", DOCK_COLOR),
+        ("staging", STAGING_COLOR),
+        ("plan", PLAN_COLOR),
+    ):
         assert _pixels_near(image, color) > 20, f"no {name} colour {color} in the picture"
     distinct = np.unique((image[:, :, :3] * 31).astype(np.int32).reshape(-1, 3), axis=0)
     assert len(distinct) > 50  # the trajectory's colour ramp, the battery fill, the room
@@ -63,8 +77,15 @@ def test_the_picture_is_a_png_with_the_room_in_its_colours(tmp_path: Path) -> No
 def test_recoveries_are_marked_where_they_happened(tmp_path: Path) -> None:
     world = load_world(GLASS_ROOM)
     plain = mpimg.imread(plot_run(world, tmp_path / "plain.png", driven=[(-1.0, 4.0), (0.0, 3.0)], dpi=80))
-    marked = mpimg.imread(plot_run(world, tmp_path / "marked.png", driven=[(-1.0, 4.0), (0.0, 3.0)],
-                                   recoveries=[(0.0, 3.0), (1.0, 4.0)], dpi=80))
+    marked = mpimg.imread(
+        plot_run(
+            world,
+            tmp_path / "marked.png",
+            driven=[(-1.0, 4.0), (0.0, 3.0)],
+            recoveries=[(0.0, 3.0), (1.0, 4.0)],
+            dpi=80,
+        )
+    )
     assert _pixels_near(plain, RECOVERY_COLOR) == 0
     assert _pixels_near(marked, RECOVERY_COLOR) > 40
 
@@ -91,7 +112,9 @@ def test_an_echo_is_drawn_as_the_arc_at_its_range_across_the_cone() -> None:
     assert arc.shape == (9, 2)
     np.testing.assert_allclose(np.hypot(arc[:, 0] - 1.0, arc[:, 1] - 2.0), 0.8)  # all at the range
     bearings = np.arctan2(arc[:, 1] - 2.0, arc[:, 0] - 1.0)
-    np.testing.assert_allclose([bearings[0], bearings[4], bearings[-1]], [np.pi / 2 - 0.25, np.pi / 2, np.pi / 2 + 0.25])
+    np.testing.assert_allclose(
+        [bearings[0], bearings[4], bearings[-1]], [np.pi / 2 - 0.25, np.pi / 2, np.pi / 2 + 0.25]
+    )
     width_m = np.hypot(*(arc[-1] - arc[0]))
     assert abs(width_m - 2 * 0.8 * np.sin(0.25)) < 1e-9  # the cone's width at that range, not a point
 
@@ -114,7 +137,9 @@ def test_the_bold_plan_is_the_last_full_one_not_the_stub_at_the_goal() -> None:
 
 def test_the_battery_is_drawn_from_the_set_not_from_an_assumed_full_charge() -> None:
     battery = np.array([(0.0, 1.0), (1.0, 1.0), (2.0, 1.0), (2.1, 0.26), (3.0, 0.259), (4.0, 0.25)])
-    np.testing.assert_allclose(battery_from_set(battery, 1.5, 0.26), battery[3:])  # the 100 % on its way dropped
+    np.testing.assert_allclose(
+        battery_from_set(battery, 1.5, 0.26), battery[3:]
+    )  # the 100 % on its way dropped
     np.testing.assert_allclose(battery_from_set(battery, 3.5, 0.5), battery[5:])  # no reading shows the set
     assert len(battery_from_set(np.zeros((0, 2)), 1.0, 0.26)) == 0
 
@@ -139,8 +164,10 @@ def test_trial_histograms_draw_trials_that_took_all_but_the_same_time(tmp_path: 
     # finite bins for that range, and the campaign failed after its last trial.
     from deploy.trials.records import TrialResult
 
-    results = [TrialResult(0, "r0", (0.0, 0.0, 0.0), True, True, 6.900000000000002, 0.00045, 0.0018, 0, 2.0),
-               TrialResult(1, "r1", (0.0, 0.0, 0.0), True, True, 6.9, 0.00105, 0.0018, 0, 2.0)]
+    results = [
+        TrialResult(0, "r0", (0.0, 0.0, 0.0), True, True, 6.900000000000002, 0.00045, 0.0018, 0, 2.0),
+        TrialResult(1, "r1", (0.0, 0.0, 0.0), True, True, 6.9, 0.00105, 0.0018, 0, 2.0),
+    ]
     path = tmp_path / "histograms.png"
     plot_trial_histograms(results, path)
     assert mpimg.imread(path).shape[2] in (3, 4)

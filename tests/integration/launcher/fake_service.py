@@ -64,7 +64,9 @@ def main() -> int:
         if stop.wait(args.ready_after):
             session.close()
             return 0
-        token = session.liveliness().declare_token(node_token_key(os.environ.get("ZENDOCK_NAMESPACE", ""), args.token))
+        token = session.liveliness().declare_token(
+            node_token_key(os.environ.get("ZENDOCK_NAMESPACE", ""), args.token)
+        )
         record(args, "ready")
         print(f"{args.name} ready", flush=True)
     stopped = stop.wait(args.exit_after)

@@ -64,8 +64,11 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
     assert ps.returncode == 0, ps.stderr
     rows = json.loads(ps.stdout)
     assert [row["name"] for row in rows] == ["router", "talker", "helper"]
-    assert all(set(row) == {"name", "state", "pid", "restarts", "health", "exit_code", "started_at", "members",
-                            "namespace"} for row in rows)
+    assert all(
+        set(row)
+        == {"name", "state", "pid", "restarts", "health", "exit_code", "started_at", "members", "namespace"}
+        for row in rows
+    )
     assert all(row["exit_code"] is None and datetime.fromisoformat(row["started_at"]).tzinfo for row in rows)
     by_name = {row["name"]: row for row in rows}
     assert by_name["talker"]["health"] == "healthy" and by_name["router"]["health"] == "none"
@@ -73,10 +76,15 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
 
     kill = zendock(project, mark, "kill", "talker")
     assert kill.returncode == 0, kill.stderr
-    assert kill.stdout == f"talker: killed (SIGKILL to pid {by_name['talker']['pid']}; its restart policy applies)\n"
+    assert (
+        kill.stdout
+        == f"talker: killed (SIGKILL to pid {by_name['talker']['pid']}; its restart policy applies)\n"
+    )
 
     def talker_back() -> bool:
-        talker = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}["talker"]
+        talker = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}[
+            "talker"
+        ]
         return talker["restarts"] == 1 and talker["state"] == "running" and talker["health"] == "healthy"
 
     wait_for(talker_back, 20, "talker restarted and healthy")
@@ -88,7 +96,10 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
     for command in ("restart", "logs"):
         unknown = zendock(project, mark, command, "nosuch")
         assert unknown.returncode == 2, (command, unknown.stderr)
-        assert unknown.stderr == f"zendock {command}: no such service: nosuch (services: router, talker, helper)\n"
+        assert (
+            unknown.stderr
+            == f"zendock {command}: no such service: nosuch (services: router, talker, helper)\n"
+        )
 
     stop = zendock(project, mark, "stop", "helper")
     assert stop.returncode == 0 and "helper: stopped" in stop.stdout
@@ -100,7 +111,11 @@ def test_detached_stack_is_driven_from_the_same_directory(project: Path, mark: s
 
     down = zendock(project, mark, "down")
     assert down.returncode == 0, down.stderr
-    assert down.stdout.splitlines() == ["helper: stopped", "talker: stopped", "router: stopped"]  # the router last
+    assert down.stdout.splitlines() == [
+        "helper: stopped",
+        "talker: stopped",
+        "router: stopped",
+    ]  # the router last
     assert not marked_processes(mark)
     state_dir = project / ".zendock" / "clitest"
     assert not (state_dir / "state.json").exists() and not (state_dir / "supervisor.json").exists()
@@ -126,7 +141,8 @@ def test_foreground_up_prints_prefixed_output_and_stops_on_ctrl_c(project: Path,
         for line in proc.stdout:
             seen.append(line.rstrip("\n"))
             if any(s.startswith("helper") and "helper up" in s for s in seen) and any(
-                    s.startswith("router | zendock router: listening on") for s in seen):
+                s.startswith("router | zendock router: listening on") for s in seen
+            ):
                 break
         assert any(line.startswith("router | zendock router: listening on") for line in seen), seen
         assert "talker | talker ready" in seen
@@ -139,19 +155,25 @@ def test_foreground_up_prints_prefixed_output_and_stops_on_ctrl_c(project: Path,
     assert proc.returncode == 0, rest
     lines = rest.splitlines()
     assert "helper | [zendock] stopped" in lines and "router | [zendock] stopped" in lines
-    assert "router | [zendock] exited with code 0" in lines and "talker | [zendock] exited with code 0" in lines
+    assert (
+        "router | [zendock] exited with code 0" in lines and "talker | [zendock] exited with code 0" in lines
+    )
     assert lines.index("helper | [zendock] stopped") < lines.index("router | [zendock] stopped")
     assert not marked_processes(mark)
 
 
 def test_up_refuses_an_invalid_stack_with_the_key_path(tmp_path: Path, mark: str) -> None:
-    (tmp_path / "stack.yaml").write_text("services:\n  a: {command: [x], restart: sometimes}\n", encoding="utf-8")
+    (tmp_path / "stack.yaml").write_text(
+        "services:\n  a: {command: [x], restart: sometimes}\n", encoding="utf-8"
+    )
     result = zendock(tmp_path, mark, "up", "-d")
     assert result.returncode == 2
     assert "stack.yaml: services.a.restart: expected one of no, always" in result.stderr
 
 
-def test_up_wait_names_a_configuration_error_and_does_not_restart_it(write_stack, endpoint: str, mark: str) -> None:
+def test_up_wait_names_a_configuration_error_and_does_not_restart_it(
+    write_stack, endpoint: str, mark: str
+) -> None:
     """A service exiting 2 (a configuration error) stays down, whatever its policy, and ``up --wait`` says why."""
     project = write_stack(f"""\
         name: badworld
@@ -170,7 +192,9 @@ def test_up_wait_names_a_configuration_error_and_does_not_restart_it(write_stack
         assert up.returncode == 1, up.stderr + up.stdout
         assert "map: failed: exited with code 2 (a configuration error: not restarted)" in up.stdout
         reason = up.stderr.splitlines()[-1]
-        assert reason.startswith("zendock up: map failed: zendock map save: nope.yaml: cannot read world file"), reason
+        assert reason.startswith(
+            "zendock up: map failed: zendock map save: nope.yaml: cannot read world file"
+        ), reason
         rows = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}
         assert (rows["map"]["state"], rows["map"]["restarts"], rows["map"]["exit_code"]) == ("exited", 0, 2)
     finally:
@@ -191,11 +215,16 @@ def test_down_cleans_up_after_a_supervisor_that_died(project: Path, mark: str) -
         return {row["pid"] for row in rows if row.get("pid")}
 
     # the state the cleanup relies on must name every service's running process before the supervisor dies
-    wait_for(lambda: len(recorded_pids()) == 3 and recorded_pids() <= marked(), 15,
-             "state.json to record the three running services")
+    wait_for(
+        lambda: len(recorded_pids()) == 3 and recorded_pids() <= marked(),
+        15,
+        "state.json to record the three running services",
+    )
     supervisor_pid = json.loads((state_dir / "supervisor.json").read_text())["pid"]
     os.kill(supervisor_pid, signal.SIGKILL)
-    wait_for(lambda: not any(p.pid == supervisor_pid for p in marked_processes(mark)), 10, "the supervisor to die")
+    wait_for(
+        lambda: not any(p.pid == supervisor_pid for p in marked_processes(mark)), 10, "the supervisor to die"
+    )
     ps = zendock(project, mark, "ps", "--json")
     assert "supervisor is not running" in ps.stderr
     assert {row["name"] for row in json.loads(ps.stdout)} == {"router", "talker", "helper"}

@@ -39,7 +39,9 @@ def test_services_start_in_dependency_order(launch, tmp_path: Path) -> None:  # 
     assert statuses["healthy"].health == "healthy"
     assert statuses["step"].state == "exited" and statuses["step"].exit_code == 0
     assert statuses["started"].started_at > statuses["healthy"].started_at  # service_started: launched after
-    wait_for(lambda: {"late", "started"} <= {row[0] for row in read_records(record)}, 10, "late and started to run")
+    wait_for(
+        lambda: {"late", "started"} <= {row[0] for row in read_records(record)}, 10, "late and started to run"
+    )
     events = {(name, event): when for name, event, when, _ in read_records(record)}
     assert events[("late", "start")] > events[("healthy", "ready")]
     assert events[("late", "start")] > events[("step", "exit")]
@@ -135,8 +137,13 @@ def test_restart_policies(launch) -> None:  # type: ignore[no-untyped-def]
         """
     )
     statuses = stack.wait_until(
-        lambda st: all(st[n].restarts >= 3 for n in ("on_failure", "always", "unless_stopped"))
-        and all(st[n].state == "exited" for n in ("no_policy", "on_failure_ok", "on_failure_max", "misconfigured")),
+        lambda st: (
+            all(st[n].restarts >= 3 for n in ("on_failure", "always", "unless_stopped"))
+            and all(
+                st[n].state == "exited"
+                for n in ("no_policy", "on_failure_ok", "on_failure_max", "misconfigured")
+            )
+        ),
         30,
         "the policies to play out",
     )
@@ -151,7 +158,11 @@ def test_restart_policies(launch) -> None:  # type: ignore[no-untyped-def]
     stopped = stack.ps()
     restarts_when_stopped = {s.name: s.restarts for s in stopped}
     assert {s.name: s.state for s in stopped}["always"] == "stopped"
-    stack.wait_until(lambda st: st["unless_stopped"].restarts >= restarts_when_stopped["unless_stopped"] + 2, 10, "more restarts")
+    stack.wait_until(
+        lambda st: st["unless_stopped"].restarts >= restarts_when_stopped["unless_stopped"] + 2,
+        10,
+        "more restarts",
+    )
     assert stack.status("always").restarts == restarts_when_stopped["always"]
     assert stack.status("on_failure").state == "stopped"
 
@@ -175,7 +186,10 @@ def test_a_run_that_passed_its_healthcheck_restarts_without_growing_backoff(laun
         backoff=Backoff(initial_s=0.2, max_s=5.0, reset_after_s=60.0),
     )
     stack.wait_until(lambda st: all(s.restarts >= 4 for s in st.values()), 30, "four restarts of each")
-    delays = {name: re.findall(r"restarting in ([0-9.]+)s", "\n".join(stack.logs(name))) for name in ("healthy_then_dies", "never_healthy")}
+    delays = {
+        name: re.findall(r"restarting in ([0-9.]+)s", "\n".join(stack.logs(name)))
+        for name in ("healthy_then_dies", "never_healthy")
+    }
     assert delays["healthy_then_dies"][:4] == ["0.2"] * 4, delays
     assert delays["never_healthy"][:4] == ["0.2", "0.4", "0.8", "1.6"], delays
 
@@ -196,7 +210,11 @@ def test_kill_9_of_a_service_leads_to_a_restart(launch) -> None:  # type: ignore
     before = stack.wait_healthy(timeout_s=15)
     os.kill(before["worker"].pid, signal.SIGKILL)
     after = stack.wait_until(
-        lambda st: st["worker"].restarts == 1 and st["worker"].state == "running" and st["worker"].health == "healthy",
+        lambda st: (
+            st["worker"].restarts == 1
+            and st["worker"].state == "running"
+            and st["worker"].health == "healthy"
+        ),
         15,
         "the killed worker to be back and healthy",
     )
@@ -217,10 +235,16 @@ def test_stop_escalates_and_down_leaves_no_process(launch, mark: str) -> None:  
     )
 
     def grandchildren_up() -> bool:
-        return all(any(line.startswith("grandchild ") for line in stack.logs(name)) for name in ("polite", "escaped"))
+        return all(
+            any(line.startswith("grandchild ") for line in stack.logs(name)) for name in ("polite", "escaped")
+        )
 
     wait_for(grandchildren_up, 15, "the grandchildren")
-    wait_for(lambda: all(any(" up (pid" in line for line in stack.logs(n)) for n in ("deaf_to_int", "deaf")), 15, "handlers")
+    wait_for(
+        lambda: all(any(" up (pid" in line for line in stack.logs(n)) for n in ("deaf_to_int", "deaf")),
+        15,
+        "handlers",
+    )
     processes = marked_processes(mark)
     assert len(processes) >= 6
     started = time.monotonic()
@@ -286,10 +310,16 @@ def test_a_missing_program_counts_as_a_failure(launch) -> None:  # type: ignore[
     assert any("cannot start /nonexistent/zendock-ghost" in line for line in stack.logs("ghost"))
 
 
-def test_the_launcher_downs_even_when_the_body_raises(tmp_path: Path, mark: str, router_endpoint: str) -> None:
+def test_the_launcher_downs_even_when_the_body_raises(
+    tmp_path: Path, mark: str, router_endpoint: str
+) -> None:
     stack_file = tmp_path / "stack.yaml"
-    stack_file.write_text(f"services:\n  sleeper: {{command: {fake('--name', 'sleeper')}}}\n", encoding="utf-8")
-    launcher = Launcher(stack_file, project_dir=tmp_path, connect=[router_endpoint], environment={"ZENDOCK_TEST_MARK": mark})
+    stack_file.write_text(
+        f"services:\n  sleeper: {{command: {fake('--name', 'sleeper')}}}\n", encoding="utf-8"
+    )
+    launcher = Launcher(
+        stack_file, project_dir=tmp_path, connect=[router_endpoint], environment={"ZENDOCK_TEST_MARK": mark}
+    )
     try:
         with launcher:
             wait_for(lambda: marked_processes(mark), 10, "the sleeper")

@@ -20,7 +20,9 @@ def test_missing_damaged_or_impossible_files_are_ignored(tmp_path: Path) -> None
     damaged.write_text("{not json", encoding="utf-8")
     assert load_charge(damaged) is None
     impossible = tmp_path / "impossible.json"
-    impossible.write_text('{"percentage": 1.7, "drain_scale": 1, "charge_scale": 1, "frozen": false}', encoding="utf-8")
+    impossible.write_text(
+        '{"percentage": 1.7, "drain_scale": 1, "charge_scale": 1, "frozen": false}', encoding="utf-8"
+    )
     assert load_charge(impossible) is None
     partial = tmp_path / "partial.json"
     partial.write_text('{"percentage": 0.5}', encoding="utf-8")

@@ -48,14 +48,15 @@ def test_the_launcher_hands_a_service_only_parameters_its_contract_names(source:
     if source == "stack.yaml":
         stack = yaml.safe_load((REPO_ROOT / "deploy" / "stack.yaml").read_text())
     elif source == "trials":
-        stack = trials_stack(TrialOptions(world=WORLD),
-                             "tcp/127.0.0.1:1", ["r0"], tmp_path)
+        stack = trials_stack(TrialOptions(world=WORLD), "tcp/127.0.0.1:1", ["r0"], tmp_path)
     else:
         stack = fleet_stack(FleetOptions(world=WORLD), "tcp/127.0.0.1:1", WORLD, ["r0"], tmp_path)
     for service, names in _launched_parameters(stack).items():
         named = {flag.name for flag in CONTRACTS[service].flags}
         names = {re.sub(r"\$\{.*", "", n) for n in names}
-        assert names <= named, f"{service}: the launcher passes {sorted(names - named)}, its contract does not name them"
+        assert names <= named, (
+            f"{service}: the launcher passes {sorted(names - named)}, its contract does not name them"
+        )
 
 
 def test_a_node_may_declare_what_its_contract_names_and_nothing_else() -> None:

@@ -49,14 +49,17 @@ def _nothing_starts(monkeypatch: pytest.MonkeyPatch) -> None:
         (["nan", "1", "0"], "--start (nan, 1.0) is not finite"),
     ],
 )
-def test_demo_checks_the_start_pose_against_the_world(start: list[str], expected: str,
-                                                       capsys: pytest.CaptureFixture[str]) -> None:
+def test_demo_checks_the_start_pose_against_the_world(
+    start: list[str], expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert _exit_code(["demo", "--start", *start]) == 2
     line = _one_error_line(capsys)
     assert line.startswith("zendock demo: ") and expected in line and "seed_room.yaml" in line
 
 
-def test_demo_rejects_a_misspelt_world_key_before_starting(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_demo_rejects_a_misspelt_world_key_before_starting(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     world = tmp_path / "room.yaml"
     world.write_text("name: room\nbounds: [0, 0, 4, 3]\nwals: [[[1, 0], [1, 1]]]\n")
     assert _exit_code(["demo", "--world", str(world)]) == 2
@@ -75,8 +78,9 @@ def test_demo_rejects_a_misspelt_world_key_before_starting(tmp_path: Path, capsy
         (["fleet", "--resume-at", "most"], "argument --resume-at: must be a fraction"),
     ],
 )
-def test_bad_values_are_named_for_users_not_by_parser_functions(argv: list[str], expected: str,
-                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_bad_values_are_named_for_users_not_by_parser_functions(
+    argv: list[str], expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert _exit_code(argv) == 2
     line = _one_error_line(capsys)
     assert expected in line and "_count" not in line and "_rtf" not in line and "invalid" not in line
@@ -87,8 +91,9 @@ def test_version_comes_from_the_package_metadata(capsys: pytest.CaptureFixture[s
     assert capsys.readouterr().out == f"zendock {importlib.metadata.version('zendock')}\n"
 
 
-def test_ps_outside_a_project_says_there_is_no_stack_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_ps_outside_a_project_says_there_is_no_stack_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ZENDOCK_STACK_FILE", raising=False)
     assert _exit_code(["ps"]) == 2
@@ -97,8 +102,9 @@ def test_ps_outside_a_project_says_there_is_no_stack_file(tmp_path: Path, monkey
     assert _one_error_line(capsys) == "zendock ps: nope.yaml: no such stack file"
 
 
-def test_logs_of_a_service_the_stack_does_not_have(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                                   capsys: pytest.CaptureFixture[str]) -> None:
+def test_logs_of_a_service_the_stack_does_not_have(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ZENDOCK_STACK_FILE", raising=False)
     (tmp_path / "stack.yaml").write_text("name: t\nservices:\n  a: {command: [x]}\n  b: {command: [y]}\n")
@@ -113,8 +119,10 @@ def test_kill_says_what_it_did() -> None:
     from deploy.launcher.status import ServiceStatus
 
     running = ServiceStatus("battery", "running", 4242, 0, "healthy")
-    assert _kill_line("battery", running, True, signal.SIGKILL) == \
-        "battery: killed (SIGKILL to pid 4242; its restart policy applies)"
+    assert (
+        _kill_line("battery", running, True, signal.SIGKILL)
+        == "battery: killed (SIGKILL to pid 4242; its restart policy applies)"
+    )
     assert _kill_line("battery", running, True, signal.SIGINT) == "battery: sent SIGINT to pid 4242"
     exited = ServiceStatus("map", "exited", None, 0, "none")
     assert _kill_line("map", exited, False, signal.SIGKILL) == "map: not running (exited), no signal sent"

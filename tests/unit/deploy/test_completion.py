@@ -44,8 +44,10 @@ def test_the_tree_has_subcommands_options_and_choices() -> None:
 
 def _bash_complete(script: str, *words: str) -> list[str]:
     words_text = " ".join(f"'{w}'" for w in words)
-    probe = (f"{script}\nCOMP_WORDS=({words_text}); COMP_CWORD={len(words) - 1}; _demo; "
-             'printf "%s\\n" "${COMPREPLY[@]}"')
+    probe = (
+        f"{script}\nCOMP_WORDS=({words_text}); COMP_CWORD={len(words) - 1}; _demo; "
+        'printf "%s\\n" "${COMPREPLY[@]}"'
+    )
     result = subprocess.run(["bash", "-c", probe], capture_output=True, text=True, timeout=30, check=True)
     return result.stdout.split()
 
@@ -66,21 +68,29 @@ def test_bash_completes_subcommands_options_and_choices() -> None:
 @pytest.mark.skipif(shutil.which("zsh") is None, reason="zsh is not installed")
 def test_zsh_completes_with_descriptions() -> None:
     script = zsh_script(command_tree(_demo_parser()), "demo")
-    stubs = ("compdef() { :; }\n"
-             "_describe() { local arr=$4; print -rl -- ${(P)arr}; }\n"
-             "compadd() { shift; print -rl -- $@; }\n"
-             "_files() { print -r -- '<files>'; }\n")
+    stubs = (
+        "compdef() { :; }\n"
+        "_describe() { local arr=$4; print -rl -- ${(P)arr}; }\n"
+        "compadd() { shift; print -rl -- $@; }\n"
+        "_files() { print -r -- '<files>'; }\n"
+    )
 
     def complete(*words: str) -> list[str]:
         quoted = " ".join(f"'{w}'" for w in words)
         probe = f"{stubs}{script}\nwords=({quoted}); CURRENT={len(words)}; _demo"
-        result = subprocess.run(["zsh", "-f", "-c", probe], capture_output=True, text=True, timeout=30, check=True)
+        result = subprocess.run(
+            ["zsh", "-f", "-c", probe], capture_output=True, text=True, timeout=30, check=True
+        )
         return result.stdout.splitlines()
 
     assert complete("demo", "") == ["keys:keys: on the bus", "completion:a script", "hidden"]
-    assert complete("demo", "keys", "echo", "--st") == ["-h:show this help message and exit",
-                                                        "--help:show this help message and exit",
-                                                        "--times:print N (default 3)", "--style", "--once"]
+    assert complete("demo", "keys", "echo", "--st") == [
+        "-h:show this help message and exit",
+        "--help:show this help message and exit",
+        "--times:print N (default 3)",
+        "--style",
+        "--once",
+    ]
     assert complete("demo", "keys", "echo", "--style", "") == ["yaml", "csv"]
     assert complete("demo", "keys", "echo", "--times", "") == ["<files>"]
 

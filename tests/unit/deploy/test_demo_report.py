@@ -14,9 +14,20 @@ from deploy.demo import DemoReport
 
 
 def _report(**changes: object) -> DemoReport:
-    report = DemoReport(docked=True, charging=True, controller="graceful", world="seed_room", dock_time_s=41.23,
-                        final_lateral_error_m=0.004, final_yaw_error_rad=0.01, collisions=0, path_length_m=3.5,
-                        lower_bound_s=30.0, wall_s=50.0, run_dir="runs/x")
+    report = DemoReport(
+        docked=True,
+        charging=True,
+        controller="graceful",
+        world="seed_room",
+        dock_time_s=41.23,
+        final_lateral_error_m=0.004,
+        final_yaw_error_rad=0.01,
+        collisions=0,
+        path_length_m=3.5,
+        lower_bound_s=30.0,
+        wall_s=50.0,
+        run_dir="runs/x",
+    )
     for name, value in changes.items():
         setattr(report, name, value)
     return report
@@ -39,8 +50,13 @@ def test_counts_are_integers_and_an_empty_reason_is_left_out() -> None:
 
 
 def test_missing_measures_read_n_a_with_their_reason() -> None:
-    report = _report(lower_bound_s=math.nan, lower_bound_s_reason="no path to the dock",
-                     dock_time_s=math.nan, final_lateral_error_m=math.nan, final_yaw_error_rad=math.nan)
+    report = _report(
+        lower_bound_s=math.nan,
+        lower_bound_s_reason="no path to the dock",
+        dock_time_s=math.nan,
+        final_lateral_error_m=math.nan,
+        final_yaw_error_rad=math.nan,
+    )
     written = json.loads(strict_json.dumps(report.as_dict()))
     assert written["false_glass_cells"] is None and written["glass_coverage"] is None
     assert written["lower_bound_s_reason"] == "no path to the dock"

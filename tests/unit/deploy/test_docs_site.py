@@ -12,7 +12,8 @@ from deploy.docs_site import MEASUREMENTS_PAGE, cli_reference, load_measurements
 def test_committed_measurements_page_is_current():
     rendered = measurements_page(load_measurements())
     assert MEASUREMENTS_PAGE.read_text(encoding="utf-8") == rendered, (
-        "docs/measurements.md is stale: run python -m deploy.docs_site")
+        "docs/measurements.md is stale: run python -m deploy.docs_site"
+    )
 
 
 def test_every_measurement_names_its_command_and_commit():

@@ -11,8 +11,17 @@ from shared.world import World
 
 
 def _world(glass: list) -> World:  # type: ignore[type-arg]
-    return World.model_validate({"name": "w", "bounds": [0.0, 0.0, 4.0, 3.0], "walls": [], "glass": glass,
-                                 "boxes": [], "docks": [], "robot": {"start": [0.5, 0.5, 0.0]}})
+    return World.model_validate(
+        {
+            "name": "w",
+            "bounds": [0.0, 0.0, 4.0, 3.0],
+            "walls": [],
+            "glass": glass,
+            "boxes": [],
+            "docks": [],
+            "robot": {"start": [0.5, 0.5, 0.0]},
+        }
+    )
 
 
 def test_marks_on_the_pane_are_true_and_marks_away_from_it_false() -> None:

@@ -14,9 +14,13 @@ TOKENS = [
     node_token_key("robot1", "battery"),
     endpoint_token_key("pub", "robot1", "battery", "sensor_msgs/msg/BatteryState", "robot1/battery_status"),
     endpoint_token_key("sub", "robot1", "battery", "nav_msgs/msg/Odometry", "robot1/odom"),
-    endpoint_token_key("srv", "robot1", "battery", "zendock_msgs/srv/SetBatteryState", "robot1/battery/set_state"),
+    endpoint_token_key(
+        "srv", "robot1", "battery", "zendock_msgs/srv/SetBatteryState", "robot1/battery/set_state"
+    ),
     endpoint_token_key("sub", "robot1", "docking", "sensor_msgs/msg/BatteryState", "robot1/battery_status"),
-    endpoint_token_key("act", "robot1", "docking", "opennav_docking_msgs/action/DockRobot", "robot1/dock_robot"),
+    endpoint_token_key(
+        "act", "robot1", "docking", "opennav_docking_msgs/action/DockRobot", "robot1/dock_robot"
+    ),
 ]
 
 
@@ -35,15 +39,19 @@ def test_nodes_are_read_from_the_keys_graph_by_node() -> None:
         "  Actions:",
     ]
     assert nodes["/robot1/docking"].to_json()["actions"] == [
-        {"key": "robot1/dock_robot", "type": "opennav_docking_msgs/action/DockRobot"}]
+        {"key": "robot1/dock_robot", "type": "opennav_docking_msgs/action/DockRobot"}
+    ]
 
 
-@pytest.mark.parametrize(("typed", "namespace", "resolved"), [
-    ("/robot1/battery", "", "/robot1/battery"),
-    ("/robot1/battery", "robot2", "/robot1/battery"),  # absolute, as nodes list prints it
-    ("battery", "robot1", "/robot1/battery"),
-    ("battery", "", "/battery"),
-])
+@pytest.mark.parametrize(
+    ("typed", "namespace", "resolved"),
+    [
+        ("/robot1/battery", "", "/robot1/battery"),
+        ("/robot1/battery", "robot2", "/robot1/battery"),  # absolute, as nodes list prints it
+        ("battery", "robot1", "/robot1/battery"),
+        ("battery", "", "/battery"),
+    ],
+)
 def test_node_names_as_typed(typed: str, namespace: str, resolved: str) -> None:
     assert resolve_node(typed, namespace) == resolved
 
@@ -62,8 +70,10 @@ def test_values_parse_as_yaml_like_start_up_overrides() -> None:
 
 
 def test_the_list_table() -> None:
-    rows = [ParameterDescriptor(name="capacity_ah", value_json="2.0"),
-            ParameterDescriptor(name="drain_scale", value_json="1.0", settable=True, applies="at once")]
+    rows = [
+        ParameterDescriptor(name="capacity_ah", value_json="2.0"),
+        ParameterDescriptor(name="drain_scale", value_json="1.0", settable=True, applies="at once"),
+    ]
     assert table_lines(rows) == [
         "NAME         VALUE  SETTABLE",
         "capacity_ah  2.0    no",

@@ -47,17 +47,33 @@ def test_the_observer_takes_the_first_reading_of_the_mating_that_started_chargin
             put(topics.BATTERY_STATUS, BatteryState(header=header(0.0), percentage=0.2))
             for i in range(12):  # 0.1 m/s along x
                 t = 0.05 * i
-                put(topics.GROUND_TRUTH_POSE, PoseStamped(header(t), Pose.from_pose2d(Pose2D(0.1 * t, 0.0, 0.0))))
+                put(
+                    topics.GROUND_TRUTH_POSE,
+                    PoseStamped(header(t), Pose.from_pose2d(Pose2D(0.1 * t, 0.0, 0.0))),
+                )
             # mated for a moment, parted, then mated for good from t = 0.4
-            for t, mated in ((0.2, True), (0.25, False), (0.3, False), (0.4, True), (0.45, True), (0.5, True)):
+            for t, mated in (
+                (0.2, True),
+                (0.25, False),
+                (0.3, False),
+                (0.4, True),
+                (0.45, True),
+                (0.5, True),
+            ):
                 put(topics.DOCK_CONTACT, DockContact(header=header(t), dock_id="home", mated=mated))
             wait_until(lambda: len(observer.snapshot().driven) == 12, 5.0, lambda: observer.snapshot().driven)
-            charging = BatteryState(header=header(0.5), percentage=0.2,
-                                    power_supply_status=BatteryState.POWER_SUPPLY_STATUS_CHARGING)
+            charging = BatteryState(
+                header=header(0.5),
+                percentage=0.2,
+                power_supply_status=BatteryState.POWER_SUPPLY_STATUS_CHARGING,
+            )
             put(topics.BATTERY_STATUS, charging)
             # each key has its own callback thread: the contacts may still be on their way after the battery
-            wait_until(lambda: observer.snapshot().mated_s == pytest.approx(0.4), 5.0,
-                       lambda: f"mating began at {observer.snapshot().mated_s}")
+            wait_until(
+                lambda: observer.snapshot().mated_s == pytest.approx(0.4),
+                5.0,
+                lambda: f"mating began at {observer.snapshot().mated_s}",
+            )
             record = observer.snapshot()
             assert record.arrival_speed_mps == pytest.approx(0.1)
         finally:

@@ -36,13 +36,17 @@ def test_each_new_recovery_is_marked_where_the_robot_stood() -> None:
             feedback_key = topic_key(NS, action_key(topics.NAVIGATE_TO_POSE, "feedback"))
 
             def truth(t: float, x: float, y: float) -> None:
-                msg = PoseStamped(Header(Time.from_sec(t), topics.MAP_FRAME), Pose.from_pose2d(Pose2D(x, y, 0.0)))
+                msg = PoseStamped(
+                    Header(Time.from_sec(t), topics.MAP_FRAME), Pose.from_pose2d(Pose2D(x, y, 0.0))
+                )
                 session.put(topic_key(NS, topics.GROUND_TRUTH_POSE), msg.encode())
 
             def feedback(goal: UUID, t: float, recoveries: int) -> None:
                 pose = PoseStamped(Header(Time.from_sec(t), topics.MAP_FRAME), Pose.from_pose2d(Pose2D()))
                 msg = NAVIGATE_TO_POSE.feedback_message(
-                    goal_id=goal, feedback=NavigateToPoseFeedback(current_pose=pose, number_of_recoveries=recoveries))
+                    goal_id=goal,
+                    feedback=NavigateToPoseFeedback(current_pose=pose, number_of_recoveries=recoveries),
+                )
                 session.put(feedback_key, msg.encode())
 
             first, second = UUID.random(), UUID.random()
@@ -56,7 +60,11 @@ def test_each_new_recovery_is_marked_where_the_robot_stood() -> None:
             feedback(first, 2.0, 2)
             feedback(second, 2.0, 1)  # a new goal counts from zero again
             session.put(feedback_key, b"\x00not msgpack")  # ignored, never fatal
-            assert _wait(lambda: len(observer.snapshot().recovery_points) == 3), observer.snapshot().recovery_points
-            np.testing.assert_allclose(observer.snapshot().recovery_points, [(1.0, 2.0), (3.0, 2.5), (3.0, 2.5)])
+            assert _wait(lambda: len(observer.snapshot().recovery_points) == 3), (
+                observer.snapshot().recovery_points
+            )
+            np.testing.assert_allclose(
+                observer.snapshot().recovery_points, [(1.0, 2.0), (3.0, 2.5), (3.0, 2.5)]
+            )
         finally:
             observer.close()

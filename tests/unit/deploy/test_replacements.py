@@ -19,8 +19,13 @@ WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
 
 def _trials_stack(tmp_path: Path, **options) -> object:  # type: ignore[no-untyped-def]
     path = tmp_path / "stack.yaml"
-    path.write_text(yaml.safe_dump(trials_stack(TrialOptions(world=WORLD, detector="synthetic", **options),
-                                                 "tcp/127.0.0.1:1", ["r0", "r1"])))
+    path.write_text(
+        yaml.safe_dump(
+            trials_stack(
+                TrialOptions(world=WORLD, detector="synthetic", **options), "tcp/127.0.0.1:1", ["r0", "r1"]
+            )
+        )
+    )
     return load_stack(path, env={}, project_dir=tmp_path)
 
 
@@ -30,14 +35,23 @@ def test_every_robots_copy_runs_the_command_with_zendocks_flags_and_its_own_name
     for robot in ("r0", "r1"):
         spec = stack.services[f"docking_{robot}"]
         assert spec.command[:4] == ["python", "my_docking.py", "--robot", robot]
-        assert spec.command[4:] == ["-p", "use_sim_time=true", "-p", f"dock_database={WORLD}", "-p", "controller=graceful"]
+        assert spec.command[4:] == [
+            "-p",
+            "use_sim_time=true",
+            "-p",
+            f"dock_database={WORLD}",
+            "-p",
+            "controller=graceful",
+        ]
         assert spec.healthcheck is not None and spec.healthcheck.liveliness == "docking"
     assert stack.services["battery_r0"].command[:3] == ["python", "-m", "services.battery"]
 
 
 def test_a_replaced_service_leaves_the_composed_group_and_runs_as_its_own_process(tmp_path: Path) -> None:
     replacement = parse_replacement("battery=./my_battery")
-    stack = apply_replacements(_trials_stack(tmp_path, compose="light", replacements=(replacement,)), [replacement])  # type: ignore[arg-type]
+    stack = apply_replacements(
+        _trials_stack(tmp_path, compose="light", replacements=(replacement,)), [replacement]
+    )  # type: ignore[arg-type]
     group = stack.services["robot_r0"].command
     assert group[:3] == ["zendock", "container", "pose"] and "battery" not in group
     assert stack.services["battery_r0"].command[0] == "./my_battery"
@@ -51,20 +65,25 @@ def test_replacing_inside_a_container_or_a_missing_service_is_one_clear_error(tm
         apply_replacements(_trials_stack(tmp_path), [parse_replacement("viz=x")])  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("text", "problem"), [
-    ("docking", "expected NAME=COMMAND"),
-    ("=python x.py", "expected NAME=COMMAND"),
-    ("router=x", "no replaceable service 'router'"),
-    ("docking=", "the command is empty"),
-    ("docking=python 'x.py", "does not parse as shell words"),
-])
+@pytest.mark.parametrize(
+    ("text", "problem"),
+    [
+        ("docking", "expected NAME=COMMAND"),
+        ("=python x.py", "expected NAME=COMMAND"),
+        ("router=x", "no replaceable service 'router'"),
+        ("docking=", "the command is empty"),
+        ("docking=python 'x.py", "does not parse as shell words"),
+    ],
+)
 def test_a_malformed_option_names_what_is_wrong(text: str, problem: str) -> None:
     with pytest.raises(ValueError, match=problem):
         parse_replacement(text)
 
 
 def test_reports_name_each_replacement_and_its_command() -> None:
-    assert replacements_report([parse_replacement("docking=python my docking.py")]) == {"docking": "python my docking.py"}
+    assert replacements_report([parse_replacement("docking=python my docking.py")]) == {
+        "docking": "python my docking.py"
+    }
     assert replacements_report([]) == {}
 
 
@@ -78,4 +97,6 @@ def test_a_file_named_relative_to_where_the_user_is_becomes_absolute(tmp_path: P
 
 def test_the_same_service_twice_is_one_clear_error(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="--service docking is given twice"):
-        apply_replacements(_trials_stack(tmp_path), [parse_replacement("docking=a"), parse_replacement("docking=b")])  # type: ignore[arg-type]
+        apply_replacements(
+            _trials_stack(tmp_path), [parse_replacement("docking=a"), parse_replacement("docking=b")]
+        )  # type: ignore[arg-type]

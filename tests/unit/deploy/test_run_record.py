@@ -25,12 +25,27 @@ def test_a_track_never_put_down_is_kept_whole_even_with_lost_samples() -> None:
 
 
 def test_the_time_to_dock_is_split_by_the_docking_state_it_was_spent_in() -> None:
-    record = RunRecord(trigger_s=10.0, charging_s=30.0, phases=[
-        (4.0, "IDLE"), (10.5, "NAV_TO_STAGING_POSE"), (20.0, "INITIAL_PERCEPTION"), (21.0, "CONTROLLING"),
-        (25.0, "RETRY"), (26.0, "CONTROLLING"), (31.0, "IDLE")])
+    record = RunRecord(
+        trigger_s=10.0,
+        charging_s=30.0,
+        phases=[
+            (4.0, "IDLE"),
+            (10.5, "NAV_TO_STAGING_POSE"),
+            (20.0, "INITIAL_PERCEPTION"),
+            (21.0, "CONTROLLING"),
+            (25.0, "RETRY"),
+            (26.0, "CONTROLLING"),
+            (31.0, "IDLE"),
+        ],
+    )
     phases = record.phase_durations()
-    assert phases == {"TRIGGER": 0.5, "NAV_TO_STAGING_POSE": 9.5, "INITIAL_PERCEPTION": 1.0, "CONTROLLING": 8.0,
-                      "RETRY": 1.0}
+    assert phases == {
+        "TRIGGER": 0.5,
+        "NAV_TO_STAGING_POSE": 9.5,
+        "INITIAL_PERCEPTION": 1.0,
+        "CONTROLLING": 8.0,
+        "RETRY": 1.0,
+    }
     assert sum(phases.values()) == 20.0
 
 
@@ -39,5 +54,7 @@ def test_a_run_that_never_charged_has_no_phase_split() -> None:
 
 
 def test_a_state_the_trigger_found_under_way_counts_from_the_trigger() -> None:
-    record = RunRecord(trigger_s=10.0, charging_s=14.0, phases=[(9.0, "CONTROLLING"), (12.0, "WAIT_FOR_CHARGE")])
+    record = RunRecord(
+        trigger_s=10.0, charging_s=14.0, phases=[(9.0, "CONTROLLING"), (12.0, "WAIT_FOR_CHARGE")]
+    )
     assert record.phase_durations() == {"CONTROLLING": 2.0, "WAIT_FOR_CHARGE": 2.0}

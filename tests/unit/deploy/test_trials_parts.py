@@ -65,7 +65,9 @@ def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:
             assert spec["namespace"] == robot and spec["healthcheck"]["liveliness"] == service
     assert 'robots=["r0", "r1"]' in stack["services"]["simulator"]["command"]
     assert "detection.source=aruco" in stack["services"]["simulator"]["command"]
-    synthetic = trials_stack(TrialOptions(world=WORLDS[0], workers=2, detector="synthetic"), "tcp/127.0.0.1:7999", ["r0"])
+    synthetic = trials_stack(
+        TrialOptions(world=WORLDS[0], workers=2, detector="synthetic"), "tcp/127.0.0.1:7999", ["r0"]
+    )
     assert "perception_r0" not in synthetic["services"]
     assert "detection.source=synthetic" in synthetic["services"]["simulator"]["command"]
 
@@ -81,29 +83,59 @@ def test_a_composed_campaign_runs_each_robots_services_in_one_container() -> Non
     assert command[:2] == ["zendock", "container"]
     members = [command[2]] + [command[i + 1] for i, word in enumerate(command) if word == "+"]
     assert members == ["battery", "pose", "planner", "perception", "docking"]
-    light = trials_stack(TrialOptions(world=WORLDS[0], compose="light"), "tcp/127.0.0.1:7999", ["r0"])["services"]
-    assert {"robot_r0", "planner_r0", "perception_r0", "docking_r0"} <= set(light) and "battery_r0" not in light
-    assert light["robot_r0"]["command"][2:3] == ["battery"] and light["robot_r0"]["healthcheck"]["liveliness"] == "pose"
+    light = trials_stack(TrialOptions(world=WORLDS[0], compose="light"), "tcp/127.0.0.1:7999", ["r0"])[
+        "services"
+    ]
+    assert {"robot_r0", "planner_r0", "perception_r0", "docking_r0"} <= set(
+        light
+    ) and "battery_r0" not in light
+    assert (
+        light["robot_r0"]["command"][2:3] == ["battery"]
+        and light["robot_r0"]["healthcheck"]["liveliness"] == "pose"
+    )
 
 
 def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: int = 0) -> TrialResult:
-    return TrialResult(i, "r0", (0.0, 0.0, 0.0), docked, docked, time_s, lateral_m, 0.01, collisions, 1.0, 4.0)
+    return TrialResult(
+        i, "r0", (0.0, 0.0, 0.0), docked, docked, time_s, lateral_m, 0.01, collisions, 1.0, 4.0
+    )
 
 
 def test_summary_counts_only_docked_runs_in_the_medians() -> None:
-    results = [_result(0, True, 10.0, 0.001), _result(1, True, 20.0, 0.003), _result(2, False, math.nan, math.nan, 1)]
+    results = [
+        _result(0, True, 10.0, 0.001),
+        _result(1, True, 20.0, 0.003),
+        _result(2, False, math.nan, math.nan, 1),
+    ]
     results[0].arrival_speed_mps, results[1].arrival_speed_mps = 0.08, 0.12
     results[2].arrival_speed_mps = 0.3  # never mated for good: not an arrival
-    summary = summarise(results, wall_s=5.0, options=TrialOptions(world=WORLDS[0]), world=load_world(WORLDS[0]))
+    summary = summarise(
+        results, wall_s=5.0, options=TrialOptions(world=WORLDS[0]), world=load_world(WORLDS[0])
+    )
     assert (summary.n, summary.successes, summary.collisions) == (3, 2, 1)
     assert summary.success_rate == pytest.approx(2 / 3)
     assert summary.median_dock_time_s == pytest.approx(15.0)
     assert summary.p95_lateral_error_m == pytest.approx(0.003)
     assert set(summary.headline()) == {
-        "n", "successes", "success_rate", "median_dock_time_s", "median_lower_bound_s", "median_time_ratio",
-        "median_lateral_error_m", "p95_lateral_error_m", "median_yaw_error_rad", "median_arrival_speed_mps",
-        "max_arrival_speed_mps", "collisions", "wall_s", "sim_s", "achieved_rtf", "median_false_glass_cells",
-        "p95_false_glass_cells", "median_glass_coverage"}
+        "n",
+        "successes",
+        "success_rate",
+        "median_dock_time_s",
+        "median_lower_bound_s",
+        "median_time_ratio",
+        "median_lateral_error_m",
+        "p95_lateral_error_m",
+        "median_yaw_error_rad",
+        "median_arrival_speed_mps",
+        "max_arrival_speed_mps",
+        "collisions",
+        "wall_s",
+        "sim_s",
+        "achieved_rtf",
+        "median_false_glass_cells",
+        "p95_false_glass_cells",
+        "median_glass_coverage",
+    }
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
     assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.10, 0.12))
 
@@ -133,7 +165,9 @@ def test_a_campaign_combines_every_trial_not_the_medians() -> None:
     assert both.wall_s == pytest.approx(7.0) and both.world == "a, b"
     assert both.peak_rss_mb == {"planner_r0": 75.0, "simulator": 60.0}
     assert both.chaos["kills"] == 2 and both.chaos["median_recovery_s"] == pytest.approx(2.0)
-    assert both.chaos["p95_recovery_s"] == pytest.approx(3.0) and both.chaos["max_recovery_s"] == pytest.approx(3.0)
+    assert both.chaos["p95_recovery_s"] == pytest.approx(3.0) and both.chaos[
+        "max_recovery_s"
+    ] == pytest.approx(3.0)
 
 
 def test_starts_in_a_closed_pocket_are_skipped_and_the_rest_keep_their_order() -> None:
@@ -150,17 +184,40 @@ def test_starts_in_a_closed_pocket_are_skipped_and_the_rest_keep_their_order() -
 def test_chaos_kills_robot_services_or_a_composed_robots_one_process() -> None:
     from deploy.trials.chaos import ChaosMonkey, chaos_victims
 
-    alone = [("router", []), ("simulator", []), ("map", []), ("battery_r0", []), ("planner_r0", []),
-             ("perception_r0", []), ("docking_r1", [])]
-    assert chaos_victims(alone, ["r0", "r1"], ChaosMonkey.VICTIMS) == ["battery_r0", "planner_r0", "docking_r1"]
-    composed = [("simulator", []), ("robot_r0", ["battery", "pose", "planner", "docking"]), ("perception_r0", []),
-                ("robot_r1", ["battery", "pose"]), ("planner_r1", [])]
-    assert chaos_victims(composed, ["r0", "r1"], ChaosMonkey.VICTIMS) == ["robot_r0", "robot_r1", "planner_r1"]
+    alone = [
+        ("router", []),
+        ("simulator", []),
+        ("map", []),
+        ("battery_r0", []),
+        ("planner_r0", []),
+        ("perception_r0", []),
+        ("docking_r1", []),
+    ]
+    assert chaos_victims(alone, ["r0", "r1"], ChaosMonkey.VICTIMS) == [
+        "battery_r0",
+        "planner_r0",
+        "docking_r1",
+    ]
+    composed = [
+        ("simulator", []),
+        ("robot_r0", ["battery", "pose", "planner", "docking"]),
+        ("perception_r0", []),
+        ("robot_r1", ["battery", "pose"]),
+        ("planner_r1", []),
+    ]
+    assert chaos_victims(composed, ["r0", "r1"], ChaosMonkey.VICTIMS) == [
+        "robot_r0",
+        "robot_r1",
+        "planner_r1",
+    ]
 
 
 def test_the_summary_gives_each_docking_states_median_with_a_missing_state_as_zero() -> None:
     from deploy.trials.summary import median_phases
 
-    trials = [{"NAV_TO_STAGING_POSE": 8.0, "CONTROLLING": 3.0}, {"NAV_TO_STAGING_POSE": 10.0, "CONTROLLING": 5.0,
-              "RETRY": 2.0}, {"NAV_TO_STAGING_POSE": 12.0, "CONTROLLING": 4.0}]
+    trials = [
+        {"NAV_TO_STAGING_POSE": 8.0, "CONTROLLING": 3.0},
+        {"NAV_TO_STAGING_POSE": 10.0, "CONTROLLING": 5.0, "RETRY": 2.0},
+        {"NAV_TO_STAGING_POSE": 12.0, "CONTROLLING": 4.0},
+    ]
     assert median_phases(trials) == {"NAV_TO_STAGING_POSE": 10.0, "CONTROLLING": 4.0, "RETRY": 0.0}

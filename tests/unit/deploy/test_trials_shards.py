@@ -40,15 +40,22 @@ def _campaign(n: int, seed: int = 1) -> list[TrialResult]:
     trials = []
     for i in range(n):
         docked = rng.random() > 0.1
-        trial = TrialResult(index=i, robot=f"r{i % 2}", start=(rng.uniform(0, 4), rng.uniform(0, 4), rng.uniform(-3, 3)),
-                            docked=docked, charging=docked,
-                            dock_time_s=rng.uniform(6, 30) if docked else math.nan,
-                            lateral_error_m=rng.uniform(0, 0.004) if docked else math.nan,
-                            yaw_error_rad=rng.uniform(0, 0.01) if docked else math.nan,
-                            collisions=int(rng.random() > 0.9), path_length_m=rng.uniform(1, 8),
-                            lower_bound_s=rng.uniform(4, 20) if rng.random() > 0.1 else math.nan,
-                            wall_s=rng.uniform(1, 5), sim_s=rng.uniform(5, 40),
-                            arrival_speed_mps=rng.uniform(0.07, 0.1) if docked else math.nan)
+        trial = TrialResult(
+            index=i,
+            robot=f"r{i % 2}",
+            start=(rng.uniform(0, 4), rng.uniform(0, 4), rng.uniform(-3, 3)),
+            docked=docked,
+            charging=docked,
+            dock_time_s=rng.uniform(6, 30) if docked else math.nan,
+            lateral_error_m=rng.uniform(0, 0.004) if docked else math.nan,
+            yaw_error_rad=rng.uniform(0, 0.01) if docked else math.nan,
+            collisions=int(rng.random() > 0.9),
+            path_length_m=rng.uniform(1, 8),
+            lower_bound_s=rng.uniform(4, 20) if rng.random() > 0.1 else math.nan,
+            wall_s=rng.uniform(1, 5),
+            sim_s=rng.uniform(5, 40),
+            arrival_speed_mps=rng.uniform(0.07, 0.1) if docked else math.nan,
+        )
         trials.append(trial)
     return trials
 
@@ -56,8 +63,12 @@ def _campaign(n: int, seed: int = 1) -> list[TrialResult]:
 def _write_report(path: Path, trials: list[TrialResult], options: TrialOptions, wall_s: float) -> Path:
     summary = summarise_results(trials, wall_s, options.controller, "seed_room")
     summary.achieved_rtf = 8.0
-    report = {"summary": asdict(summary), "trials": [asdict(t) for t in trials], "errors": [],
-              "options": {f.name: str(getattr(options, f.name)) for f in fields(options)}}
+    report = {
+        "summary": asdict(summary),
+        "trials": [asdict(t) for t in trials],
+        "errors": [],
+        "options": {f.name: str(getattr(options, f.name)) for f in fields(options)},
+    }
     path.mkdir(parents=True)
     (path / "trials.json").write_text(strict_json.dumps(report, summary_reasons(summary), indent=2))
     return path
@@ -71,9 +82,12 @@ def test_merged_shards_give_the_unsharded_summary_and_trials(tmp_path: Path) -> 
         shard = Shard(k, 3)
         mine = [t for i, t in shard.select(trials)]
         options = TrialOptions(world=SEED_ROOM, n=23, seed=1, shard=shard, workers=k)  # workers may differ
-        shard_dirs.append(_write_report(tmp_path / f"shard{k}" / "trials-x-seed_room", mine, options, 10.0 / 3))
-    merged = merge_reports([read_shard(p) for p in find_reports([tmp_path / "shard3", tmp_path / "shard1",
-                                                                  tmp_path / "shard2"])])
+        shard_dirs.append(
+            _write_report(tmp_path / f"shard{k}" / "trials-x-seed_room", mine, options, 10.0 / 3)
+        )
+    merged = merge_reports(
+        [read_shard(p) for p in find_reports([tmp_path / "shard3", tmp_path / "shard1", tmp_path / "shard2"])]
+    )
     result = merged["seed_room"]
     assert [t.start for t in result.trials] == [t.start for t in trials]
     assert [t.index for t in result.trials] == list(range(23))
@@ -84,18 +98,27 @@ def test_merged_shards_give_the_unsharded_summary_and_trials(tmp_path: Path) -> 
         assert got[key] == pytest.approx(want[key], nan_ok=True), key
     assert result.summary.achieved_rtf == pytest.approx(8.0)
     out = write_merged(merged, tmp_path / "runs")
-    written = json.loads((out / "trials.json").read_text(),
-                         parse_constant=lambda c: pytest.fail(f"{c} in the merged report"))
+    written = json.loads(
+        (out / "trials.json").read_text(), parse_constant=lambda c: pytest.fail(f"{c} in the merged report")
+    )
     assert written["summary"]["n"] == 23 and (out / "histograms.png").is_file()
 
 
 def test_merge_refuses_missing_repeated_and_foreign_shards(tmp_path: Path) -> None:
     trials = _campaign(6)
     one, two = Shard(1, 2), Shard(2, 2)
-    a = _write_report(tmp_path / "a", [t for _, t in one.select(trials)], TrialOptions(world=SEED_ROOM, n=6, shard=one), 1)
-    b = _write_report(tmp_path / "b", [t for _, t in two.select(trials)], TrialOptions(world=SEED_ROOM, n=6, shard=two), 1)
-    other = _write_report(tmp_path / "c", [t for _, t in two.select(trials)],
-                          TrialOptions(world=SEED_ROOM, n=6, seed=9, shard=two), 1)
+    a = _write_report(
+        tmp_path / "a", [t for _, t in one.select(trials)], TrialOptions(world=SEED_ROOM, n=6, shard=one), 1
+    )
+    b = _write_report(
+        tmp_path / "b", [t for _, t in two.select(trials)], TrialOptions(world=SEED_ROOM, n=6, shard=two), 1
+    )
+    other = _write_report(
+        tmp_path / "c",
+        [t for _, t in two.select(trials)],
+        TrialOptions(world=SEED_ROOM, n=6, seed=9, shard=two),
+        1,
+    )
     assert merge_reports([read_shard(p) for p in find_reports([a, b])])["seed_room"].summary.n == 6
     with pytest.raises(MergeError, match=r"3 of 6 trials missing \(1, 3, 5\)"):
         merge_reports([read_shard(p) for p in find_reports([a])])

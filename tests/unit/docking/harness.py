@@ -85,7 +85,9 @@ class KinematicWorld:
         return self._nav_goal is not None
 
     def inputs(self) -> TickInputs:
-        charging = self.mated and self.charger_works if self.charging_override is None else self.charging_override
+        charging = (
+            self.mated and self.charger_works if self.charging_override is None else self.charging_override
+        )
         return TickInputs(
             now_s=self.now_s,
             robot_pose=self.believed_pose if self.pose_available(self) else None,

@@ -39,7 +39,9 @@ def test_tuned_controller_beats_seed_and_nav2_defaults() -> None:
     assert tuned["median_time_s"] < 0.5 * seed["median_time_s"]
     assert tuned["median_time_s"] < nav2["median_time_s"]
     assert tuned["median_lateral_error_mm"] < 5.0
-    assert tuned["median_yaw_error_deg"] < min(0.5, seed["median_yaw_error_deg"], nav2["median_yaw_error_deg"])
+    assert tuned["median_yaw_error_deg"] < min(
+        0.5, seed["median_yaw_error_deg"], nav2["median_yaw_error_deg"]
+    )
     table = format_comparison(report)
     for name in CONTROLLERS:
         assert name in table

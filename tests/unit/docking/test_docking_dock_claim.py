@@ -85,7 +85,9 @@ def test_await_dock_holds_still_then_goes_to_its_holding_pose_once_and_waits_the
     assert task.step(_inputs(0.2, NavStatus(intent.key, busy=True))) == intent
     assert task.step(_inputs(3.0, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP
     task.hold_at(Pose2D(5.0, 1.0, 0.0))
-    assert task.step(_inputs(3.1, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP, "no second trip"
+    assert task.step(_inputs(3.1, NavStatus(intent.key, outcome=NavOutcome.SUCCEEDED))) == STOP, (
+        "no second trip"
+    )
     assert task.result is None, "waiting never ends by itself"
 
 
@@ -116,9 +118,14 @@ def test_the_mission_leaves_its_dock_when_asked_only_while_charging_after_its_ow
 def test_a_fleet_answer_reads_the_response_and_its_holding_pose() -> None:
     from shared.interfaces.fleet import ReserveDockResponse
 
-    queued = FleetAnswer.from_response(ReserveDockResponse(queue_position=2, reason="every dock is taken",
-                                                           holding_pose=np.array([4.0, 7.4, 0.0])))
+    queued = FleetAnswer.from_response(
+        ReserveDockResponse(
+            queue_position=2, reason="every dock is taken", holding_pose=np.array([4.0, 7.4, 0.0])
+        )
+    )
     assert not queued.granted and not queued.refused and queued.holding_pose == Pose2D(4.0, 7.4, 0.0)
-    refused = FleetAnswer.from_response(ReserveDockResponse(reason="no dock 'x'", holding_pose=np.array([1.0, np.nan, 0.0])))
+    refused = FleetAnswer.from_response(
+        ReserveDockResponse(reason="no dock 'x'", holding_pose=np.array([1.0, np.nan, 0.0]))
+    )
     assert refused.refused and refused.holding_pose is None
     assert FleetAnswer.from_response(ReserveDockResponse(granted=True, dock_id="west")).dock_id == "west"

@@ -28,7 +28,9 @@ def test_world_file_is_a_dock_database() -> None:
 
 def test_dock_file_loads(tmp_path: Path) -> None:
     path = tmp_path / "docks.yaml"
-    path.write_text("docks:\n  - {id: a, pose: [1.0, 2.0, 0.5], type: charger}\n  - {id: b, pose: [0, 0, 0]}\n")
+    path.write_text(
+        "docks:\n  - {id: a, pose: [1.0, 2.0, 0.5], type: charger}\n  - {id: b, pose: [0, 0, 0]}\n"
+    )
     db = load_dock_db(path)
     assert len(db) == 2 and "a" in db and "c" not in db
     assert db.get("b").type == "charger"
@@ -69,7 +71,10 @@ def test_choose_by_id_or_nearest() -> None:
         ({"docks": [{"id": "a", "pose": [0, 0]}]}, "docks.0.pose"),
         ({"docks": [{"id": "a", "pose": [0, "x", 0]}]}, "docks.0.pose.1"),
         ({"docks": [{"id": "a", "pose": [0, float("nan"), 0]}]}, "docks.0.pose: pose must be finite"),
-        ({"docks": [{"id": "a", "pose": [0, 0, 0]}, {"id": "a", "pose": [1, 0, 0]}]}, "docks.1.id: dock id 'a' appears twice"),
+        (
+            {"docks": [{"id": "a", "pose": [0, 0, 0]}, {"id": "a", "pose": [1, 0, 0]}]},
+            "docks.1.id: dock id 'a' appears twice",
+        ),
     ],
 )
 def test_malformed_input_names_file_and_field(document: object, expected: str) -> None:

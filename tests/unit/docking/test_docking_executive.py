@@ -100,7 +100,8 @@ def test_a_goal_that_replaces_another_cancels_it_and_a_foreign_cancel_is_answere
     assert ex.task is not None and ex.task.state_name() == "UNDOCKING" and ex.goal is undock_goal
     stray = Goal(object(), TaskKind.DOCK)
     assert ex.handle(CancelGoal(stray), _heard(0.2)) == [
-        GoalEnded(stray, Outcome.CANCELED, DockRobotResult(success=False))]
+        GoalEnded(stray, Outcome.CANCELED, DockRobotResult(success=False))
+    ]
 
 
 def test_a_cancelled_goal_ends_canceled_once_the_planner_lets_go_and_the_robot_is_left_stopped() -> None:
@@ -134,6 +135,7 @@ def test_a_clock_reset_cancels_what_runs() -> None:
 
 # --- the fleet's dock claim ----------------------------------------------------------------------------
 
+
 def test_with_a_fleet_it_waits_for_a_dock_asks_with_path_lengths_and_docks_once_granted() -> None:
     ex = _executive(CORRIDOR, "r1", fleet=True, patrol=[(1.2, 3.0, 0.0)])
     goal = Goal(object(), TaskKind.DOCK)
@@ -145,10 +147,13 @@ def test_with_a_fleet_it_waits_for_a_dock_asks_with_path_lengths_and_docks_once_
     assert len(asks) == 1 and asks[0].battery == 0.5 and asks[0].dock_id == ""
     lengths = asks[0].path_lengths
     assert lengths and set(lengths) == {d.id for d in ex.database}
-    assert all(length >= here.distance_to(d.pose2d) - 1e-9 for d in ex.database
-               for length in [lengths[d.id]]), "a path is never shorter than the straight line"
+    assert all(
+        length >= here.distance_to(d.pose2d) - 1e-9 for d in ex.database for length in [lengths[d.id]]
+    ), "a path is never shorter than the straight line"
     assert _of(ex.step(_heard(0.1, here, battery=0.5)), Reserve) == [], "one request in flight"
-    queued = FleetAnswer(False, queue_position=1, reason="both docks taken", holding_pose=Pose2D(2.0, 3.0, 0.0))
+    queued = FleetAnswer(
+        False, queue_position=1, reason="both docks taken", holding_pose=Pose2D(2.0, 3.0, 0.0)
+    )
     ex.handle(FleetReserved(queued), _heard(0.2, here))
     drives = [e.orders for e in _of(ex.step(_heard(0.25, here, battery=0.5)), Drive)]
     assert any(o.send_goal == Pose2D(2.0, 3.0, 0.0) for o in drives), "it goes to the holding pose"
@@ -165,7 +170,9 @@ def test_with_the_fleet_down_it_docks_at_a_dock_seen_free_and_releases_after_und
     ex.handle(DockGoal(Goal(object(), TaskKind.DOCK), DockRequest()), _heard(0.0, here))
     ex.step(_heard(0.05, here, battery=0.5))
     ex.handle(FleetReserved(None, TimeoutError("no answer")), _heard(1.0, here))
-    claimed = _of(ex.step(_heard(6.0, here, battery=0.5, scan=LidarReturns.of_points(np.zeros((0, 2))))), Reserve)
+    claimed = _of(
+        ex.step(_heard(6.0, here, battery=0.5, scan=LidarReturns.of_points(np.zeros((0, 2))))), Reserve
+    )
     assert ex.task is not None and ex.task.state_name() != "WAITING_FOR_DOCK"
     assert ex.claim is not None and ex.claim.granted_dock == ex.task.dock_request.dock_id
     assert len(claimed) == 1 and claimed[0].path_lengths is None, "the dock it took is claimed, not asked for"
@@ -182,6 +189,7 @@ def test_with_the_fleet_down_it_docks_at_a_dock_seen_free_and_releases_after_und
 
 
 # --- traffic -------------------------------------------------------------------------------------------
+
 
 def test_met_head_on_in_the_corridor_by_a_robot_with_priority_it_gives_way_then_patrols_on() -> None:
     ex = _executive(CORRIDOR, "r1", fleet=True)

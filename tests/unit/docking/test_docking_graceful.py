@@ -27,7 +27,12 @@ DOCK = Pose2D(-1.0, 0.83, -math.pi / 2)
 def test_nav2_default_gains() -> None:
     g = NAV2_DOCKING_DEFAULTS
     assert (g.k_phi, g.k_delta, g.beta, g.lambda_) == (3.0, 2.0, 0.4, 2.0)
-    assert (g.v_linear_min_mps, g.v_linear_max_mps, g.v_angular_max_radps, g.slowdown_radius_m) == (0.1, 0.25, 0.75, 0.25)
+    assert (g.v_linear_min_mps, g.v_linear_max_mps, g.v_angular_max_radps, g.slowdown_radius_m) == (
+        0.1,
+        0.25,
+        0.75,
+        0.25,
+    )
 
 
 def test_tuned_gains_respect_the_robot_limits() -> None:
@@ -69,13 +74,18 @@ def test_speed_limits_and_slowdown() -> None:
 
 
 def test_backward_motion_drives_in_reverse() -> None:
-    v, w = smooth_control_law(Pose2D(-1.0, 0.0, 0.0), Pose2D(), NAV2_DOCKING_DEFAULTS, backward=True).as_tuple()
+    v, w = smooth_control_law(
+        Pose2D(-1.0, 0.0, 0.0), Pose2D(), NAV2_DOCKING_DEFAULTS, backward=True
+    ).as_tuple()
     assert v < 0.0 and w == pytest.approx(0.0)
 
 
 def test_no_nan_at_or_near_the_target() -> None:
     for gains in (NAV2_DOCKING_DEFAULTS, ZENDOCK_TUNED):
-        assert smooth_control_law(Pose2D(1.0, 2.0, 0.3), Pose2D(1.0, 2.0, -2.0), gains).as_tuple() == (0.0, 0.0)
+        assert smooth_control_law(Pose2D(1.0, 2.0, 0.3), Pose2D(1.0, 2.0, -2.0), gains).as_tuple() == (
+            0.0,
+            0.0,
+        )
         for r in (1e-12, 1e-7, 1e-5, 1e-3):
             for phi in np.linspace(-math.pi, math.pi, 7):
                 target = Pose2D(r, 0.0, float(phi))
@@ -96,20 +106,31 @@ def test_gains_are_validated() -> None:
 def test_converges_onto_the_dock_from_random_staging_starts(params) -> None:
     rng = np.random.default_rng(7)
     for i in range(15):
-        dock = Pose2D(float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), float(rng.uniform(-math.pi, math.pi)))
-        start = offset_along(dock, -float(rng.uniform(0.5, 1.2)), float(rng.uniform(-0.2, 0.2)), float(rng.uniform(-0.4, 0.4)))
+        dock = Pose2D(
+            float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), float(rng.uniform(-math.pi, math.pi))
+        )
+        start = offset_along(
+            dock, -float(rng.uniform(0.5, 1.2)), float(rng.uniform(-0.2, 0.2)), float(rng.uniform(-0.4, 0.4))
+        )
         result = simulate_approach(GracefulDockController(dock, params), start, dock, 0.05, timeout_s=20.0)
         assert result.contact, f"run {i}: no contact from {start}"
-        assert result.mated, f"run {i}: lateral {result.lateral_error_m:.4f} m, yaw {result.yaw_error_rad:.4f} rad"
+        assert result.mated, (
+            f"run {i}: lateral {result.lateral_error_m:.4f} m, yaw {result.yaw_error_rad:.4f} rad"
+        )
         assert np.isfinite(result.trajectory).all()
 
 
 def test_tuned_controller_is_robust_to_latency_and_noise() -> None:
     sensing_errors = []
-    for i, (back, lateral, yaw) in enumerate([(0.7, 0.15, -0.3), (0.7, -0.1, 0.2), (1.0, 0.0, 0.3), (0.6, 0.1, 0.0)]):
+    for i, (back, lateral, yaw) in enumerate(
+        [(0.7, 0.15, -0.3), (0.7, -0.1, 0.2), (1.0, 0.0, 0.3), (0.6, 0.1, 0.0)]
+    ):
         start = offset_along(DOCK, -back, lateral, yaw)
         result = simulate_approach(
-            GracefulDockController(DOCK), start, DOCK, 0.05,
+            GracefulDockController(DOCK),
+            start,
+            DOCK,
+            0.05,
             sensing=PoseSensing(0.05, 0.002, math.radians(0.2), seed=i),
         )
         assert result.mated
@@ -121,7 +142,9 @@ def test_tuned_controller_is_robust_to_latency_and_noise() -> None:
 def test_arrival_speed_is_capped_near_the_plate() -> None:
     start = offset_along(DOCK, -1.0, 0.0, 0.0)
     result = simulate_approach(GracefulDockController(DOCK), start, DOCK, 0.05)
-    assert result.contact and result.contact_speed_mps == pytest.approx(ZENDOCK_PARAMS.contact_speed_mps, abs=0.005)
+    assert result.contact and result.contact_speed_mps == pytest.approx(
+        ZENDOCK_PARAMS.contact_speed_mps, abs=0.005
+    )
     assert result.trajectory[:, 4].max() > 0.45  # but it is fast on the way
 
 
@@ -132,11 +155,18 @@ def test_the_plate_is_met_at_the_contact_speed_from_late_noisy_poses_and_braking
     speeds, braking_from = [], []
     for i, lateral in enumerate((-0.1, 0.0, 0.1, 0.05)):
         start = offset_along(DOCK, -0.8, lateral, 0.1 * lateral)
-        result = simulate_approach(GracefulDockController(DOCK, quick), start, DOCK, 0.05,
-                                   sensing=PoseSensing(0.05, 0.002, math.radians(0.2), seed=i))
+        result = simulate_approach(
+            GracefulDockController(DOCK, quick),
+            start,
+            DOCK,
+            0.05,
+            sensing=PoseSensing(0.05, 0.002, math.radians(0.2), seed=i),
+        )
         assert result.mated
         speeds.append(result.contact_speed_mps)
-        along = np.array([dock_frame_error(Pose2D(x, y, yaw), DOCK).along_m for _, x, y, yaw, _, _ in result.trajectory])
+        along = np.array(
+            [dock_frame_error(Pose2D(x, y, yaw), DOCK).along_m for _, x, y, yaw, _, _ in result.trajectory]
+        )
         fast = result.trajectory[:, 4] > 0.45
         braking_from.append(-along[fast].max())  # the nearest point to the plate still at nearly full speed
     assert max(speeds) <= ZENDOCK_PARAMS.contact_speed_mps + 0.01, speeds
@@ -147,17 +177,23 @@ def test_the_plate_is_met_at_the_contact_speed_from_late_noisy_poses_and_braking
 
 def test_target_is_past_the_plate_and_follows_dock_updates() -> None:
     controller = GracefulDockController(DOCK)
-    assert dock_frame_error(controller.target, DOCK).along_m == pytest.approx(ZENDOCK_PARAMS.dock_target_past_m)
+    assert dock_frame_error(controller.target, DOCK).along_m == pytest.approx(
+        ZENDOCK_PARAMS.dock_target_past_m
+    )
     moved = Pose2D(0.0, 0.0, 0.0)
     controller.set_dock_pose(moved)
-    assert dock_frame_error(controller.target, moved).along_m == pytest.approx(ZENDOCK_PARAMS.dock_target_past_m)
+    assert dock_frame_error(controller.target, moved).along_m == pytest.approx(
+        ZENDOCK_PARAMS.dock_target_past_m
+    )
 
 
 def test_distance_test_stops_the_robot() -> None:
     controller = GracefulDockController(DOCK, NAV2_DOCKING_PARAMS)
     assert controller.step(-1.0, 0.86, -math.pi / 2) == (0.0, 0.0)
     assert controller.step(-1.0, 1.5, -math.pi / 2)[0] > 0.0
-    assert not GracefulDockController(DOCK).is_docked_by_distance(DOCK)  # zendock leaves stopping to the caller
+    assert not GracefulDockController(DOCK).is_docked_by_distance(
+        DOCK
+    )  # zendock leaves stopping to the caller
 
 
 def test_estimator_takes_the_callers_timing_and_odometry() -> None:
@@ -180,7 +216,9 @@ def test_the_target_recedes_so_it_stays_a_lookahead_ahead() -> None:
     controller = GracefulDockController(DOCK)
     far = offset_along(DOCK, -1.0, 0.02)
     near = offset_along(DOCK, -0.1, 0.02)
-    assert dock_frame_error(controller.target_for(far), DOCK).along_m == pytest.approx(ZENDOCK_PARAMS.dock_target_past_m)
+    assert dock_frame_error(controller.target_for(far), DOCK).along_m == pytest.approx(
+        ZENDOCK_PARAMS.dock_target_past_m
+    )
     lookahead = ZENDOCK_PARAMS.target_lookahead_m
     assert lookahead is not None
     assert dock_frame_error(controller.target_for(near), DOCK).along_m == pytest.approx(-0.1 + lookahead)
@@ -195,7 +233,9 @@ def test_beta_eases_off_far_from_the_plate() -> None:
     assert controller.gains_at(offset_along(DOCK, -0.3)).beta == pytest.approx(p.gains.beta)
     assert controller.gains_at(offset_along(DOCK, -1.5)).beta == pytest.approx(p.far_beta)
     middle = 0.5 * (p.near_distance_m + p.far_distance_m)
-    assert controller.gains_at(offset_along(DOCK, -middle)).beta == pytest.approx(0.5 * (p.gains.beta + p.far_beta))
+    assert controller.gains_at(offset_along(DOCK, -middle)).beta == pytest.approx(
+        0.5 * (p.gains.beta + p.far_beta)
+    )
     # Askew far from the plate, the robot now turns faster than the law's beta alone would let it.
     askew = offset_along(DOCK, -1.0, 0.15, -0.6)
     plain = smooth_control_law(controller.target_for(askew), askew, p.gains)
@@ -254,9 +294,13 @@ def test_the_arrival_cap_is_the_fastest_speed_that_can_still_brake_after_a_held_
         if v >= 0.5 - 1e-9:  # the command itself is slow enough
             assert v**2 <= contact**2 + 2.0 * a * left
         elif v > contact + 1e-9:
-            assert v**2 == pytest.approx(contact**2 + 2.0 * a * left)  # brakes to the contact speed exactly in time
+            assert v**2 == pytest.approx(
+                contact**2 + 2.0 * a * left
+            )  # brakes to the contact speed exactly in time
         else:
             assert v == pytest.approx(contact)  # never slower than the contact speed
-    at_plate = controller._cap_arrival_speed(VelocityCommand(0.5, 0.2, 0.4), offset_along(DOCK, -reach, 0.0, 0.0), contact)
+    at_plate = controller._cap_arrival_speed(
+        VelocityCommand(0.5, 0.2, 0.4), offset_along(DOCK, -reach, 0.0, 0.0), contact
+    )
     assert at_plate.linear_x_mps == pytest.approx(contact)
     assert at_plate.curvature_per_m == 0.4 and at_plate.angular_z_radps == pytest.approx(0.4 * contact)

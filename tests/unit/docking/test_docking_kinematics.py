@@ -32,13 +32,30 @@ def test_the_model_limits_a_twist_as_the_simulated_base_does_short_of_the_wheels
 
     base = DiffDriveParams()
     limits = RobotLimits()
-    assert (limits.v_max_mps, limits.w_max_radps, limits.a_max_mps2, limits.alpha_max_radps2, limits.a_decel_mps2,
-            limits.alpha_decel_radps2) == (base.max_linear_mps, base.max_angular_radps, base.max_linear_accel,
-                                           base.max_angular_accel, base.max_linear_decel, base.max_angular_decel)
+    assert (
+        limits.v_max_mps,
+        limits.w_max_radps,
+        limits.a_max_mps2,
+        limits.alpha_max_radps2,
+        limits.a_decel_mps2,
+        limits.alpha_decel_radps2,
+    ) == (
+        base.max_linear_mps,
+        base.max_angular_radps,
+        base.max_linear_accel,
+        base.max_angular_accel,
+        base.max_linear_decel,
+        base.max_angular_decel,
+    )
     rng = np.random.default_rng(3)
     compared = 0
     for _ in range(2000):
-        v, w, cmd_v, cmd_w = rng.uniform(-0.6, 0.6), rng.uniform(-1.8, 1.8), rng.uniform(-0.7, 0.7), rng.uniform(-2, 2)
+        v, w, cmd_v, cmd_w = (
+            rng.uniform(-0.6, 0.6),
+            rng.uniform(-1.8, 1.8),
+            rng.uniform(-0.7, 0.7),
+            rng.uniform(-2, 2),
+        )
         dt = rng.choice([0.005, 0.01, 0.05])
         model = limits.next_twist(v, w, cmd_v, cmd_w, dt)
         half_track = 0.5 * base.wheel_separation_m
@@ -82,7 +99,9 @@ class SeenPoses:
 def test_controller_sees_the_pose_late() -> None:
     dock = Pose2D(10.0, 0.0, 0.0)
     controller = SeenPoses((0.3, 0.0))
-    result = simulate_approach(controller, Pose2D(), dock, 0.1, sensing=PoseSensing(latency_s=0.2), timeout_s=2.0)
+    result = simulate_approach(
+        controller, Pose2D(), dock, 0.1, sensing=PoseSensing(latency_s=0.2), timeout_s=2.0
+    )
     traj = result.trajectory
     assert controller.seen[0][0] == controller.seen[1][0] == controller.seen[2][0] == 0.0
     for tick in (5, 10, 15):

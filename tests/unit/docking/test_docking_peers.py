@@ -31,8 +31,17 @@ class _Node:
     def now(self) -> float:
         return self.clock_s
 
-    def create_subscription(self, msg_type: type, key: str, callback: Callable[..., Any], qos: Any, *,
-                            with_key: bool = False, absolute: bool = False, undecoded: bool = False) -> None:
+    def create_subscription(
+        self,
+        msg_type: type,
+        key: str,
+        callback: Callable[..., Any],
+        qos: Any,
+        *,
+        with_key: bool = False,
+        absolute: bool = False,
+        undecoded: bool = False,
+    ) -> None:
         assert with_key and absolute and key.startswith("fleet/*/")
         self.callbacks[msg_type] = callback
         self.undecoded[msg_type] = undecoded
@@ -42,10 +51,21 @@ class _Node:
 
 
 def _plan(points: list[tuple[float, float]]) -> Path:
-    return Path.from_dict({"header": {"frame_id": "map", "stamp": STAMP}, "poses": [
-        {"header": {"frame_id": "map", "stamp": STAMP},
-         "pose": {"position": {"x": x, "y": y, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}
-        for x, y in points]})
+    return Path.from_dict(
+        {
+            "header": {"frame_id": "map", "stamp": STAMP},
+            "poses": [
+                {
+                    "header": {"frame_id": "map", "stamp": STAMP},
+                    "pose": {
+                        "position": {"x": x, "y": y, "z": 0.0},
+                        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                    },
+                }
+                for x, y in points
+            ],
+        }
+    )
 
 
 def _points(plan: np.ndarray | None) -> list[list[float]]:
@@ -55,8 +75,10 @@ def _points(plan: np.ndarray | None) -> list[list[float]]:
 
 def _watch_with_r2(node: _Node) -> PeerWatch:
     watch = PeerWatch(cast(Node, node), "docking/state")
-    node.callbacks[Float64MultiArray]("fleet/r2/map_to_base_link_pose2d", Float64MultiArray.from_dict(
-        {"layout": {"dim": [], "data_offset": 0}, "data": [1.0, 2.0, 0.0]}))
+    node.callbacks[Float64MultiArray](
+        "fleet/r2/map_to_base_link_pose2d",
+        Float64MultiArray.from_dict({"layout": {"dim": [], "data_offset": 0}, "data": [1.0, 2.0, 0.0]}),
+    )
     node.callbacks[String]("fleet/r2/docking/state", String("PATROLLING"))
     return watch
 
@@ -103,8 +125,10 @@ def test_an_old_plan_is_no_plan_and_the_own_robots_is_kept_apart() -> None:
     assert callable(own) and _points(own()) == [[0.0, 0.0], [1.0, 0.0]]
     assert [peer.name for peer in watch.fresh(node.now())] == ["fleet/r2"]  # this robot is no peer
     node.clock_s += 1.0
-    node.callbacks[Float64MultiArray]("fleet/r2/map_to_base_link_pose2d", Float64MultiArray.from_dict(
-        {"layout": {"dim": [], "data_offset": 0}, "data": [1.0, 2.0, 0.0]}))
+    node.callbacks[Float64MultiArray](
+        "fleet/r2/map_to_base_link_pose2d",
+        Float64MultiArray.from_dict({"layout": {"dim": [], "data_offset": 0}, "data": [1.0, 2.0, 0.0]}),
+    )
     node.clock_s += 1.5  # the plans are now 2.5 s old, the pose 1.5 s
     (peer,) = watch.fresh(node.now())
     assert peer.name == "fleet/r2" and peer.plan is None

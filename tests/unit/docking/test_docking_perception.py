@@ -139,7 +139,9 @@ def seed_room() -> World:
 
 def sense(world: World, pose: Pose2D, extra_boxes: list[dict] | None = None) -> tuple[np.ndarray, float]:  # type: ignore[type-arg]
     if extra_boxes:
-        world = World.model_validate(world.model_dump() | {"boxes": [*world.model_dump()["boxes"], *extra_boxes]})
+        world = World.model_validate(
+            world.model_dump() | {"boxes": [*world.model_dump()["boxes"], *extra_boxes]}
+        )
     segments = SegmentSet(world.opaque_segments())
     rng = np.random.default_rng(0)
     lidar = LidarParams(noise_m=0.0)
@@ -161,8 +163,12 @@ def test_a_scan_s_points_are_worked_out_once_when_first_asked_for() -> None:
     np.testing.assert_array_equal(LidarReturns.of_points(given).points, given)
 
 
-APPROACH = [offset_along(SEED_DOCK, -back, lateral, yaw) for back in (0.7, 0.4, 0.2, 0.1, 0.05, 0.0)
-            for lateral in (-0.03, 0.0, 0.03) for yaw in (-0.08, 0.0, 0.08)]
+APPROACH = [
+    offset_along(SEED_DOCK, -back, lateral, yaw)
+    for back in (0.7, 0.4, 0.2, 0.1, 0.05, 0.0)
+    for lateral in (-0.03, 0.0, 0.03)
+    for yaw in (-0.08, 0.0, 0.08)
+]
 
 
 @pytest.mark.parametrize("pose", APPROACH, ids=lambda p: f"{p.x:.2f},{p.y:.2f},{p.yaw:.2f}")
@@ -173,7 +179,9 @@ def test_the_dock_itself_never_blocks_the_approach(seed_room: World, pose: Pose2
     assert not lidar_blocked(points, True, dock_in_base, params)
     assert not sonar_blocked(sonar, dock_in_base, params), (sonar, expected_sonar_range(dock_in_base, params))
     if -dock_frame_error(pose, SEED_DOCK).along_m < params.stop_distance_m - 0.02:
-        assert lidar_blocked(points, True, None, params)  # the dock is in the way: only the excuse lets it pass
+        assert lidar_blocked(
+            points, True, None, params
+        )  # the dock is in the way: only the excuse lets it pass
 
 
 def test_a_pillar_in_the_approach_blocks_it(seed_room: World) -> None:
@@ -232,7 +240,9 @@ def test_a_late_localisation_sample_pairs_with_the_odometry_it_was_made_from() -
     track.add_odom(OdometrySample(t_next, arc(start, v, w, t_next), v, w))
     assert close(track.map_to_odom, correction, 1e-9)
     stamp, latest = track.latest()  # type: ignore[misc]
-    assert stamp == pytest.approx(t_next) and close(latest, correction.compose(arc(start, v, w, t_next)), 1e-9)
+    assert stamp == pytest.approx(t_next) and close(
+        latest, correction.compose(arc(start, v, w, t_next)), 1e-9
+    )
     assert close(track.pose_now_at(0.9), correction.compose(arc(start, v, w, 0.9)), 1e-9)
 
 

@@ -40,7 +40,9 @@ def test_noise_is_reduced() -> None:
     truth = Pose2D(2.0, -1.0, 0.4)
     errors = []
     for i in range(300):
-        noisy = Pose2D(truth.x + rng.normal(0, 0.01), truth.y + rng.normal(0, 0.01), truth.yaw + rng.normal(0, 0.02))
+        noisy = Pose2D(
+            truth.x + rng.normal(0, 0.01), truth.y + rng.normal(0, 0.01), truth.yaw + rng.normal(0, 0.02)
+        )
         out = f.update(noisy, i * 0.05)
         if i > 50:
             errors.append(out.distance_to(truth))
@@ -63,7 +65,9 @@ def test_older_detections_are_ignored() -> None:
 
 
 def test_outliers_are_rejected_until_they_persist() -> None:
-    f = DockPoseFilter(PoseFilterParams(coef=0.5, outlier_distance_m=0.2, outlier_yaw_rad=0.3, max_rejected_in_a_row=3))
+    f = DockPoseFilter(
+        PoseFilterParams(coef=0.5, outlier_distance_m=0.2, outlier_yaw_rad=0.3, max_rejected_in_a_row=3)
+    )
     f.update(Pose2D(0.0, 0.0, 0.0), 0.0)
     assert same(f.update(Pose2D(1.0, 0.0, 0.0), 0.1), Pose2D(0.0, 0.0, 0.0))
     assert same(f.update(Pose2D(0.0, 0.0, 1.0), 0.2), Pose2D(0.0, 0.0, 0.0))

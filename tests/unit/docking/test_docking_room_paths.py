@@ -24,7 +24,12 @@ def test_a_wall_between_makes_the_near_dock_the_far_one() -> None:
 
 
 def test_an_enclosed_goal_is_out_of_reach() -> None:
-    box = [((4.0, 1.0), (5.0, 1.0)), ((5.0, 1.0), (5.0, 2.0)), ((5.0, 2.0), (4.0, 2.0)), ((4.0, 2.0), (4.0, 1.0))]
+    box = [
+        ((4.0, 1.0), (5.0, 1.0)),
+        ((5.0, 1.0), (5.0, 2.0)),
+        ((5.0, 2.0), (4.0, 2.0)),
+        ((4.0, 2.0), (4.0, 1.0)),
+    ]
     room = RoomPaths((0.0, 0.0, 6.0, 4.0), box)
     assert room.lengths(Pose2D(1.0, 1.0, 0.0), [Pose2D(4.5, 1.5, 0.0)]) == [math.inf]
 

@@ -19,12 +19,15 @@ from shared.world import Dock
 from tests.unit.docking.harness import SEED_DOCK, KinematicWorld
 
 FAR = Pose2D(1.8, 4.2, math.pi)
-DATABASE = DockDatabase([Dock(id="home", pose=SEED_DOCK.as_tuple()), Dock(id="spare", pose=(2.0, 0.83, -math.pi / 2))])
+DATABASE = DockDatabase(
+    [Dock(id="home", pose=SEED_DOCK.as_tuple()), Dock(id="spare", pose=(2.0, 0.83, -math.pi / 2))]
+)
 
 
 def graceful_run(request: DockRequest | None = None, **config: object) -> DockingRun:
-    return DockingRun(request or DockRequest(dock_id="home"), DATABASE, GracefulApproach(),
-                      DockingConfig(**config))  # type: ignore[arg-type]
+    return DockingRun(
+        request or DockRequest(dock_id="home"), DATABASE, GracefulApproach(), DockingConfig(**config)
+    )  # type: ignore[arg-type]
 
 
 def run_with_states(world: KinematicWorld, run: DockingRun, max_time_s: float) -> list[DockingState]:
@@ -41,8 +44,11 @@ def test_graceful_run_stages_perceives_approaches_and_docks() -> None:
     run = graceful_run()
     states = run_with_states(world, run, 60.0)
     assert run.result is not None and run.result.outcome is Outcome.SUCCEEDED, run.result
-    assert states == [DockingState.NAV_TO_STAGING_POSE, DockingState.INITIAL_PERCEPTION,
-                      DockingState.CONTROLLING]
+    assert states == [
+        DockingState.NAV_TO_STAGING_POSE,
+        DockingState.INITIAL_PERCEPTION,
+        DockingState.CONTROLLING,
+    ]
     assert [g for _, g in world.log.goals] == [graceful_staging_pose(SEED_DOCK)]
     assert world.mated and run.num_retries == 0 and not run.blind
     assert world.log.overlaps == 0
@@ -71,14 +77,19 @@ def test_detections_cancel_a_localisation_error_that_blind_docking_cannot(detect
         assert abs(dock_frame_error(world.true_pose, SEED_DOCK).lateral_m) < 0.01
     else:
         assert run.blind and not world.mated
-        assert run.result.outcome is Outcome.FAILED and run.result.error_code is DockingErrorCode.FAILED_TO_CHARGE
+        assert (
+            run.result.outcome is Outcome.FAILED
+            and run.result.error_code is DockingErrorCode.FAILED_TO_CHARGE
+        )
         assert run.result.num_retries == 1
     assert world.log.overlaps == 0
 
 
 def test_seed_run_uses_the_line_approach_at_its_own_rate() -> None:
     world = KinematicWorld(FAR, period_s=0.1)
-    run = DockingRun(DockRequest(dock_id="home"), DATABASE, SeedApproach(), DockingConfig(wait_for_detection=False))
+    run = DockingRun(
+        DockRequest(dock_id="home"), DATABASE, SeedApproach(), DockingConfig(wait_for_detection=False)
+    )
     world.run(run, 200.0)
     assert run.result is not None and run.result.success, run.result
     assert [g for _, g in world.log.goals] == [line_approach(SEED_DOCK).staging_goal]
@@ -101,7 +112,10 @@ def test_retries_run_out_with_the_last_error() -> None:
     world.run(run, 60.0)
     assert run.result is not None and run.result.outcome is Outcome.FAILED
     assert (run.result.error_code, run.result.num_retries, len(world.log.goals)) == (
-        DockingErrorCode.FAILED_TO_STAGE, 2, 3)
+        DockingErrorCode.FAILED_TO_STAGE,
+        2,
+        3,
+    )
 
 
 def test_unknown_dock_fails_at_once_without_moving() -> None:
@@ -140,8 +154,9 @@ def test_a_robot_in_front_of_the_dock_backs_off_before_staging() -> None:
 def test_without_the_planner_a_retry_backs_off_to_staging() -> None:
     staging = graceful_staging_pose(SEED_DOCK)
     world = KinematicWorld(staging, charger_works=False)
-    run = graceful_run(DockRequest(dock_id="home", navigate_to_staging_pose=False), max_retries=1,
-                       wait_charge_timeout_s=1.0)
+    run = graceful_run(
+        DockRequest(dock_id="home", navigate_to_staging_pose=False), max_retries=1, wait_charge_timeout_s=1.0
+    )
     world.run(run, 60.0)
     assert not world.log.goals
     assert run.result is not None and run.result.error_code is DockingErrorCode.FAILED_TO_CHARGE
@@ -240,16 +255,22 @@ def test_nearest_dock_waits_for_a_pose_then_times_out() -> None:
 
 
 def handover_run(approach: GracefulApproach | None = None, **config: object) -> DockingRun:
-    settings: dict[str, object] = {"continuous_perception": True, "handover_distance_m": 0.45,
-                                   "max_control_pose_age_s": 0.25} | config
-    return DockingRun(DockRequest(dock_id="home"), DATABASE, approach or GracefulApproach(),
-                      DockingConfig(**settings))  # type: ignore[arg-type]
+    settings: dict[str, object] = {
+        "continuous_perception": True,
+        "handover_distance_m": 0.45,
+        "max_control_pose_age_s": 0.25,
+    } | config
+    return DockingRun(
+        DockRequest(dock_id="home"), DATABASE, approach or GracefulApproach(), DockingConfig(**settings)
+    )  # type: ignore[arg-type]
 
 
 def test_the_approach_takes_over_from_navigation_near_the_staging_pose() -> None:
     """Close to the staging pose and facing the dock, the run cancels navigation rather than wait for it
     to stop there, drives nothing until the planner has let go, and docks from where the robot is."""
-    world = KinematicWorld(offset_along(SEED_DOCK, -1.6), nav_duration_s=30.0, error=Pose2D(0.03, -0.02, 0.02))
+    world = KinematicWorld(
+        offset_along(SEED_DOCK, -1.6), nav_duration_s=30.0, error=Pose2D(0.03, -0.02, 0.02)
+    )
     run = handover_run()
     states = run_with_states(world, run, 0.5)
     assert run.phase is RunPhase.NAV_TO_STAGING and len(world.log.goals) == 1
@@ -259,7 +280,10 @@ def test_the_approach_takes_over_from_navigation_near_the_staging_pose() -> None
     states += run_with_states(world, run, 20.0)
     assert run.result is not None and run.result.success, run.result
     assert [s for i, s in enumerate(states) if i == 0 or s != states[i - 1]] == [
-        DockingState.NAV_TO_STAGING_POSE, DockingState.INITIAL_PERCEPTION, DockingState.CONTROLLING]
+        DockingState.NAV_TO_STAGING_POSE,
+        DockingState.INITIAL_PERCEPTION,
+        DockingState.CONTROLLING,
+    ]
     assert len(world.log.goals) == 1 and world.log.cancels and world.log.overlaps == 0
     assert world.now_s < 6.0 and world.mated
     error = dock_frame_error(world.true_pose, SEED_DOCK)
@@ -356,7 +380,9 @@ def test_on_the_way_no_detections_are_wanted_even_with_the_dock_in_view() -> Non
     run.step(TickInputs(now_s=0.0, robot_pose=FAR))
     assert run.phase is RunPhase.NAV_TO_STAGING
     assert not run.wants_detections(FAR)
-    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0))), "the marker in view, on the way"
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0))), (
+        "the marker in view, on the way"
+    )
     run.enter(RunPhase.RETRY, 1.0)
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0)))
 
@@ -367,17 +393,22 @@ def test_from_staging_on_detections_are_wanted_while_the_marker_could_be_in_view
     run.enter(RunPhase.INITIAL_PERCEPTION, 1.0)
     near_facing = SEED_DOCK.compose(Pose2D(-1.5, 0.2, 0.0))
     assert run.wants_detections(near_facing)
-    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-1.5, 0.0, math.radians(32.0)))), \
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-1.5, 0.0, math.radians(32.0)))), (
         "the marker 32 degrees off the heading: at the edge of the view, where it is not found whole"
+    )
     assert not run.wants_detections(near_facing.compose(Pose2D(0.0, 0.0, math.pi)))  # turned away
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-4.0, 0.0, 0.0)))  # out of range
-    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(1.5, 0.0, math.pi)))  # behind the dock, facing it
+    assert not run.wants_detections(
+        SEED_DOCK.compose(Pose2D(1.5, 0.0, math.pi))
+    )  # behind the dock, facing it
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.2, 1.5, -math.pi / 2)))  # edge-on, 82 deg off
     assert not graceful_run(use_detection=False).wants_detections(near_facing)
     run.enter(RunPhase.CONTROLLING, 2.0)
     assert run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, -0.3)))  # off the axis, facing the marker
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.5, 0.3, 0.5))), "still turning onto the dock"
-    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.7, 0.0, math.pi / 2))), "turned side-on at staging"
+    assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.7, 0.0, math.pi / 2))), (
+        "turned side-on at staging"
+    )
     assert run.wants_detections(None)  # no pose yet: look
     assert not run.wants_detections(SEED_DOCK.compose(Pose2D(-0.08, 0.0, 0.0)))  # the marker fills the view
     run.enter(RunPhase.WAIT_FOR_CHARGE, 3.0)

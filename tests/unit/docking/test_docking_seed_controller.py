@@ -64,9 +64,13 @@ def test_goal_yaw_error_is_not_wrapped_unless_asked() -> None:
 def test_drives_through_all_three_goals_from_the_staging_goal_and_ends_idle() -> None:
     approach = line_approach(SEED_DOCK)
     recorder = Recorder(LineApproachController(approach.goals))
-    result = simulate_approach(recorder, approach.staging_goal, SEED_DOCK, 0.1, stop_at_contact=False, timeout_s=200.0)
+    result = simulate_approach(
+        recorder, approach.staging_goal, SEED_DOCK, 0.1, stop_at_contact=False, timeout_s=200.0
+    )
 
-    goal_sequence = [idx for i, (idx, _, _) in enumerate(recorder.ticks) if i == 0 or recorder.ticks[i - 1][0] != idx]
+    goal_sequence = [
+        idx for i, (idx, _, _) in enumerate(recorder.ticks) if i == 0 or recorder.ticks[i - 1][0] != idx
+    ]
     assert goal_sequence == [0, 1, 2, 3]
     for goal_idx in (0, 1, 2):
         phases = {phase for idx, phase, _ in recorder.ticks if idx == goal_idx}
@@ -84,7 +88,14 @@ def test_drives_through_all_three_goals_from_the_staging_goal_and_ends_idle() ->
 
 def test_trigger_fires_when_crossing_below_threshold() -> None:
     trigger = LowBatteryTrigger(0.25)
-    assert [trigger.update(p) for p in (0.5, 0.3, 0.25, 0.2499, 0.2, 0.1)] == [False, False, False, True, False, False]
+    assert [trigger.update(p) for p in (0.5, 0.3, 0.25, 0.2499, 0.2, 0.1)] == [
+        False,
+        False,
+        False,
+        True,
+        False,
+        False,
+    ]
 
 
 def test_trigger_fires_when_the_first_reading_is_already_low() -> None:

@@ -104,18 +104,23 @@ def test_backing_off_reverses_to_staging() -> None:
 def test_params_take_a_world_file_as_the_dock_database() -> None:
     params = Params.model_validate({"dock_database": SEED_ROOM})
     assert (params.controller, params.low_battery_threshold, params.max_retries) == ("graceful", 0.25, 3)
-    patrol = Params.model_validate({"dock_database": SEED_ROOM, "patrol": [[1, 2, 0.5]], "controller": "seed"})
+    patrol = Params.model_validate(
+        {"dock_database": SEED_ROOM, "patrol": [[1, 2, 0.5]], "controller": "seed"}
+    )
     assert patrol.patrol == [(1.0, 2.0, 0.5)]
 
 
-@pytest.mark.parametrize("bad, field", [
-    ({"controller": "pid"}, "controller"),
-    ({"resume_at": 0.2}, "resume_at"),
-    ({"dock_database": "/nonexistent/docks.yaml"}, "dock_database"),
-    ({"max_approach_speed_mps": 0.8}, "max_approach_speed_mps"),
-    ({"unknown": 1}, "unknown"),
-    ({"world": SEED_ROOM}, "world"),
-])
+@pytest.mark.parametrize(
+    "bad, field",
+    [
+        ({"controller": "pid"}, "controller"),
+        ({"resume_at": 0.2}, "resume_at"),
+        ({"dock_database": "/nonexistent/docks.yaml"}, "dock_database"),
+        ({"max_approach_speed_mps": 0.8}, "max_approach_speed_mps"),
+        ({"unknown": 1}, "unknown"),
+        ({"world": SEED_ROOM}, "world"),
+    ],
+)
 def test_params_refuse_bad_values(bad: dict, field: str) -> None:  # type: ignore[type-arg]
     with pytest.raises(ValidationError, match=field):
         Params.model_validate({"dock_database": SEED_ROOM} | bad)
@@ -132,8 +137,9 @@ def test_cli_names_match_the_service_codes() -> None:
 
 
 def test_feedback_lines_change_with_state_and_retries() -> None:
-    feedback = DockRobotFeedback(state=DockRobotFeedback.CONTROLLING, docking_time=Duration.from_sec(12.34),
-                                 num_retries=0)
+    feedback = DockRobotFeedback(
+        state=DockRobotFeedback.CONTROLLING, docking_time=Duration.from_sec(12.34), num_retries=0
+    )
     key, line = describe_dock_feedback(feedback)
     assert line == "   12.3 s  CONTROLLING" and key == (3, 0)
     feedback.num_retries = 2
@@ -165,5 +171,8 @@ def test_coming_up_to_the_plate_off_its_axis_gives_up() -> None:
     approach.begin(SEED_DOCK)
     assert approach.command(0.0, offset_along(SEED_DOCK, -0.08, 0.035), 0.0, None) is MISALIGNED
     assert approach.command(0.05, offset_along(SEED_DOCK, -0.08, 0.0, 0.25), 0.0, None) is MISALIGNED
-    assert approach.command(0.1, offset_along(SEED_DOCK, -0.08, 0.01, 0.05), 0.0, None) not in (ARRIVED, MISALIGNED)
+    assert approach.command(0.1, offset_along(SEED_DOCK, -0.08, 0.01, 0.05), 0.0, None) not in (
+        ARRIVED,
+        MISALIGNED,
+    )
     assert approach.command(0.15, offset_along(SEED_DOCK, -0.3, 0.06), 0.0, None) not in (ARRIVED, MISALIGNED)

@@ -181,12 +181,18 @@ def test_resume_at_must_be_above_the_threshold() -> None:
 
 def test_no_command_while_the_planner_drives() -> None:
     arbiter = DriveArbiter(cancel_retry_s=1.0)
-    assert arbiter.navigate(Navigate(Pose2D(1.0, 2.0, 0.0), "a")) == DriveOrders(send_goal=Pose2D(1.0, 2.0, 0.0))
-    assert arbiter.navigate(Navigate(Pose2D(1.0, 2.0, 0.0), "a")) == DriveOrders()  # same request: sent already
+    assert arbiter.navigate(Navigate(Pose2D(1.0, 2.0, 0.0), "a")) == DriveOrders(
+        send_goal=Pose2D(1.0, 2.0, 0.0)
+    )
+    assert (
+        arbiter.navigate(Navigate(Pose2D(1.0, 2.0, 0.0), "a")) == DriveOrders()
+    )  # same request: sent already
     assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=0.0) == DriveOrders(cancel_nav=True)
     assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=0.5) == DriveOrders()
     assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=1.1) == DriveOrders(cancel_nav=True)
-    assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=False, now_s=1.2) == DriveOrders(publish=Velocity(0.1, 0.0))
+    assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=False, now_s=1.2) == DriveOrders(
+        publish=Velocity(0.1, 0.0)
+    )
 
 
 def test_one_zero_command_before_the_planner_takes_over() -> None:

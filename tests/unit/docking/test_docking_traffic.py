@@ -24,9 +24,20 @@ from services.docking.traffic import (
 from shared.geometry import Pose2D
 
 # A corridor 0.8 m wide from x=2 to x=8 (y 2.6 .. 3.4) between two open rooms of a 10 x 6 m hall.
-CORRIDOR = [((2.0, 2.6), (8.0, 2.6)), ((2.0, 3.4), (8.0, 3.4)),
-            ((2.0, 0.0), (2.0, 2.6)), ((2.0, 3.4), (2.0, 6.0)), ((8.0, 0.0), (8.0, 2.6)), ((8.0, 3.4), (8.0, 6.0))]
-HALL = [((0.0, 0.0), (10.0, 0.0)), ((10.0, 0.0), (10.0, 6.0)), ((10.0, 6.0), (0.0, 6.0)), ((0.0, 6.0), (0.0, 0.0))]
+CORRIDOR = [
+    ((2.0, 2.6), (8.0, 2.6)),
+    ((2.0, 3.4), (8.0, 3.4)),
+    ((2.0, 0.0), (2.0, 2.6)),
+    ((2.0, 3.4), (2.0, 6.0)),
+    ((8.0, 0.0), (8.0, 2.6)),
+    ((8.0, 3.4), (8.0, 6.0)),
+]
+HALL = [
+    ((0.0, 0.0), (10.0, 0.0)),
+    ((10.0, 0.0), (10.0, 6.0)),
+    ((10.0, 6.0), (0.0, 6.0)),
+    ((0.0, 6.0), (0.0, 0.0)),
+]
 
 
 def test_priority_goes_to_less_charge_then_to_the_name_first() -> None:
@@ -45,7 +56,9 @@ def test_head_on_in_a_corridor_one_gives_way_and_the_other_waits_for_the_way_to_
     assert met is not None and met[1] is Meeting.HEAD_ON, "r2 has less charge: r1 gives way"
     met = must_give_way(r2, "r2", 0.4, [Peer("r1", r1, 0.8, True)], WALLS)
     assert met is not None and met[1] is Meeting.HEAD_ON_PRIORITY, "r2 waits for r1 to back out"
-    assert must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, False)], WALLS) is None, "a parked robot is not met"
+    assert must_give_way(r1, "r1", 0.8, [Peer("r2", r2, 0.4, False)], WALLS) is None, (
+        "a parked robot is not met"
+    )
     following = Pose2D(6.0, 3.0, 0.0)  # going the same way, ahead of r1
     assert must_give_way(r1, "r1", 0.8, [Peer("r2", following, 0.4, True)], WALLS) is None
     far = Peer("r2", Pose2D(7.5, 3.0, math.pi), 0.4, True)
@@ -80,7 +93,9 @@ def test_the_way_ahead_is_the_plan_from_the_robot_on_or_else_the_line_it_heads_a
     assert way[-1][0] == pytest.approx(5.5) and np.all(way[1:, 1] == 0.0)  # the next 3.5 m of the plan
     heading_line = way_ahead(Pose2D(2.0, 1.0, math.pi / 2), None)
     np.testing.assert_allclose(heading_line[[0, -1]], [[2.0, 1.0], [2.0, 4.5]], atol=1e-12)
-    np.testing.assert_allclose(way_ahead(Pose2D(2.0, 1.0, math.pi / 2), plan), heading_line)  # not on this plan
+    np.testing.assert_allclose(
+        way_ahead(Pose2D(2.0, 1.0, math.pi / 2), plan), heading_line
+    )  # not on this plan
 
 
 def test_the_priority_robot_does_not_wait_for_one_beyond_the_end_of_its_plan() -> None:
@@ -227,13 +242,17 @@ def test_give_way_on_a_blocked_way_to_the_passing_place_waits_for_its_own_pose()
     task = GiveWay(Peer("r2", Pose2D(9.0, 3.0, math.pi), 0.2, True), Meeting.HEAD_ON, place, resume=None)
     intent = task.step(_inputs(0.0, Pose2D(3.0, 3.0, 0.0)))
     running = NavStatus(intent.key, busy=True)
-    assert task.step(_inputs(STILL_GIVING_WAY_S + 1.0, None, running)) == intent, "its own pose stale: it keeps going"
+    assert task.step(_inputs(STILL_GIVING_WAY_S + 1.0, None, running)) == intent, (
+        "its own pose stale: it keeps going"
+    )
     task.step(_inputs(STILL_GIVING_WAY_S + 1.1, Pose2D(3.0, 3.0, 0.0), running))
     assert task.result is not None
 
 
 def test_give_way_ends_when_the_other_robot_stops_driving() -> None:
-    task = GiveWay(Peer("r2", Pose2D(2.0, 0.0, math.pi), 0.2, True), Meeting.HEAD_ON_PRIORITY, None, resume=None)
+    task = GiveWay(
+        Peer("r2", Pose2D(2.0, 0.0, math.pi), 0.2, True), Meeting.HEAD_ON_PRIORITY, None, resume=None
+    )
     me = Pose2D(0.0, 0.0, 0.0)
     task.step(_inputs(0.0, me))
     assert task.result is None
@@ -243,8 +262,9 @@ def test_give_way_ends_when_the_other_robot_stops_driving() -> None:
 
 
 def test_give_way_does_not_wait_for_ever() -> None:
-    task = GiveWay(Peer("r2", Pose2D(1.5, 1.0, math.pi), 0.2, True), Meeting.HEAD_ON, Pose2D(1.0, 1.0, 0.0),
-                   resume=None)
+    task = GiveWay(
+        Peer("r2", Pose2D(1.5, 1.0, math.pi), 0.2, True), Meeting.HEAD_ON, Pose2D(1.0, 1.0, 0.0), resume=None
+    )
     first = task.step(_inputs(0.0, Pose2D(1.0, 1.0, 0.0)))
     assert isinstance(first, Navigate)
     task.step(_inputs(1.0, Pose2D(1.0, 1.0, 0.0), NavStatus(first.key, outcome=NavOutcome.SUCCEEDED)))
@@ -258,7 +278,9 @@ def test_two_robots_waiting_on_each_other_the_one_with_priority_carries_on_first
     # by; r3 had turned meanwhile and found r2 on the line it headed along, so it waited for r2 to back out,
     # and both stood until r3's wait ran out (30 s).
     r3, r2 = Pose2D(1.82, 2.43, 0.72), Pose2D(4.37, 4.91, -3.12)
-    waiting = GiveWay(Peer("r2", r2, 0.9, False, giving_way=True), Meeting.HEAD_ON_PRIORITY, None, resume=None)
+    waiting = GiveWay(
+        Peer("r2", r2, 0.9, False, giving_way=True), Meeting.HEAD_ON_PRIORITY, None, resume=None
+    )
     giving = GiveWay(Peer("r3", r3, 0.4, True), Meeting.HEAD_ON, r2, resume=None)
     going = giving.step(_inputs(0.0, r2))
     assert isinstance(going, Navigate)
@@ -274,7 +296,10 @@ def test_two_robots_waiting_on_each_other_the_one_with_priority_carries_on_first
     assert waiting.unresolved and waiting.message.startswith("r2 stood still"), waiting.message
     assert t == pytest.approx(STILL_PRIORITY_S, abs=0.3)
     assert giving.result is None, "the one giving way waits longer than the one with priority"
-    assert must_give_way(r3, "r3", 0.4, [Peer("r2", r2, 0.9, False, giving_way=True)], [], carry_on={"r2"}) is None
+    assert (
+        must_give_way(r3, "r3", 0.4, [Peer("r2", r2, 0.9, False, giving_way=True)], [], carry_on={"r2"})
+        is None
+    )
 
 
 def test_a_robot_that_stops_giving_way_but_stands_still_is_waited_for_as_one_stuck_from_then_on() -> None:
@@ -294,7 +319,9 @@ def test_a_robot_that_stops_giving_way_but_stands_still_is_waited_for_as_one_stu
     assert t == pytest.approx(2 * STILL_PRIORITY_S, abs=0.3), "6 s after it stopped giving way, not at once"
 
 
-def test_a_robot_stopped_for_a_crossing_carries_on_when_the_other_stands_still_but_not_while_it_moves() -> None:
+def test_a_robot_stopped_for_a_crossing_carries_on_when_the_other_stands_still_but_not_while_it_moves() -> (
+    None
+):
     me = Pose2D(5.0, 5.0, 0.0)
     stuck = Pose2D(6.0, 5.2, math.pi / 2)  # in front, crossing, with priority; held up (by this robot, say)
     for waits, patience in ((False, STILL_PRIORITY_S), (True, STILL_GIVING_WAY_S)):

@@ -9,8 +9,15 @@ from shared.geometry import Pose2D
 from shared.starts import beacon_starts
 from shared.world import parse_world
 
-ROOM = parse_world({"name": "ir", "bounds": [-3, -3, 3, 3], "docks": [{"id": "home", "pose": [2.4, 0, 0]}],
-                    "boxes": [{"pose": [0.0, 1.5, 0.0], "size": [0.5, 0.5]}], "robot": {"start": [0, 0, 0]}})
+ROOM = parse_world(
+    {
+        "name": "ir",
+        "bounds": [-3, -3, 3, 3],
+        "docks": [{"id": "home", "pose": [2.4, 0, 0]}],
+        "boxes": [{"pose": [0.0, 1.5, 0.0], "size": [0.5, 0.5]}],
+        "robot": {"start": [0, 0, 0]},
+    }
+)
 
 
 def test_from_beacon_starts_the_task_docks_on_its_contacts_without_touching_anything_else() -> None:
@@ -33,4 +40,6 @@ def test_a_run_that_gives_up_says_where_the_drive_was_and_what_it_tried() -> Non
     room = Room(ROOM)
     trial = dock_from(room, beacon_starts(ROOM, 1, seed=4)[0], seed=0, max_time_s=3.0)
     assert not trial.docked
-    assert trial.outcome.startswith("not charging after 3 s (in ") and "states begun: scan 1x" in trial.outcome
+    assert (
+        trial.outcome.startswith("not charging after 3 s (in ") and "states begun: scan 1x" in trial.outcome
+    )

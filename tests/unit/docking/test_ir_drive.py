@@ -15,13 +15,21 @@ from services.simulator.raycast import SegmentSet
 from shared.geometry import Pose2D
 from shared.world import ROBOT_FRONT_M, parse_world
 
-WORLD = parse_world({"name": "ir", "bounds": [-5, -5, 5, 5], "docks": [{"id": "home", "pose": [0, 0, 0]}],
-                     "robot": {"start": [-1, 0, 0]}})
+WORLD = parse_world(
+    {
+        "name": "ir",
+        "bounds": [-5, -5, 5, 5],
+        "docks": [{"id": "home", "pose": [0, 0, 0]}],
+        "robot": {"start": [-1, 0, 0]},
+    }
+)
 DOCK = WORLD.docks[0].pose2d
 FACE = DOCK.compose(Pose2D(ROBOT_FRONT_M, 0.0, math.pi))
 
 
-def _dock_from(start: Pose2D, seed: int, max_time_s: float = 150.0) -> tuple[float | None, Pose2D, list[IrState]]:
+def _dock_from(
+    start: Pose2D, seed: int, max_time_s: float = 150.0
+) -> tuple[float | None, Pose2D, list[IrState]]:
     """Kinematic unicycle at 20 Hz until the robot's front reaches the dock's face (or time runs out)."""
     rng = np.random.default_rng(seed)
     segments = SegmentSet(WORLD.opaque_segments())
@@ -37,8 +45,11 @@ def _dock_from(start: Pose2D, seed: int, max_time_s: float = 150.0) -> tuple[flo
         if command.state is IrState.LOST:
             return None, at_dock, states
         turn = command.angular_radps
-        pose = Pose2D(pose.x + command.linear_mps * dt * math.cos(pose.yaw),
-                      pose.y + command.linear_mps * dt * math.sin(pose.yaw), pose.yaw + turn * dt)
+        pose = Pose2D(
+            pose.x + command.linear_mps * dt * math.cos(pose.yaw),
+            pose.y + command.linear_mps * dt * math.sin(pose.yaw),
+            pose.yaw + turn * dt,
+        )
         t += dt
     return None, pose.relative_to(DOCK), states
 

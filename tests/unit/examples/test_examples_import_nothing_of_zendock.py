@@ -58,23 +58,37 @@ def test_there_are_examples_to_check() -> None:
 
 
 def test_no_example_imports_zendock() -> None:
-    offences = [f"{path.relative_to(EXAMPLES.parent)}:{line}: imports {module}"
-                for path in sorted(EXAMPLES.rglob("*.py")) for line, module in _imported_modules(path)
-                if _zendock_import(path, module)]
+    offences = [
+        f"{path.relative_to(EXAMPLES.parent)}:{line}: imports {module}"
+        for path in sorted(EXAMPLES.rglob("*.py"))
+        for line, module in _imported_modules(path)
+        if _zendock_import(path, module)
+    ]
     assert not offences, "examples must not import zendock's packages:\n" + "\n".join(offences)
 
 
 def test_examples_use_only_zenoh_msgpack_numpy_and_the_standard_library() -> None:
     own = {p.stem for p in EXAMPLES.rglob("*.py")}
     allowed = set(sys.stdlib_module_names) | ALLOWED_THIRD_PARTY | own | {"__future__"}
-    offences = [f"{path.relative_to(EXAMPLES.parent)}:{line}: imports {module}"
-                for path in _service_sources() for line, module in _imported_modules(path)
-                if module.split(".")[0] not in allowed]
-    assert not offences, "examples may use only zenoh, msgpack, numpy and the standard library:\n" + "\n".join(offences)
+    offences = [
+        f"{path.relative_to(EXAMPLES.parent)}:{line}: imports {module}"
+        for path in _service_sources()
+        for line, module in _imported_modules(path)
+        if module.split(".")[0] not in allowed
+    ]
+    assert not offences, (
+        "examples may use only zenoh, msgpack, numpy and the standard library:\n" + "\n".join(offences)
+    )
 
 
-@pytest.mark.parametrize("source", ["from shared.node import Node", "import services.battery",
-                                    "import importlib\nimportlib.import_module('deploy.cli')"])
+@pytest.mark.parametrize(
+    "source",
+    [
+        "from shared.node import Node",
+        "import services.battery",
+        "import importlib\nimportlib.import_module('deploy.cli')",
+    ],
+)
 def test_the_check_sees_an_import_of_zendock(tmp_path: Path, source: str) -> None:
     path = tmp_path / "bad.py"
     path.write_text(source + "\n")

@@ -64,8 +64,10 @@ def test_the_examples_read_the_same_docks_as_zendock(docking: ModuleType, world:
 
 def test_a_block_style_dock_database(docking: ModuleType, tmp_path: Path) -> None:
     path = tmp_path / "docks.yaml"
-    path.write_text("# a dock database\ndocks:\n  - id: a   # the first\n    pose: [1.0, 2, -0.5]\n    type: charger\n"
-                    "  - {id: 'b', pose: [3.5, 4.0, 0.0]}\nother: 1\n")
+    path.write_text(
+        "# a dock database\ndocks:\n  - id: a   # the first\n    pose: [1.0, 2, -0.5]\n    type: charger\n"
+        "  - {id: 'b', pose: [3.5, 4.0, 0.0]}\nother: 1\n"
+    )
     assert docking.read_docks(str(path)) == {"a": (1.0, 2.0, -0.5), "b": (3.5, 4.0, 0.0)}
 
 
@@ -74,7 +76,10 @@ def test_messages_decode_with_zendocks_classes(wire: ModuleType) -> None:
     assert Header.decode(_wire_bytes(wire.header(12.5, "map"))).stamp == Time(12, 500_000_000)
     twist = Twist.decode(_wire_bytes(wire.twist_msg(0.2, -0.5)))
     assert (twist.linear.x, twist.angular.z) == (0.2, -0.5)
-    nav_goal = {"pose": {"header": wire.header(3.0, "map"), "pose": wire.pose_msg(1.0, 2.0, 1.2)}, "behavior_tree": ""}
+    nav_goal = {
+        "pose": {"header": wire.header(3.0, "map"), "pose": wire.pose_msg(1.0, 2.0, 1.2)},
+        "behavior_tree": "",
+    }
     decoded = NAVIGATE_TO_POSE.goal.decode(_wire_bytes(nav_goal))
     assert decoded.pose.pose.to_pose2d().yaw == pytest.approx(1.2)
     assert wire.planar_pose(wire.pose_msg(1.0, 2.0, -2.5)) == pytest.approx((1.0, 2.0, -2.5))
@@ -84,11 +89,16 @@ def test_messages_decode_with_zendocks_classes(wire: ModuleType) -> None:
 def test_action_messages_decode_with_zendocks_classes(wire: ModuleType, docking: ModuleType) -> None:
     handle = wire.GoalHandle(bytes(range(16)), {}, wire.time_msg(4.0))
     status = {"status_list": [{"goal_info": handle.info(), "status": wire.SUCCEEDED}]}
-    assert GoalStatusArray.decode(_wire_bytes(status)).status_list[0].goal_info.goal_id.hex() == bytes(range(16)).hex()
+    assert (
+        GoalStatusArray.decode(_wire_bytes(status)).status_list[0].goal_info.goal_id.hex()
+        == bytes(range(16)).hex()
+    )
     DockRobotResult.decode(_wire_bytes(docking.Docking.dock_result(True, 0, 1)))
     feedback = {"state": docking.CONTROLLING, "docking_time": wire.time_msg(3.5), "num_retries": 0}
     DockRobotFeedback.decode(_wire_bytes(feedback))
-    DOCK_ROBOT.feedback_message.decode(_wire_bytes({"goal_id": wire.uuid_msg(bytes(16)), "feedback": feedback}))
+    DOCK_ROBOT.feedback_message.decode(
+        _wire_bytes({"goal_id": wire.uuid_msg(bytes(16)), "feedback": feedback})
+    )
     DOCK_ROBOT.send_goal_response.decode(_wire_bytes({"accepted": True, "stamp": wire.time_msg(1.0)}))
 
 
@@ -125,7 +135,11 @@ def test_the_battery_state_and_set_state_response_decode(wire: ModuleType) -> No
     assert BatteryState.decode(_wire_bytes(node.published[-1])).power_supply_status == battery.FULL
     request = {"percentage": 0.5, "drain_scale": math.nan, "charge_scale": 2.0, "frozen": False}
     response = SetBatteryStateResponse.decode(_wire_bytes(model.on_set_state(request)))
-    assert (response.state.percentage, response.state.power_supply_status, response.charge_scale) == (0.5, 1, 2.0)
+    assert (response.state.percentage, response.state.power_supply_status, response.charge_scale) == (
+        0.5,
+        1,
+        2.0,
+    )
     with pytest.raises(wire.BadMessage, match="percentage"):
         model.on_set_state({**request, "percentage": 1.5})
     with pytest.raises(wire.BadMessage, match="unknown field"):

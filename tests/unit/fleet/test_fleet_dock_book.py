@@ -84,7 +84,9 @@ def test_no_dock_ever_has_two_robots_whatever_happens(seed: int) -> None:
         action = rng.random()
         if action < 0.5:
             lengths = {d: rng.uniform(1.0, 10.0) for d in ("a", "b", "c") if rng.random() < 0.8}
-            book.request(robot, rng.uniform(0.0, 1.0), now, wanted=rng.choice([None, "a", "b"]), path_lengths_m=lengths)
+            book.request(
+                robot, rng.uniform(0.0, 1.0), now, wanted=rng.choice([None, "a", "b"]), path_lengths_m=lengths
+            )
         elif action < 0.7:
             book.release(robot)
         elif action < 0.9:

@@ -38,7 +38,9 @@ def test_compose_runs_each_robots_services_in_one_container(tmp_path: Path) -> N
         assert command[:2] == ["zendock", "container"]
         members = [command[2]] + [command[i + 1] for i, word in enumerate(command) if word == "+"]
         assert members == ["battery", "pose", "planner", "docking"]
-        assert f"glass_memory_file={tmp_path / 'state'}/{robot}/glass_memory.npz" in command, "${ROBOT} filled in"
+        assert f"glass_memory_file={tmp_path / 'state'}/{robot}/glass_memory.npz" in command, (
+            "${ROBOT} filled in"
+        )
         assert group.namespace == robot
         # healthy once its last member's node (``docking`` in the robot's namespace) is alive
         assert group.healthcheck is not None and group.healthcheck.liveliness == "docking"

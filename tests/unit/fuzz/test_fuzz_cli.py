@@ -15,4 +15,3 @@ def test_a_remote_endpoint_is_a_usage_error(capsys: pytest.CaptureFixture[str]) 
 def test_bad_counts_are_usage_errors(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["fuzz", "--connect", "tcp/127.0.0.1:7447", "--messages", "-1"]) == 2
     assert "--messages" in capsys.readouterr().err
-

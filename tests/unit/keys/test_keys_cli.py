@@ -29,16 +29,31 @@ def _parse(*argv: str) -> argparse.Namespace:
 
 
 def test_every_verb_takes_the_bus_flags() -> None:
-    for verb, extra in [("list", []), ("echo", ["k"]), ("hz", ["k"]), ("bw", ["k"]), ("delay", ["k"]),
-                        ("info", ["k"]), ("pub", ["k"])]:
-        args = _parse(verb, *extra, "--connect", "tcp/1.2.3.4:7447", "--namespace", "r1", "--connect-timeout", "1")
+    for verb, extra in [
+        ("list", []),
+        ("echo", ["k"]),
+        ("hz", ["k"]),
+        ("bw", ["k"]),
+        ("delay", ["k"]),
+        ("info", ["k"]),
+        ("pub", ["k"]),
+    ]:
+        args = _parse(
+            verb, *extra, "--connect", "tcp/1.2.3.4:7447", "--namespace", "r1", "--connect-timeout", "1"
+        )
         assert (args.connect, args.namespace, args.connect_timeout) == (["tcp/1.2.3.4:7447"], "r1", 1.0)
         assert callable(args.func)
 
 
 def test_echo_and_hz_flags() -> None:
     echo = _parse("echo", "/cmd_vel", "--once", "--field", "linear.x", "--csv", "--timeout", "2")
-    assert (echo.key, echo.once, echo.field, echo.csv, echo.timeout) == ("/cmd_vel", True, "linear.x", True, 2.0)
+    assert (echo.key, echo.once, echo.field, echo.csv, echo.timeout) == (
+        "/cmd_vel",
+        True,
+        "linear.x",
+        True,
+        2.0,
+    )
     hz = _parse("hz", "a", "b", "-w", "50", "--sim-time", "--duration", "3", "--json")
     assert (hz.keys, hz.window, hz.sim_time, hz.duration, hz.json) == (["a", "b"], 50, True, 3.0, True)
     with pytest.raises(SystemExit):
@@ -48,9 +63,14 @@ def test_echo_and_hz_flags() -> None:
 
 
 def test_pub_arguments() -> None:
-    args = _parse("pub", "cmd_vel", "geometry_msgs/msg/Twist", "{linear: {x: 0.2}}", "--rate", "5", "--times", "3")
+    args = _parse(
+        "pub", "cmd_vel", "geometry_msgs/msg/Twist", "{linear: {x: 0.2}}", "--rate", "5", "--times", "3"
+    )
     assert (args.key, args.type_and_values, args.rate, args.times) == (
-        "cmd_vel", ["geometry_msgs/msg/Twist", "{linear: {x: 0.2}}"], 5.0, 3,
+        "cmd_vel",
+        ["geometry_msgs/msg/Twist", "{linear: {x: 0.2}}"],
+        5.0,
+        3,
     )
     assert _parse("pub", "cmd_vel", "{}", "-1").once
 
@@ -76,30 +96,44 @@ def test_too_many_pub_arguments_is_a_usage_error() -> None:
 
 
 def _graph():  # type: ignore[no-untyped-def]
-    return build_graph([
-        endpoint_token_key("pub", "r1", "teleop", TWIST, "r1/cmd_vel"),
-        endpoint_token_key("sub", "r1", "sim", TWIST, "r1/cmd_vel"),
-        endpoint_token_key("srv", "r1", "sim", "zendock_msgs/srv/Teleport", "r1/simulator/teleport"),
-        endpoint_token_key("act", "r1", "docking", "zendock_msgs/action/DockRobot", "r1/dock_robot"),
-    ], [("pub", "r1/raw")])
+    return build_graph(
+        [
+            endpoint_token_key("pub", "r1", "teleop", TWIST, "r1/cmd_vel"),
+            endpoint_token_key("sub", "r1", "sim", TWIST, "r1/cmd_vel"),
+            endpoint_token_key("srv", "r1", "sim", "zendock_msgs/srv/Teleport", "r1/simulator/teleport"),
+            endpoint_token_key("act", "r1", "docking", "zendock_msgs/action/DockRobot", "r1/dock_robot"),
+        ],
+        [("pub", "r1/raw")],
+    )
 
 
 def test_list_plain_types_and_verbose() -> None:
     entries = _graph().in_namespace("r1")
     assert list_lines(entries, ListFormat()) == [
-        "r1/cmd_vel", "r1/dock_robot (action)", "r1/raw (no token)", "r1/simulator/teleport (service)",
+        "r1/cmd_vel",
+        "r1/dock_robot (action)",
+        "r1/raw (no token)",
+        "r1/simulator/teleport (service)",
     ]
     typed = list_lines(entries, ListFormat(show_types=True))
     assert typed[0] == f"r1/cmd_vel [{TWIST}]" and typed[2] == "r1/raw [?] (no token)"
     verbose = list_lines(entries, ListFormat(verbose=True))
-    assert verbose[:3] == [f"r1/cmd_vel [{TWIST}]", "  publishers (1): /r1/teleop", "  subscribers (1): /r1/sim"]
+    assert verbose[:3] == [
+        f"r1/cmd_vel [{TWIST}]",
+        "  publishers (1): /r1/teleop",
+        "  subscribers (1): /r1/sim",
+    ]
     assert "  action servers (1): /r1/docking" in verbose
     assert "  service servers (1): /r1/sim" in verbose
     assert "  without a zendock token (router admin space): publisher" in verbose
 
 
 def test_hidden_keys_are_those_ros2_hides() -> None:
-    assert is_hidden("r1/dock_robot/_action/status") and is_hidden("r1/battery/_param/get") and is_hidden("_internal")
+    assert (
+        is_hidden("r1/dock_robot/_action/status")
+        and is_hidden("r1/battery/_param/get")
+        and is_hidden("_internal")
+    )
     assert not is_hidden("r1/dock_robot") and not is_hidden("r1/cmd_vel") and not is_hidden("r1/a_b")
     for flag in ("-a", "--include-hidden", "--include-hidden-topics"):
         assert _parse("list", flag).include_hidden
@@ -109,7 +143,11 @@ def test_hidden_keys_are_those_ros2_hides() -> None:
 def test_info_counts_and_nodes() -> None:
     graph = _graph()
     assert info_lines(graph.keys["r1/cmd_vel"]) == [
-        "Key: r1/cmd_vel", f"Type: {TWIST}", "Publisher count: 1", "    /r1/teleop", "Subscription count: 1",
+        "Key: r1/cmd_vel",
+        f"Type: {TWIST}",
+        "Publisher count: 1",
+        "    /r1/teleop",
+        "Subscription count: 1",
         "    /r1/sim",
     ]
     service = info_lines(graph.keys["r1/simulator/teleport"])

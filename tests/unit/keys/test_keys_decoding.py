@@ -76,7 +76,10 @@ def test_arrays_become_short_float_lists_and_nan_survives() -> None:
 
 
 def test_action_and_service_interface_types_are_known() -> None:
-    sample = decode_payload("r/dock_robot/_action/status", GoalStatusArray().encode(),
-                            "application/msgpack;action_msgs/msg/GoalStatusArray")
+    sample = decode_payload(
+        "r/dock_robot/_action/status",
+        GoalStatusArray().encode(),
+        "application/msgpack;action_msgs/msg/GoalStatusArray",
+    )
     assert sample.note == "" and sample.value == {"status_list": []}
     assert "opennav_docking_msgs/action/DockRobot_Goal" in known_types()

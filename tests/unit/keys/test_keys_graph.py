@@ -14,7 +14,9 @@ def _tokens() -> list[str]:
         endpoint_token_key("pub", "robot1", "teleop", TWIST, "robot1/cmd_vel"),
         endpoint_token_key("sub", "robot1", "simulator", TWIST, "robot1/cmd_vel"),
         endpoint_token_key("sub", "robot1", "recorder", TWIST, "robot1/cmd_vel"),
-        endpoint_token_key("srv", "robot1", "simulator", "zendock_msgs/srv/Teleport", "robot1/simulator/teleport"),
+        endpoint_token_key(
+            "srv", "robot1", "simulator", "zendock_msgs/srv/Teleport", "robot1/simulator/teleport"
+        ),
         endpoint_token_key("act", "robot1", "docking", "zendock_msgs/action/DockRobot", "robot1/dock_robot"),
         endpoint_token_key("pub", "", "clock_source", "rosgraph_msgs/msg/Clock", "clock"),
         "@zendock/unknown/x/y",  # foreign or malformed tokens are ignored
@@ -43,7 +45,9 @@ def test_duplicate_tokens_count_once() -> None:
 def test_namespace_filter_and_wildcard_matching() -> None:
     graph = build_graph(_tokens())
     assert [e.key for e in graph.in_namespace("robot1")] == [
-        "robot1/cmd_vel", "robot1/dock_robot", "robot1/simulator/teleport",
+        "robot1/cmd_vel",
+        "robot1/dock_robot",
+        "robot1/simulator/teleport",
     ]
     assert [e.key for e in graph.in_namespace("")][0] == "clock"
     assert [e.key for e in graph.in_namespace("robot")] == []  # a prefix of a chunk is not a namespace

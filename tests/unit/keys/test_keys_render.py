@@ -38,7 +38,9 @@ def test_twist_prints_like_ros2_topic_echo() -> None:
 
 def test_lists_of_messages_are_block_items_and_output_is_yaml() -> None:
     path = Path(Header(Time(3, 5), "map"), [PoseStamped(), PoseStamped()])
-    text = "\n".join(yaml_lines(decode_payload("p", path.encode(), "application/msgpack;nav_msgs/msg/Path").value))
+    text = "\n".join(
+        yaml_lines(decode_payload("p", path.encode(), "application/msgpack;nav_msgs/msg/Path").value)
+    )
     assert "poses:\n- header:\n    stamp:\n      sec: 0" in text
     assert yaml.safe_load(text)["poses"][1]["pose"]["orientation"]["w"] == 1.0
     assert yaml.safe_load(text)["header"]["frame_id"] == "map"
@@ -46,12 +48,20 @@ def test_lists_of_messages_are_block_items_and_output_is_yaml() -> None:
 
 def test_scalars_use_yaml_spelling() -> None:
     assert [format_scalar(v) for v in (math.nan, math.inf, -math.inf, True, None, 3, 0.1)] == [
-        ".nan", ".inf", "-.inf", "true", "null", "3", "0.1",
+        ".nan",
+        ".inf",
+        "-.inf",
+        "true",
+        "null",
+        "3",
+        "0.1",
     ]
     assert format_scalar(b"\x01\x02") == "<2 bytes: 0102>"
 
 
-@pytest.mark.parametrize("text", ["base_link", "", "true", "1.5", "a: b", "#x", " lead", "it's", "two\nlines", "é"])
+@pytest.mark.parametrize(
+    "text", ["base_link", "", "true", "1.5", "a: b", "#x", " lead", "it's", "two\nlines", "é"]
+)
 def test_strings_read_back_as_the_same_string(text: str) -> None:
     assert yaml.safe_load(f"k: {format_string(text)}")["k"] == text
 
@@ -72,8 +82,13 @@ def test_select_field_by_dotted_path_and_index() -> None:
     assert select_field(tree, "poses[0].x") == 1
     assert select_field(tree, "data.-1") == 30
     assert select_field(tree, "header") == {"frame_id": "map"}
-    for bad, reason in [("nope", "no field 'nope'"), ("data.7", "out of range"), ("data.x", "expected an index"),
-                        ("header.frame_id.z", "has no field 'z'"), ("", "names no field")]:
+    for bad, reason in [
+        ("nope", "no field 'nope'"),
+        ("data.7", "out of range"),
+        ("data.x", "expected an index"),
+        ("header.frame_id.z", "has no field 'z'"),
+        ("", "names no field"),
+    ]:
         with pytest.raises(FieldNotFound, match=reason):
             select_field(tree, bad)
 

@@ -40,7 +40,9 @@ def test_partial_yaml_is_merged_over_defaults() -> None:
 
 
 def test_list_items_that_are_messages_get_their_defaults() -> None:
-    msg = build_message(Path, {"header": {"frame_id": "map"}, "poses": [{"pose": {"position": {"x": 1}}}, {}]})
+    msg = build_message(
+        Path, {"header": {"frame_id": "map"}, "poses": [{"pose": {"position": {"x": 1}}}, {}]}
+    )
     assert isinstance(msg, Path) and len(msg.poses) == 2
     assert msg.poses[0].pose.position.x == 1.0 and msg.poses[0].pose.orientation.w == 1.0
     assert msg.poses[1] == PoseStamped()
@@ -53,7 +55,9 @@ def test_now_and_auto_stamp_each_message() -> None:
     assert first.header.stamp.to_sec() == pytest.approx(100.25) and first.header.frame_id == ""
     assert second.header.stamp.to_sec() == pytest.approx(101.5)
     assert math.isnan(first.voltage)  # the default survives the merge
-    tf = build_message(TFMessage, {"transforms": [{"header": {"stamp": "now", "frame_id": "odom"}}]}, now_s=7.5)
+    tf = build_message(
+        TFMessage, {"transforms": [{"header": {"stamp": "now", "frame_id": "odom"}}]}, now_s=7.5
+    )
     assert isinstance(tf, TFMessage) and tf.transforms[0].header.stamp.to_sec() == 7.5
 
 
@@ -84,8 +88,14 @@ def test_factory_validates_before_anything_is_built() -> None:
         message_factory(Twist, {"linear": {"x": "fast"}})
 
 
-@pytest.mark.parametrize(("text", "reason"), [("{linear: [", "not valid YAML"), ("[1, 2]", "must be a YAML mapping"),
-                                              ("0.5", "must be a YAML mapping")])
+@pytest.mark.parametrize(
+    ("text", "reason"),
+    [
+        ("{linear: [", "not valid YAML"),
+        ("[1, 2]", "must be a YAML mapping"),
+        ("0.5", "must be a YAML mapping"),
+    ],
+)
 def test_yaml_that_is_not_a_mapping_is_refused(text: str, reason: str) -> None:
     with pytest.raises(KeysError, match=reason) as error:
         parse_yaml_values(text)

@@ -14,17 +14,25 @@ REPO_ROOT = Path(__file__).resolve().parents[3]
 
 
 def _doc() -> dict:  # type: ignore[type-arg]
-    return {"services": {
-        "router": {"command": ["zendock", "router"]},
-        "map": {"command": ["zendock", "map", "save"], "restart": "no"},
-        "battery": {"command": ["python", "-m", "services.battery", "-p", "use_sim_time=true"],
-                    "depends_on": {"router": {"condition": "service_started"}}, "restart": "on-failure",
-                    "environment": {"A": "1"}},
-        "planner": {"command": "python -m services.planner -p map_yaml=m.yaml", "stop_grace_period": "8s",
-                    "depends_on": {"router": {}, "map": {"condition": "service_completed_successfully"}},
-                    "healthcheck": {"liveliness": True, "timeout": "20s"}},
-        "viewer": {"command": ["python", "-m", "services.viz"], "depends_on": ["planner", "router"]},
-    }}
+    return {
+        "services": {
+            "router": {"command": ["zendock", "router"]},
+            "map": {"command": ["zendock", "map", "save"], "restart": "no"},
+            "battery": {
+                "command": ["python", "-m", "services.battery", "-p", "use_sim_time=true"],
+                "depends_on": {"router": {"condition": "service_started"}},
+                "restart": "on-failure",
+                "environment": {"A": "1"},
+            },
+            "planner": {
+                "command": "python -m services.planner -p map_yaml=m.yaml",
+                "stop_grace_period": "8s",
+                "depends_on": {"router": {}, "map": {"condition": "service_completed_successfully"}},
+                "healthcheck": {"liveliness": True, "timeout": "20s"},
+            },
+            "viewer": {"command": ["python", "-m", "services.viz"], "depends_on": ["planner", "router"]},
+        }
+    }
 
 
 def test_a_group_replaces_its_members_with_one_container() -> None:
@@ -32,60 +40,99 @@ def test_a_group_replaces_its_members_with_one_container() -> None:
     out = compose_groups(doc, {"robot": ["battery", "planner"]})
     assert set(out["services"]) == {"router", "map", "robot", "viewer"} and "robot" not in doc["services"]
     robot = out["services"]["robot"]
-    assert robot["command"] == ["zendock", "container", "battery", "-p", "use_sim_time=true", "+",
-                                "planner", "-p", "map_yaml=m.yaml"]
-    assert robot["depends_on"] == {"router": {"condition": "service_started"},
-                                   "map": {"condition": "service_completed_successfully"}}
+    assert robot["command"] == [
+        "zendock",
+        "container",
+        "battery",
+        "-p",
+        "use_sim_time=true",
+        "+",
+        "planner",
+        "-p",
+        "map_yaml=m.yaml",
+    ]
+    assert robot["depends_on"] == {
+        "router": {"condition": "service_started"},
+        "map": {"condition": "service_completed_successfully"},
+    }
     assert robot["healthcheck"] == {"liveliness": "planner", "timeout": "20s"}
-    assert robot["restart"] == "on-failure" and robot["stop_grace_period"] == "8s" and robot["environment"] == {"A": "1"}
+    assert (
+        robot["restart"] == "on-failure"
+        and robot["stop_grace_period"] == "8s"
+        and robot["environment"] == {"A": "1"}
+    )
     assert out["services"]["viewer"]["depends_on"] == ["robot", "router"]
 
 
-@pytest.mark.parametrize(("groups", "message"), [
-    ({"robot": ["battery", "nowhere"]}, "unknown service 'nowhere'"),
-    ({"robot": ["battery", "map"]}, "only zendock's services run in a container"),
-    ({"robot": []}, "non-empty list"),
-    ({"router": ["battery"]}, "already named 'router'"),
-    ({"a": ["battery"], "b": ["battery"]}, "already in group 'a'"),
-])
+@pytest.mark.parametrize(
+    ("groups", "message"),
+    [
+        ({"robot": ["battery", "nowhere"]}, "unknown service 'nowhere'"),
+        ({"robot": ["battery", "map"]}, "only zendock's services run in a container"),
+        ({"robot": []}, "non-empty list"),
+        ({"router": ["battery"]}, "already named 'router'"),
+        ({"a": ["battery"], "b": ["battery"]}, "already in group 'a'"),
+    ],
+)
 def test_groups_that_cannot_run_as_one_process_are_named(groups: dict, message: str) -> None:  # type: ignore[type-arg]
     with pytest.raises(CompositionError, match=message):
         compose_groups(_doc(), groups)
 
 
 def test_the_default_stack_composes_and_a_bad_x_compose_is_one_clear_error(tmp_path: Path) -> None:
-    stack = load_stack(REPO_ROOT / "deploy/stack.yaml", env={}, project_dir=tmp_path,
-                       compose={"robot": ["perception", "battery", "pose", "planner", "docking"]})
+    stack = load_stack(
+        REPO_ROOT / "deploy/stack.yaml",
+        env={},
+        project_dir=tmp_path,
+        compose={"robot": ["perception", "battery", "pose", "planner", "docking"]},
+    )
     assert "robot" in stack.services and "docking" not in stack.services
     assert stack.services["robot"].command[:3] == ["zendock", "container", "perception"]
     bad = tmp_path / "stack.yaml"
-    bad.write_text("services:\n  a: {command: [python, -m, services.battery]}\nx-compose: [a]\n", encoding="utf-8")
+    bad.write_text(
+        "services:\n  a: {command: [python, -m, services.battery]}\nx-compose: [a]\n", encoding="utf-8"
+    )
     with pytest.raises(ConfigError, match="x-compose: expected a mapping"):
         load_stack(bad, env={}, project_dir=tmp_path)
-    bad.write_text("services:\n  a: {command: [python, -m, services.battery]}\nx-compose: {g: [a, b]}\n",
-                   encoding="utf-8")
+    bad.write_text(
+        "services:\n  a: {command: [python, -m, services.battery]}\nx-compose: {g: [a, b]}\n",
+        encoding="utf-8",
+    )
     with pytest.raises(ConfigError, match="x-compose.g: unknown service 'b'"):
         load_stack(bad, env={}, project_dir=tmp_path)
 
 
-@pytest.mark.parametrize(("command", "members"), [
-    (["zendock", "container", "battery", "-p", "a=1", "+", "pose", "+", "planner", "-p", "m=x"],
-     ("battery", "pose", "planner")),
-    (["zendock", "container", "--namespace", "r1", "--log-level", "DEBUG", "battery", "+", "docking"],
-     ("battery", "docking")),
-    (["/venv/bin/zendock", "container", "pose"], ("pose",)),
-    (["python", "-m", "services.battery"], ()),
-    (["zendock", "router"], ()),
-])
-def test_a_groups_members_are_read_from_its_container_command(command: list[str], members: tuple[str, ...]) -> None:
+@pytest.mark.parametrize(
+    ("command", "members"),
+    [
+        (
+            ["zendock", "container", "battery", "-p", "a=1", "+", "pose", "+", "planner", "-p", "m=x"],
+            ("battery", "pose", "planner"),
+        ),
+        (
+            ["zendock", "container", "--namespace", "r1", "--log-level", "DEBUG", "battery", "+", "docking"],
+            ("battery", "docking"),
+        ),
+        (["/venv/bin/zendock", "container", "pose"], ("pose",)),
+        (["python", "-m", "services.battery"], ()),
+        (["zendock", "router"], ()),
+    ],
+)
+def test_a_groups_members_are_read_from_its_container_command(
+    command: list[str], members: tuple[str, ...]
+) -> None:
     assert container_members(command) == members
 
 
 def test_the_launch_plan_of_a_composed_stack_names_the_groups_services(tmp_path: Path) -> None:
     from deploy.launcher.plan import plan_launch
 
-    stack = load_stack(REPO_ROOT / "deploy/stack.yaml", env={}, project_dir=tmp_path,
-                       compose={"robot": ["battery", "pose", "planner", "docking"]})
+    stack = load_stack(
+        REPO_ROOT / "deploy/stack.yaml",
+        env={},
+        project_dir=tmp_path,
+        compose={"robot": ["battery", "pose", "planner", "docking"]},
+    )
     plan = plan_launch(stack, working_dir=tmp_path)
     assert plan.services["robot"].members == ("battery", "pose", "planner", "docking")
     assert plan.services["simulator"].members == ()

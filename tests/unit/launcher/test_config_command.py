@@ -24,7 +24,9 @@ def test_config_prints_the_interpolated_default_stack(monkeypatch, capsys) -> No
     assert "deploy/worlds/glass_room.yaml" in printed["services"]["simulator"]["command"]
     assert "deploy/worlds/glass_room.yaml" in printed["services"]["map"]["command"]
     assert printed["services"]["router"]["command"][-1] == "tcp/127.0.0.1:7555"
-    assert printed["services"]["planner"]["depends_on"]["map"] == {"condition": "service_completed_successfully"}
+    assert printed["services"]["planner"]["depends_on"]["map"] == {
+        "condition": "service_completed_successfully"
+    }
     assert printed["services"]["simulator"]["healthcheck"]["liveliness"] is True
     assert "x-service" not in printed
 
@@ -32,8 +34,19 @@ def test_config_prints_the_interpolated_default_stack(monkeypatch, capsys) -> No
 def test_config_lists_services_and_profiles(monkeypatch, capsys) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.chdir(REPO_ROOT)
     assert main(["config", "--services"]) == 0
-    assert capsys.readouterr().out.split() == ["router", "map", "simulator", "perception", "battery", "pose", "planner",
-                                              "docking", "viz", "ros2_bridge", "ros2_dds"]
+    assert capsys.readouterr().out.split() == [
+        "router",
+        "map",
+        "simulator",
+        "perception",
+        "battery",
+        "pose",
+        "planner",
+        "docking",
+        "viz",
+        "ros2_bridge",
+        "ros2_dds",
+    ]
     assert main(["config", "--profiles"]) == 0
     assert capsys.readouterr().out.split() == ["ros2", "ros2-dds", "viz"]
 

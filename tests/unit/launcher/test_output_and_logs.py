@@ -83,12 +83,23 @@ def test_follower_sees_new_lines_through_a_rotation(tmp_path: Path) -> None:
 
 def test_failure_line_is_the_cause_from_the_last_run() -> None:
     earlier_run = ["[zendock] started (pid 1)", "an old error: gone", "[zendock] exited with code 1"]
-    config_error = ["[zendock] started (pid 2)", "loading world",
-                    "python -m services.simulator: error: nope.yaml: cannot read world file: No such file",
-                    "[zendock] exited with code 2 (a configuration error: not restarted)"]
+    config_error = [
+        "[zendock] started (pid 2)",
+        "loading world",
+        "python -m services.simulator: error: nope.yaml: cannot read world file: No such file",
+        "[zendock] exited with code 2 (a configuration error: not restarted)",
+    ]
     assert failure_line(earlier_run + config_error) == config_error[2]
-    traceback = ["[zendock] started (pid 3)", "Traceback (most recent call last):", '  File "shared/config_errors.py"',
-                 "ValueError: bad pose", "[zendock] exited with code 1"]
+    traceback = [
+        "[zendock] started (pid 3)",
+        "Traceback (most recent call last):",
+        '  File "shared/config_errors.py"',
+        "ValueError: bad pose",
+        "[zendock] exited with code 1",
+    ]
     assert failure_line(traceback) == "ValueError: bad pose"
-    assert failure_line(["[zendock] started (pid 4)", "first", "last words", "[zendock] exited with code 3"]) == "last words"
+    assert (
+        failure_line(["[zendock] started (pid 4)", "first", "last words", "[zendock] exited with code 3"])
+        == "last words"
+    )
     assert failure_line(["[zendock] started (pid 5)", "[zendock] exited with code 1"]) is None

@@ -52,7 +52,9 @@ def _stack(tmp_path: Path):  # type: ignore[no-untyped-def]
 
 
 def test_every_service_gets_namespace_connect_and_its_environment(tmp_path: Path) -> None:
-    plan = plan_launch(_stack(tmp_path), working_dir=tmp_path, base_environment={"HOME": "/root", "LEVEL": "info"})
+    plan = plan_launch(
+        _stack(tmp_path), working_dir=tmp_path, base_environment={"HOME": "/root", "LEVEL": "info"}
+    )
     sim, pose, absolute = plan.services["sim"], plan.services["robot1_pose"], plan.services["absolute"]
     assert sim.env["ZENDOCK_NAMESPACE"] == "fleet"
     assert pose.env["ZENDOCK_NAMESPACE"] == "fleet/robot1"
@@ -96,9 +98,13 @@ def test_health_plans_watch_the_right_token(tmp_path: Path) -> None:
 
 def test_the_launchers_zenoh_config_is_resolved_against_the_working_dir(tmp_path: Path) -> None:
     path = tmp_path / "secure.yaml"
-    path.write_text("zenoh: {connect: [tcp/127.0.0.1:7600], config: creds/viewer.json5}\nservices: {a: {command: [x]}}\n")
+    path.write_text(
+        "zenoh: {connect: [tcp/127.0.0.1:7600], config: creds/viewer.json5}\nservices: {a: {command: [x]}}\n"
+    )
     stack = load_stack(path, env={}, project_dir=tmp_path)
     assert stack.zenoh_config == "creds/viewer.json5"
     assert stack.to_dict()["zenoh"] == {"connect": ["tcp/127.0.0.1:7600"], "config": "creds/viewer.json5"}
-    assert plan_launch(stack, working_dir=tmp_path / "run").zenoh_config == str(tmp_path / "run/creds/viewer.json5")
+    assert plan_launch(stack, working_dir=tmp_path / "run").zenoh_config == str(
+        tmp_path / "run/creds/viewer.json5"
+    )
     assert plan_launch(_stack(tmp_path), working_dir=tmp_path).zenoh_config is None

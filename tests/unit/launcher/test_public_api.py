@@ -34,11 +34,29 @@ def test_free_endpoint_is_a_bindable_loopback_port() -> None:
 
 
 def test_ps_json_has_exactly_the_promised_keys() -> None:
-    status = ServiceStatus("planner", "running", 42, 1, "healthy", phase="running", detail="up 3s", starts=2,
-                           exit_code=-9, started_at=1_795_000_000.25)
-    assert status.ps_json() == {"name": "planner", "state": "running", "pid": 42, "restarts": 1, "health": "healthy",
-                                "exit_code": -9, "started_at": "2026-11-18T11:06:40.250+00:00", "members": [],
-                                "namespace": ""}
+    status = ServiceStatus(
+        "planner",
+        "running",
+        42,
+        1,
+        "healthy",
+        phase="running",
+        detail="up 3s",
+        starts=2,
+        exit_code=-9,
+        started_at=1_795_000_000.25,
+    )
+    assert status.ps_json() == {
+        "name": "planner",
+        "state": "running",
+        "pid": 42,
+        "restarts": 1,
+        "health": "healthy",
+        "exit_code": -9,
+        "started_at": "2026-11-18T11:06:40.250+00:00",
+        "members": [],
+        "namespace": "",
+    }
     group = ServiceStatus("robot", "running", 43, 0, "healthy", members=["battery", "pose"])
     assert group.ps_json()["members"] == ["battery", "pose"]
     assert ServiceStatus.from_dict(group.to_dict()) == group
@@ -50,10 +68,12 @@ def test_ps_json_has_exactly_the_promised_keys() -> None:
 def test_ps_groups_a_fleets_services_by_robot() -> None:
     from deploy.commands.ps import format_table
 
-    statuses = [ServiceStatus("planner_r2", "running", 5, 0, "healthy", namespace="r2"),
-                ServiceStatus("simulator", "running", 1, 0, "healthy"),
-                ServiceStatus("battery_r1", "running", 2, 0, "healthy", namespace="r1"),
-                ServiceStatus("planner_r1", "running", 3, 0, "healthy", namespace="r1")]
+    statuses = [
+        ServiceStatus("planner_r2", "running", 5, 0, "healthy", namespace="r2"),
+        ServiceStatus("simulator", "running", 1, 0, "healthy"),
+        ServiceStatus("battery_r1", "running", 2, 0, "healthy", namespace="r1"),
+        ServiceStatus("planner_r1", "running", 3, 0, "healthy", namespace="r1"),
+    ]
     lines = format_table(statuses).splitlines()
     names = [line.split()[0] for line in lines]
     assert names == ["NAME", "simulator", "r1/", "battery_r1", "planner_r1", "r2/", "planner_r2"], lines

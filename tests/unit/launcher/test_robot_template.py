@@ -54,19 +54,28 @@ def test_robot_slash_service_names_a_robots_copy() -> None:
     assert service_for("router", services) == "router"
 
 
-@pytest.mark.parametrize(("block", "message"), [
-    ("x-robots: [r1]", "expected a mapping"),
-    ("x-robots: {robots: [], services: {a: {command: [x]}}}", "non-empty list of robot names"),
-    ("x-robots: {robots: [1r], services: {a: {command: [x]}}}", "is not a robot name"),
-    ("x-robots: {robots: [r1, r1], services: {a: {command: [x]}}}", "named twice"),
-    ("x-robots: {robots: [r1], services: {}}", "service templates"),
-    ("x-robots: {robots: [r1], services: {router: {command: [x]}}}\nservices: {router_r1: {command: [y]}}",
-     "already named 'router_r1'"),
-    ("x-robots: {robots: [r1], services: {a: {command: [x], depends_on: 3}}}", "depends_on: expected"),
-])
+@pytest.mark.parametrize(
+    ("block", "message"),
+    [
+        ("x-robots: [r1]", "expected a mapping"),
+        ("x-robots: {robots: [], services: {a: {command: [x]}}}", "non-empty list of robot names"),
+        ("x-robots: {robots: [1r], services: {a: {command: [x]}}}", "is not a robot name"),
+        ("x-robots: {robots: [r1, r1], services: {a: {command: [x]}}}", "named twice"),
+        ("x-robots: {robots: [r1], services: {}}", "service templates"),
+        (
+            "x-robots: {robots: [r1], services: {router: {command: [x]}}}\nservices: {router_r1: {command: [y]}}",
+            "already named 'router_r1'",
+        ),
+        ("x-robots: {robots: [r1], services: {a: {command: [x], depends_on: 3}}}", "depends_on: expected"),
+    ],
+)
 def test_a_bad_template_is_one_clear_error(tmp_path: Path, block: str, message: str) -> None:
     path = tmp_path / "bad.yaml"
-    text = block if "services:" in block.split("\n")[-1] else f"services: {{router: {{command: [zendock, router]}}}}\n{block}"
+    text = (
+        block
+        if "services:" in block.split("\n")[-1]
+        else f"services: {{router: {{command: [zendock, router]}}}}\n{block}"
+    )
     path.write_text(text)
     with pytest.raises(ConfigError, match=message):
         load_stack(path, env={}, project_dir=tmp_path)

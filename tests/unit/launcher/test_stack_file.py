@@ -30,7 +30,16 @@ def error_of(path: Path, env: dict[str, str] | None = None) -> str:
 
 @pytest.mark.parametrize(
     ("text", "seconds"),
-    [("5s", 5.0), ("500ms", 0.5), ("1m", 60.0), ("1m30s", 90.0), ("1.5s", 1.5), ("2h", 7200.0), (3, 3.0), (0.25, 0.25)],
+    [
+        ("5s", 5.0),
+        ("500ms", 0.5),
+        ("1m", 60.0),
+        ("1m30s", 90.0),
+        ("1.5s", 1.5),
+        ("2h", 7200.0),
+        (3, 3.0),
+        (0.25, 0.25),
+    ],
 )
 def test_durations_read_as_people_write_them(text: object, seconds: float) -> None:
     assert parse_duration(text) == pytest.approx(seconds)
@@ -60,7 +69,12 @@ def test_interpolation_forms_follow_compose() -> None:
 
 @pytest.mark.parametrize(
     ("text", "message"),
-    [("${NEEDED:?give the world}", "required variable NEEDED is missing: give the world"), ("${OPEN", "unclosed"), ("${1X}", "invalid variable name"), ("${A*b}", "invalid interpolation")],
+    [
+        ("${NEEDED:?give the world}", "required variable NEEDED is missing: give the world"),
+        ("${OPEN", "unclosed"),
+        ("${1X}", "invalid variable name"),
+        ("${A*b}", "invalid interpolation"),
+    ],
 )
 def test_interpolation_errors_say_what_is_wrong(text: str, message: str) -> None:
     with pytest.raises(InterpolationError, match=message.replace("$", r"\$").replace("{", r"\{")):
@@ -116,7 +130,9 @@ def test_a_minimal_stack_gets_the_defaults(tmp_path: Path) -> None:
     assert stack.connect == ("tcp/127.0.0.1:7447",)
     assert stack.namespace == ""
     assert stack.project_name == tmp_path.name.lower()
-    assert load_stack(path, env={"ZENOH_CONNECT": "tcp/127.0.0.1:9000,tcp/127.0.0.1:9001"}, project_dir=tmp_path).connect == (
+    assert load_stack(
+        path, env={"ZENOH_CONNECT": "tcp/127.0.0.1:9000,tcp/127.0.0.1:9001"}, project_dir=tmp_path
+    ).connect == (
         "tcp/127.0.0.1:9000",
         "tcp/127.0.0.1:9001",
     )
@@ -157,15 +173,33 @@ def test_long_and_short_forms_and_extensions(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("service_yaml", "expected"),
     [
-        ("restart: sometimes", "services.planner.restart: expected one of no, always, on-failure[:max], unless-stopped"),
+        (
+            "restart: sometimes",
+            "services.planner.restart: expected one of no, always, on-failure[:max], unless-stopped",
+        ),
         ("restart: always:3", "services.planner.restart: only on-failure takes a maximum"),
         ("stop_grace_period: soon", "services.planner.stop_grace_period: expected a duration"),
         ("colour: red", "services.planner.colour: unknown key"),
-        ("depends_on: {ghost: {condition: service_started}}", "services.planner.depends_on.ghost: unknown service"),
-        ("depends_on: {router: {condition: service_ready}}", "services.planner.depends_on.router.condition: Input should be"),
-        ("depends_on: {router: {condition: service_healthy}}", "services.planner.depends_on.router.condition: service_healthy needs a healthcheck on router"),
-        ("healthcheck: {timeout: 5s}", "services.planner.healthcheck: give liveliness: true or a test command"),
-        ("healthcheck: {liveliness: true, retries: 0}", "services.planner.healthcheck.retries: Input should be greater than or equal to 1"),
+        (
+            "depends_on: {ghost: {condition: service_started}}",
+            "services.planner.depends_on.ghost: unknown service",
+        ),
+        (
+            "depends_on: {router: {condition: service_ready}}",
+            "services.planner.depends_on.router.condition: Input should be",
+        ),
+        (
+            "depends_on: {router: {condition: service_healthy}}",
+            "services.planner.depends_on.router.condition: service_healthy needs a healthcheck on router",
+        ),
+        (
+            "healthcheck: {timeout: 5s}",
+            "services.planner.healthcheck: give liveliness: true or a test command",
+        ),
+        (
+            "healthcheck: {liveliness: true, retries: 0}",
+            "services.planner.healthcheck.retries: Input should be greater than or equal to 1",
+        ),
         ("namespace: 'a/*'", "services.planner.namespace: namespace 'a/*'"),
         ("command: []", "services.planner.command: command is empty"),
         ("profiles: viz", "services.planner.profiles: Input should be a valid list"),
@@ -188,10 +222,19 @@ def test_errors_name_the_file_and_the_key(tmp_path: Path, service_yaml: str, exp
 
 
 def test_top_level_errors(tmp_path: Path) -> None:
-    assert "stack.yaml: servics: unknown key" in error_of(write(tmp_path, "servics: {}\nservices: {a: {command: [x]}}\n"))
+    assert "stack.yaml: servics: unknown key" in error_of(
+        write(tmp_path, "servics: {}\nservices: {a: {command: [x]}}\n")
+    )
     assert "services: Field required" in error_of(write(tmp_path, "name: x\n"))
-    assert "zenoh.connect: give at least one endpoint" in error_of(write(tmp_path, "zenoh: {connect: ['']}\nservices: {a: {command: [x]}}\n"))
-    cycle = error_of(write(tmp_path, "services:\n  a: {command: [x], depends_on: [b]}\n  b: {command: [x], depends_on: [a]}\n"))
+    assert "zenoh.connect: give at least one endpoint" in error_of(
+        write(tmp_path, "zenoh: {connect: ['']}\nservices: {a: {command: [x]}}\n")
+    )
+    cycle = error_of(
+        write(
+            tmp_path,
+            "services:\n  a: {command: [x], depends_on: [b]}\n  b: {command: [x], depends_on: [a]}\n",
+        )
+    )
     assert "services: dependency cycle: a -> b -> a" in cycle
     assert "invalid YAML" in error_of(write(tmp_path, "services: [unclosed\n"))
     assert "(top level): expected a mapping" in error_of(write(tmp_path, "- a list\n"))
@@ -235,8 +278,16 @@ def test_the_default_stack_validates_with_its_services() -> None:
     assert stack.project_name == "zendock"
     assert stack.namespace == ""
     assert stack.connect == ("tcp/127.0.0.1:7447",)
-    assert stack.select() == ["router", "map", "simulator", "perception", "battery", "pose", "planner",
-                              "docking"]
+    assert stack.select() == [
+        "router",
+        "map",
+        "simulator",
+        "perception",
+        "battery",
+        "pose",
+        "planner",
+        "docking",
+    ]
     assert stack.services["viz"].profiles == ["viz"]
     assert "viz" in stack.select(profiles=["viz"])
     assert stack.services["router"].command == ["zendock", "router", "--listen", "tcp/127.0.0.1:7447"]
@@ -246,7 +297,11 @@ def test_the_default_stack_validates_with_its_services() -> None:
 def test_zendock_world_alone_switches_the_default_stack() -> None:
     world = "deploy/worlds/glass_room.yaml"
     stack = load_stack(DEFAULT_STACK, env={"ZENDOCK_WORLD": world}, project_dir=REPO_ROOT)
-    mentions = {name: " ".join(spec.command) for name, spec in stack.services.items() if world in " ".join(spec.command)}
+    mentions = {
+        name: " ".join(spec.command)
+        for name, spec in stack.services.items()
+        if world in " ".join(spec.command)
+    }
     assert set(mentions) == {"map", "simulator", "perception", "docking", "viz"}
     assert "seed_room" not in " ".join(" ".join(spec.command) for spec in stack.services.values())
     map_file = stack.services["map"].command[stack.services["map"].command.index("-o") + 1]

@@ -5,8 +5,15 @@ from deploy.launcher.status import ServiceStatus
 
 
 def _status(**fields) -> ServiceStatus:  # type: ignore[no-untyped-def]
-    base = {"name": "router", "state": "running", "pid": 1, "restarts": 0, "health": "none", "phase": "running",
-            "starts": 1}
+    base = {
+        "name": "router",
+        "state": "running",
+        "pid": 1,
+        "restarts": 0,
+        "health": "none",
+        "phase": "running",
+        "starts": 1,
+    }
     return ServiceStatus(**{**base, **fields})
 
 

@@ -13,12 +13,15 @@ def _image(height: int, width: int, encoding: str, step: int, data: np.ndarray) 
     return Image(Header(Time(), "camera_optical_frame"), height, width, encoding, 0, step, data)
 
 
-@pytest.mark.parametrize(("image", "reason"), [
-    (_image(4, 4, "yuv422", 8, np.zeros(32, np.uint8)), "encoding"),
-    (_image(0, 4, "mono8", 4, np.zeros(0, np.uint8)), "empty"),
-    (_image(4, 4, "rgb8", 4, np.zeros(16, np.uint8)), "step"),
-    (_image(4, 4, "mono8", 4, np.zeros(10, np.uint8)), "size"),
-])
+@pytest.mark.parametrize(
+    ("image", "reason"),
+    [
+        (_image(4, 4, "yuv422", 8, np.zeros(32, np.uint8)), "encoding"),
+        (_image(0, 4, "mono8", 4, np.zeros(0, np.uint8)), "empty"),
+        (_image(4, 4, "rgb8", 4, np.zeros(16, np.uint8)), "step"),
+        (_image(4, 4, "mono8", 4, np.zeros(10, np.uint8)), "size"),
+    ],
+)
 def test_malformed_frames_are_refused_with_a_reason(image: Image, reason: str) -> None:
     with pytest.raises(ImageError) as caught:
         grey_pixels(image)

@@ -19,8 +19,12 @@ from shared.world import World, dock_markers, parse_world
 
 def _world(**extra: Any) -> World:
     """A dock at the origin facing +x (its face 0.2 m ahead of the docked pose), in a 10 m room."""
-    data: dict[str, Any] = {"name": "markers", "bounds": [-5.0, -5.0, 5.0, 5.0],
-                            "robot": {"start": [-1.0, 0.0, 0.0]}, "docks": [{"id": "home", "pose": [0.0, 0.0, 0.0]}]}
+    data: dict[str, Any] = {
+        "name": "markers",
+        "bounds": [-5.0, -5.0, 5.0, 5.0],
+        "robot": {"start": [-1.0, 0.0, 0.0]},
+        "docks": [{"id": "home", "pose": [0.0, 0.0, 0.0]}],
+    }
     data.update(extra)
     return parse_world(data)
 
@@ -29,7 +33,9 @@ def _base_from_optical(params: CameraParams) -> Rigid3:
     frames = StaticTransforms()
     for t in camera_mount_transforms(params, Time()):
         tr, q = t.transform.translation, t.transform.rotation
-        frames.set(t.header.frame_id, t.child_frame_id, Rigid3.from_parts((tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w)))
+        frames.set(
+            t.header.frame_id, t.child_frame_id, Rigid3.from_parts((tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w))
+        )
     found = frames.lookup("base_link", "camera_optical_frame")
     assert found is not None
     return found
@@ -43,19 +49,26 @@ def _sightings(world: World, robot: Pose2D, params: CameraParams | None = None, 
     base_from_optical = _base_from_optical(params)
     found = []
     for sighting in finder.find(image):
-        dock = locate_dock(sighting, markers[sighting.marker_id], params.intrinsics(), np.zeros(5), base_from_optical)
+        dock = locate_dock(
+            sighting, markers[sighting.marker_id], params.intrinsics(), np.zeros(5), base_from_optical
+        )
         if dock is not None:
             found.append(dock)
     return found
 
 
-@pytest.mark.parametrize(("offset", "position_tol_m", "yaw_tol_deg"), [
-    (Pose2D(-0.5, 0.0, 0.0), 0.01, 1.5),          # close, straight on
-    (Pose2D(-1.0, 0.10, -0.15), 0.02, 3.0),        # the approach's start: off the axis and turned
-    (Pose2D(-1.2, -0.6, math.radians(25)), 0.03, 3.0),  # oblique
-    (Pose2D(-2.0, 0.0, 0.0), 0.03, 5.0),          # far: range is the weakest part
-])
-def test_the_dock_pose_comes_back_from_the_pixels(offset: Pose2D, position_tol_m: float, yaw_tol_deg: float) -> None:
+@pytest.mark.parametrize(
+    ("offset", "position_tol_m", "yaw_tol_deg"),
+    [
+        (Pose2D(-0.5, 0.0, 0.0), 0.01, 1.5),  # close, straight on
+        (Pose2D(-1.0, 0.10, -0.15), 0.02, 3.0),  # the approach's start: off the axis and turned
+        (Pose2D(-1.2, -0.6, math.radians(25)), 0.03, 3.0),  # oblique
+        (Pose2D(-2.0, 0.0, 0.0), 0.03, 5.0),  # far: range is the weakest part
+    ],
+)
+def test_the_dock_pose_comes_back_from_the_pixels(
+    offset: Pose2D, position_tol_m: float, yaw_tol_deg: float
+) -> None:
     world = _world()
     dock = world.docks[0].pose2d
     robot = dock.compose(offset)
@@ -86,8 +99,12 @@ def test_a_dock_behind_the_camera_is_not_seen() -> None:
 
 
 def test_each_dock_is_told_by_its_own_marker_id() -> None:
-    world = _world(docks=[{"id": "left", "pose": [0.0, 0.5, 0.0], "marker_id": 7},
-                          {"id": "right", "pose": [0.0, -0.5, 0.0], "marker_id": 3}])
+    world = _world(
+        docks=[
+            {"id": "left", "pose": [0.0, 0.5, 0.0], "marker_id": 7},
+            {"id": "right", "pose": [0.0, -0.5, 0.0], "marker_id": 3},
+        ]
+    )
     found = _sightings(world, Pose2D(-1.6, 0.0, 0.0))
     assert sorted((d.dock_id, d.marker_id) for d in found) == [("left", 7), ("right", 3)]
     for d in found:

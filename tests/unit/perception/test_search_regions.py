@@ -13,9 +13,17 @@ from shared.world import parse_world
 
 
 def _image(robot: Pose2D) -> tuple[np.ndarray, str]:
-    world = parse_world({"name": "regions", "bounds": [-5.0, -5.0, 5.0, 5.0], "robot": {"start": [-1.0, 0.0, 0.0]},
-                         "docks": [{"id": "home", "pose": [0.0, 0.0, 0.0]}]})
-    return CameraRenderer(build_scene(world), CameraParams(), np.random.default_rng(3)).render(robot), world.aruco_dictionary
+    world = parse_world(
+        {
+            "name": "regions",
+            "bounds": [-5.0, -5.0, 5.0, 5.0],
+            "robot": {"start": [-1.0, 0.0, 0.0]},
+            "docks": [{"id": "home", "pose": [0.0, 0.0, 0.0]}],
+        }
+    )
+    return CameraRenderer(build_scene(world), CameraParams(), np.random.default_rng(3)).render(
+        robot
+    ), world.aruco_dictionary
 
 
 def test_a_box_around_last_frames_marker_finds_the_same_corners_as_the_whole_frame() -> None:
@@ -41,7 +49,9 @@ def test_a_box_that_misses_its_marker_is_incomplete() -> None:
     whole = finder.find(image)
     regions = SearchRegions()
     # Last frame saw the marker far to the left: the box there holds no marker now.
-    regions.update([MarkerSighting(whole[0].marker_id, whole[0].corners - (250.0, 0.0))], 10.0, whole_frame=True)
+    regions.update(
+        [MarkerSighting(whole[0].marker_id, whole[0].corners - (250.0, 0.0))], 10.0, whole_frame=True
+    )
     boxes = regions.boxes(10.066, image.shape[1], image.shape[0])
     assert boxes is not None
     assert not regions.complete(finder.find(image, boxes))

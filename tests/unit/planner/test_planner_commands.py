@@ -32,8 +32,16 @@ def test_nav_without_a_router_fails_with_one_line(capsys: pytest.CaptureFixture[
 
 
 def test_bench_planner_reports_planning_stages_as_json(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["bench", "planner", "--planning-only", "--repeats", "1", "--resolution", "0.1", "--json"]) == 0
+    assert (
+        main(["bench", "planner", "--planning-only", "--repeats", "1", "--resolution", "0.1", "--json"]) == 0
+    )
     result = json.loads(capsys.readouterr().out)
     assert (result["grid_width"], result["grid_height"]) == (200.0, 200.0)
-    assert {"plan_ms", "astar_ms", "plan_full_resolution_ms", "inflation_ms", "path_length_m"} <= result.keys()
+    assert {
+        "plan_ms",
+        "astar_ms",
+        "plan_full_resolution_ms",
+        "inflation_ms",
+        "path_length_m",
+    } <= result.keys()
     assert all(result[k] > 0 for k in ("plan_ms", "astar_ms", "path_length_m"))

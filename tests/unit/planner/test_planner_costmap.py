@@ -62,7 +62,6 @@ def test_distance_transform_matches_brute_force() -> None:
         np.testing.assert_array_equal(got, expected)
 
 
-
 def test_distance_transform_of_a_few_marks_in_a_large_grid_matches_brute_force() -> None:
     """Only the marks' surroundings are computed; every cell still gets its exact distance (or far)."""
     rng = np.random.default_rng(12)
@@ -78,6 +77,7 @@ def test_distance_transform_of_a_few_marks_in_a_large_grid_matches_brute_force()
         expected = np.sqrt(((iy[..., None] - ys) ** 2 + (ix[..., None] - xs) ** 2).min(axis=-1))
         expected[expected > cutoff] = np.inf
         np.testing.assert_array_equal(got, expected)
+
 
 def test_inflation_values_match_nav2_formula_at_known_distances() -> None:
     params = CostmapParams(inflation_radius_m=0.55, cost_scaling_factor=3.0)

@@ -35,8 +35,9 @@ def worker() -> Iterator[Worker]:
         track.track.add_pose(0.0, Pose2D(0.5, 1.0, 0.0))
     layers = CostmapUpdater(Params(), track, logging.getLogger("test"))
     updated: queue.Queue[tuple[float, str]] = queue.Queue()
-    costmap = CostmapThread(layers, lambda now: updated.put((now, threading.current_thread().name)),
-                            logging.getLogger("test"))
+    costmap = CostmapThread(
+        layers, lambda now: updated.put((now, threading.current_thread().name)), logging.getLogger("test")
+    )
     yield costmap, updated
     costmap.close()
 
@@ -80,12 +81,16 @@ def test_a_change_publishes_a_new_snapshot(worker: Worker) -> None:
     moved.data[:, 10] = OCC_OCCUPIED
     costmap.change(costmap.layers.set_map, moved)
     assert costmap.grid is not None
-    assert costmap.grid.costs[20, 10] == 254 and costmap.grid.costs[20, 30] == 0, "the snapshot shows the new map"
+    assert costmap.grid.costs[20, 10] == 254 and costmap.grid.costs[20, 30] == 0, (
+        "the snapshot shows the new map"
+    )
     costmap.change(costmap.layers.clear, GlassClearing.ALL)
     assert costmap.heard_glass_xy.shape == (0, 2), "nothing heard: no glass cells"
 
 
-def test_a_failing_update_is_reported_and_the_worker_goes_on(worker: Worker, caplog: pytest.LogCaptureFixture) -> None:
+def test_a_failing_update_is_reported_and_the_worker_goes_on(
+    worker: Worker, caplog: pytest.LogCaptureFixture
+) -> None:
     costmap, updated = worker
     costmap.change(costmap.layers.set_map, _room())
     real_update = costmap.layers.update

@@ -26,7 +26,10 @@ def _room(size_m: float = 6.0, blocks: tuple[tuple[float, float, float, float], 
     data[[0, -1], :] = OCC_OCCUPIED
     data[:, [0, -1]] = OCC_OCCUPIED
     for x0, y0, x1, y1 in blocks:
-        data[round(y0 / RESOLUTION_M):round(y1 / RESOLUTION_M), round(x0 / RESOLUTION_M):round(x1 / RESOLUTION_M)] = OCC_OCCUPIED
+        data[
+            round(y0 / RESOLUTION_M) : round(y1 / RESOLUTION_M),
+            round(x0 / RESOLUTION_M) : round(x1 / RESOLUTION_M),
+        ] = OCC_OCCUPIED
     return LayeredCostmap(OccupancyMap(RESOLUTION_M, (0.0, 0.0, 0.0), data))
 
 
@@ -73,7 +76,9 @@ def test_no_room_to_turn_leaves_the_path_as_it_was() -> None:
 def test_an_arrival_within_the_turn_allowed_is_left_alone() -> None:
     grid = _room().grid()
     nearly = _straight((5.0, 3.0), (2.0, 3.0), math.pi - 0.3)
-    assert arrive_along_heading(grid, nearly, GoalHeadingParams(min_turn_rad=0.35), start_yaw=math.pi) is nearly
+    assert (
+        arrive_along_heading(grid, nearly, GoalHeadingParams(min_turn_rad=0.35), start_yaw=math.pi) is nearly
+    )
 
 
 def test_the_new_end_crosses_no_costlier_cells_than_the_old_one_away_from_its_ends() -> None:
@@ -86,8 +91,10 @@ def test_the_new_end_crosses_no_costlier_cells_than_the_old_one_away_from_its_en
     changed = 0
     for trial in range(240):
         if trial % 8 == 0:
-            blocks = tuple((x, y, x + w, y + h)
-                           for x, y, w, h in rng.uniform((0.5, 0.5, 0.2, 0.2), (5.0, 5.0, 1.0, 1.0), (6, 4)))
+            blocks = tuple(
+                (x, y, x + w, y + h)
+                for x, y, w, h in rng.uniform((0.5, 0.5, 0.2, 0.2), (5.0, 5.0, 1.0, 1.0), (6, 4))
+            )
             grid = _room(blocks=blocks).grid()
             fits = np.argwhere(grid.costs < 253)
         start_cell, goal_cell = fits[rng.integers(len(fits))], fits[rng.integers(len(fits))]
@@ -106,7 +113,9 @@ def test_the_new_end_crosses_no_costlier_cells_than_the_old_one_away_from_its_en
         ends = plain.poses[0, :2], plain.poses[-1, :2]
 
         def near(xy: np.ndarray, ends: tuple[np.ndarray, np.ndarray] = ends) -> np.ndarray:
-            return (np.hypot(*(xy - ends[0]).T) <= p.end_radius_m) | (np.hypot(*(xy - ends[1]).T) <= p.end_radius_m)
+            return (np.hypot(*(xy - ends[0]).T) <= p.end_radius_m) | (
+                np.hypot(*(xy - ends[1]).T) <= p.end_radius_m
+            )
 
         old, new = plain.poses[:, :2], poses[:, :2]
         old_away = grid.costs_at(old[~near(old)]).max(initial=0)
@@ -133,7 +142,9 @@ def test_by_default_only_arrivals_beyond_docking_s_takeover_are_curved() -> None
     beyond = _straight((5.0, 3.0), (2.0, 3.0), -1.2)  # 1.94 rad off: docking would stop there to turn
     poses = arrive_along_heading(grid, beyond, start_yaw=math.pi)
     assert poses is not beyond and abs(wrap_angle(_arrival_yaw(poses) + 1.2)) < 0.1
-    doubling_back = _straight((5.0, 3.0), (2.0, 3.0), -0.3)  # 2.8 rad off: turning there is quicker than a loop
+    doubling_back = _straight(
+        (5.0, 3.0), (2.0, 3.0), -0.3
+    )  # 2.8 rad off: turning there is quicker than a loop
     assert arrive_along_heading(grid, doubling_back, start_yaw=math.pi) is doubling_back
 
 

@@ -35,10 +35,17 @@ def test_glass_counts_as_solid_for_the_bound() -> None:
 def _room_with_dock(x: float, y: float, yaw: float):  # type: ignore[no-untyped-def]
     from shared.world import World
 
-    return World.model_validate({
-        "name": "room", "bounds": [0.0, 0.0, 16.0, 12.0], "walls": [], "glass": [], "boxes": [],
-        "docks": [{"id": "home", "pose": [x, y, yaw], "type": "charger"}], "robot": {"start": [1.0, 1.0, 0.0]},
-    })
+    return World.model_validate(
+        {
+            "name": "room",
+            "bounds": [0.0, 0.0, 16.0, 12.0],
+            "walls": [],
+            "glass": [],
+            "boxes": [],
+            "docks": [{"id": "home", "pose": [x, y, yaw], "type": "charger"}],
+            "robot": {"start": [1.0, 1.0, 0.0]},
+        }
+    )
 
 
 @pytest.mark.parametrize("case", range(12))

@@ -39,7 +39,12 @@ GLASS_ROOM = REPO_ROOT / "deploy/worlds/glass_room.yaml"
 
 def _room(walls: list | None = None) -> World:
     return World.model_validate(
-        {"name": "room", "bounds": [0.0, 0.0, 4.0, 3.0], "walls": walls or [], "robot": {"start": [0.5, 1.5, 0.0]}}
+        {
+            "name": "room",
+            "bounds": [0.0, 0.0, 4.0, 3.0],
+            "walls": walls or [],
+            "robot": {"start": [0.5, 1.5, 0.0]},
+        }
     )
 
 
@@ -68,7 +73,10 @@ def test_goal_pose_accepts_the_map_frame_and_normalises_the_quaternion() -> None
     ("goal", "reason"),
     [
         (_goal(frame="odom"), "frame_id 'odom'"),
-        (PoseStamped(Header(frame_id="map"), Pose(Point(0, 0, 0), Quaternion(0, 0, 0, 0))), "zero quaternion"),
+        (
+            PoseStamped(Header(frame_id="map"), Pose(Point(0, 0, 0), Quaternion(0, 0, 0, 0))),
+            "zero quaternion",
+        ),
     ],
 )
 def test_goal_pose_refusals_say_why(goal: PoseStamped, reason: str) -> None:
@@ -246,12 +254,21 @@ def test_shortest_path_goes_round_walls_and_glass() -> None:
 
 
 def test_parameters_keep_costmap_follower_and_planner_in_agreement() -> None:
-    params = Params(inflation_radius_m=0.7, cost_scaling_factor=4.0, robot_width_m=0.34,
-                    cost_weight=2.0, allow_unknown=True, max_linear_vel_mps=0.4)
+    params = Params(
+        inflation_radius_m=0.7,
+        cost_scaling_factor=4.0,
+        robot_width_m=0.34,
+        cost_weight=2.0,
+        allow_unknown=True,
+        max_linear_vel_mps=0.4,
+    )
     costmap, follower, planner = params.costmap_params(), params.follower_params(), params.planner_params()
     assert follower.inflation_cost_scaling_factor == costmap.cost_scaling_factor == 4.0
     assert follower.inscribed_radius_m == costmap.inscribed_radius_m == pytest.approx(0.17)
-    assert (follower.robot_length_m, follower.robot_width_m) == (costmap.robot_length_m, costmap.robot_width_m)
+    assert (follower.robot_length_m, follower.robot_width_m) == (
+        costmap.robot_length_m,
+        costmap.robot_width_m,
+    )
     assert planner.astar.cost_weight == planner.smoothing.cost_weight == 2.0
     assert planner.astar.allow_unknown and planner.smoothing.allow_unknown
     assert follower.desired_linear_vel_mps == 0.4
@@ -370,8 +387,12 @@ def test_a_pane_heard_but_not_yet_marked_makes_the_floor_beyond_it_suspect() -> 
     the cone's edge, or from afar); the end lies beyond them. Suspicion grows from those heard cells as
     from marks, so the unlooked-at floor round the end counts as glass until the sonar looks there."""
     memory = _glass_memory(suspicion_m=0.3)
-    memory.add_reading((1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0)  # one far echo: an eighth of a near one's evidence
-    assert len(memory.heard_cells_xy()) > 0 and not (memory.sonar_layer == LETHAL_OBSTACLE).any()  # heard, not marked
+    memory.add_reading(
+        (1.0, 1.5, 0.0), 2.5, 0.5, 0.02, 3.0
+    )  # one far echo: an eighth of a near one's evidence
+    assert (
+        len(memory.heard_cells_xy()) > 0 and not (memory.sonar_layer == LETHAL_OBSTACLE).any()
+    )  # heard, not marked
     assert _is_glass(memory, 3.5 + 0.25, 1.5)  # behind the echo the sonar could not look
     assert not _is_glass(memory, 3.0, 1.5)  # short of it the cone looked through
     without = _glass_memory(suspicion_m=0.0)
@@ -411,7 +432,12 @@ def test_recoveries_forget_glass_round_the_robot_and_all_of_it_only_when_no_path
     assert [glass_clearing(n, planning_failed=False) for n in range(1, 7)] == [kept, around] * 3
     # no path: round the robot first; glass farther off can block the only way, so then all of it
     assert [glass_clearing(n, planning_failed=True) for n in range(1, 7)] == [
-        kept, around, kept, everything, kept, everything
+        kept,
+        around,
+        kept,
+        everything,
+        kept,
+        everything,
     ]
 
 
@@ -419,7 +445,9 @@ def test_follower_settings_come_from_the_planner_parameters() -> None:
     follower = Params().follower_params()
     assert follower.approach_velocity_scaling_dist_m == pytest.approx(0.3)
     assert follower.regulated_linear_scaling_min_radius_m == pytest.approx(0.6)
-    tuned = Params(approach_velocity_scaling_dist_m=0.6, regulated_linear_scaling_min_radius_m=0.9).follower_params()
+    tuned = Params(
+        approach_velocity_scaling_dist_m=0.6, regulated_linear_scaling_min_radius_m=0.9
+    ).follower_params()
     assert (tuned.approach_velocity_scaling_dist_m, tuned.regulated_linear_scaling_min_radius_m) == (0.6, 0.9)
     params = Params()
     assert params.open_loop_acceleration and params.carried_pose_timeout_s > params.pose_timeout_s

@@ -22,7 +22,12 @@ DT_S = 0.05
 
 def _grid(walls: list | None = None):  # type: ignore[no-untyped-def]
     world = World.model_validate(
-        {"name": "room", "bounds": [0.0, 0.0, 5.0, 3.0], "walls": walls or [], "robot": {"start": [0.6, 1.5, 0.0]}}
+        {
+            "name": "room",
+            "bounds": [0.0, 0.0, 5.0, 3.0],
+            "walls": walls or [],
+            "robot": {"start": [0.6, 1.5, 0.0]},
+        }
     )
     return LayeredCostmap(map_from_world(world), CostmapParams()).grid()
 
@@ -45,8 +50,14 @@ class KinematicWorld:
 
     def snapshot(self, **overrides: object) -> NavSnapshot:
         values = {
-            "now_s": self.now_s, "wall_s": self.now_s, "pose": self.pose, "pose_age_s": self.pose_age_s,
-            "pose_carried": True, "velocity": self.cmd, "grid": self.grid, "planning_in_flight": False,
+            "now_s": self.now_s,
+            "wall_s": self.now_s,
+            "pose": self.pose,
+            "pose_age_s": self.pose_age_s,
+            "pose_carried": True,
+            "velocity": self.cmd,
+            "grid": self.grid,
+            "planning_in_flight": False,
             "last_cmd": self.cmd,
         } | overrides
         return NavSnapshot(**values)  # type: ignore[arg-type]
@@ -64,7 +75,9 @@ class KinematicWorld:
             self.plans += 1
             request = PlanRequest(run.generation, self.grid, orders.plan_from, run.goal)
             try:
-                outcome = PlanOutcome(request, self.planner.compute_path(self.grid, orders.plan_from, run.goal))
+                outcome = PlanOutcome(
+                    request, self.planner.compute_path(self.grid, orders.plan_from, run.goal)
+                )
             except PlanningError as exc:
                 outcome = PlanOutcome(request, None, str(exc), blocked_end_of(exc))
             self.carry_out(run, run.plan_outcome(outcome, self.snapshot()))

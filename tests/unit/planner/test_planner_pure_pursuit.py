@@ -76,7 +76,9 @@ def test_a_speed_limit_caps_the_forward_speed() -> None:
     follower = _follower(_straight())
     speed = 0.5
     for _ in range(10):  # braking within the deceleration limit, then held at the limit
-        command = follower.compute_velocity_command(Pose2D(0.0, 0.0, 0.0), (speed, 0.0), DT, speed_limit_mps=0.2)
+        command = follower.compute_velocity_command(
+            Pose2D(0.0, 0.0, 0.0), (speed, 0.0), DT, speed_limit_mps=0.2
+        )
         assert command.status is FollowStatus.FOLLOWING and command.linear_mps < speed or speed <= 0.2
         speed = command.linear_mps
     assert speed == pytest.approx(0.2)

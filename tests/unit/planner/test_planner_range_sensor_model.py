@@ -44,8 +44,10 @@ def test_cells_seen_through_get_free_evidence_and_nothing_beyond_the_echo() -> N
 def test_an_echo_from_afar_gives_its_arc_less_evidence() -> None:
     """An echo's arc is ``fov * r`` wide and one of its cells made it: from 0.5 m one echo marks, from the
     trusted range (Nav2's phi; 2 m here) it gives half the evidence, from 3 m next to none."""
-    on_axis = {r: reading_evidence(np.array([r]), np.zeros(1), r, HALF_FOV, True, MODEL)[1][0]
-               for r in (0.5, 1.0, MODEL.trusted_range_m, 2.5, 3.0)}
+    on_axis = {
+        r: reading_evidence(np.array([r]), np.zeros(1), r, HALF_FOV, True, MODEL)[1][0]
+        for r in (0.5, 1.0, MODEL.trusted_range_m, 2.5, 3.0)
+    }
     assert on_axis[0.5] >= MODEL.mark_log_odds and on_axis[1.0] >= MODEL.mark_log_odds  # near: one echo marks
     assert on_axis[0.5] > on_axis[1.0] > on_axis[MODEL.trusted_range_m] > on_axis[2.5] > on_axis[3.0] > 0.0
     assert range_weight(MODEL.trusted_range_m, MODEL.trusted_range_m) == pytest.approx(0.5)
@@ -54,8 +56,16 @@ def test_an_echo_from_afar_gives_its_arc_less_evidence() -> None:
     assert free[0] == pytest.approx(log_odds(MODEL.miss_probability))  # seeing through is as sure from afar
 
 
-@pytest.mark.parametrize("bad", [{"hit_probability": 0.4}, {"miss_probability": 1.2}, {"mark_threshold": 0.3},
-                                 {"range_band_m": 0.0}, {"trusted_range_m": 0.0}])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"hit_probability": 0.4},
+        {"miss_probability": 1.2},
+        {"mark_threshold": 0.3},
+        {"range_band_m": 0.0},
+        {"trusted_range_m": 0.0},
+    ],
+)
 def test_a_model_that_contradicts_itself_is_refused(bad: dict[str, float]) -> None:
     with pytest.raises(ValueError, match="RangeSensorModel"):
         RangeSensorModel(**bad)  # type: ignore[arg-type]
@@ -93,7 +103,9 @@ def _coverage(memory: GlassMemory, pane: tuple[np.ndarray, np.ndarray], toleranc
         return 0.0
     a, b = pane
     points = a + np.linspace(0.0, 1.0, 100)[:, None] * (b - a)
-    nearest = np.min(np.hypot(points[:, None, 0] - xy[None, :, 0], points[:, None, 1] - xy[None, :, 1]), axis=1)
+    nearest = np.min(
+        np.hypot(points[:, None, 0] - xy[None, :, 0], points[:, None, 1] - xy[None, :, 1]), axis=1
+    )
     return float(np.mean(nearest <= tolerance_m))
 
 
@@ -113,7 +125,9 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
     final_false = _false_marks(memory, pane)
     assert final_false <= 3, f"{final_false} cells marked more than 10 cm in front of the pane"
     # (With the far echoes trusted less, the first looks may put no false marks there at all.)
-    assert final_false == 0 or final_false < most_false, "looks from further along should clear the early false marks"
+    assert final_false == 0 or final_false < most_false, (
+        "looks from further along should clear the early false marks"
+    )
     # Its far end is heard only from beyond the trusted range (2 m) here: it waits for nearer looks.
     assert _coverage(memory, pane) >= 0.55, f"only {_coverage(memory, pane):.0%} of the pane is marked"
 
@@ -149,15 +163,23 @@ def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
     assert layers.glass_speed_limit_mps(Pose2D(2.0, 1.3, 0.0)) is None
     # Marked glass counts as much as suspected glass: facing the arc's marked middle from 0.3 m.
     assert layers.glass_speed_limit_mps(Pose2D(1.7, 2.0, 0.0)) == pytest.approx(
-        params.max_linear_vel_mps * 0.3 / 0.8, abs=0.05)
+        params.max_linear_vel_mps * 0.3 / 0.8, abs=0.05
+    )
     # The node reads the limit from the heard cells the costmap thread hands over, round where the last
     # update placed the robot: the same answers there and half a metre on.
     assert len(layers.heard_glass_xy()) == 0, "before an update placed the robot nothing is handed over"
-    for pose in (Pose2D(0.5, 0.5, 0.0), Pose2D(1.6, 2.0, 0.0), Pose2D(1.6, 2.0, math.pi), Pose2D(2.0, 1.3, 0.0),
-                 Pose2D(1.7, 2.0, 0.0)):
+    for pose in (
+        Pose2D(0.5, 0.5, 0.0),
+        Pose2D(1.6, 2.0, 0.0),
+        Pose2D(1.6, 2.0, math.pi),
+        Pose2D(2.0, 1.3, 0.0),
+        Pose2D(1.7, 2.0, 0.0),
+    ):
         for dx in (0.0, -0.5):
             layers.last_pose = Pose2D(pose.x + dx, pose.y, pose.yaw)
-            assert glass_speed_limit(params, pose, layers.heard_glass_xy()) == layers.glass_speed_limit_mps(pose), pose
+            assert glass_speed_limit(params, pose, layers.heard_glass_xy()) == layers.glass_speed_limit_mps(
+                pose
+            ), pose
 
 
 def test_an_echo_from_cells_known_free_is_held_as_glass_for_a_while() -> None:

@@ -217,5 +217,6 @@ def test_the_gap_is_still_taken_when_the_way_round_is_too_long_or_missing() -> N
     path = GlobalPlanner(params).compute_path(closed, (0.0, -1.0, math.pi / 2), (0.0, 1.0, math.pi / 2))
     assert _min_clearance_cost_on(closed, path.poses) >= 186
     short_hop = GlobalPlanner(params).compute_path(
-        _gap_room(detour_wall_to_m=0.8), (0.0, -0.4, math.pi / 2), (0.0, 0.4, math.pi / 2))
+        _gap_room(detour_wall_to_m=0.8), (0.0, -0.4, math.pi / 2), (0.0, 0.4, math.pi / 2)
+    )
     assert short_hop.length_m < 1.2  # 0.8 m through the gap beats a detour of several metres

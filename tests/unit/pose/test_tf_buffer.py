@@ -33,11 +33,13 @@ def assert_pose(actual: Pose2D, expected: Pose2D, tol: float = 1e-9) -> None:
 def matrix(transform: RigidTransform) -> np.ndarray:
     """Homogeneous 4x4 matrix, from the textbook quaternion-to-rotation formula (independent of the buffer)."""
     x, y, z, w = transform.rotation
-    rotation = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     out = np.eye(4)
     out[:3, :3] = rotation
     out[:3, 3] = transform.translation
@@ -48,7 +50,8 @@ def random_transform(rng: random.Random) -> RigidTransform:
     q = [rng.gauss(0.0, 1.0) for _ in range(4)]
     norm = math.sqrt(sum(v * v for v in q))
     return RigidTransform(
-        (rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-3, 3)), tuple(v / norm for v in q)  # type: ignore[arg-type]
+        (rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-3, 3)),
+        tuple(v / norm for v in q),  # type: ignore[arg-type]
     )
 
 
@@ -156,7 +159,9 @@ def test_static_links_hold_at_any_time() -> None:
     buffer = TfBuffer()
     buffer.set_transform("base_link", "lidar_link", 0.0, planar(0.1, 0.0, 0.0), static=True)
     for time_s in (0.0, 1e3, 1e6):
-        assert_pose(buffer.lookup("base_link", "lidar_link", time_s).transform.to_pose2d(), Pose2D(0.1, 0.0, 0.0))
+        assert_pose(
+            buffer.lookup("base_link", "lidar_link", time_s).transform.to_pose2d(), Pose2D(0.1, 0.0, 0.0)
+        )
 
 
 def test_extrapolation_into_the_future_and_the_past_name_the_link(robot_tree: TfBuffer) -> None:

@@ -38,16 +38,25 @@ def write_run(path: Path, namespace: str = "r1", steps: int = 50) -> list[Record
     """Drives from (0, 3) straight south at 0.5 m/s; the sonar looks ahead at the south wall."""
     samples: list[RecordedSample] = []
     ns = f"{namespace}/" if namespace else ""
-    mount = TransformStamped(Header.at(0.0, "base_link"), "ultrasonic_link",
-                             Transform.from_pose2d(Pose2D(SONAR_MOUNT_X_M, 0.0, 0.0)))
+    mount = TransformStamped(
+        Header.at(0.0, "base_link"),
+        "ultrasonic_link",
+        Transform.from_pose2d(Pose2D(SONAR_MOUNT_X_M, 0.0, 0.0)),
+    )
     samples.append(_sample(f"{ns}tf_static", TFMessage([mount]), 0.0, 1))
-    plan = messages.Path(Header.at(0.0, "map"), [PoseStamped(Header.at(0.0, "map"), Pose.from_pose2d(Pose2D(0.0, y, 0.0)))
-                                           for y in (3.0, 2.0, 1.0)])
+    plan = messages.Path(
+        Header.at(0.0, "map"),
+        [PoseStamped(Header.at(0.0, "map"), Pose.from_pose2d(Pose2D(0.0, y, 0.0))) for y in (3.0, 2.0, 1.0)],
+    )
     samples.append(_sample(f"{ns}plan", plan, 0.01, 1))
     for i in range(steps):
         t = 0.02 + i * 0.05
         pose = Pose2D(0.0, 3.0 - 0.5 * i * 0.05, -math.pi / 2)
-        samples.append(_sample(f"{ns}ground_truth_pose", PoseStamped(Header.at(t, "map"), Pose.from_pose2d(pose)), t, i + 1))
+        samples.append(
+            _sample(
+                f"{ns}ground_truth_pose", PoseStamped(Header.at(t, "map"), Pose.from_pose2d(pose)), t, i + 1
+            )
+        )
         distance = pose.y - SONAR_MOUNT_X_M - WALL_Y_M
         sonar = Range(Header(Time.from_sec(t), "ultrasonic_link"), Range.ULTRASOUND, 0.5, 0.02, 3.0, distance)
         samples.append(_sample(f"{ns}ultrasonic", sonar, t + 0.001, i + 1))

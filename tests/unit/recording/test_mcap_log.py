@@ -49,7 +49,9 @@ def test_the_file_follows_the_mcap_registry(tmp_path: Path) -> None:
         else:
             assert channel.topic.startswith("/")
             assert (channel.message_encoding, schema.encoding) in {  # type: ignore[union-attr]
-                ("protobuf", "protobuf"), ("json", "jsonschema")}
+                ("protobuf", "protobuf"),
+                ("json", "jsonschema"),
+            }
 
 
 def test_a_file_that_is_not_mcap_is_refused_by_name(tmp_path: Path) -> None:

@@ -17,7 +17,10 @@ def _token(session: str, entity: int, kind: EntityKind, topic: str, domain: int 
 
 def test_a_topic_is_wanted_while_a_peer_subscription_lasts() -> None:
     peers = PeerSubscriptions("bridge", 0)
-    first, second = _token("peer", 5, EntityKind.SUBSCRIPTION, "/scan"), _token("peer2", 5, EntityKind.SUBSCRIPTION, "/scan")
+    first, second = (
+        _token("peer", 5, EntityKind.SUBSCRIPTION, "/scan"),
+        _token("peer2", 5, EntityKind.SUBSCRIPTION, "/scan"),
+    )
     assert not peers.wanted("/scan")
     assert peers.appeared(first) is not None and peers.wanted("/scan")
     assert peers.appeared(first) is None  # the same token twice counts once
@@ -29,10 +32,12 @@ def test_a_topic_is_wanted_while_a_peer_subscription_lasts() -> None:
 
 def test_publishers_nodes_own_tokens_and_other_domains_are_no_demand() -> None:
     peers = PeerSubscriptions("bridge", 0)
-    for key in (_token("peer", 5, EntityKind.PUBLISHER, "/scan"),
-                _token("bridge", 5, EntityKind.SUBSCRIPTION, "/scan"),
-                _token("peer", 5, EntityKind.SUBSCRIPTION, "/scan", domain=7),
-                GraphNode(0, "peer", 1, "viewer").token_key()):
+    for key in (
+        _token("peer", 5, EntityKind.PUBLISHER, "/scan"),
+        _token("bridge", 5, EntityKind.SUBSCRIPTION, "/scan"),
+        _token("peer", 5, EntityKind.SUBSCRIPTION, "/scan", domain=7),
+        GraphNode(0, "peer", 1, "viewer").token_key(),
+    ):
         assert peers.appeared(key) is None
     assert not peers.wanted("/scan")
 

@@ -19,8 +19,15 @@ def test_a_service_is_shown_while_it_is_up_and_the_bridge_always() -> None:
     live: set[str] = set()
     nodes = {name: GraphNode(0, "s", i, name) for i, name in enumerate(("ros2_bridge", "battery"))}
     graph = GraphMirror(nodes, lambda key: _Token(live, key), always="ros2_bridge")
-    status = Endpoint(nodes["battery"], 7, EntityKind.PUBLISHER, "/battery_status", "sensor_msgs/msg/BatteryState",
-                      "RIHS01_x", RELIABLE)
+    status = Endpoint(
+        nodes["battery"],
+        7,
+        EntityKind.PUBLISHER,
+        "/battery_status",
+        "sensor_msgs/msg/BatteryState",
+        "RIHS01_x",
+        RELIABLE,
+    )
     graph.add(status)
     assert live == {nodes["ros2_bridge"].token_key()}  # the battery is not up yet
     assert graph.present("battery") and not graph.present("battery")

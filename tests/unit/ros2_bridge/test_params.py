@@ -10,7 +10,8 @@ from shared.config_errors import CONFIG_ERROR_EXIT
 
 @pytest.mark.parametrize("namespace", ["robot", "/robot/", "//r", "/r-1"])
 def test_a_non_canonical_namespace_is_refused_at_start_up_in_one_line(
-        namespace: str, capsys: pytest.CaptureFixture[str]) -> None:
+    namespace: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     """rmw_zenoh takes namespaces from rcl, canonical (``/robot``), and mangles them as they are
     (liveliness_utils.cpp, ``mangle_name``); another form would make keys no ROS 2 node makes."""
     assert SERVICE.run(["-p", f"ros_namespace={namespace}"]) == CONFIG_ERROR_EXIT

@@ -8,7 +8,9 @@ from shared.messages import Header, TFMessage, Transform, TransformStamped
 
 
 def _mount(parent: str, child: str, pose: Pose2D) -> TransformStamped:
-    return TransformStamped(header=Header(frame_id=parent), child_frame_id=child, transform=Transform.from_pose2d(pose))
+    return TransformStamped(
+        header=Header(frame_id=parent), child_frame_id=child, transform=Transform.from_pose2d(pose)
+    )
 
 
 def test_frame_names_ignore_leading_slashes() -> None:
@@ -21,7 +23,12 @@ def test_mounts_take_base_link_children_whatever_the_slashes() -> None:
     assert mounts.get("lidar_link") == Pose2D(0.1, 0.0, 0.0)
     sonar = Pose2D(0.2, 0.05, 0.3)
     updated = mounts.update(
-        TFMessage(transforms=[_mount("/base_link", "/sonar_link", sonar), _mount("odom", "elsewhere", Pose2D(5, 5, 0))])
+        TFMessage(
+            transforms=[
+                _mount("/base_link", "/sonar_link", sonar),
+                _mount("odom", "elsewhere", Pose2D(5, 5, 0)),
+            ]
+        )
     )
     assert updated == ["sonar_link"]
     got = mounts.get("/sonar_link")

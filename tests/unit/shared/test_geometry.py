@@ -23,7 +23,9 @@ from shared.geometry import (
 def test_wrap_angle_range_and_equivalence(angle: float) -> None:
     wrapped = wrap_angle(angle)
     assert -math.pi <= wrapped < math.pi
-    assert math.cos(wrapped) == pytest.approx(math.cos(angle)) and math.sin(wrapped) == pytest.approx(math.sin(angle))
+    assert math.cos(wrapped) == pytest.approx(math.cos(angle)) and math.sin(wrapped) == pytest.approx(
+        math.sin(angle)
+    )
     assert wrap_angles(np.array([angle]))[0] == pytest.approx(wrapped)
 
 
@@ -34,7 +36,9 @@ def test_yaw_quaternion_round_trip_matches_euler() -> None:
         q = quaternion_from_yaw(yaw)
         assert yaw_from_quaternion(*q) == pytest.approx(yaw, abs=1e-12)
         roll, pitch, yaw2 = euler_from_quaternion(*q)
-        assert (roll, pitch) == (pytest.approx(0.0), pytest.approx(0.0)) and yaw2 == pytest.approx(yaw, abs=1e-12)
+        assert (roll, pitch) == (pytest.approx(0.0), pytest.approx(0.0)) and yaw2 == pytest.approx(
+            yaw, abs=1e-12
+        )
 
 
 def test_euler_pitch_clamped() -> None:
@@ -53,7 +57,11 @@ def test_compose_inverse_identity() -> None:
         a = Pose2D(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-3, 3))
         b = Pose2D(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-3, 3))
         ident = a.compose(a.inverse())
-        assert (ident.x, ident.y, ident.yaw) == (pytest.approx(0, abs=1e-9), pytest.approx(0, abs=1e-9), pytest.approx(0, abs=1e-9))
+        assert (ident.x, ident.y, ident.yaw) == (
+            pytest.approx(0, abs=1e-9),
+            pytest.approx(0, abs=1e-9),
+            pytest.approx(0, abs=1e-9),
+        )
         rel = b.relative_to(a)
         back = a.compose(rel)
         assert (back.x, back.y) == (pytest.approx(b.x), pytest.approx(b.y))
@@ -67,7 +75,9 @@ def test_compose_matches_matrices() -> None:
 
 def test_transform_points() -> None:
     pose = Pose2D(1.0, 0.0, math.pi / 2)
-    np.testing.assert_allclose(pose.transform_points(np.array([[1.0, 0.0], [0.0, 1.0]])), [[1.0, 1.0], [0.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(
+        pose.transform_points(np.array([[1.0, 0.0], [0.0, 1.0]])), [[1.0, 1.0], [0.0, 0.0]], atol=1e-12
+    )
     assert pose.transform_point(1.0, 0.0) == pytest.approx((1.0, 1.0))
 
 

@@ -7,8 +7,17 @@ import sys
 
 import pytest
 
-PURE_MODULES = ["shared.geometry", "shared.frames", "shared.world", "shared.messages", "shared.topics", "shared.parameters",
-                "shared.ros2.wire", "shared.ros2.types", "services.ros2_bridge.demand"]
+PURE_MODULES = [
+    "shared.geometry",
+    "shared.frames",
+    "shared.world",
+    "shared.messages",
+    "shared.topics",
+    "shared.parameters",
+    "shared.ros2.wire",
+    "shared.ros2.types",
+    "services.ros2_bridge.demand",
+]
 ALGORITHM_MODULES = [
     "services.docking.graceful",
     "services.docking.docking_run",
@@ -22,6 +31,8 @@ ALGORITHM_MODULES = [
 @pytest.mark.parametrize("module", PURE_MODULES + ALGORITHM_MODULES)
 def test_module_imports_without_zenoh(module: str) -> None:
     probe = f"import sys, {module}; print('zenoh' in sys.modules)"
-    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False)
+    result = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "False", f"importing {module} loads zenoh"

@@ -14,11 +14,15 @@ import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
 #: Every service that runs in the main environment (ros2_dds needs rclpy, from ``make ros2``).
-SERVICES = sorted(p.parent.name for p in (REPO_ROOT / "services").glob("*/__main__.py") if p.parent.name != "ros2_dds")
+SERVICES = sorted(
+    p.parent.name for p in (REPO_ROOT / "services").glob("*/__main__.py") if p.parent.name != "ros2_dds"
+)
 
 
 def _run(code: str) -> str:
-    done = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, timeout=60)
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, timeout=60
+    )
     assert done.returncode == 0, done.stderr
     return done.stdout.strip()
 
@@ -36,7 +40,8 @@ def test_without_openssl_the_hashes_are_python_s_own_and_the_same() -> None:
         "import pydantic, hashlib, hmac\n"
         "class M(pydantic.BaseModel):\n    x: int = 1\n"
         "print(hashlib.sha256(b'abc').hexdigest(), hmac.new(b'k', b'm', 'sha256').hexdigest())\n"
-        + _openssl_loaded())
+        + _openssl_loaded()
+    )
     digests, loaded = out.splitlines()
     assert digests.split() == [hashlib.sha256(b"abc").hexdigest(), hmac.new(b"k", b"m", "sha256").hexdigest()]
     assert loaded == "False"
@@ -58,7 +63,8 @@ def test_a_service_starts_without_openssl(service: str) -> None:
         "    try:\n"
         f"        runpy.run_module('services.{service}', run_name='__main__', alter_sys=True)\n"
         "    except SystemExit:\n        pass\n"
-        "print('pydantic' in sys.modules)\n" + _openssl_loaded())
+        "print('pydantic' in sys.modules)\n" + _openssl_loaded()
+    )
     assert out.split() == ["True", "False"], f"services.{service}: expected pydantic loaded and OpenSSL not"
 
 
@@ -72,7 +78,8 @@ def test_a_lean_command_loads_only_its_own_code(command: str) -> None:
         f"        main(['{command}', '--help'])\n"
         "    except SystemExit:\n        pass\n"
         "others = sorted(m for m in sys.modules if m.startswith('deploy.commands.'))\n"
-        "print(others, 'deploy.launcher' in sys.modules)\n" + _openssl_loaded())
+        "print(others, 'deploy.launcher' in sys.modules)\n" + _openssl_loaded()
+    )
     assert out.split("\n") == [f"['deploy.commands.{command}'] False", "False"]
 
 
@@ -83,7 +90,8 @@ def test_the_router_loads_no_pydantic() -> None:
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    try:\n        main(['router', '--help'])\n"
         "    except SystemExit:\n        pass\n"
-        "print('pydantic' in sys.modules)\n")
+        "print('pydantic' in sys.modules)\n"
+    )
     assert out == "False"
 
 
@@ -104,5 +112,7 @@ def test_a_simulator_s_cameras_share_one_noise_bank_and_draw_their_own_windows()
     noiseless = CameraRenderer(scene, params.model_copy(update={"noise_sigma": 0.0})).render(pose)
     residual = a.astype(float) - noiseless
     assert abs(residual[(noiseless > 10) & (noiseless < 245)].std() - params.noise_sigma) < 0.3
-    again = CameraRenderer(scene, params, np.random.default_rng(2), ReadNoise(np.random.default_rng(1))).render(pose)
+    again = CameraRenderer(
+        scene, params, np.random.default_rng(2), ReadNoise(np.random.default_rng(1))
+    ).render(pose)
     assert np.array_equal(a, again)  # the same seeds, the same frame

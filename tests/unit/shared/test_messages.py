@@ -62,11 +62,15 @@ def test_constants_keep_ros_values() -> None:
         Clock(Time(5, 10)),
         Bool(True),
         PoseStamped(Header.at(1.0, "map"), Pose.from_pose2d(Pose2D(1.0, -2.0, 0.7))),
-        TFMessage([TransformStamped(Header.at(2.0, "odom"), "base_link", Transform.from_pose2d(Pose2D(1, 2, 3)))]),
+        TFMessage(
+            [TransformStamped(Header.at(2.0, "odom"), "base_link", Transform.from_pose2d(Pose2D(1, 2, 3)))]
+        ),
         Odometry(Header.at(1.0, "odom"), "base_link"),
         Path(Header.at(0.0, "map"), [PoseStamped(), PoseStamped()]),
         BatteryState(percentage=0.3, power_supply_status=BatteryState.POWER_SUPPLY_STATUS_DISCHARGING),
-        Range(radiation_type=Range.ULTRASOUND, field_of_view=0.5, min_range=0.02, max_range=3.0, range=math.inf),
+        Range(
+            radiation_type=Range.ULTRASOUND, field_of_view=0.5, min_range=0.02, max_range=3.0, range=math.inf
+        ),
     ],
     ids=lambda m: type(m).__name__,
 )
@@ -76,7 +80,9 @@ def test_round_trip(msg) -> None:  # type: ignore[no-untyped-def]
 
 
 def test_arrays_round_trip_as_numpy() -> None:
-    scan = LaserScan(ranges=np.array([1.0, np.inf, 2.5], dtype=np.float32), intensities=np.zeros(3, np.float32))
+    scan = LaserScan(
+        ranges=np.array([1.0, np.inf, 2.5], dtype=np.float32), intensities=np.zeros(3, np.float32)
+    )
     back = LaserScan.decode(scan.encode())
     assert back.ranges.dtype == np.float32
     assert np.isinf(back.ranges[1]) and back.ranges[2] == pytest.approx(2.5)
@@ -113,7 +119,9 @@ def test_not_a_map() -> None:
 
 
 def test_missing_field_named_with_path() -> None:
-    err = _error(lambda: Twist.from_dict({"linear": {"x": 1.0, "y": 0.0}, "angular": {"x": 0, "y": 0, "z": 0}}))
+    err = _error(
+        lambda: Twist.from_dict({"linear": {"x": 1.0, "y": 0.0}, "angular": {"x": 0, "y": 0, "z": 0}})
+    )
     assert err.field == "linear.z" and "missing" in err.reason
 
 
@@ -124,7 +132,11 @@ def test_unknown_field() -> None:
 
 
 def test_wrong_type() -> None:
-    err = _error(lambda: Twist.from_dict({"linear": {"x": "fast", "y": 0, "z": 0}, "angular": {"x": 0, "y": 0, "z": 0}}))
+    err = _error(
+        lambda: Twist.from_dict(
+            {"linear": {"x": "fast", "y": 0, "z": 0}, "angular": {"x": 0, "y": 0, "z": 0}}
+        )
+    )
     assert err.field == "linear.x" and "expected a number" in err.reason
     err = _error(lambda: Bool.from_dict({"data": 1}))
     assert "true or false" in err.reason
@@ -148,7 +160,9 @@ def test_enum_and_range_bounds() -> None:
 
 
 def test_array_errors() -> None:
-    err = _error(lambda: Float64MultiArray.from_dict({"layout": {"dim": [], "data_offset": 0}, "data": [1.0, "x"]}))
+    err = _error(
+        lambda: Float64MultiArray.from_dict({"layout": {"dim": [], "data_offset": 0}, "data": [1.0, "x"]})
+    )
     assert err.field == "data" and "numbers" in err.reason
     err = _error(lambda: Float64MultiArray(data=np.array([1.0, np.nan])).encode())
     assert "finite" in err.reason
@@ -171,10 +185,20 @@ def test_error_names_key_when_given() -> None:
 
 def test_registry_knows_every_required_type() -> None:
     required = {
-        "std_msgs/msg/Header", "builtin_interfaces/msg/Time", "geometry_msgs/msg/Twist", "geometry_msgs/msg/Pose",
-        "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/Transform", "geometry_msgs/msg/TransformStamped",
-        "tf2_msgs/msg/TFMessage", "nav_msgs/msg/Odometry", "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/Range",
-        "sensor_msgs/msg/BatteryState", "rosgraph_msgs/msg/Clock", "std_msgs/msg/Float64MultiArray",
+        "std_msgs/msg/Header",
+        "builtin_interfaces/msg/Time",
+        "geometry_msgs/msg/Twist",
+        "geometry_msgs/msg/Pose",
+        "geometry_msgs/msg/PoseStamped",
+        "geometry_msgs/msg/Transform",
+        "geometry_msgs/msg/TransformStamped",
+        "tf2_msgs/msg/TFMessage",
+        "nav_msgs/msg/Odometry",
+        "sensor_msgs/msg/LaserScan",
+        "sensor_msgs/msg/Range",
+        "sensor_msgs/msg/BatteryState",
+        "rosgraph_msgs/msg/Clock",
+        "std_msgs/msg/Float64MultiArray",
         "std_msgs/msg/Bool",
     }
     assert required <= set(registered_types())

@@ -21,8 +21,9 @@ class Lidar(BaseModel):
 
 
 class DemoParams(ServiceParams):
-    speed_mps: float = Field(0.5, gt=0.0, le=1.0, description="top speed",
-                             json_schema_extra=runtime_settable("next run"))
+    speed_mps: float = Field(
+        0.5, gt=0.0, le=1.0, description="top speed", json_schema_extra=runtime_settable("next run")
+    )
     min_speed_mps: float = Field(0.1, gt=0.0, json_schema_extra=runtime_settable())
     frame_id: str = Field("base_link", description="read at start")
     mount: tuple[float, float, float] = (0.1, 0.0, 0.0)
@@ -31,7 +32,9 @@ class DemoParams(ServiceParams):
     @model_validator(mode="after")
     def _consistent(self) -> DemoParams:
         if self.min_speed_mps > self.speed_mps:
-            raise ValueError(f"min_speed_mps ({self.min_speed_mps}) must not exceed speed_mps ({self.speed_mps})")
+            raise ValueError(
+                f"min_speed_mps ({self.min_speed_mps}) must not exceed speed_mps ({self.speed_mps})"
+            )
         return self
 
 
@@ -39,9 +42,20 @@ def test_list_shows_every_parameter_flattened_with_value_and_settable() -> None:
     table = ParameterTable(DemoParams())
     rows = {info.name: info for info in table.describe()}
     assert list(rows) == sorted(rows)
-    assert set(rows) == {"use_sim_time", "speed_mps", "min_speed_mps", "frame_id", "mount", "lidar.noise_m",
-                         "lidar.rate_hz"}
-    assert (rows["speed_mps"].value, rows["speed_mps"].settable, rows["speed_mps"].applies) == (0.5, True, "next run")
+    assert set(rows) == {
+        "use_sim_time",
+        "speed_mps",
+        "min_speed_mps",
+        "frame_id",
+        "mount",
+        "lidar.noise_m",
+        "lidar.rate_hz",
+    }
+    assert (rows["speed_mps"].value, rows["speed_mps"].settable, rows["speed_mps"].applies) == (
+        0.5,
+        True,
+        "next run",
+    )
     assert rows["speed_mps"].description == "top speed"
     assert (rows["frame_id"].settable, rows["frame_id"].applies) == (False, "")
     assert rows["mount"].value == [0.1, 0.0, 0.0] and rows["mount"].value_json == "[0.1, 0.0, 0.0]"
@@ -58,16 +72,27 @@ def test_a_good_value_is_written_into_the_live_model() -> None:
     assert params.lidar.noise_m == 0.05
 
 
-@pytest.mark.parametrize(("name", "value", "reason"), [
-    ("speed_mps", 2.0, "speed_mps: Input should be less than or equal to 1 (got 2.0)"),
-    ("speed_mps", "fast", "speed_mps: Input should be a valid number, unable to parse string as a number (got 'fast')"),
-    ("speed_mps", 0.05, "speed_mps: min_speed_mps (0.1) must not exceed speed_mps (0.05) (got 0.05)"),
-    ("lidar.noise_m", -1, "lidar.noise_m: Input should be greater than or equal to 0 (got -1)"),
-    ("frame_id", "odom", "frame_id: read at start-up only, cannot change while running (settable: lidar.noise_m, "
-                         "min_speed_mps, speed_mps)"),
-    ("lidar.rate_hz", 5.0, "lidar.rate_hz: read at start-up only"),
-    ("speed", 0.3, "speed: no such parameter (settable: lidar.noise_m, min_speed_mps, speed_mps)"),
-])
+@pytest.mark.parametrize(
+    ("name", "value", "reason"),
+    [
+        ("speed_mps", 2.0, "speed_mps: Input should be less than or equal to 1 (got 2.0)"),
+        (
+            "speed_mps",
+            "fast",
+            "speed_mps: Input should be a valid number, unable to parse string as a number (got 'fast')",
+        ),
+        ("speed_mps", 0.05, "speed_mps: min_speed_mps (0.1) must not exceed speed_mps (0.05) (got 0.05)"),
+        ("lidar.noise_m", -1, "lidar.noise_m: Input should be greater than or equal to 0 (got -1)"),
+        (
+            "frame_id",
+            "odom",
+            "frame_id: read at start-up only, cannot change while running (settable: lidar.noise_m, "
+            "min_speed_mps, speed_mps)",
+        ),
+        ("lidar.rate_hz", 5.0, "lidar.rate_hz: read at start-up only"),
+        ("speed", 0.3, "speed: no such parameter (settable: lidar.noise_m, min_speed_mps, speed_mps)"),
+    ],
+)
 def test_a_refused_change_names_the_reason_and_changes_nothing(name: str, value: Any, reason: str) -> None:
     params = DemoParams()
     before = params.model_dump()
@@ -112,7 +137,8 @@ def test_services_mark_what_may_change_while_running() -> None:
 
     assert ParameterTable(BatteryParams()).settable_names() == ["charge_scale", "drain_scale"]
     assert {"max_linear_vel_mps", "max_angular_vel_radps", "inflation_radius_m"} <= set(
-        ParameterTable(PlannerParams()).settable_names())
+        ParameterTable(PlannerParams()).settable_names()
+    )
     docking = set(ParameterTable(DockingParams.model_construct()).settable_names())
     assert {"max_approach_speed_mps", "undock_speed_mps"} <= docking
     assert "dock_database" not in docking and "controller" not in docking

@@ -82,7 +82,9 @@ def test_stale_odometry_stops_extrapolation_and_a_clock_reset_clears_history() -
     tracker = PoseTrack()
     _feed(tracker, 2.0)
     last_map = MAP_TO_ODOM.compose(_turning(2.0))
-    assert tracker.current_pose(3.0, ODOM_MAX_AGE_S) == last_map and tracker.twist(3.0, ODOM_MAX_AGE_S) is None
+    assert (
+        tracker.current_pose(3.0, ODOM_MAX_AGE_S) == last_map and tracker.twist(3.0, ODOM_MAX_AGE_S) is None
+    )
     # A sample older than the newest (out of order) is dropped; a jump back by over a second is a reset.
     tracker.add_odom(OdometrySample(1.5, Pose2D(), 0.0, 0.0), received_s=3.0)
     assert _close(tracker.pose_now_at(1.5), MAP_TO_ODOM.compose(_turning(1.5)))  # type: ignore[arg-type]
@@ -111,7 +113,9 @@ def test_odometry_that_jumps_waits_for_localisation_to_catch_up() -> None:
     _feed(tracker, 1.0)
     assert tracker.carried_by_odometry(1.0, ODOM_MAX_AGE_S)
     tracker.add_odom(OdometrySample(1.02, Pose2D(), 0.0, 0.0), received_s=1.02)  # restarted at the origin
-    assert tracker.current_pose(1.02, ODOM_MAX_AGE_S) is None and not tracker.carried_by_odometry(1.02, ODOM_MAX_AGE_S)
+    assert tracker.current_pose(1.02, ODOM_MAX_AGE_S) is None and not tracker.carried_by_odometry(
+        1.02, ODOM_MAX_AGE_S
+    )
     tracker.add_pose(1.05, MAP_TO_ODOM.compose(_turning(1.0)))  # from before, arriving late
     assert tracker.current_pose(1.05, ODOM_MAX_AGE_S) is None
     placed = Pose2D(-2.0, 3.0, 1.0)

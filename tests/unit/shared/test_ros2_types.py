@@ -63,29 +63,68 @@ POSE = Pose(Point(1.5, -2.25, 0.0), Quaternion(0.0, 0.0, math.sin(0.3), math.cos
 
 EXAMPLES: dict[str, Message] = {
     "rosgraph_msgs/msg/Clock": Clock(Time(99, 5)),
-    "tf2_msgs/msg/TFMessage": TFMessage([
-        TransformStamped(HEADER, "odom", Transform(Vector3(0.1, 0.2, 0.0), Quaternion(0.0, 0.0, 0.6, 0.8))),
-        TransformStamped(Header(Time(1, 2), "map"), "base_link", Transform(Vector3(-3.0, 4.0, 0.5)))]),
-    "nav_msgs/msg/Odometry": Odometry(HEADER, "base_link", PoseWithCovariance(POSE, np.arange(36.0)),
-                                      TwistWithCovariance(Twist.planar(0.3, -0.7), np.full(36, 0.01))),
-    "sensor_msgs/msg/LaserScan": LaserScan(HEADER, -3.1, 3.1, 0.0175, 0.0001, 0.1, 0.12, 12.0,
-                                           np.array([1.0, math.inf, 0.5, -math.inf], dtype=np.float32),
-                                           np.array([10.0, 0.0, 3.0, 1.0], dtype=np.float32)),
+    "tf2_msgs/msg/TFMessage": TFMessage(
+        [
+            TransformStamped(
+                HEADER, "odom", Transform(Vector3(0.1, 0.2, 0.0), Quaternion(0.0, 0.0, 0.6, 0.8))
+            ),
+            TransformStamped(Header(Time(1, 2), "map"), "base_link", Transform(Vector3(-3.0, 4.0, 0.5))),
+        ]
+    ),
+    "nav_msgs/msg/Odometry": Odometry(
+        HEADER,
+        "base_link",
+        PoseWithCovariance(POSE, np.arange(36.0)),
+        TwistWithCovariance(Twist.planar(0.3, -0.7), np.full(36, 0.01)),
+    ),
+    "sensor_msgs/msg/LaserScan": LaserScan(
+        HEADER,
+        -3.1,
+        3.1,
+        0.0175,
+        0.0001,
+        0.1,
+        0.12,
+        12.0,
+        np.array([1.0, math.inf, 0.5, -math.inf], dtype=np.float32),
+        np.array([10.0, 0.0, 3.0, 1.0], dtype=np.float32),
+    ),
     "sensor_msgs/msg/Range": Range(HEADER, Range.ULTRASOUND, 0.26, 0.02, 4.0, 1.234),
     "sensor_msgs/msg/Image": Image(HEADER, 2, 3, "rgb8", 0, 9, np.arange(18, dtype=np.uint8)),
-    "sensor_msgs/msg/CameraInfo": CameraInfo(HEADER, 480, 640, "plumb_bob", np.zeros(5),
-                                             np.array([500.0, 0, 320, 0, 500, 240, 0, 0, 1]), np.eye(3).ravel(),
-                                             np.arange(12.0)),
-    "sensor_msgs/msg/BatteryState": BatteryState(HEADER, voltage=12.4, current=-0.4, charge=1.8, capacity=2.0,
-                                                 design_capacity=2.0, percentage=0.9, power_supply_status=2,
-                                                 power_supply_health=1, power_supply_technology=2,
-                                                 cell_voltage=np.array([4.1, 4.2, 4.1], dtype=np.float32),
-                                                 location="base_link", serial_number="zd-1"),
+    "sensor_msgs/msg/CameraInfo": CameraInfo(
+        HEADER,
+        480,
+        640,
+        "plumb_bob",
+        np.zeros(5),
+        np.array([500.0, 0, 320, 0, 500, 240, 0, 0, 1]),
+        np.eye(3).ravel(),
+        np.arange(12.0),
+    ),
+    "sensor_msgs/msg/BatteryState": BatteryState(
+        HEADER,
+        voltage=12.4,
+        current=-0.4,
+        charge=1.8,
+        capacity=2.0,
+        design_capacity=2.0,
+        percentage=0.9,
+        power_supply_status=2,
+        power_supply_health=1,
+        power_supply_technology=2,
+        cell_voltage=np.array([4.1, 4.2, 4.1], dtype=np.float32),
+        location="base_link",
+        serial_number="zd-1",
+    ),
     "std_msgs/msg/Float64MultiArray": Float64MultiArray(
-        MultiArrayLayout([MultiArrayDimension("pose", 3, 3)], 0), np.array([1.0, 2.0, 0.5])),
-    "nav_msgs/msg/OccupancyGrid": OccupancyGrid(HEADER, MapMetaData(Time(3, 0), 0.05, 3, 2, POSE),
-                                                np.array([0, 100, -1, 0, 0, 100], dtype=np.int8)),
-    "nav_msgs/msg/Path": Path(Header(Time(5, 0), "map"), [PoseStamped(HEADER, POSE), PoseStamped(HEADER, Pose())]),
+        MultiArrayLayout([MultiArrayDimension("pose", 3, 3)], 0), np.array([1.0, 2.0, 0.5])
+    ),
+    "nav_msgs/msg/OccupancyGrid": OccupancyGrid(
+        HEADER, MapMetaData(Time(3, 0), 0.05, 3, 2, POSE), np.array([0, 100, -1, 0, 0, 100], dtype=np.int8)
+    ),
+    "nav_msgs/msg/Path": Path(
+        Header(Time(5, 0), "map"), [PoseStamped(HEADER, POSE), PoseStamped(HEADER, Pose())]
+    ),
     "geometry_msgs/msg/PoseStamped": PoseStamped(Header(Time(7, 0), "map"), POSE),
     "geometry_msgs/msg/Twist": Twist(Vector3(0.25, 0.0, 0.0), Vector3(0.0, 0.0, -0.5)),
 }
@@ -94,27 +133,40 @@ GOAL_ID = UUID(np.arange(16, dtype=np.uint8))
 GOAL_INFO = GoalInfo(GOAL_ID, Time(4, 5))
 #: The actions' parts: zendock's messages of the same names as rosidl's.
 ACTION_EXAMPLES: dict[str, Message] = {
-    "action_msgs/msg/GoalStatusArray": GoalStatusArray([GoalStatus(GOAL_INFO, 2), GoalStatus(GoalInfo(UUID(), Time()), 4)]),
+    "action_msgs/msg/GoalStatusArray": GoalStatusArray(
+        [GoalStatus(GOAL_INFO, 2), GoalStatus(GoalInfo(UUID(), Time()), 4)]
+    ),
     "action_msgs/srv/CancelGoal_Request": CancelGoalRequest(GOAL_INFO),
     "action_msgs/srv/CancelGoal_Response": CancelGoalResponse(0, [GOAL_INFO]),
     "nav2_msgs/action/DockRobot_SendGoal_Request": DOCK_ROBOT.send_goal_request(
-        goal_id=GOAL_ID, goal=DockRobotGoal(True, "home", PoseStamped(HEADER, POSE), "charger", 120.0, False)),
-    "nav2_msgs/action/DockRobot_SendGoal_Response": DOCK_ROBOT.send_goal_response(accepted=True, stamp=Time(8, 9)),
+        goal_id=GOAL_ID, goal=DockRobotGoal(True, "home", PoseStamped(HEADER, POSE), "charger", 120.0, False)
+    ),
+    "nav2_msgs/action/DockRobot_SendGoal_Response": DOCK_ROBOT.send_goal_response(
+        accepted=True, stamp=Time(8, 9)
+    ),
     "nav2_msgs/action/DockRobot_GetResult_Request": DOCK_ROBOT.get_result_request(goal_id=GOAL_ID),
     "nav2_msgs/action/DockRobot_GetResult_Response": DOCK_ROBOT.get_result_response(
-        status=4, result=DockRobotResult(True, 0, 2)),
+        status=4, result=DockRobotResult(True, 0, 2)
+    ),
     "nav2_msgs/action/DockRobot_FeedbackMessage": DOCK_ROBOT.feedback_message(
-        goal_id=GOAL_ID, feedback=DockRobotFeedback(3, Duration(7, 100), 1)),
+        goal_id=GOAL_ID, feedback=DockRobotFeedback(3, Duration(7, 100), 1)
+    ),
     "nav2_msgs/action/UndockRobot_SendGoal_Request": UNDOCK_ROBOT.send_goal_request(
-        goal_id=GOAL_ID, goal=UndockRobotGoal("charger", 15.0)),
+        goal_id=GOAL_ID, goal=UndockRobotGoal("charger", 15.0)
+    ),
     "nav2_msgs/action/UndockRobot_FeedbackMessage": UNDOCK_ROBOT.feedback_message(
-        goal_id=GOAL_ID, feedback=UndockRobotFeedback()),
+        goal_id=GOAL_ID, feedback=UndockRobotFeedback()
+    ),
     "nav2_msgs/action/NavigateToPose_SendGoal_Request": NAVIGATE_TO_POSE.send_goal_request(
-        goal_id=GOAL_ID, goal=NavigateToPoseGoal(PoseStamped(HEADER, POSE), "")),
+        goal_id=GOAL_ID, goal=NavigateToPoseGoal(PoseStamped(HEADER, POSE), "")
+    ),
     "nav2_msgs/action/NavigateToPose_GetResult_Response": NAVIGATE_TO_POSE.get_result_response(
-        status=6, result=NavigateToPoseResult(9002, "no valid path")),
+        status=6, result=NavigateToPoseResult(9002, "no valid path")
+    ),
     "nav2_msgs/action/NavigateToPose_FeedbackMessage": NAVIGATE_TO_POSE.feedback_message(
-        goal_id=GOAL_ID, feedback=NavigateToPoseFeedback(PoseStamped(HEADER, POSE), Duration(3, 0), Duration(9, 0), 1, 2.5)),
+        goal_id=GOAL_ID,
+        feedback=NavigateToPoseFeedback(PoseStamped(HEADER, POSE), Duration(3, 0), Duration(9, 0), 1, 2.5),
+    ),
 }
 EXAMPLES.update(ACTION_EXAMPLES)
 
@@ -137,8 +189,14 @@ def _independent(value: Any, ros_type: str) -> Any:
             if sub_kind == 2:
                 values[name] = [_independent(item, sub_detail) for item in (given or [])]
             else:
-                dtype = {"float32": np.float32, "float64": np.float64, "uint8": np.uint8, "int8": np.int8}[sub_detail[0]]
-                raw = np.frombuffer(given, dtype=dtype) if isinstance(given, bytes) else np.array(given or [], dtype=dtype)
+                dtype = {"float32": np.float32, "float64": np.float64, "uint8": np.uint8, "int8": np.int8}[
+                    sub_detail[0]
+                ]
+                raw = (
+                    np.frombuffer(given, dtype=dtype)
+                    if isinstance(given, bytes)
+                    else np.array(given or [], dtype=dtype)
+                )
                 values[name] = raw if kind == 4 or raw.size else np.zeros(detail[1], dtype=dtype)
     return cls(**values)
 
@@ -169,17 +227,26 @@ def test_cdr_reads_back_into_the_same_zendock_message(ros_type: str) -> None:
 
 def _float32_rounded(msg: Message, ros_type: str) -> Message:
     """ROS 2 carries some fields as float32 (BatteryState, Range, LaserScan): compare what survives."""
-    return types.from_ros(types.typestore().deserialize_cdr(
-        types.typestore().serialize_cdr(_independent(msg, ros_type), ros_type), ros_type), type(msg))
+    return types.from_ros(
+        types.typestore().deserialize_cdr(
+            types.typestore().serialize_cdr(_independent(msg, ros_type), ros_type), ros_type
+        ),
+        type(msg),
+    )
 
 
 def test_type_hashes_are_jazzys_published_values() -> None:
     assert types.type_hash("std_msgs/msg/String") == (
-        "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18")
+        "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
+    )
     assert types.type_hash("geometry_msgs/msg/Twist") == (
-        "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a")
+        "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a"
+    )
     for route in (*OUTBOUND, *INBOUND):
-        assert types.type_hash(route.ros_type).startswith("RIHS01_") and len(types.type_hash(route.ros_type)) == 71
+        assert (
+            types.type_hash(route.ros_type).startswith("RIHS01_")
+            and len(types.type_hash(route.ros_type)) == 71
+        )
 
 
 def test_char_is_uint8_in_every_types_hash() -> None:
@@ -190,7 +257,8 @@ def test_char_is_uint8_in_every_types_hash() -> None:
     in every key and token (rmw_publisher_data.cpp, ``rosidl_stringify_type_hash``), so a wrong one means no
     match with a ROS 2 peer."""
     assert types.type_hash("std_msgs/msg/Char") == (
-        "RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9")
+        "RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9"
+    )
     assert types.typestore().fielddefs["std_msgs/msg/Char"][1] == [("data", (1, ("uint8", 0)))]
     for name, (_consts, fields) in types.typestore().fielddefs.items():
         assert "'char'" not in repr(fields), name
@@ -207,16 +275,27 @@ def test_service_hashes_describe_request_response_and_event() -> None:
     store.register(dict(types.typestore().fielddefs))
     store.register(service_definitions("example_interfaces/srv/AddTwoInts", "int64 a\nint64 b", "int64 sum"))
     assert store.hash_rihs01("example_interfaces/srv/AddTwoInts") == (
-        "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a")
+        "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a"
+    )
     for action in ACTIONS:
         for service in action.services:
             assert types.type_hash(service.ros_type) != types.type_hash(f"{service.ros_type}_Request")
 
 
 def test_zendock_docking_types_have_jazzy_names() -> None:
-    assert types.jazzy_name(DOCK_ROBOT.feedback_message.TYPE_NAME) == "nav2_msgs/action/DockRobot_FeedbackMessage"
-    assert types.zendock_name("nav2_msgs/action/DockRobot_FeedbackMessage") == DOCK_ROBOT.feedback_message.TYPE_NAME
-    assert types.jazzy_name("sensor_msgs/msg/Range") == types.zendock_name("sensor_msgs/msg/Range") == "sensor_msgs/msg/Range"
+    assert (
+        types.jazzy_name(DOCK_ROBOT.feedback_message.TYPE_NAME)
+        == "nav2_msgs/action/DockRobot_FeedbackMessage"
+    )
+    assert (
+        types.zendock_name("nav2_msgs/action/DockRobot_FeedbackMessage")
+        == DOCK_ROBOT.feedback_message.TYPE_NAME
+    )
+    assert (
+        types.jazzy_name("sensor_msgs/msg/Range")
+        == types.zendock_name("sensor_msgs/msg/Range")
+        == "sensor_msgs/msg/Range"
+    )
     assert types.knows(types.jazzy_name(UNDOCK_ROBOT.feedback_message.TYPE_NAME))
 
 

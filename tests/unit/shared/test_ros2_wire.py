@@ -58,21 +58,27 @@ def test_canonical_namespaces_are_taken(namespace: str) -> None:
     assert GraphNode(0, "s", 1, "n", namespace).token_key().split("/")[7] == namespace.replace("/", "%")
 
 
-@pytest.mark.parametrize(("namespace", "why"), [
-    ("robot", "must start with '/'"),
-    ("/robot/", "must not end with '/'"),
-    ("//r", "must not contain '//'"),
-    ("/r-1", "'r-1' is not a ROS name token"),
-    ("/1robot", "'1robot' is not a ROS name token"),
-    ("", "must start with '/'"),
-])
+@pytest.mark.parametrize(
+    ("namespace", "why"),
+    [
+        ("robot", "must start with '/'"),
+        ("/robot/", "must not end with '/'"),
+        ("//r", "must not contain '//'"),
+        ("/r-1", "'r-1' is not a ROS name token"),
+        ("/1robot", "'1robot' is not a ROS name token"),
+        ("", "must start with '/'"),
+    ],
+)
 def test_other_namespaces_are_refused_with_the_reason(namespace: str, why: str) -> None:
     error = namespace_error(namespace)
     assert error is not None and why in error and "\n" not in error
 
 
 def test_data_key_is_domain_topic_type_hash() -> None:
-    assert data_key(3, "/chatter", "std_msgs/msg/String", HASH) == f"3/chatter/std_msgs::msg::dds_::String_/{HASH}"
+    assert (
+        data_key(3, "/chatter", "std_msgs/msg/String", HASH)
+        == f"3/chatter/std_msgs::msg::dds_::String_/{HASH}"
+    )
 
 
 def test_qos_strings_leave_defaults_empty_and_read_back() -> None:
@@ -89,22 +95,34 @@ def test_qos_strings_leave_defaults_empty_and_read_back() -> None:
 def test_tokens_carry_the_whole_endpoint_and_parse_back() -> None:
     node = GraphNode(0, "aa11", 2, "battery", "/robot")
     assert node.token_key() == "@ros2_lv/0/aa11/2/2/NN/%/%robot/battery"
-    endpoint = Endpoint(node, 9, EntityKind.PUBLISHER, "/robot/battery_status", "sensor_msgs/msg/BatteryState",
-                        HASH, SENSOR_DATA)
+    endpoint = Endpoint(
+        node,
+        9,
+        EntityKind.PUBLISHER,
+        "/robot/battery_status",
+        "sensor_msgs/msg/BatteryState",
+        HASH,
+        SENSOR_DATA,
+    )
     key = endpoint.token_key()
-    assert key == ("@ros2_lv/0/aa11/2/9/MP/%/%robot/battery/%robot%battery_status/"
-                   f"sensor_msgs::msg::dds_::BatteryState_/{HASH}/2::,5:,:,:,,")
+    assert key == (
+        "@ros2_lv/0/aa11/2/9/MP/%/%robot/battery/%robot%battery_status/"
+        f"sensor_msgs::msg::dds_::BatteryState_/{HASH}/2::,5:,:,:,,"
+    )
     assert parse_endpoint_token(key) == endpoint
 
 
-@pytest.mark.parametrize("key", [
-    "@ros2_lv/0/aa11/2/2/NN/%/%/battery",  # a node
-    "@ros2_lv/0/aa11/2/9/XX/%/%/n/%t/std_msgs::msg::dds_::String_/h/::,10:,:,:,,",  # unknown kind
-    "@ros2_lv/x/aa11/2/9/MS/%/%/n/%t/std_msgs::msg::dds_::String_/h/::,10:,:,:,,",  # domain not a number
-    "@ros2_lv/0/aa11/2/9/MS/%/%/n/%t/String/h/::,10:,:,:,,",  # not a DDS type
-    "@ros2_lv/0/aa11/2/9/MS/%/%/n/%t/std_msgs::msg::dds_::String_/h/bad",  # QoS
-    "elsewhere/0/aa11/2/9/MS/%/%/n/%t/std_msgs::msg::dds_::String_/h/::,10:,:,:,,",
-])
+@pytest.mark.parametrize(
+    "key",
+    [
+        "@ros2_lv/0/aa11/2/2/NN/%/%/battery",  # a node
+        "@ros2_lv/0/aa11/2/9/XX/%/%/n/%t/std_msgs::msg::dds_::String_/h/::,10:,:,:,,",  # unknown kind
+        "@ros2_lv/x/aa11/2/9/MS/%/%/n/%t/std_msgs::msg::dds_::String_/h/::,10:,:,:,,",  # domain not a number
+        "@ros2_lv/0/aa11/2/9/MS/%/%/n/%t/String/h/::,10:,:,:,,",  # not a DDS type
+        "@ros2_lv/0/aa11/2/9/MS/%/%/n/%t/std_msgs::msg::dds_::String_/h/bad",  # QoS
+        "elsewhere/0/aa11/2/9/MS/%/%/n/%t/std_msgs::msg::dds_::String_/h/::,10:,:,:,,",
+    ],
+)
 def test_malformed_tokens_are_named(key: str) -> None:
     with pytest.raises(ValueError, match="token"):
         parse_endpoint_token(key)
@@ -114,9 +132,17 @@ def test_a_gid_is_the_xxh3_128_hash_of_the_token_key() -> None:
     """rmw_zenoh (liveliness_utils.cpp, ``Entity::Entity``) hashes the entity's liveliness key with
     ``simplified_XXH3_128bits`` and memcpys ``low64`` then ``high64`` (host order, little endian) into the
     16-byte gid it sends in every attachment (rmw_publisher_data.cpp, ``entity_->copy_gid()``)."""
-    assert xxhash.xxh3_128_intdigest(b"") == 0x99AA06D3014798D86001C324468D497F  # XXH3-128 seed 0: the standard
-    endpoint = Endpoint(GraphNode(0, "aa11", 2, "battery"), 9, EntityKind.PUBLISHER, "/battery_status",
-                        "sensor_msgs/msg/BatteryState", HASH)
+    assert (
+        xxhash.xxh3_128_intdigest(b"") == 0x99AA06D3014798D86001C324468D497F
+    )  # XXH3-128 seed 0: the standard
+    endpoint = Endpoint(
+        GraphNode(0, "aa11", 2, "battery"),
+        9,
+        EntityKind.PUBLISHER,
+        "/battery_status",
+        "sensor_msgs/msg/BatteryState",
+        HASH,
+    )
     key = endpoint.token_key()
     value = xxhash.xxh3_128_intdigest(key.encode())
     low64, high64 = value & (2**64 - 1), value >> 64

@@ -56,7 +56,9 @@ def test_defaults_and_env(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_overrides_are_typed_yaml_scalars() -> None:
-    params = load_params(DemoParams, _options("-p", "rate_hz=20", "-p", "use_sim_time=true", "-p", "target_frame=lidar_link"))
+    params = load_params(
+        DemoParams, _options("-p", "rate_hz=20", "-p", "use_sim_time=true", "-p", "target_frame=lidar_link")
+    )
     assert params.rate_hz == 20.0 and params.use_sim_time is True and params.target_frame == "lidar_link"
 
 
@@ -116,18 +118,22 @@ def test_dotted_overrides_merge_with_a_nested_config_file(tmp_path: Path) -> Non
     assert params.lidar == LidarPart(rate_hz=5, noise_m=0.02)
     dotted = tmp_path / "dotted.yaml"
     dotted.write_text("lidar.rate_hz: 4\n")
-    assert load_params(NestedParams, _options("--config", str(dotted), "-p", "lidar={noise_m: 0}")).lidar == LidarPart(
-        rate_hz=4, noise_m=0)
+    assert load_params(
+        NestedParams, _options("--config", str(dotted), "-p", "lidar={noise_m: 0}")
+    ).lidar == LidarPart(rate_hz=4, noise_m=0)
 
 
-@pytest.mark.parametrize(("override", "message"), [
-    ("lidr.noise_m=0.02", "lidr.noise_m: unknown group 'lidr' (groups: lidar)"),
-    ("lidar.noise=0.02", "lidar.noise: unknown key"),
-    ("lidar.noise_m=-1", "lidar.noise_m: Input should be greater than or equal to 0"),
-    ("lidar.noise_m=loud", "lidar.noise_m: Input should be a valid number"),
-    ("world.name=x", "world.name: 'world' is a single parameter, not a group"),
-    ("lidar..noise_m=1", "lidar..noise_m: not a parameter name"),
-])
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("lidr.noise_m=0.02", "lidr.noise_m: unknown group 'lidr' (groups: lidar)"),
+        ("lidar.noise=0.02", "lidar.noise: unknown key"),
+        ("lidar.noise_m=-1", "lidar.noise_m: Input should be greater than or equal to 0"),
+        ("lidar.noise_m=loud", "lidar.noise_m: Input should be a valid number"),
+        ("world.name=x", "world.name: 'world' is a single parameter, not a group"),
+        ("lidar..noise_m=1", "lidar..noise_m: not a parameter name"),
+    ],
+)
 def test_bad_dotted_overrides_name_the_parameter(override: str, message: str) -> None:
     with pytest.raises(ConfigError, match=re.escape(message)):
         load_params(NestedParams, _options("-p", override))

@@ -60,7 +60,7 @@ def test_other_layouts_fall_back_to_the_general_path() -> None:
 def test_non_finite_values_are_named_both_ways() -> None:
     wire = bytearray(Twist.planar(1.0, 0.0).encode())
     at = wire.index(b"\xa1x\xcb") + 3  # linear.x, the first float
-    wire[at:at + 8] = np.float64(math.nan).byteswap().tobytes()
+    wire[at : at + 8] = np.float64(math.nan).byteswap().tobytes()
     with pytest.raises(MessageError, match=r"field 'linear.x': must be finite"):
         Twist.decode(bytes(wire))
     with pytest.raises(MessageError, match=r"field 'angular.z': must be finite"):
@@ -80,5 +80,8 @@ def test_a_changed_key_or_length_is_not_taken_for_the_layout() -> None:
 def test_unusual_values_still_encode_like_msgpack() -> None:
     msg = Twist(Vector3(np.float64(0.25), 1, 0.0), {"x": 0.0, "y": 0.0, "z": 2.0})  # type: ignore[arg-type]
     wire = msg.encode()
-    assert msgpack.unpackb(wire) == {"linear": {"x": 0.25, "y": 1.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 2.0}}
+    assert msgpack.unpackb(wire) == {
+        "linear": {"x": 0.25, "y": 1.0, "z": 0.0},
+        "angular": {"x": 0.0, "y": 0.0, "z": 2.0},
+    }
     assert wire == Twist(Vector3(0.25, 1.0, 0.0), Vector3(0.0, 0.0, 2.0)).encode()

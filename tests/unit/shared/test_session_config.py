@@ -24,7 +24,7 @@ def test_default_sessions_queue_sixteen_data_batches_without_shared_memory() -> 
 
 def test_a_config_file_decides_the_transport_itself(tmp_path: Path) -> None:
     path = tmp_path / "client.json5"
-    path.write_text('{ transport: { link: { tx: { queue: { size: { data: 3 } } } } } }')
+    path.write_text("{ transport: { link: { tx: { queue: { size: { data: 3 } } } } } }")
     spec = SessionSpec(config_file=str(path))
     assert _get(spec, "transport/link/tx/queue/size/data") == 3
     assert _get(spec, "scouting/multicast/enabled") is False  # never multicast, file or not

@@ -13,7 +13,9 @@ def test_the_same_bytes_on_the_same_key_decode_once() -> None:
     decodes = SharedDecodes()
     payload = Clock(Time(12, 5)).encode()
     first = decodes.decode(Clock, "r1/clock", payload)
-    assert decodes.decode(Clock, "r1/clock", bytes(payload)) is first, "equal bytes: the decoded message is shared"
+    assert decodes.decode(Clock, "r1/clock", bytes(payload)) is first, (
+        "equal bytes: the decoded message is shared"
+    )
     newer = decodes.decode(Clock, "r1/clock", Clock(Time(12, 6)).encode())
     assert newer is not first and newer.clock.nanosec == 6
     assert decodes.decode(Clock, "r2/clock", payload) is not first, "another key decodes on its own"

@@ -19,8 +19,13 @@ from shared.geometry import Pose2D
 from shared.world import parse_world
 
 
-def _reference(running_top: np.ndarray, hit: np.ndarray, foot_row: np.ndarray, layer_grey: np.ndarray,
-               floor_grey: np.ndarray) -> np.ndarray:
+def _reference(
+    running_top: np.ndarray,
+    hit: np.ndarray,
+    foot_row: np.ndarray,
+    layer_grey: np.ndarray,
+    floor_grey: np.ndarray,
+) -> np.ndarray:
     """Pixel by pixel: the nearest layer whose top is at or above the row, down to the nearest layer's foot;
     the floor's grey elsewhere."""
     W, k = hit.shape
@@ -64,13 +69,15 @@ def test_column_spans_paint_what_each_pixel_shows(seed: int) -> None:
 
 
 def test_a_wall_ahead_fills_the_rows_between_its_top_and_its_foot() -> None:
-    world = parse_world({
-        "name": "wall_ahead",
-        "bounds": [-10.0, -10.0, 10.0, 10.0],
-        "walls": [[[2.0, -5.0], [2.0, 5.0]]],
-        "docks": [{"id": "d", "pose": [-9.0, 0.0, 0.0]}],
-        "robot": {"start": [0.0, 0.0, 0.0]},
-    })
+    world = parse_world(
+        {
+            "name": "wall_ahead",
+            "bounds": [-10.0, -10.0, 10.0, 10.0],
+            "walls": [[[2.0, -5.0], [2.0, 5.0]]],
+            "docks": [{"id": "d", "pose": [-9.0, 0.0, 0.0]}],
+            "robot": {"start": [0.0, 0.0, 0.0]},
+        }
+    )
     params = CameraParams(noise_sigma=0.0, width=64, height=48)
     image = CameraRenderer(build_scene(world), params).render(Pose2D(-params.mount_x_m, 0.0, 0.0))
     f, (cx, cy) = params.focal_px, params.centre_px
@@ -82,4 +89,4 @@ def test_a_wall_ahead_fills_the_rows_between_its_top_and_its_foot() -> None:
     inside = np.arange(48)[(np.arange(48) >= math.ceil(top)) & (np.arange(48) <= foot)]
     assert len(inside) > 5 and np.ptp(column[inside]) == 0, "a flat-shaded wall is one grey"
     assert np.all(column[: math.ceil(top)] == np.uint8(BACKGROUND_GREY)), "above the wall: the background"
-    assert np.all(column[int(foot) + 1:] != column[inside[0]]), "below its foot: the floor"
+    assert np.all(column[int(foot) + 1 :] != column[inside[0]]), "below its foot: the floor"

@@ -25,7 +25,9 @@ QUIET = InfraredParams(dropout=0.0)
 
 
 def _read(world: World, robot: Pose2D, params: InfraredParams = QUIET) -> tuple[int, int, int]:
-    return receiver_readings(robot, world.docks, SegmentSet(world.opaque_segments()), params, np.random.default_rng(0))
+    return receiver_readings(
+        robot, world.docks, SegmentSet(world.opaque_segments()), params, np.random.default_rng(0)
+    )
 
 
 def test_fields_split_the_front_of_the_dock_into_centre_sides_near_and_far() -> None:
@@ -34,12 +36,16 @@ def test_fields_split_the_front_of_the_dock_into_centre_sides_near_and_far() -> 
     assert fields_at(1.0, 0.5, QUIET) == FAR_LEFT
     assert fields_at(0.4, 0.2, QUIET) == FAR_LEFT | NEAR_LEFT
     assert fields_at(1.0, -0.5, QUIET) == FAR_RIGHT
-    assert fields_at(1.0, 0.05, QUIET) == FAR_CENTER | FAR_LEFT  # just off the axis: both, as on the real dock
+    assert (
+        fields_at(1.0, 0.05, QUIET) == FAR_CENTER | FAR_LEFT
+    )  # just off the axis: both, as on the real dock
     assert fields_at(-0.5, 0.0, QUIET) == 0  # behind the face
     assert fields_at(3.0, 0.0, QUIET) == 0  # out of reach
 
 
-def test_the_central_receiver_sees_the_centre_only_when_facing_the_dock(dock_world: Callable[..., World]) -> None:
+def test_the_central_receiver_sees_the_centre_only_when_facing_the_dock(
+    dock_world: Callable[..., World],
+) -> None:
     world = dock_world()  # dock at the origin facing +x: the docked robot stands at the origin
     in_front = Pose2D(-1.0 + ROBOT_FRONT_M, 0.0, 0.0)
     right, central, left = _read(world, in_front)
@@ -71,6 +77,8 @@ def test_readings_flicker_at_the_dropout_rate(dock_world: Callable[..., World]) 
     rng = np.random.default_rng(1)
     params = InfraredParams(dropout=0.2)
     segments = SegmentSet(world.opaque_segments())
-    seen = [receiver_readings(Pose2D(-0.8, 0.0, 0.0), world.docks, segments, params, rng)[1] for _ in range(2000)]
+    seen = [
+        receiver_readings(Pose2D(-0.8, 0.0, 0.0), world.docks, segments, params, rng)[1] for _ in range(2000)
+    ]
     lost = sum(1 for bits in seen if not bits & FAR_CENTER) / len(seen)
     assert 0.15 < lost < 0.25

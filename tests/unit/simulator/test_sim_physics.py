@@ -165,7 +165,9 @@ def test_localisation_absorbs_odometry_drift_but_keeps_its_error(open_world: Cal
     assert believed.as_tuple() == pytest.approx(sim.pose.compose(error).as_tuple(), abs=1e-9)
 
 
-def test_an_initial_pose_becomes_the_belief_and_its_offset_the_error(open_world: Callable[..., World]) -> None:
+def test_an_initial_pose_becomes_the_belief_and_its_offset_the_error(
+    open_world: Callable[..., World],
+) -> None:
     sim = SimWorld(open_world(), params=SimParams(odom_noise=0.05))
     drive(sim, 0.3, 0.4, 2.0)
     given = sim.pose.compose(Pose2D(0.2, -0.1, 0.3))

@@ -50,12 +50,20 @@ def test_each_robots_sensors_see_the_others_body(quiet: SimParams, open_world: C
 
 def _edges_by_hand(robot: SimWorld) -> np.ndarray:
     """The other robots' footprint edges as ``(M, 2, 2)`` start/end points, built afresh."""
-    return np.array([(c[i], c[(i + 1) % 4]) for m in robot.members if m is not robot
-                     for c in [m.footprint()] for i in range(4)])
+    return np.array(
+        [
+            (c[i], c[(i + 1) % 4])
+            for m in robot.members
+            if m is not robot
+            for c in [m.footprint()]
+            for i in range(4)
+        ]
+    )
 
 
-def test_what_sensors_see_of_the_others_follows_every_move(quiet: SimParams,
-                                                          open_world: Callable[..., World]) -> None:
+def test_what_sensors_see_of_the_others_follows_every_move(
+    quiet: SimParams, open_world: Callable[..., World]
+) -> None:
     world = open_world()
     r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
     r2 = r1.join("r2", Pose2D(2.0, 0.0, math.pi / 2))

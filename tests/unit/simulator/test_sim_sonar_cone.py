@@ -44,7 +44,9 @@ def test_an_oblique_pane_echoes_from_the_cone_edge_nearest_it() -> None:
     pane = SegmentSet([((1.0, -1.0), (3.0, 1.0))])
     edge = -HALF
     # On the edge ray p = r (cos e, sin e): x - y = 2, so r = 2 / (cos e - sin e).
-    assert nearest_in_cone((0.0, 0.0), 0.0, HALF, pane) == pytest.approx(2.0 / (math.cos(edge) - math.sin(edge)))
+    assert nearest_in_cone((0.0, 0.0), 0.0, HALF, pane) == pytest.approx(
+        2.0 / (math.cos(edge) - math.sin(edge))
+    )
 
 
 def test_nothing_behind_or_beside_the_cone() -> None:

@@ -69,12 +69,19 @@ def test_the_rate_report_says_how_long_the_world_waited_for_each_kind_of_input()
     pacer.holds, pacer.held_s, pacer.held_by_kind = 3, 0.6, {"pose": 0.1, "cmd_vel": 0.5}
     assert rate_report(57.0, 20.0, 3.0, pacer) == (
         "real-time factor 2.9 over the last 20 s (target 3.0); waited for late drivers 3 times, 0.6 s in all "
-        "(cmd_vel 0.5 s, pose 0.1 s)")
+        "(cmd_vel 0.5 s, pose 0.1 s)"
+    )
 
 
-def _run(pacer: StepPacer, until_wall_s: float, late_between: tuple[float, float] | None = None,
-         stall: tuple[float, float] | None = None, dt_s: float = 0.01, oversleep_s: float = 0.0,
-         step_cost_s: float = 0.0) -> list[float]:
+def _run(
+    pacer: StepPacer,
+    until_wall_s: float,
+    late_between: tuple[float, float] | None = None,
+    stall: tuple[float, float] | None = None,
+    dt_s: float = 0.01,
+    oversleep_s: float = 0.0,
+    step_cost_s: float = 0.0,
+) -> list[float]:
     """Drive ``pacer`` on a virtual wall clock; returns the wall time of every step. ``late_between``: a moving
     robot's command is late in that wall window; ``stall``: the machine stops at ``stall[0]`` for ``stall[1]``;
     every sleep wakes ``oversleep_s`` late and every step takes ``step_cost_s``."""
@@ -110,7 +117,9 @@ def test_time_held_for_a_late_driver_is_made_up_no_faster_than_the_catch_up_fact
     assert pacer.drivers is not None and pacer.drivers.held_s == pytest.approx(0.05, abs=0.002)
     assert len(steps) == pytest.approx(400, abs=1), "the 50 ms held are made up within two wall seconds"
     after = [b - a for a, b in zip(steps, steps[1:], strict=False) if b > 0.56]
-    assert min(after) >= 0.005 / CATCH_UP_FACTOR - 1e-9, "making up, steps come no closer than the factor allows"
+    assert min(after) >= 0.005 / CATCH_UP_FACTOR - 1e-9, (
+        "making up, steps come no closer than the factor allows"
+    )
     assert max(after[:5]) <= 0.005 / CATCH_UP_FACTOR + 2e-5, "right after the hold the world runs faster"
 
 

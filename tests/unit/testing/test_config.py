@@ -18,9 +18,18 @@ def test_defaults_are_the_stack_files_but_a_test_friendly_rtf() -> None:
 
 
 def test_marker_arguments_become_the_stack(tmp_path: Path) -> None:
-    config = stack_config({"world": "corridor", "rtf": 8, "detector": "synthetic", "controller": "seed", "seed": 3,
-                           "localisation_error": [0.03, -0.02, 0.02], "services": {"docking": "python my.py"},
-                           "healthy_timeout_s": 30})
+    config = stack_config(
+        {
+            "world": "corridor",
+            "rtf": 8,
+            "detector": "synthetic",
+            "controller": "seed",
+            "seed": 3,
+            "localisation_error": [0.03, -0.02, 0.02],
+            "services": {"docking": "python my.py"},
+            "healthy_timeout_s": 30,
+        }
+    )
     assert config.world == WORLDS_DIR / "corridor.yaml"
     assert (config.rtf, config.detector, config.controller, config.seed) == ("8", "synthetic", "seed", 3)
     assert config.localisation_error == (0.03, -0.02, 0.02) and config.healthy_timeout_s == 30.0
@@ -33,8 +42,11 @@ def test_marker_arguments_become_the_stack(tmp_path: Path) -> None:
 
 
 def test_the_command_line_wins_over_the_marker() -> None:
-    config = stack_config({"rtf": 8, "services": {"docking": "python mine.py", "pose": "python pose.py"}},
-                          cli_services=["docking=python theirs.py --fast"], cli_rtf="2")
+    config = stack_config(
+        {"rtf": 8, "services": {"docking": "python mine.py", "pose": "python pose.py"}},
+        cli_services=["docking=python theirs.py --fast"],
+        cli_rtf="2",
+    )
     assert config.rtf == "2"
     assert dict(config.services) == {"docking": "python theirs.py --fast", "pose": "python pose.py"}
 
@@ -55,16 +67,19 @@ def test_a_world_is_a_shipped_name_or_a_file_under_the_rootdir(tmp_path: Path) -
         resolve_world("worlds/absent.yaml", tmp_path)
 
 
-@pytest.mark.parametrize(("marker", "message"), [
-    ({"rtf": 0}, "rtf=0: expected a positive number or 'max'"),
-    ({"rtf": "fast"}, "rtf='fast'"),
-    ({"detector": "lidar"}, "detector='lidar': one of aruco, synthetic"),
-    ({"localisation_error": [0.1, 0.2]}, r"expected \(x_m, y_m, yaw_rad\)"),
-    ({"healthy_timeout_s": 0}, "healthy_timeout_s=0.0"),
-    ({"services": {"router": "python r.py"}}, "no replaceable service 'router'"),
-    ({"services": {"docking": ""}}, "the command is empty"),
-    ({"services": "docking=python x.py"}, "services must be a dict"),
-])
+@pytest.mark.parametrize(
+    ("marker", "message"),
+    [
+        ({"rtf": 0}, "rtf=0: expected a positive number or 'max'"),
+        ({"rtf": "fast"}, "rtf='fast'"),
+        ({"detector": "lidar"}, "detector='lidar': one of aruco, synthetic"),
+        ({"localisation_error": [0.1, 0.2]}, r"expected \(x_m, y_m, yaw_rad\)"),
+        ({"healthy_timeout_s": 0}, "healthy_timeout_s=0.0"),
+        ({"services": {"router": "python r.py"}}, "no replaceable service 'router'"),
+        ({"services": {"docking": ""}}, "the command is empty"),
+        ({"services": "docking=python x.py"}, "services must be a dict"),
+    ],
+)
 def test_a_mistake_is_one_line_naming_it(marker: dict[str, object], message: str) -> None:
     with pytest.raises(ValueError, match=message):
         stack_config(marker)

@@ -41,21 +41,38 @@ def test_a_report_gets_each_services_log_tail(tmp_path: Path) -> None:
     assert report.sections[0][1].splitlines() == [f"line {i}" for i in range(95, 100)]
 
 
-def _status(name: str, state: str, restarts: int = 0, health: str = "starting", detail: str = "") -> ServiceStatus:
+def _status(
+    name: str, state: str, restarts: int = 0, health: str = "starting", detail: str = ""
+) -> ServiceStatus:
     return ServiceStatus(name, state, pid=None, restarts=restarts, health=health, phase=state, detail=detail)
 
 
 def test_an_unhealthy_stack_is_one_line_naming_the_service_that_failed(tmp_path: Path) -> None:
-    _write_log(tmp_path, "docking", ["[zendock] started (pid 3)", "Traceback (most recent call last):",
-                                     '  File "x.py", line 1', "ModuleNotFoundError: No module named 'mine'"])
-    statuses = [_status("router", "running", health="none"), _status("planner", "stopped", detail="waiting for map"),
-                _status("docking", "restarting", restarts=2)]
+    _write_log(
+        tmp_path,
+        "docking",
+        [
+            "[zendock] started (pid 3)",
+            "Traceback (most recent call last):",
+            '  File "x.py", line 1',
+            "ModuleNotFoundError: No module named 'mine'",
+        ],
+    )
+    statuses = [
+        _status("router", "running", health="none"),
+        _status("planner", "stopped", detail="waiting for map"),
+        _status("docking", "restarting", restarts=2),
+    ]
     line = unhealthy_line(statuses, tmp_path, 20.0)
     assert "\n" not in line
-    assert line.startswith("zendock stack not healthy within 20 s: docking is restarting (health starting, restarts 2)")
+    assert line.startswith(
+        "zendock stack not healthy within 20 s: docking is restarting (health starting, restarts 2)"
+    )
     assert line.endswith("its log: ModuleNotFoundError: No module named 'mine'")
     waiting = unhealthy_line(statuses[:2], tmp_path, 20.0)
-    assert "planner is stopped" in waiting and "waiting for map" in waiting and "it printed nothing" in waiting
+    assert (
+        "planner is stopped" in waiting and "waiting for map" in waiting and "it printed nothing" in waiting
+    )
 
 
 def test_a_replaced_service_runs_in_the_pytest_rootdir(tmp_path: Path) -> None:

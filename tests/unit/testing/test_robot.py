@@ -42,8 +42,11 @@ def test_a_wait_that_runs_out_says_what_arrived(robot: Robot) -> None:
     robot.watch("docking/state")
     robot.publish("docking/state", String(data="NAV_TO_STAGING_POSE"))
     robot.wait_for("docking/state", timeout_s=5.0)
-    with pytest.raises(WaitTimeout, match=r"docking/state matching the condition within 0.3 s; 1 message\(s\) "
-                                          r"arrived, 0 undecodable; the last: .*NAV_TO_STAGING_POSE"):
+    with pytest.raises(
+        WaitTimeout,
+        match=r"docking/state matching the condition within 0.3 s; 1 message\(s\) "
+        r"arrived, 0 undecodable; the last: .*NAV_TO_STAGING_POSE",
+    ):
         robot.wait_for("docking/state", lambda m: m.data == "CHARGING", timeout_s=0.3)
 
 

@@ -53,7 +53,9 @@ def test_a_payload_of_another_type_gets_no_view() -> None:
 
 
 def test_tf_keeps_its_stamp_and_frames() -> None:
-    msg = TFMessage([TransformStamped(Header(Time(12, 500), "map"), "odom", Transform.from_pose2d(Pose2D(1, 2, 0)))])
+    msg = TFMessage(
+        [TransformStamped(Header(Time(12, 500), "map"), "odom", Transform.from_pose2d(Pose2D(1, 2, 0)))]
+    )
     (view,) = convert_key("r/tf", msg.TYPE_NAME, msg.encode())
     assert view.topic == "/r/tf" and view.schema.name == "foxglove.FrameTransforms"
     assert view.schema.encoding == "protobuf" and view.stamp_ns == 12_000_000_500
@@ -61,8 +63,11 @@ def test_tf_keeps_its_stamp_and_frames() -> None:
 
 
 def test_battery_is_json_with_unmeasured_values_as_null() -> None:
-    msg = BatteryState(header=Header.at(3.0, "base_link"), percentage=0.75,
-                       power_supply_status=BatteryState.POWER_SUPPLY_STATUS_CHARGING)
+    msg = BatteryState(
+        header=Header.at(3.0, "base_link"),
+        percentage=0.75,
+        power_supply_status=BatteryState.POWER_SUPPLY_STATUS_CHARGING,
+    )
     (view,) = convert_key("battery_status", msg.TYPE_NAME, msg.encode())
     record = json.loads(view.data)
     assert record["percentage"] == 0.75 and record["voltage"] is None and record["status"] == "charging"
