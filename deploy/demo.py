@@ -28,6 +28,7 @@ from deploy.paths import REPO_ROOT
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, demo_line
 from deploy.replacements import Replacement, apply_replacements, replacements_report
 from deploy.service_tools import run_tool
+from shared.controllers import DEFAULT_CONTROLLER, ControllerName, DetectorName
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.simulator import TELEPORT, TeleportRequest
@@ -50,9 +51,9 @@ ROBOT_GROUP = {"robot": ["perception", "battery", "pose", "planner", "docking"]}
 @dataclass(frozen=True)
 class DemoOptions:
     world: Path = DEFAULT_WORLD
-    controller: str = "graceful"
+    controller: ControllerName = DEFAULT_CONTROLLER
     #: aruco: the dock is found in camera images by the perception service; synthetic: the simulator's truth
-    detector: str = "aruco"
+    detector: DetectorName = "aruco"
     rtf: str = "1.0"
     seed: int = 0
     start: tuple[float, float, float] | None = None
@@ -72,7 +73,7 @@ class DemoOptions:
 class DemoReport:
     docked: bool
     charging: bool
-    controller: str
+    controller: ControllerName
     world: str
     dock_time_s: float
     final_lateral_error_m: float

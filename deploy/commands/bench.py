@@ -11,6 +11,7 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import count, real_time_factor
+from deploy.options import add_detector_option
 from deploy.service_tools import run_tool
 
 
@@ -423,7 +424,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     messages.add_argument(
         "--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max"
     )
-    messages.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
+    add_detector_option(messages, "aruco")
     messages.add_argument("--seed", type=int, default=0)
     messages.add_argument("--compose", action="store_true", help="the robot's services in one process")
     messages.add_argument("--json", action="store_true")
@@ -440,7 +441,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="simulator real-time factor, or max (1: as a real run)",
     )
     record.add_argument("--workers", type=count, default=1, help="robots docking side by side")
-    record.add_argument("--detector", choices=["aruco", "synthetic"], default="aruco")
+    add_detector_option(record, "aruco")
     record.add_argument("--seed", type=int, default=0)
     record.add_argument("--json", action="store_true")
     record.set_defaults(func=_bench_record)

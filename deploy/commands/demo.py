@@ -12,6 +12,7 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, positive_number, real_time_factor
+from deploy.options import add_controller_option, add_detector_option
 from deploy.progress import is_terminal, progress_period_s
 from shared.config_errors import ConfigError
 from shared.world import load_world
@@ -102,18 +103,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="the robot's services in one process (zendock container) instead of one process each",
     )
-    parser.add_argument(
-        "--controller",
-        choices=["graceful", "seed", "ir"],
-        default="graceful",
-        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)",
-    )
-    parser.add_argument(
-        "--detector",
-        choices=["aruco", "synthetic"],
-        default="aruco",
-        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth",
-    )
+    add_controller_option(parser)
+    add_detector_option(parser, "aruco")
     parser.add_argument(
         "--rtf", type=real_time_factor, default="1.0", help="real-time factor of the simulator, or max"
     )

@@ -25,6 +25,7 @@ from typing import Any, TextIO
 
 import zenoh
 
+from deploy.options import add_connect_option
 from deploy.paths import REPO_ROOT
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, dock_line, is_terminal
 from shared import topics
@@ -350,13 +351,7 @@ def add_connection_flags(group: argparse._ActionsContainer) -> None:
     group.add_argument(
         "--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)"
     )
-    group.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-        f"default {DEFAULT_ROUTER_ENDPOINT})",
-    )
+    add_connect_option(group)
     group.add_argument(
         "--connect-timeout",
         type=float,

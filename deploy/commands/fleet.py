@@ -14,6 +14,7 @@ from rich.text import Text
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, positive_number, real_time_factor
+from deploy.options import add_detector_option
 from deploy.progress import is_terminal
 from shared.config_errors import ConfigError
 
@@ -182,12 +183,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--seed", type=int, default=0, help="seed of generated starts, patrols and sensor noise"
     )
-    parser.add_argument(
-        "--detector",
-        choices=["aruco", "synthetic"],
-        default="synthetic",
-        help="how robots find their dock: the simulator's noisy truth, or ArUco in camera images",
-    )
+    add_detector_option(parser, "synthetic")
     parser.add_argument(
         "--drain-scale",
         type=positive_number,

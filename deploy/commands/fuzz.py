@@ -15,6 +15,7 @@ import zenoh
 
 from deploy.fuzz import FuzzOptions, FuzzReport, run_fuzz
 from deploy.keys.connection import resolve_endpoints
+from deploy.options import add_connect_option
 from shared.config_errors import ConfigError
 from shared.names import normalise_namespace
 
@@ -106,13 +107,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Send malformed payloads (from each key's schema) to every key and request endpoint "
         "of a running stack on this machine, and report what was sent.",
     )
-    parser.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help="loopback Zenoh endpoint (repeatable; default: ZENDOCK_CONNECT, ZENOH_CONNECT, "
-        "tcp/127.0.0.1:7447)",
-    )
+    add_connect_option(parser)
     parser.add_argument("--namespace", default=None, help="robot namespace (default: ZENDOCK_NAMESPACE)")
     parser.add_argument("--messages", type=int, default=5000, help="how many to send in all (default 5000)")
     parser.add_argument(

@@ -40,7 +40,7 @@ from deploy.keys.pub import (
 )
 from deploy.keys.render import DEFAULT_ARRAY_LIMIT, EchoFormat
 from deploy.keys.stats import DEFAULT_BW_WINDOW, DEFAULT_RATE_WINDOW
-from shared.session import DEFAULT_ROUTER_ENDPOINT
+from deploy.options import add_connect_option
 
 Verb = Callable[[argparse.Namespace, BusOptions], int]
 
@@ -48,13 +48,7 @@ Verb = Callable[[argparse.Namespace, BusOptions], int]
 def _bus_flags() -> argparse.ArgumentParser:
     flags = argparse.ArgumentParser(add_help=False)
     group = flags.add_argument_group("bus")
-    group.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-        f"default {DEFAULT_ROUTER_ENDPOINT})",
-    )
+    add_connect_option(group)
     group.add_argument(
         "--namespace",
         default=None,

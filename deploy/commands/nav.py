@@ -18,6 +18,8 @@ import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, TextIO
 
+from deploy.options import add_connect_option
+
 if TYPE_CHECKING:
     from shared.navigation import NavigationClient
 
@@ -191,12 +193,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)"
     )
-    parser.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help="Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT)",
-    )
+    add_connect_option(parser)
     parser.add_argument(
         "--timeout",
         type=float,

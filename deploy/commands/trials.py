@@ -22,8 +22,10 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
+from deploy.options import add_controller_option, add_detector_option
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
 from shared.config_errors import ConfigError
+from shared.controllers import CONTROLLERS
 from shared.world import world_files
 
 SHIPPED_WORLDS = Path(__file__).resolve().parents[1] / "worlds"
@@ -95,7 +97,7 @@ def _run(args: argparse.Namespace) -> int:
     per_world = []
     for number, world in enumerate(worlds):
         # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
-        starts = args.starts or ("beacon" if args.controller == "ir" else "room")
+        starts = args.starts or CONTROLLERS[args.controller].starts
         options = TrialOptions(
             world=world,
             n=args.n,
@@ -253,12 +255,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         f"default {DEFAULT_WORLD}",
     )
     parser.add_argument("--n", type=count, default=10, help="number of dockings (per world)")
-    parser.add_argument(
-        "--controller",
-        choices=["graceful", "seed", "ir"],
-        default="graceful",
-        help="docking controller (ir: infrared beacon, no map pose or camera in the last 2 m)",
-    )
+    add_controller_option(parser)
     parser.add_argument(
         "--starts",
         choices=["room", "beacon"],
@@ -266,12 +263,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="room: anywhere reachable, away from the dock; beacon: within 2 m in front of it "
         "(default: beacon for --controller ir, room otherwise)",
     )
-    parser.add_argument(
-        "--detector",
-        choices=["aruco", "synthetic"],
-        default="aruco",
-        help="how the robot finds its dock: ArUco in camera images, or the simulator's noisy truth",
-    )
+    add_detector_option(parser, "aruco")
     parser.add_argument(
         "--seed", type=int, default=0, help="seed of the start poses and the simulator's noise"
     )

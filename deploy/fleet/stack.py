@@ -9,6 +9,7 @@ from typing import Any
 
 from deploy.launcher.composition import members_to_compose
 from deploy.replacements import Replacement
+from shared.controllers import DEFAULT_CONTROLLER, DETECTORS, ControllerName, DetectorName
 
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
 #: where its lidar last put it) and folding its sensors in twice as often.
@@ -26,8 +27,8 @@ class FleetOptions:
     duration_s: float = 3600.0
     rtf: str = "4"
     seed: int = 0
-    detector: str = "synthetic"
-    controller: str = "graceful"
+    detector: DetectorName = "synthetic"
+    controller: ControllerName = DEFAULT_CONTROLLER
     #: The battery drains (and charges) this many times faster than the model's real cell, so that an
     #: hour of simulated time holds several charge cycles per robot.
     drain_scale: float = 8.0
@@ -98,7 +99,7 @@ def fleet_stack(
             ]
         },
     }
-    if options.detector == "aruco":
+    if DETECTORS[options.detector].camera:
         template["perception"] = {"command": [*py, "services.perception", "-p", f"dock_database={world}"]}
     for service in template.values():
         service.setdefault("depends_on", {"router": {"condition": "service_started"}})

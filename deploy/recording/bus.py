@@ -5,18 +5,12 @@ from __future__ import annotations
 import argparse
 
 from deploy.keys.connection import DEFAULT_CONNECT_TIMEOUT_S, BusOptions, bus_options
-from shared.session import DEFAULT_ROUTER_ENDPOINT
+from deploy.options import add_connect_option
 
 
 def add_bus_flags(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("bus")
-    group.add_argument(
-        "--connect",
-        action="append",
-        metavar="ENDPOINT",
-        help=f"Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
-        f"default {DEFAULT_ROUTER_ENDPOINT})",
-    )
+    add_connect_option(group)
     group.add_argument(
         "--namespace",
         default=None,

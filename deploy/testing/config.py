@@ -19,6 +19,9 @@ from pathlib import Path
 from typing import Any
 
 from deploy.paths import REPO_ROOT
+from shared.controllers import DEFAULT_CONTROLLER, ControllerName, DetectorName
+from shared.controllers import controller as find_controller
+from shared.controllers import detector as find_detector
 
 #: The stack the fixture brings up, and where ``world="seed_room"`` is looked up.
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"
@@ -34,7 +37,6 @@ MARKER_ARGUMENTS = (
     "services",
     "healthy_timeout_s",
 )
-DETECTORS = ("aruco", "synthetic")
 
 
 @dataclass(frozen=True)
@@ -43,8 +45,8 @@ class StackConfig:
 
     world: Path = WORLDS_DIR / "seed_room.yaml"
     rtf: str = "4"
-    detector: str = "aruco"
-    controller: str = "graceful"
+    detector: DetectorName = "aruco"
+    controller: ControllerName = DEFAULT_CONTROLLER
     seed: int = 0
     #: map->odom error of the simulated localisation (x_m, y_m, yaw_rad).
     localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -152,9 +154,8 @@ def stack_config(
     defaults = StackConfig()
     world = resolve_world(marker["world"], rootdir) if "world" in marker else defaults.world
     rtf = parse_rtf(cli_rtf if cli_rtf is not None else marker.get("rtf", defaults.rtf))
-    detector = str(marker.get("detector", defaults.detector))
-    if detector not in DETECTORS:
-        raise ValueError(f"detector={detector!r}: one of {', '.join(DETECTORS)}")
+    detector = find_detector(str(marker.get("detector", defaults.detector))).name
+    controller = find_controller(str(marker.get("controller", defaults.controller))).name
     error = tuple(float(v) for v in marker.get("localisation_error", defaults.localisation_error))
     if len(error) != 3:
         raise ValueError(f"localisation_error={marker['localisation_error']!r}: expected (x_m, y_m, yaw_rad)")
@@ -167,7 +168,7 @@ def stack_config(
         world=world,
         rtf=rtf,
         detector=detector,
-        controller=str(marker.get("controller", defaults.controller)),
+        controller=controller,
         seed=int(marker.get("seed", defaults.seed)),
         localisation_error=(error[0], error[1], error[2]),
         services=tuple(services.items()),

@@ -10,6 +10,7 @@ from typing import Any, TypeVar
 
 from deploy.paths import REPO_ROOT
 from deploy.replacements import Replacement
+from shared.controllers import DEFAULT_CONTROLLER, ControllerName, DetectorName
 
 T = TypeVar("T")
 
@@ -54,10 +55,10 @@ class Shard:
 class TrialOptions:
     world: Path
     n: int = 10
-    controller: str = "graceful"
+    controller: ControllerName = DEFAULT_CONTROLLER
     #: How the robot finds its dock: ``aruco`` (camera images through the perception service) or
     #: ``synthetic`` (the simulator's true dock pose plus noise).
-    detector: str = "aruco"
+    detector: DetectorName = "aruco"
     #: Where trials start: ``room`` (anywhere reachable, away from the dock) or ``beacon`` (within 2 m in
     #: front of the dock, where infrared docking can start).
     starts: str = "room"

@@ -8,6 +8,7 @@ from typing import Any
 
 from deploy.launcher.composition import members_to_compose
 from deploy.trials.records import TrialOptions
+from shared.controllers import DETECTORS
 
 #: Each robot's planner keeps its glass memory in ``<state_dir>/<robot>/`` under this name.
 GLASS_MEMORY_FILE = "glass_memory.npz"
@@ -63,7 +64,7 @@ def trials_stack(
                 *(["-p", f"glass_memory_file={state_dir / robot / GLASS_MEMORY_FILE}"] if state_dir else []),
             ],
         }
-        if options.detector == "aruco":
+        if DETECTORS[options.detector].camera:
             members["perception"] = ["-p", f"dock_database={world}"]
         members["docking"] = [
             "-p",

@@ -31,16 +31,12 @@ from dataclasses import dataclass, replace
 
 from services.docking.dock_claim import AwaitDock, DockClaim, docks_seen_free
 from services.docking.dock_db import DockDatabase
-from services.docking.dock_tracker import DockTracker
-from services.docking.docking_run import DockingRun, DockRequest
+from services.docking.docking_run import DockRequest
 from services.docking.drive_arbiter import DriveArbiter, DriveOrders
-from services.docking.errors import DockingError
 from services.docking.inputs import DockSighting, Heard
-from services.docking.ir_run import IrDockingRun
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.params import Params
 from services.docking.patrol import Patrol
-from services.docking.pose_filter import PoseFilterParams
 from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams
 from services.docking.task_io import Intent, Navigate, NavStatus, Outcome, Task, TickInputs, Velocity
@@ -539,26 +535,7 @@ class Executive:
 
     def _docking_run(self, request: DockRequest, heard: Heard) -> Task:
         p = self.params
-        if p.controller == "ir":
-            try:
-                dock = (
-                    request.dock_pose
-                    or self.database.choose(
-                        request.dock_id or None, heard.latest_pose, request.dock_type or None
-                    ).pose2d
-                )
-            except DockingError:
-                dock = None  # no such dock in the database: infrared docking needs none
-            return IrDockingRun(
-                max_time_s=min(p.max_docking_time_s, p.approach_timeout_s + 60.0),
-                dock_pose=dock,
-                staging_offset_m=p.staging_offset_m,
-                max_staging_time_s=request.max_staging_time_s,
-            )
-        tracker = DockTracker(
-            replace(PoseFilterParams(), coef=p.detection_filter_coef), p.max_detection_offset_m
-        )
-        return DockingRun(request, self.database, p.approach_controller(), p.docking_config(), tracker)
+        return p.docking_controller.docking_run(p, request, self.database, heard.latest_pose)
 
     def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
         return UndockingRun(self.database, max_time_s, dock_type, self.params.undock_config())

@@ -73,8 +73,6 @@ from shared.world import World, load_world
 
 #: std_msgs/String with the service's state name, for tools (published on change and every second).
 DOCKING_STATE = "docking/state"
-#: Control rates fixed by the controllers: graceful 20 Hz, seed (line approach) 10 Hz.
-CONTROL_PERIOD_S = {"graceful": 0.05, "seed": 0.1, "ir": 0.05}
 _NAV_OUTCOMES = {TaskResult.SUCCEEDED: NavOutcome.SUCCEEDED, TaskResult.CANCELED: NavOutcome.CANCELED}
 
 GoalHandle = ServerGoalHandle[Any, Any, Any]
@@ -127,7 +125,7 @@ class DockingService:
             Range, topics.ULTRASONIC, lambda m: cache.sonar(m.range, node.now()), SENSOR_DATA
         )
         node.create_subscription(TFMessage, topics.TF_STATIC, cache.tf_static, QoS(depth=20))
-        if params.controller == "ir":
+        if params.docking_controller.info.infrared:
             node.create_subscription(
                 DockInfraRed, topics.IR_DOCK, lambda m: cache.infrared(m, node.now()), SENSOR_DATA
             )
@@ -150,7 +148,7 @@ class DockingService:
             on_cancel=lambda handle: self._event(CancelGoal(Goal(handle, TaskKind.UNDOCK))),
             preempt_result=lambda: UndockRobotResult(success=False),
         )
-        self.period_s = CONTROL_PERIOD_S[params.controller]
+        self.period_s = params.docking_controller.info.control_period_s
         self.timer = node.create_timer(self.period_s, self._on_tick)
         self._log.info(
             "controller %s at %g Hz, %d dock(s) from %s, detection %s, patrol of %d waypoint(s), on %s time%s",

@@ -7,22 +7,15 @@ approach does none of these): that choice is made here once, not tested again at
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Literal
-
 from pydantic import Field, field_validator, model_validator
 
 from services.docking.approach import GRACEFUL_STAGING_OFFSET_M
-from services.docking.approach_control import (
-    ApproachController,
-    GracefulApproach,
-    SeedApproach,
-    back_off_gains,
-    graceful_params_with_speed,
-)
+from services.docking.approach_control import ApproachController, back_off_gains
+from services.docking.controllers import REGISTRY, DockingController
 from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockingConfig
 from services.docking.undocking_run import UndockConfig
+from shared.controllers import CONTROLLERS, DEFAULT_CONTROLLER, ControllerName, choices_help
 from shared.parameters import runtime_settable
 from shared.runtime import ServiceParams
 
@@ -36,9 +29,8 @@ class Params(ServiceParams):
     dock_database: str = Field(
         description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
     )
-    controller: Literal["graceful", "seed", "ir"] = Field(
-        "graceful",
-        description="final approach controller (ir: Kobuki's infrared docking, no map pose or camera)",
+    controller: ControllerName = Field(
+        DEFAULT_CONTROLLER, description="final approach controller: " + choices_help(CONTROLLERS)
     )
     dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
     auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
@@ -152,25 +144,17 @@ class Params(ServiceParams):
         return self
 
     @property
-    def graceful(self) -> bool:
-        """Whether the graceful approach runs (else the line approach)."""
-        return self.controller == "graceful"
+    def docking_controller(self) -> DockingController:
+        """The controller these parameters name: what it builds and how it docks."""
+        return REGISTRY[self.controller]
 
     def approach_controller(self) -> ApproachController:
         """A fresh final-approach controller as these parameters configure it."""
-        if not self.graceful:
-            return SeedApproach()
-        params = graceful_params_with_speed(self.max_approach_speed_mps)
-        params = replace(params, command_delay_s=self.command_delay_s)
-        if params.pose_estimator is not None:
-            # The pose comes carried by odometry, smooth and fresh: trust it, only compensate its age.
-            estimator = replace(params.pose_estimator, correction_gain=self.pose_correction_gain)
-            params = replace(params, pose_estimator=estimator)
-        return GracefulApproach(params, self.staging_offset_m)
+        return self.docking_controller.approach(self)
 
     def docking_config(self) -> DockingConfig:
         """The docking run's settings."""
-        graceful = self.graceful
+        graceful = self.docking_controller.perceives_while_driving
         return DockingConfig(
             max_retries=self.max_retries,
             use_detection=self.use_detection,

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
-from typing import Literal
 
 import cv2
 import numpy as np
@@ -28,6 +27,7 @@ from services.perception.images import ImageError, grey_pixels
 from services.perception.markers import DockSighting, MarkerFinder, MarkerSighting, locate_dock
 from services.perception.search_regions import SearchRegions
 from shared import topics
+from shared.controllers import DETECTORS, DetectorName
 from shared.geometry import Pose2D
 from shared.messages import (
     CameraInfo,
@@ -61,7 +61,7 @@ class Params(ServiceParams):
     )
     max_range_m: float = Field(3.5, gt=0, description="markers farther than this are not reported")
     max_reprojection_error_px: float = Field(2.0, gt=0, description="fits worse than this are refused")
-    dock_detector: Literal["aruco", "synthetic"] = Field(
+    dock_detector: DetectorName = Field(
         "aruco", description="synthetic: the simulator reports docks itself and this service stays idle"
     )
     opencv_threads: int = Field(
@@ -99,7 +99,7 @@ class PerceptionService:
         #: as Zenoh reports each change: flat out, a poll even every 0.2 s of wall time let a dozen frames
         #: through after the docking service had let go of its detections.
         self._image_sub: Subscription[Image] | None = None
-        if params.dock_detector == "aruco":
+        if DETECTORS[params.dock_detector].camera:
             for pub in (self.detected_pub, self.detections_pub, self.debug_pub):
                 pub.on_matching_change(lambda _matching: node.post(self._follow_demand))
             self._follow_demand()

@@ -26,6 +26,7 @@ from services.simulator.camera_frames import camera_info, camera_mount_transform
 from services.simulator.params import Params
 from services.simulator.physics import SimWorld
 from shared import topics
+from shared.controllers import DETECTORS
 from shared.geometry import Pose2D
 from shared.messages import (
     CameraInfo,
@@ -259,7 +260,7 @@ def channel_table(params: Params) -> list[Channel]:
         Channel(topics.SCAN, LaserScan, SENSOR_DATA, params.lidar.rate_hz, scan),
         Channel(topics.ULTRASONIC, Range, SENSOR_DATA, params.ultrasonic.rate_hz, ultrasonic),
     ]
-    if params.detection.source == "synthetic":
+    if not DETECTORS[params.detection.source].camera:
         # Captured only while someone listens, as the contract says: in a fleet most robots are not docking,
         # and six robots' detections at 15 Hz were 6 % of the simulator's time, for nobody.
         table.append(

@@ -10,7 +10,6 @@ Names follow Nav2's ``component.parameter`` style; the dotted form is described 
 from __future__ import annotations
 
 import math
-from typing import Literal
 
 from pydantic import Field, field_validator
 
@@ -22,6 +21,7 @@ from services.simulator.pacing import PacingParams
 from services.simulator.physics import SimParams
 from services.simulator.robot_model import DiffDriveParams
 from services.simulator.sensors import FiducialCameraParams, LidarParams, UltrasonicParams
+from shared.controllers import DetectorName
 from shared.geometry import Pose2D
 from shared.names import normalise_namespace
 from shared.runtime import ServiceParams
@@ -75,7 +75,7 @@ class DetectionParams(FiducialCameraParams):
 
     #: ``aruco`` leaves it to the perception service (which reads camera/image_raw); ``synthetic`` publishes
     #: detected_dock_pose from the true pose plus noise.
-    source: Literal["aruco", "synthetic"] = "synthetic"
+    source: DetectorName = "synthetic"
     #: The synthetic detector sees the marker down to 2 cm (the camera is 5 cm from it when docked).
     range_min_m: float = Field(0.02, ge=0)
     rate_hz: float = Field(15.0, gt=0, description="synthetic detections per second (sim time)")

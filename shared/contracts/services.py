@@ -11,6 +11,7 @@ from dataclasses import replace
 
 from shared import topics
 from shared.contracts.model import Action, Contract, Flag, Request, Topic
+from shared.controllers import CONTROLLERS, DETECTORS
 from shared.endpoints import BLOCKING, RELIABLE, SENSOR_DATA, QoS
 from shared.interfaces.battery import SET_BATTERY_STATE
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
@@ -271,7 +272,7 @@ DOCKING = Contract(
     flags=(
         USE_SIM_TIME,
         DOCK_DATABASE,
-        Flag("controller", "graceful, seed or ir: zendock's own approach laws"),
+        Flag("controller", "zendock's own approach laws: " + ", ".join(CONTROLLERS)),
         Flag("fleet", "share docks through the fleet service"),
         Flag("resume_at", "undock at this charge (fleet)"),
     ),
@@ -306,7 +307,10 @@ PERCEPTION = Contract(
         Topic(topics.TF_STATIC, TFMessage, QoS(depth=20)),
         Topic(topics.CAMERA_IMAGE, Image, IMAGE_QOS, when="while someone listens to its detections"),
     ),
-    flags=(DOCK_DATABASE, Flag("dock_detector", "aruco, or synthetic (then it stays idle)")),
+    flags=(
+        DOCK_DATABASE,
+        Flag("dock_detector", " or ".join(DETECTORS) + " (without a camera it stays idle)"),
+    ),
     behaviour=(
         "sees the dock: with the robot 1 m in front of the dock, detected_dock_pose within 5 cm of the truth",
     ),

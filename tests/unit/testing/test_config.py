@@ -72,7 +72,8 @@ def test_a_world_is_a_shipped_name_or_a_file_under_the_rootdir(tmp_path: Path) -
     [
         ({"rtf": 0}, "rtf=0: expected a positive number or 'max'"),
         ({"rtf": "fast"}, "rtf='fast'"),
-        ({"detector": "lidar"}, "detector='lidar': one of aruco, synthetic"),
+        ({"detector": "lidar"}, r"no dock detector 'lidar' \(one of: aruco, synthetic\)"),
+        ({"controller": "gracefull"}, r"no docking controller 'gracefull' \(one of: graceful, seed, ir\)"),
         ({"localisation_error": [0.1, 0.2]}, r"expected \(x_m, y_m, yaw_rad\)"),
         ({"healthy_timeout_s": 0}, "healthy_timeout_s=0.0"),
         ({"services": {"router": "python r.py"}}, "no replaceable service 'router'"),

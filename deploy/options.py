@@ -1,0 +1,42 @@
+"""Options several commands share, each defined once: where the bus is, which controller, which detector."""
+
+from __future__ import annotations
+
+import argparse
+
+from shared.controllers import CONTROLLERS, DEFAULT_CONTROLLER, DETECTORS, DetectorName, choices_help
+from shared.session import DEFAULT_ROUTER_ENDPOINT
+
+#: A parser or an argument group.
+_Adds = argparse._ActionsContainer
+
+
+def add_connect_option(parser: _Adds) -> None:
+    """``--connect ENDPOINT`` (repeatable): where a command's Zenoh session connects."""
+    parser.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help="Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
+        f"default {DEFAULT_ROUTER_ENDPOINT})",
+    )
+
+
+def add_controller_option(parser: _Adds) -> None:
+    """``--controller NAME``: the docking controller, one of :data:`shared.controllers.CONTROLLERS`."""
+    parser.add_argument(
+        "--controller",
+        choices=list(CONTROLLERS),
+        default=DEFAULT_CONTROLLER,
+        help=f"docking controller ({choices_help(CONTROLLERS)})",
+    )
+
+
+def add_detector_option(parser: _Adds, default: DetectorName) -> None:
+    """``--detector NAME``: how robots find their dock, one of :data:`shared.controllers.DETECTORS`."""
+    parser.add_argument(
+        "--detector",
+        choices=list(DETECTORS),
+        default=default,
+        help=f"dock detector ({choices_help(DETECTORS)})",
+    )
