@@ -3,7 +3,7 @@
 The full stack's campaign (``zendock trials --controller ir``) is the figure of record, but it costs
 minutes of a machine per world and its rare failures hide in logs. This bench closes the same task
 (:class:`~services.docking.ir_run.IrDockingRun`, the service's own state machine) in a loop with the
-simulator's own beacon model (:func:`services.simulator.infrared.receiver_readings`: fields, fields of
+simulator's own beacon model (:func:`shared.models.infrared.receiver_readings`: fields, fields of
 view, occlusion, dropout) on a unicycle with the base's acceleration limits, from the same beacon
 starts as the trials (:func:`shared.starts.beacon_starts`), in any world file:
 
@@ -43,11 +43,11 @@ from services.docking.ir_drive import IrDriveParams
 from services.docking.ir_run import IrDockingRun
 from services.docking.kinematics import DiffDriveModel
 from services.docking.task_io import Outcome, TickInputs, Velocity
-from services.simulator.dock_contact import DockContactParams
-from services.simulator.infrared import InfraredParams, receiver_readings
-from services.simulator.raycast import SegmentSet
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D, wrap_angle
+from shared.models.dock_contact import DockContactParams
+from shared.models.infrared import InfraredParams, receiver_readings
+from shared.models.raycast import SegmentSet
 from shared.starts import beacon_starts
 from shared.world import (
     DOCK_GEOMETRY,

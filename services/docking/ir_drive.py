@@ -58,12 +58,11 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-NEAR_LEFT = 1
-NEAR_CENTER = 2
-NEAR_RIGHT = 4
-FAR_CENTER = 8
-FAR_LEFT = 16
-FAR_RIGHT = 32
+from shared.messages import DockInfraRed
+
+#: The receivers' field bits, as the message defines them.
+NEAR_LEFT, NEAR_CENTER, NEAR_RIGHT = DockInfraRed.NEAR_LEFT, DockInfraRed.NEAR_CENTER, DockInfraRed.NEAR_RIGHT
+FAR_CENTER, FAR_LEFT, FAR_RIGHT = DockInfraRed.FAR_CENTER, DockInfraRed.FAR_LEFT, DockInfraRed.FAR_RIGHT
 LEFT = NEAR_LEFT | FAR_LEFT
 CENTER = NEAR_CENTER | FAR_CENTER
 RIGHT = NEAR_RIGHT | FAR_RIGHT

@@ -2,7 +2,7 @@
 
 The world is a floor plane with vertical surfaces standing on it (walls, box sides, the docks' bodies, glass
 panes), each of a stated height. With the camera level, a vertical surface is a vertical strip in the image,
-so one ray per image column finds every surface the column crosses (:func:`~services.simulator.raycast`'s
+so one ray per image column finds every surface the column crosses (:func:`~shared.models.raycast`'s
 segment tests, vectorised over columns and surfaces). A pixel shows the nearest surface whose top is above
 it, or the floor below the nearest surface's foot: occlusion, perspective and the horizon follow from the
 geometry. Each dock's face carries its ArUco marker, warped into the image by the homography of the marker's
@@ -28,9 +28,9 @@ import cv2
 import numpy as np
 from pydantic import Field
 
-from services.simulator.component import ComponentParams
 from services.simulator.sensors import CAMERA_MOUNT_X_M
 from shared.geometry import Pose2D
+from shared.models.component import ComponentParams
 from shared.world import DOCK_GEOMETRY, Dock, DockMarker, World, dock_markers
 
 #: OpenCV's pixel convention: pixel centres sit at integer coordinates, the image spans [-0.5, n - 0.5].

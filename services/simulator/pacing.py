@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from pydantic import Field
 
-from services.simulator.component import ComponentParams
+from shared.models.component import ComponentParams
 
 #: Time the world lost against its wall-clock schedule (held for a late driver, or the machine was busy) is
 #: made up by stepping faster than the target, at most this many times the target rate: a user who asks for

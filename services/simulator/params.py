@@ -14,15 +14,15 @@ import math
 from pydantic import Field, field_validator
 
 from services.simulator.camera import CameraParams
-from services.simulator.component import ComponentParams
-from services.simulator.dock_contact import DockContactParams
-from services.simulator.infrared import InfraredParams
 from services.simulator.pacing import PacingParams
 from services.simulator.physics import SimParams
 from services.simulator.robot_model import DiffDriveParams
 from services.simulator.sensors import FiducialCameraParams, LidarParams, UltrasonicParams
 from shared.controllers import DetectorName
 from shared.geometry import Pose2D
+from shared.models.component import ComponentParams
+from shared.models.dock_contact import DockContactParams
+from shared.models.infrared import InfraredParams
 from shared.names import normalise_namespace
 from shared.runtime import ServiceParams
 from shared.world import load_world

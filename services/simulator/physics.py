@@ -19,14 +19,15 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pymunk
 
-from services.simulator import infrared, sensors
-from services.simulator.dock_contact import DockContact, DockContactParams, dock_contact
-from services.simulator.footprint import footprint_corners, separated
+from services.simulator import sensors
 from services.simulator.localisation import map_to_odom
 from services.simulator.odometry import Odometry
-from services.simulator.raycast import SegmentSet
 from services.simulator.robot_model import DiffDrive, DiffDriveParams, Twist2D
 from shared.geometry import Pose2D, wrap_angle
+from shared.models import infrared
+from shared.models.dock_contact import DockContact, DockContactParams, dock_contact
+from shared.models.footprint import footprint_corners, separated
+from shared.models.raycast import SegmentSet
 from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, Dock, World
 
 ROBOT_COLLISION_TYPE = 1

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from pydantic import Field
 
-from services.simulator.component import ComponentParams
+from shared.models.component import ComponentParams
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M
 
 

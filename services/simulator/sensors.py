@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import BaseModel, Field, model_validator
 
-from services.simulator.component import ComponentParams
-from services.simulator.raycast import SegmentSet, cast_rays, nearest_in_cone, segment_blocked
 from shared.geometry import Pose2D, wrap_angle
+from shared.models.component import ComponentParams
+from shared.models.raycast import SegmentSet, cast_rays, nearest_in_cone, segment_blocked
 from shared.world import DOCK_GEOMETRY, Dock
 
 #: The forward camera's mount ahead of base_link: the rendered camera and the fiducial detector are one camera.

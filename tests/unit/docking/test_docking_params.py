@@ -13,7 +13,9 @@ SEED_ROOM = str(Path(__file__).resolve().parents[3] / "deploy" / "worlds" / "see
 def test_graceful_waits_for_detection_and_hands_over_from_navigation() -> None:
     params = Params.model_validate({"dock_database": SEED_ROOM, "handover_distance_m": 0.4})
     config = params.docking_config()
-    assert params.docking_controller.perceives_while_driving and isinstance(params.approach_controller(), GracefulApproach)
+    assert params.docking_controller.perceives_while_driving and isinstance(
+        params.approach_controller(), GracefulApproach
+    )
     assert config.wait_for_detection and config.continuous_perception
     assert config.handover_distance_m == 0.4
     assert config.max_control_pose_age_s == params.max_control_pose_age_s
@@ -23,7 +25,9 @@ def test_graceful_waits_for_detection_and_hands_over_from_navigation() -> None:
 def test_the_line_approach_neither_waits_nor_hands_over() -> None:
     params = Params.model_validate({"dock_database": SEED_ROOM, "controller": "seed"})
     config = params.docking_config()
-    assert not params.docking_controller.perceives_while_driving and isinstance(params.approach_controller(), SeedApproach)
+    assert not params.docking_controller.perceives_while_driving and isinstance(
+        params.approach_controller(), SeedApproach
+    )
     assert not config.wait_for_detection and not config.continuous_perception
     assert config.handover_distance_m is None and config.max_control_pose_age_s is None
 

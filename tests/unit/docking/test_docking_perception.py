@@ -18,9 +18,9 @@ from services.docking.safety import (
     scan_points,
     sonar_blocked,
 )
-from services.simulator.raycast import SegmentSet
 from services.simulator.sensors import LidarParams, UltrasonicParams, lidar_scan, ultrasonic_range
 from shared.geometry import Pose2D
+from shared.models.raycast import SegmentSet
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.world import World, load_world
 from tests.support.processes import REPO_ROOT

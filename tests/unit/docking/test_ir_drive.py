@@ -10,9 +10,9 @@ import pytest
 
 from services.docking.ir_drive import FAR_LEFT, FAR_RIGHT, NEAR_LEFT, IrDockDrive, IrState
 from services.docking.ir_run import within_beacon_reach
-from services.simulator.infrared import InfraredParams, receiver_readings
-from services.simulator.raycast import SegmentSet
 from shared.geometry import Pose2D
+from shared.models.infrared import InfraredParams, receiver_readings
+from shared.models.raycast import SegmentSet
 from shared.world import ROBOT_FRONT_M, parse_world
 
 WORLD = parse_world(

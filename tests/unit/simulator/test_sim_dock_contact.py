@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from services.simulator.dock_contact import DockContactParams, dock_contact
-from services.simulator.footprint import polygon_distance
 from services.simulator.physics import SimParams, SimWorld
 from shared.geometry import Pose2D
+from shared.models.dock_contact import DockContactParams, dock_contact
+from shared.models.footprint import polygon_distance
 from shared.world import World, load_world
 
 # dock_world: dock pose at the origin facing +x, its body from x=0.2 to x=0.4, y in [-0.2, 0.2].

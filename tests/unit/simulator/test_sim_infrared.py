@@ -7,7 +7,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from services.simulator.infrared import (
+from shared.geometry import Pose2D
+from shared.models.infrared import (
     FAR_CENTER,
     FAR_LEFT,
     FAR_RIGHT,
@@ -17,8 +18,7 @@ from services.simulator.infrared import (
     fields_at,
     receiver_readings,
 )
-from services.simulator.raycast import SegmentSet
-from shared.geometry import Pose2D
+from shared.models.raycast import SegmentSet
 from shared.world import ROBOT_FRONT_M, World
 
 QUIET = InfraredParams(dropout=0.0)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from services.simulator.physics import SimParams, SimWorld
-from services.simulator.raycast import SegmentSet, cast_rays
 from services.simulator.sensors import LidarParams, UltrasonicParams, lidar_scan
 from shared.geometry import Pose2D
+from shared.models.raycast import SegmentSet, cast_rays
 from shared.world import World, load_world
 
 FORWARD_BEAM = 180  # angle_min = -pi, 1 degree apart: beam 180 looks straight ahead

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from services.simulator.raycast import SegmentSet, cast_rays, nearest_in_cone
+from shared.models.raycast import SegmentSet, cast_rays, nearest_in_cone
 
 HALF = 0.25
 

@@ -63,7 +63,8 @@ def cast_rays(origin_xy: tuple[float, float], angles_rad: np.ndarray, segments: 
     t = q_cross_s / denom
     u = (qx * dy - qy * dx) / denom
     hit = (t >= 0.0) & (u >= 0.0) & (u <= 1.0)
-    return np.where(hit, t, np.inf).min(axis=1)
+    nearest: np.ndarray = np.where(hit, t, np.inf).min(axis=1)
+    return nearest
 
 
 def segment_blocked(

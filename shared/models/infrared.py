@@ -27,17 +27,15 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import Field, model_validator
 
-from services.simulator.component import ComponentParams
-from services.simulator.raycast import SegmentSet, segment_blocked
 from shared.geometry import Pose2D, wrap_angle
+from shared.messages import DockInfraRed
+from shared.models.component import ComponentParams
+from shared.models.raycast import SegmentSet, segment_blocked
 from shared.world import DOCK_GEOMETRY, Dock
 
-NEAR_LEFT = 1
-NEAR_CENTER = 2
-NEAR_RIGHT = 4
-FAR_CENTER = 8
-FAR_LEFT = 16
-FAR_RIGHT = 32
+#: The receivers' field bits, as the message defines them.
+NEAR_LEFT, NEAR_CENTER, NEAR_RIGHT = DockInfraRed.NEAR_LEFT, DockInfraRed.NEAR_CENTER, DockInfraRed.NEAR_RIGHT
+FAR_CENTER, FAR_LEFT, FAR_RIGHT = DockInfraRed.FAR_CENTER, DockInfraRed.FAR_LEFT, DockInfraRed.FAR_RIGHT
 
 
 @dataclass(frozen=True, slots=True)

@@ -14,9 +14,9 @@ from typing import NamedTuple
 import numpy as np
 from pydantic import Field
 
-from services.simulator.component import ComponentParams
-from services.simulator.footprint import footprint_corners, polygon_distance
 from shared.geometry import Pose2D, wrap_angle
+from shared.models.component import ComponentParams
+from shared.models.footprint import footprint_corners, polygon_distance
 from shared.world import DOCK_GEOMETRY, Dock
 
 
