@@ -20,6 +20,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from deploy.launcher.launch import GroupRun, ModuleRun, ProgramRun
 from deploy.launcher.stack_file import Stack, join_namespace
 from shared.config_errors import ConfigError
 
@@ -41,18 +42,25 @@ ROBOT_PLACEHOLDER = "{robot}"
 
 @dataclass(frozen=True)
 class Replacement:
-    """One ``--service NAME=COMMAND``: zendock's service ``name`` replaced by ``command`` (shell words)."""
+    """One ``--service NAME=COMMAND``: zendock's service ``name`` replaced by the program ``words``."""
 
     name: str
-    command: str
+    words: tuple[str, ...]
+
+    @classmethod
+    def of(cls, name: str, command: str) -> Replacement:
+        """From the command as shell text (a stack file's or a report's); :func:`parse_replacement` checks it."""
+        return cls(name, tuple(shlex.split(command)))
 
     @property
-    def words(self) -> list[str]:
-        return shlex.split(self.command)
+    def command(self) -> str:
+        """The command as shell text, for reports and for ``--service`` again (a detached ``up``)."""
+        return shlex.join(self.words)
 
-    def argv_for(self, namespace: str, flags: Sequence[str]) -> list[str]:
-        """The command for one copy of the service: ``{robot}`` filled in, zendock's flags appended."""
-        return [word.replace(ROBOT_PLACEHOLDER, namespace) for word in self.words] + list(flags)
+    def run_for(self, namespace: str, flags: Sequence[str]) -> ProgramRun:
+        """The run of one copy of the service: ``{robot}`` filled in, zendock's flags appended."""
+        words = [word.replace(ROBOT_PLACEHOLDER, namespace) for word in self.words]
+        return ProgramRun((*words, *flags), replaces=self.name)
 
 
 def parse_replacement(text: str) -> Replacement:
@@ -70,7 +78,7 @@ def parse_replacement(text: str) -> Replacement:
     if not words:
         raise ValueError(f"--service {name}: the command is empty")
     # A file named relative to where the user typed it: zendock runs services in another directory.
-    return Replacement(name, shlex.join(absolute_if_file(word) for word in words))
+    return Replacement(name, tuple(absolute_if_file(word) for word in words))
 
 
 def absolute_if_file(word: str) -> str:
@@ -80,32 +88,14 @@ def absolute_if_file(word: str) -> str:
     return os.path.abspath(path) if not path.is_absolute() and path.is_file() else word
 
 
-def check_unique(replacements: Iterable[Replacement]) -> list[Replacement]:
-    """The replacements, refusing two for the same service."""
+def check_unique(replacements: Iterable[Replacement], option: str = "--service") -> list[Replacement]:
+    """The replacements, refusing two for the same service (``option`` names where they were given)."""
     seen: dict[str, Replacement] = {}
     for replacement in replacements:
         if replacement.name in seen:
-            raise ValueError(f"--service {replacement.name} is given twice")
+            raise ValueError(f"{option} {replacement.name} is given twice")
         seen[replacement.name] = replacement
     return list(seen.values())
-
-
-def split_service_command(command: Sequence[str], name: str) -> tuple[list[str], list[str]] | None:
-    """``(program up to services.<name>, the flags after it)`` of a command running ``-m services.<name>``,
-    or ``None`` when it does not run it."""
-    for i in range(len(command) - 1):
-        if command[i] == "-m" and command[i + 1] == f"services.{name}":
-            return list(command[: i + 2]), list(command[i + 2 :])
-    return None
-
-
-def runs_inside_container(command: Sequence[str], name: str) -> bool:
-    """Whether ``command`` is a ``zendock container`` group with ``name`` as one of its members."""
-    if len(command) < 2 or command[1] != "container":
-        return False
-    members = [command[2]] if len(command) > 2 else []
-    members += [command[i + 1] for i, word in enumerate(command[:-1]) if word == "+"]
-    return name in members
 
 
 def apply_replacements(stack: Stack, replacements: Sequence[Replacement]) -> Stack:
@@ -123,18 +113,17 @@ def apply_replacements(stack: Stack, replacements: Sequence[Replacement]) -> Sta
         raise ConfigError(str(exc)) from None
     for replacement in unique:
         found = 0
-        for service_name, spec in stack.services.items():
-            if runs_inside_container(spec.command, replacement.name):
+        for service_name, launch in stack.services.items():
+            run = launch.run
+            if isinstance(run, GroupRun) and replacement.name in run.services:
                 raise ConfigError(
                     f"--service {replacement.name}: {service_name} runs it inside a composed zendock container; "
                     "replace it in a stack that runs it as its own process"
                 )
-            split = split_service_command(spec.command, replacement.name)
-            if split is None:
+            if not (isinstance(run, ModuleRun) and run.service == replacement.name):
                 continue
-            namespace = join_namespace(stack.namespace, spec.namespace)
-            argv = replacement.argv_for(namespace, split[1])
-            services[service_name] = spec.model_copy(update={"command": argv})
+            namespace = join_namespace(stack.namespace, launch.namespace)
+            services[service_name] = replace(launch, run=replacement.run_for(namespace, run.flags))
             found += 1
         if not found:
             raise ConfigError(

@@ -36,9 +36,11 @@ from deploy.contracts.checks import (
 )
 from deploy.contracts.probe import Probe
 from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.launcher.launch import ModuleRun, run_words
 from deploy.launcher.plan import resolve_argv
+from deploy.launcher.stack_file import Stack
 from deploy.paths import REPO_ROOT
-from deploy.replacements import ROBOT_PLACEHOLDER, absolute_if_file, split_service_command
+from deploy.replacements import ROBOT_PLACEHOLDER, absolute_if_file
 from shared.config_errors import ConfigError
 from shared.contracts import CONTRACTS
 from shared.session import SessionSpec, open_session
@@ -85,26 +87,30 @@ class ConformReport:
         }
 
 
-def _flags_for(service: str, stack: Any, world: Path) -> list[str]:
+def _own_run(service: str, stack: Stack) -> ModuleRun:
+    """zendock's own ``service`` as the stack file runs it (its interpreter and flags), or plainly."""
+    launch = stack.services.get(service)
+    return launch.run if launch is not None and isinstance(launch.run, ModuleRun) else ModuleRun(service)
+
+
+def _flags_for(service: str, stack: Stack, world: Path) -> list[str]:
     """The flags the launcher gives zendock's own ``service`` (from the stack file), plus conform's own."""
-    spec = stack.services.get(service)
-    split = split_service_command(spec.command, service) if spec is not None else None
-    flags = split[1] if split is not None else (["-p", f"world={world}"] if service == "fleet" else [])
+    launch = stack.services.get(service)
+    flags = list(_own_run(service, stack).flags) if launch is not None else []
+    if launch is None and service == "fleet":
+        flags = ["-p", f"world={world}"]
     if service == "viz":
         flags += ["-p", "port=0"]  # any free port: never the default a running viewer uses
     return flags
 
 
-def _own_command(service: str, stack: Any) -> list[str]:
+def _own_command(service: str, stack: Stack) -> list[str]:
     """zendock's own service as its stack file runs it (the DDS face: with .venv-ros2's interpreter)."""
-    spec = stack.services.get(service)
-    split = split_service_command(spec.command, service) if spec is not None else None
-    if split is None:
-        return ["python", "-m", f"services.{service}"]
-    head = split[0]
-    if head[0] != "python" and not Path(head[0]).is_absolute():
-        head = [str(REPO_ROOT / head[0]), *head[1:]]  # relative to the repository, where zendock's stacks run
-    return head
+    run = _own_run(service, stack)
+    python = run.python
+    if python != "python" and not Path(python).is_absolute():
+        python = str(REPO_ROOT / python)  # relative to the repository, where zendock's stacks run
+    return run_words(ModuleRun(run.service, (), python))
 
 
 def run_conform(

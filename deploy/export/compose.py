@@ -31,7 +31,8 @@ import yaml
 
 from deploy.launcher.durations import format_duration
 from deploy.launcher.interpolation import interpolate
-from deploy.launcher.stack_file import Healthcheck, ServiceSpec, Stack
+from deploy.launcher.launch import Healthcheck, ModuleRun, ProgramRun, ServiceLaunch
+from deploy.launcher.stack_file import Stack
 
 IMAGE = "zendock:latest"
 NETWORK = "bus"
@@ -59,7 +60,8 @@ HOST_ONLY_VARIABLES = ("ZENOH_LISTEN", "ZENDOCK_GLASS_MEMORY", "ZENDOCK_TLS")
 #: Host paths under .zendock/ and the named volume each becomes (first match wins).
 VOLUMES = ((".zendock/maps/", "maps", "/maps/"), (".zendock/", "state", "/state/"))
 #: Services that serve the host: arguments to serve on every interface, and the port published on loopback.
-SERVED = {"services.viz": (["--host", "0.0.0.0"], ["127.0.0.1:8765:8765"])}
+#: zendock services that serve outside the network: the flags that open them, the ports published.
+SERVED = {"viz": (["--host", "0.0.0.0"], ["127.0.0.1:8765:8765"])}
 ZENOH_CONFIG_FLAG = "--zenoh-config"
 
 _HOST_ONLY_RE = re.compile(r"\$\{(?:" + "|".join(HOST_ONLY_VARIABLES) + r")[-+:?][^${}]*\}")
@@ -80,8 +82,8 @@ def _in_volumes(word: str, volumes: list[str]) -> str:
     return word
 
 
-def is_router(spec: ServiceSpec) -> bool:
-    return list(spec.command[:2]) == ["zendock", "router"]
+def is_router(spec: ServiceLaunch) -> bool:
+    return isinstance(spec.run, ProgramRun) and list(spec.run.words[:2]) == ["zendock", "router"]
 
 
 def _router_command(command: list[str]) -> list[str]:
@@ -111,7 +113,7 @@ def _healthcheck(name: str, check: Healthcheck | None) -> dict[str, Any] | None:
     return {"test": test, **HEALTH}
 
 
-def _service(name: str, spec: ServiceSpec, namespace: str, volumes: list[str]) -> dict[str, Any]:
+def _service(name: str, spec: ServiceLaunch, namespace: str, volumes: list[str]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     router = is_router(spec)
     if router:
@@ -123,9 +125,9 @@ def _service(name: str, spec: ServiceSpec, namespace: str, volumes: list[str]) -
         command = _router_command(command)
     else:
         command = [_in_volumes(_without_host_variables(word), volumes) for word in command]
-    for module, (serve_args, _) in SERVED.items():
-        if command[:3] == ["python", "-m", module]:
-            command = [*command[:3], *serve_args, *command[3:]]
+    served = SERVED.get(spec.run.service) if isinstance(spec.run, ModuleRun) else None
+    if served is not None:
+        command = [*command[:3], *served[0], *command[3:]]
     out["command"] = command
     if not router:
         out["environment"] = {
@@ -138,18 +140,7 @@ def _service(name: str, spec: ServiceSpec, namespace: str, volumes: list[str]) -
     out["restart"] = str(spec.restart)
     out["stop_grace_period"] = format_duration(spec.stop_grace_period)
     out["networks"] = [NETWORK]
-    ports = (
-        ROUTER_PORTS
-        if router
-        else next(
-            (
-                published
-                for module, (_, published) in SERVED.items()
-                if command[:3] == ["python", "-m", module]
-            ),
-            None,
-        )
-    )
+    ports = ROUTER_PORTS if router else served[1] if served is not None else None
     if ports:
         out["ports"] = list(ports)
     if volumes:
@@ -165,10 +156,10 @@ def _service(name: str, spec: ServiceSpec, namespace: str, volumes: list[str]) -
     return out
 
 
-def runs_on_host_only(spec: ServiceSpec) -> bool:
+def runs_on_host_only(spec: ServiceLaunch) -> bool:
     """A service whose interpreter is a host virtualenv's (``.venv-ros2/bin/python``: the ROS 2 DDS face, on
     rclpy wheels the image does not carry) has no container: the Compose files leave it out."""
-    return bool(spec.command) and spec.command[0].startswith(".venv")
+    return isinstance(spec.run, ModuleRun) and spec.run.python.startswith(".venv")
 
 
 def compose_document(stack: Stack) -> dict[str, Any]:

@@ -13,13 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import deploy
-from deploy.launcher.composition import container_members
+from deploy.launcher.launch import Healthcheck, ServiceLaunch, run_words
 from deploy.launcher.restart import RestartPolicy
 from deploy.launcher.stack_file import (
     DEFAULT_CHECK_TIMEOUT_S,
     DEFAULT_LIVELINESS_TIMEOUT_S,
-    Healthcheck,
-    ServiceSpec,
     Stack,
     join_namespace,
 )
@@ -107,7 +105,7 @@ def _health_plan(service: str, namespace: str, check: Healthcheck | None) -> Hea
 
 
 def service_environment(
-    spec: ServiceSpec,
+    spec: ServiceLaunch,
     *,
     base: Mapping[str, str],
     namespace: str,
@@ -158,7 +156,7 @@ def plan_launch(
         cwd = (root / spec.working_dir).resolve() if spec.working_dir else root
         services[name] = ServicePlan(
             name=name,
-            argv=tuple(resolve_argv(spec.command)),
+            argv=tuple(resolve_argv(run_words(spec.run))),
             cwd=cwd,
             env=service_environment(
                 spec,
@@ -173,7 +171,7 @@ def plan_launch(
             health=_health_plan(name, service_namespace, spec.healthcheck),
             stop_grace_s=spec.stop_grace_period,
             depends_on={dep: d.condition for dep, d in spec.depends_on.items()},
-            members=container_members(spec.command),
+            members=spec.members,
         )
     zenoh_config = str((root / stack.zenoh_config).resolve()) if stack.zenoh_config else None
     return LaunchPlan(

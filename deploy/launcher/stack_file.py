@@ -11,25 +11,28 @@ import os
 import re
 import shlex
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any
 
 import yaml
-from pydantic import (
-    BaseModel,
-    BeforeValidator,
-    ConfigDict,
-    Field,
-    ValidationError,
-    field_validator,
-    model_validator,
-)
+from pydantic import BeforeValidator, Field, ValidationError, field_validator, model_validator
 
 from deploy.launcher.composition import CompositionError, compose_groups
-from deploy.launcher.durations import format_duration, parse_duration
+from deploy.launcher.durations import format_duration
 from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
 from deploy.launcher.interpolation import InterpolationError, interpolate_tree, parse_env_file
+from deploy.launcher.launch import (
+    DEFAULT_STOP_GRACE_S,
+    NAME_RE,
+    Dependency,
+    Duration,
+    Healthcheck,
+    ServiceLaunch,
+    Strict,
+    as_text,
+    read_command,
+)
 from deploy.launcher.restart import RestartPolicy, parse_restart_policy
 from deploy.launcher.robot_template import RobotTemplateError, expand_robots
 from shared.config_errors import ConfigError, format_validation_error
@@ -37,13 +40,8 @@ from shared.names import normalise_namespace
 from shared.session import DEFAULT_ROUTER_ENDPOINT
 
 DEFAULT_CONNECT = f"${{ZENOH_CONNECT:-{DEFAULT_ROUTER_ENDPOINT}}}"
-DEFAULT_STOP_GRACE_S = 5.0
 DEFAULT_LIVELINESS_TIMEOUT_S = 30.0
 DEFAULT_CHECK_TIMEOUT_S = 5.0
-Condition = Literal["service_started", "service_healthy", "service_completed_successfully"]
-_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
-
-Duration = Annotated[float, BeforeValidator(parse_duration)]
 Restart = Annotated[RestartPolicy, BeforeValidator(parse_restart_policy)]
 
 
@@ -55,60 +53,12 @@ def _drop_extensions(data: Any) -> Any:
     return data
 
 
-def _as_text(value: object) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (str, int, float)):
-        return str(value)
-    raise ValueError(f"expected text or a number, got {value!r}")
+class ServiceSpec(Strict):
+    """One service as the stack file writes it; keys and meanings follow the Compose specification.
 
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class Dependency(_Strict):
-    condition: Condition = "service_started"
-
-
-class Healthcheck(_Strict):
-    """Healthy when the service's liveliness token is up and/or an exec test passes.
-
-    ``liveliness: true`` watches the token of the node named like the service (a string names the node);
-    ``timeout`` is then how long the service has to declare it before it counts as unhealthy. ``test``
-    runs a command every ``interval`` (``timeout`` per run); ``retries`` failures in a row make it unhealthy.
+    Read into a :class:`~deploy.launcher.launch.ServiceLaunch` (:meth:`launch`) once validated: its command
+    words become a typed run there.
     """
-
-    liveliness: bool | str = False
-    test: list[str] | str | None = None
-    interval: Duration = 2.0
-    timeout: Duration | None = None
-    retries: int = Field(default=3, ge=1)
-    start_period: Duration = 0.0
-    disable: bool = False
-
-    @field_validator("test", mode="before")
-    @classmethod
-    def _test_words(cls, value: Any) -> Any:
-        if isinstance(value, list):
-            return [_as_text(word) for word in value]
-        return value
-
-    @model_validator(mode="after")
-    def _has_a_check(self) -> Healthcheck:
-        if not self.disable and not self.liveliness and not self.test:
-            raise ValueError("give liveliness: true or a test command (or disable: true)")
-        if isinstance(self.liveliness, str) and not _NAME_RE.match(self.liveliness):
-            raise ValueError(f"liveliness: {self.liveliness!r} is not a node name")
-        return self
-
-    @property
-    def enabled(self) -> bool:
-        return not self.disable and bool(self.liveliness or self.test)
-
-
-class ServiceSpec(_Strict):
-    """One service of the stack; keys and meanings follow the Compose specification."""
 
     command: list[str]
     working_dir: str | None = None
@@ -133,7 +83,7 @@ class ServiceSpec(_Strict):
         if isinstance(value, list):
             if not value:
                 raise ValueError("command is empty")
-            return [_as_text(word) for word in value]
+            return [as_text(word) for word in value]
         return value
 
     @field_validator("environment", mode="before")
@@ -142,18 +92,18 @@ class ServiceSpec(_Strict):
         if isinstance(value, list):
             pairs: dict[str, str | None] = {}
             for item in value:
-                key, sep, text = _as_text(item).partition("=")
+                key, sep, text = as_text(item).partition("=")
                 pairs[key] = text if sep else None
             return pairs
         if isinstance(value, dict):
-            return {str(key): None if text is None else _as_text(text) for key, text in value.items()}
+            return {str(key): None if text is None else as_text(text) for key, text in value.items()}
         return value
 
     @field_validator("depends_on", mode="before")
     @classmethod
     def _depends_on_map(cls, value: Any) -> Any:
         if isinstance(value, list):
-            return {_as_text(name): {} for name in value}
+            return {as_text(name): {} for name in value}
         if isinstance(value, dict):
             return {name: {} if spec is None else spec for name, spec in value.items()}
         return value
@@ -165,8 +115,21 @@ class ServiceSpec(_Strict):
             normalise_namespace(value)
         return value
 
+    def launch(self) -> ServiceLaunch:
+        return ServiceLaunch(
+            run=read_command(self.command),
+            depends_on=dict(self.depends_on),
+            restart=self.restart,
+            healthcheck=self.healthcheck,
+            namespace=self.namespace,
+            environment=dict(self.environment),
+            profiles=tuple(self.profiles),
+            stop_grace_period=self.stop_grace_period,
+            working_dir=self.working_dir,
+        )
 
-class ZenohSettings(_Strict):
+
+class ZenohSettings(Strict):
     """Where services and the launcher's health checker connect (``ZENDOCK_CONNECT`` of every service).
 
     ``config``: a Zenoh json5 file for the launcher's own session (the health checker), e.g. the
@@ -185,7 +148,7 @@ class ZenohSettings(_Strict):
         return endpoints
 
 
-class StackFile(_Strict):
+class StackFile(Strict):
     name: str | None = None
     namespace: str = ""
     zenoh: ZenohSettings = Field(default_factory=ZenohSettings)
@@ -199,7 +162,7 @@ class StackFile(_Strict):
     @field_validator("name")
     @classmethod
     def _project_name(cls, value: str | None) -> str | None:
-        if value is not None and not _NAME_RE.match(value):
+        if value is not None and not NAME_RE.match(value):
             raise ValueError("use letters, digits, '_', '-' and '.', starting with a letter or digit")
         return value
 
@@ -226,7 +189,7 @@ class Stack:
     project_name: str
     namespace: str
     connect: tuple[str, ...]
-    services: Mapping[str, ServiceSpec]
+    services: Mapping[str, ServiceLaunch]
     #: The Zenoh json5 file of the launcher's own session (``zenoh.config``), if any.
     zenoh_config: str | None = None
     #: The variables interpolation used (shell environment over ``.env``), for ``KEY:`` pass-throughs.
@@ -386,34 +349,41 @@ def load_stack(
     declared = document.get("x-compose")
     if declared is not None and not isinstance(declared, dict):
         raise ConfigError(f"{source}: x-compose: expected a mapping of group names to lists of services")
-    groups = {**(declared or {}), **(compose or {})}
-    if groups:
-        try:
-            document = compose_groups(document, groups)
-        except CompositionError as exc:
-            raise ConfigError(f"{source}: {exc}") from None
     try:
         parsed = StackFile.model_validate(document)
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, source)) from None
-    problems = _reference_problems(parsed)
-    if problems:
-        raise ConfigError("\n".join(f"{source}: {problem}" for problem in problems))
-    return Stack(
+    stack = Stack(
         source=source,
         project_name=project_name or parsed.name or project_name_from_dir(directory),
         namespace=parsed.namespace,
         connect=tuple(parsed.zenoh.connect),
-        services=dict(parsed.services),
+        services={name: spec.launch() for name, spec in parsed.services.items()},
         zenoh_config=parsed.zenoh.config or None,
         variables=variables,
     )
+    groups = {**(declared or {}), **(compose or {})}
+    if groups:
+        try:
+            stack = replace(stack, services=compose_groups(stack.services, groups))
+        except CompositionError as exc:
+            raise ConfigError(f"{source}: {exc}") from None
+    check_stack(stack)
+    return stack
 
 
-def _reference_problems(parsed: StackFile) -> list[str]:
+def check_stack(stack: Stack) -> None:
+    """Refuse a stack whose names, dependencies or namespaces do not hold together, naming every problem
+    (a stack file's, or one a runner built in Python)."""
+    problems = _reference_problems(stack)
+    if problems:
+        raise ConfigError("\n".join(f"{stack.source}: {problem}" for problem in problems))
+
+
+def _reference_problems(parsed: Stack) -> list[str]:
     problems = []
     for name, spec in parsed.services.items():
-        if not _NAME_RE.match(name):
+        if not NAME_RE.match(name):
             problems.append(f"services.{name}: a service name uses letters, digits, '_', '-' and '.'")
         for dependency, condition in spec.depends_on.items():
             where = f"services.{name}.depends_on.{dependency}"

@@ -16,9 +16,12 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from deploy.paths import REPO_ROOT
+
+if TYPE_CHECKING:
+    from deploy.replacements import Replacement
 from shared.controllers import DEFAULT_CONTROLLER, ControllerName, DetectorName
 from shared.controllers import controller as find_controller
 from shared.controllers import detector as find_detector
@@ -51,7 +54,8 @@ class StackConfig:
     #: map->odom error of the simulated localisation (x_m, y_m, yaw_rad).
     localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
     #: ``NAME=COMMAND`` replacements (see :mod:`deploy.replacements`), in order, one per service.
-    services: tuple[tuple[str, str], ...] = ()
+    #: ``services=`` and ``--zendock-service``: zendock's services replaced by a user's programs.
+    services: tuple[Replacement, ...] = ()
     #: How long the stack has to become healthy (wall seconds).
     healthy_timeout_s: float = 90.0
 
@@ -105,10 +109,13 @@ def parse_rtf(value: object) -> str:
     return text
 
 
-def parse_services(services: object, where: str) -> list[tuple[str, str]]:
+def parse_services(services: object, where: str) -> list[Replacement]:
     """``{"docking": "python my_docking.py"}`` (a marker's) or ``["docking=python my_docking.py"]`` (options')
-    as checked ``(name, command)`` pairs; raises ``ValueError`` naming the problem."""
-    from deploy.replacements import parse_replacement  # noqa: PLC0415 - the stack file model is slow to import
+    as checked replacements; raises ``ValueError`` naming the problem."""
+    from deploy.replacements import (  # noqa: PLC0415 - the stack file model is slow to import
+        check_unique,
+        parse_replacement,
+    )
 
     if isinstance(services, Mapping):
         texts = [f"{name}={command}" for name, command in services.items()]
@@ -116,18 +123,13 @@ def parse_services(services: object, where: str) -> list[tuple[str, str]]:
         texts = [str(text) for text in services]
     else:
         raise ValueError(f"{where}: services must be a dict of service name to command, got {services!r}")
-    pairs = []
+    replacements = []
     for text in texts:
         try:
-            replacement = parse_replacement(text)
+            replacements.append(parse_replacement(text))
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
-        pairs.append((replacement.name, replacement.command))
-    names = [name for name, _ in pairs]
-    twice = sorted({name for name in names if names.count(name) > 1})
-    if twice:
-        raise ValueError(f"{where}: {', '.join(twice)} replaced twice")
-    return pairs
+    return check_unique(replacements, option=where)
 
 
 def merge_markers(marker_kwargs: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
@@ -162,8 +164,12 @@ def stack_config(
     timeout = float(marker.get("healthy_timeout_s", defaults.healthy_timeout_s))
     if not timeout > 0:
         raise ValueError(f"healthy_timeout_s={timeout!r}: expected a positive number of seconds")
-    services = dict(parse_services(marker.get("services", {}), "@pytest.mark.zendock(services=...)"))
-    services.update(parse_services(cli_services, "--zendock-service"))  # the command line wins
+    services = {
+        r.name: r for r in parse_services(marker.get("services", {}), "@pytest.mark.zendock(services=...)")
+    }
+    services.update(
+        (r.name, r) for r in parse_services(cli_services, "--zendock-service")
+    )  # the command line wins
     return StackConfig(
         world=world,
         rtf=rtf,
@@ -171,6 +177,6 @@ def stack_config(
         controller=controller,
         seed=int(marker.get("seed", defaults.seed)),
         localisation_error=(error[0], error[1], error[2]),
-        services=tuple(services.items()),
+        services=tuple(services.values()),
         healthy_timeout_s=timeout,
     )

@@ -24,7 +24,7 @@ from deploy.launcher.logs import failure_line, tail
 from deploy.launcher.stack_file import Stack
 from deploy.launcher.status import ServiceStatus
 from deploy.paths import REPO_ROOT
-from deploy.replacements import Replacement, apply_replacements
+from deploy.replacements import apply_replacements
 from deploy.testing.config import DEFAULT_STACK, StackConfig
 
 #: The project name under ``.zendock/`` in the test's directory.
@@ -43,8 +43,8 @@ def run_replacements_in(before: Stack, after: Stack, directory: Path) -> Stack:
     """``after`` with every service whose command the replacements changed running in ``directory``."""
     services = dict(after.services)
     for name, spec in after.services.items():
-        if spec.command != before.services[name].command:
-            services[name] = spec.model_copy(update={"working_dir": str(directory)})
+        if spec.run != before.services[name].run:
+            services[name] = replace(spec, working_dir=str(directory))
     return replace(after, services=services)
 
 
@@ -88,9 +88,7 @@ class ZendockStack:
         stack = load_stack(
             DEFAULT_STACK, env=config.environment(self.endpoint, project_dir), project_dir=REPO_ROOT
         )
-        replaced = apply_replacements(
-            stack, [Replacement(name, command) for name, command in config.services]
-        )
+        replaced = apply_replacements(stack, config.services)
         stack = run_replacements_in(stack, replaced, rootdir)
         self.launcher = Launcher(stack, project_dir=project_dir, working_dir=REPO_ROOT, project_name=PROJECT)
         self.services: list[str] = list(self.launcher.services)

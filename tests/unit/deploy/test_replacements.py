@@ -92,7 +92,7 @@ def test_a_file_named_relative_to_where_the_user_is_becomes_absolute(tmp_path: P
     (tmp_path / "my_docking.py").write_text("")
     monkeypatch.chdir(tmp_path)
     replacement = parse_replacement("docking=python my_docking.py --gain 2")
-    assert replacement.words == ["python", str(tmp_path / "my_docking.py"), "--gain", "2"]
+    assert replacement.words == ("python", str(tmp_path / "my_docking.py"), "--gain", "2")
 
 
 def test_the_same_service_twice_is_one_clear_error(tmp_path: Path) -> None:

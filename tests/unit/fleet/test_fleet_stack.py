@@ -56,7 +56,7 @@ def test_compose_light_groups_battery_and_pose_only(tmp_path: Path) -> None:
 
 
 def test_a_replaced_service_keeps_its_own_process_beside_the_group(tmp_path: Path) -> None:
-    replaced = (Replacement("planner", "my-planner --robot {robot}"),)
+    replaced = (Replacement.of("planner", "my-planner --robot {robot}"),)
     services = _stack(tmp_path, compose="all", replacements=replaced).services
     assert list(services["planner_r1"].command)[:3] == ["my-planner", "--robot", "r1"]
     assert "planner" not in list(services["robot_r1"].command)

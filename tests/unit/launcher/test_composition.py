@@ -7,10 +7,17 @@ from pathlib import Path
 import pytest
 
 from deploy.launcher import load_stack
-from deploy.launcher.composition import CompositionError, compose_groups, container_members
+from deploy.launcher.composition import CompositionError, compose_groups
+from deploy.launcher.launch import GroupRun, ModuleRun, ProgramRun, read_command, run_words
+from deploy.launcher.stack_file import StackFile
 from shared.config_errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+def _services(document: dict) -> dict:  # type: ignore[type-arg]
+    """The document's services, validated and read as a stack file's are."""
+    return {name: spec.launch() for name, spec in StackFile.model_validate(document).services.items()}
 
 
 def _doc() -> dict:  # type: ignore[type-arg]
@@ -36,11 +43,14 @@ def _doc() -> dict:  # type: ignore[type-arg]
 
 
 def test_a_group_replaces_its_members_with_one_container() -> None:
-    doc = _doc()
-    out = compose_groups(doc, {"robot": ["battery", "planner"]})
-    assert set(out["services"]) == {"router", "map", "robot", "viewer"} and "robot" not in doc["services"]
-    robot = out["services"]["robot"]
-    assert robot["command"] == [
+    services = _services(_doc())
+    out = compose_groups(services, {"robot": ["battery", "planner"]})
+    assert set(out) == {"router", "map", "robot", "viewer"} and "robot" not in services
+    robot = out["robot"]
+    assert robot.run == GroupRun(
+        (ModuleRun("battery", ("-p", "use_sim_time=true")), ModuleRun("planner", ("-p", "map_yaml=m.yaml")))
+    )
+    assert robot.command == [
         "zendock",
         "container",
         "battery",
@@ -51,17 +61,15 @@ def test_a_group_replaces_its_members_with_one_container() -> None:
         "-p",
         "map_yaml=m.yaml",
     ]
-    assert robot["depends_on"] == {
-        "router": {"condition": "service_started"},
-        "map": {"condition": "service_completed_successfully"},
+    assert {name: d.condition for name, d in robot.depends_on.items()} == {
+        "router": "service_started",
+        "map": "service_completed_successfully",
     }
-    assert robot["healthcheck"] == {"liveliness": "planner", "timeout": "20s"}
-    assert (
-        robot["restart"] == "on-failure"
-        and robot["stop_grace_period"] == "8s"
-        and robot["environment"] == {"A": "1"}
-    )
-    assert out["services"]["viewer"]["depends_on"] == ["robot", "router"]
+    assert robot.healthcheck is not None
+    assert (robot.healthcheck.liveliness, robot.healthcheck.timeout) == ("planner", 20.0)
+    assert str(robot.restart) == "on-failure" and robot.stop_grace_period == 8.0
+    assert robot.environment == {"A": "1"}
+    assert set(out["viewer"].depends_on) == {"robot", "router"}
 
 
 @pytest.mark.parametrize(
@@ -76,7 +84,7 @@ def test_a_group_replaces_its_members_with_one_container() -> None:
 )
 def test_groups_that_cannot_run_as_one_process_are_named(groups: dict, message: str) -> None:  # type: ignore[type-arg]
     with pytest.raises(CompositionError, match=message):
-        compose_groups(_doc(), groups)
+        compose_groups(_services(_doc()), groups)
 
 
 def test_the_default_stack_composes_and_a_bad_x_compose_is_one_clear_error(tmp_path: Path) -> None:
@@ -87,6 +95,7 @@ def test_the_default_stack_composes_and_a_bad_x_compose_is_one_clear_error(tmp_p
         compose={"robot": ["perception", "battery", "pose", "planner", "docking"]},
     )
     assert "robot" in stack.services and "docking" not in stack.services
+    assert stack.services["robot"].members == ("perception", "battery", "pose", "planner", "docking")
     assert stack.services["robot"].command[:3] == ["zendock", "container", "perception"]
     bad = tmp_path / "stack.yaml"
     bad.write_text(
@@ -114,14 +123,35 @@ def test_the_default_stack_composes_and_a_bad_x_compose_is_one_clear_error(tmp_p
             ("battery", "docking"),
         ),
         (["/venv/bin/zendock", "container", "pose"], ("pose",)),
-        (["python", "-m", "services.battery"], ()),
-        (["zendock", "router"], ()),
     ],
 )
-def test_a_groups_members_are_read_from_its_container_command(
+def test_a_groups_members_are_read_once_from_its_container_command(
     command: list[str], members: tuple[str, ...]
 ) -> None:
-    assert container_members(command) == members
+    run = read_command(command)
+    assert isinstance(run, GroupRun) and run.services == members
+    assert run_words(run)[2:] == command[2:]  # the words again, as they were
+
+
+@pytest.mark.parametrize(
+    ("command", "run"),
+    [
+        (["python", "-m", "services.battery", "-p", "a=1"], ModuleRun("battery", ("-p", "a=1"))),
+        (
+            [".venv-ros2/bin/python", "-m", "services.ros2_dds"],
+            ModuleRun("ros2_dds", (), ".venv-ros2/bin/python"),
+        ),
+        (["zendock", "router"], ProgramRun(("zendock", "router"))),
+        (["python", "-m", "services"], ProgramRun(("python", "-m", "services"))),
+        (
+            ["python", "my_docking.py", "-m", "services.docking"],
+            ProgramRun(("python", "my_docking.py", "-m", "services.docking")),
+        ),
+        (["zendock", "container", "+", "pose"], ProgramRun(("zendock", "container", "+", "pose"))),
+    ],
+)
+def test_a_command_is_read_into_its_run(command: list[str], run: object) -> None:
+    assert read_command(command) == run
 
 
 def test_the_launch_plan_of_a_composed_stack_names_the_groups_services(tmp_path: Path) -> None:

@@ -288,7 +288,7 @@ def test_the_default_stack_validates_with_its_services() -> None:
         "planner",
         "docking",
     ]
-    assert stack.services["viz"].profiles == ["viz"]
+    assert stack.services["viz"].profiles == ("viz",)
     assert "viz" in stack.select(profiles=["viz"])
     assert stack.services["router"].command == ["zendock", "router", "--listen", "tcp/127.0.0.1:7447"]
     assert stack.services["planner"].depends_on["map"].condition == "service_completed_successfully"

@@ -33,7 +33,7 @@ def test_marker_arguments_become_the_stack(tmp_path: Path) -> None:
     assert config.world == WORLDS_DIR / "corridor.yaml"
     assert (config.rtf, config.detector, config.controller, config.seed) == ("8", "synthetic", "seed", 3)
     assert config.localisation_error == (0.03, -0.02, 0.02) and config.healthy_timeout_s == 30.0
-    assert config.services == (("docking", "python my.py"),)
+    assert [(r.name, r.command) for r in config.services] == [("docking", "python my.py")]
     env = config.environment("tcp/127.0.0.1:40000", tmp_path)
     assert env["ZENOH_LISTEN"] == env["ZENOH_CONNECT"] == "tcp/127.0.0.1:40000"
     assert env["ZENDOCK_WORLD"] == str(WORLDS_DIR / "corridor.yaml") and env["ZENDOCK_RTF"] == "8"
@@ -48,7 +48,10 @@ def test_the_command_line_wins_over_the_marker() -> None:
         cli_rtf="2",
     )
     assert config.rtf == "2"
-    assert dict(config.services) == {"docking": "python theirs.py --fast", "pose": "python pose.py"}
+    assert {r.name: r.command for r in config.services} == {
+        "docking": "python theirs.py --fast",
+        "pose": "python pose.py",
+    }
 
 
 def test_the_closest_marker_wins_and_unknown_arguments_are_named() -> None:
@@ -87,6 +90,6 @@ def test_a_mistake_is_one_line_naming_it(marker: dict[str, object], message: str
 
 
 def test_a_service_replaced_twice_on_the_command_line_is_refused() -> None:
-    with pytest.raises(ValueError, match="--zendock-service: docking replaced twice"):
+    with pytest.raises(ValueError, match="--zendock-service docking is given twice"):
         stack_config({}, cli_services=["docking=python a.py", "docking=python b.py"])
     assert stack_config({"rtf": "max"}).rtf == "max"

@@ -77,7 +77,7 @@ def test_an_unhealthy_stack_is_one_line_naming_the_service_that_failed(tmp_path:
 
 def test_a_replaced_service_runs_in_the_pytest_rootdir(tmp_path: Path) -> None:
     stack = load_stack(DEFAULT_STACK, env={}, project_dir=tmp_path)
-    replaced = apply_replacements(stack, [Replacement("docking", "python my_docking.py")])
+    replaced = apply_replacements(stack, [Replacement.of("docking", "python my_docking.py")])
     moved = run_replacements_in(stack, replaced, tmp_path)
     assert moved.services["docking"].working_dir == str(tmp_path)
     assert moved.services["docking"].command[:2] == ["python", "my_docking.py"]

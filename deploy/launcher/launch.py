@@ -1,0 +1,236 @@
+"""The typed launch model: what a service runs, read once from its command, and the service around it.
+
+A stack file's ``command`` is a list of words, as in Compose. The launcher reads those words once, here,
+into one of three runs:
+
+- :class:`ModuleRun`: one of zendock's services, ``python -m services.<service> FLAGS``;
+- :class:`GroupRun`: several of them in one process and one session (``zendock container A + B ...``);
+- :class:`ProgramRun`: any other program (the router, the map step, a user's own service).
+
+Everything after works on these types: a replacement (``--service``) turns a :class:`ModuleRun` into a
+:class:`ProgramRun` that stands in for it, composition (``x-compose``, ``--compose``) folds module runs into a
+:class:`GroupRun`, conform and export ask a run which service it is. Words are produced again only where a
+process starts (:func:`run_words`), so no other module reads argv to learn what a service is.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+
+from deploy.launcher.durations import parse_duration
+from deploy.launcher.restart import RestartPolicy
+
+#: Dependency conditions, as in Compose.
+Condition = Literal["service_started", "service_healthy", "service_completed_successfully"]
+#: A service's, a project's or a node's name.
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+DEFAULT_STOP_GRACE_S = 5.0
+Duration = Annotated[float, BeforeValidator(parse_duration)]
+
+#: The package zendock's services live in: ``python -m services.<name>``.
+SERVICES_PACKAGE = "services"
+#: ``zendock container``'s word between two members.
+GROUP_SEPARATOR = "+"
+#: ``zendock container``'s own options that take a value (they may stand before the first member).
+GROUP_VALUE_OPTIONS = frozenset({"--namespace", "--connect", "--listen", "--zenoh-config", "--log-level"})
+
+
+@dataclass(frozen=True)
+class ModuleRun:
+    """One of zendock's services: ``python -m services.<service> FLAGS``.
+
+    ``python`` is the interpreter word: ``python`` (the launcher's own) or another (the DDS face runs with
+    ``.venv-ros2/bin/python``).
+    """
+
+    service: str
+    flags: tuple[str, ...] = ()
+    python: str = "python"
+
+    def with_flags(self, *flags: str) -> ModuleRun:
+        return ModuleRun(self.service, (*self.flags, *flags), self.python)
+
+
+@dataclass(frozen=True)
+class GroupRun:
+    """Several of zendock's services in one process on one session (``zendock container``).
+
+    ``options`` are the container's own (``--namespace r1``), given before the first member.
+    """
+
+    members: tuple[ModuleRun, ...]
+    options: tuple[str, ...] = ()
+
+    @property
+    def services(self) -> tuple[str, ...]:
+        return tuple(member.service for member in self.members)
+
+
+@dataclass(frozen=True)
+class ProgramRun:
+    """Any other program, as its words. ``replaces`` names the zendock service it stands in for (``--service``)."""
+
+    words: tuple[str, ...]
+    replaces: str | None = None
+
+
+Run = ModuleRun | GroupRun | ProgramRun
+
+
+def read_command(words: Sequence[str]) -> Run:
+    """The run a stack file's command words describe (the one place those words are read)."""
+    words = tuple(str(word) for word in words)
+    if len(words) >= 3 and words[1] == "-m" and _is_service_module(words[2]):
+        return ModuleRun(words[2].removeprefix(f"{SERVICES_PACKAGE}."), words[3:], words[0])
+    if len(words) >= 2 and words[1] == "container" and words[0].rsplit("/", 1)[-1] == "zendock":
+        group = _read_group(words[2:])
+        if group is not None:
+            return group
+    return ProgramRun(words)
+
+
+def _is_service_module(module: str) -> bool:
+    package, dot, name = module.partition(".")
+    return package == SERVICES_PACKAGE and bool(dot) and name.isidentifier()
+
+
+def _read_group(words: Sequence[str]) -> GroupRun | None:
+    """``[OPTIONS] A ARGS + B ARGS ...``; ``None`` when no member is named."""
+    options: list[str] = []
+    index = 0
+    while index < len(words) and words[index].startswith("-"):
+        takes_value = words[index] in GROUP_VALUE_OPTIONS
+        options += words[index : index + (2 if takes_value else 1)]
+        index += 2 if takes_value else 1
+    members: list[ModuleRun] = []
+    current: list[str] = []
+    for word in (*words[index:], GROUP_SEPARATOR):
+        if word != GROUP_SEPARATOR:
+            current.append(word)
+            continue
+        if not current or not current[0].isidentifier():
+            return None
+        members.append(ModuleRun(current[0], tuple(current[1:])))
+        current = []
+    return GroupRun(tuple(members), tuple(options))
+
+
+def run_words(run: Run) -> list[str]:
+    """The words that start ``run`` (``python`` and ``zendock`` are resolved where the process starts)."""
+    if isinstance(run, ModuleRun):
+        return [run.python, "-m", f"{SERVICES_PACKAGE}.{run.service}", *run.flags]
+    if isinstance(run, GroupRun):
+        words = ["zendock", "container", *run.options]
+        for i, member in enumerate(run.members):
+            words += [*([GROUP_SEPARATOR] if i else []), member.service, *member.flags]
+        return words
+    return list(run.words)
+
+
+def runs_service(run: Run, service: str) -> bool:
+    """Whether ``run``'s process runs zendock's ``service`` (alone, in a group, or as its replacement)."""
+    if isinstance(run, ModuleRun):
+        return run.service == service
+    if isinstance(run, GroupRun):
+        return service in run.services
+    return run.replaces == service
+
+
+def as_text(value: object) -> str:
+    """A YAML scalar as a command word or a variable's value (``true``, ``8``, ``0.5``)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (str, int, float)):
+        return str(value)
+    raise ValueError(f"expected text or a number, got {value!r}")
+
+
+class Strict(BaseModel):
+    """A stack file's section: unknown keys are errors, values are frozen."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Dependency(Strict):
+    condition: Condition = "service_started"
+
+
+class Healthcheck(Strict):
+    """Healthy when the service's liveliness token is up and/or an exec test passes.
+
+    ``liveliness: true`` watches the token of the node named like the service (a string names the node);
+    ``timeout`` is then how long the service has to declare it before it counts as unhealthy. ``test``
+    runs a command every ``interval`` (``timeout`` per run); ``retries`` failures in a row make it unhealthy.
+    """
+
+    liveliness: bool | str = False
+    test: list[str] | str | None = None
+    interval: Duration = 2.0
+    timeout: Duration | None = None
+    retries: int = Field(default=3, ge=1)
+    start_period: Duration = 0.0
+    disable: bool = False
+
+    @field_validator("test", mode="before")
+    @classmethod
+    def _test_words(cls, value: Any) -> Any:
+        if isinstance(value, list):
+            return [as_text(word) for word in value]
+        return value
+
+    @model_validator(mode="after")
+    def _has_a_check(self) -> Healthcheck:
+        if not self.disable and not self.liveliness and not self.test:
+            raise ValueError("give liveliness: true or a test command (or disable: true)")
+        if isinstance(self.liveliness, str) and not NAME_RE.match(self.liveliness):
+            raise ValueError(f"liveliness: {self.liveliness!r} is not a node name")
+        return self
+
+    @property
+    def enabled(self) -> bool:
+        return not self.disable and bool(self.liveliness or self.test)
+
+
+@dataclass(frozen=True)
+class ServiceLaunch:
+    """One service of a stack: what runs, where, after what, how it is watched and restarted.
+
+    Built from a stack file (:func:`deploy.launcher.stack_file.load_stack`) or directly in Python by the
+    runners (trials, fleets); the keys and meanings follow the Compose specification.
+    """
+
+    run: Run
+    depends_on: Mapping[str, Dependency] = field(default_factory=dict)
+    restart: RestartPolicy = RestartPolicy("no")
+    healthcheck: Healthcheck | None = None
+    #: Relative to the stack's namespace, unless it starts with ``/``.
+    namespace: str | None = None
+    environment: Mapping[str, str | None] = field(default_factory=dict)
+    profiles: tuple[str, ...] = ()
+    stop_grace_period: float = DEFAULT_STOP_GRACE_S
+    working_dir: str | None = None
+
+    @property
+    def command(self) -> list[str]:
+        """The run as stack-file words (``zendock config``, exports, reports)."""
+        return run_words(self.run)
+
+    @property
+    def members(self) -> tuple[str, ...]:
+        """For a group, the services its one process runs (``zendock ps`` shows them)."""
+        return self.run.services if isinstance(self.run, GroupRun) else ()
+
+
+def after(**conditions: Condition) -> dict[str, Dependency]:
+    """``after(router="service_started")``: a ``depends_on`` map, for stacks built in Python."""
+    return {name: Dependency(condition=condition) for name, condition in conditions.items()}
+
+
+def liveliness(node: str | bool = True, timeout_s: float = 30.0) -> Healthcheck:
+    """Healthy once the node's liveliness token is up (``True``: the node named like the service)."""
+    return Healthcheck(liveliness=node, timeout=timeout_s)
