@@ -7,12 +7,14 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
+from deploy.arg_types import add_service_option
 from deploy.launcher.api import is_ready
-from deploy.launcher.daemon import add_launch_options, launch_argv
+from deploy.launcher.daemon import launch_argv, plan_input
 from deploy.launcher.host import SupervisorHost, run_blocking
 from deploy.launcher.logs import failure_line, tail
-from deploy.launcher.plan import plan_launch
+from deploy.launcher.plan import LaunchPlan, plan_launch
 from deploy.launcher.printer import Printer
 from deploy.launcher.project import (
     active_profiles,
@@ -31,13 +33,30 @@ DAEMON_START_TIMEOUT_S = 20.0
 FAILURE_LOG_LINES = 200
 
 
-def run_foreground(args: argparse.Namespace, stack: Stack, services: list[str], paths: RuntimePaths) -> int:
-    plan = plan_launch(
+def add_launch_options(parser: argparse.ArgumentParser) -> None:
+    """Launch-time overrides of the stack's settings."""
+    parser.add_argument("--namespace", help="override the stack's namespace (e.g. one robot per project)")
+    parser.add_argument(
+        "--connect", action="append", metavar="ENDPOINT", help="override zenoh.connect (repeatable)"
+    )
+    parser.add_argument(
+        "--working-dir", metavar="DIR", help="where services run (default: the project directory)"
+    )
+    add_service_option(parser)
+
+
+def launch_plan(args: argparse.Namespace, stack: Stack) -> LaunchPlan:
+    """The launch ``up`` plans once, whether it supervises in the foreground or hands it to the daemon."""
+    return plan_launch(
         stack,
         working_dir=args.working_dir or project_dir(args),
         namespace=args.namespace,
         connect=args.connect,
     )
+
+
+def run_foreground(args: argparse.Namespace, stack: Stack, services: list[str], paths: RuntimePaths) -> int:
+    plan = launch_plan(args, stack)
     printer = Printer(sys.stdout, services)
     host = SupervisorHost(
         plan, services, paths, mode="foreground", on_line=printer.line, exit_when_settled=True
@@ -128,18 +147,24 @@ def not_ready_reason(paths: RuntimePaths, status: ServiceStatus, timeout_s: floa
     return f"{status.name} not healthy after {timeout_s:g}s ({f'its last line: {last}' if last else 'it printed nothing'})"
 
 
-def start_daemon(args: argparse.Namespace, services: list[str], paths: RuntimePaths) -> int:
-    """Spawn the supervisor in its own session and wait until it answers; 0, or 1 with its log shown."""
+def start_daemon(plan: LaunchPlan, services: list[str], paths: RuntimePaths, directory: Path) -> int:
+    """Spawn the supervisor in its own session with ``plan`` and wait until it answers; 0, or 1 with its log."""
     paths.state_dir.mkdir(parents=True, exist_ok=True)
     with paths.daemon_log.open("ab") as log:
         daemon = subprocess.Popen(
-            launch_argv(args, services),
-            cwd=project_dir(args),
-            stdin=subprocess.DEVNULL,
+            launch_argv(directory, services),
+            cwd=directory,
+            stdin=subprocess.PIPE,
             stdout=log,
             stderr=subprocess.STDOUT,
             start_new_session=True,
         )
+        assert daemon.stdin is not None
+        try:
+            with daemon.stdin:
+                daemon.stdin.write(plan_input(plan))
+        except BrokenPipeError:
+            pass  # it exited at once: its exit code and log are reported below
     deadline = time.monotonic() + DAEMON_START_TIMEOUT_S
     while time.monotonic() < deadline:
         if daemon.poll() is not None:
@@ -170,7 +195,7 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
             )
         request(paths, "start", services=services)
     else:
-        code = start_daemon(args, services, paths)
+        code = start_daemon(launch_plan(args, stack), services, paths, project_dir(args))
         if code:
             return code
     printed: set[str] = set()

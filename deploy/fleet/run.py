@@ -25,10 +25,10 @@ from deploy import strict_json
 from deploy.fleet.monitor import Conflict, FleetMonitor, RobotTally
 from deploy.fleet.stack import FleetOptions, fleet_stack
 from deploy.fleet.world_setup import fleet_world
-from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.launcher import Launcher, free_endpoint
 from deploy.memory import PeakRssSampler
 from deploy.paths import REPO_ROOT
-from deploy.replacements import apply_replacements, replacements_report
+from deploy.replacements import replacements_report
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.names import topic_key
 from shared.node import ServiceError, call_service
@@ -109,11 +109,9 @@ def run_fleet(
     world, world_file = fleet_world(options.world, options.robots, options.seed, run_dir / "world.yaml")
     robots = [r.name for r in world.robots]
     endpoint = free_endpoint()
-    stack_path = run_dir / "stack.yaml"
-    stack_path.write_text(
-        yaml.safe_dump(fleet_stack(options, endpoint, world_file, robots, run_dir / "state"), sort_keys=False)
-    )
-    stack = apply_replacements(load_stack(stack_path, env={}, project_dir=REPO_ROOT), options.replacements)
+    stack = fleet_stack(options, endpoint, world_file, robots, run_dir / "state")
+    # The run's record of what ran (as ``zendock config`` prints a stack), not read back.
+    (run_dir / "stack.yaml").write_text(yaml.safe_dump(stack.to_dict(), sort_keys=False))
     log(
         f"{len(robots)} robot(s) and {len(world.docks)} dock(s) in {world.name} for {options.duration_s:g} s of "
         f"simulated time, rtf {options.rtf}, detector {options.detector}; run directory {run_dir}"

@@ -5,19 +5,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from deploy.launcher.composition import members_to_compose
+from deploy.launcher.stack_file import Stack
 from deploy.replacements import Replacement
-from shared.controllers import DEFAULT_CONTROLLER, DETECTORS, ControllerName, DetectorName
+from deploy.scenario import Scenario, scenario_stack
+from shared.controllers import DEFAULT_CONTROLLER, ControllerName, DetectorName
 
 #: A planner among other robots: slower (two robots close at twice the speed, and each sees the other only
 #: where its lidar last put it) and folding its sensors in twice as often.
-FLEET_PLANNER_PARAMS = ("-p", "max_linear_vel_mps=0.4", "-p", "costmap_update_rate_hz=10")
+FLEET_PLANNER_PARAMS = {"max_linear_vel_mps": 0.4, "costmap_update_rate_hz": 10}
 #: A fleet's batteries report twice a second, and at once on a change of status (CHARGING): every robot
 #: hears every other's battery (the traffic rule's priority, lowest first), and at 10 Hz that was 60 messages
 #: a simulated second for each robot to decode, for a charge that moves a few hundredths of a percent between.
-FLEET_BATTERY_PARAMS = ("-p", "publish_rate_hz=2")
+FLEET_BATTERY_PARAMS = {"publish_rate_hz": 2}
 
 
 @dataclass(frozen=True)
@@ -44,107 +44,32 @@ class FleetOptions:
 
 def fleet_stack(
     options: FleetOptions, endpoint: str, world_file: Path, robots: list[str], state_dir: Path
-) -> dict[str, Any]:
-    """A stack file (as data) for ``robots`` sharing the room of ``world_file``."""
-    world = str(world_file)
-    py = ["python", "-m"]
-    template: dict[str, Any] = {
-        "battery": {
-            "command": [
-                *py,
-                "services.battery",
-                "-p",
-                "use_sim_time=true",
-                "-p",
-                f"drain_scale={options.drain_scale}",
-                "-p",
-                f"charge_scale={options.charge_scale}",
-                "-p",
-                f"state_file={state_dir}/${{ROBOT}}/battery.json",
-                *FLEET_BATTERY_PARAMS,
-            ]
-        },
-        "pose": {"command": [*py, "services.pose", "-p", "use_sim_time=true"]},
-        "planner": {
-            "command": [
-                *py,
-                "services.planner",
-                "-p",
-                "use_sim_time=true",
-                "-p",
-                f"map_yaml={state_dir}/map.yaml",
-                "-p",
-                f"glass_memory_file={state_dir}/${{ROBOT}}/glass_memory.npz",
-                *FLEET_PLANNER_PARAMS,
-            ],
-            "depends_on": {
-                "router": {"condition": "service_started"},
-                "map": {"condition": "service_completed_successfully"},
+) -> Stack:
+    """``robots`` sharing the room of ``world_file``, with the fleet service handing out docks."""
+    return scenario_stack(
+        Scenario(
+            project="fleet",
+            world=world_file,
+            robots=tuple(robots),
+            endpoint=endpoint,
+            rtf=options.rtf,
+            seed=options.seed,
+            controller=options.controller,
+            detector=options.detector,
+            state_dir=state_dir,
+            map_file=f"{state_dir}/map.yaml",
+            fleet=True,
+            robot_params={
+                "battery": {
+                    "drain_scale": options.drain_scale,
+                    "charge_scale": options.charge_scale,
+                    **FLEET_BATTERY_PARAMS,
+                },
+                "planner": FLEET_PLANNER_PARAMS,
+                "docking": {"fleet": True, "resume_at": options.resume_at},
             },
-        },
-        "docking": {
-            "command": [
-                *py,
-                "services.docking",
-                "-p",
-                "use_sim_time=true",
-                "-p",
-                f"dock_database={world}",
-                "-p",
-                f"controller={options.controller}",
-                "-p",
-                "fleet=true",
-                "-p",
-                f"resume_at={options.resume_at}",
-            ]
-        },
-    }
-    if DETECTORS[options.detector].camera:
-        template["perception"] = {"command": [*py, "services.perception", "-p", f"dock_database={world}"]}
-    for service in template.values():
-        service.setdefault("depends_on", {"router": {"condition": "service_started"}})
-        service["restart"] = "on-failure"
-        service["healthcheck"] = {"liveliness": True, "timeout": "60s"}
-    services: dict[str, Any] = {
-        "router": {"command": ["zendock", "router", "--listen", endpoint], "restart": "on-failure"},
-        "map": {
-            "command": ["zendock", "map", "save", "--world", world, "-o", f"{state_dir}/map.yaml"],
-            "restart": "no",
-        },
-        "simulator": {
-            "command": [
-                *py,
-                "services.simulator",
-                "--world",
-                world,
-                "-p",
-                f"rtf={options.rtf}",
-                "-p",
-                f"seed={options.seed}",
-                "-p",
-                f"detection.source={options.detector}",
-            ],
-            "depends_on": {"router": {"condition": "service_started"}},
-            "healthcheck": {"liveliness": True, "timeout": "60s"},
-            "restart": "on-failure",
-        },
-        "fleet": {
-            "command": [*py, "services.fleet", "-p", f"world={world}"],
-            "depends_on": {"router": {"condition": "service_started"}},
-            "healthcheck": {"liveliness": True, "timeout": "60s"},
-            "restart": "on-failure",
-        },
-    }
-    document: dict[str, Any] = {
-        "name": "fleet",
-        "namespace": "",
-        "zenoh": {"connect": [endpoint]},
-        "services": services,
-        "x-robots": {"robots": list(robots), "services": template},
-    }
-    grouped = members_to_compose(template, options.compose, {r.name for r in options.replacements})
-    if grouped:
-        document["x-compose"] = {
-            f"robot_{robot}": [f"{name}_{robot}" for name in grouped] for robot in robots
-        }
-    return document
+            health_timeout_s=60.0,
+            compose=options.compose,
+            replacements=options.replacements,
+        )
+    )

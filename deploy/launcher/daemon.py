@@ -1,7 +1,10 @@
-"""The ``zendock up -d`` supervisor: ``python -m deploy.launcher.daemon [options] [SERVICE...]``.
+"""The ``zendock up -d`` supervisor: ``python -m deploy.launcher.daemon --project-directory DIR -- SERVICE...``.
 
-It is started in its own session with its output in ``.zendock/<project>/daemon.log``, loads the stack the
-way ``up`` did (same environment, same options), and runs until ``zendock down``, SIGINT or SIGTERM.
+``up`` plans the launch once (the stack file, its variables, the profiles, ``--service``, the overrides) and
+hands the plan to this process as JSON on its standard input (:func:`~deploy.launcher.plan.plan_to_json`), so
+the supervisor runs exactly what ``up`` planned, with nothing loaded or parsed a second time. It is started
+in its own session with its output in ``.zendock/<project>/daemon.log`` and runs until ``zendock down``,
+SIGINT or SIGTERM.
 """
 
 from __future__ import annotations
@@ -10,78 +13,55 @@ import argparse
 import signal
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
-from deploy.arg_types import add_service_option
 from deploy.launcher.host import SupervisorHost, run_blocking
-from deploy.launcher.plan import plan_launch
-from deploy.launcher.project import (
-    active_profiles,
-    add_project_options,
-    add_stack_options,
-    load_project_stack,
-    project_dir,
-)
+from deploy.launcher.plan import LaunchPlan, plan_from_json, plan_to_json
 from deploy.launcher.runtime import ControlError, RuntimePaths
 from shared.config_errors import ConfigError
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m deploy.launcher.daemon")
-    add_project_options(parser)
-    add_stack_options(parser)
-    add_launch_options(parser)
-    parser.add_argument("services", nargs="*", metavar="SERVICE")
+    parser = argparse.ArgumentParser(
+        prog="python -m deploy.launcher.daemon", description="run the launch plan read from standard input"
+    )
+    parser.add_argument("--project-directory", required=True, metavar="DIR", help="where .zendock/ lives")
+    parser.add_argument("services", nargs="*", metavar="SERVICE", help="the services to start, in order")
     return parser
 
 
-def add_launch_options(parser: argparse.ArgumentParser) -> None:
-    """Launch-time overrides of the stack's settings (shared by ``up`` and the daemon)."""
-    parser.add_argument("--namespace", help="override the stack's namespace (e.g. one robot per project)")
-    parser.add_argument(
-        "--connect", action="append", metavar="ENDPOINT", help="override zenoh.connect (repeatable)"
-    )
-    parser.add_argument(
-        "--working-dir", metavar="DIR", help="where services run (default: the project directory)"
-    )
-    add_service_option(parser)
+def launch_argv(project_directory: Path, services: Sequence[str]) -> list[str]:
+    """The daemon's command line; its plan goes to its standard input (:func:`plan_to_json`)."""
+    return [
+        sys.executable,
+        "-m",
+        "deploy.launcher.daemon",
+        "--project-directory",
+        str(project_directory),
+        "--",
+        *services,
+    ]
 
 
-def launch_argv(args: argparse.Namespace, services: Sequence[str]) -> list[str]:
-    """The daemon's command line for an ``up`` invocation's options."""
-    argv = [sys.executable, "-m", "deploy.launcher.daemon", "--project-directory", str(project_dir(args))]
-    if args.file:
-        argv += ["--file", str(args.file)]
-    if args.project_name:
-        argv += ["--project-name", args.project_name]
-    if args.env_file:
-        argv += ["--env-file", args.env_file]
-    for profile in active_profiles(args):
-        argv += ["--profile", profile]
-    if args.namespace is not None:
-        argv += ["--namespace", args.namespace]
-    for endpoint in args.connect or []:
-        argv += ["--connect", endpoint]
-    if args.working_dir:
-        argv += ["--working-dir", args.working_dir]
-    for replacement in args.replacements:
-        argv += ["--service", f"{replacement.name}={replacement.command}"]
-    return [*argv, "--", *services]
+def plan_input(plan: LaunchPlan) -> bytes:
+    """What ``up`` writes to the daemon's standard input."""
+    return plan_to_json(plan).encode("utf-8")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
     try:
-        stack = load_project_stack(args)
-        paths = RuntimePaths.for_project(project_dir(args), stack.project_name)
-        services = stack.select(args.services, active_profiles(args))
-        plan = plan_launch(
-            stack,
-            working_dir=args.working_dir or project_dir(args),
-            namespace=args.namespace,
-            connect=args.connect,
-        )
-        host = SupervisorHost(plan, services, paths, mode="daemon")
+        plan = plan_from_json(sys.stdin.read())
+    except ValueError as exc:
+        print(f"zendock daemon: standard input: {exc}", file=sys.stderr, flush=True)
+        return 2
+    try:
+        unknown = [name for name in args.services if name not in plan.services]
+        if unknown:
+            raise ConfigError(f"the plan has no service {', '.join(unknown)}")
+        paths = RuntimePaths.for_project(Path(args.project_directory), plan.project)
+        host = SupervisorHost(plan, list(args.services), paths, mode="daemon")
         return run_blocking(host, announce=lambda text: print(f"zendock daemon: {text}", flush=True))
     except (ConfigError, ControlError) as exc:
         print(f"zendock daemon: {exc}", file=sys.stderr, flush=True)
@@ -89,4 +69,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())

@@ -15,6 +15,7 @@ process starts (:func:`run_words`), so no other module reads argv to learn what 
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -234,3 +235,18 @@ def after(**conditions: Condition) -> dict[str, Dependency]:
 def liveliness(node: str | bool = True, timeout_s: float = 30.0) -> Healthcheck:
     """Healthy once the node's liveliness token is up (``True``: the node named like the service)."""
     return Healthcheck(liveliness=node, timeout=timeout_s)
+
+
+def param_flags(values: Mapping[str, object]) -> tuple[str, ...]:
+    """``-p name=value`` for each parameter, as a service's command line takes them: a list or a tuple as
+    JSON, a bool as ``true``/``false``, anything else as its text."""
+    flags: list[str] = []
+    for name, value in values.items():
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        elif isinstance(value, (list, tuple)):
+            text = json.dumps(list(value))
+        else:
+            text = str(value)
+        flags += ["-p", f"{name}={text}"]
+    return tuple(flags)

@@ -6,10 +6,11 @@ bring the same stack file up on a free port in a fresh namespace.
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import deploy
@@ -181,3 +182,66 @@ def plan_launch(
         services=services,
         zenoh_config=zenoh_config,
     )
+
+
+def plan_to_json(plan: LaunchPlan) -> str:
+    """The plan as JSON, for the detached supervisor (``zendock up -d``): it runs what ``up`` planned."""
+    return json.dumps(
+        {
+            "project": plan.project,
+            "namespace": plan.namespace,
+            "connect": list(plan.connect),
+            "zenoh_config": plan.zenoh_config,
+            "services": [
+                {
+                    "name": s.name,
+                    "argv": list(s.argv),
+                    "cwd": str(s.cwd),
+                    "env": dict(s.env),
+                    "namespace": s.namespace,
+                    "restart": {"mode": s.restart.mode, "max_retries": s.restart.max_retries},
+                    "health": None if s.health is None else asdict(s.health),
+                    "stop_grace_s": s.stop_grace_s,
+                    "depends_on": dict(s.depends_on),
+                    "members": list(s.members),
+                }
+                for s in plan.services.values()
+            ],
+        }
+    )
+
+
+def plan_from_json(text: str) -> LaunchPlan:
+    """The plan :func:`plan_to_json` wrote; a :class:`ValueError` when the text is not one."""
+    try:
+        data = json.loads(text)
+        services = {
+            s["name"]: ServicePlan(
+                name=s["name"],
+                argv=tuple(s["argv"]),
+                cwd=Path(s["cwd"]),
+                env=dict(s["env"]),
+                namespace=s["namespace"],
+                restart=RestartPolicy(s["restart"]["mode"], s["restart"]["max_retries"]),
+                health=None
+                if s["health"] is None
+                else HealthPlan(**{**s["health"], "test_argv": _optional_tuple(s["health"]["test_argv"])}),
+                stop_grace_s=float(s["stop_grace_s"]),
+                depends_on=dict(s["depends_on"]),
+                members=tuple(s["members"]),
+            )
+            for s in data["services"]
+        }
+        return LaunchPlan(
+            project=data["project"],
+            namespace=data["namespace"],
+            connect=tuple(data["connect"]),
+            services=services,
+            zenoh_config=data["zenoh_config"],
+        )
+    except (ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"not a launch plan: {exc}") from None
+
+
+def _optional_tuple(words: list[str] | None) -> tuple[str, ...] | None:
+    return None if words is None else tuple(words)

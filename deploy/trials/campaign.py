@@ -25,11 +25,10 @@ import yaml
 
 from deploy import strict_json
 from deploy.glass_report import read_glass_marks
-from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.launcher import Launcher, free_endpoint
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT
-from deploy.replacements import apply_replacements
 from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
@@ -187,11 +186,9 @@ def run_trials(
     workers = max(1, min(options.workers, len(mine)))
     robots = [f"r{i}" for i in range(workers)]
     endpoint = free_endpoint()
-    stack_path = run_dir / "stack.yaml"
-    stack_path.write_text(
-        yaml.safe_dump(trials_stack(options, endpoint, robots, run_dir / "state"), sort_keys=False)
-    )
-    stack = apply_replacements(load_stack(stack_path, env={}, project_dir=REPO_ROOT), options.replacements)
+    stack = trials_stack(options, endpoint, robots, run_dir / "state")
+    # The run's record of what ran (as ``zendock config`` prints a stack), not read back.
+    (run_dir / "stack.yaml").write_text(yaml.safe_dump(stack.to_dict(), sort_keys=False))
     results: list[TrialResult] = []
     records: dict[int, RunRecord] = {}
     errors: list[str] = []

@@ -4,14 +4,14 @@ flags its contract names, and a node refuses an endpoint its contract does not n
 from __future__ import annotations
 
 import json
-import re
 
 import msgpack
 import pytest
-import yaml
 
 from deploy.contracts.document import contract_json, stale_files
 from deploy.fleet.stack import FleetOptions, fleet_stack
+from deploy.launcher.launch import GroupRun, ModuleRun
+from deploy.launcher.stack_file import Stack, load_stack
 from deploy.paths import REPO_ROOT
 from deploy.trials.records import TrialOptions
 from deploy.trials.stack import trials_stack
@@ -26,34 +26,34 @@ def test_the_committed_contract_documents_are_what_the_code_renders() -> None:
     assert stale_files() == [], "docs/contracts/ is stale: run python -m deploy.docs_site"
 
 
-def _launched_parameters(stack: dict) -> dict[str, set[str]]:
-    """``-p`` names each zendock service gets in a stack (as data), by service."""
+def _launched_parameters(stack: Stack) -> dict[str, set[str]]:
+    """``-p`` names each zendock service gets in a stack, by service (a group's members each)."""
     found: dict[str, set[str]] = {}
-    services = dict(stack["services"])
-    services.update(stack.get("x-robots", {}).get("services", {}))
-    for spec in services.values():
-        command = [str(word) for word in spec["command"]]
-        modules = [command[i + 1] for i, word in enumerate(command[:-1]) if word == "-m"]
-        if not modules or not modules[0].startswith("services."):
-            continue
-        names = {command[i + 1].split("=", 1)[0] for i, word in enumerate(command[:-1]) if word == "-p"}
-        if "--world" in command:
-            names.add("world")
-        found.setdefault(modules[0].removeprefix("services."), set()).update(names)
+    for launch in stack.services.values():
+        runs = launch.run.members if isinstance(launch.run, GroupRun) else (launch.run,)
+        for run in runs:
+            if not isinstance(run, ModuleRun):
+                continue
+            flags = run.flags
+            names = {flags[i + 1].split("=", 1)[0] for i, word in enumerate(flags[:-1]) if word == "-p"}
+            if "--world" in flags:
+                names.add("world")
+            found.setdefault(run.service, set()).update(names)
     return found
 
 
 @pytest.mark.parametrize("source", ["stack.yaml", "trials", "fleet"])
 def test_the_launcher_hands_a_service_only_parameters_its_contract_names(source: str, tmp_path) -> None:  # type: ignore[no-untyped-def]
     if source == "stack.yaml":
-        stack = yaml.safe_load((REPO_ROOT / "deploy" / "stack.yaml").read_text())
+        stack = load_stack(REPO_ROOT / "deploy" / "stack.yaml", env={}, project_dir=tmp_path)
     elif source == "trials":
         stack = trials_stack(TrialOptions(world=WORLD), "tcp/127.0.0.1:1", ["r0"], tmp_path)
     else:
         stack = fleet_stack(FleetOptions(world=WORLD), "tcp/127.0.0.1:1", WORLD, ["r0"], tmp_path)
-    for service, names in _launched_parameters(stack).items():
+    launched = _launched_parameters(stack)
+    assert {"simulator", "battery", "pose", "planner", "docking"} <= set(launched)
+    for service, names in launched.items():
         named = {flag.name for flag in CONTRACTS[service].flags}
-        names = {re.sub(r"\$\{.*", "", n) for n in names}
         assert names <= named, (
             f"{service}: the launcher passes {sorted(names - named)}, its contract does not name them"
         )

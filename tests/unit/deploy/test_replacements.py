@@ -5,9 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-import yaml
 
-from deploy.launcher.stack_file import load_stack
+from deploy.launcher.stack_file import Stack
 from deploy.paths import REPO_ROOT
 from deploy.replacements import apply_replacements, parse_replacement, replacements_report
 from deploy.trials.records import TrialOptions
@@ -17,21 +16,15 @@ from shared.config_errors import ConfigError
 WORLD = REPO_ROOT / "deploy" / "worlds" / "seed_room.yaml"
 
 
-def _trials_stack(tmp_path: Path, **options) -> object:  # type: ignore[no-untyped-def]
-    path = tmp_path / "stack.yaml"
-    path.write_text(
-        yaml.safe_dump(
-            trials_stack(
-                TrialOptions(world=WORLD, detector="synthetic", **options), "tcp/127.0.0.1:1", ["r0", "r1"]
-            )
-        )
+def _trials_stack(tmp_path: Path, **options) -> Stack:  # type: ignore[no-untyped-def]
+    return trials_stack(
+        TrialOptions(world=WORLD, detector="synthetic", **options), "tcp/127.0.0.1:1", ["r0", "r1"]
     )
-    return load_stack(path, env={}, project_dir=tmp_path)
 
 
 def test_every_robots_copy_runs_the_command_with_zendocks_flags_and_its_own_namespace(tmp_path: Path) -> None:
     replacement = parse_replacement("docking=python my_docking.py --robot {robot}")
-    stack = apply_replacements(_trials_stack(tmp_path), [replacement])  # type: ignore[arg-type]
+    stack = apply_replacements(_trials_stack(tmp_path), [replacement])
     for robot in ("r0", "r1"):
         spec = stack.services[f"docking_{robot}"]
         assert spec.command[:4] == ["python", "my_docking.py", "--robot", robot]
@@ -49,9 +42,7 @@ def test_every_robots_copy_runs_the_command_with_zendocks_flags_and_its_own_name
 
 def test_a_replaced_service_leaves_the_composed_group_and_runs_as_its_own_process(tmp_path: Path) -> None:
     replacement = parse_replacement("battery=./my_battery")
-    stack = apply_replacements(
-        _trials_stack(tmp_path, compose="light", replacements=(replacement,)), [replacement]
-    )  # type: ignore[arg-type]
+    stack = _trials_stack(tmp_path, compose="light", replacements=(replacement,))
     group = stack.services["robot_r0"].command
     assert group[:3] == ["zendock", "container", "pose"] and "battery" not in group
     assert stack.services["battery_r0"].command[0] == "./my_battery"
@@ -60,9 +51,9 @@ def test_a_replaced_service_leaves_the_composed_group_and_runs_as_its_own_proces
 def test_replacing_inside_a_container_or_a_missing_service_is_one_clear_error(tmp_path: Path) -> None:
     composed = _trials_stack(tmp_path, compose="all")
     with pytest.raises(ConfigError, match="runs it inside a composed zendock container"):
-        apply_replacements(composed, [parse_replacement("planner=x")])  # type: ignore[arg-type]
+        apply_replacements(composed, [parse_replacement("planner=x")])
     with pytest.raises(ConfigError, match="runs no services.viz"):
-        apply_replacements(_trials_stack(tmp_path), [parse_replacement("viz=x")])  # type: ignore[arg-type]
+        apply_replacements(_trials_stack(tmp_path), [parse_replacement("viz=x")])
 
 
 @pytest.mark.parametrize(
@@ -99,4 +90,4 @@ def test_the_same_service_twice_is_one_clear_error(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="--service docking is given twice"):
         apply_replacements(
             _trials_stack(tmp_path), [parse_replacement("docking=a"), parse_replacement("docking=b")]
-        )  # type: ignore[arg-type]
+        )

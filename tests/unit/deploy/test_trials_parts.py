@@ -57,42 +57,37 @@ def testdistance_to_segment() -> None:
 def test_stack_gives_each_robot_its_own_services_and_one_simulator() -> None:
     options = TrialOptions(world=WORLDS[0], workers=2)
     stack = trials_stack(options, "tcp/127.0.0.1:7999", ["r0", "r1"])
-    names = set(stack["services"])
-    assert {"router", "map", "simulator"} <= names
+    assert {"router", "map", "simulator"} <= set(stack.services)
     for robot in ("r0", "r1"):
         for service in ("battery", "pose", "planner", "perception", "docking"):
-            spec = stack["services"][f"{service}_{robot}"]
-            assert spec["namespace"] == robot and spec["healthcheck"]["liveliness"] == service
-    assert 'robots=["r0", "r1"]' in stack["services"]["simulator"]["command"]
-    assert "detection.source=aruco" in stack["services"]["simulator"]["command"]
+            spec = stack.services[f"{service}_{robot}"]
+            assert spec.namespace == robot
+            assert spec.healthcheck is not None and spec.healthcheck.liveliness == service
+    assert 'robots=["r0", "r1"]' in stack.services["simulator"].command
+    assert "detection.source=aruco" in stack.services["simulator"].command
     synthetic = trials_stack(
         TrialOptions(world=WORLDS[0], workers=2, detector="synthetic"), "tcp/127.0.0.1:7999", ["r0"]
     )
-    assert "perception_r0" not in synthetic["services"]
-    assert "detection.source=synthetic" in synthetic["services"]["simulator"]["command"]
+    assert "perception_r0" not in synthetic.services
+    assert "detection.source=synthetic" in synthetic.services["simulator"].command
 
 
 def test_a_composed_campaign_runs_each_robots_services_in_one_container() -> None:
     options = TrialOptions(world=WORLDS[0], workers=2, compose="all")
     stack = trials_stack(options, "tcp/127.0.0.1:7999", ["r0", "r1"])
-    assert set(stack["services"]) == {"router", "map", "simulator", "robot_r0", "robot_r1"}
-    group = stack["services"]["robot_r0"]
-    assert group["namespace"] == "r0" and group["healthcheck"]["liveliness"] == "docking"
-    assert group["depends_on"]["map"] == {"condition": "service_completed_successfully"}
-    command = group["command"]
-    assert command[:2] == ["zendock", "container"]
-    members = [command[2]] + [command[i + 1] for i, word in enumerate(command) if word == "+"]
-    assert members == ["battery", "pose", "planner", "perception", "docking"]
-    light = trials_stack(TrialOptions(world=WORLDS[0], compose="light"), "tcp/127.0.0.1:7999", ["r0"])[
-        "services"
-    ]
-    assert {"robot_r0", "planner_r0", "perception_r0", "docking_r0"} <= set(
-        light
-    ) and "battery_r0" not in light
-    assert (
-        light["robot_r0"]["command"][2:3] == ["battery"]
-        and light["robot_r0"]["healthcheck"]["liveliness"] == "pose"
-    )
+    assert set(stack.services) == {"router", "map", "simulator", "robot_r0", "robot_r1"}
+    group = stack.services["robot_r0"]
+    assert group.namespace == "r0"
+    assert group.healthcheck is not None and group.healthcheck.liveliness == "docking"
+    assert group.depends_on["map"].condition == "service_completed_successfully"
+    assert group.command[:2] == ["zendock", "container"]
+    assert group.members == ("battery", "pose", "planner", "perception", "docking")
+    light = trials_stack(
+        TrialOptions(world=WORLDS[0], compose="light"), "tcp/127.0.0.1:7999", ["r0"]
+    ).services
+    assert {"robot_r0", "planner_r0", "perception_r0", "docking_r0"} <= set(light)
+    assert "battery_r0" not in light and light["robot_r0"].members == ("battery", "pose")
+    assert light["robot_r0"].healthcheck is not None and light["robot_r0"].healthcheck.liveliness == "pose"
 
 
 def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: int = 0) -> TrialResult:

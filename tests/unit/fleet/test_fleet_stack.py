@@ -4,22 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
-
 from deploy.fleet.stack import FleetOptions, fleet_stack
-from deploy.launcher import load_stack
+from deploy.launcher.stack_file import Stack
 from deploy.paths import REPO_ROOT
-from deploy.replacements import Replacement, apply_replacements
+from deploy.replacements import Replacement
 
 WORLD = REPO_ROOT / "deploy" / "worlds" / "fleet" / "warehouse.yaml"
 
 
-def _stack(tmp_path: Path, **options: object):  # type: ignore[no-untyped-def]
+def _stack(tmp_path: Path, **options: object) -> Stack:
     fleet_options = FleetOptions(world=WORLD, **options)  # type: ignore[arg-type]
-    document = fleet_stack(fleet_options, "tcp/127.0.0.1:1", WORLD, ["r1", "r2"], tmp_path / "state")
-    path = tmp_path / "stack.yaml"
-    path.write_text(yaml.safe_dump(document, sort_keys=False))
-    return apply_replacements(load_stack(path, env={}, project_dir=REPO_ROOT), fleet_options.replacements)
+    return fleet_stack(fleet_options, "tcp/127.0.0.1:1", WORLD, ["r1", "r2"], tmp_path / "state")
 
 
 def test_by_default_every_robot_service_is_its_own_process(tmp_path: Path) -> None:
@@ -36,10 +31,9 @@ def test_compose_runs_each_robots_services_in_one_container(tmp_path: Path) -> N
         group = services[f"robot_{robot}"]
         command = list(group.command)
         assert command[:2] == ["zendock", "container"]
-        members = [command[2]] + [command[i + 1] for i, word in enumerate(command) if word == "+"]
-        assert members == ["battery", "pose", "planner", "docking"]
+        assert group.members == ("battery", "pose", "planner", "docking")
         assert f"glass_memory_file={tmp_path / 'state'}/{robot}/glass_memory.npz" in command, (
-            "${ROBOT} filled in"
+            "each robot's own memory"
         )
         assert group.namespace == robot
         # healthy once its last member's node (``docking`` in the robot's namespace) is alive

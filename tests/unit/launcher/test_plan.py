@@ -6,9 +6,13 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 from deploy.launcher.plan import ZENDOCK_ROOT, health_test_argv, plan_launch, resolve_argv
 from deploy.launcher.stack_file import load_stack
 from shared.names import node_token_key
+
+REPO_ROOT = ZENDOCK_ROOT
 
 
 def test_python_and_zendock_mean_this_interpreter_and_this_zendock() -> None:
@@ -108,3 +112,18 @@ def test_the_launchers_zenoh_config_is_resolved_against_the_working_dir(tmp_path
         tmp_path / "run/creds/viewer.json5"
     )
     assert plan_launch(_stack(tmp_path), working_dir=tmp_path).zenoh_config is None
+
+
+def test_the_detached_supervisor_gets_the_plan_up_made_unchanged(tmp_path: Path) -> None:
+    from deploy.launcher.plan import plan_from_json, plan_to_json
+
+    stack = load_stack(
+        REPO_ROOT / "deploy" / "stack.yaml",
+        env={},
+        project_dir=tmp_path,
+        compose={"robot": ["battery", "pose"]},
+    )
+    plan = plan_launch(stack, working_dir=tmp_path, namespace="r7", connect=["tcp/127.0.0.1:7001"])
+    assert plan_from_json(plan_to_json(plan)) == plan
+    with pytest.raises(ValueError, match="not a launch plan"):
+        plan_from_json('{"project": "x"}')
