@@ -14,145 +14,37 @@ navigation server does. Everything runs on the node's executor: the server never
 
 from __future__ import annotations
 
-import enum
 import logging
 import threading
 import time
-import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Annotated, Any, Generic, TypeVar
+from typing import Any, Generic
 
-import numpy as np
 import zenoh
 
+from shared.interface_types import (
+    CANCEL_GOAL,
+    UUID,
+    ActionType,
+    CancelGoalRequest,
+    CancelGoalResponse,
+    F,
+    G,
+    GoalInfo,
+    GoalStatus,
+    GoalStatusArray,
+    GoalStatusCode,
+    R,
+)
 from shared.messages import Time
-from shared.node import BLOCKING, RELIABLE, Node, ServiceError, ServiceType, encoding_for
-from shared.schema import Message, MessageError, Range, UInt8Array, message
-
-G = TypeVar("G", bound=Message)
-R = TypeVar("R", bound=Message)
-F = TypeVar("F", bound=Message)
+from shared.node import BLOCKING, RELIABLE, Node, ServiceError, encoding_for
+from shared.schema import MessageError
 
 #: How often :meth:`ActionClient.server_ready` asks again for a server that has not answered yet.
 SERVER_POLL_S = 0.05
 
 log = logging.getLogger(__name__)
-
-
-class GoalStatusCode(enum.IntEnum):
-    """``action_msgs/msg/GoalStatus`` values."""
-
-    UNKNOWN = 0
-    ACCEPTED = 1
-    EXECUTING = 2
-    CANCELING = 3
-    SUCCEEDED = 4
-    CANCELED = 5
-    ABORTED = 6
-
-    @property
-    def terminal(self) -> bool:
-        return self in (GoalStatusCode.SUCCEEDED, GoalStatusCode.CANCELED, GoalStatusCode.ABORTED)
-
-
-def _uuid16() -> np.ndarray:
-    return np.zeros(16, dtype=np.uint8)
-
-
-@message("unique_identifier_msgs/msg/UUID")
-class UUID(Message):
-    uuid: UInt8Array = field(default_factory=_uuid16)
-
-    @classmethod
-    def random(cls) -> UUID:
-        return cls(np.frombuffer(uuid.uuid4().bytes, dtype=np.uint8).copy())
-
-    def hex(self) -> str:
-        return bytes(self.uuid.astype(np.uint8)).hex()
-
-    def is_zero(self) -> bool:
-        return not self.uuid.any()
-
-
-@message("action_msgs/msg/GoalInfo")
-class GoalInfo(Message):
-    goal_id: UUID = field(default_factory=UUID)
-    stamp: Time = field(default_factory=Time)
-
-
-@message("action_msgs/msg/GoalStatus")
-class GoalStatus(Message):
-    goal_info: GoalInfo = field(default_factory=GoalInfo)
-    status: Annotated[int, Range(0, 6)] = 0
-
-
-@message("action_msgs/msg/GoalStatusArray")
-class GoalStatusArray(Message):
-    status_list: list[GoalStatus] = field(default_factory=list)
-
-
-@message("action_msgs/srv/CancelGoal_Request")
-class CancelGoalRequest(Message):
-    goal_info: GoalInfo = field(default_factory=GoalInfo)
-
-
-@message("action_msgs/srv/CancelGoal_Response")
-class CancelGoalResponse(Message):
-    ERROR_NONE = 0
-    ERROR_REJECTED = 1
-    ERROR_UNKNOWN_GOAL_ID = 2
-    ERROR_GOAL_TERMINATED = 3
-    return_code: Annotated[int, Range(0, 3)] = 0
-    goals_canceling: list[GoalInfo] = field(default_factory=list)
-
-
-@message("zendock_msgs/msg/Empty")
-class Empty(Message):
-    pass
-
-
-CANCEL_GOAL = ServiceType("action_msgs/srv/CancelGoal", CancelGoalRequest, CancelGoalResponse)
-
-
-def _wrapper(type_name: str, fields: dict[str, Any]) -> Any:
-    namespace: dict[str, Any] = {"__annotations__": dict(fields)}
-    for name, annotation in fields.items():
-        default: Any
-        if annotation is bool:
-            default = False
-        elif annotation is int or getattr(annotation, "__origin__", None) is int:
-            default = 0
-        else:
-            default = field(default_factory=annotation)
-        namespace[name] = default
-    cls = type(type_name.rsplit("/", 1)[-1], (Message,), namespace)
-    return message(type_name)(cls)
-
-
-class ActionType(Generic[G, R, F]):
-    """An action interface: goal, result and feedback messages plus the generated wrappers."""
-
-    def __init__(self, type_name: str, goal: type[G], result: type[R], feedback: type[F]) -> None:
-        self.type_name = type_name
-        self.goal = goal
-        self.result = result
-        self.feedback = feedback
-        self.send_goal_request = _wrapper(f"{type_name}_SendGoal_Request", {"goal_id": UUID, "goal": goal})
-        self.send_goal_response = _wrapper(
-            f"{type_name}_SendGoal_Response", {"accepted": bool, "stamp": Time}
-        )
-        self.get_result_request = _wrapper(f"{type_name}_GetResult_Request", {"goal_id": UUID})
-        self.get_result_response = _wrapper(
-            f"{type_name}_GetResult_Response", {"status": Annotated[int, Range(0, 6)], "result": result}
-        )
-        self.feedback_message = _wrapper(
-            f"{type_name}_FeedbackMessage", {"goal_id": UUID, "feedback": feedback}
-        )
-        self.send_goal = ServiceType(f"{type_name}_SendGoal", self.send_goal_request, self.send_goal_response)
-        self.get_result = ServiceType(
-            f"{type_name}_GetResult", self.get_result_request, self.get_result_response
-        )
 
 
 def action_key(action_name: str, part: str) -> str:

@@ -23,7 +23,8 @@ from typing import Any
 from shared.contracts.enforce import hold_to_contract
 from shared.node import Node
 from shared.parameter_server import attach_parameters
-from shared.runtime import ServiceOptions, ServiceParams, ServiceSpec, open_session_unless
+from shared.parameters import ServiceParams
+from shared.runtime import ServiceOptions, ServiceSpec, open_session_unless
 from shared.waiting import SIGNAL_CHECK_S
 
 

@@ -28,6 +28,7 @@ from shared.encoding import (
     sequence_attachment,
 )
 from shared.executor import Work
+from shared.interface_types import ServiceType
 from shared.schema import Message, MessageError
 from shared.subscriber_hub import SUBSCRIBER_HUB
 
@@ -72,15 +73,6 @@ class ServiceError(RuntimeError):
 
 class ServiceUnavailable(ServiceError):
     """Nothing answered the request in time: no server, or one restarting. Asking again may work."""
-
-
-@dataclass(frozen=True)
-class ServiceType(Generic[Req, Res]):
-    """A request/response interface, e.g. ``zendock_msgs/srv/Teleport``."""
-
-    type_name: str
-    request: type[Req]
-    response: type[Res]
 
 
 class Publisher(Generic[M]):

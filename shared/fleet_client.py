@@ -14,13 +14,12 @@ room from the namespace above theirs (``fleet/reserve_dock`` for ``r1``, ``site/
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from shared import topics
-from shared.geometry import Pose2D
+from shared.fleet_answer import FleetAnswer
 from shared.interfaces.fleet import (
     RELEASE_DOCK,
     RESERVE_DOCK,
@@ -34,38 +33,6 @@ from shared.node import Node, ServiceError
 
 #: How long a request waits for the fleet's answer.
 ANSWER_TIMEOUT_S = 1.0
-
-
-@dataclass(frozen=True, slots=True)
-class FleetAnswer:
-    """The fleet's answer to a reservation: a dock (``granted``, ``dock_id``), or a place in the queue
-    (1 = next) with why and where to wait (``holding_pose``, None: where the robot stands); and whether
-    a robot whose battery is critical needs this robot's dock (``asked_to_leave``)."""
-
-    granted: bool
-    dock_id: str = ""
-    queue_position: int = 0
-    reason: str = ""
-    asked_to_leave: bool = False
-    holding_pose: Pose2D | None = None
-
-    @property
-    def refused(self) -> bool:
-        """Neither a dock nor a place in the queue: the request itself was wrong (``reason`` says why)."""
-        return not self.granted and self.queue_position == 0
-
-    @classmethod
-    def from_response(cls, response: ReserveDockResponse) -> FleetAnswer:
-        pose = np.asarray(response.holding_pose, dtype=float)
-        holding = Pose2D.from_seq(pose) if pose.size == 3 and np.all(np.isfinite(pose)) else None
-        return cls(
-            bool(response.granted),
-            response.dock_id,
-            int(response.queue_position),
-            response.reason,
-            bool(response.asked_to_leave),
-            holding,
-        )
 
 
 class FleetClient:

@@ -18,8 +18,9 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable
 
-from shared.action import ActionClient, ClientGoal, GoalStatusCode
+from shared.action import ActionClient, ClientGoal
 from shared.geometry import Pose2D
+from shared.interface_types import GoalStatusCode
 from shared.interfaces.navigation import (
     CLEAR_COSTMAPS_SERVICE,
     CLEAR_ENTIRE_COSTMAP,

@@ -48,13 +48,13 @@ from shared.endpoints import (
     QoS,
     ServiceError,
     ServiceServer,
-    ServiceType,
     ServiceUnavailable,
     Subscription,
     call_service,
     decode_reply,
 )
 from shared.executor import TIMER_TOLERANCE_S, Executor, Timer, in_callback
+from shared.interface_types import ServiceType
 from shared.messages import Clock, Time
 from shared.names import endpoint_token_key, node_token_key, normalise_namespace, stats_key, topic_key
 from shared.ratelimit import RateLimitedLogger

@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, ConfigDict, ValidationError
 from pydantic_core import to_jsonable_python
 
 #: The ``json_schema_extra`` key that marks a field settable at runtime.
@@ -33,6 +33,14 @@ DYNAMIC_KEY = "dynamic"
 #: The key of the text that says when a change takes effect.
 APPLIES_KEY = "applies"
 AT_ONCE = "at once"
+
+
+class ServiceParams(BaseModel):
+    """Base of every service's parameters: strict (unknown names are errors). Pure, so a service's
+    parameter model (and the logic built from it) loads without the bus."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    use_sim_time: bool = False
 
 
 def runtime_settable(applies: str = AT_ONCE) -> dict[str, Any]:

@@ -43,13 +43,14 @@ from typing import Any, Protocol, TypeVar
 
 import yaml
 import zenoh
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ValidationError
 
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
 from shared.contracts.enforce import hold_to_contract
 from shared.names import normalise_namespace
 from shared.node import Node
 from shared.parameter_server import attach_parameters
+from shared.parameters import ServiceParams
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 from shared.waiting import SIGNAL_CHECK_S, wait_interruptibly
 
@@ -94,13 +95,6 @@ def open_session_unless(spec: SessionSpec, stopped: threading.Event) -> zenoh.Se
         outcome.close()
         return None
     return outcome
-
-
-class ServiceParams(BaseModel):
-    """Base of every service's parameters: strict (unknown names are errors)."""
-
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
-    use_sim_time: bool = False
 
 
 class Closeable(Protocol):

@@ -29,9 +29,10 @@ from deploy.options import add_connect_option
 from deploy.paths import REPO_ROOT
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, dock_line, is_terminal
 from shared import topics
-from shared.action import ActionClient, ActionType, ClientGoal, GoalStatusCode, spin_in_background
+from shared.action import ActionClient, ClientGoal, spin_in_background
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
+from shared.interface_types import ActionType, GoalStatusCode
 from shared.interfaces.docking import (
     DOCK_ROBOT,
     UNDOCK_ROBOT,

@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the examples' wire.py
 
-from wire import BadMessage, Msg, Node, exact_fields, get, header, parse_options  # noqa: E402
+from wire import BadMessage, Msg, Node, exact_fields, get, header, parse_options
 
 #: sensor_msgs/BatteryState constants (the values ROS 2 defines).
 CHARGING, DISCHARGING, FULL = 1, 2, 4

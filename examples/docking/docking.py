@@ -28,7 +28,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the examples' wire.py
 
-from wire import (  # noqa: E402
+from wire import (
     ABORTED,
     CANCELED,
     SUCCEEDED,

@@ -24,8 +24,8 @@ from shared import topics
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest, SetBatteryStateResponse
 from shared.messages import BatteryState, DockContact, Header, Odometry
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
-from shared.parameters import runtime_settable
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.parameters import ServiceParams, runtime_settable
+from shared.runtime import ServiceSpec
 
 #: How often the node says it is still waiting for the simulator's clock.
 CLOCK_WAIT_LOG_PERIOD_S = 5.0

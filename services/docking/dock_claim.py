@@ -26,7 +26,7 @@ import numpy as np
 
 from services.docking.docking_run import DockRequest
 from services.docking.task_io import Intent, Navigate, NavOutcome, Task, TickInputs
-from shared.fleet_client import FleetAnswer
+from shared.fleet_answer import FleetAnswer
 from shared.geometry import Pose2D
 
 

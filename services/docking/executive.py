@@ -1,6 +1,6 @@
 """The docking service's executive: which task runs, and what the service does about it.
 
-Pure: no bus, no clock. The node hands it what it hears (:class:`~services.docking.inputs.Heard`) and
+Pure: no bus, no clock. The node hands it what it hears (:class:`~services.docking.heard.Heard`) and
 what happens (:data:`Event`: action goals and cancels, the fleet's answers, dock sightings, battery
 readings); it answers with :data:`Effects`, a list of plain data the node carries out in order (drive
 orders, fleet requests, action feedback and results, the state to publish). Each control tick
@@ -33,7 +33,7 @@ from services.docking.dock_claim import AwaitDock, DockClaim, docks_seen_free
 from services.docking.dock_db import DockDatabase
 from services.docking.docking_run import DockRequest
 from services.docking.drive_arbiter import DriveArbiter, DriveOrders
-from services.docking.inputs import DockSighting, Heard
+from services.docking.heard import DockSighting, Heard
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.params import Params
 from services.docking.patrol import Patrol
@@ -52,7 +52,7 @@ from services.docking.traffic import (
     way_ahead,
 )
 from services.docking.undocking_run import UndockingRun
-from shared.fleet_client import FleetAnswer
+from shared.fleet_answer import FleetAnswer
 from shared.geometry import Pose2D
 from shared.interfaces.docking import DockRobotFeedback, DockRobotResult, UndockRobotGoal, UndockRobotResult
 from shared.messages import Duration

@@ -36,7 +36,8 @@ from services.docking.executive import (
     UndockGoal,
     WantDetections,
 )
-from services.docking.inputs import CHARGING_STATUSES, DockSightings, Heard, InputCache, NavHeard
+from services.docking.heard import CHARGING_STATUSES, Heard, NavHeard
+from services.docking.inputs import DockSightings, InputCache
 from services.docking.mission import TaskKind
 from services.docking.params import Params
 from services.docking.peers import PeerWatch

@@ -16,8 +16,7 @@ from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockingConfig
 from services.docking.undocking_run import UndockConfig
 from shared.controllers import CONTROLLERS, DEFAULT_CONTROLLER, ControllerName, choices_help
-from shared.parameters import runtime_settable
-from shared.runtime import ServiceParams
+from shared.parameters import ServiceParams, runtime_settable
 
 #: When a runtime change of a docking parameter takes effect: each run is built from the parameters.
 NEXT_RUN = "at the next docking or undocking run"

@@ -31,7 +31,8 @@ from shared.interfaces.fleet import (
 from shared.messages import Header
 from shared.names import GRAPH_PREFIX, decode_chunk, normalise_namespace
 from shared.node import BLOCKING, Node
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.parameters import ServiceParams
+from shared.runtime import ServiceSpec
 from shared.world import load_world
 
 #: The robots' docking nodes' liveliness tokens: ``@zendock/node/<namespace>/docking``.

@@ -39,9 +39,10 @@ from shared.messages import (
     TFMessage,
 )
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
+from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
 from shared.rigid3 import Rigid3, StaticTransforms
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.runtime import ServiceSpec
 from shared.world import ROBOT_FRONT_M, DockMarker, dock_markers, load_world
 
 #: Images: the newest only (a late frame is worth less than the next one).

@@ -21,8 +21,7 @@ from services.planner.pure_pursuit import PurePursuitParams
 from services.planner.rasterize import map_from_world
 from services.planner.recovery import BackUpParams
 from services.planner.smoothing import SmoothingParams
-from shared.parameters import runtime_settable
-from shared.runtime import ServiceParams
+from shared.parameters import ServiceParams, runtime_settable
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, load_world
 
 #: When a runtime change of a follower setting takes effect: each goal builds its follower.

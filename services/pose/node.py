@@ -24,8 +24,9 @@ from shared.messages import (
     TransformStamped,
 )
 from shared.node import RELIABLE, Node, QoS
+from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.runtime import ServiceSpec
 
 #: tf is a high-rate stream: keep a deep queue so a busy moment loses no history.
 TF_QOS = QoS(reliable=False, depth=100)

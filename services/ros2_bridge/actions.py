@@ -18,7 +18,8 @@ from typing import Any
 
 import zenoh
 
-from shared.action import CANCEL_GOAL, action_key
+from shared.action import action_key
+from shared.interface_types import CANCEL_GOAL
 from shared.node import Node, ServiceError, ServiceType, ServiceUnavailable
 from shared.ros2 import bridge_routes, interfaces
 from shared.ros2 import types as ros_types

@@ -41,6 +41,7 @@ from shared.messages import PoseStamped
 from shared.names import node_token_key, parse_token_key
 from shared.navigation import NavigationClient
 from shared.node import SENSOR_DATA, Node, QoS, Subscription
+from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2 import types as ros_types
 from shared.ros2.bridge_routes import (
@@ -67,7 +68,7 @@ from shared.ros2.wire import (
     qualified_name,
 )
 from shared.ros2.wire import RELIABLE as ROS_RELIABLE
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.runtime import ServiceSpec
 from shared.schema import MessageError
 
 STATS_PERIOD_S = 30.0

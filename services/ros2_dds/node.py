@@ -42,11 +42,13 @@ from pydantic import Field
 
 from services.ros2_dds.convert import ConversionError, from_ros, ros_class, to_ros
 from shared import topics
-from shared.action import ActionClient, ClientGoal, GoalStatusCode
+from shared.action import ActionClient, ClientGoal
+from shared.interface_types import GoalStatusCode
 from shared.interfaces.navigation import NavigateToPoseGoal
 from shared.messages import PoseStamped
 from shared.names import node_token_key, parse_token_key
 from shared.node import SENSOR_DATA, Node, QoS, Subscription
+from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2.bridge_routes import (
     ACTIONS,
@@ -60,7 +62,7 @@ from shared.ros2.bridge_routes import (
 )
 from shared.ros2.commands import RosCommands
 from shared.ros2.wire import Durability, QosProfile, Reliability
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.runtime import ServiceSpec
 
 STATS_PERIOD_S = 30.0
 FACE_NODE = "ros2_dds"

@@ -24,7 +24,7 @@ from shared.models.component import ComponentParams
 from shared.models.dock_contact import DockContactParams
 from shared.models.infrared import InfraredParams
 from shared.names import normalise_namespace
-from shared.runtime import ServiceParams
+from shared.parameters import ServiceParams
 from shared.world import load_world
 
 

@@ -36,7 +36,8 @@ from shared.interfaces.map_server import GET_MAP, GET_MAP_SERVICE, GetMapRequest
 from shared.messages import OccupancyGrid
 from shared.names import topic_key
 from shared.node import SENSOR_DATA, Node, QoS, ServiceError, Subscription
-from shared.runtime import ServiceParams, ServiceSpec
+from shared.parameters import ServiceParams
+from shared.runtime import ServiceSpec
 from shared.schema import Message
 from shared.topics import BASE_FRAME, MAP
 from shared.world import World, load_world

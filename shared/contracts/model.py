@@ -14,8 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from shared.action import ActionType
-from shared.endpoints import QoS, ServiceType
+from shared.endpoints import QoS
+from shared.interface_types import ActionType, ServiceType
 from shared.schema import Message
 
 

@@ -11,8 +11,8 @@ import math
 from dataclasses import field
 from typing import Annotated
 
+from shared.interface_types import ServiceType
 from shared.messages import BatteryState
-from shared.node import ServiceType
 from shared.schema import FloatAny, Message, message
 from shared.schema import Range as Bounds
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import field
 from typing import ClassVar
 
-from shared.action import ActionType
+from shared.interface_types import ActionType
 from shared.messages import Duration, PoseStamped
 from shared.schema import Message, UInt16, message
 

@@ -11,8 +11,8 @@ from dataclasses import field
 
 import numpy as np
 
+from shared.interface_types import ServiceType
 from shared.messages import Header
-from shared.node import ServiceType
 from shared.schema import Float64Array, Message, UInt32, message
 
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import field
 
+from shared.interface_types import ServiceType
 from shared.messages import OccupancyGrid
-from shared.node import ServiceType
 from shared.schema import Message, message
 
 

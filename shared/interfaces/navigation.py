@@ -6,9 +6,8 @@ import enum
 from dataclasses import field
 from typing import Annotated, ClassVar
 
-from shared.action import ActionType, Empty
+from shared.interface_types import ActionType, Empty, ServiceType
 from shared.messages import Duration, OccupancyGrid, PoseStamped
-from shared.node import ServiceType
 from shared.schema import Message, Range, UInt16, message
 
 

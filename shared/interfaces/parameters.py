@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import field
 
-from shared.node import ServiceType
+from shared.interface_types import ServiceType
 from shared.schema import Message, message
 
 

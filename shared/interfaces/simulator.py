@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import field
 
+from shared.interface_types import ServiceType
 from shared.messages import DockContact, Pose, Time
-from shared.node import ServiceType
 from shared.schema import Message, UInt32, message
 
 

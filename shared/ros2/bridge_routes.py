@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from shared import topics
-from shared.action import ActionType, GoalStatusArray, action_key
+from shared.action import action_key
+from shared.interface_types import ActionType, GoalStatusArray
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.messages import (

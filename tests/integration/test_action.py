@@ -7,15 +7,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from shared.action import (
-    ActionClient,
-    ActionServer,
-    ActionType,
-    ClientGoal,
-    GoalStatusCode,
-    ServerGoalHandle,
-    spin_in_background,
-)
+from shared.action import ActionClient, ActionServer, ClientGoal, ServerGoalHandle, spin_in_background
+from shared.interface_types import ActionType, GoalStatusCode
 from shared.messages import Float64, String
 from shared.node import Node
 from shared.session import SessionSpec, open_session

@@ -24,15 +24,9 @@ import zenoh
 
 from services.docking.node import DOCKING_STATE
 from shared import topics
-from shared.action import (
-    ActionClient,
-    ActionServer,
-    ClientGoal,
-    GoalStatusCode,
-    ServerGoalHandle,
-    spin_in_background,
-)
+from shared.action import ActionClient, ActionServer, ClientGoal, ServerGoalHandle, spin_in_background
 from shared.geometry import Pose2D
+from shared.interface_types import GoalStatusCode
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.docking import DOCK_ROBOT, DockRobotFeedback, DockRobotGoal, DockRobotResult
 from shared.interfaces.navigation import NAVIGATE_TO_POSE, NavigateErrorCode, NavigateToPoseResult

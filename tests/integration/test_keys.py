@@ -24,7 +24,7 @@ import zenoh
 from deploy import cli
 from deploy.keys.connection import bus_options
 from deploy.keys.pub import PubRequest, run_pub
-from shared.action import CANCEL_GOAL, CancelGoalResponse
+from shared.interface_types import CANCEL_GOAL, CancelGoalResponse
 from shared.messages import BatteryState, Clock, Time, Twist, now_header
 from shared.names import endpoint_token_key
 from shared.node import Node, encoding_for

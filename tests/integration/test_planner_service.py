@@ -20,8 +20,9 @@ import zenoh
 
 from services.planner.occupancy_map import save_map
 from services.planner.rasterize import map_from_world
-from shared.action import UUID, spin_in_background
+from shared.action import spin_in_background
 from shared.geometry import Pose2D, wrap_angle
+from shared.interface_types import UUID
 from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE, GetMapRequest
 from shared.interfaces.navigation import (
     NAVIGATE_TO_POSE,

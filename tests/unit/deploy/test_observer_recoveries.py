@@ -8,8 +8,9 @@ import numpy as np
 
 from deploy.observer import RunObserver
 from shared import topics
-from shared.action import UUID, action_key
+from shared.action import action_key
 from shared.geometry import Pose2D
+from shared.interface_types import UUID
 from shared.interfaces.navigation import NAVIGATE_TO_POSE, NavigateToPoseFeedback
 from shared.messages import Header, Pose, PoseStamped, Time
 from shared.names import topic_key

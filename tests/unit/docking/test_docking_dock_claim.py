@@ -10,7 +10,7 @@ from services.docking.dock_claim import AwaitDock, ClaimState, DockClaim, docks_
 from services.docking.docking_run import DockRequest
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.task_io import STOP, Navigate, NavOutcome, NavStatus, TickInputs
-from shared.fleet_client import FleetAnswer
+from shared.fleet_answer import FleetAnswer
 from shared.geometry import Pose2D
 
 

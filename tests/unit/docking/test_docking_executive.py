@@ -28,13 +28,13 @@ from services.docking.executive import (
     UndockGoal,
     WantDetections,
 )
-from services.docking.inputs import Heard, NavHeard
+from services.docking.heard import Heard, NavHeard
 from services.docking.mission import TaskKind
 from services.docking.params import Params
 from services.docking.safety import LidarReturns
 from services.docking.task_io import Outcome
 from services.docking.traffic import Peer
-from shared.fleet_client import FleetAnswer
+from shared.fleet_answer import FleetAnswer
 from shared.geometry import Pose2D
 from shared.interfaces.docking import DockRobotResult, UndockRobotResult
 from shared.world import load_world

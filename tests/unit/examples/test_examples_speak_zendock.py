@@ -16,7 +16,7 @@ from types import ModuleType
 import msgpack
 import pytest
 
-from shared.action import GoalStatusArray
+from shared.interface_types import GoalStatusArray
 from shared.interfaces.battery import SetBatteryStateResponse
 from shared.interfaces.docking import DOCK_ROBOT, DockRobotFeedback, DockRobotResult
 from shared.interfaces.navigation import NAVIGATE_TO_POSE

@@ -18,7 +18,7 @@ from deploy.fuzz.payloads import (
     rich_example,
 )
 from deploy.keys.types import known_types
-from shared.action import UUID
+from shared.interface_types import UUID
 from shared.messages import TFMessage, Twist
 from shared.schema import MessageError
 

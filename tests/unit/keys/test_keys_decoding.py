@@ -9,7 +9,7 @@ import numpy as np
 
 from deploy.keys.decoding import decode_payload, message_tree, undecodable_note
 from deploy.keys.types import known_types
-from shared.action import GoalStatusArray
+from shared.interface_types import GoalStatusArray
 from shared.messages import BatteryState, LaserScan, OccupancyGrid, Twist
 
 TWIST_ENC = "application/msgpack;geometry_msgs/msg/Twist"

@@ -11,8 +11,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from shared.interfaces.parameters import GetParameterRequest, ListParametersRequest, SetParameterRequest
 from shared.parameter_server import ParameterServer, attach_parameters
-from shared.parameters import AT_ONCE, ParameterRefused, ParameterTable, runtime_settable
-from shared.runtime import ServiceParams
+from shared.parameters import AT_ONCE, ParameterRefused, ParameterTable, ServiceParams, runtime_settable
 
 
 class Lidar(BaseModel):

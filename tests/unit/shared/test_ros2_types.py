@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 
 from services.ros2_bridge.actions import ACTIONS
-from shared.action import UUID, CancelGoalRequest, CancelGoalResponse, GoalInfo, GoalStatus, GoalStatusArray
+from shared.interface_types import (
+    UUID,
+    CancelGoalRequest,
+    CancelGoalResponse,
+    GoalInfo,
+    GoalStatus,
+    GoalStatusArray,
+)
 from shared.interfaces.docking import (
     DOCK_ROBOT,
     UNDOCK_ROBOT,

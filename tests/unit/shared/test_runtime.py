@@ -13,9 +13,9 @@ import pytest
 from pydantic import BaseModel, ConfigDict, Field
 
 from shared.config_errors import ConfigError
+from shared.parameters import ServiceParams
 from shared.runtime import (
     ServiceOptions,
-    ServiceParams,
     build_arg_parser,
     load_params,
     options_from_args,
