@@ -22,6 +22,7 @@ from typing import Any
 from deploy import strict_json
 from deploy.glass_report import GlassMarks, read_glass_marks
 from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.launcher.overrides import with_params
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT
@@ -136,7 +137,6 @@ def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dic
         "ZENOH_LISTEN": endpoint,
         "ZENOH_CONNECT": endpoint,
         "ZENDOCK_WORLD": str(options.world),
-        "ZENDOCK_CONTROLLER": options.controller,
         "ZENDOCK_DETECTOR": options.detector,
         "ZENDOCK_RTF": options.rtf,
         "ZENDOCK_SEED": str(options.seed),
@@ -221,7 +221,9 @@ def run_demo(
         project_dir=REPO_ROOT,
         compose=group if options.compose else None,
     )
-    stack = apply_replacements(stack, options.replacements)
+    stack = apply_replacements(
+        with_params(stack, "docking", {"controller": options.controller}), options.replacements
+    )
     services = _composed(DOCK_SERVICES, group) if options.compose else DOCK_SERVICES
     wall_start = time.monotonic()
     log(

@@ -14,6 +14,7 @@ from deploy.launcher.api import is_ready
 from deploy.launcher.daemon import launch_argv, plan_input
 from deploy.launcher.host import SupervisorHost, run_blocking
 from deploy.launcher.logs import failure_line, tail
+from deploy.launcher.overrides import parse_set
 from deploy.launcher.plan import LaunchPlan, plan_launch
 from deploy.launcher.printer import Printer
 from deploy.launcher.project import (
@@ -42,7 +43,23 @@ def add_launch_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--working-dir", metavar="DIR", help="where services run (default: the project directory)"
     )
+    parser.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        type=_set_option,
+        metavar="SERVICE.PARAM=VALUE",
+        help="a parameter of one of zendock's services, over the stack's (repeatable; e.g. docking.auto_dock=false)",
+    )
     add_service_option(parser)
+
+
+def _set_option(text: str) -> tuple[str, str, str]:
+    try:
+        return parse_set(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def launch_plan(args: argparse.Namespace, stack: Stack) -> LaunchPlan:

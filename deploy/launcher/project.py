@@ -12,6 +12,7 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
+from deploy.launcher.overrides import apply_sets
 from deploy.launcher.runtime import RUNTIME_DIRNAME, RuntimePaths
 from deploy.launcher.stack_file import Stack, load_stack, project_name_from_dir, read_document
 from deploy.replacements import apply_replacements
@@ -73,6 +74,8 @@ def load_project_stack(args: argparse.Namespace) -> Stack:
         raise no_stack_file(path)
     env_file = getattr(args, "env_file", None)
     stack = load_stack(path, env_file=env_file, project_dir=project_dir(args), project_name=args.project_name)
+    # ``--set SERVICE.NAME=VALUE`` first: a replacement then gets the overridden flags as zendock's own would.
+    stack = apply_sets(stack, getattr(args, "sets", None) or [])
     replacements = getattr(args, "replacements", None) or []
     namespace = getattr(args, "namespace", None)
     if replacements and namespace is not None:  # {robot} is the namespace the service will run in

@@ -21,6 +21,7 @@ import psutil
 
 from deploy.launcher import Launcher, StackNotReady, free_endpoint, is_ready, load_stack
 from deploy.launcher.logs import failure_line, tail
+from deploy.launcher.overrides import with_params
 from deploy.launcher.stack_file import Stack
 from deploy.launcher.status import ServiceStatus
 from deploy.paths import REPO_ROOT
@@ -88,6 +89,7 @@ class ZendockStack:
         stack = load_stack(
             DEFAULT_STACK, env=config.environment(self.endpoint, project_dir), project_dir=REPO_ROOT
         )
+        stack = with_params(stack, "docking", {"controller": config.controller})
         replaced = apply_replacements(stack, config.services)
         stack = run_replacements_in(stack, replaced, rootdir)
         self.launcher = Launcher(stack, project_dir=project_dir, working_dir=REPO_ROOT, project_name=PROJECT)
