@@ -150,24 +150,22 @@ def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dic
 def build_report(
     record: RunRecord, options: DemoOptions, world: World, wall_s: float, bound_s: float
 ) -> DemoReport:
-    contact = record.contact_at_charging
-    docked = bool(record.charging and contact is not None and contact.mated)
-    trigger = record.trigger_s if record.trigger_s is not None else math.nan
+    outcome = record.outcome()
     return DemoReport(
-        docked=docked,
-        charging=record.charging,
+        docked=outcome.docked,
+        charging=outcome.charging,
         controller=options.controller,
         world=world.name,
-        dock_time_s=(record.charging_s - trigger) if record.charging_s is not None else math.nan,
-        final_lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
-        final_yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,
-        collisions=record.collisions,
-        path_length_m=record.driven_length_m(since_s=record.trigger_s),
+        dock_time_s=outcome.dock_time_s,
+        final_lateral_error_m=outcome.lateral_error_m,
+        final_yaw_error_rad=outcome.yaw_error_rad,
+        collisions=outcome.collisions,
+        path_length_m=outcome.path_length_m,
         lower_bound_s=bound_s,
         recoveries=len(record.recovery_points),
         wall_s=wall_s,
         sim_s=record.sim_time_s,
-        trigger_s=trigger,
+        trigger_s=outcome.trigger_s,
     )
 
 

@@ -46,6 +46,24 @@ ARRIVAL_SPEED_WINDOW_S = 0.1
 TELEPORT_JUMP_M = 0.3
 
 
+@dataclass(frozen=True)
+class DockingOutcome:
+    """One docking's figures as every report gives them (the demo's and each trial's), from a record."""
+
+    #: Charging with the contacts mated.
+    docked: bool
+    charging: bool
+    #: Sim seconds from the low-battery trigger to charging (NaN: it never charged, or never triggered).
+    dock_time_s: float
+    #: How far off the dock's axis and heading the contacts mated (absolute; NaN without a contact).
+    lateral_error_m: float
+    yaw_error_rad: float
+    collisions: int
+    #: Ground-truth distance driven since the trigger.
+    path_length_m: float
+    trigger_s: float
+
+
 @dataclass
 class RunRecord:
     """What the observer saw, as plain data (sim-time seconds)."""
@@ -76,6 +94,21 @@ class RunRecord:
     @property
     def charging(self) -> bool:
         return self.charging_s is not None
+
+    def outcome(self) -> DockingOutcome:
+        """The docking's figures (the one mapping from a record to what reports say of it)."""
+        contact = self.contact_at_charging
+        trigger = self.trigger_s if self.trigger_s is not None else math.nan
+        return DockingOutcome(
+            docked=bool(self.charging and contact is not None and contact.mated),
+            charging=self.charging,
+            dock_time_s=(self.charging_s - trigger) if self.charging_s is not None else math.nan,
+            lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
+            yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,
+            collisions=self.collisions,
+            path_length_m=self.driven_length_m(since_s=self.trigger_s),
+            trigger_s=trigger,
+        )
 
     def driven_length_m(self, since_s: float | None = None) -> float:
         points = [(x, y) for t, x, y, _ in self.driven if since_s is None or t >= since_s]

@@ -7,6 +7,9 @@ import argparse
 from shared.controllers import CONTROLLERS, DEFAULT_CONTROLLER, DETECTORS, DetectorName, choices_help
 from shared.session import DEFAULT_ROUTER_ENDPOINT
 
+#: How long a command waits to reach the router before it says so.
+DEFAULT_CONNECT_TIMEOUT_S = 3.0
+
 #: A parser or an argument group.
 _Adds = argparse._ActionsContainer
 
@@ -19,6 +22,24 @@ def add_connect_option(parser: _Adds) -> None:
         metavar="ENDPOINT",
         help="Zenoh router endpoint, repeatable (env ZENDOCK_CONNECT or ZENOH_CONNECT; "
         f"default {DEFAULT_ROUTER_ENDPOINT})",
+    )
+
+
+def add_bus_options(parser: _Adds) -> None:
+    """Where a command finds the bus: ``--connect``, ``--namespace`` and ``--connect-timeout``."""
+    add_connect_option(parser)
+    parser.add_argument(
+        "--namespace",
+        default=None,
+        metavar="NS",
+        help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)",
+    )
+    parser.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=DEFAULT_CONNECT_TIMEOUT_S,
+        metavar="S",
+        help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})",
     )
 
 

@@ -25,7 +25,7 @@ from typing import Any, TextIO
 
 import zenoh
 
-from deploy.options import add_connect_option
+from deploy.options import add_bus_options
 from deploy.paths import REPO_ROOT
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, dock_line, is_terminal
 from shared import topics
@@ -349,17 +349,7 @@ def undock_main(args: argparse.Namespace) -> int:
 
 def add_connection_flags(group: argparse._ActionsContainer) -> None:
     """Where a command finds the bus: namespace, endpoints, connect timeout, Zenoh config (dock, health)."""
-    group.add_argument(
-        "--namespace", default=None, metavar="NS", help="robot namespace (env ZENDOCK_NAMESPACE)"
-    )
-    add_connect_option(group)
-    group.add_argument(
-        "--connect-timeout",
-        type=float,
-        default=3.0,
-        metavar="S",
-        help="give up reaching the router after S seconds (default 3)",
-    )
+    add_bus_options(group)
     group.add_argument(
         "--zenoh-config",
         default=None,

@@ -23,7 +23,7 @@ import sys
 from collections.abc import Callable
 
 from deploy.keys.bw import run_bw
-from deploy.keys.connection import DEFAULT_CONNECT_TIMEOUT_S, BusOptions, bus_options
+from deploy.keys.connection import BusOptions, bus_options
 from deploy.keys.delay import run_delay
 from deploy.keys.echo import EchoRequest, run_echo
 from deploy.keys.errors import KeysError
@@ -40,28 +40,14 @@ from deploy.keys.pub import (
 )
 from deploy.keys.render import DEFAULT_ARRAY_LIMIT, EchoFormat
 from deploy.keys.stats import DEFAULT_BW_WINDOW, DEFAULT_RATE_WINDOW
-from deploy.options import add_connect_option
+from deploy.options import add_bus_options
 
 Verb = Callable[[argparse.Namespace, BusOptions], int]
 
 
 def _bus_flags() -> argparse.ArgumentParser:
     flags = argparse.ArgumentParser(add_help=False)
-    group = flags.add_argument_group("bus")
-    add_connect_option(group)
-    group.add_argument(
-        "--namespace",
-        default=None,
-        metavar="NS",
-        help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)",
-    )
-    group.add_argument(
-        "--connect-timeout",
-        type=float,
-        default=DEFAULT_CONNECT_TIMEOUT_S,
-        metavar="S",
-        help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})",
-    )
+    add_bus_options(flags.add_argument_group("bus"))
     return flags
 
 

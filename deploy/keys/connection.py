@@ -20,10 +20,10 @@ from dataclasses import dataclass
 import zenoh
 
 from deploy.keys.errors import EXIT_USAGE, KeysError
+from deploy.options import DEFAULT_CONNECT_TIMEOUT_S
 from shared.names import normalise_namespace, topic_key
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
-DEFAULT_CONNECT_TIMEOUT_S = 3.0
 ENV_CONNECT = ("ZENDOCK_CONNECT", "ZENOH_CONNECT")
 ENV_NAMESPACE = "ZENDOCK_NAMESPACE"
 

@@ -4,26 +4,12 @@ from __future__ import annotations
 
 import argparse
 
-from deploy.keys.connection import DEFAULT_CONNECT_TIMEOUT_S, BusOptions, bus_options
-from deploy.options import add_connect_option
+from deploy.keys.connection import BusOptions, bus_options
+from deploy.options import add_bus_options
 
 
 def add_bus_flags(parser: argparse.ArgumentParser) -> None:
-    group = parser.add_argument_group("bus")
-    add_connect_option(group)
-    group.add_argument(
-        "--namespace",
-        default=None,
-        metavar="NS",
-        help="robot namespace keys are relative to (env ZENDOCK_NAMESPACE)",
-    )
-    group.add_argument(
-        "--connect-timeout",
-        type=float,
-        default=DEFAULT_CONNECT_TIMEOUT_S,
-        metavar="S",
-        help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})",
-    )
+    add_bus_options(parser.add_argument_group("bus"))
 
 
 def options_from(args: argparse.Namespace) -> BusOptions:

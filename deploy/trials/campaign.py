@@ -117,21 +117,20 @@ def _run_one(
         record = observer.snapshot()
     finally:
         observer.close()
-    contact = record.contact_at_charging
-    trigger = record.trigger_s if record.trigger_s is not None else math.nan
+    outcome = record.outcome()
     result = TrialResult(
         index=index,
         robot=robot,
         start=start.as_tuple(),
-        docked=bool(record.charging and contact is not None and contact.mated),
-        charging=record.charging,
-        dock_time_s=(record.charging_s - trigger) if record.charging_s is not None else math.nan,
-        lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
-        yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,
-        collisions=record.collisions,
-        path_length_m=record.driven_length_m(since_s=record.trigger_s),
+        docked=outcome.docked,
+        charging=outcome.charging,
+        dock_time_s=outcome.dock_time_s,
+        lateral_error_m=outcome.lateral_error_m,
+        yaw_error_rad=outcome.yaw_error_rad,
+        collisions=outcome.collisions,
+        path_length_m=outcome.path_length_m,
         wall_s=time.monotonic() - wall_start,
-        sim_s=(record.sim_time_s - trigger) if record.trigger_s is not None else math.nan,
+        sim_s=record.sim_time_s - outcome.trigger_s,
         phase_s=record.phase_durations(),
         arrival_speed_mps=record.arrival_speed_mps,
     )
