@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -164,6 +165,16 @@ def not_ready_reason(paths: RuntimePaths, status: ServiceStatus, timeout_s: floa
     return f"{status.name} not healthy after {timeout_s:g}s ({f'its last line: {last}' if last else 'it printed nothing'})"
 
 
+def _hand_over(daemon: subprocess.Popen[bytes], plan: bytes) -> None:
+    """Write the plan to the daemon's standard input and close it."""
+    assert daemon.stdin is not None
+    try:
+        with daemon.stdin:
+            daemon.stdin.write(plan)
+    except BrokenPipeError:
+        pass  # it exited at once: its exit code and log are reported by start_daemon
+
+
 def start_daemon(plan: LaunchPlan, services: list[str], paths: RuntimePaths, directory: Path) -> int:
     """Spawn the supervisor in its own session with ``plan`` and wait until it answers; 0, or 1 with its log."""
     paths.state_dir.mkdir(parents=True, exist_ok=True)
@@ -176,12 +187,10 @@ def start_daemon(plan: LaunchPlan, services: list[str], paths: RuntimePaths, dir
             stderr=subprocess.STDOUT,
             start_new_session=True,
         )
-        assert daemon.stdin is not None
-        try:
-            with daemon.stdin:
-                daemon.stdin.write(plan_input(plan))
-        except BrokenPipeError:
-            pass  # it exited at once: its exit code and log are reported below
+    # Written from a thread: a daemon that never reads its plan is caught by the start timeout below.
+    threading.Thread(
+        target=_hand_over, args=(daemon, plan_input(plan)), name="plan-to-daemon", daemon=True
+    ).start()
     deadline = time.monotonic() + DAEMON_START_TIMEOUT_S
     while time.monotonic() < deadline:
         if daemon.poll() is not None:

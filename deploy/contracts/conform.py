@@ -110,7 +110,7 @@ def _own_command(service: str, stack: Stack) -> list[str]:
     python = run.python
     if python != "python" and not Path(python).is_absolute():
         python = str(REPO_ROOT / python)  # relative to the repository, where zendock's stacks run
-    return run_words(ModuleRun(run.service, (), python))
+    return run_words(ModuleRun(run.service, (), python, run.python_options))
 
 
 def run_conform(

@@ -1,5 +1,5 @@
 """The stack a fleet run starts: one simulator for the shared room, the fleet service, and each robot's
-services written once as an ``x-robots`` template (the same form a hand-written fleet stack file uses)."""
+own services in its namespace (a :class:`~deploy.scenario.Scenario` with ``fleet=True``)."""
 
 from __future__ import annotations
 

@@ -86,7 +86,11 @@ def compose_groups(
 def _group_service(where: str, members: list[tuple[str, ServiceLaunch]], names: set[str]) -> ServiceLaunch:
     runs: list[ModuleRun] = []
     for name, launch in members:
-        if not isinstance(launch.run, ModuleRun) or launch.run.python != "python":
+        if (
+            not isinstance(launch.run, ModuleRun)
+            or launch.run.python != "python"
+            or launch.run.python_options
+        ):
             raise CompositionError(
                 f"{where}: {name}'s command is not 'python -m services.<name> ...': "
                 "only zendock's services run in a container"

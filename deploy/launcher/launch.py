@@ -38,7 +38,7 @@ SERVICES_PACKAGE = "services"
 #: ``zendock container``'s word between two members.
 GROUP_SEPARATOR = "+"
 #: ``zendock container``'s own options that take a value (they may stand before the first member).
-GROUP_VALUE_OPTIONS = frozenset({"--namespace", "--connect", "--listen", "--zenoh-config", "--log-level"})
+GROUP_VALUE_OPTIONS = frozenset({"--namespace", "--connect", "--zenoh-config", "--log-level"})
 
 
 @dataclass(frozen=True)
@@ -46,26 +46,29 @@ class ModuleRun:
     """One of zendock's services: ``python -m services.<service> FLAGS``.
 
     ``python`` is the interpreter word: ``python`` (the launcher's own) or another (the DDS face runs with
-    ``.venv-ros2/bin/python``).
+    ``.venv-ros2/bin/python``); ``python_options`` are the interpreter's own, before ``-m`` (``-u``).
     """
 
     service: str
     flags: tuple[str, ...] = ()
     python: str = "python"
+    python_options: tuple[str, ...] = ()
 
     def with_flags(self, *flags: str) -> ModuleRun:
-        return ModuleRun(self.service, (*self.flags, *flags), self.python)
+        return ModuleRun(self.service, (*self.flags, *flags), self.python, self.python_options)
 
 
 @dataclass(frozen=True)
 class GroupRun:
     """Several of zendock's services in one process on one session (``zendock container``).
 
-    ``options`` are the container's own (``--namespace r1``), given before the first member.
+    ``options`` are the container's own (``--namespace r1``), given before the first member; ``program`` is
+    the zendock that runs them (``zendock``: the launcher's own; a path: that one).
     """
 
     members: tuple[ModuleRun, ...]
     options: tuple[str, ...] = ()
+    program: str = "zendock"
 
     @property
     def services(self) -> tuple[str, ...]:
@@ -86,13 +89,34 @@ Run = ModuleRun | GroupRun | ProgramRun
 def read_command(words: Sequence[str]) -> Run:
     """The run a stack file's command words describe (the one place those words are read)."""
     words = tuple(str(word) for word in words)
-    if len(words) >= 3 and words[1] == "-m" and _is_service_module(words[2]):
-        return ModuleRun(words[2].removeprefix(f"{SERVICES_PACKAGE}."), words[3:], words[0])
+    # An interpreter, its own options (``-u``, ``-X importtime``: words before ``-m``), then the module.
+    at = words.index("-m") if "-m" in words else -1
+    if (
+        at >= 1
+        and at + 1 < len(words)
+        and _is_service_module(words[at + 1])
+        and _interpreter_options(words[1:at])
+    ):
+        service = words[at + 1].removeprefix(f"{SERVICES_PACKAGE}.")
+        return ModuleRun(service, words[at + 2 :], words[0], words[1:at])
     if len(words) >= 2 and words[1] == "container" and words[0].rsplit("/", 1)[-1] == "zendock":
         group = _read_group(words[2:])
         if group is not None:
-            return group
+            return GroupRun(group.members, group.options, words[0])
     return ProgramRun(words)
+
+
+def _interpreter_options(words: Sequence[str]) -> bool:
+    """Whether ``words`` can be an interpreter's options: each an option or the value after ``-X``/``-W``."""
+    expect_value = False
+    for word in words:
+        if expect_value:
+            expect_value = False
+        elif word in ("-X", "-W"):
+            expect_value = True
+        elif not word.startswith("-"):
+            return False
+    return not expect_value
 
 
 def _is_service_module(module: str) -> bool:
@@ -124,9 +148,9 @@ def _read_group(words: Sequence[str]) -> GroupRun | None:
 def run_words(run: Run) -> list[str]:
     """The words that start ``run`` (``python`` and ``zendock`` are resolved where the process starts)."""
     if isinstance(run, ModuleRun):
-        return [run.python, "-m", f"{SERVICES_PACKAGE}.{run.service}", *run.flags]
+        return [run.python, *run.python_options, "-m", f"{SERVICES_PACKAGE}.{run.service}", *run.flags]
     if isinstance(run, GroupRun):
-        words = ["zendock", "container", *run.options]
+        words = [run.program, "container", *run.options]
         for i, member in enumerate(run.members):
             words += [*([GROUP_SEPARATOR] if i else []), member.service, *member.flags]
         return words

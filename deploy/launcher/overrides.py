@@ -25,7 +25,7 @@ def _with_values(run: ModuleRun, values: Mapping[str, object]) -> ModuleRun:
             continue
         kept.append(flags[i])
         i += 1
-    return ModuleRun(run.service, (*kept, *param_flags(values)), run.python)
+    return ModuleRun(run.service, (*kept, *param_flags(values)), run.python, run.python_options)
 
 
 def _overridden(run: Run, service: str, values: Mapping[str, object]) -> Run | None:
@@ -33,7 +33,7 @@ def _overridden(run: Run, service: str, values: Mapping[str, object]) -> Run | N
         return _with_values(run, values)
     if isinstance(run, GroupRun) and service in run.services:
         members = tuple(_with_values(m, values) if m.service == service else m for m in run.members)
-        return GroupRun(members, run.options)
+        return GroupRun(members, run.options, run.program)
     return None
 
 
@@ -43,11 +43,13 @@ def with_params(stack: Stack, service: str, values: Mapping[str, object]) -> Sta
     if not values:
         return stack
     services = dict(stack.services)
+    found = False
     for name, launch in stack.services.items():
         run = _overridden(launch.run, service, values)
         if run is not None:
             services[name] = replace(launch, run=run)
-    if services == dict(stack.services):
+            found = True
+    if not found:
         known = sorted({m.service for launch in stack.services.values() for m in _module_runs(launch.run)})
         raise ConfigError(
             f"--set {service}: the stack runs no zendock service {service!r} (it runs: {', '.join(known)})"

@@ -135,10 +135,9 @@ class DockingConfig:
 #: Where a dock's marker could be in a forward camera's view: its range, its bearing from the robot's
 #: heading within the camera's 70 degree field of view less the marker's own width, and the marker seen at
 #: most this far off its normal (it faces back along the dock's axis, towards the staging pose; rendered
-#: frames of the shipped dock show it found up to 80 degrees off at 1.5 m, not from behind the dock). In
-#: a campaign's frames the marker was found in 180 of 191 frames whose marker bearing was under 30
-#: degrees, and in 2 of 135 at 30 degrees or more (many of those while the robot turned onto the dock at
-#: the staging pose, its camera side-on).
+#: frames of the shipped dock show it found up to 80 degrees off at 1.5 m, not from behind the dock). Past
+#: 30 degrees of bearing the marker is rarely found, most often while the robot turns onto the dock at the
+#: staging pose with its camera side-on (the frame counts are in commit 6de8902's message).
 DETECTION_VIEW_RANGE_M = 3.5
 DETECTION_VIEW_BEARING_RAD = math.radians(30.0)
 DETECTION_VIEW_OFF_NORMAL_RAD = math.radians(80.0)

@@ -26,159 +26,54 @@ kept by name. Action goals are opaque here: :class:`Goal` carries the node's han
 from __future__ import annotations
 
 import logging
-import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from services.docking.dock_claim import AwaitDock, DockClaim, docks_seen_free
 from services.docking.dock_db import DockDatabase
 from services.docking.docking_run import DockRequest
 from services.docking.drive_arbiter import DriveArbiter, DriveOrders
+from services.docking.events import (
+    CancelGoal,
+    DockGoal,
+    Drive,
+    Effects,
+    Event,
+    FleetReleased,
+    FleetReserved,
+    Goal,
+    GoalEnded,
+    Log,
+    Release,
+    Reserve,
+    UndockGoal,
+    WantDetections,
+)
 from services.docking.heard import DockSighting, Heard
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.params import Params
 from services.docking.patrol import Patrol
+from services.docking.reporting import Reporter, result_message
 from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams
 from services.docking.task_io import Intent, Navigate, NavStatus, Outcome, Task, TickInputs, Velocity
-from services.docking.traffic import (
-    CARRY_ON_S,
-    TOO_CLOSE_CALM_S,
-    GiveWay,
-    Meeting,
-    Peer,
-    must_give_way,
-    passing_place,
-    plan_points,
-    way_ahead,
-)
+from services.docking.traffic import GiveWay
+from services.docking.traffic_policy import TrafficPolicy
 from services.docking.undocking_run import UndockingRun
 from shared.fleet_answer import FleetAnswer
 from shared.geometry import Pose2D
-from shared.interfaces.docking import DockRobotFeedback, DockRobotResult, UndockRobotGoal, UndockRobotResult
-from shared.messages import Duration
-from shared.ratelimit import RateLimitedLogger
+from shared.interfaces.docking import UndockRobotGoal
 from shared.world import World
-
-#: ``docking/state`` is published on change and at least this often.
-STATE_PERIOD_S = 1.0
-
-
-@dataclass(frozen=True, eq=False)
-class Goal:
-    """An action goal being served: the node's ``handle`` (opaque here: one per goal, compared by identity)
-    and which action it belongs to."""
-
-    handle: object
-    action: TaskKind
-
-    def same(self, other: Goal | None) -> bool:
-        return other is not None and other.handle is self.handle
-
-
-# --- events: what happens ------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class DockGoal:
-    goal: Goal
-    request: DockRequest
-
-
-@dataclass(frozen=True)
-class UndockGoal:
-    goal: Goal
-    max_time_s: float
-    dock_type: str = ""
-
-
-@dataclass(frozen=True)
-class CancelGoal:
-    goal: Goal
-
-
-@dataclass(frozen=True)
-class FleetReserved:
-    """The fleet's answer to a reservation request (None and an error: it did not answer)."""
-
-    answer: FleetAnswer | None
-    error: Exception | None = None
-
-
-@dataclass(frozen=True)
-class FleetReleased:
-    """The fleet's answer to a release: the dock released ("" none), or None and an error."""
-
-    dock_id: str | None
-    error: Exception | None = None
-
-
-Event = DockGoal | UndockGoal | CancelGoal | FleetReserved | FleetReleased | DockSighting
-
-
-# --- effects: what the node does -----------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Drive:
-    orders: DriveOrders
-
-
-@dataclass(frozen=True)
-class Reserve:
-    """Ask the fleet for ``dock_id`` ("" : the nearest free one by ``path_lengths``) at charge ``battery``."""
-
-    battery: float
-    dock_id: str
-    path_lengths: dict[str, float] | None
-
-
-@dataclass(frozen=True)
-class Release:
-    """Tell the fleet the robot's dock is free."""
-
-
-@dataclass(frozen=True)
-class WantDetections:
-    """Whether the running task wants dock detections (the subscription follows at once)."""
-
-    wanted: bool
-
-
-@dataclass(frozen=True)
-class GoalFeedback:
-    goal: Goal
-    feedback: DockRobotFeedback
-
-
-@dataclass(frozen=True)
-class GoalEnded:
-    """Answer ``goal`` (if its client still waits) with ``result``, as succeeded, canceled or aborted."""
-
-    goal: Goal
-    outcome: Outcome
-    result: DockRobotResult | UndockRobotResult
-
-
-@dataclass(frozen=True)
-class PublishState:
-    name: str
-
-
-Effect = Drive | Reserve | Release | WantDetections | GoalFeedback | GoalEnded | PublishState
-Effects = list[Effect]
 
 
 class Executive:
     """See the module docstring."""
 
-    def __init__(
-        self, params: Params, database: DockDatabase, room: World | None, namespace: str, log: logging.Logger
-    ) -> None:
+    def __init__(self, params: Params, database: DockDatabase, room: World | None, namespace: str) -> None:
         self.params = params
         self.database = database
         self.namespace = namespace
-        self._log = log
-        self._say = RateLimitedLogger(log, interval_s=5.0)
+        #: Whether debug lines are wanted (the hold diagnostics cost a line each tick otherwise).
+        self.debug = False
         name = namespace.rpartition("/")[2]
         patrol = params.patrol or (
             next((list(r.patrol) for r in room.robots if r.name == name), [])
@@ -194,6 +89,8 @@ class Executive:
         #: The room's walls, for passing places (the traffic rule) and path lengths to the docks.
         self.walls = [*room.opaque_segments(), *room.glass] if params.fleet and room is not None else []
         self._room_paths = RoomPaths(room.bounds, self.walls) if self.walls and room is not None else None
+        self.traffic = TrafficPolicy(namespace, self.walls)
+        self.reporter = Reporter(params.feedback_period_s)
         self._approach = params.approach_controller()
         self.task: Task | None = None
         self.task_kind: TaskKind | None = None
@@ -201,16 +98,8 @@ class Executive:
         #: The running task when it is one the executive started for its own reasons.
         self._awaiting: AwaitDock | None = None
         self._giving_way: GiveWay | None = None
-        #: Until when not to stop again for a robot that came too close.
-        self._calm_until: dict[str, float] = {}
-        #: Robots this one waited for lately without the way clearing: left to the planner until then.
-        self._carry_on_until: dict[str, float] = {}
         self._applied_correction: Pose2D | None = None
         self._holding = ""
-        self._last_state = ""
-        self._state_published_s = -math.inf
-        self._feedback_key: tuple[int, int] | None = None
-        self._feedback_published_s = -math.inf
 
     @property
     def watches_traffic(self) -> bool:
@@ -219,13 +108,11 @@ class Executive:
 
     # --- what happens ----------------------------------------------------------------------------------
 
-    def battery_reading(self, percentage: float, charging: bool) -> None:
-        if self.mission.battery(percentage, charging):
-            self._log.info(
-                "battery at %.1f%%, below %.0f%%: going home",
-                100.0 * percentage,
-                100.0 * self.params.low_battery_threshold,
-            )
+    def battery_reading(self, percentage: float, charging: bool) -> Effects:
+        if not self.mission.battery(percentage, charging):
+            return []
+        threshold = 100.0 * self.params.low_battery_threshold
+        return [Log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * percentage, threshold)]
 
     def handle(self, event: Event, heard: Heard) -> Effects:
         """React to ``event`` at once (an action's goal replaces what runs before the next tick)."""
@@ -237,14 +124,14 @@ class Executive:
                 self._start(self._undocking_run(max_time_s, dock_type), TaskKind.UNDOCK, goal, out)
             case CancelGoal(goal):
                 if goal.same(self.goal) and self.task is not None:
-                    self._log.info("%s: cancel requested", type(self.task).__name__)
+                    out.append(Log.info("%s: cancel requested", type(self.task).__name__))
                     self.task.cancel()
                 else:
-                    out.append(GoalEnded(goal, Outcome.CANCELED, _result_message(goal.action, None)))
+                    out.append(GoalEnded(goal, Outcome.CANCELED, result_message(goal.action, None)))
             case FleetReserved(answer, error):
-                self._reserved(answer, error, heard.now_s)
+                self._reserved(answer, error, heard.now_s, out)
             case FleetReleased(dock_id, error):
-                self._released(dock_id, error, heard.now_s)
+                self._released(dock_id, error, heard.now_s, out)
             case DockSighting():
                 if self.task is not None:
                     self._follow_correction(heard.map_to_odom)
@@ -258,8 +145,10 @@ class Executive:
         out: Effects = []
         now = heard.now_s
         if heard.clock_reset:
-            self._log.warning(
-                "clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs", now
+            out.append(
+                Log.warning(
+                    "clock jumped back to %.3f s (a reset?): forgetting the pose history and what runs", now
+                )
             )
             self.mission.trigger.reset()  # a low battery after the reset sends the robot home again
             if self.task is not None:
@@ -276,21 +165,23 @@ class Executive:
             inputs = self._task_inputs(task, heard)
             intent = task.step(inputs)
             if task.holding and task.holding != self._holding:
-                self._say.info(f"hold:{task.holding}", "holding still: %s", task.holding)
-            if task.holding and self._log.isEnabledFor(logging.DEBUG):
-                self._log.debug(
-                    "hold t=%.3f %s: localisation %.3f s old, odometry %.3f s old",
-                    now,
-                    task.holding,
-                    heard.localisation_age_s,
-                    heard.odometry_age_s,
+                out.append(
+                    Log.now_and_then(logging.INFO, f"hold:{task.holding}", "holding still: %s", task.holding)
+                )
+            if task.holding and self.debug:
+                out.append(
+                    Log(
+                        logging.DEBUG,
+                        "hold t=%.3f %s: localisation %.3f s old, odometry %.3f s old",
+                        (now, task.holding, heard.localisation_age_s, heard.odometry_age_s),
+                    )
                 )
             self._holding = task.holding
             out.append(Drive(self._orders(intent, inputs)))
-            self._report_feedback(task, now, out)
+            self.reporter.feedback(task, self.goal, now, out)
             if task.done:
                 self._end_task(heard, out)
-        self._report_state(heard, out)
+        self.reporter.state(self.state_name(heard.charging), now, out)
         return out
 
     def _task_inputs(self, task: Task, heard: Heard) -> TickInputs:
@@ -339,14 +230,14 @@ class Executive:
             )
             self._begin_docking(request, None, heard, out)
         elif order is MissionOrder.UNDOCK:
-            self._log.info(
-                "charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage
+            out.append(
+                Log.info("charged to %.0f%%: undocking to resume the patrol", 100.0 * self.mission.percentage)
             )
             self._start(
                 self._undocking_run(UndockRobotGoal().max_undocking_time, ""), TaskKind.UNDOCK, None, out
             )
         elif order is MissionOrder.PATROL:
-            self._log.info("patrolling from waypoint %d", self.mission.next_waypoint)
+            out.append(Log.info("patrolling from waypoint %d", self.mission.next_waypoint))
             self._start(Patrol(self.mission.patrol, self.mission.next_waypoint), TaskKind.PATROL, None, out)
 
     # --- the fleet -------------------------------------------------------------------------------------
@@ -362,8 +253,10 @@ class Executive:
         if granted is not None:
             self._start(self._docking_run(replace(request, dock_id=granted), heard), TaskKind.DOCK, goal, out)
         else:
-            self._log.info(
-                "asking the fleet for %s", f"dock {request.dock_id!r}" if request.dock_id else "a dock"
+            out.append(
+                Log.info(
+                    "asking the fleet for %s", f"dock {request.dock_id!r}" if request.dock_id else "a dock"
+                )
             )
             waiting = AwaitDock(request)
             self._start(waiting, TaskKind.DOCK, goal, out)
@@ -376,7 +269,7 @@ class Executive:
         if waiting is not None:
             granted = claim.granted_dock
             if granted is not None:
-                self._log.info("the fleet granted dock %s", granted)
+                out.append(Log.info("the fleet granted dock %s", granted))
                 self._start(
                     self._docking_run(replace(waiting.request, dock_id=granted), heard),
                     TaskKind.DOCK,
@@ -392,8 +285,8 @@ class Executive:
             if heard.latest_pose is not None:
                 claim.holds(now, self.database.nearest(heard.latest_pose).id)
         if claim.asked_to_leave and self.mission.leave_dock():
-            self._log.info(
-                "the fleet asks this robot to leave its dock for a robot whose battery is critical"
+            out.append(
+                Log.info("the fleet asks this robot to leave its dock for a robot whose battery is critical")
             )
         if claim.reserve_due(now):
             if heard.battery is None or not 0.0 <= heard.battery <= 1.0:
@@ -420,38 +313,47 @@ class Executive:
             for (dock_id, pose), stage, length in zip(docks.items(), staging, found, strict=True)
         }
 
-    def _reserved(self, answer: FleetAnswer | None, error: Exception | None, now: float) -> None:
+    def _reserved(
+        self, answer: FleetAnswer | None, error: Exception | None, now: float, out: Effects
+    ) -> None:
         claim = self.claim
         if claim is None:
             return
         if answer is None:
             claim.unanswered(now)
-            self._say.warning("fleet", "the fleet did not answer: %s", error)
+            out.append(Log.now_and_then(logging.WARNING, "fleet", "the fleet did not answer: %s", error))
             return
         if answer.refused:
-            self._say.warning("fleet-refused", "the fleet refused: %s", answer.reason)
+            out.append(
+                Log.now_and_then(logging.WARNING, "fleet-refused", "the fleet refused: %s", answer.reason)
+            )
         claim.answered(now, answer)
         if self._awaiting is not None and not answer.granted:
             if answer.queue_position:
-                self._say.info(
-                    "queued",
-                    "waiting for a dock: number %d in the queue (%s)",
-                    answer.queue_position,
-                    answer.reason,
+                out.append(
+                    Log.now_and_then(
+                        logging.INFO,
+                        "queued",
+                        "waiting for a dock: number %d in the queue (%s)",
+                        answer.queue_position,
+                        answer.reason,
+                    )
                 )
             self._awaiting.hold_at(answer.holding_pose)
 
-    def _released(self, dock_id: str | None, error: Exception | None, now: float) -> None:
+    def _released(self, dock_id: str | None, error: Exception | None, now: float, out: Effects) -> None:
         claim = self.claim
         if claim is None:
             return
         if dock_id is None:
             claim.unanswered(now)
-            self._say.warning("fleet", "the fleet did not answer a release: %s", error)
+            out.append(
+                Log.now_and_then(logging.WARNING, "fleet", "the fleet did not answer a release: %s", error)
+            )
             return
         claim.released(now)
         if dock_id:
-            self._log.info("released dock %s", dock_id)
+            out.append(Log.info("released dock %s", dock_id))
 
     def _dock_without_fleet(self, claim: DockClaim, waiting: AwaitDock, heard: Heard, out: Effects) -> None:
         """The fleet is down: dock at the nearest dock seen free (no robot in it), keeping it as a claim so
@@ -462,10 +364,16 @@ class Executive:
         docks = [(d.id, d.pose2d) for d in self.database if not wanted or d.id == wanted]
         free = docks_seen_free(docks, heard.latest_pose, heard.scan_points)
         if not free:
-            self._say.warning("fleet-down", "the fleet is down and no dock is seen free: waiting")
+            out.append(
+                Log.now_and_then(
+                    logging.WARNING, "fleet-down", "the fleet is down and no dock is seen free: waiting"
+                )
+            )
             return
-        self._log.warning(
-            "the fleet has not answered for %g s: docking at %s, seen free", claim.patience_s, free[0]
+        out.append(
+            Log.warning(
+                "the fleet has not answered for %g s: docking at %s, seen free", claim.patience_s, free[0]
+            )
         )
         claim.holds(heard.now_s, free[0])
         self._start(
@@ -475,61 +383,18 @@ class Executive:
     # --- traffic ---------------------------------------------------------------------------------------
 
     def _follow_traffic(self, heard: Heard, out: Effects) -> None:
-        """Give way to a robot with priority met on the way (see :mod:`services.docking.traffic`)."""
-        now = heard.now_s
+        """Give way to a robot with priority met on the way (the traffic policy decides)."""
         if self._giving_way is not None:
-            other = next((p for p in heard.peers if p.name == self._giving_way.peer), None)
-            self._giving_way.peer_seen(
-                other.pose if other else None,
-                other is not None and other.active,
-                other is not None and other.giving_way,
-            )
+            self.traffic.watch(self._giving_way, heard)
             return
         task = self.task
-        if task is None or not task.under_way or heard.battery is None or heard.latest_pose is None:
+        if task is None or not task.under_way:
             return
-        me = heard.latest_pose
-        calm = {peer for peer, until in self._calm_until.items() if now < until}
-        carry_on = {peer for peer, until in self._carry_on_until.items() if now < until}
-        own_plan = heard.own_plan  # decoded only for a robot met face to face
-        met = must_give_way(
-            me, self.namespace, heard.battery, list(heard.peers), self.walls, calm, carry_on, own_plan
-        )
-        if met is None:
-            return
-        peer, meeting = met
-        place = self._give_way_plan(me, peer, meeting, now)
-        assert self.task_kind is not None
-        own_way = None
-        if meeting is Meeting.HEAD_ON_PRIORITY:
-            own_way = way_ahead(me, plan_points(own_plan))
-        giving_way = GiveWay(peer, meeting, place, task.dock_request, own_way)
-        self._start(giving_way, self.task_kind, self.goal, out)
-        self._giving_way = giving_way
-
-    def _give_way_plan(self, me: Pose2D, peer: Peer, meeting: Meeting, now: float) -> Pose2D | None:
-        """Where to give way (None: stop where it stands), saying why in the log."""
-        place: Pose2D | None = None
-        if meeting is Meeting.HEAD_ON:
-            place = passing_place(me, peer, self.walls)
-            if place is None:
-                self._say.warning(
-                    "no-passing-place",
-                    "met %s head-on and must give way, but found no passing place: stopping",
-                    peer.name,
-                )
-        if place is not None:
-            self._log.info(
-                "met %s head-on (it has priority): giving way at (%.2f, %.2f)", peer.name, place.x, place.y
-            )
-        elif meeting is Meeting.HEAD_ON_PRIORITY:
-            self._log.info("met %s head-on (this robot has priority): waiting for it to back out", peer.name)
-        elif meeting is Meeting.TOO_CLOSE:
-            self._log.info("%s is too close in front: stopping for a moment", peer.name)
-            self._calm_until[peer.name] = now + TOO_CLOSE_CALM_S
-        else:
-            self._log.info("%s crosses this robot's way (it has priority): stopping for it", peer.name)
-        return place
+        giving_way = self.traffic.meet(heard, task.dock_request, out)
+        if giving_way is not None:
+            assert self.task_kind is not None
+            self._start(giving_way, self.task_kind, self.goal, out)
+            self._giving_way = giving_way
 
     # --- task life -------------------------------------------------------------------------------------
 
@@ -546,14 +411,14 @@ class Executive:
         if old is not None and old.waypoint_index is not None:
             self.mission.next_waypoint = old.waypoint_index
         if old_goal is not None and not old_goal.same(goal):
-            out.append(GoalEnded(old_goal, Outcome.CANCELED, _result_message(old_goal.action, None)))
+            out.append(GoalEnded(old_goal, Outcome.CANCELED, result_message(old_goal.action, None)))
         if old is not None and old is self._awaiting and kind is not TaskKind.DOCK and self.claim is not None:
             self.claim.drop()  # no longer waiting for a dock
         if old is not None:
-            self._log.info("%s replaced by %s", type(old).__name__, type(task).__name__)
+            out.append(Log.info("%s replaced by %s", type(old).__name__, type(task).__name__))
         self.task, self.task_kind, self.goal = task, kind, goal
         self._awaiting = self._giving_way = None
-        self._feedback_key = None
+        self.reporter.new_task()
 
     def _end_task(self, heard: Heard, out: Effects) -> None:
         task, kind, goal = self.task, self.task_kind, self.goal
@@ -567,9 +432,7 @@ class Executive:
         if task.waypoint_index is not None:
             self.mission.next_waypoint = task.waypoint_index
         if giving_way is not None and result.success:
-            self._log.info("gave way: %s", giving_way.message or "done")
-            if giving_way.unresolved:
-                self._carry_on_until[giving_way.peer] = heard.now_s + CARRY_ON_S
+            self.traffic.gave_way(giving_way, heard.now_s, out)
             if isinstance(giving_way.resume, DockRequest):
                 self._begin_docking(
                     giving_way.resume, goal, heard, out
@@ -585,39 +448,24 @@ class Executive:
         level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
         feedback = task.dock_feedback(heard.now_s)
         took = f" after {feedback.docking_time_s:.1f} s" if feedback is not None else ""
-        self._log.log(
-            level,
-            "%s %s%s (code %d, %d retries)%s",
-            kind.value,
-            result.outcome.value,
-            took,
-            int(result.error_code),
-            result.num_retries,
-            f": {result.message}" if result.message else "",
-        )
-        if goal is not None:
-            out.append(GoalEnded(goal, result.outcome, _result_message(goal.action, task)))
-
-    # --- reports ---------------------------------------------------------------------------------------
-
-    def _report_feedback(self, task: Task, now: float, out: Effects) -> None:
-        feedback = task.dock_feedback(now)
-        if feedback is None or self.goal is None:
-            return
-        key = (int(feedback.state), feedback.num_retries)
-        if key == self._feedback_key and now - self._feedback_published_s < self.params.feedback_period_s:
-            return
-        self._feedback_key, self._feedback_published_s = key, now
         out.append(
-            GoalFeedback(
-                self.goal,
-                DockRobotFeedback(
-                    state=int(feedback.state),
-                    docking_time=Duration.from_sec(feedback.docking_time_s),
-                    num_retries=feedback.num_retries,
+            Log(
+                level,
+                "%s %s%s (code %d, %d retries)%s",
+                (
+                    kind.value,
+                    result.outcome.value,
+                    took,
+                    int(result.error_code),
+                    result.num_retries,
+                    f": {result.message}" if result.message else "",
                 ),
             )
         )
+        if goal is not None:
+            out.append(GoalEnded(goal, result.outcome, result_message(goal.action, task)))
+
+    # --- reports ---------------------------------------------------------------------------------------
 
     def state_name(self, charging: bool) -> str:
         """What the service is doing, for ``docking/state``."""
@@ -626,23 +474,3 @@ class Executive:
         if charging:
             return "DOCKED"
         return "HOLDING" if self.mission.mode is MissionMode.HOLDING else "IDLE"
-
-    def _report_state(self, heard: Heard, out: Effects) -> None:
-        name = self.state_name(heard.charging)
-        now = heard.now_s
-        if name == self._last_state and now - self._state_published_s < STATE_PERIOD_S:
-            return
-        if name != self._last_state:
-            self._log.info("state %s (clock %.2f s)", name, now)
-        self._last_state, self._state_published_s = name, now
-        out.append(PublishState(name))
-
-
-def _result_message(action: TaskKind, task: Task | None) -> DockRobotResult | UndockRobotResult:
-    """The action's result for ``task`` (None: a goal cancelled before any task ran for it)."""
-    result = task.result if task is not None else None
-    success = result is not None and result.success
-    code = int(result.error_code) if result is not None else 0
-    if action is TaskKind.DOCK:
-        return DockRobotResult(success=success, error_code=code, num_retries=task.retries if task else 0)
-    return UndockRobotResult(success=success, error_code=code)

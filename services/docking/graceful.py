@@ -177,10 +177,8 @@ class GracefulDockParams:
     #: ``near_distance_m`` to ``far_beta`` at ``far_distance_m`` (distances to the dock pose along its
     #: axis). Turning early costs no precision, and with beta 0.3 the law never turns faster than
     #: about 0.5 rad/s, so an approach that starts askew would crawl round its first curve. From 0.6 m
-    #: out beta is 0: the speed is then bounded only by the top turn rate (``v <= w_max / |kappa|``). The
-    #: ramp ran from 0.45 to 0.9 m towards 0.08 before; on the docking bench the change took the median
-    #: approach from 2.59 to 2.50 s with the lateral error at contact 0.52 -> 0.49 mm, and a robot handed
-    #: over side-on no longer crawls into the axis. None: off.
+    #: out beta is 0: the speed is then bounded only by the top turn rate (``v <= w_max / |kappa|``), so a
+    #: robot handed over side-on does not crawl into the axis (docs/measurements, measurement 77). None: off.
     far_beta: float | None = 0.0
     near_distance_m: float = 0.35
     far_distance_m: float = 0.6
@@ -208,11 +206,10 @@ class GracefulDockParams:
     #: Speed allowed when the contacts touch; None disables the arrival speed cap.
     contact_speed_mps: float | None = 0.08
     #: The cap slows to the contact speed this far before the contacts' reach: the robot's and the dock's
-    #: poses are a few millimetres off along the axis, and braking at ``approach_decel_mps2`` a plate 3 mm
-    #: nearer than believed is met at 0.12 m/s. On the docking bench (2 mm pose noise) 5 mm keeps every
-    #: arrival at 0.08 m/s (0.106 at worst without it) for 0.05 s more (measurement 78). The cap counts on
-    #: the next tick coming a control period later; a late tick near the plate eats into the margin and
-    #: into the base's 1 m/s**2 of braking above the cap's.
+    #: poses are a few millimetres off along the axis, and a plate nearer than believed would be met above
+    #: the contact speed (docs/measurements, measurement 78). The cap counts on the next tick coming a
+    #: control period later; a late tick near the plate eats into the margin and into the base's 1 m/s**2
+    #: of braking above the cap's.
     arrival_margin_m: float = 0.005
     #: Deceleration the arrival speed cap plans with (keep it under the robot's braking limit, 2.5 m/s**2
     #: on the simulated base). With the control period and the margin, 1.5 slows the robot from 0.5 m/s

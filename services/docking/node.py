@@ -14,28 +14,30 @@ truth (dock_contact, ground_truth_pose) is never used.
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockRequest
-from services.docking.executive import (
+from services.docking.events import (
     CancelGoal,
     DockGoal,
     Drive,
     Effects,
     Event,
-    Executive,
     FleetReleased,
     FleetReserved,
     Goal,
     GoalEnded,
     GoalFeedback,
+    Log,
     PublishState,
     Release,
     Reserve,
     UndockGoal,
     WantDetections,
 )
+from services.docking.executive import Executive
 from services.docking.heard import CHARGING_STATUSES, Heard, NavHeard
 from services.docking.inputs import DockSightings, InputCache
 from services.docking.mission import TaskKind
@@ -99,7 +101,8 @@ class DockingService:
         #: The room, when the dock database is a world file: the robot's patrol, the walls for the traffic
         #: rule's passing places and the path lengths to the docks.
         room = _room_world(params.dock_database) if params.fleet or not params.patrol else None
-        self.executive = Executive(params, database, room, node.namespace, node.log)
+        self.executive = Executive(params, database, room, node.namespace)
+        self.executive.debug = node.log.isEnabledFor(logging.DEBUG)
         self.inputs = InputCache(params, self._say)
         self._last_now_s = float("-inf")
 
@@ -167,7 +170,9 @@ class DockingService:
 
     def _on_battery(self, msg: BatteryState) -> None:
         self.inputs.battery(msg, self.node.now())
-        self.executive.battery_reading(msg.percentage, msg.power_supply_status in CHARGING_STATUSES)
+        self._carry_out(
+            self.executive.battery_reading(msg.percentage, msg.power_supply_status in CHARGING_STATUSES)
+        )
 
     def _heard(self, now_s: float, *, tick: bool = False, clock_reset: bool = False) -> Heard:
         busy = not self.nav.is_task_complete()
@@ -266,6 +271,11 @@ class DockingService:
                     self._answer(goal, outcome, result)
                 case PublishState(name):
                     self.state_pub.publish(String(name))
+                case Log(level, fmt, args, key):
+                    if key is None:
+                        self._log.log(level, fmt, *args)
+                    else:
+                        self._say.log(level, key, fmt, *args)
 
     def _answer(self, goal: Goal, outcome: Outcome, result: Any) -> None:
         handle: GoalHandle = goal.handle  # type: ignore[assignment]

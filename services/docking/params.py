@@ -93,10 +93,9 @@ class Params(ServiceParams):
         0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)"
     )
     #: The simulated base answers a command within a physics step or two of its arrival, and the pose the
-    #: approach steers from is already brought up to its tick, so little is left to predict. On the shipped
-    #: worlds' 42 room starts 0.15 s put the robot about 2 cm ahead of where it was: it braked early, crept
-    #: the last centimetres, and steered into 2.4 / 4.1 mm of lateral error; 0.1, 0.05 and 0 gave
-    #: 0.9 / 2.7, 0.6 / 1.4 and 0.6 / 1.6 mm. 0.05 leaves room for the bus's latency at higher speed-ups.
+    #: approach steers from is already brought up to its tick, so little is left to predict: a longer dead
+    #: time makes the robot believe itself ahead of where it is, brake early and steer off the axis. 0.05 s
+    #: leaves room for the bus's latency at higher speed-ups (the sweep: docs/measurements, measurement 78).
     command_delay_s: float = Field(
         0.05,
         ge=0.0,

@@ -41,9 +41,8 @@ class GoalHeadingParams:
     lead_ins_m: tuple[float, ...] = (0.15, 0.4)
     #: A path that already arrives within this of the goal's heading is left alone: docking takes over
     #: from navigation before the staging pose up to 1.6 rad off the dock's heading, wherever its approach
-    #: can curve in from, so a curve planned for such an arrival only lengthens the way (the 42 shipped room
-    #: starts: 1.235x the bound curving from 1 rad, 1.224x from 1.6 rad; a short room start 5.0 -> 5.6 s
-    #: curving from 0.35 rad). Other goals turn at most that much on the spot at the goal.
+    #: can curve in from, so a curve planned for such an arrival only lengthens the way (docs/measurements,
+    #: measurement 77). Other goals turn at most that much on the spot at the goal.
     min_turn_rad: float = 1.6
     #: The curve's centre stays on cells at most this costly (128: about 0.38 m from the nearest obstacle
     #: with the default inflation), or as costly as the replaced stretch where that was costlier, never on

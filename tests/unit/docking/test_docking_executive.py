@@ -3,7 +3,6 @@ claim and the traffic rule, driven by snapshots and events and judged by the eff
 
 from __future__ import annotations
 
-import logging
 import math
 from pathlib import Path
 
@@ -11,23 +10,24 @@ import numpy as np
 
 from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockRequest
-from services.docking.executive import (
+from services.docking.events import (
     CancelGoal,
     DockGoal,
     Drive,
     Effects,
-    Executive,
     FleetReleased,
     FleetReserved,
     Goal,
     GoalEnded,
     GoalFeedback,
+    Log,
     PublishState,
     Release,
     Reserve,
     UndockGoal,
     WantDetections,
 )
+from services.docking.executive import Executive
 from services.docking.heard import Heard, NavHeard
 from services.docking.mission import TaskKind
 from services.docking.params import Params
@@ -42,13 +42,22 @@ from shared.world import load_world
 WORLDS = Path(__file__).resolve().parents[3] / "deploy" / "worlds"
 SEED_ROOM = WORLDS / "seed_room.yaml"
 CORRIDOR = WORLDS / "fleet" / "corridor_meeting.yaml"
-LOG = logging.getLogger("test-executive")
+
+
+def _acts(effects: Effects) -> Effects:
+    """What the node does, without the log lines."""
+    return [e for e in effects if not isinstance(e, Log)]
+
+
+def _said(effects: Effects) -> list[str]:
+    """The log lines among ``effects``."""
+    return [e.text() for e in effects if isinstance(e, Log)]
 
 
 def _executive(world: Path = SEED_ROOM, namespace: str = "", **params: object) -> Executive:
     p = Params(dock_database=str(world), **params)
     room = load_world(str(world)) if p.fleet or not p.patrol else None
-    return Executive(p, load_dock_db(p.dock_database), room, namespace, LOG)
+    return Executive(p, load_dock_db(p.dock_database), room, namespace)
 
 
 SOMEWHERE = Pose2D(1.0, 1.0, 0.0)
@@ -96,7 +105,8 @@ def test_a_goal_that_replaces_another_cancels_it_and_a_foreign_cancel_is_answere
     assert ex.handle(DockGoal(dock_goal, DockRequest()), _heard(0.0)) == []
     undock_goal = Goal(object(), TaskKind.UNDOCK)
     effects = ex.handle(UndockGoal(undock_goal, 30.0), _heard(0.1))
-    assert effects == [GoalEnded(dock_goal, Outcome.CANCELED, DockRobotResult(success=False))]
+    assert _acts(effects) == [GoalEnded(dock_goal, Outcome.CANCELED, DockRobotResult(success=False))]
+    assert _said(effects) == ["DockingRun replaced by UndockingRun"]
     assert ex.task is not None and ex.task.state_name() == "UNDOCKING" and ex.goal is undock_goal
     stray = Goal(object(), TaskKind.DOCK)
     assert ex.handle(CancelGoal(stray), _heard(0.2)) == [
@@ -108,7 +118,9 @@ def test_a_cancelled_goal_ends_canceled_once_the_planner_lets_go_and_the_robot_i
     ex = _executive()
     goal = Goal(object(), TaskKind.UNDOCK)
     ex.handle(UndockGoal(goal, 30.0), _heard(0.0))
-    assert ex.handle(CancelGoal(goal), _heard(0.01)) == [], "the running task is asked to stop"
+    effects = ex.handle(CancelGoal(goal), _heard(0.01))
+    assert _acts(effects) == [], "the running task is asked to stop"
+    assert _said(effects) == ["UndockingRun: cancel requested"]
     effects = ex.step(_heard(0.05))
     assert _of(effects, GoalEnded) == [GoalEnded(goal, Outcome.CANCELED, UndockRobotResult(success=False))]
     assert ex.task is None and _states(effects) == ["HOLDING"], "an action took over: nothing automatic"

@@ -130,7 +130,7 @@ def test_a_groups_members_are_read_once_from_its_container_command(
 ) -> None:
     run = read_command(command)
     assert isinstance(run, GroupRun) and run.services == members
-    assert run_words(run)[2:] == command[2:]  # the words again, as they were
+    assert run_words(run) == command  # the words again, as they were (the zendock named runs them)
 
 
 @pytest.mark.parametrize(
@@ -140,6 +140,10 @@ def test_a_groups_members_are_read_once_from_its_container_command(
         (
             [".venv-ros2/bin/python", "-m", "services.ros2_dds"],
             ModuleRun("ros2_dds", (), ".venv-ros2/bin/python"),
+        ),
+        (
+            ["python", "-u", "-X", "importtime", "-m", "services.pose"],
+            ModuleRun("pose", (), "python", ("-u", "-X", "importtime")),
         ),
         (["zendock", "router"], ProgramRun(("zendock", "router"))),
         (["python", "-m", "services"], ProgramRun(("python", "-m", "services"))),
@@ -152,6 +156,7 @@ def test_a_groups_members_are_read_once_from_its_container_command(
 )
 def test_a_command_is_read_into_its_run(command: list[str], run: object) -> None:
     assert read_command(command) == run
+    assert run_words(read_command(command)) == command
 
 
 def test_the_launch_plan_of_a_composed_stack_names_the_groups_services(tmp_path: Path) -> None:

@@ -48,6 +48,11 @@ def test_a_malformed_set_names_the_form(text: str) -> None:
         parse_set(text)
 
 
+def test_a_set_to_the_value_the_stack_already_gives_changes_nothing(tmp_path: Path) -> None:
+    stack = load_stack(STACK, env={}, project_dir=tmp_path)
+    assert with_params(stack, "docking", {"controller": "graceful"}) == stack
+
+
 def test_a_set_for_a_service_the_stack_does_not_run_is_one_clear_error(tmp_path: Path) -> None:
     stack = load_stack(STACK, env={}, project_dir=tmp_path)
     with pytest.raises(ConfigError, match="runs no zendock service 'dockin'"):
