@@ -72,35 +72,9 @@ class Rigid3:
         )
 
 
-class StaticTransforms:
-    """The tree ``tf_static`` describes, child -> (parent, transform), for chaining a sensor's frame to
-    base_link (``lookup('base_link', 'camera_optical_frame')``)."""
-
-    def __init__(self) -> None:
-        self._edges: dict[str, tuple[str, Rigid3]] = {}
-
-    def set(self, parent: str, child: str, transform: Rigid3) -> None:
-        self._edges[child.lstrip("/")] = (parent.lstrip("/"), transform)
-
-    def lookup(self, target: str, source: str, max_depth: int = 16) -> Rigid3 | None:
-        """``target <- source``, or None when ``source`` does not hang below ``target``."""
-        target, frame = target.lstrip("/"), source.lstrip("/")
-        chain = Rigid3.identity()
-        for _ in range(max_depth):
-            if frame == target:
-                return chain
-            edge = self._edges.get(frame)
-            if edge is None:
-                return None
-            frame, transform = edge
-            chain = transform.compose(chain)
-        return None
-
-
 __all__ = [
     "OPTICAL_FROM_LINK_QUATERNION",
     "Rigid3",
-    "StaticTransforms",
     "matrix_from_quaternion",
     "quaternion_from_pitch",
 ]

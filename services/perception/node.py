@@ -41,8 +41,9 @@ from shared.messages import (
 from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, Subscription
 from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
-from shared.rigid3 import Rigid3, StaticTransforms
+from shared.rigid3 import Rigid3
 from shared.runtime import ServiceSpec
+from shared.tf_buffer import TfBuffer, rigid3_between
 from shared.world import ROBOT_FRONT_M, DockMarker, dock_markers, load_world
 
 #: Images: the newest only (a late frame is worth less than the next one).
@@ -83,7 +84,8 @@ class PerceptionService:
         cv2.setNumThreads(params.opencv_threads or -1)  # -1: OpenCV's default
         self.finder = MarkerFinder(world.aruco_dictionary)
         self.search = SearchRegions()
-        self.frames = StaticTransforms()
+        #: The camera's mount: the static links ``tf_static`` gives (the same buffer the pose service keeps).
+        self.frames = TfBuffer()
         self._camera_matrix: np.ndarray | None = None
         self._distortion = np.zeros(5)
         self.counts: Counter[str] = Counter()
@@ -146,20 +148,8 @@ class PerceptionService:
         self._distortion = np.asarray(msg.d, dtype=np.float64) if msg.d.size else np.zeros(5)
 
     def _on_tf_static(self, msg: TFMessage) -> None:
-        for item in msg.transforms:
-            t, q = item.transform.translation, item.transform.rotation
-            try:
-                transform = Rigid3.from_parts((t.x, t.y, t.z), (q.x, q.y, q.z, q.w))
-            except ValueError as exc:
-                self._refuse(
-                    "tf",
-                    "ignored a tf_static entry %s -> %s: %s",
-                    item.header.frame_id,
-                    item.child_frame_id,
-                    exc,
-                )
-                continue
-            self.frames.set(item.header.frame_id, item.child_frame_id, transform)
+        for link, why in self.frames.add_message(msg, static=True).refused:
+            self._refuse("tf", "ignored a tf_static entry %s: %s", link, why)
 
     def _on_image(self, msg: Image) -> None:
         self.counts["frames"] += 1
@@ -171,7 +161,7 @@ class PerceptionService:
         if self._camera_matrix is None:
             self._refuse("no-camera-info", "no camera_info yet: images wait for the calibration")
             return
-        base_from_camera = self.frames.lookup(topics.BASE_FRAME, msg.header.frame_id)
+        base_from_camera = rigid3_between(self.frames, topics.BASE_FRAME, msg.header.frame_id)
         if base_from_camera is None:
             self._refuse(
                 "no-mount", "no tf_static chain from %s to %s yet", msg.header.frame_id, topics.BASE_FRAME

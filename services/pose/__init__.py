@@ -2,5 +2,5 @@
 
 It looks up ``map -> target_frame`` (default ``base_link``) at the latest common time and publishes
 ``map_to_base_link_pose2d`` (std_msgs/Float64MultiArray ``[x, y, yaw]``). The buffer
-(:mod:`services.pose.tf_buffer`) is pure; :mod:`services.pose.node` wires it to the bus.
+(:mod:`shared.tf_buffer`) is pure; :mod:`services.pose.node` wires it to the bus.
 """

@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field, field_validator
 
-from services.pose.tf_buffer import RigidTransform, StampedTransform, TfBuffer, TransformError
 from shared import topics
 from shared.frames import CLOCK_RESET_S, clock_went_back
 from shared.messages import (
@@ -21,12 +20,12 @@ from shared.messages import (
     MultiArrayDimension,
     MultiArrayLayout,
     TFMessage,
-    TransformStamped,
 )
 from shared.node import RELIABLE, Node, QoS
 from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import ServiceSpec
+from shared.tf_buffer import StampedTransform, TfBuffer, TransformError
 
 #: tf is a high-rate stream: keep a deep queue so a busy moment loses no history.
 TF_QOS = QoS(reliable=False, depth=100)
@@ -66,11 +65,6 @@ def pose2d_message(transform: StampedTransform) -> Float64MultiArray:
     )
 
 
-def rigid_transform(msg: TransformStamped) -> RigidTransform:
-    t, q = msg.transform.translation, msg.transform.rotation
-    return RigidTransform((t.x, t.y, t.z), (q.x, q.y, q.z, q.w))
-
-
 class PoseService:
     """The tf listener and 2-D pose publisher on a node; see the module docstring."""
 
@@ -107,27 +101,13 @@ class PoseService:
         self._insert(msg, static=True)
 
     def _insert(self, msg: TFMessage, static: bool) -> None:
-        for item in msg.transforms:
-            try:
-                reset = self._buffer.set_transform(
-                    item.header.frame_id,
-                    item.child_frame_id,
-                    item.header.stamp.to_sec(),
-                    rigid_transform(item),
-                    static=static,
-                )
-            except ValueError as exc:
-                self._say.warning(
-                    f"bad:{item.header.frame_id}->{item.child_frame_id}", "ignored a transform: %s", exc
-                )
-                continue
-            if reset:
-                self._log.warning(
-                    "transform %s -> %s went back in time to %.3f s (a reset?): cleared the tf history",
-                    item.header.frame_id,
-                    item.child_frame_id,
-                    item.header.stamp.to_sec(),
-                )
+        intake = self._buffer.add_message(msg, static=static)
+        for link, why in intake.refused:
+            self._say.warning(f"bad:{link}", "ignored a transform: %s", why)
+        for link, stamp_s in intake.went_back:
+            self._log.warning(
+                "transform %s went back in time to %.3f s (a reset?): cleared the tf history", link, stamp_s
+            )
 
     def _on_timer(self) -> None:
         now_s = self._node.now()

@@ -12,8 +12,9 @@ from services.perception.markers import MarkerFinder, choose_fit, locate_dock
 from services.simulator.camera import CameraParams, CameraRenderer, build_scene
 from services.simulator.camera_frames import camera_mount_transforms
 from shared.geometry import Pose2D
-from shared.messages import Time
-from shared.rigid3 import Rigid3, StaticTransforms
+from shared.messages import TFMessage, Time
+from shared.rigid3 import Rigid3
+from shared.tf_buffer import TfBuffer, rigid3_between
 from shared.world import World, dock_markers, parse_world
 
 
@@ -30,13 +31,12 @@ def _world(**extra: Any) -> World:
 
 
 def _base_from_optical(params: CameraParams) -> Rigid3:
-    frames = StaticTransforms()
-    for t in camera_mount_transforms(params, Time()):
-        tr, q = t.transform.translation, t.transform.rotation
-        frames.set(
-            t.header.frame_id, t.child_frame_id, Rigid3.from_parts((tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w))
-        )
-    found = frames.lookup("base_link", "camera_optical_frame")
+    frames = TfBuffer()
+    intake = frames.add_message(
+        TFMessage(transforms=list(camera_mount_transforms(params, Time()))), static=True
+    )
+    assert intake.refused == []
+    found = rigid3_between(frames, "base_link", "camera_optical_frame")
     assert found is not None
     return found
 

@@ -18,6 +18,7 @@ PURE_MODULES = [
     "shared.ros2.types",
     "services.ros2_bridge.demand",
     "shared.interface_types",
+    "shared.tf_buffer",
     "shared.interfaces.docking",
     "shared.interfaces.navigation",
     "shared.fleet_answer",

@@ -7,7 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from shared.rigid3 import OPTICAL_FROM_LINK_QUATERNION, Rigid3, StaticTransforms, quaternion_from_pitch
+from shared.messages import Header, Quaternion, TFMessage, Transform, TransformStamped, Vector3
+from shared.rigid3 import OPTICAL_FROM_LINK_QUATERNION, Rigid3, quaternion_from_pitch
+from shared.tf_buffer import TfBuffer, rigid3_between
 
 
 def test_the_optical_frame_looks_along_the_links_x_with_x_right_and_y_down() -> None:
@@ -23,18 +25,29 @@ def test_a_positive_pitch_looks_down() -> None:
     assert ahead[2] == pytest.approx(-math.sin(math.radians(10)))
 
 
-def test_chains_compose_in_order_and_missing_links_give_none() -> None:
-    frames = StaticTransforms()
-    frames.set("base_link", "camera_link", Rigid3.from_parts((0.15, 0.0, 0.10), (0.0, 0.0, 0.0, 1.0)))
-    frames.set(
-        "camera_link",
-        "camera_optical_frame",
-        Rigid3.from_parts((0.0, 0.0, 0.0), OPTICAL_FROM_LINK_QUATERNION),
+def test_a_camera_mount_chains_through_the_tf_buffer_and_a_missing_one_is_none() -> None:
+    frames = TfBuffer()
+
+    def link(
+        parent: str, child: str, xyz: tuple[float, float, float], q: tuple[float, ...]
+    ) -> TransformStamped:
+        return TransformStamped(
+            header=Header(frame_id=parent),
+            child_frame_id=child,
+            transform=Transform(translation=Vector3(*xyz), rotation=Quaternion(*q)),
+        )
+
+    msg = TFMessage(
+        transforms=[
+            link("base_link", "camera_link", (0.15, 0.0, 0.10), (0.0, 0.0, 0.0, 1.0)),
+            link("camera_link", "camera_optical_frame", (0.0, 0.0, 0.0), OPTICAL_FROM_LINK_QUATERNION),
+        ]
     )
-    chain = frames.lookup("base_link", "camera_optical_frame")
+    assert frames.add_message(msg, static=True).refused == []
+    chain = rigid3_between(frames, "base_link", "camera_optical_frame")
     assert chain is not None
     assert np.allclose(chain.apply(np.array([0.0, 0.0, 2.0])), [2.15, 0.0, 0.10])
-    assert frames.lookup("base_link", "lidar_link") is None
+    assert rigid3_between(frames, "base_link", "lidar_link") is None
 
 
 def test_a_non_unit_quaternion_is_refused() -> None:

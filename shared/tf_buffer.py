@@ -1,4 +1,8 @@
-"""A tf buffer: the frame tree over time, with lookups between any two frames.
+"""A tf buffer: the frame tree over time, with lookups between any two frames (pure: no bus).
+
+Every service that reads ``tf`` or ``tf_static`` keeps one: the pose service (static and moving links, to
+publish the robot's 2-D pose) and perception (the camera's 3-D mount on base_link), each feeding it whole
+messages through :meth:`TfBuffer.add_message`, so a transform is read and refused the same way everywhere.
 
 Semantics follow tf2's ``BufferCore`` (the ROS 2 ``tf2`` package): each frame has one parent; a
 dynamic link keeps a time-ordered history (``cache_time_s`` deep) and is interpolated between
@@ -19,6 +23,8 @@ from dataclasses import dataclass, field
 
 from shared.frames import frame_name
 from shared.geometry import Pose2D, quaternion_from_yaw, quaternion_multiply, wrap_angle, yaw_from_quaternion
+from shared.messages import TFMessage
+from shared.rigid3 import Rigid3
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -128,6 +134,15 @@ class RigidTransform:
     def to_pose2d(self) -> Pose2D:
         """The projection onto the plane: ``(x, y, yaw)``."""
         return Pose2D(self.translation[0], self.translation[1], self.yaw_rad())
+
+
+@dataclass
+class TfIntake:
+    """What :meth:`TfBuffer.add_message` did not take as it came: ``refused`` (link, why) and
+    ``went_back`` (link, stamp) where the clock went back and the moving links were forgotten."""
+
+    refused: list[tuple[str, str]] = field(default_factory=list)
+    went_back: list[tuple[str, float]] = field(default_factory=list)
 
 
 @dataclass(frozen=True, slots=True)
@@ -253,6 +268,29 @@ class TfBuffer:
         link.insert(stamp_s, transform, self.cache_time_s)
         return reset
 
+    def add_message(self, msg: TFMessage, *, static: bool) -> TfIntake:
+        """Every transform of a ``tf`` (or, ``static``, ``tf_static``) message; what was refused and why, and
+        the links whose stamps went back in time (the dynamic history was cleared)."""
+        intake = TfIntake()
+        for item in msg.transforms:
+            link = f"{item.header.frame_id} -> {item.child_frame_id}"
+            t, q = item.transform.translation, item.transform.rotation
+            stamp_s = item.header.stamp.to_sec()
+            try:
+                reset = self.set_transform(
+                    item.header.frame_id,
+                    item.child_frame_id,
+                    stamp_s,
+                    RigidTransform((t.x, t.y, t.z), (q.x, q.y, q.z, q.w)),
+                    static=static,
+                )
+            except ValueError as exc:
+                intake.refused.append((link, str(exc)))
+                continue
+            if reset:
+                intake.went_back.append((link, stamp_s))
+        return intake
+
     def clear_dynamic(self) -> None:
         """Forget every dynamic link (static links stay)."""
         self._links = {child: link for child, link in self._links.items() if link.is_static}
@@ -346,3 +384,13 @@ class TfBuffer:
         for child in children:
             result = self._links[child].at(time_s, child).compose(result)
         return result
+
+
+def rigid3_between(frames: TfBuffer, target_frame: str, source_frame: str) -> Rigid3 | None:
+    """``target <- source`` at the latest common time as a :class:`~shared.rigid3.Rigid3` (numpy, for
+    projections: a camera's mount on base_link), or None while the buffer cannot tell it."""
+    try:
+        found = frames.lookup(target_frame, source_frame).transform
+    except (TransformError, ValueError):
+        return None
+    return Rigid3.from_parts(found.translation, found.rotation)

@@ -8,7 +8,8 @@ import random
 import numpy as np
 import pytest
 
-from services.pose.tf_buffer import (
+from shared.geometry import Pose2D
+from shared.tf_buffer import (
     ConnectivityError,
     ExtrapolationError,
     FrameNotFoundError,
@@ -17,7 +18,6 @@ from services.pose.tf_buffer import (
     TransformError,
     slerp,
 )
-from shared.geometry import Pose2D
 
 
 def planar(x: float, y: float, yaw: float) -> RigidTransform:
