@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from services.simulator.camera import CameraParams, CameraRenderer, Motion, build_scene
-from services.simulator.physics import SimParams, SimWorld, step_together
+from services.simulator.physics import Robot, SimParams, step_together
 from shared.geometry import Pose2D
 from shared.world import World, load_world
 
@@ -106,12 +106,12 @@ def bench_simulation(
     return result
 
 
-def _robots(world: World, params: SimParams | None) -> list[SimWorld]:
+def _robots(world: World, params: SimParams | None) -> list[Robot]:
     """The world's fleet in one room, or its one robot."""
     if not world.robots:
-        return [SimWorld(world, params=params)]
+        return [Robot(world, params=params)]
     first, *rest = world.robots
-    room = SimWorld(world, params=params, start=Pose2D.from_seq(first.start), name=first.name)
+    room = Robot(world, params=params, start=Pose2D.from_seq(first.start), name=first.name)
     return [room] + [room.join(r.name, Pose2D.from_seq(r.start), params) for r in rest]
 
 

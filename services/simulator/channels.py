@@ -24,7 +24,7 @@ import numpy as np
 from services.simulator.camera import CameraRenderer, Motion
 from services.simulator.camera_frames import camera_info, camera_mount_transforms
 from services.simulator.params import Params
-from services.simulator.physics import SimWorld
+from services.simulator.physics import Robot
 from shared import topics
 from shared.controllers import DETECTORS
 from shared.geometry import Pose2D
@@ -59,7 +59,7 @@ class SimRobot:
     """One simulated robot: its physics, its publishers (by topic) and what it was last told."""
 
     namespace: str
-    sim: SimWorld
+    sim: Robot
     prefix: str
     pubs: dict[str, Publisher[Any]] = field(default_factory=dict)
     cmd_v: float = 0.0

@@ -28,7 +28,7 @@ from services.simulator.camera import CameraRenderer, ReadNoise, build_scene
 from services.simulator.channels import Channels, SimRobot, channel_table, contact_message, tf_message
 from services.simulator.pacing import Driver, DriverPacer, StepPacer, pacing_stats, rate_report
 from services.simulator.params import Params
-from services.simulator.physics import PoseInCollisionError, SimWorld, step_together
+from services.simulator.physics import PoseInCollisionError, Robot, step_together
 from shared import topics
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
@@ -67,14 +67,14 @@ class SimulatorService:
         noise = ReadNoise(np.random.default_rng([params.seed, 7])) if scene is not None else None
         #: Whether the robots share one room (a fleet world) and so step together.
         self.shared_room = bool(self.world.robots)
-        room: SimWorld | None = None
+        room: Robot | None = None
         for i, (ns, start) in enumerate(self._starts(params).items()):
             sim_params = params.sim_params(robot_index=i)
             try:
                 if not self.shared_room:
-                    sim = SimWorld(self.world, params.drive, sim_params)
+                    sim = Robot(self.world, params.drive, sim_params)
                 elif room is None:
-                    sim = room = SimWorld(self.world, params.drive, sim_params, start=start, name=ns)
+                    sim = room = Robot(self.world, params.drive, sim_params, start=start, name=ns)
                 else:
                     assert start is not None, (
                         "a shared room's robots are the world's fleet, each with its start"

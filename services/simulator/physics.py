@@ -1,6 +1,11 @@
-"""The simulated room: a pymunk space with the world's walls, glass, boxes and docks, and the robot in it.
+"""The simulated room and the robots in it: a :class:`Room` (a pymunk space with the world's walls, glass,
+boxes and docks) and each :class:`Robot` (its body, drive, odometry, sensors and collision events).
 
-Several robots can share one room (a fleet, :meth:`SimWorld.join`): one space, so they collide with
+The room owns the space and hands each contact to the robot whose body made it (:meth:`Robot.touched`,
+:meth:`Robot.touched_robot`, :meth:`Robot.parted`); a robot asks its room what its body overlaps and what
+its sensors see (:meth:`Room.overlapping`, :meth:`Room.with_others`). Neither reaches into the other.
+
+Several robots can share one room (a fleet, :meth:`Robot.join`): one space, so they collide with
 each other, and each one's lidar, sonar, camera detections and infrared see the others' bodies. They
 are stepped together (:func:`step_together`); a robot alone in its room steps itself.
 
@@ -140,12 +145,12 @@ class _RobotEdges:
         self._edges = None
         self._sets.clear()
 
-    def with_others(self, robot: SimWorld, segments: SegmentSet) -> SegmentSet:
+    def with_others(self, robot: Robot, segments: SegmentSet) -> SegmentSet:
         """``segments`` plus the edges of every robot in ``robot``'s room but ``robot`` (in room order)."""
         key = (id(robot), id(segments))
         found = self._sets.get(key)
         if found is None:
-            members = robot.members
+            members = robot.room.members
             if self._edges is None:
                 corners = np.stack([m.footprint() for m in members])  # (N, 4, 2), counter-clockwise
                 self._edges = corners.reshape(-1, 2), (np.roll(corners, -1, axis=1) - corners).reshape(-1, 2)
@@ -157,93 +162,43 @@ class _RobotEdges:
         return found
 
 
-class SimWorld:
-    """One robot in one room, stepped at a fixed rate. Public methods are the simulator service's API.
+class Room:
+    """One world's room in a physics space: its walls, glass, boxes and docks, and the robots in it.
 
-    Not thread-safe: step it and read its sensors from one thread.
+    Contacts are handed to the robot whose body made them; see the module docstring.
     """
 
-    def __init__(
-        self,
-        world: World,
-        drive: DiffDriveParams | None = None,
-        params: SimParams | None = None,
-        *,
-        start: Pose2D | None = None,
-        name: str = "",
-        room: SimWorld | None = None,
-    ):
-        """A robot at ``start`` (default: the world's ``robot.start``) in a room of its own, or in
-        ``room``'s (another robot's) as ``name``: use :meth:`join` for that."""
+    def __init__(self, world: World, friction: float = 0.3) -> None:
         self.world = world
-        self.name = name
-        self.params = params or SimParams()
-        self.drive = DiffDrive(drive)
-        # Separate streams: how often sensors are read does not change the odometry's noise.
-        sensor_seed, odom_seed = np.random.SeedSequence(self.params.seed).spawn(2)
-        self.rng = np.random.default_rng(sensor_seed)
-        self.odometry = Odometry(self.drive.params, self.params.odom_noise, np.random.default_rng(odom_seed))
-        self.time_s = 0.0
-        self.steps = 0
-        self.collision_counts = dict.fromkeys(COLLISION_KINDS, 0)
-        self.twist = Twist2D()  # measured body twist of the last step
-        self._events: list[CollisionEvent] = []
-        self._last_separation_s: dict[pymunk.Shape, float] = {}
-        if room is None:
-            self._obstacles: dict[pymunk.Shape, _Obstacle] = {}
-            #: (label, outline) of every obstacle, for placement checks: segments as 2 points, boxes as 4.
-            self._outlines: list[tuple[str, np.ndarray]] = []
-            self.opaque = SegmentSet(world.opaque_segments())
-            self.glass = SegmentSet(world.glass)
-            self.sonar_visible = SegmentSet.concat(self.opaque, self.glass)
-            self.space = pymunk.Space()
-            self.space.gravity = (0.0, 0.0)
-            # Pymunk's defaults suit pixels; the room is in metres.
-            self.space.collision_slop = 0.0005
-            self.space.iterations = 10
-            #: Every robot in this room, and whose each robot shape is (a teleport makes a new shape).
-            self.members: list[SimWorld] = []
-            self._by_shape: dict[pymunk.Shape, SimWorld] = {}
-            self._robot_edges = _RobotEdges()
-            self._add_obstacles()
-            self.space.on_collision(
-                ROBOT_COLLISION_TYPE,
-                OBSTACLE_COLLISION_TYPE,
-                begin=self._room_begin,
-                separate=self._room_separate,
-            )
-            self.space.on_collision(
-                ROBOT_COLLISION_TYPE,
-                ROBOT_COLLISION_TYPE,
-                begin=self._room_robots_begin,
-                separate=self._room_robots_separate,
-            )
-        else:
-            if room.world is not world:
-                raise ValueError("robots share a room only in the same world")
-            self._obstacles, self._outlines = room._obstacles, room._outlines
-            self.opaque, self.glass, self.sonar_visible = room.opaque, room.glass, room.sonar_visible
-            self.space, self.members, self._by_shape = room.space, room.members, room._by_shape
-            self._robot_edges = room._robot_edges
-            if any(m.name == name for m in self.members):
-                raise ValueError(f"a robot named {name!r} is already in this room")
-        pose = start if start is not None else Pose2D.from_seq(world.robot.start)
-        self._check_placement(pose, f"{name} start" if name else "robot.start")
-        self.body, self.shape = self._new_robot(pose)
-        self.members.append(self)
-        self._robot_edges.moved()
-
-    def join(
-        self, name: str, start: Pose2D, params: SimParams | None = None, drive: DiffDriveParams | None = None
-    ) -> SimWorld:
-        """Another robot, ``name``, in this robot's room at ``start``: the same space and obstacles."""
-        return SimWorld(
-            self.world, drive or self.drive.params, params or self.params, start=start, name=name, room=self
+        self.friction = friction
+        self._obstacles: dict[pymunk.Shape, _Obstacle] = {}
+        #: (label, outline) of every obstacle, for placement checks: segments as 2 points, boxes as 4.
+        self._outlines: list[tuple[str, np.ndarray]] = []
+        self.opaque = SegmentSet(world.opaque_segments())
+        self.glass = SegmentSet(world.glass)
+        self.sonar_visible = SegmentSet.concat(self.opaque, self.glass)
+        self.space = pymunk.Space()
+        self.space.gravity = (0.0, 0.0)
+        # Pymunk's defaults suit pixels; the room is in metres.
+        self.space.collision_slop = 0.0005
+        self.space.iterations = 10
+        #: Every robot in this room, and whose each robot shape is (a teleport makes a new shape).
+        self.members: list[Robot] = []
+        self._by_shape: dict[pymunk.Shape, Robot] = {}
+        self._robot_edges = _RobotEdges()
+        self._add_obstacles()
+        self.space.on_collision(
+            ROBOT_COLLISION_TYPE,
+            OBSTACLE_COLLISION_TYPE,
+            begin=self._obstacle_begin,
+            separate=self._obstacle_separate,
         )
-
-    @property
-    def shares_room(self) -> bool:
-        return len(self.members) > 1
+        self.space.on_collision(
+            ROBOT_COLLISION_TYPE,
+            ROBOT_COLLISION_TYPE,
+            begin=self._robots_begin,
+            separate=self._robots_separate,
+        )
 
     # ----------------------------------------------------------------------------------------- building
     def _add_static(
@@ -252,7 +207,7 @@ class SimWorld:
         label = obstacle.kind if obstacle.dock is None else f"dock {obstacle.dock.id!r}"
         self._outlines.append((label, np.asarray(outline, dtype=float)))
         shape.collision_type = OBSTACLE_COLLISION_TYPE
-        shape.friction = self.params.friction
+        shape.friction = self.friction
         shape.elasticity = 0.0
         self.space.add(shape)
         self._obstacles[shape] = obstacle
@@ -269,8 +224,164 @@ class SimWorld:
             corners = DOCK_GEOMETRY.body_box(dock).corners()
             self._add_static(pymunk.Poly(static, corners), _Obstacle("dock", dock), corners)
 
+    # ----------------------------------------------------------------------------------------- robots
+    def admit(self, robot: Robot) -> None:
+        """``robot`` joins the room (its body is placed with :meth:`place`)."""
+        if any(m.name == robot.name for m in self.members):
+            raise ValueError(f"a robot named {robot.name!r} is already in this room")
+        self.members.append(robot)
+
+    def place(self, robot: Robot, body: pymunk.Body, shape: pymunk.Shape) -> None:
+        """Put ``robot``'s (new) body in the space."""
+        self.space.add(body, shape)
+        self._by_shape[shape] = robot
+        self._robot_edges.moved()
+
+    def remove(self, body: pymunk.Body, shape: pymunk.Shape) -> None:
+        """Take a robot's (old) body out of the space."""
+        self.space.remove(body, shape)
+        del self._by_shape[shape]
+        self._robot_edges.moved()
+
+    def moved(self) -> None:
+        """A robot moved: what its sensors see of it is stale."""
+        self._robot_edges.moved()
+
+    def others(self, robot: Robot) -> list[Robot]:
+        return [m for m in self.members if m is not robot]
+
+    def obstacle(self, shape: pymunk.Shape) -> _Obstacle | None:
+        """The obstacle ``shape`` is, or None (a robot)."""
+        return self._obstacles.get(shape)
+
+    def overlapping(self, footprint: np.ndarray, robot: Robot) -> list[str]:
+        """What ``footprint`` overlaps: obstacles, and the robots in the room other than ``robot``."""
+        found = [label for label, outline in self._outlines if not separated(footprint, outline)]
+        for other in self.others(robot):
+            if not separated(footprint, other.footprint()):
+                found.append(f"robot {other.name!r}")
+        return found
+
+    def with_others(self, robot: Robot, segments: SegmentSet) -> SegmentSet:
+        """``segments`` plus the edges of every other robot in the room (what ``robot``'s sensors see)."""
+        if len(self.members) < 2:
+            return segments
+        return self._robot_edges.with_others(robot, segments)
+
+    # ----------------------------------------------------------------------------------------- contacts
+    def _robot_of(self, arbiter: pymunk.Arbiter) -> Robot | None:
+        first, second = arbiter.shapes
+        return self._by_shape.get(first) or self._by_shape.get(second)
+
+    def _obstacle_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        robot = self._robot_of(arbiter)
+        if robot is not None:
+            robot.touched(arbiter)
+
+    def _obstacle_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        robot = self._robot_of(arbiter)
+        if robot is not None:
+            robot.parted(arbiter)
+
+    def _robots_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        """Two robots touched: each records a collision naming the other, at the same point."""
+        first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
+        if first is None or second is None:
+            return
+        (ax, ay), (bx, by) = first.body.position, second.body.position
+        cx, cy = _contact_centre(arbiter.contact_point_set.points, (0.5 * (ax + bx), 0.5 * (ay + by)))
+        for robot, other in ((first, second), (second, first)):
+            speed = float(
+                abs(
+                    robot.body.velocity_at_world_point((cx, cy))
+                    - other.body.velocity_at_world_point((cx, cy))
+                )
+            )
+            robot.touched_robot(other, float(cx), float(cy), speed)
+
+    def _robots_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
+        if first is not None and second is not None:
+            first.parted_from(second.shape)
+            second.parted_from(first.shape)
+
+
+class Robot:
+    """One robot in a :class:`Room`, stepped at a fixed rate. Public methods are the simulator service's API.
+
+    Not thread-safe: step it and read its sensors from one thread.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        drive: DiffDriveParams | None = None,
+        params: SimParams | None = None,
+        *,
+        start: Pose2D | None = None,
+        name: str = "",
+        room: Room | None = None,
+    ):
+        """A robot at ``start`` (default: the world's ``robot.start``) in a room of its own, or in ``room``
+        as ``name``: use :meth:`join` for that."""
+        self.world = world
+        self.name = name
+        self.params = params or SimParams()
+        self.drive = DiffDrive(drive)
+        # Separate streams: how often sensors are read does not change the odometry's noise.
+        sensor_seed, odom_seed = np.random.SeedSequence(self.params.seed).spawn(2)
+        self.rng = np.random.default_rng(sensor_seed)
+        self.odometry = Odometry(self.drive.params, self.params.odom_noise, np.random.default_rng(odom_seed))
+        self.time_s = 0.0
+        self.steps = 0
+        self.collision_counts = dict.fromkeys(COLLISION_KINDS, 0)
+        self.twist = Twist2D()  # measured body twist of the last step
+        self._events: list[CollisionEvent] = []
+        self._last_separation_s: dict[pymunk.Shape, float] = {}
+        if room is not None and room.world is not world:
+            raise ValueError("robots share a room only in the same world")
+        self.room = room if room is not None else Room(world, self.params.friction)
+        self.room.admit(self)
+        pose = start if start is not None else Pose2D.from_seq(world.robot.start)
+        try:
+            self._check_placement(pose, f"{name} start" if name else "robot.start")
+        except PoseInCollisionError:
+            self.room.members.remove(self)
+            raise
+        self.body, self.shape = self._new_robot(pose)
+
+    def join(
+        self, name: str, start: Pose2D, params: SimParams | None = None, drive: DiffDriveParams | None = None
+    ) -> Robot:
+        """Another robot, ``name``, in this robot's room at ``start``: the same space and obstacles."""
+        return Robot(
+            self.world,
+            drive or self.drive.params,
+            params or self.params,
+            start=start,
+            name=name,
+            room=self.room,
+        )
+
+    @property
+    def members(self) -> list[Robot]:
+        """Every robot in this robot's room (itself included), in the order they came."""
+        return self.room.members
+
+    @property
+    def space(self) -> pymunk.Space:
+        return self.room.space
+
+    @property
+    def opaque(self) -> SegmentSet:
+        return self.room.opaque
+
+    @property
+    def shares_room(self) -> bool:
+        return len(self.room.members) > 1
+
     def _new_robot(self, pose: Pose2D) -> tuple[pymunk.Body, pymunk.Poly]:
-        """The robot's body at ``pose``, added to the space, standing still."""
+        """The robot's body at ``pose``, added to the room, standing still."""
         p = self.drive.params
         size = (p.footprint_length_m, p.footprint_width_m)
         body = pymunk.Body(p.mass_kg, pymunk.moment_for_box(p.mass_kg, size))
@@ -281,8 +392,7 @@ class SimWorld:
         shape.collision_type = ROBOT_COLLISION_TYPE
         shape.friction = self.params.friction
         shape.elasticity = 0.0
-        self.space.add(body, shape)
-        self._by_shape[shape] = self
+        self.room.place(self, body, shape)
         return body, shape
 
     def _drive_velocity(self, body: pymunk.Body, gravity: object, damping: float, dt: float) -> None:
@@ -324,29 +434,20 @@ class SimWorld:
         (obstacles, and the other robots in the room)."""
         p, inset = self.drive.params, 2.0 * self.params.placement_tolerance_m
         footprint = footprint_corners(pose, p.footprint_length_m - inset, p.footprint_width_m - inset)
-        found = [label for label, outline in self._outlines if not separated(footprint, outline)]
-        for other in self._others():
-            if not separated(footprint, other.footprint()):
-                found.append(f"robot {other.name!r}")
-        return found
+        return self.room.overlapping(footprint, self)
 
     def footprint(self) -> np.ndarray:
         """The robot's footprint where it stands, ``(4, 2)`` counter-clockwise."""
         p = self.drive.params
         return footprint_corners(self.pose, p.footprint_length_m, p.footprint_width_m)
 
-    def _others(self) -> list[SimWorld]:
-        return [m for m in self.members if m is not self]
-
     def other_footprints(self) -> list[np.ndarray]:
         """The footprints of the other robots in the room (what the camera draws of them)."""
-        return [other.footprint() for other in self._others()]
+        return [other.footprint() for other in self.room.others(self)]
 
     def _with_others(self, segments: SegmentSet) -> SegmentSet:
         """``segments`` plus the edges of every other robot in the room (what sensors see of them)."""
-        if len(self.members) < 2:
-            return segments
-        return self._robot_edges.with_others(self, segments)
+        return self.room.with_others(self, segments)
 
     def _check_placement(self, pose: Pose2D, what: str) -> None:
         if not all(math.isfinite(v) for v in pose.as_tuple()):
@@ -370,10 +471,8 @@ class SimWorld:
         """
         self._check_placement(pose, "pose")
         # A fresh body carries no velocity or solver state (penetration bias) over from the old place.
-        self.space.remove(self.body, self.shape)
-        del self._by_shape[self.shape]
+        self.room.remove(self.body, self.shape)
         self.body, self.shape = self._new_robot(pose)
-        self._robot_edges.moved()
         self.drive.stop()
         self.odometry.reset()
         self.twist = Twist2D()
@@ -400,7 +499,7 @@ class SimWorld:
     def _after_step(self, before: tuple[float, float, float]) -> None:
         dt = self.params.dt_s
         x0, y0, yaw0 = before
-        self._robot_edges.moved()
+        self.room.moved()
         self.steps += 1
         self.time_s = self.steps * dt
         # What the wheels rolled: the displacement along the heading, not any sideways push by a contact.
@@ -412,61 +511,33 @@ class SimWorld:
         self.odometry.update(self.twist, dt)
 
     # ----------------------------------------------------------------------------------------- collisions
-    def _room_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        """A robot touched an obstacle: the robot whose shape it is records it (one handler per room)."""
-        robot = self._robot_of(arbiter)
-        if robot is not None:
-            robot._on_begin(arbiter)
-
-    def _room_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        robot = self._robot_of(arbiter)
-        if robot is not None:
-            robot._on_separate(arbiter)
-
-    def _robot_of(self, arbiter: pymunk.Arbiter) -> SimWorld | None:
-        first, second = arbiter.shapes
-        return self._by_shape.get(first) or self._by_shape.get(second)
-
-    def _room_robots_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        """Two robots touched: each records a collision naming the other, at the same point."""
-        first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
-        if first is None or second is None:
+    def touched_robot(self, other: Robot, x_m: float, y_m: float, speed_mps: float) -> None:
+        """Another robot of the room touched this one at ``(x_m, y_m)``: a collision naming it."""
+        last = self._last_separation_s.get(other.shape)
+        if last is not None and self.time_s - last < self.params.collision_debounce_s:
             return
-        (ax, ay), (bx, by) = first.body.position, second.body.position
-        cx, cy = _contact_centre(arbiter.contact_point_set.points, (0.5 * (ax + bx), 0.5 * (ay + by)))
-        for robot, other in ((first, second), (second, first)):
-            last = robot._last_separation_s.get(other.shape)
-            if last is not None and robot.time_s - last < robot.params.collision_debounce_s:
-                continue
-            speed = float(
-                abs(
-                    robot.body.velocity_at_world_point((cx, cy))
-                    - other.body.velocity_at_world_point((cx, cy))
-                )
+        self.collision_counts["robot"] += 1
+        self._events.append(
+            CollisionEvent(
+                kind="robot",
+                time_s=self.time_s,
+                x_m=x_m,
+                y_m=y_m,
+                speed_mps=speed_mps,
+                other_robot=other.name,
             )
-            robot.collision_counts["robot"] += 1
-            robot._events.append(
-                CollisionEvent(
-                    kind="robot",
-                    time_s=robot.time_s,
-                    x_m=float(cx),
-                    y_m=float(cy),
-                    speed_mps=speed,
-                    other_robot=other.name,
-                )
-            )
+        )
 
-    def _room_robots_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        first, second = (self._by_shape.get(shape) for shape in arbiter.shapes)
-        if first is not None and second is not None:
-            first._last_separation_s[second.shape] = first.time_s
-            second._last_separation_s[first.shape] = second.time_s
+    def parted_from(self, shape: pymunk.Shape) -> None:
+        """The contact with ``shape`` (an obstacle's or another robot's) ended now."""
+        self._last_separation_s[shape] = self.time_s
 
-    def _on_begin(self, arbiter: pymunk.Arbiter) -> None:
+    def touched(self, arbiter: pymunk.Arbiter) -> None:
+        """This robot's body began touching an obstacle: a collision, unless it is docking."""
         robot_shape, other = arbiter.shapes
         if robot_shape is not self.shape:
             robot_shape, other = other, robot_shape
-        obstacle = self._obstacles.get(other)
+        obstacle = self.room.obstacle(other)
         if obstacle is None:
             return
         last = self._last_separation_s.get(other)
@@ -489,10 +560,11 @@ class SimWorld:
             )
         )
 
-    def _on_separate(self, arbiter: pymunk.Arbiter) -> None:
+    def parted(self, arbiter: pymunk.Arbiter) -> None:
+        """This robot's body stopped touching an obstacle."""
         for shape in arbiter.shapes:
-            if shape in self._obstacles:
-                self._last_separation_s[shape] = self.time_s
+            if self.room.obstacle(shape) is not None:
+                self.parted_from(shape)
 
     def _is_docking_touch(self, dock: Dock, points: Sequence[pymunk.ContactPoint], speed_mps: float) -> bool:
         """A touch on the charging plate, square to the dock or gentle, is docking rather than a crash."""
@@ -516,27 +588,27 @@ class SimWorld:
     def lidar_scan(self, pose: Pose2D | None = None) -> sensors.LidarScan:
         """A lidar scan from ``pose`` (default: the robot's true pose); sees opaque surfaces, not glass."""
         at = self.pose if pose is None else pose
-        return sensors.lidar_scan(at, self._with_others(self.opaque), self.params.lidar, self.rng)
+        return sensors.lidar_scan(at, self._with_others(self.room.opaque), self.params.lidar, self.rng)
 
     def ultrasonic_range(self, pose: Pose2D | None = None) -> float:
         """The front ultrasonic reading from ``pose`` (default: true pose); sees opaque surfaces and glass."""
         at = self.pose if pose is None else pose
         return sensors.ultrasonic_range(
-            at, self._with_others(self.sonar_visible), self.params.ultrasonic, self.rng
+            at, self._with_others(self.room.sonar_visible), self.params.ultrasonic, self.rng
         )
 
     def dock_infrared(self, pose: Pose2D | None = None) -> tuple[int, int, int]:
         """The right, central and left infrared receivers' readings from ``pose`` (default: true pose)."""
         at = self.pose if pose is None else pose
         return infrared.receiver_readings(
-            at, self.world.docks, self._with_others(self.opaque), self.params.infrared, self.rng
+            at, self.world.docks, self._with_others(self.room.opaque), self.params.infrared, self.rng
         )
 
     def detect_docks(self, pose: Pose2D | None = None) -> list[sensors.DockDetection]:
         """Every dock the camera reads from ``pose`` (default: true pose), nearest first; glass hides none."""
         at = self.pose if pose is None else pose
         return sensors.detect_docks(
-            at, self.world.docks, self._with_others(self.opaque), self.params.camera, self.rng
+            at, self.world.docks, self._with_others(self.room.opaque), self.params.camera, self.rng
         )
 
     def detect_dock(
@@ -556,16 +628,16 @@ class SimWorld:
         return dock_contact(self.pose, self.world.docks, self.params.contact)
 
 
-def step_together(robots: Sequence[SimWorld], commands: Sequence[tuple[float, float]]) -> None:
+def step_together(robots: Sequence[Robot], commands: Sequence[tuple[float, float]]) -> None:
     """One ``dt_s`` for every robot in one room, each commanded ``(v, w)``: one step of their shared space."""
     if not robots:
         return
     if len(commands) != len(robots):
         raise ValueError(f"{len(robots)} robots but {len(commands)} commands")
-    space = robots[0].space
-    if any(r.space is not space for r in robots) or len(robots) != len(robots[0].members):
+    room = robots[0].room
+    if any(r.room is not room for r in robots) or len(robots) != len(room.members):
         raise ValueError("step_together steps every robot of one room, and only them")
     before = [r._drive_step(v, w) for r, (v, w) in zip(robots, commands)]
-    space.step(robots[0].params.dt_s)
+    room.space.step(robots[0].params.dt_s)
     for robot, start in zip(robots, before):
         robot._after_step(start)

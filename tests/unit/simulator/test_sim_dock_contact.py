@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from services.simulator.physics import SimParams, SimWorld
+from services.simulator.physics import Robot, SimParams
 from shared.geometry import Pose2D
 from shared.models.dock_contact import DockContactParams, dock_contact
 from shared.models.footprint import polygon_distance
@@ -56,7 +56,7 @@ def test_no_dock_nearby(dock_world: Callable[..., World]) -> None:
     assert dock_id is None and not mated and not touching and math.isnan(lateral)
 
 
-def drive(sim: SimWorld, v: float, w: float, seconds: float) -> None:
+def drive(sim: Robot, v: float, w: float, seconds: float) -> None:
     for _ in range(round(seconds / sim.params.dt_s)):
         sim.step(v, w)
 
@@ -64,7 +64,7 @@ def drive(sim: SimWorld, v: float, w: float, seconds: float) -> None:
 def test_driving_in_square_docks_without_a_collision(
     quiet: SimParams, dock_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     drive(sim, 0.15, 0.0, 8.0)
     contact = sim.dock_contact()
     assert contact.mated and contact.touching
@@ -74,7 +74,7 @@ def test_driving_in_square_docks_without_a_collision(
 
 
 def test_docking_in_the_seed_room(worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "seed_room.yaml"))
+    sim = Robot(load_world(worlds_dir / "seed_room.yaml"))
     sim.teleport(Pose2D(-1.0, 1.4, -math.pi / 2))
     assert not sim.dock_contact().mated
     drive(sim, 0.1, 0.0, 8.0)
@@ -84,7 +84,7 @@ def test_docking_in_the_seed_room(worlds_dir: Path) -> None:
 def test_hitting_the_plate_skewed_at_speed_is_a_collision(
     quiet: SimParams, dock_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     sim.teleport(Pose2D(-0.6, -0.35, 0.6))
     drive(sim, 0.4, 0.0, 3.0)
     events = sim.drain_collisions()
@@ -96,7 +96,7 @@ def test_hitting_the_plate_skewed_at_speed_is_a_collision(
 def test_touching_the_plate_skewed_but_gently_is_not(
     quiet: SimParams, dock_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     sim.teleport(Pose2D(-0.6, -0.35, 0.6))
     drive(sim, 0.08, 0.0, 12.0)
     assert sim.dock_contact().touching
@@ -106,7 +106,7 @@ def test_touching_the_plate_skewed_but_gently_is_not(
 def test_hitting_the_dock_body_side_is_a_collision(
     quiet: SimParams, dock_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     sim.teleport(Pose2D(0.3, -1.0, math.pi / 2))
     drive(sim, 0.1, 0.0, 10.0)
     events = sim.drain_collisions()
@@ -116,7 +116,7 @@ def test_hitting_the_dock_body_side_is_a_collision(
 
 
 def test_teleport_onto_the_dock_pose_is_allowed(quiet: SimParams, dock_world: Callable[..., World]) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     sim.teleport(Pose2D(0.0, 0.0, 0.0))
     drive(sim, 0.0, 0.0, 0.5)
     assert sim.dock_contact().mated

@@ -9,18 +9,18 @@ from pathlib import Path
 import pytest
 
 from services.simulator.localisation import map_to_odom
-from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld
+from services.simulator.physics import PoseInCollisionError, Robot, SimParams
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import ROBOT_FRONT_M, World, load_world
 
 
-def drive(sim: SimWorld, v: float, w: float, seconds: float) -> None:
+def drive(sim: Robot, v: float, w: float, seconds: float) -> None:
     for _ in range(round(seconds / sim.params.dt_s)):
         sim.step(v, w)
 
 
 def test_drives_straight_as_the_kinematics_say(quiet: SimParams, open_world: Callable[..., World]) -> None:
-    sim = SimWorld(open_world(), params=quiet)
+    sim = Robot(open_world(), params=quiet)
     drive(sim, 0.3, 0.0, 3.0)
     # Ramp at 1 m/s^2 to 0.3 m/s costs 0.3^2 / 2 m; the base answers one 10 ms step late.
     expected_x = 0.3 * 3.0 - 0.3**2 / 2.0 - 0.3 * 0.01
@@ -32,7 +32,7 @@ def test_drives_straight_as_the_kinematics_say(quiet: SimParams, open_world: Cal
 
 
 def test_turns_in_place_as_the_kinematics_say(quiet: SimParams, open_world: Callable[..., World]) -> None:
-    sim = SimWorld(open_world(), params=quiet)
+    sim = Robot(open_world(), params=quiet)
     drive(sim, 0.0, 1.0, 2.0)
     expected_yaw = 1.0 * 2.0 - 1.0**2 / (2.0 * 3.0) - 1.0 * 0.01
     assert sim.pose.yaw == pytest.approx(expected_yaw, abs=0.01)
@@ -41,7 +41,7 @@ def test_turns_in_place_as_the_kinematics_say(quiet: SimParams, open_world: Call
 
 
 def test_arc_stays_on_its_circle(quiet: SimParams, open_world: Callable[..., World]) -> None:
-    sim = SimWorld(open_world(), params=quiet)
+    sim = Robot(open_world(), params=quiet)
     v, w = 0.2, 0.5
     radius = v / w
     drive(sim, v, w, 1.0)  # past both acceleration ramps
@@ -59,7 +59,7 @@ def test_arc_stays_on_its_circle(quiet: SimParams, open_world: Callable[..., Wor
 def test_acceleration_limits_hold_in_the_body_motion(
     quiet: SimParams, open_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(open_world(), params=quiet)
+    sim = Robot(open_world(), params=quiet)
     previous = sim.twist
     for command in [(0.5, 1.5)] * 80 + [(-0.5, -1.5)] * 120:
         sim.step(*command)
@@ -75,7 +75,7 @@ def test_acceleration_limits_hold_in_the_body_motion(
 def test_cannot_pass_through_a_wall_or_glass(
     kind: str, quiet: SimParams, open_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(open_world(**{kind: [[[2.0, -1.0], [2.0, 1.0]]]}), params=quiet)
+    sim = Robot(open_world(**{kind: [[[2.0, -1.0], [2.0, 1.0]]]}), params=quiet)
     drive(sim, 0.5, 0.0, 8.0)
     front_x = sim.pose.x + ROBOT_FRONT_M
     assert 2.0 - 0.005 <= front_x <= 2.0 + 0.002
@@ -91,7 +91,7 @@ def test_cannot_pass_through_a_wall_or_glass(
 
 
 def test_glass_partition_stops_the_robot_in_the_glass_room(quiet: SimParams, worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "glass_room.yaml"), params=quiet)
+    sim = Robot(load_world(worlds_dir / "glass_room.yaml"), params=quiet)
     drive(sim, 0.5, 0.0, 6.0)
     assert sim.pose.y - ROBOT_FRONT_M == pytest.approx(2.6, abs=0.005)
     assert sim.collision_counts["glass"] == 1
@@ -99,7 +99,7 @@ def test_glass_partition_stops_the_robot_in_the_glass_room(quiet: SimParams, wor
 
 
 def test_sliding_along_a_wall_keeps_out_of_it(quiet: SimParams, open_world: Callable[..., World]) -> None:
-    sim = SimWorld(open_world(walls=[[[-3.0, 1.0], [3.0, 1.0]]]), params=quiet)
+    sim = Robot(open_world(walls=[[[-3.0, 1.0], [3.0, 1.0]]]), params=quiet)
     sim.teleport(Pose2D(-2.0, 0.5, 0.5))
     drive(sim, 0.4, 0.0, 6.0)
     corners_y = [sim.pose.transform_point(px, py)[1] for px in (-0.2, 0.2) for py in (-0.15, 0.15)]
@@ -116,7 +116,7 @@ def test_sliding_along_a_wall_keeps_out_of_it(quiet: SimParams, open_world: Call
     ],
 )
 def test_teleport_into_an_obstacle_is_rejected(pose: Pose2D, what: str, worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "seed_room.yaml"))
+    sim = Robot(load_world(worlds_dir / "seed_room.yaml"))
     before = sim.pose
     with pytest.raises(PoseInCollisionError, match=what):
         sim.teleport(pose)
@@ -124,7 +124,7 @@ def test_teleport_into_an_obstacle_is_rejected(pose: Pose2D, what: str, worlds_d
 
 
 def test_teleport_outside_the_room_is_rejected_and_a_free_pose_accepted(worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "seed_room.yaml"))
+    sim = Robot(load_world(worlds_dir / "seed_room.yaml"))
     with pytest.raises(PoseInCollisionError, match="outside the room"):
         sim.teleport(Pose2D(10.0, 2.0, 0.0))
     drive(sim, 0.3, 0.2, 1.0)
@@ -138,7 +138,7 @@ def test_teleport_outside_the_room_is_rejected_and_a_free_pose_accepted(worlds_d
 def test_start_pose_in_collision_is_rejected(open_world: Callable[..., World]) -> None:
     world = open_world(boxes=[{"pose": [0.0, 0.0, 0.0], "size": [0.5, 0.5]}])
     with pytest.raises(PoseInCollisionError, match="box"):
-        SimWorld(world)
+        Robot(world)
 
 
 def test_map_to_odom_lands_on_true_pose_times_error() -> None:
@@ -157,7 +157,7 @@ def test_map_to_odom_lands_on_true_pose_times_error() -> None:
 
 def test_localisation_absorbs_odometry_drift_but_keeps_its_error(open_world: Callable[..., World]) -> None:
     error = Pose2D(0.1, 0.0, 0.05)
-    sim = SimWorld(open_world(), params=SimParams(odom_noise=0.05, localisation_error=error))
+    sim = Robot(open_world(), params=SimParams(odom_noise=0.05, localisation_error=error))
     drive(sim, 0.4, 0.6, 5.0)
     assert sim.odom_pose.distance_to(Pose2D()) > 0.5
     assert sim.odom_pose.distance_to(sim.pose) > 1e-3  # noisy wheels: odometry has drifted from the truth
@@ -168,7 +168,7 @@ def test_localisation_absorbs_odometry_drift_but_keeps_its_error(open_world: Cal
 def test_an_initial_pose_becomes_the_belief_and_its_offset_the_error(
     open_world: Callable[..., World],
 ) -> None:
-    sim = SimWorld(open_world(), params=SimParams(odom_noise=0.05))
+    sim = Robot(open_world(), params=SimParams(odom_noise=0.05))
     drive(sim, 0.3, 0.4, 2.0)
     given = sim.pose.compose(Pose2D(0.2, -0.1, 0.3))
     sim.believe(given)
@@ -180,7 +180,7 @@ def test_an_initial_pose_becomes_the_belief_and_its_offset_the_error(
 
 
 def test_wiggling_against_a_wall_is_one_collision(quiet: SimParams, open_world: Callable[..., World]) -> None:
-    sim = SimWorld(open_world(walls=[[[-3.0, 1.0], [3.0, 1.0]]]), params=quiet)
+    sim = Robot(open_world(walls=[[[-3.0, 1.0], [3.0, 1.0]]]), params=quiet)
     sim.teleport(Pose2D(0.0, 0.75, math.pi / 2))
     drive(sim, 0.2, 0.0, 3.0)
     for i in range(600):  # nudging forward while swinging left and right: corners leave and touch again

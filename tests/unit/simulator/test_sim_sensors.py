@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from services.simulator.physics import SimParams, SimWorld
+from services.simulator.physics import Robot, SimParams
 from services.simulator.sensors import LidarParams, UltrasonicParams, lidar_scan
 from shared.geometry import Pose2D
 from shared.models.raycast import SegmentSet, cast_rays
@@ -29,7 +29,7 @@ def test_cast_rays_against_known_geometry() -> None:
 
 
 def test_lidar_sees_walls_but_not_glass_and_sonar_sees_glass(quiet: SimParams, worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "glass_room.yaml"), params=quiet)
+    sim = Robot(load_world(worlds_dir / "glass_room.yaml"), params=quiet)
     behind_glass = Pose2D(0.0, 3.5, -math.pi / 2)  # glass 0.9 m ahead, south wall beyond it
     scan = sim.lidar_scan(behind_glass)
     assert scan.ranges_m[FORWARD_BEAM] == pytest.approx(3.5 - 0.10 - 0.43)  # through the glass
@@ -40,7 +40,7 @@ def test_lidar_sees_walls_but_not_glass_and_sonar_sees_glass(quiet: SimParams, w
 
 
 def test_lidar_frame_and_noise(worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "seed_room.yaml"))  # default noise, sigma 1 cm
+    sim = Robot(load_world(worlds_dir / "seed_room.yaml"))  # default noise, sigma 1 cm
     pose = Pose2D(0.0, 2.0, 0.0)
     scan = sim.lidar_scan(pose)
     assert scan.ranges_m.shape == (360,)
@@ -68,20 +68,20 @@ def test_sonar_reads_nearest_in_its_cone_and_inf_beyond_range(
 ) -> None:
     # A post 1 m ahead of the ranger and off to the left, its lower end inside the cone (edge at 0.25 rad).
     post = [[[1.2, 0.2], [1.2, 0.4]]]
-    sim = SimWorld(open_world(walls=post), params=quiet)
+    sim = Robot(open_world(walls=post), params=quiet)
     assert sim.ultrasonic_range() == pytest.approx(math.hypot(1.0, 0.2))
-    sim_narrow = SimWorld(
+    sim_narrow = Robot(
         open_world(walls=post), params=SimParams(ultrasonic=UltrasonicParams(field_of_view_rad=0.3))
     )
     assert math.isinf(sim_narrow.ultrasonic_range())
-    pressed = SimWorld(open_world(walls=[[[1.0, -1.0], [1.0, 1.0]]]), params=quiet)
+    pressed = Robot(open_world(walls=[[[1.0, -1.0], [1.0, 1.0]]]), params=quiet)
     pressed.teleport(Pose2D(0.795, 0.0, 0.0))  # 5 mm from the wall, under the 2 cm minimum
     assert pressed.ultrasonic_range() == pytest.approx(0.02)
     assert math.isinf(sim.ultrasonic_range(Pose2D(0.0, 0.0, math.pi)))  # 4.8 m of open floor behind
 
 
 def test_sensor_calls_are_fast(worlds_dir: Path) -> None:
-    sim = SimWorld(load_world(worlds_dir / "seed_room.yaml"))
+    sim = Robot(load_world(worlds_dir / "seed_room.yaml"))
     batches = []
     for _ in range(5):
         started = time.perf_counter()
@@ -98,7 +98,7 @@ def test_sensor_calls_are_fast(worlds_dir: Path) -> None:
 def test_dock_seen_ahead_reports_the_dock_pose_in_base_link(
     quiet: SimParams, dock_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     robot = Pose2D(-1.0, 0.3, -0.2)
     detection = sim.detect_dock(robot)
     assert detection is not None and detection.dock_id == "home"
@@ -109,7 +109,7 @@ def test_dock_seen_ahead_reports_the_dock_pose_in_base_link(
 
 
 def test_detection_noise_is_small_and_unbiased(dock_world: Callable[..., World]) -> None:
-    sim = SimWorld(dock_world())
+    sim = Robot(dock_world())
     xs = []
     for _ in range(300):
         detection = sim.detect_dock(Pose2D(-1.0, 0.0, 0.0))
@@ -129,7 +129,7 @@ def test_detection_noise_is_small_and_unbiased(dock_world: Callable[..., World])
     ],
 )
 def test_dock_not_seen(robot: Pose2D, quiet: SimParams, dock_world: Callable[..., World]) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     assert sim.detect_dock(robot) is None
     assert sim.detect_docks(robot) == []
 
@@ -146,15 +146,15 @@ def _camera_looking_at_marker(view_angle_rad: float, distance_m: float) -> Pose2
 def test_marker_readable_only_below_70_degrees_off_its_normal(
     quiet: SimParams, dock_world: Callable[..., World]
 ) -> None:
-    sim = SimWorld(dock_world(), params=quiet)
+    sim = Robot(dock_world(), params=quiet)
     assert sim.detect_dock(_camera_looking_at_marker(math.radians(60), 1.0)) is not None
     assert sim.detect_dock(_camera_looking_at_marker(math.radians(75), 1.0)) is None
 
 
 def test_box_hides_the_marker_but_glass_does_not(quiet: SimParams, dock_world: Callable[..., World]) -> None:
     robot = Pose2D(-1.5, 0.0, 0.0)
-    boxed = SimWorld(dock_world(boxes=[{"pose": [-0.6, 0.0, 0.0], "size": [0.1, 0.3]}]), params=quiet)
+    boxed = Robot(dock_world(boxes=[{"pose": [-0.6, 0.0, 0.0], "size": [0.1, 0.3]}]), params=quiet)
     assert boxed.detect_dock(robot) is None
-    glazed = SimWorld(dock_world(glass=[[[-0.6, -1.0], [-0.6, 1.0]]]), params=quiet)
+    glazed = Robot(dock_world(glass=[[[-0.6, -1.0], [-0.6, 1.0]]]), params=quiet)
     assert glazed.detect_dock(robot) is not None
     assert math.isfinite(glazed.ultrasonic_range(robot)) and glazed.ultrasonic_range(robot) < 0.8

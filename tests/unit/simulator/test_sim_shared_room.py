@@ -8,12 +8,12 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from services.simulator.physics import PoseInCollisionError, SimParams, SimWorld, step_together
+from services.simulator.physics import PoseInCollisionError, Robot, SimParams, step_together
 from shared.geometry import Pose2D
 from shared.world import World
 
 
-def _drive_together(robots: list[SimWorld], commands: list[tuple[float, float]], seconds: float) -> None:
+def _drive_together(robots: list[Robot], commands: list[tuple[float, float]], seconds: float) -> None:
     for _ in range(round(seconds / robots[0].params.dt_s)):
         step_together(robots, commands)
 
@@ -22,7 +22,7 @@ def test_two_robots_head_on_collide_and_each_names_the_other(
     quiet: SimParams, open_world: Callable[..., World]
 ) -> None:
     world = open_world()
-    r1 = SimWorld(world, params=quiet, start=Pose2D(-1.0, 0.0, 0.0), name="r1")
+    r1 = Robot(world, params=quiet, start=Pose2D(-1.0, 0.0, 0.0), name="r1")
     r2 = r1.join("r2", Pose2D(1.0, 0.0, math.pi))
     assert r1.members == [r1, r2] and r2.space is r1.space
     _drive_together([r1, r2], [(0.4, 0.0), (0.4, 0.0)], 4.0)
@@ -38,8 +38,8 @@ def test_two_robots_head_on_collide_and_each_names_the_other(
 
 def test_each_robots_sensors_see_the_others_body(quiet: SimParams, open_world: Callable[..., World]) -> None:
     world = open_world()
-    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
-    alone = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0))
+    r1 = Robot(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    alone = Robot(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0))
     r1.join("r2", Pose2D(2.0, 0.0, math.pi / 2))  # broadside, 2 m ahead: its near side at x = 1.85
     assert r1.ultrasonic_range() == pytest.approx(1.85 - 0.20, abs=1e-6)
     forward = r1.params.lidar.num_rays // 2
@@ -48,7 +48,7 @@ def test_each_robots_sensors_see_the_others_body(quiet: SimParams, open_world: C
     assert np.isfinite(r1.lidar_scan().ranges_m).sum() >= np.isfinite(alone.lidar_scan().ranges_m).sum()
 
 
-def _edges_by_hand(robot: SimWorld) -> np.ndarray:
+def _edges_by_hand(robot: Robot) -> np.ndarray:
     """The other robots' footprint edges as ``(M, 2, 2)`` start/end points, built afresh."""
     return np.array(
         [
@@ -65,13 +65,13 @@ def test_what_sensors_see_of_the_others_follows_every_move(
     quiet: SimParams, open_world: Callable[..., World]
 ) -> None:
     world = open_world()
-    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r1 = Robot(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
     r2 = r1.join("r2", Pose2D(2.0, 0.0, math.pi / 2))
     r3 = r1.join("r3", Pose2D(0.0, 2.0, 0.0))  # joined after r1's edges may have been built
 
     def check() -> None:
         for robot in (r1, r2, r3):
-            seen = robot._with_others(robot.opaque)
+            seen = robot.room.with_others(robot, robot.opaque)
             static = len(robot.opaque)
             expected = _edges_by_hand(robot)
             assert np.array_equal(seen.start[:static], robot.opaque.start)
@@ -91,7 +91,7 @@ def test_what_sensors_see_of_the_others_follows_every_move(
 
 def test_robots_cannot_be_put_into_each_other(quiet: SimParams, open_world: Callable[..., World]) -> None:
     world = open_world()
-    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r1 = Robot(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
     with pytest.raises(PoseInCollisionError, match="robot 'r1'"):
         r1.join("r2", Pose2D(0.3, 0.0, 0.0))
     r2 = r1.join("r2", Pose2D(2.0, 0.0, 0.0))
@@ -106,7 +106,7 @@ def test_robots_cannot_be_put_into_each_other(quiet: SimParams, open_world: Call
 
 def test_a_shared_room_steps_only_together(quiet: SimParams, open_world: Callable[..., World]) -> None:
     world = open_world()
-    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r1 = Robot(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
     r1.step(0.1, 0.0)  # alone, it steps itself
     r2 = r1.join("r2", Pose2D(2.0, 2.0, 0.0))
     with pytest.raises(RuntimeError, match="step_together"):
@@ -126,7 +126,7 @@ def test_the_shipped_fleet_world_puts_every_robot_in_one_room(quiet: SimParams) 
     world = load_world(REPO_ROOT / "deploy/worlds/fleet/warehouse.yaml")
     assert [r.name for r in world.robots] == ["r1", "r2", "r3"] and len(world.docks) == 2
     first, *rest = world.robots
-    room = SimWorld(world, params=quiet, start=Pose2D.from_seq(first.start), name=first.name)
+    room = Robot(world, params=quiet, start=Pose2D.from_seq(first.start), name=first.name)
     robots = [room] + [room.join(r.name, Pose2D.from_seq(r.start)) for r in rest]
     assert [r.name for r in room.members] == ["r1", "r2", "r3"]
     _drive_together(robots, [(0.2, 0.0)] * 3, 1.0)
@@ -137,7 +137,7 @@ def test_the_camera_draws_the_other_robots(quiet: SimParams, open_world: Callabl
     from services.simulator.camera import CameraParams, CameraRenderer, build_scene
 
     world = open_world()
-    r1 = SimWorld(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
+    r1 = Robot(world, params=quiet, start=Pose2D(0.0, 0.0, 0.0), name="r1")
     r1.join("r2", Pose2D(1.0, 0.0, math.pi / 2))  # broadside, 1 m ahead
     camera = CameraRenderer(build_scene(world), CameraParams(noise_sigma=0.0))
     alone = camera.render(r1.pose).astype(float)
