@@ -54,9 +54,6 @@ class ModuleRun:
     python: str = "python"
     python_options: tuple[str, ...] = ()
 
-    def with_flags(self, *flags: str) -> ModuleRun:
-        return ModuleRun(self.service, (*self.flags, *flags), self.python, self.python_options)
-
 
 @dataclass(frozen=True)
 class GroupRun:
@@ -155,15 +152,6 @@ def run_words(run: Run) -> list[str]:
             words += [*([GROUP_SEPARATOR] if i else []), member.service, *member.flags]
         return words
     return list(run.words)
-
-
-def runs_service(run: Run, service: str) -> bool:
-    """Whether ``run``'s process runs zendock's ``service`` (alone, in a group, or as its replacement)."""
-    if isinstance(run, ModuleRun):
-        return run.service == service
-    if isinstance(run, GroupRun):
-        return service in run.services
-    return run.replaces == service
 
 
 def as_text(value: object) -> str:
