@@ -45,24 +45,11 @@ def _summary_table(summary: dict) -> Table:
         "max_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
         "median_glass_coverage": lambda v: f"{100 * v:.0f} %",
     }
-    for key in (
-        "successes",
-        "success_rate",
-        "median_dock_time_s",
-        "median_lower_bound_s",
-        "median_time_ratio",
-        "median_lateral_error_m",
-        "p95_lateral_error_m",
-        "median_yaw_error_rad",
-        "median_arrival_speed_mps",
-        "max_arrival_speed_mps",
-        "collisions",
-        "wall_s",
-        "sim_s",
-        "median_false_glass_cells",
-        "p95_false_glass_cells",
-        "median_glass_coverage",
-    ):
+    from deploy.trials.records import HEADLINE_KEYS  # noqa: PLC0415 - the package loads the campaign
+
+    for key in HEADLINE_KEYS:
+        if key == "n":  # the table's title says it
+            continue
         value = summary[key]
         text = fmt[key](value) if key in fmt else (f"{value:.1f}" if isinstance(value, float) else str(value))
         table.add_row(key, text)

@@ -106,6 +106,29 @@ class TrialResult:
     arrival_speed_mps: float = math.nan
 
 
+#: A campaign's figures as its JSON line and its summary table give them, in order.
+HEADLINE_KEYS = (
+    "n",
+    "successes",
+    "success_rate",
+    "median_dock_time_s",
+    "median_lower_bound_s",
+    "median_time_ratio",
+    "median_lateral_error_m",
+    "p95_lateral_error_m",
+    "median_yaw_error_rad",
+    "median_arrival_speed_mps",
+    "max_arrival_speed_mps",
+    "collisions",
+    "wall_s",
+    "sim_s",
+    "achieved_rtf",
+    "median_false_glass_cells",
+    "p95_false_glass_cells",
+    "median_glass_coverage",
+)
+
+
 @dataclass
 class TrialsSummary:
     n: int
@@ -142,26 +165,7 @@ class TrialsSummary:
     max_arrival_speed_mps: float = math.nan
 
     def headline(self) -> dict[str, Any]:
-        keys = (
-            "n",
-            "successes",
-            "success_rate",
-            "median_dock_time_s",
-            "median_lower_bound_s",
-            "median_time_ratio",
-            "median_lateral_error_m",
-            "p95_lateral_error_m",
-            "median_yaw_error_rad",
-            "median_arrival_speed_mps",
-            "max_arrival_speed_mps",
-            "collisions",
-            "wall_s",
-            "sim_s",
-            "achieved_rtf",
-            "median_false_glass_cells",
-            "p95_false_glass_cells",
-            "median_glass_coverage",
-        )
+        keys = HEADLINE_KEYS
         line = {k: getattr(self, k) for k in keys}
         if self.median_phase_s:
             line["median_phase_s"] = dict(self.median_phase_s)
