@@ -2,7 +2,8 @@
 
 Each command module defines ``register(subparsers)``, which adds its parser(s) and sets ``func`` to a
 callable taking the parsed arguments and returning an exit code. Bad arguments exit 2 with argparse's
-message; a :class:`~shared.config_errors.ConfigError` from a command prints one line and exits 2.
+message, naming a misspelled option or choice with the closest one (:mod:`deploy.parser`); a
+:class:`~shared.config_errors.ConfigError` from a command prints one line and exits 2.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from collections.abc import Sequence
 from typing import Any, cast
 
 from deploy import commands
+from deploy.parser import ZendockParser, error_in_command
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
 from shared.memory import keep_openssl_out
 
@@ -70,7 +72,7 @@ LEAN_COMMANDS = frozenset({"container", "router"})
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The ``zendock`` parser: every command's, or with ``only`` that one command module's alone."""
-    parser = argparse.ArgumentParser(
+    parser = ZendockParser(
         prog="zendock",
         description="Autonomous docking for a two-wheeled robot, as services over Zenoh.",
     )
@@ -103,7 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if extra and getattr(args, "takes_command", False) and extra[0] == "--":
         args.command_words = extra[1:]
     elif extra:
-        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+        error_in_command(parser, argv, extra)
     # SIGTERM (kill, a CI timeout, a supervisor) unwinds like Ctrl-C, so every ``with Launcher(...)`` brings
     # its stack down instead of leaving the services it started running. Commands that handle signals
     # themselves (``up`` in the foreground) install their own handlers over this one.

@@ -13,6 +13,7 @@ from deploy import strict_json
 from deploy.arg_types import count, real_time_factor
 from deploy.options import add_detector_option
 from deploy.service_tools import run_tool
+from deploy.world_names import world_argument
 
 
 def _print(result: dict, as_json: bool, title: str) -> None:
@@ -405,7 +406,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     bus.add_argument("--json", action="store_true")
     bus.set_defaults(func=_bench_bus)
     sim = verbs.add_parser("sim", help="simulator steps per second with all sensors, as a real-time factor")
-    sim.add_argument("--world", default="deploy/worlds/seed_room.yaml")
+    sim.add_argument("--world", type=world_argument, default="deploy/worlds/seed_room.yaml")
     sim.add_argument("--seconds", type=float, default=60.0, help="simulated seconds to run")
     sim.add_argument("--json", action="store_true")
     sim.set_defaults(func=_bench_sim)
@@ -419,7 +420,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     messages = verbs.add_parser(
         "messages", help="messages per simulated second per key and subscriber, docking"
     )
-    messages.add_argument("--world", default="deploy/worlds/seed_room.yaml")
+    messages.add_argument("--world", type=world_argument, default="deploy/worlds/seed_room.yaml")
     messages.add_argument("--n", type=count, default=5, help="dockings from random starts")
     messages.add_argument(
         "--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max"
@@ -432,7 +433,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     record = verbs.add_parser(
         "record", help="record everything, camera included, through a docking campaign: gaps"
     )
-    record.add_argument("--world", default="deploy/worlds/seed_room.yaml")
+    record.add_argument("--world", type=world_argument, default="deploy/worlds/seed_room.yaml")
     record.add_argument("--n", type=count, default=3, help="dockings from random starts")
     record.add_argument(
         "--rtf",
@@ -463,7 +464,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="wall seconds per condition of the stack's real-time factor (0: skip)",
     )
     ros2.add_argument(
-        "--world", default="deploy/worlds/seed_room.yaml", help="world of the real-time-factor runs"
+        "--world",
+        type=world_argument,
+        default="deploy/worlds/seed_room.yaml",
+        help="world of the real-time-factor runs",
     )
     ros2.add_argument(
         "--dds",
@@ -493,6 +497,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     ir = verbs.add_parser("ir", help="infrared docking from beacon starts in world files, kinematic model")
     ir.add_argument(
         "--world",
+        type=world_argument,
         action="append",
         metavar="FILE|DIR",
         help="world file or directory of them (repeatable; default deploy/worlds/unseen)",

@@ -16,6 +16,7 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import real_time_factor
+from deploy.world_names import world_argument
 from shared.config_errors import ConfigError
 from shared.contracts import CONTRACTS
 
@@ -78,7 +79,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("service", nargs="?", metavar="SERVICE", help=f"one of: {', '.join(CONTRACTS)}")
     parser.add_argument("--all", action="store_true", help="every zendock service against its own contract")
-    parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file (needs a dock)")
+    parser.add_argument(
+        "--world",
+        type=world_argument,
+        default="deploy/worlds/seed_room.yaml",
+        help="world file (needs a dock)",
+    )
     parser.add_argument("--rtf", type=real_time_factor, default="4", help="the simulator's real-time factor")
     parser.add_argument(
         "--runs-dir", metavar="DIR", help="where each run's directory goes (default: the temp dir)"

@@ -14,6 +14,7 @@ from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, positive_number, real_time_factor
 from deploy.options import add_controller_option, add_detector_option
 from deploy.progress import is_terminal, progress_period_s
+from deploy.world_names import world_argument
 from shared.config_errors import ConfigError
 from shared.world import load_world
 
@@ -97,7 +98,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "demo", help="dock once on the full stack and report (what `make run` runs)"
     )
-    parser.add_argument("--world", default="deploy/worlds/seed_room.yaml", help="world file")
+    parser.add_argument(
+        "--world", type=world_argument, default="deploy/worlds/seed_room.yaml", help="world file"
+    )
     parser.add_argument(
         "--compose",
         action="store_true",

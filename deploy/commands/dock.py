@@ -28,6 +28,7 @@ import zenoh
 from deploy.options import add_bus_options
 from deploy.paths import REPO_ROOT
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, dock_line, is_terminal
+from deploy.world_names import world_argument
 from shared import topics
 from shared.action import ActionClient, ClientGoal, spin_in_background
 from shared.config_errors import ConfigError
@@ -395,6 +396,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     dock.add_argument(
         "--world",
+        type=world_argument,
         default=None,
         metavar="FILE",
         help="world file the dock poses are read from, for the distance shown "

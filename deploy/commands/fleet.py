@@ -16,6 +16,7 @@ from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, positive_number, real_time_factor
 from deploy.options import add_detector_option
 from deploy.progress import is_terminal
+from deploy.world_names import world_argument
 from shared.config_errors import ConfigError
 
 DEFAULT_WORLD = "deploy/worlds/fleet/warehouse.yaml"
@@ -159,6 +160,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--world",
+        type=world_argument,
         default=DEFAULT_WORLD,
         metavar="FILE",
         help=f"a world with docks (and robots; default {DEFAULT_WORLD})",

@@ -24,6 +24,7 @@ from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
 from deploy.options import add_controller_option, add_detector_option
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
+from deploy.world_names import campaign_world
 from shared.config_errors import ConfigError
 from shared.controllers import CONTROLLERS
 from shared.world import world_files
@@ -236,6 +237,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("trials", help="Monte Carlo dockings from random starts on the full stack")
     parser.add_argument(
         "--world",
+        type=campaign_world,
         action="append",
         metavar="FILE|DIR",
         help=f"world file or directory of them (repeat for a campaign across worlds; 'all': every shipped world); "
