@@ -39,6 +39,8 @@ def find_world(text: str) -> Path:
     name = text.removesuffix(".yaml").removeprefix("deploy/worlds/")
     if name in names:
         return names[name]
+    if given.is_absolute() or text.startswith("."):
+        raise ValueError(f"{text}: no such file or directory")
     close = difflib.get_close_matches(name, list(names), n=3, cutoff=0.6)
     hint = f"did you mean {' or '.join(close)}? " if close else ""
     top = ", ".join(sorted(p.stem for p in WORLDS_DIR.glob("*.yaml")))
