@@ -3,7 +3,7 @@
 Every ``python -m services.<name>`` takes the same flags::
 
     --namespace NS          robot namespace (env ZENDOCK_NAMESPACE)
-    --connect ENDPOINT      repeatable; default tcp/127.0.0.1:7447 (env ZENDOCK_CONNECT, comma-separated)
+    --connect ENDPOINT      repeatable; default tcp/127.0.0.1:7447 (env ZENDOCK_CONNECT, else ZENOH_CONNECT)
     --listen ENDPOINT       repeatable
     --zenoh-config FILE     a Zenoh json5 config applied before the flags (env ZENDOCK_ZENOH_CONFIG)
     --config FILE           YAML parameters (flat, or ROS style ``node: {ros__parameters: {...}}``)
@@ -45,6 +45,7 @@ import yaml
 import zenoh
 from pydantic import BaseModel, ValidationError
 
+from shared.bus_env import connect_from_env
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
 from shared.contracts.enforce import hold_to_contract
 from shared.names import normalise_namespace
@@ -178,7 +179,7 @@ def set_dotted(values: dict[str, Any], name: str, value: Any, model: type[BaseMo
 
 def build_arg_parser(service_name: str, description: str = "") -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=f"python -m services.{service_name}", description=description)
-    env_connect = [e for e in os.environ.get("ZENDOCK_CONNECT", "").split(",") if e.strip()]
+    env_connect = list(connect_from_env())
     parser.add_argument(
         "--namespace", default=os.environ.get("ZENDOCK_NAMESPACE", ""), help="robot namespace"
     )
@@ -187,7 +188,8 @@ def build_arg_parser(service_name: str, description: str = "") -> argparse.Argum
         action="append",
         default=None,
         metavar="ENDPOINT",
-        help=f"Zenoh endpoint to connect to (repeatable; default {DEFAULT_ROUTER_ENDPOINT})",
+        help="Zenoh endpoint to connect to (repeatable; env ZENDOCK_CONNECT, else ZENOH_CONNECT; "
+        f"default {DEFAULT_ROUTER_ENDPOINT})",
     )
     parser.add_argument(
         "--listen", action="append", default=[], metavar="ENDPOINT", help="Zenoh endpoint to listen on"

@@ -12,6 +12,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from shared.bus_env import listen_from_env
 from shared.config_errors import ConfigError
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 from shared.waiting import wait_interruptibly
@@ -64,7 +65,9 @@ def main(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGINT, request_stop)
     signal.signal(signal.SIGTERM, request_stop)
-    return run_router(router_spec(args.listen or (), args.config), stop)
+    # --listen, else (without a config file of its own) ZENOH_LISTEN, as every zendock process reads it.
+    listen = args.listen or (() if args.config else listen_from_env())
+    return run_router(router_spec(listen, args.config), stop)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -77,7 +80,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--listen",
         action="append",
         metavar="ENDPOINT",
-        help=f"endpoint to listen on, repeatable (default {DEFAULT_ROUTER_ENDPOINT}, or the config file's)",
+        help=f"endpoint to listen on, repeatable (env ZENOH_LISTEN; default {DEFAULT_ROUTER_ENDPOINT}, or the "
+        "config file's)",
     )
     parser.add_argument(
         "--config", metavar="FILE", help="a Zenoh json5 config file (e.g. deploy/zenoh/router.json5)"

@@ -21,10 +21,11 @@ import zenoh
 
 from deploy.keys.errors import EXIT_USAGE, KeysError
 from deploy.options import DEFAULT_CONNECT_TIMEOUT_S
+from shared.bus_env import CONNECT_VARIABLES, connect_from_env
 from shared.names import normalise_namespace, topic_key
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
-ENV_CONNECT = ("ZENDOCK_CONNECT", "ZENOH_CONNECT")
+ENV_CONNECT = CONNECT_VARIABLES
 ENV_NAMESPACE = "ZENDOCK_NAMESPACE"
 
 
@@ -43,12 +44,7 @@ def resolve_endpoints(
     """``--connect`` flags win, then ``ZENDOCK_CONNECT``, then ``ZENOH_CONNECT``, then the default router."""
     if flags:
         return tuple(flags)
-    env = os.environ if environ is None else environ
-    for name in ENV_CONNECT:
-        endpoints = [e.strip() for e in env.get(name, "").split(",") if e.strip()]
-        if endpoints:
-            return tuple(endpoints)
-    return (DEFAULT_ROUTER_ENDPOINT,)
+    return connect_from_env(environ) or (DEFAULT_ROUTER_ENDPOINT,)
 
 
 def bus_options(

@@ -1,0 +1,45 @@
+"""A bare ``zendock router`` listens where ZENOH_LISTEN says, as the rest of zendock reads it."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+
+from deploy.launcher import free_tcp_port
+from tests.support.processes import wait_until
+
+
+def _accepts(port: int) -> bool:
+    with socket.socket() as probe:
+        probe.settimeout(0.2)
+        return probe.connect_ex(("127.0.0.1", port)) == 0
+
+
+def test_a_bare_router_listens_on_zenoh_listen() -> None:
+    port = free_tcp_port()
+    env = {**os.environ, "ZENOH_LISTEN": f"tcp/127.0.0.1:{port}"}
+    router = subprocess.Popen(
+        [sys.executable, "-m", "deploy.cli", "router"],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
+    try:
+        wait_until(
+            lambda: _accepts(port) or router.poll() is not None,
+            timeout_s=20.0,
+            describe=lambda: f"the router did not listen on {port} (exit code {router.poll()})",
+        )
+        assert router.poll() is None and _accepts(port), "the router exited instead of listening"
+    finally:
+        router.terminate()
+        try:
+            router.wait(timeout=10.0)
+        except subprocess.TimeoutExpired:
+            router.kill()
+            router.wait()
+        assert router.stdout is not None
+        router.stdout.close()
