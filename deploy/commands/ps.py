@@ -45,6 +45,12 @@ def current_statuses(paths: RuntimePaths) -> tuple[list[ServiceStatus], bool]:
 COLUMNS = ("NAME", "STATE", "PID", "RESTARTS", "HEALTH", "DETAIL")
 
 
+def state_word(status: ServiceStatus) -> str:
+    """The table's STATE: a step that ran to its end (the map, exit 0) is ``done``, not ``exited`` like a
+    crash (``ps --json`` keeps Compose's ``exited`` with its ``exit_code``)."""
+    return "done" if status.state == "exited" and status.exit_code == 0 else status.state
+
+
 def ps_table(statuses: list[ServiceStatus]) -> Table:
     """One row per service; a fleet's services grouped by namespace (robot), each group under its name."""
     namespaces = list(dict.fromkeys(sorted(s.namespace for s in statuses)))
@@ -66,7 +72,7 @@ def ps_table(statuses: list[ServiceStatus]) -> Table:
             table.add_row(
                 *(
                     Text(cell)
-                    for cell in (name, s.state, str(s.pid or "-"), str(s.restarts), s.health, detail)
+                    for cell in (name, state_word(s), str(s.pid or "-"), str(s.restarts), s.health, detail)
                 )
             )
     return table

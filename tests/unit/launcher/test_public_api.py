@@ -81,6 +81,18 @@ def test_ps_groups_a_fleets_services_by_robot() -> None:
     assert [line.split()[0] for line in alone] == ["NAME", "docking"], "one namespace: no groups"
 
 
+def test_ps_shows_a_step_that_ran_to_its_end_as_done_and_a_crash_as_exited() -> None:
+    from deploy.commands.ps import format_table
+
+    done = ServiceStatus("map", "exited", None, 0, "none", phase="exited", exit_code=0)
+    crashed = ServiceStatus("planner", "exited", None, 3, "none", phase="exited", exit_code=1)
+    rows = [line.split()[:2] for line in format_table([done, crashed]).splitlines()[1:]]
+    assert rows == [["map", "done"], ["planner", "exited"]]
+    assert done.ps_json()["state"] == "exited" and done.ps_json()["exit_code"] == 0, (
+        "JSON as Compose gives it"
+    )
+
+
 def test_readiness_counts_completed_steps_and_unchecked_services() -> None:
     assert is_ready(ServiceStatus("a", "running", 1, 0, "healthy"))
     assert is_ready(ServiceStatus("a", "running", 1, 0, "none"))
