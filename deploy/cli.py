@@ -116,7 +116,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"zendock {getattr(args, 'command_path', args.command)}: {exc}", file=sys.stderr)
         return CONFIG_ERROR_EXIT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        why = f" ({exc})" if str(exc) else ""
+        print(f"zendock {getattr(args, 'command_path', args.command)}: interrupted{why}", file=sys.stderr)
         return 130
     except TimeoutError as exc:
         from deploy.launcher.api import StackNotReady  # noqa: PLC0415 - lean commands never load the launcher

@@ -132,6 +132,10 @@ def lower_bound(world_path: Path, start: Pose2D, goal: Pose2D) -> dict[str, floa
         raise RuntimeError(f"lower bound failed: {exc}") from None
 
 
+#: The file in a run directory while the demo has not written its report.
+INCOMPLETE_MARK = "INCOMPLETE"
+
+
 def stack_environment(options: DemoOptions, endpoint: str, run_dir: Path) -> dict[str, str]:
     return {
         "ZENOH_LISTEN": endpoint,
@@ -211,6 +215,11 @@ def run_demo(
     world = load_world(options.world)
     run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)
+    # Until the report is written the run is marked incomplete: an interrupted or failed demo leaves no
+    # directory that looks like a finished run.
+    (run_dir / INCOMPLETE_MARK).write_text(
+        "this demo did not finish (interrupted, or it failed before its report): no report.json\n"
+    )
     endpoint = free_endpoint()
     group = robot_group(r.name for r in options.replacements)
     stack = load_stack(
@@ -326,6 +335,7 @@ def run_demo(
         glass,
         battery_set=(battery_set_s, options.battery_start),
     )
+    (run_dir / INCOMPLETE_MARK).unlink()
     return report
 
 
