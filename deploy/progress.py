@@ -67,7 +67,8 @@ def demo_line(
 def dock_line(*, docking_time_s: float, state: str, retries: int, distance_m: float | None) -> str:
     """One ``zendock dock`` line: the action's clock, its phase, retries, the distance from the pose."""
     retry = f"  (retry {retries})" if retries else ""
-    distance = f"  {distance_m:6.2f} m" if distance_m is not None and math.isfinite(distance_m) else ""
+    known = distance_m is not None and math.isfinite(distance_m)
+    distance = f"  {distance_m:6.2f} m to the dock" if known else ""
     return f"{docking_time_s:7.1f} s  {state}{retry}{distance}"
 
 

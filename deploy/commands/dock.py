@@ -2,7 +2,7 @@
 
 Both send one goal to the docking service (``dock_robot`` / ``undock_robot`` in ``--namespace``), print
 each change of the feedback as it comes (time on the service's clock, state, retries; for ``dock`` the
-distance to the dock from ``map_to_base_link_pose2d``, and on a terminal a line every 2 s) and the
+distance to the dock from ``map_to_base_link_pose2d``, and a line at least every second) and the
 result, and exit 0 on success (``dock``: once the battery says CHARGING, its last line ``charging``), 1 on failure or when no docking service answers, 130 when interrupted (the goal
 is cancelled first: the robot stops). Endpoints come from ``--connect`` (repeatable), else
 ``ZENDOCK_CONNECT``, else ``ZENOH_CONNECT``, else the default router; the namespace from
@@ -27,10 +27,11 @@ import zenoh
 
 from deploy.options import add_bus_options
 from deploy.paths import REPO_ROOT
-from deploy.progress import TERMINAL_PERIOD_S, Throttle, dock_line, is_terminal
+from deploy.progress import Throttle, dock_line
 from deploy.world_names import world_argument
 from shared import topics
 from shared.action import ActionClient, ClientGoal, spin_in_background
+from shared.bus_env import connect_from_env
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
 from shared.interface_types import ActionType, GoalStatusCode
@@ -54,7 +55,9 @@ EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130
 #: After the dock_robot goal succeeded, how long the battery has to say CHARGING (wall seconds).
 CHARGING_WAIT_S = 15.0
 DEFAULT_WORLD = "deploy/worlds/seed_room.yaml"
-ENV_CONNECT = ("ZENDOCK_CONNECT", "ZENOH_CONNECT")
+
+#: ``zendock dock`` prints a line at least this often (wall seconds) while the robot docks.
+DOCK_PROGRESS_PERIOD_S = 1.0
 
 
 def _constant_names(cls: type, exclude: tuple[str, ...] = ()) -> dict[int, str]:
@@ -67,13 +70,8 @@ ERROR_NAMES = _constant_names(DockRobotResult)
 
 
 def endpoints(flags: list[str] | None) -> tuple[str, ...]:
-    if flags:
-        return tuple(flags)
-    for name in ENV_CONNECT:
-        found = [e.strip() for e in os.environ.get(name, "").split(",") if e.strip()]
-        if found:
-            return tuple(found)
-    return (DEFAULT_ROUTER_ENDPOINT,)
+    """``--connect``, else the environment as every zendock process reads it (:mod:`shared.bus_env`)."""
+    return tuple(flags) if flags else connect_from_env() or (DEFAULT_ROUTER_ENDPOINT,)
 
 
 class RouterUnreachable(Exception):
@@ -288,8 +286,9 @@ def dock_main(args: argparse.Namespace) -> int:
     )
     print(f"docking at {target}", flush=True)
     dock, docks = _dock_poses(args)
-    # on a terminal a line every 2 s as the robot closes in; into a pipe only the changes of state
-    repeat_every_s = TERMINAL_PERIOD_S if is_terminal(sys.stdout) else None
+    # A line on every change of state and at least every second as the robot closes in: a long drive to the
+    # staging pose is not a silence.
+    repeat_every_s = DOCK_PROGRESS_PERIOD_S
     try:
         with client_session(args) as session:
             approach = Approach(session, namespace, dock, docks)

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, TextIO
 
 from deploy.options import add_connect_option
+from shared.bus_env import connect_from_env
 
 if TYPE_CHECKING:
     from shared.navigation import NavigationClient
@@ -34,13 +35,7 @@ PRINT_PERIOD_S = 0.5
 def _endpoints(flags: Sequence[str] | None) -> tuple[str, ...]:
     from shared.session import DEFAULT_ROUTER_ENDPOINT  # noqa: PLC0415 - keep CLI start-up light
 
-    if flags:
-        return tuple(flags)
-    for name in ("ZENDOCK_CONNECT", "ZENOH_CONNECT"):
-        endpoints = [e.strip() for e in os.environ.get(name, "").split(",") if e.strip()]
-        if endpoints:
-            return tuple(endpoints)
-    return (DEFAULT_ROUTER_ENDPOINT,)
+    return tuple(flags) if flags else connect_from_env() or (DEFAULT_ROUTER_ENDPOINT,)
 
 
 def run_nav(

@@ -28,7 +28,7 @@ def test_a_dock_line_keeps_its_columns_and_adds_the_distance_when_known() -> Non
     )
     assert (
         dock_line(docking_time_s=3.0, state="CONTROLLING", retries=1, distance_m=0.4567)
-        == "    3.0 s  CONTROLLING  (retry 1)    0.46 m"
+        == "    3.0 s  CONTROLLING  (retry 1)    0.46 m to the dock"
     )
 
 
