@@ -7,6 +7,7 @@ exits 0 on SIGINT or SIGTERM after closing its session (the launcher stops servi
 from __future__ import annotations
 
 import argparse
+import re
 import signal
 import sys
 import threading
@@ -41,6 +42,14 @@ def router_spec(listen: Sequence[str], config_file: str | None) -> SessionSpec:
     )
 
 
+def plain_error(text: str) -> str:
+    """Zenoh's error without the Rust source locations it carries (``at .../tcp.rs:61``): the first line,
+    cut where the first location begins."""
+    first = text.strip().splitlines()[0] if text.strip() else text
+    cut = re.search(r"\s+at\s+\S+\.rs:\d+", first)
+    return (first[: cut.start()] if cut else first).strip()
+
+
 def run_router(spec: SessionSpec, stop: threading.Event) -> int:
     """Serve until ``stop`` is set; the session is closed on the way out."""
     try:
@@ -48,7 +57,15 @@ def run_router(spec: SessionSpec, stop: threading.Event) -> int:
     except ValueError as exc:  # a missing config file or a bad mode
         raise ConfigError(str(exc)) from exc
     except Exception as exc:  # zenoh.ZError: the endpoint is taken or malformed
-        print(f"zendock router: cannot start: {exc}", file=sys.stderr, flush=True)
+        text = plain_error(str(exc))
+        if "address already in use" in text.lower() or "os error 98" in text:
+            where = ", ".join(spec.listen) or "its endpoint"
+            # The same port stays taken: a configuration error (exit 2), not worth a restart.
+            raise ConfigError(
+                f"{where} is in use: set ZENOH_LISTEN and ZENOH_CONNECT to a free port "
+                "(e.g. tcp/127.0.0.1:7448), or stop what listens there"
+            ) from None
+        print(f"zendock router: cannot start: {text}", file=sys.stderr, flush=True)
         return 1
     with session:
         where = ", ".join(spec.listen) if spec.listen else f"the endpoints of {spec.config_file}"

@@ -58,6 +58,16 @@ class StackNotReady(TimeoutError):
         self.summary = summary or message.splitlines()[0]
 
 
+class ServiceFailed(StackNotReady):
+    """A service the wait was for has ended and will not be started again (a configuration error, a command
+    not found, a crash with restarts spent): the wait ends at once, its ``summary`` naming the service and why."""
+
+
+def failed_for_good(status: ServiceStatus) -> bool:
+    """Ended by itself with a failure and left down: no restart is coming."""
+    return status.phase == "exited" and status.exit_code not in (None, 0)
+
+
 def format_statuses(statuses: Iterable[ServiceStatus]) -> str:
     return "\n".join(
         f"  {s.name}: {s.state} pid={s.pid} restarts={s.restarts} health={s.health} {s.detail}".rstrip()
@@ -284,18 +294,31 @@ class Launcher:
     ) -> dict[str, ServiceStatus]:
         """Until every (given) service is running and healthy, or a one-shot step exited 0."""
         names = list(services) if services is not None else self.services
+
+        def ready(st: dict[str, ServiceStatus]) -> bool:
+            failed = [name for name in names if name in st and failed_for_good(st[name])]
+            if failed:
+                raise ServiceFailed(
+                    f"{self.project}: {', '.join(failed)} cannot start:\n{format_statuses(st.values())}",
+                    "; ".join(self._failure_line(st[name]) for name in failed),
+                )
+            return all(name in st and is_ready(st[name]) for name in names)
+
         try:
-            return self.wait_until(
-                lambda st: all(name in st and is_ready(st[name]) for name in names),
-                timeout_s,
-                f"{', '.join(names)} to be healthy",
-            )
+            return self.wait_until(ready, timeout_s, f"{', '.join(names)} to be healthy")
+        except ServiceFailed:
+            raise
         except StackNotReady as exc:
             statuses = {s.name: s for s in self.ps()}
             late = [name for name in names if name not in statuses or not is_ready(statuses[name])]
             raise StackNotReady(
                 str(exc), "; ".join(self._not_ready_line(name, timeout_s) for name in late)
             ) from None
+
+    def _failure_line(self, status: ServiceStatus) -> str:
+        """``router cannot start: tcp/127.0.0.1:7447 is in use: ...``: the service and the line that says why."""
+        why = failure_line(self.logs(status.name, 200)) or status.detail
+        return f"{status.name} cannot start: {why}"
 
     def _not_ready_line(self, name: str, timeout_s: float) -> str:
         """``docking not healthy after 90s (its last line: ...)``: often a replacement that never declared its

@@ -110,7 +110,8 @@ def failure_line(lines: list[str]) -> str | None:
 
     Only the last run counts (after the last ``[zendock] started`` event). A traceback's cause is its
     last line; otherwise the first line that says ``error`` (``... : error: world.yaml: cannot read ...``);
-    else the last line the service printed. None when it printed nothing.
+    else the last line the service printed; for a program that could not be started at all, the launcher's
+    line saying why. None when there is nothing.
     """
     starts = [i for i, text in enumerate(lines) if text.startswith(f"{EVENT_PREFIX}started")]
     output = [
@@ -119,7 +120,9 @@ def failure_line(lines: list[str]) -> str | None:
         if text.strip() and not text.startswith(EVENT_PREFIX)
     ]
     if not output:
-        return None
+        # It never ran: the launcher's own line says why (``cannot start .venv-ros2/bin/python: ...``).
+        spawn = [text for text in lines if text.startswith(f"{EVENT_PREFIX}cannot start")]
+        return spawn[-1].removeprefix(EVENT_PREFIX).strip() if spawn else None
     if any(text.startswith("Traceback") for text in output):
         return output[-1].strip()
     return next((text.strip() for text in output if _ERROR_RE.search(text)), output[-1].strip())

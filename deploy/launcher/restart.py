@@ -8,6 +8,14 @@ from dataclasses import dataclass
 from shared.config_errors import CONFIG_ERROR_EXIT
 
 RESTART_MODES = ("no", "always", "on-failure", "unless-stopped")
+#: Exits a restart would only repeat, and what each means: the same files, flags and programs give the same
+#: answer, so the service is left down and the run told at once instead of a crash loop.
+FINAL_EXITS = {
+    CONFIG_ERROR_EXIT: "a configuration error",
+    78: "a configuration error",  # EX_CONFIG
+    126: "a command that cannot run",
+    127: "a command not found",
+}
 _POLICY_RE = re.compile(r"^(no|always|unless-stopped|on-failure)(?::(\d+))?$")
 
 
@@ -18,15 +26,15 @@ class RestartPolicy:
     ``always`` and ``unless-stopped`` restart after any exit; ``on-failure`` after a non-zero exit (a
     signal counts as a failure), at most ``max_retries`` times in a row when given. A service stopped by the
     user (``stop``, ``down``) is never restarted, whatever the policy, nor is one that exited with
-    :data:`~shared.config_errors.CONFIG_ERROR_EXIT` (2): a configuration error, which the same files and
-    flags would only repeat, as a crash loop.
+    :data:`~shared.config_errors.CONFIG_ERROR_EXIT` (2) or another of :data:`FINAL_EXITS` (a configuration
+    error, a command not found), which the same files and flags would only repeat, as a crash loop.
     """
 
     mode: str = "no"
     max_retries: int | None = None
 
     def should_restart(self, exit_code: int, consecutive_restarts: int) -> bool:
-        if exit_code == CONFIG_ERROR_EXIT:
+        if exit_code in FINAL_EXITS:
             return False
         if self.mode in ("always", "unless-stopped"):
             return True

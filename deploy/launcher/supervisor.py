@@ -19,10 +19,9 @@ from deploy.launcher.health import LivelinessWatcher, run_check
 from deploy.launcher.logs import EVENT_PREFIX, RotatingLog
 from deploy.launcher.plan import LaunchPlan, ServicePlan
 from deploy.launcher.process import ServiceProcess
-from deploy.launcher.restart import Backoff
+from deploy.launcher.restart import FINAL_EXITS, Backoff
 from deploy.launcher.robot_template import service_for
 from deploy.launcher.status import Phase, ServiceStatus, public_state
-from shared.config_errors import CONFIG_ERROR_EXIT
 
 WATCHER_CLOSE_S = 5.0
 
@@ -34,9 +33,16 @@ class DependencyFailed(Exception):
     """A dependency ended in a way that can never satisfy its condition."""
 
 
+def missing_program_hint(program: str) -> str:
+    """What to do about a program that is not there (the ROS 2 faces' interpreter: ``make ros2``)."""
+    if ".venv-ros2" in program:
+        return " (.venv-ros2 is missing: run make ros2)"
+    return ""
+
+
 def _describe_exit(code: int) -> str:
-    if code == CONFIG_ERROR_EXIT:
-        return f"exited with code {code} (a configuration error: not restarted)"
+    if code in FINAL_EXITS:
+        return f"exited with code {code} ({FINAL_EXITS[code]}: not restarted)"
     return f"killed by signal {-code}" if code < 0 else f"exited with code {code}"
 
 
@@ -294,7 +300,9 @@ class ServiceRunner:
                 self.plan.argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output
             )
         except OSError as exc:
-            self.event(f"cannot start {self.plan.argv[0]}: {exc.strerror or exc}")
+            self.event(
+                f"cannot start {self.plan.argv[0]}: {exc.strerror or exc}{missing_program_hint(self.plan.argv[0])}"
+            )
             return SPAWN_FAILED_EXIT
         process.started_at = launched_at
         self._healthy_this_run = False
