@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from deploy.arg_types import add_service_option
+from deploy.commands.down import bring_down
 from deploy.launcher.api import is_ready
 from deploy.launcher.daemon import launch_argv, plan_input
 from deploy.launcher.host import SupervisorHost, run_blocking
@@ -238,9 +239,17 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
             print(status_line(status, wait=args.wait), flush=True)
     if not ok:
         failed = [s for s in statuses if _failed(s)]
+        if failed:
+            # A service that cannot start ends the run: nothing is left running (the logs are kept).
+            reason = "; ".join(failure_reason(paths, s) for s in failed)
+            bring_down(paths)
+            print(
+                f"zendock up: {reason}; the stack is down (`zendock logs` keeps what it printed)",
+                file=sys.stderr,
+            )
+            return 1
         reason = (
-            "; ".join(failure_reason(paths, s) for s in failed)
-            or "; ".join(not_ready_reason(paths, s, args.wait_timeout) for s in statuses if not is_ready(s))
+            "; ".join(not_ready_reason(paths, s, args.wait_timeout) for s in statuses if not is_ready(s))
             or f"timed out after {args.wait_timeout:g}s"
         )
         print(

@@ -195,8 +195,10 @@ def test_up_wait_names_a_configuration_error_and_does_not_restart_it(
         assert reason.startswith(
             "zendock up: map failed: zendock map save: nope.yaml: cannot read world file"
         ), reason
-        rows = {row["name"]: row for row in json.loads(zendock(project, mark, "ps", "--json").stdout)}
-        assert (rows["map"]["state"], rows["map"]["restarts"], rows["map"]["exit_code"]) == ("exited", 0, 2)
+        assert reason.endswith("the stack is down (`zendock logs` keeps what it printed)"), reason
+        wait_for(lambda: not marked_processes(mark), 10, "nothing of the failed stack left running")
+        logs = zendock(project, mark, "logs", "map")
+        assert "cannot read world file" in logs.stdout, logs.stdout + logs.stderr
     finally:
         zendock(project, mark, "down")
 
