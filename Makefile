@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed
 #: The test and docs tools on top of the runtime: `make run` does not need them.
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test test-containers check lint docs docs-serve clean
+.PHONY: run test test-containers check lint docs docs-serve docs-check browser clean
 
 $(BIN)/python:
 	@echo "creating $(VENV) and upgrading pip"
@@ -34,8 +34,18 @@ check: $(TEST_STAMP)
 	$(BIN)/ruff format --check shared services deploy tests
 	$(BIN)/mypy shared services deploy
 
-test: $(TEST_STAMP) ros2 check docs
+test: $(TEST_STAMP) ros2 browser check docs
 	$(BIN)/python -m pytest -q --durations=25
+
+# Debian's Chromium and its driver, for the docs site's search test in a real browser (tests/docs).
+browser:
+	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || \
+		{ echo "installing Debian's chromium and chromium-driver"; apt-get update -qq && \
+		  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver; }
+
+# The site builds without warnings, and its search finds the contracts page in headless Chromium.
+docs-check: $(TEST_STAMP) browser docs
+	$(BIN)/python -m pytest -q tests/docs
 
 # The CLI reference (docs/cli.md) is generated from deploy/cli.py's parsers while the site builds
 # (deploy/docs_site.py, a mkdocs hook); docs/measurements.md is rendered from docs/measurements/*.json.
