@@ -298,15 +298,16 @@ def test_a_failed_dependency_stops_its_dependents(launch) -> None:  # type: igno
     assert not any("never up" in line for line in stack.logs("needs_step"))
 
 
-def test_a_missing_program_counts_as_a_failure(launch) -> None:  # type: ignore[no-untyped-def]
+def test_a_missing_program_counts_as_a_failure_and_is_not_restarted(launch) -> None:  # type: ignore[no-untyped-def]
     stack = launch(
         """\
         services:
-          ghost: {command: [/nonexistent/zendock-ghost], restart: "on-failure:1"}
+          ghost: {command: [/nonexistent/zendock-ghost], restart: "on-failure:3"}
         """
     )
     status = stack.wait_until(lambda st: st["ghost"].state == "exited", 10, "ghost to give up")["ghost"]
-    assert status.exit_code == 127 and status.restarts == 1
+    assert status.exit_code == 127 and status.restarts == 0, "a command not found would only fail again"
+    assert "a command not found: not restarted" in status.detail
     assert any("cannot start /nonexistent/zendock-ghost" in line for line in stack.logs("ghost"))
 
 
