@@ -90,6 +90,15 @@ class PoseTrack:
         self._odom_received_s = -math.inf
         self._ignore_poses_until_s = -math.inf
 
+    def snapshot(self) -> PoseTrack:
+        """A copy that later samples do not change: readings placed with it in one pass share one
+        map -> odom correction, however localisation arrives meanwhile."""
+        copy = PoseTrack.__new__(PoseTrack)
+        copy.__dict__.update(self.__dict__)
+        for name in ("_pose_times", "_poses", "_corrections", "_odom_times", "_odom"):
+            setattr(copy, name, list(getattr(self, name)))
+        return copy
+
     # --- input -------------------------------------------------------------------------------------
 
     def add_pose(self, received_s: float, pose: Pose2D, latency_s: float = 0.0) -> None:

@@ -15,8 +15,8 @@ What the two threads share, and how:
 - What the executor reads every tick is published after each update or change as snapshots that are
   never changed afterwards: the inflated :class:`~services.planner.costmap.CostGrid` and the cells the
   sonar heard glass in (:attr:`CostmapThread.grid`, :attr:`CostmapThread.heard_glass_xy`).
-- The pose track: the executor adds samples holding :attr:`LockedPoseTrack.lock`; the worker reads it
-  through :class:`LockedPoseTrack`, under the same lock.
+- The pose track: the executor adds samples holding :attr:`LockedPoseTrack.lock`; the worker takes a
+  snapshot of it under the same lock at the start of each update and places every reading with that.
 
 After each update the worker calls ``on_updated(now)`` (the node passes its ``post``, so the navigation run
 hears of the new costmap on the executor, never concurrently with its callbacks).
@@ -55,6 +55,10 @@ class LockedPoseTrack:
     def pose_now_at(self, t_s: float) -> Pose2D | None:
         with self.lock:
             return self.track.pose_now_at(t_s)
+
+    def snapshot(self) -> PoseTrack:
+        with self.lock:
+            return self.track.snapshot()
 
 
 class CostmapThread:

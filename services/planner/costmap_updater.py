@@ -3,7 +3,8 @@
 Sensor callbacks only hand their newest data over (:meth:`CostmapUpdater.add_scan`,
 :meth:`CostmapUpdater.add_range`, :meth:`CostmapUpdater.add_mounts`); :meth:`CostmapUpdater.update`, run
 at the node's costmap rate on a worker thread (:mod:`services.planner.costmap_thread`), places each
-reading with the robot's pose at its own stamp (:class:`~shared.pose_tracking.PoseTrack`) and the
+reading with the robot's pose at its own stamp (:class:`~shared.pose_tracking.PoseTrack`, one snapshot of
+it per update, so a scan and an echo are placed through the same map -> odom correction) and the
 sensor's mount from ``tf_static``, folds it in and re-inflates, so the control tick finds a cached
 snapshot. Sonar echoes the lidar cannot explain are glass: they go into the glass memory
 (:mod:`services.planner.glass_memory`), which is folded into the static layer and kept on file. No bus
@@ -33,6 +34,7 @@ from shared import topics
 from shared.frames import SensorMounts
 from shared.geometry import Pose2D, wrap_angle
 from shared.messages import Header, LaserScan, Range, TFMessage
+from shared.pose_tracking import PoseTrack
 from shared.ratelimit import RateLimitedLogger
 
 #: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
@@ -42,6 +44,10 @@ SONAR_MIN_TURN_RAD = 0.1
 GLASS_SAVE_PERIOD_S = 1.0
 #: A scan this far in time from a sonar reading is too old to explain its echo.
 LIDAR_FOR_SONAR_MAX_AGE_S = 0.5
+#: A scan placed through a map -> odom correction this far from the echo's cannot explain it either: the
+#: localiser moved the robot in between (a teleport, a relocalisation).
+LIDAR_FOR_SONAR_MAX_SHIFT_M = 0.05
+LIDAR_FOR_SONAR_MAX_TURN_RAD = 0.05
 #: The heard glass handed to another thread reaches this much past the slowdown radius round the robot as of
 #: the update: at most 0.5 m/s, it drives a tenth of that before the next update, 5-10 per second.
 HEARD_GLASS_MARGIN_M = 1.0
@@ -51,11 +57,10 @@ GLASS_SLOWDOWN_HALF_ANGLE_RAD = math.radians(70.0)
 
 class PoseSource(Protocol):
     """What the updater asks of the pose track (:class:`~shared.pose_tracking.PoseTrack`, or a view of it
-    that another thread fills, :class:`~services.planner.costmap_thread.LockedPoseTrack`)."""
+    that another thread fills, :class:`~services.planner.costmap_thread.LockedPoseTrack`): a copy to place
+    one update's readings with."""
 
-    def current_pose(self, now_s: float, max_odom_age_s: float) -> Pose2D | None: ...
-
-    def pose_now_at(self, t_s: float) -> Pose2D | None: ...
+    def snapshot(self) -> PoseTrack: ...
 
 
 def glass_speed_limit(params: Params, pose: Pose2D | None, heard_xy: np.ndarray) -> float | None:
@@ -79,6 +84,17 @@ def glass_speed_limit(params: Params, pose: Pose2D | None, heard_xy: np.ndarray)
         return None
     distance_m = float(np.min(distance[ahead]))
     return max(p.glass_slowdown_min_speed_mps, p.max_linear_vel_mps * distance_m / p.glass_slowdown_radius_m)
+
+
+def _same_correction(a: Pose2D | None, b: Pose2D | None) -> bool:
+    """Whether two readings were placed through (about) the same map -> odom correction (both without
+    one counts: they were placed from localisation alone)."""
+    if a is None or b is None:
+        return a is b
+    return (
+        a.distance_to(b) <= LIDAR_FOR_SONAR_MAX_SHIFT_M
+        and abs(wrap_angle(a.yaw - b.yaw)) <= LIDAR_FOR_SONAR_MAX_TURN_RAD
+    )
 
 
 def _moved(before: Pose2D, after: Pose2D) -> bool:
@@ -121,8 +137,10 @@ class CostmapUpdater:
         self.last_pose: Pose2D | None = None
         self._pending_ranges: deque[Range] = deque(maxlen=16)
         self._last_range_pose: Pose2D | None = None
-        #: The newest scan's hits in the map frame, with its stamp: what the lidar explains of a sonar echo.
+        #: The newest scan's hits in the map frame, with its stamp and the map -> odom correction it was
+        #: placed through: what the lidar explains of a sonar echo.
         self._lidar_hits: tuple[float, np.ndarray | None] = (-math.inf, None)
+        self._lidar_correction: Pose2D | None = None
 
     # --- inputs -------------------------------------------------------------------------------------
 
@@ -198,9 +216,13 @@ class CostmapUpdater:
             return
         while self._pending_mounts:
             self._mounts.update(self._pending_mounts.popleft())
+        # Localisation arriving during the update must not place the scan through one correction and the
+        # echoes after it through another: an echo heard where the robot was put down was compared with
+        # walls the lidar saw from where it had stood, and marked as glass.
+        track = self._tracker.snapshot()
         scan = self._pending_scan.popleft() if self._pending_scan else None
         if scan is not None:
-            sensor = self._sensor_pose(scan.header)
+            sensor = self._sensor_pose(track, scan.header)
             if sensor is not None:
                 stride = self._params.scan_beam_stride
                 endpoints, hits = laser_scan_points(
@@ -213,17 +235,18 @@ class CostmapUpdater:
                 )
                 costmap.update_with_scan((sensor.x, sensor.y), endpoints, hits)
                 self._lidar_hits = (scan.header.stamp.to_sec(), endpoints[hits])
+                self._lidar_correction = track.map_to_odom
         while self._pending_ranges:
             reading = self._pending_ranges.popleft()
-            sensor = self._sensor_pose(reading.header)
+            sensor = self._sensor_pose(track, reading.header)
             if sensor is None:
                 continue
             last = self._last_range_pose
             if self._pending_ranges and last is not None and not _moved(last, sensor):
                 continue  # a reading from (almost) the same place as the last one adds nothing
-            if self._fold_in_sonar(sensor, reading, may_wait=bool(self._pending_ranges)):
+            if self._fold_in_sonar(sensor, reading, track.map_to_odom, may_wait=bool(self._pending_ranges)):
                 self._last_range_pose = sensor
-        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
+        pose = track.current_pose(now, self._params.pose_timeout_s)
         self.last_pose = pose
         if pose is not None:
             costmap.clear_footprint(pose.as_tuple())
@@ -285,8 +308,8 @@ class CostmapUpdater:
 
     # --- internals ----------------------------------------------------------------------------------
 
-    def _sensor_pose(self, header: Header) -> Pose2D | None:
-        robot = self._tracker.pose_now_at(header.stamp.to_sec())
+    def _sensor_pose(self, track: PoseTrack, header: Header) -> Pose2D | None:
+        robot = track.pose_now_at(header.stamp.to_sec())
         mount = self._mounts.get(header.frame_id)
         if robot is None or mount is None:
             if mount is None:
@@ -296,7 +319,9 @@ class CostmapUpdater:
             return None
         return robot.compose(mount)
 
-    def _fold_in_sonar(self, sensor: Pose2D, reading: Range, may_wait: bool) -> bool:
+    def _fold_in_sonar(
+        self, sensor: Pose2D, reading: Range, correction: Pose2D | None, may_wait: bool
+    ) -> bool:
         """Into glass memory: an echo the lidar cannot explain marks; one it explains only clears.
 
         Only a scan from about the same time can tell glass from a wall. With ``may_wait`` (a later
@@ -310,7 +335,9 @@ class CostmapUpdater:
             return True
         echo = reading.min_range <= reading.range < reading.max_range
         hits_stamp_s, hits = self._lidar_hits
-        fresh = abs(reading.header.stamp.to_sec() - hits_stamp_s) <= LIDAR_FOR_SONAR_MAX_AGE_S
+        fresh = abs(
+            reading.header.stamp.to_sec() - hits_stamp_s
+        ) <= LIDAR_FOR_SONAR_MAX_AGE_S and _same_correction(self._lidar_correction, correction)
         if echo and not fresh and may_wait:
             return False
         if (

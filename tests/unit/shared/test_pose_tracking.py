@@ -128,3 +128,22 @@ def test_odometry_that_jumps_waits_for_localisation_to_catch_up() -> None:
     assert tracker.pose_now_at(1.0) is None
     at_restart = tracker.pose_now_at(1.02)
     assert at_restart is not None and _close(at_restart, placed)
+
+
+def test_a_snapshot_keeps_the_correction_it_was_taken_with() -> None:
+    """The planner places one costmap update's scan and echoes with one snapshot: a robot put down
+    elsewhere whose odometry restarts where it stood before (at the odom origin, standing) is moved only
+    by localisation, and that may arrive between placing the scan and placing the echoes."""
+    here, there = Pose2D(-2.53, 4.52, -2.57), Pose2D(2.53, 4.52, -0.57)
+    tracker = PoseTrack()
+    for i in range(11):
+        tracker.add_odom(OdometrySample(i / 10, Pose2D(), 0.0, 0.0), received_s=i / 10)
+        tracker.add_pose(i / 10, here)
+    snapshot = tracker.snapshot()
+    for i in range(11, 16):
+        tracker.add_odom(OdometrySample(i / 10, Pose2D(), 0.0, 0.0), received_s=i / 10)
+        tracker.add_pose(i / 10, there)
+    old, new = snapshot.pose_now_at(1.0), tracker.pose_now_at(1.0)
+    assert old is not None and _close(old, here), old
+    assert new is not None and _close(new, there), new
+    assert snapshot.map_to_odom is not None and _close(snapshot.map_to_odom, here)
