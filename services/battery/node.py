@@ -67,6 +67,11 @@ class Params(ServiceParams):
         description="demo knob: the charge fills this many times faster",
         json_schema_extra=runtime_settable(),
     )
+    frozen: bool = Field(
+        False,
+        description="hold the charge where it is (neither drains nor fills)",
+        json_schema_extra=runtime_settable(),
+    )
     state_file: str = Field(
         "", description="keep the charge in this file across restarts (empty: start from the parameters)"
     )
@@ -151,6 +156,9 @@ class BatteryService:
             )
             self._log.info("charge restored from %s: %.1f%%", params.state_file, 100.0 * stored.percentage)
             params.drain_scale, params.charge_scale = stored.drain_scale, stored.charge_scale
+            params.frozen = stored.frozen
+        elif params.frozen:
+            self._model.set_state(frozen=True)
         self._clock = StepClock(params.max_step_s)
         self._odom: FreshValue[tuple[float, float]] = FreshValue(params.odom_timeout_s)
         self._contact: FreshValue[bool] = FreshValue(params.dock_contact_timeout_s)
@@ -281,6 +289,7 @@ class BatteryService:
             self._model.drain_scale,
             self._model.charge_scale,
         )
+        self._params.frozen = self._model.frozen
         self._keep_charge(force=True)
         state = self._publish()
         return SetBatteryStateResponse(
@@ -291,12 +300,15 @@ class BatteryService:
         )
 
     def on_parameter_set(self, name: str, value: float) -> None:
-        """A runtime change of ``drain_scale`` or ``charge_scale`` (``zendock param set``) applies at once."""
+        """A runtime change of ``drain_scale``, ``charge_scale`` or ``frozen`` (``zendock param set``)
+        applies at once."""
         self._advance()  # the charge up to now moved at the old rate
         if name == "drain_scale":
             self._model.set_state(drain_scale=value)
         elif name == "charge_scale":
             self._model.set_state(charge_scale=value)
+        elif name == "frozen":
+            self._model.set_state(frozen=bool(value))
         self._keep_charge(force=True)
 
     def close(self) -> None:

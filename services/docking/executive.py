@@ -112,6 +112,14 @@ class Executive:
         if not self.mission.battery(percentage, charging):
             return []
         threshold = 100.0 * self.params.low_battery_threshold
+        if not self.mission.auto_dock:
+            return [
+                Log.info(
+                    "battery at %.1f%%, below %.0f%%: auto_dock is off, not docking",
+                    100.0 * percentage,
+                    threshold,
+                )
+            ]
         return [Log.info("battery at %.1f%%, below %.0f%%: going home", 100.0 * percentage, threshold)]
 
     def handle(self, event: Event, heard: Heard) -> Effects:

@@ -70,6 +70,16 @@ class Mission:
         self._redock_at_s: float | None = None
         self._leave_asked = False
 
+    def set_auto_dock(self, on: bool) -> None:
+        """Switch the battery trigger while running: off drops a docking it wanted and not yet started
+        (one already running keeps its way: cancel it as any goal); on while the battery is already low
+        and not charging docks at the next decision, as a trigger crossing now would."""
+        self.auto_dock = on
+        if not on:
+            self._dock_wanted = False
+        elif self.low and not self.charging:
+            self._dock_wanted = True
+
     @property
     def low(self) -> bool:
         return math.isfinite(self.percentage) and self.percentage < self.trigger.threshold

@@ -288,6 +288,13 @@ class DockingService:
         else:
             handle.abort(result)
 
+    def on_parameter_set(self, name: str, value: object) -> None:
+        """``auto_dock`` applies at once (``zendock param set docking auto_dock false``); the other
+        runtime-settable parameters are read when a run is built."""
+        if name == "auto_dock":
+            self.executive.mission.set_auto_dock(bool(value))
+            self._log.info("auto_dock %s", "on" if value else "off: the battery trigger starts no docking")
+
     def close(self) -> None:
         self.timer.cancel()
         if self.executive.task is not None:

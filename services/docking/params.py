@@ -32,7 +32,12 @@ class Params(ServiceParams):
         DEFAULT_CONTROLLER, description="final approach controller: " + choices_help(CONTROLLERS)
     )
     dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
-    auto_dock: bool = Field(True, description="dock when the battery crosses below low_battery_threshold")
+    auto_dock: bool = Field(
+        True,
+        description="dock when the battery crosses below low_battery_threshold (off: a program of "
+        "the user's own docks, and this service does not react to the same low battery)",
+        json_schema_extra=runtime_settable("at once"),
+    )
     low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
     resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
     patrol: list[tuple[float, float, float]] = Field(

@@ -382,6 +382,30 @@ def _zendock(s: Stack, *args: str, timeout_s: float = 60.0) -> subprocess.Comple
     )
 
 
+def test_auto_dock_switched_off_while_running_leaves_a_low_battery_to_the_user(stack) -> None:  # type: ignore[no-untyped-def]
+    """A user's own docking program runs against the stack: ``zendock param set docking auto_dock false``
+    and ``zendock battery set 20%``; zendock's docking hears the low battery and starts nothing. Switched
+    on again while the battery is low, it docks."""
+    s: Stack = stack(battery=("initial_percentage=0.6",))
+    s.start_docking("controller=seed")
+    s.wait_state("IDLE", timeout_s=20.0)
+    off = _zendock(s, "param", "set", "docking", "auto_dock", "false")
+    assert off.returncode == 0 and "auto_dock = false (applies at once)" in off.stdout, off
+    mark = s.state.count
+    low = _zendock(s, "battery", "set", "20%")
+    assert low.returncode == 0 and low.stdout.startswith("20.0%  DISCHARGING"), low
+    wait_until(
+        lambda: "auto_dock is off, not docking" in s.docking_log(),
+        timeout_s=10.0,
+        describe=lambda: s.docking_log()[-2000:],
+    )
+    s.wait_sim(2.0)  # two decision ticks and more on sim time, after the trigger fired
+    assert {m.data for m in since(s.state, mark)} <= {"IDLE"}, [m.data for m in since(s.state, mark)]
+    on = _zendock(s, "param", "set", "docking", "auto_dock", "true")
+    assert on.returncode == 0, on
+    s.state.wait_for(lambda m: m.data != "IDLE", timeout_s=20.0, after=s.state.count)
+
+
 def test_zendock_dock_and_undock_from_the_command_line(stack) -> None:  # type: ignore[no-untyped-def]
     s: Stack = stack(battery=("initial_percentage=0.9",))
     s.start_docking()

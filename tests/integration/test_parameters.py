@@ -103,7 +103,7 @@ def test_param_list_get_set_on_a_running_battery(
     code, _, err = zendock("param", "set", "battery", "capacity_ah", "3")
     assert code == 2 and err.startswith(f"zendock param set: {node}: capacity_ah: read at start-up only")
     code, _, err = zendock("param", "set", "battery", "drain", "3")
-    assert code == 2 and "drain: no such parameter (settable: charge_scale, drain_scale)" in err
+    assert code == 2 and "drain: no such parameter (settable: charge_scale, drain_scale, frozen)" in err
     code, _, err = zendock("param", "get", "battery", "drain")
     assert code == 2 and err.startswith(f"zendock param get: {node}: drain: no such parameter")
     code, out, _ = zendock("param", "get", "battery", "drain_scale", "--json")
@@ -112,3 +112,48 @@ def test_param_list_get_set_on_a_running_battery(
     # A node that is not there: exit 1.
     code, _, err = zendock("param", "list", "no_such_node", "--connect-timeout", "2")
     assert code == 1 and "did not answer" in err
+
+
+def test_battery_get_and_set_from_the_command_line(
+    spawn,
+    bus: zenoh.Session,
+    namespace: str,  # type: ignore[no-untyped-def]
+    router_endpoint: str,
+    zendock,
+) -> None:
+    status = KeyRecorder(bus, topic_key(namespace, topics.BATTERY_STATUS), BatteryState)
+    spawn("battery", "-p", "initial_percentage=0.9")
+    status.wait_for(timeout_s=20.0)
+
+    code, out, err = zendock("battery", "get", "--json")
+    got = json.loads(out)
+    assert (code, err) == (0, ""), err
+    assert got["percentage"] == pytest.approx(0.9, abs=0.01) and got["status"] == "DISCHARGING", got
+    assert (got["drain_scale"], got["charge_scale"], got["frozen"]) == (1.0, 1.0, False), got
+
+    # A percentage, frozen: the charge holds there.
+    code, out, err = zendock("battery", "set", "20%", "--freeze")
+    assert (code, err) == (0, "") and out.startswith("20.0%  DISCHARGING") and "frozen" in out, (out, err)
+    mark = status.count
+    held = [status.wait_for(after=mark + i, timeout_s=5.0).percentage for i in range(2)]
+    assert held == [pytest.approx(0.2), pytest.approx(0.2)], held
+    code, out, _ = zendock("param", "get", "battery", "frozen")
+    assert (code, out) == (0, "frozen: true\n")
+
+    # A knob alone keeps the rest (still frozen, still 20%); thawed, the charge falls at the new rate.
+    code, out, _ = zendock("battery", "set", "--drain-scale", str(DEMO_DRAIN_SCALE), "--json")
+    after = json.loads(out)
+    assert code == 0 and after["frozen"] and after["drain_scale"] == DEMO_DRAIN_SCALE, after
+    assert after["percentage"] == pytest.approx(0.2), after
+    code, _, _ = zendock("battery", "set", "--thaw")
+    assert code == 0
+    status.wait_for(lambda m: m.percentage < 0.19, timeout_s=10.0, after=status.count)
+
+    # Mistakes name themselves: nothing asked, a level out of range; and no battery in another namespace.
+    code, _, err = zendock("battery", "set")
+    assert code == 2 and "nothing to set" in err, err
+    with pytest.raises(SystemExit) as refused:
+        zendock("battery", "set", "120%")
+    assert refused.value.code == 2
+    code = cli.main(["battery", "get", "--connect", router_endpoint, "--namespace", f"{namespace}_none"])
+    assert code == 1

@@ -109,6 +109,27 @@ def test_mission_docks_on_a_crossing_or_a_first_low_reading() -> None:
     assert restarted.decide(0.0, None) is MissionOrder.DOCK
 
 
+def test_auto_dock_switched_while_running() -> None:
+    """``zendock param set docking auto_dock false``: a user's program docks, the mission does not react
+    to the same low battery; switched on again while low, the mission docks."""
+    mission = Mission()
+    mission.battery(0.30, False)
+    mission.set_auto_dock(False)
+    assert mission.battery(0.2, False)  # the trigger still fires ...
+    assert mission.decide(0.0, None) is None  # ... and starts nothing
+    mission.set_auto_dock(True)
+    assert mission.decide(0.1, None) is MissionOrder.DOCK
+    wanted = Mission()
+    wanted.battery(0.2, False)
+    wanted.set_auto_dock(False)  # a docking wanted and not yet started is dropped
+    assert wanted.decide(0.0, None) is None
+    charging = Mission()
+    charging.battery(0.2, True)
+    charging.set_auto_dock(False)
+    charging.set_auto_dock(True)  # low but charging: nothing to do
+    assert charging.decide(0.0, None) is None
+
+
 def test_mission_leaves_an_action_alone() -> None:
     mission = Mission()
     mission.battery(0.2, False)

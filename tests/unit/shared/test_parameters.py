@@ -134,12 +134,12 @@ def test_services_mark_what_may_change_while_running() -> None:
     from services.docking.params import Params as DockingParams
     from services.planner.params import Params as PlannerParams
 
-    assert ParameterTable(BatteryParams()).settable_names() == ["charge_scale", "drain_scale"]
+    assert ParameterTable(BatteryParams()).settable_names() == ["charge_scale", "drain_scale", "frozen"]
     assert {"max_linear_vel_mps", "max_angular_vel_radps", "inflation_radius_m"} <= set(
         ParameterTable(PlannerParams()).settable_names()
     )
     docking = set(ParameterTable(DockingParams.model_construct()).settable_names())
-    assert {"max_approach_speed_mps", "undock_speed_mps"} <= docking
+    assert {"max_approach_speed_mps", "undock_speed_mps", "auto_dock"} <= docking
     assert "dock_database" not in docking and "controller" not in docking
 
 
