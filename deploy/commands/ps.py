@@ -66,6 +66,8 @@ def ps_table(statuses: list[ServiceStatus]) -> Table:
             detail = s.detail or (
                 f"up {format_duration(round(s.uptime_s))}" if s.uptime_s is not None else ""
             )
+            if s.last_exit and s.last_exit not in detail:  # running again: why it stopped last time
+                detail = f"{detail} (last: {s.last_exit})".strip()
             if s.members:  # one process: its services start, crash and restart together
                 detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
             name = f"  {s.name}" if nested else s.name

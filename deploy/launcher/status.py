@@ -49,6 +49,8 @@ class ServiceStatus:
     members: list[str] = field(default_factory=list)
     #: The namespace the service runs in (a fleet's robot: ``r1``; "" for the stack's root).
     namespace: str = ""
+    #: After a restart, why the run before ended: "exited with code 3: <the line that says why>".
+    last_exit: str = ""
 
     def ps_json(self) -> dict[str, Any]:
         """Exactly the keys ``zendock ps --json`` promises, as ``docker compose ps --format json`` users

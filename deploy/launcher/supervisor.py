@@ -11,12 +11,13 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import time
+from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from deploy.launcher.graph import dependency_order, with_dependencies
 from deploy.launcher.health import LivelinessWatcher, run_check
-from deploy.launcher.logs import EVENT_PREFIX, RotatingLog
+from deploy.launcher.logs import EVENT_PREFIX, RotatingLog, failure_line
 from deploy.launcher.plan import LaunchPlan, ServicePlan
 from deploy.launcher.process import ServiceProcess
 from deploy.launcher.restart import FINAL_EXITS, Backoff
@@ -40,6 +41,10 @@ def missing_program_hint(program: str) -> str:
     return ""
 
 
+#: How many of a run's last lines are kept to say why it ended.
+RUN_LINES_KEPT = 200
+
+
 def _describe_exit(code: int) -> str:
     if code in FINAL_EXITS:
         return f"exited with code {code} ({FINAL_EXITS[code]}: not restarted)"
@@ -59,6 +64,11 @@ class ServiceRunner:
         self.starts = 0
         self.exit_code: int | None = None
         self.detail = ""
+        #: Why the last run ended: its exit and the line that says why (``ps`` shows it while restarting
+        #: and once it runs again).
+        self.last_exit = ""
+        #: The current run's lines (and the launcher's events), for :func:`failure_line` when it ends.
+        self._run_lines: deque[str] = deque(maxlen=RUN_LINES_KEPT)
         self.next_start_at: float | None = None
         self._launched_wall: float | None = None
         self._health = "none"
@@ -76,6 +86,7 @@ class ServiceRunner:
 
     # -- output -------------------------------------------------------------------------------------
     def output(self, text: str) -> None:
+        self._run_lines.append(text)
         if self._log is not None:
             self._log.write(text)
         self._sup.emit_line(self.name, text)
@@ -117,6 +128,7 @@ class ServiceRunner:
             pid_create_time=process.create_time if process else None,
             members=list(self.plan.members),
             namespace=self.plan.namespace,
+            last_exit=self.last_exit if self.restarts else "",
         )
 
     def _set_phase(self, phase: Phase, detail: str | None = None) -> None:
@@ -268,6 +280,8 @@ class ServiceRunner:
             self._launched_wall = time.time()
             code = await self._run_once(launched_at)
             self.exit_code = code
+            why = failure_line(list(self._run_lines))
+            self.last_exit = _describe_exit(code) + (f": {why}" if why else "")
             if self._stopping:
                 break
             if self._healthy_this_run or time.monotonic() - launched_at >= backoff.reset_after_s:
@@ -276,14 +290,14 @@ class ServiceRunner:
                 # service killed twice within reset_after_s would otherwise wait 0.2, 0.4, 0.8 ... s.
                 streak = 0
             if not self.plan.restart.should_restart(code, streak):
-                self._set_phase(Phase.EXITED, _describe_exit(code))
+                self._set_phase(Phase.EXITED, self.last_exit)
                 return
             delay_s = backoff.delay_s(streak)
             streak += 1
             self.restarts += 1
             self.next_start_at = time.monotonic() + delay_s
             self.event(f"restarting in {delay_s:.1f}s (restart {self.restarts}, policy {self.plan.restart})")
-            self._set_phase(Phase.RESTARTING, _describe_exit(code))
+            self._set_phase(Phase.RESTARTING, self.last_exit)
             with contextlib.suppress(TimeoutError):
                 async with asyncio.timeout(delay_s):
                     await self._wake.wait()

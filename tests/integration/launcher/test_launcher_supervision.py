@@ -13,6 +13,7 @@ from pathlib import Path
 import psutil
 import pytest
 
+from deploy.commands.ps import format_table
 from deploy.launcher import Backoff, Launcher, StackNotReady
 from tests.integration.launcher.conftest import fake, marked_processes, read_records, wait_for
 
@@ -350,3 +351,25 @@ def test_a_stack_that_never_gets_healthy_names_the_service_and_its_last_line(lau
     assert summary.startswith("replacement not healthy after 2s"), summary
     assert "ready" not in summary.split("(")[0].replace("replacement", ""), summary
     assert "its last line: my_docking" in summary, summary  # the fake prints "my_docking up (pid ...)"
+
+
+def test_a_crash_loop_backs_off_and_ps_says_why_it_last_stopped(launch, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """A service that fails at start-up is retried after 0.1, 0.2, 0.4 s ... (not a tight loop), and ``ps``
+    names the cause while it restarts and after it comes back: the exit and the line that said why."""
+    needed = tmp_path / "calibration.yaml"
+    stack = launch(
+        f"""\
+        services:
+          looping: {{command: {fake("--fail-unless-exists", str(needed))}, restart: always}}
+        """,
+        backoff=Backoff(initial_s=0.1, max_s=1.0, reset_after_s=10.0),
+    )
+    why = f"exited with code 3: fake: {needed} missing"
+    looping = stack.wait_until(lambda st: st["looping"].restarts >= 3, 30, "three restarts")["looping"]
+    assert why in looping.last_exit, looping
+    delays = [float(d) for d in re.findall(r"restarting in ([0-9.]+)s", "\n".join(stack.logs("looping")))]
+    assert delays[:3] == [0.1, 0.2, 0.4], delays
+    needed.write_text("ok\n")
+    running = stack.wait_until(lambda st: st["looping"].state == "running", 30, "running again")
+    assert running["looping"].last_exit == why
+    assert f"(last: {why})" in format_table(list(running.values()))
