@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from shared.contracts.enforce import hold_to_contract
+from shared.lifecycle_states import serve_lifecycle_states
 from shared.node import Node
 from shared.parameter_server import attach_parameters
 from shared.parameters import ServiceParams
@@ -93,6 +94,7 @@ def serve_group(members: list[Member], *, install_signal_handlers: bool = True) 
                 hold_to_contract(node)
                 service = member.spec.build(node, member.params)
                 attach_parameters(node, member.params, service)  # closed with the node
+                serve_lifecycle_states(node, node.name)  # closed with the node
                 node.declare_ready()
                 thread = threading.Thread(target=node.spin, name=member.label, daemon=True)
                 thread.start()

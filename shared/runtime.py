@@ -48,6 +48,7 @@ from pydantic import BaseModel, ValidationError
 from shared.bus_env import connect_from_env
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
 from shared.contracts.enforce import hold_to_contract
+from shared.lifecycle_states import serve_lifecycle_states
 from shared.names import normalise_namespace
 from shared.node import Node
 from shared.parameter_server import attach_parameters
@@ -321,6 +322,7 @@ def serve(
             return 0
         service = build(node, params)
         parameters = attach_parameters(node, params, service)
+        serve_lifecycle_states(node, node.name)  # held and closed by the node
         node.declare_ready()
         log.info("ready (namespace %r, connect %s)", options.namespace, ",".join(options.connect))
         try:

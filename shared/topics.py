@@ -12,6 +12,8 @@ SCAN = "scan"
 ULTRASONIC = "ultrasonic"
 BATTERY_STATUS = "battery_status"
 POSE2D = "map_to_base_link_pose2d"
+#: The pose as Nav2's localiser publishes it (PoseWithCovarianceStamped in map), for Nav2 scripts.
+AMCL_POSE = "amcl_pose"
 DOCK_CONTACT = "dock_contact"
 COLLISIONS = "collisions"
 GROUND_TRUTH_POSE = "ground_truth_pose"

@@ -1,4 +1,4 @@
-"""The pose service's wiring: ``tf`` and ``tf_static`` in, ``map_to_base_link_pose2d`` out.
+"""The pose service's wiring: ``tf`` and ``tf_static`` in, ``map_to_base_link_pose2d`` and ``amcl_pose`` out.
 
 Every ``1 / publish_rate_hz`` seconds on the node's clock it looks up ``reference_frame ->
 target_frame`` at the latest common time and publishes std_msgs/Float64MultiArray ``[x, y, yaw]``
@@ -6,6 +6,13 @@ target_frame`` at the latest common time and publishes std_msgs/Float64MultiArra
 While the lookup fails, or the newest transform is older than ``max_transform_age_s`` on the node's
 clock, it publishes nothing and says why (rate-limited). The simulator republishes ``tf_static``
 every second, so a late joiner has the static links within a second.
+
+It also stands in for Nav2's ``amcl`` (:mod:`shared.nav2_stand_ins`): ``amcl_pose``
+(geometry_msgs/PoseWithCovarianceStamped in ``reference_frame``) as AMCL publishes it, when the robot
+has moved ``amcl_update_min_d_m`` or turned ``amcl_update_min_a_rad`` since the last one (AMCL's
+``update_min_d`` and ``update_min_a``), and at least every ``amcl_pose_period_s``, so a Nav2 script's
+``waitUntilNav2Active()`` hears one soon after its ``/initialpose``. The covariance is all zeros: the
+stand-in does not estimate its uncertainty.
 """
 
 from __future__ import annotations
@@ -15,10 +22,15 @@ from pydantic import Field, field_validator
 
 from shared import topics
 from shared.frames import CLOCK_RESET_S, clock_went_back
+from shared.geometry import Pose2D, wrap_angle
 from shared.messages import (
     Float64MultiArray,
+    Header,
     MultiArrayDimension,
     MultiArrayLayout,
+    Pose,
+    PoseWithCovariance,
+    PoseWithCovarianceStamped,
     TFMessage,
 )
 from shared.node import RELIABLE, Node, QoS
@@ -46,6 +58,13 @@ class Params(ServiceParams):
     max_transform_age_s: float = Field(
         1.0, ge=0.0, description="publish nothing when the newest transform is older than this (0: no limit)"
     )
+    amcl_pose_period_s: float = Field(1.0, gt=0.0, description="amcl_pose at least this often (node's clock)")
+    amcl_update_min_d_m: float = Field(
+        0.25, gt=0.0, description="amcl_pose when moved this far since the last"
+    )
+    amcl_update_min_a_rad: float = Field(
+        0.2, gt=0.0, description="amcl_pose when turned this far since the last"
+    )
 
     @field_validator("target_frame", "reference_frame")
     @classmethod
@@ -54,6 +73,14 @@ class Params(ServiceParams):
         if not name:
             raise ValueError("a frame name must not be empty")
         return name
+
+
+def amcl_pose_message(transform: StampedTransform, frame_id: str) -> PoseWithCovarianceStamped:
+    """The pose as Nav2's localiser publishes it: stamped with the transform's time (zero covariance)."""
+    return PoseWithCovarianceStamped(
+        header=Header.at(transform.stamp_s, frame_id),
+        pose=PoseWithCovariance(pose=Pose.from_pose2d(transform.transform.to_pose2d())),
+    )
 
 
 def pose2d_message(transform: StampedTransform) -> Float64MultiArray:
@@ -77,6 +104,9 @@ class PoseService:
         self._available = False
         self._last_tick_s: float | None = None
         self._publisher = node.create_publisher(Float64MultiArray, topics.POSE2D, RELIABLE)
+        self._amcl_publisher = node.create_publisher(PoseWithCovarianceStamped, topics.AMCL_POSE, RELIABLE)
+        #: The pose and clock time of the last amcl_pose (None before the first).
+        self._amcl_last: tuple[float, Pose2D] | None = None
         self._tf_sub = node.create_subscription(TFMessage, topics.TF, self._on_tf, TF_QOS)
         self._tf_static_sub = node.create_subscription(
             TFMessage, topics.TF_STATIC, self._on_tf_static, TF_STATIC_QOS
@@ -135,6 +165,22 @@ class PoseService:
             self._available = True
             self._log.info("transform %s -> %s available: publishing", reference, target)
         self._publisher.publish(pose2d_message(transform))
+        self._maybe_amcl_pose(now_s, transform)
+
+    def _maybe_amcl_pose(self, now_s: float, transform: StampedTransform) -> None:
+        pose, last, p = transform.transform.to_pose2d(), self._amcl_last, self._params
+        if last is not None:
+            last_s, last_pose = last
+            due = (
+                now_s - last_s >= p.amcl_pose_period_s
+                or now_s < last_s  # the clock was reset
+                or pose.distance_to(last_pose) >= p.amcl_update_min_d_m
+                or abs(wrap_angle(pose.yaw - last_pose.yaw)) >= p.amcl_update_min_a_rad
+            )
+            if not due:
+                return
+        self._amcl_last = (now_s, pose)
+        self._amcl_publisher.publish(amcl_pose_message(transform, p.reference_frame))
 
     def _unavailable(self, reason: str) -> None:
         if self._available:

@@ -65,55 +65,76 @@ def _relayed(action: bridge_routes.BridgedAction) -> RelayedAction:
 
 #: zendock's actions (:data:`shared.ros2.bridge_routes.ACTIONS`) as rmw_zenoh's services.
 ACTIONS: tuple[RelayedAction, ...] = tuple(_relayed(action) for action in bridge_routes.ACTIONS)
+#: zendock's plain services (:data:`shared.ros2.bridge_routes.SERVICES`), each its own part.
+SERVICES: tuple[tuple[bridge_routes.BridgedService, RelayedService], ...] = tuple(
+    (service, RelayedService(service.name, service.ros_type, service.zendock, REQUEST_WAIT_S))
+    for service in bridge_routes.SERVICES
+)
 
 
-class ActionRelay:
-    """Serves one ROS 2 action's services by asking zendock's server of the same name."""
+class QueryRelay:
+    """Serves ROS 2 services (rmw_zenoh's queryables, CDR) by asking zendock's services of the same type.
+
+    Each request becomes the zendock request, the reply comes back the same way; the relay keeps no state.
+    """
+
+    #: What the counters and refusals call this relay's requests.
+    kind = "service"
 
     def __init__(
         self,
         node: Node,
-        action: RelayedAction,
         domain_id: int,
-        ros_name: str,
         refuse: Callable[..., None],
         count: Callable[[str], None],
     ) -> None:
         self.node = node
-        self.action = action
-        self.ros_name = ros_name
+        self.domain_id = domain_id
         self._refuse = refuse
         self._count = count
         self._queryables: list[Any] = []
-        for service in action.services:
-            key = data_key(
-                domain_id,
-                f"{ros_name}/_action/{service.part}",
-                service.ros_type,
-                ros_types.type_hash(service.ros_type),
-            )
-            # complete: rmw_zenoh clients ask with target ALL_COMPLETE, as for any service
-            self._queryables.append(
-                node.session.declare_queryable(key, self._handler(service), complete=True)
-            )
 
-    def _handler(self, service: RelayedService) -> Callable[[zenoh.Query], None]:
+    def serve(self, ros_name: str, service: RelayedService, zendock_key: str) -> None:
+        """Answer ROS 2's ``ros_name`` (fully qualified) from zendock's ``zendock_key`` (in the namespace)."""
+        key = data_key(self.domain_id, ros_name, service.ros_type, ros_types.type_hash(service.ros_type))
+        # complete: rmw_zenoh clients ask with target ALL_COMPLETE, as for any service
+        self._queryables.append(
+            self.node.session.declare_queryable(
+                key, self._handler(ros_name, service, zendock_key), complete=True
+            )
+        )
+
+    def _handler(
+        self, where: str, service: RelayedService, zendock_key: str
+    ) -> Callable[[zenoh.Query], None]:
         def on_query(query: zenoh.Query) -> None:
             # Zenoh's thread: take the bytes, leave the work (and the reply, perhaps much later) to the executor.
             payload = query.payload.to_bytes() if query.payload is not None else b""
             attachment = query.attachment.to_bytes() if query.attachment is not None else b""
-            self.node.post(self._relay, service, query, payload, attachment)
+            self.node.post(self._relay, where, service, zendock_key, query, payload, attachment)
 
         return on_query
 
-    def _relay(self, service: RelayedService, query: zenoh.Query, payload: bytes, attachment: bytes) -> None:
-        where = f"{self.ros_name}/_action/{service.part}"
+    def _answer_to_error(self, service: RelayedService, where: str, error: ServiceError) -> Any | None:
+        """A response to send instead of an error reply when zendock's server refused (None: none)."""
+        return None
+
+    def _relay(
+        self,
+        where: str,
+        service: RelayedService,
+        zendock_key: str,
+        query: zenoh.Query,
+        payload: bytes,
+        attachment: bytes,
+    ) -> None:
+        kind = self.kind
         try:
             caller = Attachment.decode(attachment)
         except ValueError as exc:
             self._fail(
                 query,
-                f"action-attachment-{service.part}",
+                f"{kind}-attachment-{service.part}",
                 f"{where}: a request needs rmw_zenoh's attachment ({exc})",
             )
             return
@@ -121,27 +142,20 @@ class ActionRelay:
         try:
             request = ros_types.from_ros(ros_types.from_cdr(payload, request_type), service.zendock.request)
         except (ros_types.Ros2TypeError, MessageError) as exc:
-            self._fail(query, f"action-request-{service.part}", f"{where}: {exc}")
+            self._fail(query, f"{kind}-request-{service.part}", f"{where}: {exc}")
             return
-        self._count(f"action {where}")
+        self._count(f"{kind} {where}")
 
         def answered(response: Any, error: ServiceError | None) -> None:
-            if (
-                service.part == "send_goal"
-                and error is not None
-                and not isinstance(error, ServiceUnavailable)
-            ):
-                # The server answered but would not take the goal (e.g. a bad max_staging_time): to ROS 2
-                # that is a rejected goal, what ``ros2 action send_goal`` reports as "Goal was rejected".
-                self._refuse(f"action-rejected-{service.part}", "%s: goal rejected: %s", where, error)
-                response = service.zendock.response(accepted=False, stamp=self.node.now_msg())
-            elif error is not None or response is None:
-                self._fail(query, f"action-server-{service.part}", f"{where}: zendock's server: {error}")
+            if error is not None and not isinstance(error, ServiceUnavailable):
+                response = self._answer_to_error(service, where, error)
+            if response is None:
+                self._fail(query, f"{kind}-server-{service.part}", f"{where}: zendock's server: {error}")
                 return
             try:
                 reply = ros_types.to_cdr(response, response_type)
             except ros_types.Ros2TypeError as exc:
-                self._fail(query, f"action-response-{service.part}", f"{where}: {exc}")
+                self._fail(query, f"{kind}-response-{service.part}", f"{where}: {exc}")
                 return
             try:
                 query.reply(
@@ -152,9 +166,7 @@ class ActionRelay:
             finally:
                 query.drop()
 
-        self.node.call_async(
-            service.zendock, action_key(self.action.name, service.part), request, answered, service.wait_s
-        )
+        self.node.call_async(service.zendock, zendock_key, request, answered, service.wait_s)
 
     def _fail(self, query: zenoh.Query, kind: str, reason: str) -> None:
         self._refuse(kind, "%s", reason)
@@ -166,3 +178,32 @@ class ActionRelay:
     def close(self) -> None:
         for queryable in self._queryables:
             queryable.undeclare()
+
+
+class ActionRelay(QueryRelay):
+    """Serves one ROS 2 action's services by asking zendock's server of the same name."""
+
+    kind = "action"
+
+    def __init__(
+        self,
+        node: Node,
+        action: RelayedAction,
+        domain_id: int,
+        ros_name: str,
+        refuse: Callable[..., None],
+        count: Callable[[str], None],
+    ) -> None:
+        super().__init__(node, domain_id, refuse, count)
+        self.action = action
+        self.ros_name = ros_name
+        for service in action.services:
+            self.serve(f"{ros_name}/_action/{service.part}", service, action_key(action.name, service.part))
+
+    def _answer_to_error(self, service: RelayedService, where: str, error: ServiceError) -> Any | None:
+        if service.part != "send_goal":
+            return None
+        # The server answered but would not take the goal (e.g. a bad max_staging_time): to ROS 2 that is a
+        # rejected goal, what ``ros2 action send_goal`` reports as "Goal was rejected".
+        self._refuse(f"action-rejected-{service.part}", "%s: goal rejected: %s", where, error)
+        return service.zendock.response(accepted=False, stamp=self.node.now_msg())

@@ -34,7 +34,7 @@ import zenoh
 import zenoh.ext
 from pydantic import Field, field_validator
 
-from services.ros2_bridge.actions import ACTIONS, ActionRelay
+from services.ros2_bridge.actions import ACTIONS, SERVICES, ActionRelay, QueryRelay
 from services.ros2_bridge.demand import PeerSubscriptions
 from services.ros2_bridge.graph import GraphMirror
 from shared.messages import PoseStamped
@@ -137,6 +137,7 @@ class Ros2Bridge:
         for ros_topic in dict.fromkeys(i.ros_topic for i in INBOUND):
             self._open_inlet(ros_topic, [i for i in INBOUND if i.ros_topic == ros_topic])
         self.actions = [self._open_action(action) for action in ACTIONS]
+        self.services = self._open_services()
         # zendock's services, past and future: which of them ROS 2 sees.
         self._services_watch = self.session.liveliness().declare_subscriber(
             node_token_key(node.namespace, "*"), self._on_service_token, history=True
@@ -147,12 +148,13 @@ class Ros2Bridge:
         )
         node.create_timer(STATS_PERIOD_S, self._report_stats, wall=True)
         node.log.info(
-            "ROS 2 domain %d, namespace %s: %d topics out, %d in, %d actions, session %s",
+            "ROS 2 domain %d, namespace %s: %d topics out, %d in, %d actions, %d services, session %s",
             params.domain_id,
             params.ros_namespace,
             len(OUTBOUND),
             len(INBOUND),
             len(ACTIONS),
+            len(SERVICES),
             self.session_id,
         )
 
@@ -164,6 +166,7 @@ class Ros2Bridge:
             *(r.owner for r in OUTBOUND),
             *(i.owner for i in INBOUND),
             *(a.owner for a in ACTIONS),
+            *(bridged.owner for bridged, _relayed in SERVICES),
         ]
         return {
             name: GraphNode(self.params.domain_id, self.session_id, i, name, self.params.ros_namespace)
@@ -356,6 +359,18 @@ class Ros2Bridge:
             )
         return ActionRelay(self.node, action, self.params.domain_id, name, self._refuse, self._count)
 
+    def _open_services(self) -> QueryRelay:
+        """zendock's plain services (Nav2's lifecycle queries) as ROS 2 services of their owners' nodes."""
+        relay = QueryRelay(self.node, self.params.domain_id, self._refuse, self._count)
+        for bridged, relayed in SERVICES:
+            name = self.ros_topic(bridged.name)
+            type_hash = ros_types.type_hash(bridged.ros_type)
+            self._declare_endpoint(
+                bridged.owner, EntityKind.SERVICE, name, bridged.ros_type, type_hash, ROS_RELIABLE
+            )
+            relay.serve(name, relayed, bridged.name)
+        return relay
+
     def _count(self, what: str) -> None:
         self.counts[what] += 1
 
@@ -377,6 +392,7 @@ class Ros2Bridge:
             subscriber.undeclare()
         for relay in self.actions:
             relay.close()
+        self.services.close()
         for outlet in self.outlets.values():
             outlet.publisher.undeclare()
         self.graph.close()

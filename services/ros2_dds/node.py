@@ -47,15 +47,17 @@ from shared.interface_types import GoalStatusCode
 from shared.interfaces.navigation import NavigateToPoseGoal
 from shared.messages import PoseStamped
 from shared.names import node_token_key, parse_token_key
-from shared.node import SENSOR_DATA, Node, QoS, Subscription
+from shared.node import SENSOR_DATA, Node, QoS, ServiceError, Subscription, call_service
 from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
 from shared.ros2.bridge_routes import (
     ACTIONS,
     INBOUND,
+    SERVICES,
     TOPICS,
     TWIST_STAMPED,
     BridgedAction,
+    BridgedService,
     Inbound,
     Route,
     default_domain_id,
@@ -71,8 +73,15 @@ ACCEPT_WAIT_S = 10.0
 EXECUTOR_THREADS = 8
 #: The zendock services shown as ROS 2 nodes (every owner in the tables).
 OWNERS: tuple[str, ...] = tuple(
-    dict.fromkeys([r.owner for r in TOPICS] + [i.owner for i in INBOUND] + [a.owner for a in ACTIONS])
+    dict.fromkeys(
+        [r.owner for r in TOPICS]
+        + [i.owner for i in INBOUND]
+        + [a.owner for a in ACTIONS]
+        + [s.owner for s in SERVICES]
+    )
 )
+#: How long a ROS 2 service request waits for zendock's service to answer.
+SERVICE_WAIT_S = 5.0
 
 
 class Params(ServiceParams):
@@ -141,6 +150,7 @@ class _Face:
     owner: str
     node: Any
     action_servers: list[Any] = field(default_factory=list)
+    services: list[Any] = field(default_factory=list)
     extra: list[Any] = field(default_factory=list)  # nodes of the second participant (TwistStamped)
 
 
@@ -290,6 +300,16 @@ class Ros2Dds:
                         callback_group=group,
                     )
                 )
+            for service in SERVICES:
+                if service.owner == owner:
+                    face.services.append(
+                        rnode.create_service(
+                            ros_class(service.ros_type),
+                            service.name,
+                            lambda request, response, s=service: self._serve(s, request, response),
+                            callback_group=group,
+                        )
+                    )
             self.executors[0].add_node(rnode)
             self.faces[owner] = face
 
@@ -306,6 +326,8 @@ class Ros2Dds:
                         outlet.feed = None
             for server in face.action_servers:
                 server.destroy()
+            for served in face.services:
+                face.node.destroy_service(served)
             for executor, rnode in [
                 (self.executors[0], face.node),
                 *((self.executors[-1], e) for e in face.extra),
@@ -417,6 +439,28 @@ class Ros2Dds:
             return
         self._count(f"in {topic}")
         self._commands.handle(inbound.ros_topic, msg)
+
+    def _serve(self, service: BridgedService, ros_request: Any, ros_response: Any) -> Any:
+        """rclpy's service callback (an executor thread): zendock's service answers, within SERVICE_WAIT_S;
+        without an answer ROS 2 gets the response's defaults (a GetState's ``unknown``) and a log line."""
+        where = f"/{service.name}"
+        try:
+            request = from_ros(ros_request, service.zendock.request)
+        except ConversionError as exc:
+            self._refuse(f"malformed-{service.name}", "refused a request on %s: %s", where, exc)
+            return ros_response
+        try:
+            reply = call_service(
+                self.node.session, self.node.key(service.name), service.zendock, request, SERVICE_WAIT_S
+            )
+            answer = to_ros(reply, type(ros_response))
+        except (ServiceError, ConversionError) as exc:
+            self._say.warning(
+                f"service-{service.name}", "%s: zendock's service did not answer: %s", where, exc
+            )
+            return ros_response
+        self._count(f"service {where}")
+        return answer
 
     def _navigate(self, goal: PoseStamped) -> None:
         self.clients[topics.NAVIGATE_TO_POSE].send_goal(NavigateToPoseGoal(pose=goal))

@@ -13,7 +13,14 @@ then rely on the dock detection, which the error does not affect.
 
 from __future__ import annotations
 
+import numpy as np
+
 from shared.geometry import Pose2D
+
+#: A beam agrees when the ranges from the truth and from an estimate differ by at most this (plus 5 % of
+#: the range): a localiser's scan matcher pulls a pose this far off back in.
+AGREEMENT_TOLERANCE_M = 0.3
+AGREEMENT_TOLERANCE_FRACTION = 0.05
 
 
 def believed_pose(true_pose: Pose2D, error: Pose2D) -> Pose2D:
@@ -29,3 +36,25 @@ def map_to_odom(true_pose: Pose2D, odom_to_base: Pose2D, error: Pose2D | None = 
     """
     belief = believed_pose(true_pose, error or Pose2D())
     return belief.compose(odom_to_base.inverse())
+
+
+def scan_agreement(from_truth: np.ndarray, from_estimate: np.ndarray) -> float:
+    """The fraction of lidar beams on which the map, ray-cast from an estimated pose (``from_estimate``),
+    agrees with what the lidar sees from the true pose (``from_truth``): both see nothing in range
+    (``inf``), or both a surface at about the same range. What a scan matcher would think of an initial pose
+    (measured: 0.03-0.07 for the map's origin as the estimate in the shipped rooms, whose robots start metres
+    from it; 0.6-0.96 for an estimate 0.5 m or 0.3 rad off)."""
+    if from_truth.shape != from_estimate.shape or from_truth.size == 0:
+        raise ValueError("two scans of the same beams are needed")
+    both_clear = np.isinf(from_truth) & np.isinf(from_estimate)
+    near = np.minimum(from_truth, from_estimate)
+    with np.errstate(invalid="ignore"):
+        close = (
+            np.isfinite(from_truth)
+            & np.isfinite(from_estimate)
+            & (
+                np.abs(from_truth - from_estimate)
+                <= AGREEMENT_TOLERANCE_M + AGREEMENT_TOLERANCE_FRACTION * near
+            )
+        )
+    return float(np.mean(both_clear | close))

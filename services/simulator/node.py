@@ -161,6 +161,21 @@ class SimulatorService:
     def _on_set_localisation(self, request: SetLocalisationRequest) -> SetLocalisationResponse:
         robot = self._robot_for(request.robot)
         belief = Pose2D.from_seq((request.x, request.y, request.yaw))
+        if not all(math.isfinite(v) for v in belief.as_tuple()):
+            return SetLocalisationResponse(
+                success=False, message=f"the pose {belief.as_tuple()} is not finite"
+            )
+        agreement = robot.sim.lidar_agreement(belief)
+        needed = self.params.localisation.initial_pose_min_agreement
+        if agreement < needed:
+            believed = robot.sim.believed_pose()
+            message = (
+                f"initial pose ({belief.x:.2f}, {belief.y:.2f}, {belief.yaw:.2f}) refused: {100 * agreement:.0f}% "
+                f"of the lidar's beams agree with the map seen from there (at least {100 * needed:.0f}% needed); "
+                f"the localiser keeps ({believed.x:.2f}, {believed.y:.2f}, {believed.yaw:.2f})"
+            )
+            self.node.log.warning("%s", message)
+            return SetLocalisationResponse(success=False, message=message)
         robot.sim.believe(belief)
         robot.pubs[topics.TF].publish(tf_message(robot, self.time_s))
         error = robot.sim.params.localisation_error

@@ -58,6 +58,14 @@ class GroundTruthParams(ComponentParams):
 class LocalisationParams(ComponentParams):
     #: map->odom is off by this much (in base_link at the start), like a drifting localiser.
     error: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="x_m, y_m, yaw_rad")
+    #: An initial pose (set_localisation, ROS 2's /initialpose) is refused when fewer of the lidar's beams
+    #: agree with the map seen from it (0: take any): a localiser would not converge there.
+    initial_pose_min_agreement: float = Field(
+        0.4,
+        ge=0.0,
+        le=1.0,
+        description="refuse an initial pose on which fewer lidar beams agree with the map (0: take any)",
+    )
 
 
 class DriveParams(DiffDriveParams):

@@ -25,14 +25,14 @@ import numpy as np
 import pymunk
 
 from services.simulator import sensors
-from services.simulator.localisation import map_to_odom
+from services.simulator.localisation import believed_pose, map_to_odom, scan_agreement
 from services.simulator.odometry import Odometry
 from services.simulator.robot_model import DiffDrive, DiffDriveParams, Twist2D
 from shared.geometry import Pose2D, wrap_angle
 from shared.models import infrared
 from shared.models.dock_contact import DockContact, DockContactParams, dock_contact
 from shared.models.footprint import footprint_corners, separated
-from shared.models.raycast import SegmentSet
+from shared.models.raycast import SegmentSet, cast_rays
 from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, Dock, World
 
 ROBOT_COLLISION_TYPE = 1
@@ -425,6 +425,10 @@ class Robot:
         given to a localiser); the offset from the truth is its localisation error from now on."""
         self.params = replace(self.params, localisation_error=self.pose.inverse().compose(belief))
 
+    def believed_pose(self) -> Pose2D:
+        """Where the simulated localiser believes the robot stands in the map."""
+        return believed_pose(self.pose, self.params.localisation_error)
+
     def map_to_odom(self) -> Pose2D:
         """The map -> odom transform of the simulated localiser (with the configured error)."""
         return map_to_odom(self.pose, self.odometry.pose, self.params.localisation_error)
@@ -589,6 +593,19 @@ class Robot:
         """A lidar scan from ``pose`` (default: the robot's true pose); sees opaque surfaces, not glass."""
         at = self.pose if pose is None else pose
         return sensors.lidar_scan(at, self._with_others(self.room.opaque), self.params.lidar, self.rng)
+
+    def lidar_agreement(self, estimate: Pose2D) -> float:
+        """How well the map seen from ``estimate`` agrees with what the lidar sees from the true pose
+        (:func:`~services.simulator.localisation.scan_agreement`; noise left out of both)."""
+        params = self.params.lidar
+        segments = self._with_others(self.room.opaque)
+
+        def cast(pose: Pose2D) -> np.ndarray:
+            sensor = pose.compose(params.mount)
+            ranges = cast_rays((sensor.x, sensor.y), sensor.yaw + params.beam_angles_rad(), segments)
+            return np.where((ranges >= params.range_min_m) & (ranges <= params.range_max_m), ranges, np.inf)
+
+        return scan_agreement(cast(self.pose), cast(estimate))
 
     def ultrasonic_range(self, pose: Pose2D | None = None) -> float:
         """The front ultrasonic reading from ``pose`` (default: true pose); sees opaque surfaces and glass."""

@@ -16,6 +16,7 @@ from shared.endpoints import BLOCKING, RELIABLE, SENSOR_DATA, QoS
 from shared.interfaces.battery import SET_BATTERY_STATE
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.fleet import RELEASE_DOCK, RESERVE_DOCK, FleetDocks, FleetQueue
+from shared.interfaces.lifecycle import GET_STATE
 from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE
 from shared.interfaces.navigation import (
     CLEAR_COSTMAPS_SERVICE,
@@ -40,11 +41,13 @@ from shared.messages import (
     Odometry,
     Path,
     PoseStamped,
+    PoseWithCovarianceStamped,
     Range,
     String,
     TFMessage,
     Twist,
 )
+from shared.nav2_stand_ins import get_state_service, stand_ins
 
 #: The docking service's phase, in words (``docking/state``).
 DOCKING_STATE = "docking/state"
@@ -54,6 +57,21 @@ CLOCK_QOS = QoS(reliable=True, depth=1)
 USE_SIM_TIME = Flag(
     "use_sim_time", "follow the simulator's clock on `clock` (zendock's stacks always set true)", needed=True
 )
+
+
+def _lifecycle(service: str) -> tuple[Request, ...]:
+    """``<nav2 node>/get_state`` for each Nav2 node ``service`` stands in for (:mod:`shared.nav2_stand_ins`)."""
+    return tuple(
+        Request(
+            get_state_service(name),
+            GET_STATE,
+            when="for Nav2 scripts (zendock's runtime serves it)",
+            about=f"stands in for Nav2's {name}: `active` while the service runs",
+        )
+        for name in stand_ins(service)
+    )
+
+
 DOCK_DATABASE = Flag("dock_database", "the world file: its docks (pose, marker id, size) and staging offsets")
 
 BATTERY = Contract(
@@ -105,11 +123,19 @@ POSE = Contract(
             rate_hz=10.0,
             about="data = [x_m, y_m, yaw_rad] in the map frame",
         ),
+        Topic(
+            topics.AMCL_POSE,
+            PoseWithCovarianceStamped,
+            RELIABLE,
+            when="for Nav2 scripts (zendock's pose service always)",
+            about="the pose as Nav2's amcl publishes it: on moving 0.25 m or turning 0.2 rad, and every second",
+        ),
     ),
     subscribes=(
         Topic(topics.TF, TFMessage, QoS(reliable=False, depth=100), rate_hz=20.0),
         Topic(topics.TF_STATIC, TFMessage, QoS(reliable=True, depth=20), rate_hz=1.0),
     ),
+    serves=_lifecycle("pose"),
     flags=(USE_SIM_TIME,),
     behaviour=(
         "follows the robot: map_to_base_link_pose2d within 5 cm and 0.05 rad of the simulator's truth",
@@ -209,6 +235,7 @@ PLANNER = Contract(
         Request(CLEAR_COSTMAPS_SERVICE, CLEAR_ENTIRE_COSTMAP),
         Request(LOAD_MAP_SERVICE, LOAD_MAP),
         Request(GET_MAP_SERVICE, GET_MAP),
+        *_lifecycle("planner"),
     ),
     serves_actions=(
         Action(
@@ -264,6 +291,7 @@ DOCKING = Contract(
         Request(topics.FLEET_RESERVE_DOCK, RESERVE_DOCK, when="with fleet=true"),
         Request(topics.FLEET_RELEASE_DOCK, RELEASE_DOCK, when="with fleet=true"),
     ),
+    serves=_lifecycle("docking"),
     serves_actions=(
         Action(topics.DOCK_ROBOT, DOCK_ROBOT, about="dock at dock_id (or the nearest dock)"),
         Action(topics.UNDOCK_ROBOT, UNDOCK_ROBOT, about="back off the dock to the staging pose"),

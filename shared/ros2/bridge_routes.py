@@ -14,8 +14,9 @@ from typing import Any
 
 from shared import topics
 from shared.action import action_key
-from shared.interface_types import ActionType, GoalStatusArray
+from shared.interface_types import ActionType, GoalStatusArray, ServiceType
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
+from shared.interfaces.lifecycle import GET_STATE
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.messages import (
     BatteryState,
@@ -33,6 +34,7 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
+from shared.nav2_stand_ins import NAV2_STAND_INS, get_state_service
 from shared.ros2 import interfaces
 from shared.ros2.wire import LATCHED, RELIABLE, SENSOR_DATA, QosProfile
 from shared.schema import Message
@@ -83,6 +85,24 @@ ACTIONS: tuple[BridgedAction, ...] = (
 )
 
 
+@dataclass(frozen=True)
+class BridgedService:
+    """One of zendock's request/response services as a ROS 2 service: its name (relative), Jazzy type,
+    owner and zendock's service type (the relayed request's and reply's)."""
+
+    name: str
+    ros_type: str
+    owner: str
+    zendock: ServiceType[Any, Any]
+
+
+#: Nav2's lifecycle queries, answered by the zendock service standing in for each Nav2 node.
+SERVICES: tuple[BridgedService, ...] = tuple(
+    BridgedService(get_state_service(nav2_node), interfaces.GET_STATE, owner, GET_STATE)
+    for nav2_node, owner in NAV2_STAND_INS.items()
+)
+
+
 def _action_topics(action: BridgedAction) -> tuple[Route, ...]:
     """An action's feedback and status topics (its services are relayed by each face on its own)."""
     parts = interfaces.action_parts(action.ros_type)
@@ -116,6 +136,7 @@ TOPICS: tuple[Route, ...] = (
     _out(topics.CAMERA_INFO, CameraInfo, "simulator", SENSOR_DATA),
     _out(topics.BATTERY_STATUS, BatteryState, "battery"),
     _out(topics.POSE2D, Float64MultiArray, "pose"),
+    _out(topics.AMCL_POSE, PoseWithCovarianceStamped, "pose", LATCHED),
     _out(topics.MAP, OccupancyGrid, "planner", LATCHED),
     _out(topics.PLAN, Path, "planner"),
     _out(topics.DETECTED_DOCK_POSE, PoseStamped, "perception", SENSOR_DATA),

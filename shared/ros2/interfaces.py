@@ -39,6 +39,9 @@ def action_text(action: str) -> tuple[str, str, str]:
     return sections[0], sections[1], sections[2]
 
 
+GET_STATE = "lifecycle_msgs/srv/GetState"
+#: lifecycle_msgs/srv/GetState (rcl_interfaces): what Nav2 scripts poll (:mod:`shared.nav2_stand_ins`).
+_GET_STATE_RESPONSE = "lifecycle_msgs/State current_state"
 #: action_msgs/srv/CancelGoal (rcl_interfaces), request and response.
 _CANCEL_REQUEST = "action_msgs/GoalInfo goal_info"
 _CANCEL_RESPONSE = "int8 return_code\naction_msgs/GoalInfo[] goals_canceling"
@@ -66,6 +69,7 @@ def definitions() -> TypeDefs:
     """Every type above (and the services' description types), ready for a rosbags type store."""
     defs: TypeDefs = {}
     defs.update(service_definitions(CANCEL_GOAL, _CANCEL_REQUEST, _CANCEL_RESPONSE))
+    defs.update(service_definitions(GET_STATE, "", _GET_STATE_RESPONSE))
     for action in ACTIONS:
         goal, result, feedback = action_text(action)
         defs.update(_messages(goal, f"{action}_Goal"))

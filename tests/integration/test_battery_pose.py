@@ -20,6 +20,7 @@ from shared.messages import (
     Float64MultiArray,
     Header,
     Odometry,
+    PoseWithCovarianceStamped,
     TFMessage,
     Time,
     Transform,
@@ -284,6 +285,7 @@ def test_pose_waits_for_tf_then_publishes_map_to_base_link(
     sim: FakeSimulator,  # type: ignore[no-untyped-def]
 ) -> None:
     poses = KeyRecorder(bus, topic_key(namespace, topics.POSE2D), Float64MultiArray)
+    amcl_poses = KeyRecorder(bus, topic_key(namespace, topics.AMCL_POSE), PoseWithCovarianceStamped)
     pose = spawn("pose", "-p", "use_sim_time=true")
 
     # The clock runs but no transform exists: it says so and publishes nothing.
@@ -302,6 +304,11 @@ def test_pose_waits_for_tf_then_publishes_map_to_base_link(
     moved = Pose2D(-0.4, 0.7, -1.2)
     sim.set(tf_links=[("map", "odom", MAP_TO_ODOM), ("odom", "base_link", moved)])
     poses.wait_for(lambda m: close_to(m, MAP_TO_ODOM.compose(moved)), timeout_s=10.0, after=poses.count)
+    # As Nav2's amcl publishes it (the pose service stands in for amcl): the same pose, stamped, in map.
+    there = MAP_TO_ODOM.compose(moved)
+    amcl = amcl_poses.wait_for(lambda m: m.pose.pose.to_pose2d().distance_to(there) < 1e-6, timeout_s=10.0)
+    assert amcl.header.frame_id == "map" and amcl.header.stamp.to_sec() > 0.0
+    assert abs(amcl.pose.pose.to_pose2d().yaw - there.yaw) < 1e-6
 
     # tf stops: once the newest transform is older than max_transform_age_s (1 s) nothing more is published.
     sim.set(tf_links=[])
@@ -310,6 +317,7 @@ def test_pose_waits_for_tf_then_publishes_map_to_base_link(
     sim.advance(1.0)
     assert poses.count - mark <= 1  # at most one in flight when the log line was read; 10 Hz would give ~10
     poses.close()
+    amcl_poses.close()
 
 
 def test_pose_of_lidar_link_through_tf_static(

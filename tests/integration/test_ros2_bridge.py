@@ -266,3 +266,14 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(
     }
     assert {t.child_frame_id for t in tf_static.messages[-1].transforms} == frames
     assert "camera_optical_frame" in frames
+
+
+def test_a_ros2_peer_asks_the_nav2_lifecycle_states_a_script_waits_for(spawn, router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
+    """``waitUntilNav2Active()`` polls ``amcl/get_state`` (lifecycle_msgs/srv/GetState) until ``active``: on
+    rmw_zenoh's wire the bridge relays it to the pose service, which stands in for amcl."""
+    pose = spawn("pose")
+    bridge = spawn("ros2_bridge")
+    wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
+    wait_until(lambda: "ready" in pose.output(), 30.0, lambda: pose.output()[-2000:])
+    answer = _peer(router_endpoint, "call", "/amcl/get_state", "lifecycle_msgs/srv/GetState")[0]
+    assert answer["response"]["current_state"] == {"id": 3, "label": "active"}, answer

@@ -105,6 +105,11 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
         assert step["ok"], f"{name}: {json.dumps(step)}\nros2_dds:\n{face_log}"
         return step
 
+    active = check("nav2_active")
+    assert active["frame"] == "map" and active["amcl_pose"] is not None, active
+    print(f"\nwaitUntilNav2Active's protocol: {active['seconds']} s from the user's start")
+    simulator_log = "\n".join(launcher.logs("simulator"))
+    assert "initial pose (0.00, 0.00, 0.00) refused" in simulator_log, simulator_log[-2000:]
     graph = check("graph")
     assert graph["topics"]["/cmd_vel"] == ["geometry_msgs/msg/Twist"], graph
     check("battery_status")

@@ -3,6 +3,8 @@
 Run it with ``.venv-ros2/bin/python tests/support/ros2_user.py`` on a ``ROS_DOMAIN_ID`` where
 ``services.ros2_dds`` shows zendock (discovery on loopback: ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
 It goes through what a ROS 2 user does, one JSON line per step on stdout (``{"step": ..., "ok": ...}``):
+first what a Nav2 script's ``waitUntilNav2Active()`` does (``amcl/get_state`` until ``active``, a zero
+``/initialpose`` until ``/amcl_pose`` comes, ``bt_navigator/get_state``; the protocol, written here), then
 lists nodes and topics, echoes ``/battery_status``, joins ``/map`` late (TRANSIENT_LOCAL), follows ``/clock``
 with ``use_sim_time``, drives with ``/cmd_vel`` (Twist, then TwistStamped) and watches ``/odom``, sends NavigateToPose and DockRobot
 goals (feedback, result, CHARGING), sends a ``/goal_pose`` and sees the robot arrive, cancels a goal, sends what zendock refuses, sets the localiser's belief with ``/initialpose``, and, after printing ``{"step": "stop_planner"}``, waits
@@ -22,6 +24,7 @@ from typing import Any
 import rclpy
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
+from lifecycle_msgs.srv import GetState
 from nav2_msgs.action import DockRobot, NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionClient
@@ -77,6 +80,57 @@ class User:
         return got
 
     # --- steps ----------------------------------------------------------------------------------
+
+    def _lifecycle_state(self, nav2_node: str, timeout_s: float) -> str:
+        """Ask ``<nav2_node>/get_state`` until it answers (as a Nav2 script does): its label."""
+        client = self.node.create_client(GetState, f"{nav2_node}/get_state")
+        try:
+            if not client.wait_for_service(timeout_sec=timeout_s):
+                return "no service"
+            future = client.call_async(GetState.Request())
+            self.spin_until(future.done, timeout_s)
+            return future.result().current_state.label if future.done() else "no answer"
+        finally:
+            self.node.destroy_client(client)
+
+    def nav2_active(self) -> None:
+        """What ``waitUntilNav2Active()`` asks, in its order: the localiser active, an initial pose (all
+        zeros in ``map``, as a script that did not set one sends) answered by ``/amcl_pose``, the navigator
+        active. The robot does not start at the map's origin: the localiser must not believe it does."""
+        started = time.monotonic()
+        amcl = self._lifecycle_state("amcl", 30.0)
+        amcl_poses: list[Any] = []
+        sub = self.node.create_subscription(
+            PoseWithCovarianceStamped, "amcl_pose", amcl_poses.append, LATCHED
+        )
+        pub = self.node.create_publisher(PoseWithCovarianceStamped, "initialpose", 10)
+        zero = PoseWithCovarianceStamped()
+        zero.header.frame_id = "map"
+        deadline = time.monotonic() + 30.0
+        while not amcl_poses and time.monotonic() < deadline:
+            pub.publish(zero)
+            self.spin_until(lambda: bool(amcl_poses), 1.0)
+        navigator = self._lifecycle_state("bt_navigator", 30.0)
+        active_s = time.monotonic() - started
+        # The zero estimate is refused (the scans contradict it): the belief stays where the robot is.
+        pose = self.robot_pose()
+        self.node.destroy_subscription(sub)
+        self.node.destroy_publisher(pub)
+        first = amcl_poses[0].pose.pose.position if amcl_poses else None
+        report(
+            "nav2_active",
+            amcl == "active"
+            and navigator == "active"
+            and bool(amcl_poses)
+            and pose is not None
+            and math.hypot(pose[0], pose[1]) > 0.5,
+            amcl=amcl,
+            bt_navigator=navigator,
+            amcl_pose=[round(first.x, 3), round(first.y, 3)] if first is not None else None,
+            frame=amcl_poses[0].header.frame_id if amcl_poses else None,
+            belief=[round(v, 3) for v in pose] if pose is not None else None,
+            seconds=round(active_s, 2),
+        )
 
     def graph(self) -> None:
         def complete() -> bool:
@@ -394,6 +448,7 @@ class User:
 
 
 STEPS = (
+    "nav2_active",
     "graph",
     "battery",
     "late_map",

@@ -26,6 +26,7 @@ from shared.interfaces.docking import (
     UndockRobotFeedback,
     UndockRobotGoal,
 )
+from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateResponse
 from shared.interfaces.navigation import (
     NAVIGATE_TO_POSE,
     NavigateToPoseFeedback,
@@ -51,6 +52,7 @@ from shared.messages import (
     Pose,
     PoseStamped,
     PoseWithCovariance,
+    PoseWithCovarianceStamped,
     Quaternion,
     Range,
     TFMessage,
@@ -62,7 +64,7 @@ from shared.messages import (
     Vector3,
 )
 from shared.ros2 import types
-from shared.ros2.bridge_routes import INBOUND, OUTBOUND
+from shared.ros2.bridge_routes import INBOUND, OUTBOUND, SERVICES
 from shared.schema import Message
 
 HEADER = Header(Time(12, 345_000_000), "base_link")
@@ -84,6 +86,11 @@ EXAMPLES: dict[str, Message] = {
         PoseWithCovariance(POSE, np.arange(36.0)),
         TwistWithCovariance(Twist.planar(0.3, -0.7), np.full(36, 0.01)),
     ),
+    "geometry_msgs/msg/PoseWithCovarianceStamped": PoseWithCovarianceStamped(
+        HEADER, PoseWithCovariance(POSE, np.arange(36.0))
+    ),
+    "lifecycle_msgs/srv/GetState_Request": GetStateRequest(),
+    "lifecycle_msgs/srv/GetState_Response": GetStateResponse(ACTIVE),
     "sensor_msgs/msg/LaserScan": LaserScan(
         HEADER,
         -3.1,
@@ -213,6 +220,7 @@ def test_every_bridged_type_has_an_example() -> None:
     only in goal, result and feedback, which have examples of their own)."""
     dock = next(a for a in ACTIONS if a.name == "dock_robot")
     services = {f"{s.ros_type}_{side}" for s in dock.services for side in ("Request", "Response")}
+    services |= {f"{s.ros_type}_{side}" for s in SERVICES for side in ("Request", "Response")}
     assert {r.ros_type for r in OUTBOUND} | {"geometry_msgs/msg/Twist"} | services <= set(EXAMPLES)
 
 
@@ -287,6 +295,14 @@ def test_service_hashes_describe_request_response_and_event() -> None:
     for action in ACTIONS:
         for service in action.services:
             assert types.type_hash(service.ros_type) != types.type_hash(f"{service.ros_type}_Request")
+
+
+def test_lifecycle_get_state_hash_is_jazzys() -> None:
+    """The value is ``type_hashes`` in ``share/lifecycle_msgs/srv/GetState.json`` of Jazzy's lifecycle_msgs
+    2.0.3 as packaged on PyPI: Nav2 scripts' ``amcl/get_state`` must match it on rmw_zenoh's keys."""
+    assert types.type_hash("lifecycle_msgs/srv/GetState") == (
+        "RIHS01_800a0a5aae599782b02932de0caf563f6dc4e7e94b794eadde075ba2cbef9795"
+    )
 
 
 def test_zendock_docking_types_have_jazzy_names() -> None:
