@@ -11,11 +11,7 @@ import sys
 from collections.abc import Callable
 
 from deploy.battery import parse_level, parse_scale, run_battery_get, run_battery_set
-from deploy.commands.keys import _bus_flags
-from deploy.keys.connection import BusOptions, bus_options
-from deploy.keys.errors import KeysError
-
-Verb = Callable[[argparse.Namespace, BusOptions], int]
+from deploy.keys.verbs import Verb, bus_flags, dispatch
 
 
 def _argument_type(parse: Callable[[str], float]) -> Callable[[str], float]:
@@ -31,15 +27,7 @@ def _argument_type(parse: Callable[[str], float]) -> Callable[[str], float]:
 
 
 def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
-    def run(args: argparse.Namespace) -> int:
-        try:
-            return verb(args, bus_options(args.connect, args.namespace, args.connect_timeout))
-        except KeysError as exc:
-            sys.stdout.flush()
-            print(f"zendock battery {args.battery_verb}: {exc}", file=sys.stderr)
-            return exc.exit_code
-
-    return run
+    return dispatch("battery", "battery_verb", verb)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -53,7 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     verbs = battery.add_subparsers(dest="battery_verb", metavar="VERB")
     verbs.required = True
-    bus = _bus_flags()
+    bus = bus_flags()
 
     p = verbs.add_parser("get", parents=[bus], help="charge, status, voltage, current and knobs")
     p.add_argument("--json", action="store_true", help="print one JSON object")

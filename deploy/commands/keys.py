@@ -23,10 +23,9 @@ import sys
 from collections.abc import Callable
 
 from deploy.keys.bw import run_bw
-from deploy.keys.connection import BusOptions, bus_options
+from deploy.keys.connection import BusOptions
 from deploy.keys.delay import run_delay
 from deploy.keys.echo import EchoRequest, run_echo
-from deploy.keys.errors import KeysError
 from deploy.keys.hz import run_hz
 from deploy.keys.info import run_info
 from deploy.keys.listing import ListFormat, run_list
@@ -40,15 +39,7 @@ from deploy.keys.pub import (
 )
 from deploy.keys.render import DEFAULT_ARRAY_LIMIT, EchoFormat
 from deploy.keys.stats import DEFAULT_BW_WINDOW, DEFAULT_RATE_WINDOW
-from deploy.options import add_bus_options
-
-Verb = Callable[[argparse.Namespace, BusOptions], int]
-
-
-def _bus_flags() -> argparse.ArgumentParser:
-    flags = argparse.ArgumentParser(add_help=False)
-    add_bus_options(flags.add_argument_group("bus"))
-    return flags
+from deploy.keys.verbs import Verb, bus_flags, dispatch
 
 
 def _monitor_flags(sim_time: bool, default_window: int) -> argparse.ArgumentParser:
@@ -77,16 +68,7 @@ def _monitor_flags(sim_time: bool, default_window: int) -> argparse.ArgumentPars
 
 
 def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
-    def run(args: argparse.Namespace) -> int:
-        try:
-            options = bus_options(args.connect, args.namespace, args.connect_timeout)
-            return verb(args, options)
-        except KeysError as exc:
-            sys.stdout.flush()
-            print(f"zendock keys {args.keys_verb}: {exc}", file=sys.stderr)
-            return exc.exit_code
-
-    return run
+    return dispatch("keys", "keys_verb", verb)
 
 
 def _list(args: argparse.Namespace, options: BusOptions) -> int:
@@ -162,7 +144,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     verbs = keys.add_subparsers(dest="keys_verb", metavar="VERB")
     verbs.required = True
-    bus = _bus_flags()
+    bus = bus_flags()
 
     p = verbs.add_parser(
         "list",

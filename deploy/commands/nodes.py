@@ -8,9 +8,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from deploy.commands.keys import _bus_flags
 from deploy.keys.connection import bus_options
 from deploy.keys.errors import KeysError
+from deploy.keys.verbs import bus_flags
 from deploy.nodes import run_nodes
 
 
@@ -28,7 +28,7 @@ def _run(args: argparse.Namespace) -> int:
 def _flags(given_after_verb: bool) -> argparse.ArgumentParser:
     """The bus flags and ``--json``. After the verb their defaults are suppressed, so that the verb's
     parser does not reset what was given before it (``nodes --json list``)."""
-    flags = _bus_flags()
+    flags = bus_flags()
     flags.add_argument("--json", action="store_true", help="print JSON (for scripts)")
     if given_after_verb:
         for action in flags._actions:

@@ -10,24 +10,12 @@ import argparse
 import sys
 from collections.abc import Callable
 
-from deploy.commands.keys import _bus_flags
-from deploy.keys.connection import BusOptions, bus_options
-from deploy.keys.errors import KeysError
+from deploy.keys.verbs import Verb, bus_flags, dispatch
 from deploy.param import run_param_get, run_param_list, run_param_set
-
-Verb = Callable[[argparse.Namespace, BusOptions], int]
 
 
 def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
-    def run(args: argparse.Namespace) -> int:
-        try:
-            return verb(args, bus_options(args.connect, args.namespace, args.connect_timeout))
-        except KeysError as exc:
-            sys.stdout.flush()
-            print(f"zendock param {args.param_verb}: {exc}", file=sys.stderr)
-            return exc.exit_code
-
-    return run
+    return dispatch("param", "param_verb", verb)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -41,7 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     verbs = param.add_subparsers(dest="param_verb", metavar="VERB")
     verbs.required = True
-    bus = _bus_flags()
+    bus = bus_flags()
 
     p = verbs.add_parser("list", parents=[bus], help="every parameter: name, value, settable while running")
     p.add_argument("node", metavar="NODE")
