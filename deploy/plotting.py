@@ -30,7 +30,8 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import Polygon
 
 from shared.foxglove_view.scene import DEFAULT_STAGING_OFFSET_M, staging_pose
-from shared.world import DOCK_GEOMETRY, World
+from shared.models.footprint import footprint_corners
+from shared.world import DOCK_GEOMETRY, ROBOT_LENGTH_M, ROBOT_WIDTH_M, World
 
 WALL_COLOR = "black"
 GLASS_COLOR = "#7ec8f0"
@@ -184,8 +185,17 @@ def draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
             label="glass" if i == 0 else None,
             zorder=3,
         )
-    for box in world.boxes:
-        ax.add_patch(Polygon(box.corners(), closed=True, facecolor=BOX_COLOR, edgecolor=WALL_COLOR, zorder=3))
+    for i, box in enumerate(world.boxes):
+        ax.add_patch(
+            Polygon(
+                box.corners(),
+                closed=True,
+                facecolor=BOX_COLOR,
+                edgecolor=WALL_COLOR,
+                label="box (an obstacle)" if i == 0 else None,
+                zorder=3,
+            )
+        )
     for i, dock in enumerate(world.docks):
         body = DOCK_GEOMETRY.body_box(dock)
         ax.add_patch(
@@ -194,11 +204,25 @@ def draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
                 closed=True,
                 facecolor=DOCK_COLOR,
                 edgecolor="none",
-                label="dock" if i == 0 else None,
+                label="dock (its body; the arrow: the way a docked robot faces)" if i == 0 else None,
                 zorder=3,
             )
         )
         pose = dock.pose2d
+        # The dock's pose is where the robot's centre is when docked: its outline there shows the gap
+        # between the end of the track and the dock's body as intended.
+        ax.add_patch(
+            Polygon(
+                footprint_corners(pose, ROBOT_LENGTH_M, ROBOT_WIDTH_M),
+                closed=True,
+                facecolor="none",
+                edgecolor=DOCK_COLOR,
+                linestyle="--",
+                linewidth=1,
+                label="the robot when docked (its centre: the dock's pose)" if i == 0 else None,
+                zorder=4,
+            )
+        )
         ax.annotate(
             "",
             xy=(pose.x + 0.25 * np.cos(pose.yaw), pose.y + 0.25 * np.sin(pose.yaw)),
@@ -234,7 +258,7 @@ def _draw_map(ax: plt.Axes, image: MapImage) -> None:
 
 def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
     bold = last_full_plan(picture.planned_paths)
-    faint_label: str | None = "other plans (replans shorten as it drives)"
+    faint_label: str | None = "the planner's other plans (each from where the robot then stood)"
     for i, path in enumerate(picture.planned_paths):
         if i != bold and len(path) >= 2:
             ax.plot(
@@ -251,7 +275,7 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
     if bold is not None:
         full = picture.planned_paths[bold]
         label = (
-            f"last full plan to the goal ({bold + 1} of {len(picture.planned_paths)})"
+            f"the last plan from the start to the goal (plan {bold + 1} of {len(picture.planned_paths)})"
             if len(picture.planned_paths) > 1
             else "planned path"
         )
@@ -334,7 +358,7 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
             color="black",
             markersize=6,
             linestyle="none",
-            label="end",
+            label="end (the robot's centre)",
             zorder=9,
         )
 
@@ -382,7 +406,7 @@ def plot_picture(picture: RunPicture, output: str | Path, dpi: int = 120) -> Pat
         room.set_title(picture.title or (picture.world.name if picture.world is not None else "run"))
         handles, _ = room.get_legend_handles_labels()
         if handles:
-            room.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=5, fontsize=8, frameon=False)
+            room.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=3, fontsize=8, frameon=False)
         _draw_battery(battery, picture.battery, picture.events, picture.time_label)
         fig.tight_layout()
         path = Path(output)

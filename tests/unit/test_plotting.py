@@ -16,6 +16,7 @@ from deploy.plotting import (
     STAGING_COLOR,
     RunPicture,
     battery_from_set,
+    draw_world,
     echo_arc,
     last_full_plan,
     plot_picture,
@@ -171,3 +172,21 @@ def test_trial_histograms_draw_trials_that_took_all_but_the_same_time(tmp_path: 
     path = tmp_path / "histograms.png"
     plot_trial_histograms(results, path)
     assert mpimg.imread(path).shape[2] in (3, 4)
+
+
+def test_every_thing_drawn_in_the_room_is_in_the_legend() -> None:
+    """The boxes, the dock and, at the dock's pose, the outline of the robot docked there (its centre is
+    the dock's pose: the gap between the track's end and the dock's body is meant)."""
+    import matplotlib.pyplot as plt
+
+    world = load_world(REPO_ROOT / "deploy/worlds/seed_room.yaml")
+    fig, ax = plt.subplots()
+    try:
+        draw_world(ax, world, staging_offset_m=0.7)
+        labels = ax.get_legend_handles_labels()[1]
+    finally:
+        plt.close(fig)
+    assert world.boxes and world.docks
+    assert "box (an obstacle)" in labels and "walls" in labels and "staging pose" in labels, labels
+    assert any(label.startswith("dock") for label in labels), labels
+    assert "the robot when docked (its centre: the dock's pose)" in labels, labels
