@@ -94,7 +94,7 @@ def serve_group(members: list[Member], *, install_signal_handlers: bool = True) 
                 hold_to_contract(node)
                 service = member.spec.build(node, member.params)
                 attach_parameters(node, member.params, service)  # closed with the node
-                serve_lifecycle_states(node, node.name)  # closed with the node
+                serve_lifecycle_states(node, member.spec.name)  # closed with the node
                 node.declare_ready()
                 thread = threading.Thread(target=node.spin, name=member.label, daemon=True)
                 thread.start()

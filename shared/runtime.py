@@ -291,9 +291,11 @@ def serve(
     build: Callable[[Node, P], Closeable | None],
     *,
     install_signal_handlers: bool = True,
+    service_name: str | None = None,
 ) -> int:
-    """Open the session, build the service on a node, serve its parameters (:mod:`shared.parameter_server`),
-    announce it, spin until stopped, close everything."""
+    """Open the session, build the service on a node, serve its parameters (:mod:`shared.parameter_server`)
+    and the Nav2 lifecycle states ``service_name`` (default: the node's name) answers for, announce it,
+    spin until stopped, close everything."""
     log = configure_logging(options)
     log.info("connecting to %s", ",".join(options.connect))
     stopped = threading.Event()
@@ -322,7 +324,7 @@ def serve(
             return 0
         service = build(node, params)
         parameters = attach_parameters(node, params, service)
-        serve_lifecycle_states(node, node.name)  # held and closed by the node
+        serve_lifecycle_states(node, service_name or node.name)  # held and closed by the node
         node.declare_ready()
         log.info("ready (namespace %r, connect %s)", options.namespace, ",".join(options.connect))
         try:
@@ -372,7 +374,7 @@ class ServiceSpec:
         if self.prepare is not None:
             self.prepare()
         try:
-            return serve(options, params, self.build)
+            return serve(options, params, self.build, service_name=self.name)
         except ConfigError as exc:  # raised while building (a bad world file, a bad map)
             print(f"{prog}: error: {exc}", file=sys.stderr)
             return CONFIG_ERROR_EXIT

@@ -128,7 +128,9 @@ class ServiceRunner:
             pid_create_time=process.create_time if process else None,
             members=list(self.plan.members),
             namespace=self.plan.namespace,
-            last_exit=self.last_exit if self.restarts else "",
+            last_exit=self.last_exit
+            if self.restarts and self.phase in (Phase.RUNNING, Phase.RESTARTING)
+            else "",
         )
 
     def _set_phase(self, phase: Phase, detail: str | None = None) -> None:
@@ -278,6 +280,7 @@ class ServiceRunner:
                 break
             launched_at = time.monotonic()
             self._launched_wall = time.time()
+            self._run_lines.clear()  # why this run ends is this run's to say
             code = await self._run_once(launched_at)
             self.exit_code = code
             why = failure_line(list(self._run_lines))

@@ -299,7 +299,7 @@ class BatteryService:
             frozen=self._model.frozen,
         )
 
-    def on_parameter_set(self, name: str, value: float) -> None:
+    def on_parameter_set(self, name: str, value: float | bool) -> None:
         """A runtime change of ``drain_scale``, ``charge_scale`` or ``frozen`` (``zendock param set``)
         applies at once."""
         self._advance()  # the charge up to now moved at the old rate

@@ -74,6 +74,8 @@ class Mission:
         """Switch the battery trigger while running: off drops a docking it wanted and not yet started
         (one already running keeps its way: cancel it as any goal); on while the battery is already low
         and not charging docks at the next decision, as a trigger crossing now would."""
+        if on == self.auto_dock:
+            return  # set to what it was: nothing to start or drop
         self.auto_dock = on
         if not on:
             self._dock_wanted = False

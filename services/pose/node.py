@@ -8,10 +8,10 @@ clock, it publishes nothing and says why (rate-limited). The simulator republish
 every second, so a late joiner has the static links within a second.
 
 It also stands in for Nav2's ``amcl`` (:mod:`shared.nav2_stand_ins`): ``amcl_pose``
-(geometry_msgs/PoseWithCovarianceStamped in ``reference_frame``) as AMCL publishes it, when the robot
-has moved ``amcl_update_min_d_m`` or turned ``amcl_update_min_a_rad`` since the last one (AMCL's
-``update_min_d`` and ``update_min_a``), and at least every ``amcl_pose_period_s``, so a Nav2 script's
-``waitUntilNav2Active()`` hears one soon after its ``/initialpose``. The covariance is all zeros: the
+(geometry_msgs/PoseWithCovarianceStamped in ``reference_frame``) when the robot has moved
+``amcl_update_min_d_m`` or turned ``amcl_update_min_a_rad`` since the last one, as AMCL publishes it
+(its ``update_min_d`` and ``update_min_a``), and, unlike AMCL, at least every ``amcl_pose_period_s``, so
+a Nav2 script's ``waitUntilNav2Active()`` hears one soon after its ``/initialpose``. The covariance is all zeros: the
 stand-in does not estimate its uncertainty.
 """
 

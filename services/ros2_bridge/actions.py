@@ -1,4 +1,7 @@
-"""ROS 2 actions on zendock's action servers: a goal sent from ROS 2 is a zendock goal, relayed.
+"""ROS 2 services and actions on zendock's servers: a request sent from ROS 2 is a zendock request, relayed.
+
+A plain service (Nav2's ``get_state``, see :data:`SERVICES`) is one queryable, relayed by
+:class:`QueryRelay`; an action (:class:`ActionRelay`) is several.
 
 An action on rmw_zenoh is three services (``<action>/_action/send_goal``, ``cancel_goal``,
 ``get_result``: queryables whose requests and replies are CDR with rmw_zenoh's attachment) and two
@@ -33,12 +36,15 @@ REQUEST_WAIT_S = 10.0
 
 @dataclass(frozen=True)
 class RelayedService:
-    """One of an action's three services: its ROS 2 type and the zendock service it is relayed to."""
+    """A service relayed (a plain one, or one of an action's three): its ROS 2 type and the zendock service
+    it is relayed to."""
 
     part: str
     ros_type: str
     zendock: ServiceType[Any, Any]
     wait_s: float
+    #: The reply when zendock's service does not answer (None: an error reply).
+    unanswered: Callable[[], Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -67,7 +73,10 @@ def _relayed(action: bridge_routes.BridgedAction) -> RelayedAction:
 ACTIONS: tuple[RelayedAction, ...] = tuple(_relayed(action) for action in bridge_routes.ACTIONS)
 #: zendock's plain services (:data:`shared.ros2.bridge_routes.SERVICES`), each its own part.
 SERVICES: tuple[tuple[bridge_routes.BridgedService, RelayedService], ...] = tuple(
-    (service, RelayedService(service.name, service.ros_type, service.zendock, REQUEST_WAIT_S))
+    (
+        service,
+        RelayedService(service.name, service.ros_type, service.zendock, REQUEST_WAIT_S, service.unanswered),
+    )
     for service in bridge_routes.SERVICES
 )
 
@@ -149,6 +158,14 @@ class QueryRelay:
         def answered(response: Any, error: ServiceError | None) -> None:
             if error is not None and not isinstance(error, ServiceUnavailable):
                 response = self._answer_to_error(service, where, error)
+            if response is None and service.unanswered is not None:
+                self._refuse(
+                    f"{kind}-unanswered-{service.part}",
+                    "%s: zendock's service did not answer (%s): replied with the default",
+                    where,
+                    error,
+                )
+                response = service.unanswered()
             if response is None:
                 self._fail(query, f"{kind}-server-{service.part}", f"{where}: zendock's server: {error}")
                 return

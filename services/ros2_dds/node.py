@@ -458,7 +458,7 @@ class Ros2Dds:
             self._say.warning(
                 f"service-{service.name}", "%s: zendock's service did not answer: %s", where, exc
             )
-            return ros_response
+            return to_ros(service.unanswered(), type(ros_response)) if service.unanswered else ros_response
         self._count(f"service {where}")
         return answer
 

@@ -41,9 +41,8 @@ def map_to_odom(true_pose: Pose2D, odom_to_base: Pose2D, error: Pose2D | None = 
 def scan_agreement(from_truth: np.ndarray, from_estimate: np.ndarray) -> float:
     """The fraction of lidar beams on which the map, ray-cast from an estimated pose (``from_estimate``),
     agrees with what the lidar sees from the true pose (``from_truth``): both see nothing in range
-    (``inf``), or both a surface at about the same range. What a scan matcher would think of an initial pose
-    (measured: 0.03-0.07 for the map's origin as the estimate in the shipped rooms, whose robots start metres
-    from it; 0.6-0.96 for an estimate 0.5 m or 0.3 rad off)."""
+    (``inf``), or both a surface at about the same range: what a scan matcher would think of an initial
+    pose (the figures for the shipped rooms are in docs/nav2-api.md)."""
     if from_truth.shape != from_estimate.shape or from_truth.size == 0:
         raise ValueError("two scans of the same beams are needed")
     both_clear = np.isinf(from_truth) & np.isinf(from_estimate)

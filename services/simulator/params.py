@@ -61,7 +61,7 @@ class LocalisationParams(ComponentParams):
     #: An initial pose (set_localisation, ROS 2's /initialpose) is refused when fewer of the lidar's beams
     #: agree with the map seen from it (0: take any): a localiser would not converge there.
     initial_pose_min_agreement: float = Field(
-        0.4,
+        0.25,
         ge=0.0,
         le=1.0,
         description="refuse an initial pose on which fewer lidar beams agree with the map (0: take any)",

@@ -128,7 +128,7 @@ POSE = Contract(
             PoseWithCovarianceStamped,
             RELIABLE,
             when="for Nav2 scripts (zendock's pose service always)",
-            about="the pose as Nav2's amcl publishes it: on moving 0.25 m or turning 0.2 rad, and every second",
+            about="the pose as Nav2's amcl_pose: on moving 0.25 m or turning 0.2 rad (as AMCL), and once a second",
         ),
     ),
     subscribes=(

@@ -9,6 +9,7 @@ so ``ros2 node list`` shows zendock's services and ``ros2 topic info -v`` names 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,7 +17,7 @@ from shared import topics
 from shared.action import action_key
 from shared.interface_types import ActionType, GoalStatusArray, ServiceType
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
-from shared.interfaces.lifecycle import GET_STATE
+from shared.interfaces.lifecycle import GET_STATE, UNKNOWN, GetStateResponse
 from shared.interfaces.navigation import NAVIGATE_TO_POSE
 from shared.messages import (
     BatteryState,
@@ -94,11 +95,20 @@ class BridgedService:
     ros_type: str
     owner: str
     zendock: ServiceType[Any, Any]
+    #: The face's reply when zendock's service does not answer (None: an error reply). A ROS 2 client
+    #: may wait for its reply without a timeout (Nav2 scripts do, for ``get_state``), and rmw_zenoh's
+    #: drops error replies: such a client would wait forever.
+    unanswered: Callable[[], Message] | None = None
 
 
-#: Nav2's lifecycle queries, answered by the zendock service standing in for each Nav2 node.
+def _unknown_state() -> GetStateResponse:
+    return GetStateResponse(current_state=UNKNOWN)
+
+
+#: Nav2's lifecycle queries, answered by the zendock service standing in for each Nav2 node (``unknown``
+#: while it does not answer: a script asks again).
 SERVICES: tuple[BridgedService, ...] = tuple(
-    BridgedService(get_state_service(nav2_node), interfaces.GET_STATE, owner, GET_STATE)
+    BridgedService(get_state_service(nav2_node), interfaces.GET_STATE, owner, GET_STATE, _unknown_state)
     for nav2_node, owner in NAV2_STAND_INS.items()
 )
 

@@ -39,8 +39,8 @@ def action_text(action: str) -> tuple[str, str, str]:
     return sections[0], sections[1], sections[2]
 
 
-GET_STATE = "lifecycle_msgs/srv/GetState"
 #: lifecycle_msgs/srv/GetState (rcl_interfaces): what Nav2 scripts poll (:mod:`shared.nav2_stand_ins`).
+GET_STATE = "lifecycle_msgs/srv/GetState"
 _GET_STATE_RESPONSE = "lifecycle_msgs/State current_state"
 #: action_msgs/srv/CancelGoal (rcl_interfaces), request and response.
 _CANCEL_REQUEST = "action_msgs/GoalInfo goal_info"

@@ -106,6 +106,8 @@ class User:
         pub = self.node.create_publisher(PoseWithCovarianceStamped, "initialpose", 10)
         zero = PoseWithCovarianceStamped()
         zero.header.frame_id = "map"
+        # A script publishes at once; here the test also checks the estimate is refused, so it must arrive.
+        self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
         deadline = time.monotonic() + 30.0
         while not amcl_poses and time.monotonic() < deadline:
             pub.publish(zero)

@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 
 from services.simulator.localisation import scan_agreement
+from services.simulator.params import LocalisationParams
 from services.simulator.physics import Robot
 from shared.geometry import Pose2D
 from shared.world import load_world
 
 SEED_ROOM = "deploy/worlds/seed_room.yaml"
 #: The simulator's default: an initial pose on which fewer beams agree is refused.
-MIN_AGREEMENT = 0.4
+MIN_AGREEMENT = LocalisationParams().initial_pose_min_agreement
 
 
 def test_the_map_origin_disagrees_with_the_scans_of_a_robot_metres_from_it() -> None:
@@ -22,7 +23,10 @@ def test_the_map_origin_disagrees_with_the_scans_of_a_robot_metres_from_it() -> 
     assert robot.lidar_agreement(Pose2D()) < 0.1 < MIN_AGREEMENT
 
 
-@pytest.mark.parametrize("offset", [Pose2D(0.3, -0.2, 0.0), Pose2D(0.0, 0.0, 0.3), Pose2D(0.5, 0.0, 0.0)])
+@pytest.mark.parametrize(
+    "offset",
+    [Pose2D(0.3, -0.2, 0.0), Pose2D(0.0, 0.0, 0.3), Pose2D(0.5, 0.0, 0.0), Pose2D(0.3, -0.2, 0.4)],
+)
 def test_an_estimate_a_localiser_would_pull_in_agrees(offset: Pose2D) -> None:
     robot = Robot(load_world(SEED_ROOM))
     truth = robot.pose
