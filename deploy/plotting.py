@@ -204,7 +204,7 @@ def draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
                 closed=True,
                 facecolor=DOCK_COLOR,
                 edgecolor="none",
-                label="dock (its body; the arrow: the way a docked robot faces)" if i == 0 else None,
+                label="dock (arrow: the way a docked robot faces)" if i == 0 else None,
                 zorder=3,
             )
         )
@@ -219,7 +219,7 @@ def draw_world(ax: plt.Axes, world: World, staging_offset_m: float) -> None:
                 edgecolor=DOCK_COLOR,
                 linestyle="--",
                 linewidth=1,
-                label="the robot when docked (its centre: the dock's pose)" if i == 0 else None,
+                label="robot docked (centre at the dock's pose)" if i == 0 else None,
                 zorder=4,
             )
         )
@@ -258,7 +258,7 @@ def _draw_map(ax: plt.Axes, image: MapImage) -> None:
 
 def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
     bold = last_full_plan(picture.planned_paths)
-    faint_label: str | None = "the planner's other plans (each from where the robot then stood)"
+    faint_label: str | None = "other plans (each from where the robot stood)"
     for i, path in enumerate(picture.planned_paths):
         if i != bold and len(path) >= 2:
             ax.plot(
@@ -275,7 +275,7 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
     if bold is not None:
         full = picture.planned_paths[bold]
         label = (
-            f"the last plan from the start to the goal (plan {bold + 1} of {len(picture.planned_paths)})"
+            f"last plan from start to goal ({bold + 1} of {len(picture.planned_paths)} plans)"
             if len(picture.planned_paths) > 1
             else "planned path"
         )
@@ -358,7 +358,7 @@ def _draw_run(ax: plt.Axes, fig: plt.Figure, picture: RunPicture) -> None:
             color="black",
             markersize=6,
             linestyle="none",
-            label="end (the robot's centre)",
+            label="end (robot's centre)",
             zorder=9,
         )
 
@@ -388,9 +388,19 @@ def _draw_battery(
         return
     ax.plot(battery[:, 0], battery[:, 1] * 100.0, color=BATTERY_COLOR, linewidth=2)
     ax.fill_between(battery[:, 0], 0, battery[:, 1] * 100.0, color=BATTERY_COLOR, alpha=0.15)
+    t_min, t_max = float(battery[0, 0]), float(battery[-1, 0])
     for k, (t_s, label) in enumerate(events):
         ax.axvline(t_s, color=EVENT_COLOR, linestyle=":", linewidth=1.2)
-        ax.text(t_s, 102 - 7 * k, f" {label}", color=EVENT_COLOR, fontsize=8, va="top", ha="left")
+        late = t_max > t_min and (t_s - t_min) / (t_max - t_min) > 0.7  # written leftwards, inside the panel
+        ax.text(
+            t_s,
+            102 - 7 * k,
+            f"{label} " if late else f" {label}",
+            color=EVENT_COLOR,
+            fontsize=8,
+            va="top",
+            ha="right" if late else "left",
+        )
 
 
 def plot_picture(picture: RunPicture, output: str | Path, dpi: int = 120) -> Path:
@@ -404,11 +414,15 @@ def plot_picture(picture: RunPicture, output: str | Path, dpi: int = 120) -> Pat
         _draw_run(room, fig, picture)
         _frame(room, picture)
         room.set_title(picture.title or (picture.world.name if picture.world is not None else "run"))
-        handles, _ = room.get_legend_handles_labels()
-        if handles:
-            room.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=3, fontsize=8, frameon=False)
+        handles, labels = room.get_legend_handles_labels()
         _draw_battery(battery, picture.battery, picture.events, picture.time_label)
-        fig.tight_layout()
+        if handles:
+            # Across the figure's foot, three columns: every label whole, the room keeps its size.
+            fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8, frameon=False)
+            rows = -(-len(handles) // 3)
+            fig.tight_layout(rect=(0.0, min(0.4, 0.035 * rows + 0.02), 1.0, 1.0))
+        else:
+            fig.tight_layout()
         path = Path(output)
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=dpi)

@@ -189,4 +189,4 @@ def test_every_thing_drawn_in_the_room_is_in_the_legend() -> None:
     assert world.boxes and world.docks
     assert "box (an obstacle)" in labels and "walls" in labels and "staging pose" in labels, labels
     assert any(label.startswith("dock") for label in labels), labels
-    assert "the robot when docked (its centre: the dock's pose)" in labels, labels
+    assert "robot docked (centre at the dock's pose)" in labels, labels
