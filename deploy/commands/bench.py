@@ -194,6 +194,26 @@ def _print_dds(dds: dict) -> None:
     )
 
 
+def _bench_nav2(args: argparse.Namespace) -> int:
+    from deploy.bench.nav2 import BenchError, run_bench  # noqa: PLC0415 - starts a stack with the DDS face
+
+    try:
+        report = run_bench(args.repeats, idle_s=args.idle_s, busy_s=args.busy_s)
+    except (BenchError, RuntimeError) as exc:
+        print(f"zendock bench nav2: {exc}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(strict_json.dumps(report))
+        return 0
+    table = Table(title="from up to waitUntilNav2Active() returning, and the DDS face's cost (medians)")
+    for column in ("figure", "median", "runs"):
+        table.add_column(column)
+    for key, median in report["median"].items():
+        table.add_row(key, f"{median:g}", ", ".join(f"{run[key]:g}" for run in report["runs"]))
+    Console().print(table)
+    return 0
+
+
 def _bench_ros2(args: argparse.Namespace) -> int:
     from deploy.bench.ros2 import run_ros2_bench, run_stack_rtf  # noqa: PLC0415 - starts a router and the bridge
 
@@ -453,6 +473,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     startup.add_argument("--repeats", type=int, default=5, help="starts per service (medians)")
     startup.add_argument("--json", action="store_true")
     startup.set_defaults(func=_bench_startup)
+    nav2 = verbs.add_parser(
+        "nav2", help="from up to a Nav2 script's waitUntilNav2Active(), and the DDS face's CPU and RSS"
+    )
+    nav2.add_argument("--repeats", type=count, default=3, help="stacks started (medians)")
+    nav2.add_argument("--idle-s", type=float, default=10.0, help="seconds the idle face's CPU is measured")
+    nav2.add_argument("--busy-s", type=float, default=8.0, help="seconds the busy face's CPU is measured")
+    nav2.add_argument("--json", action="store_true")
+    nav2.set_defaults(func=_bench_nav2)
     ros2 = verbs.add_parser(
         "ros2", help="the ROS 2 bridge: added latency, CPU per message, throughput by type"
     )

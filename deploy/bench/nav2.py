@@ -1,0 +1,159 @@
+"""``zendock bench nav2``: from ``up`` to a Nav2 script's ``waitUntilNav2Active()`` returning, and what the
+ROS 2 DDS face costs.
+
+Each repeat starts the default stack with the ``ros2-dds`` profile on a free port and a fresh ROS 2
+domain (discovery on loopback), waits for it to be healthy, then runs the rclpy user
+(``tests/support/ros2_user.py``, in ``.venv-ros2``) for its ``nav2_active`` step: the protocol
+``waitUntilNav2Active()`` speaks (``amcl/get_state``, a zero ``/initialpose`` until ``/amcl_pose``,
+``bt_navigator/get_state``). Reported per repeat: the seconds to healthy, the protocol's own seconds
+and the total from ``up``; then the face's CPU (share of one core) and RSS (its process and children)
+while idle, and while a ROS 2 user echoes the battery and the clock and drives on ``/cmd_vel``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import statistics
+import subprocess
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import psutil
+
+from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.paths import REPO_ROOT
+from deploy.testing.config import DEFAULT_STACK, StackConfig
+
+ROS2_PYTHON = REPO_ROOT / ".venv-ros2" / "bin" / "python"
+USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
+#: What the busy user does while the face's CPU is measured.
+BUSY_STEPS = "battery,clock,drive,drive_stamped"
+
+
+class BenchError(RuntimeError):
+    """The bench cannot run here (no .venv-ros2) or a run went wrong; the message says which."""
+
+
+@dataclass(frozen=True)
+class Nav2Run:
+    healthy_s: float
+    protocol_s: float
+    up_to_active_s: float
+    face_cpu_idle: float
+    face_cpu_busy: float
+    face_rss_idle_mb: float
+    face_rss_busy_mb: float
+
+
+def _user_env(domain: int) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTHON"))}
+    env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    return env
+
+
+def _face_processes(launcher: Launcher) -> list[psutil.Process]:
+    status = launcher.status("ros2_dds")
+    if status.pid is None:
+        raise BenchError(f"ros2_dds is not running ({status.state}: {status.detail})")
+    face = psutil.Process(status.pid)
+    return [face, *face.children(recursive=True)]
+
+
+def _cpu_share(processes: list[psutil.Process], seconds: float) -> float:
+    def cpu() -> float:
+        return sum(p.cpu_times().user + p.cpu_times().system for p in processes)
+
+    before = cpu()
+    time.sleep(seconds)
+    return (cpu() - before) / seconds
+
+
+def _rss_mb(processes: list[psutil.Process]) -> float:
+    return sum(p.memory_info().rss for p in processes) / 1e6
+
+
+def _protocol_seconds(domain: int) -> float:
+    done = subprocess.run(
+        [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", "nav2_active"],
+        cwd=REPO_ROOT,
+        env=_user_env(domain),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    for line in done.stdout.splitlines():
+        if line.startswith("{"):
+            step = json.loads(line)
+            if step.get("step") == "nav2_active":
+                if not step["ok"]:
+                    raise BenchError(f"waitUntilNav2Active's protocol failed: {line}")
+                return float(step["seconds"])
+    raise BenchError(f"the rclpy user reported nothing: {done.stderr[-1500:]}")
+
+
+def one_run(idle_s: float, busy_s: float) -> Nav2Run:
+    domain = random.randint(100, 200)
+    with tempfile.TemporaryDirectory(prefix="zendock-bench-nav2-") as tmp:
+        project = Path(tmp)
+        environment = {
+            **StackConfig(detector="synthetic", rtf="4").environment(free_endpoint(), project),
+            "ROS_DOMAIN_ID": str(domain),
+        }
+        stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
+        launcher = Launcher(
+            stack,
+            profiles=["ros2-dds"],
+            project_dir=project,
+            working_dir=REPO_ROOT,
+            project_name="bench-nav2",
+        )
+        started = time.monotonic()
+        try:
+            launcher.up()
+            launcher.wait_healthy(timeout_s=90.0)
+            healthy_s = time.monotonic() - started
+            protocol_s = _protocol_seconds(domain)
+            up_to_active_s = time.monotonic() - started
+            face = _face_processes(launcher)
+            idle = _cpu_share(face, idle_s)
+            rss_idle = _rss_mb(face)
+            busy_user = subprocess.Popen(
+                [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", BUSY_STEPS],
+                cwd=REPO_ROOT,
+                env=_user_env(domain),
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+            try:
+                busy = _cpu_share(face, busy_s)
+                rss_busy = _rss_mb(face)
+            finally:
+                busy_user.kill()
+                busy_user.wait(timeout=10)
+        finally:
+            launcher.down()
+    return Nav2Run(
+        round(healthy_s, 2),
+        round(protocol_s, 2),
+        round(up_to_active_s, 2),
+        round(idle, 4),
+        round(busy, 4),
+        round(rss_idle, 1),
+        round(rss_busy, 1),
+    )
+
+
+def run_bench(repeats: int, idle_s: float = 10.0, busy_s: float = 8.0) -> dict[str, Any]:
+    """``repeats`` runs and the median of each figure."""
+    if not ROS2_PYTHON.exists():
+        raise BenchError(f"{ROS2_PYTHON} is missing: run make ros2")
+    runs = [one_run(idle_s, busy_s) for _ in range(repeats)]
+    rows = [asdict(r) for r in runs]
+    return {"runs": rows, "median": {key: statistics.median(row[key] for row in rows) for key in rows[0]}}
