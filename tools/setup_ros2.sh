@@ -211,26 +211,31 @@ pkg_xml tf2_msgs 0.36.14 builtin_interfaces geometry_msgs action_msgs | write_if
 cmakelists tf2_msgs "msg/TF2Error.msg msg/TFMessage.msg srv/FrameGraph.srv action/LookupTransform.action" \
   builtin_interfaces geometry_msgs action_msgs | write_if_changed "$T/CMakeLists.txt"
 
-# nav2_msgs: only the actions zendock serves (NavigateToPose, DockRobot, UndockRobot; in Jazzy the
-# docking actions are nav2_msgs', not opennav_docking_msgs').
+# nav2_msgs: only what zendock serves (shared/ros2/definitions/nav2_msgs: the actions NavigateToPose,
+# DockRobot, UndockRobot -- in Jazzy the docking actions are nav2_msgs', not opennav_docking_msgs' -- and
+# the costmap and map services with the messages they carry).
 N=$SRC/nav2_msgs
-mkdir -p "$N/action"
 ifaces=""
-for f in "$DEFS"/nav2_msgs/action/*.action; do
-  write_if_changed "$N/action/$(basename "$f")" < "$f"
-  ifaces="$ifaces action/$(basename "$f")"
+for kind in msg srv action; do
+  mkdir -p "$N/$kind"
+  for f in "$DEFS"/nav2_msgs/$kind/*.$kind; do
+    write_if_changed "$N/$kind/$(basename "$f")" < "$f"
+    ifaces="$ifaces $kind/$(basename "$f")"
+  done
+  for f in "$N"/$kind/*.$kind; do
+    [ -f "$DEFS/nav2_msgs/$kind/$(basename "$f")" ] || rm -f "$f"
+  done
 done
-for f in "$N"/action/*.action; do
-  [ -f "$DEFS/nav2_msgs/action/$(basename "$f")" ] || rm -f "$f"
-done
-pkg_xml nav2_msgs 1.3.13 builtin_interfaces geometry_msgs action_msgs | write_if_changed "$N/package.xml"
-cmakelists nav2_msgs "$ifaces" builtin_interfaces geometry_msgs action_msgs | write_if_changed "$N/CMakeLists.txt"
+pkg_xml nav2_msgs 1.3.13 builtin_interfaces geometry_msgs std_msgs nav_msgs action_msgs \
+  | write_if_changed "$N/package.xml"
+cmakelists nav2_msgs "$ifaces" builtin_interfaces geometry_msgs std_msgs nav_msgs action_msgs \
+  | write_if_changed "$N/CMakeLists.txt"
 step_done sources checked
 
 # ---- 6. colcon build into the venv ------------------------------------------------------------------
 step_start
 want=$( (cd "$SRC" && find . -type f | LC_ALL=C sort | xargs sha256sum; cat "$STAMPS/runtime" "$STAMPS/buildtools") | digest)
-if stamp_ok interfaces "$want" && "$VPY" -c 'import nav2_msgs.action, tf2_msgs.msg' 2>/dev/null; then
+if stamp_ok interfaces "$want" && "$VPY" -c 'import nav2_msgs.action, nav2_msgs.srv, tf2_msgs.msg' 2>/dev/null; then
   step_done 'nav2_msgs, tf2_msgs' cached
 else
   (
@@ -246,7 +251,7 @@ else
         "-DPython3_EXECUTABLE=$VPY" "-DPYTHON_EXECUTABLE=$VPY" \
       > "$BUILD/colcon.out" 2>&1 || { tail -60 "$BUILD/colcon.out" >&2; exit 1; }
   )
-  "$VPY" -c 'import nav2_msgs.action, tf2_msgs.msg' \
+  "$VPY" -c 'import nav2_msgs.action, nav2_msgs.srv, tf2_msgs.msg' \
     || { echo "setup_ros2: the built packages do not import (see $BUILD/colcon.out)" >&2; exit 1; }
   stamp interfaces "$want"
   step_done 'nav2_msgs, tf2_msgs' built

@@ -13,6 +13,7 @@ from services.planner.costmap import CostGrid, occupancy_from_costs
 from services.planner.grid_frame import GridFrame
 from services.planner.occupancy_map import OccupancyMap
 from shared.geometry import Pose2D
+from shared.interfaces.costmap import Costmap, CostmapMetaData
 from shared.messages import Header, MapMetaData, OccupancyGrid, Path, Pose, PoseStamped, Time
 
 
@@ -43,6 +44,41 @@ def costmap_message(grid: CostGrid, stamp_s: float, frame_id: str) -> OccupancyG
         header=Header.at(stamp_s, frame_id),
         info=_info(grid.frame, stamp_s),
         data=occupancy_from_costs(grid.costs).ravel(),
+    )
+
+
+def nav2_costmap_message(
+    grid: CostGrid,
+    stamp_s: float,
+    frame_id: str,
+    layer: str,
+    window: tuple[float, float, float] | None = None,
+) -> Costmap:
+    """The costs as ``nav2_msgs/Costmap`` (Nav2's scale already): the whole grid, or the cells of the
+    square ``window = (x, y, side_m)`` centred on a world point, cut to the grid."""
+    frame, costs = grid.frame, grid.costs
+    ix0, iy0, ix1, iy1 = 0, 0, frame.width, frame.height
+    if window is not None:
+        x, y, side_m = window
+        (cx, cy) = frame.world_to_cell(x, y)
+        half = int(round(side_m / frame.resolution_m / 2.0))
+        ix0, iy0 = min(max(cx - half, 0), frame.width), min(max(cy - half, 0), frame.height)
+        ix1, iy1 = min(max(cx + half, 0), frame.width), min(max(cy + half, 0), frame.height)
+    ox, oy, yaw = frame.origin
+    dx, dy = ix0 * frame.resolution_m, iy0 * frame.resolution_m
+    origin = Pose2D(ox + dx * np.cos(yaw) - dy * np.sin(yaw), oy + dx * np.sin(yaw) + dy * np.cos(yaw), yaw)
+    return Costmap(
+        header=Header.at(stamp_s, frame_id),
+        metadata=CostmapMetaData(
+            map_load_time=Time.from_sec(stamp_s),
+            update_time=Time.from_sec(stamp_s),
+            layer=layer,
+            resolution=frame.resolution_m,
+            size_x=ix1 - ix0,
+            size_y=iy1 - iy0,
+            origin=Pose.from_pose2d(origin),
+        ),
+        data=np.ascontiguousarray(costs[iy0:iy1, ix0:ix1], dtype=np.uint8).ravel(),
     )
 
 

@@ -34,7 +34,7 @@ from typing import Any
 from services.planner.costmap_thread import CostmapThread, LockedPoseTrack
 from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
 from services.planner.goal_check import check_goal_on_grid, goal_pose
-from services.planner.map_messages import costmap_message, path_message
+from services.planner.map_messages import costmap_message, nav2_costmap_message, path_message
 from services.planner.map_server import MapServer
 from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
 from services.planner.occupancy_map import OccupancyMap
@@ -44,6 +44,15 @@ from services.planner.recovery import GlassClearing
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.geometry import Pose2D
+from shared.interfaces.costmap import (
+    GET_COSTMAP,
+    GLOBAL_COSTMAP_CLEAR,
+    GLOBAL_COSTMAP_GET,
+    LOCAL_COSTMAP_CLEAR,
+    LOCAL_COSTMAP_GET,
+    GetCostmapRequest,
+    GetCostmapResponse,
+)
 from shared.interfaces.map_server import (
     COSTMAP_TOPIC,
 )
@@ -72,7 +81,7 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
-from shared.node import RELIABLE, SENSOR_DATA, Node, QoS
+from shared.node import RELIABLE, SENSOR_DATA, Node, QoS, ServiceError
 from shared.pose_tracking import OdometrySample, PoseTrack
 from shared.ratelimit import RateLimitedLogger
 from shared.runtime import ServiceSpec
@@ -157,6 +166,11 @@ class PlannerService:
             node.create_subscription(Range, topics.ULTRASONIC, self._layers.add_range, SENSOR_DATA)
         node.create_subscription(TFMessage, topics.TF_STATIC, self._layers.add_mounts, QoS(depth=5))
         node.create_service(CLEAR_ENTIRE_COSTMAP, CLEAR_COSTMAPS_SERVICE, self._on_clear_costmaps)
+        # Nav2's names for what Nav2 scripts ask (shared/interfaces/costmap.py): one costmap answers both.
+        node.create_service(CLEAR_ENTIRE_COSTMAP, GLOBAL_COSTMAP_CLEAR, self._on_clear_costmaps)
+        node.create_service(CLEAR_ENTIRE_COSTMAP, LOCAL_COSTMAP_CLEAR, self._on_clear_local_costmap)
+        node.create_service(GET_COSTMAP, GLOBAL_COSTMAP_GET, self._on_get_global_costmap)
+        node.create_service(GET_COSTMAP, LOCAL_COSTMAP_GET, self._on_get_local_costmap)
         self._action = ActionServer(
             node,
             NAVIGATE_TO_POSE,
@@ -210,8 +224,36 @@ class PlannerService:
             self._costmap_pub.publish(costmap_message(grid, self._node.now(), topics.MAP_FRAME))
 
     def _on_clear_costmaps(self, request: ClearEntireCostmapRequest) -> ClearEntireCostmapResponse:
+        """The whole costmap: the lidar's marks and all the glass the sonar heard (it is heard again as the
+        robot drives; a pane seen only from its far side stays unknown until then)."""
         self._costmap.change(self._layers.clear, GlassClearing.ALL)
         return ClearEntireCostmapResponse()
+
+    def _on_clear_local_costmap(self, request: ClearEntireCostmapRequest) -> ClearEntireCostmapResponse:
+        """Round the robot, as Nav2's local costmap is: the lidar's marks, and the glass within
+        ``recovery_glass_clear_radius_m`` (a recovery's clearing; the rest of the glass memory stays)."""
+        pose = self._tracker.current_pose(self._node.now(), self._params.pose_timeout_s)
+        self._costmap.change(self._layers.clear, GlassClearing.AROUND_ROBOT, pose)
+        return ClearEntireCostmapResponse()
+
+    def _on_get_global_costmap(self, request: GetCostmapRequest) -> GetCostmapResponse:
+        grid = self._costmap.grid
+        if grid is None:
+            raise ServiceError("no costmap yet (no map loaded)")
+        return GetCostmapResponse(
+            map=nav2_costmap_message(grid, self._node.now(), topics.MAP_FRAME, "global_costmap")
+        )
+
+    def _on_get_local_costmap(self, request: GetCostmapRequest) -> GetCostmapResponse:
+        grid = self._costmap.grid
+        now = self._node.now()
+        pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
+        if grid is None or pose is None:
+            raise ServiceError("no costmap yet (no map loaded)" if grid is None else "no robot pose yet")
+        window = (pose.x, pose.y, self._params.local_costmap_size_m)
+        return GetCostmapResponse(
+            map=nav2_costmap_message(grid, now, topics.MAP_FRAME, "local_costmap", window)
+        )
 
     # --- sensors ----------------------------------------------------------------------------------
 

@@ -39,6 +39,9 @@ class Params(ServiceParams):
     costmap_publish_period_s: float = Field(
         1.0, ge=0.0, description="publish the costmap this often (0: never)"
     )
+    local_costmap_size_m: float = Field(
+        3.0, gt=0.0, description="side of the square local_costmap/get_costmap answers, round the robot"
+    )
     # robot and goal
     robot_length_m: float = Field(ROBOT_LENGTH_M, gt=0.0, description="footprint length along x")
     robot_width_m: float = Field(ROBOT_WIDTH_M, gt=0.0, description="footprint width along y")

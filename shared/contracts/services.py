@@ -14,6 +14,13 @@ from shared.contracts.model import Action, Contract, Flag, Request, Topic
 from shared.controllers import CONTROLLERS, DETECTORS
 from shared.endpoints import BLOCKING, RELIABLE, SENSOR_DATA, QoS
 from shared.interfaces.battery import SET_BATTERY_STATE
+from shared.interfaces.costmap import (
+    GET_COSTMAP,
+    GLOBAL_COSTMAP_CLEAR,
+    GLOBAL_COSTMAP_GET,
+    LOCAL_COSTMAP_CLEAR,
+    LOCAL_COSTMAP_GET,
+)
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.fleet import RELEASE_DOCK, RESERVE_DOCK, FleetDocks, FleetQueue
 from shared.interfaces.lifecycle import GET_STATE
@@ -235,6 +242,20 @@ PLANNER = Contract(
         Request(CLEAR_COSTMAPS_SERVICE, CLEAR_ENTIRE_COSTMAP),
         Request(LOAD_MAP_SERVICE, LOAD_MAP),
         Request(GET_MAP_SERVICE, GET_MAP),
+        Request(
+            GLOBAL_COSTMAP_GET, GET_COSTMAP, about="the whole costmap, Nav2's costs (0 free .. 254 lethal)"
+        ),
+        Request(LOCAL_COSTMAP_GET, GET_COSTMAP, about="the square of local_costmap_size_m round the robot"),
+        Request(
+            GLOBAL_COSTMAP_CLEAR,
+            CLEAR_ENTIRE_COSTMAP,
+            about="forget the lidar's marks and all the glass the sonar heard",
+        ),
+        Request(
+            LOCAL_COSTMAP_CLEAR,
+            CLEAR_ENTIRE_COSTMAP,
+            about="forget the lidar's marks and the glass round the robot",
+        ),
         *_lifecycle("planner"),
     ),
     serves_actions=(

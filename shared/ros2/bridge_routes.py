@@ -16,9 +16,24 @@ from typing import Any
 from shared import topics
 from shared.action import action_key
 from shared.interface_types import ActionType, GoalStatusArray, ServiceType
+from shared.interfaces.costmap import (
+    GET_COSTMAP,
+    GLOBAL_COSTMAP_CLEAR,
+    GLOBAL_COSTMAP_GET,
+    LOCAL_COSTMAP_CLEAR,
+    LOCAL_COSTMAP_GET,
+    GetCostmapResponse,
+)
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.lifecycle import GET_STATE, UNKNOWN, GetStateResponse
-from shared.interfaces.navigation import NAVIGATE_TO_POSE
+from shared.interfaces.navigation import (
+    CLEAR_ENTIRE_COSTMAP,
+    LOAD_MAP,
+    LOAD_MAP_SERVICE,
+    NAVIGATE_TO_POSE,
+    ClearEntireCostmapResponse,
+    LoadMapResponse,
+)
 from shared.messages import (
     BatteryState,
     CameraInfo,
@@ -105,11 +120,29 @@ def _unknown_state() -> GetStateResponse:
     return GetStateResponse(current_state=UNKNOWN)
 
 
+def _map_not_loaded() -> LoadMapResponse:
+    return LoadMapResponse(result=LoadMapResponse.RESULT_UNDEFINED_FAILURE)
+
+
 #: Nav2's lifecycle queries, answered by the zendock service standing in for each Nav2 node (``unknown``
-#: while it does not answer: a script asks again).
-SERVICES: tuple[BridgedService, ...] = tuple(
-    BridgedService(get_state_service(nav2_node), interfaces.GET_STATE, owner, GET_STATE, _unknown_state)
-    for nav2_node, owner in NAV2_STAND_INS.items()
+#: while it does not answer: a script asks again); the planner's costmap and map services under Nav2's
+#: names (an empty costmap, or a failed load, while it does not answer).
+SERVICES: tuple[BridgedService, ...] = (
+    *(
+        BridgedService(get_state_service(nav2_node), interfaces.GET_STATE, owner, GET_STATE, _unknown_state)
+        for nav2_node, owner in NAV2_STAND_INS.items()
+    ),
+    *(
+        BridgedService(name, interfaces.GET_COSTMAP, "planner", GET_COSTMAP, GetCostmapResponse)
+        for name in (GLOBAL_COSTMAP_GET, LOCAL_COSTMAP_GET)
+    ),
+    *(
+        BridgedService(
+            name, interfaces.CLEAR_ENTIRE_COSTMAP, "planner", CLEAR_ENTIRE_COSTMAP, ClearEntireCostmapResponse
+        )
+        for name in (GLOBAL_COSTMAP_CLEAR, LOCAL_COSTMAP_CLEAR)
+    ),
+    BridgedService(LOAD_MAP_SERVICE, interfaces.LOAD_MAP, "planner", LOAD_MAP, _map_not_loaded),
 )
 
 

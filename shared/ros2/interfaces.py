@@ -25,8 +25,30 @@ DOCK_ROBOT = "nav2_msgs/action/DockRobot"
 UNDOCK_ROBOT = "nav2_msgs/action/UndockRobot"
 CANCEL_GOAL = "action_msgs/srv/CancelGoal"
 ACTIONS = (NAVIGATE_TO_POSE, DOCK_ROBOT, UNDOCK_ROBOT)
-#: Nav2's ``.action`` files, shipped with their licence notice (see the README there).
+GET_COSTMAP = "nav2_msgs/srv/GetCostmap"
+CLEAR_ENTIRE_COSTMAP = "nav2_msgs/srv/ClearEntireCostmap"
+LOAD_MAP = "nav2_msgs/srv/LoadMap"
+#: Nav2's ``.action``, ``.srv`` and ``.msg`` files, shipped with their licence notice (see the README there).
 DEFINITIONS = Path(__file__).parent / "definitions"
+
+
+def package_messages(package: str) -> TypeDefs:
+    """Every ``msg/*.msg`` of ``package`` in :data:`DEFINITIONS` (a name in the same package may be bare)."""
+    defs: TypeDefs = {}
+    for path in sorted((DEFINITIONS / package / "msg").glob("*.msg")):
+        defs.update(_messages(path.read_text(encoding="utf-8"), f"{package}/msg/{path.stem}"))
+    return defs
+
+
+def package_services(package: str) -> TypeDefs:
+    """Every ``srv/*.srv`` of ``package`` in :data:`DEFINITIONS`, with its description types."""
+    defs: TypeDefs = {}
+    for path in sorted((DEFINITIONS / package / "srv").glob("*.srv")):
+        sections = re.split(r"^---\s*$", path.read_text(encoding="utf-8"), flags=re.MULTILINE)
+        if len(sections) != 2:
+            raise ValueError(f"{path}: a service has a request and a response separated by '---'")
+        defs.update(service_definitions(f"{package}/srv/{path.stem}", sections[0], sections[1]))
+    return defs
 
 
 def action_text(action: str) -> tuple[str, str, str]:
@@ -69,6 +91,8 @@ def definitions() -> TypeDefs:
     """Every type above (and the services' description types), ready for a rosbags type store."""
     defs: TypeDefs = {}
     defs.update(service_definitions(CANCEL_GOAL, _CANCEL_REQUEST, _CANCEL_RESPONSE))
+    defs.update(package_messages("nav2_msgs"))
+    defs.update(package_services("nav2_msgs"))
     defs.update(service_definitions(GET_STATE, "", _GET_STATE_RESPONSE))
     for action in ACTIONS:
         goal, result, feedback = action_text(action)

@@ -9,15 +9,19 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import zenoh
 import zenoh.ext
 
+from services.planner.occupancy_map import save_map
+from services.planner.rasterize import map_from_world
 from shared.geometry import Pose2D
 from shared.messages import BatteryState, Float64MultiArray, PoseStamped, TFMessage
 from shared.ros2 import types as ros_types
 from shared.ros2.wire import ADMIN_SPACE, Attachment, data_key, entity_gid
+from shared.world import load_world
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, wait_until
 
@@ -268,12 +272,41 @@ def test_a_ros2_peer_drives_the_robot_and_bad_input_is_refused(
     assert "camera_optical_frame" in frames
 
 
-def test_a_ros2_peer_asks_the_nav2_lifecycle_states_a_script_waits_for(spawn, router_endpoint: str) -> None:  # type: ignore[no-untyped-def]
+def test_a_ros2_peer_asks_what_a_nav2_script_asks_of_nav2s_servers(
+    spawn, router_endpoint: str, tmp_path: Path
+) -> None:  # type: ignore[no-untyped-def]
     """``waitUntilNav2Active()`` polls ``amcl/get_state`` (lifecycle_msgs/srv/GetState) until ``active``: on
-    rmw_zenoh's wire the bridge relays it to the pose service, which stands in for amcl."""
+    rmw_zenoh's wire the bridge relays it to the pose service, which stands in for amcl. The costmap
+    services come from the planner; without a robot pose the local costmap cannot be cut, and the bridge
+    answers an empty one rather than leave a script waiting."""
     pose = spawn("pose")
+    planner = spawn("planner", "-p", f"world={SEED_ROOM}")
     bridge = spawn("ros2_bridge")
-    wait_until(lambda: "ready" in bridge.output(), 30.0, lambda: bridge.output()[-2000:])
-    wait_until(lambda: "ready" in pose.output(), 30.0, lambda: pose.output()[-2000:])
+    for service in (bridge, pose, planner):
+        wait_until(lambda s=service: "ready" in s.output(), 30.0, lambda s=service: s.output()[-2000:])
     answer = _peer(router_endpoint, "call", "/amcl/get_state", "lifecycle_msgs/srv/GetState")[0]
     assert answer["response"]["current_state"] == {"id": 3, "label": "active"}, answer
+    state = _peer(router_endpoint, "call", "/bt_navigator/get_state", "lifecycle_msgs/srv/GetState")[0]
+    assert state["response"]["current_state"]["label"] == "active", state
+    whole = _peer(router_endpoint, "call", "/global_costmap/get_costmap", "nav2_msgs/srv/GetCostmap")[0]
+    meta = whole["response"]["map"]["metadata"]
+    assert meta["size_x"] * meta["size_y"] == len(whole["response"]["map"]["data"]) > 0, meta
+    assert 254 in whole["response"]["map"]["data"]  # the room's walls, lethal
+    local = _peer(router_endpoint, "call", "/local_costmap/get_costmap", "nav2_msgs/srv/GetCostmap")[0]
+    assert local["response"]["map"]["data"] == [], local
+    cleared = _peer(
+        router_endpoint,
+        "call",
+        "/global_costmap/clear_entirely_global_costmap",
+        "nav2_msgs/srv/ClearEntireCostmap",
+    )[0]
+    assert cleared["response"] is not None
+    wait_until(lambda: "costmap cleared" in planner.output(), 10.0, lambda: planner.output()[-2000:])
+    # changeMap(): a map file that is not there, then one that is (Nav2's result codes).
+    load = ("call", "/map_server/load_map", "nav2_msgs/srv/LoadMap")
+    missing = _peer(router_endpoint, *load, json.dumps({"map_url": str(tmp_path / "none.yaml")}))[0]
+    assert missing["response"]["result"] == 1, missing  # RESULT_MAP_DOES_NOT_EXIST
+    saved, _ = save_map(map_from_world(load_world(SEED_ROOM)), tmp_path / "room.yaml")
+    loaded = _peer(router_endpoint, *load, json.dumps({"map_url": f"file://{saved}"}))[0]
+    assert loaded["response"]["result"] == 0, loaded
+    assert loaded["response"]["map"]["info"]["width"] > 0, loaded["response"]["map"]["info"]

@@ -23,7 +23,7 @@ ROS2_VENV = REPO_ROOT / ".venv-ros2"
 ROS2_PYTHON = ROS2_VENV / "bin" / "python"
 USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
 ROS2_READY = ROS2_PYTHON.exists() and any(
-    (ROS2_VENV / "lib").glob("python3.*/site-packages/nav2_msgs/action")
+    (ROS2_VENV / "lib").glob("python3.*/site-packages/nav2_msgs/srv/_get_costmap.py")
 )
 
 pytestmark = pytest.mark.skipif(
@@ -110,6 +110,10 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     print(f"\nwaitUntilNav2Active's protocol: {active['seconds']} s from the user's start")
     simulator_log = "\n".join(launcher.logs("simulator"))
     assert "initial pose (0.00, 0.00, 0.00) refused" in simulator_log, simulator_log[-2000:]
+    costmaps = check("costmaps")
+    world, local = costmaps["global"], costmaps["local"]
+    assert world["frame"] == "map" and world["lethal"] > 0, costmaps  # the room's walls
+    assert local["size"][0] <= 62 and local["size"][1] <= 62 and local["cells"] < world["cells"], costmaps
     graph = check("graph")
     assert graph["topics"]["/cmd_vel"] == ["geometry_msgs/msg/Twist"], graph
     check("battery_status")

@@ -320,7 +320,12 @@ def _call(session: Any, args: argparse.Namespace) -> int:
     from shared.ros2 import types as zendock_types
 
     ours = zendock_types.typestore()
-    needed = {n: d for n, d in ours.fielddefs.items() if n.startswith(args.type)}
+    package = args.type.split("/")[0]
+    needed = {
+        n: d
+        for n, d in ours.fielddefs.items()
+        if n.startswith(args.type) or (n.startswith(f"{package}/msg/") and n not in session.store.fielddefs)
+    }
     session.store.register(needed)
     for name in needed:
         session._registered_types[name] = name

@@ -26,6 +26,7 @@ from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from lifecycle_msgs.srv import GetState
 from nav2_msgs.action import DockRobot, NavigateToPose
+from nav2_msgs.srv import ClearEntireCostmap, GetCostmap
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionClient
 from rclpy.node import Node
@@ -92,6 +93,50 @@ class User:
             return future.result().current_state.label if future.done() else "no answer"
         finally:
             self.node.destroy_client(client)
+
+    def _call(self, srv_type: Any, name: str, timeout_s: float = 10.0) -> Any:
+        """One call as a Nav2 script makes it (wait for the service, call, wait for the reply)."""
+        client = self.node.create_client(srv_type, name)
+        try:
+            if not client.wait_for_service(timeout_sec=timeout_s):
+                return None
+            future = client.call_async(srv_type.Request())
+            self.spin_until(future.done, timeout_s)
+            return future.result() if future.done() else None
+        finally:
+            self.node.destroy_client(client)
+
+    def costmaps(self) -> None:
+        """``clearAllCostmaps()`` (local, then global), ``getGlobalCostmap()`` and ``getLocalCostmap()``."""
+        cleared = [
+            self._call(ClearEntireCostmap, name) is not None
+            for name in (
+                "local_costmap/clear_entirely_local_costmap",
+                "global_costmap/clear_entirely_global_costmap",
+            )
+        ]
+        got = {}
+        for which in ("global", "local"):
+            reply = self._call(GetCostmap, f"{which}_costmap/get_costmap")
+            if reply is None:
+                got[which] = None
+                continue
+            meta = reply.map.metadata
+            data = list(reply.map.data)
+            got[which] = {
+                "size": [meta.size_x, meta.size_y],
+                "cells": len(data),
+                "resolution": round(meta.resolution, 3),
+                "lethal": sum(1 for c in data if c == 254),
+                "frame": reply.map.header.frame_id,
+            }
+        report(
+            "costmaps",
+            all(cleared)
+            and all(g is not None and g["cells"] == g["size"][0] * g["size"][1] > 0 for g in got.values()),
+            cleared=cleared,
+            **got,
+        )
 
     def nav2_active(self) -> None:
         """What ``waitUntilNav2Active()`` asks, in its order: the localiser active, an initial pose (all
@@ -451,6 +496,7 @@ class User:
 
 STEPS = (
     "nav2_active",
+    "costmaps",
     "graph",
     "battery",
     "late_map",

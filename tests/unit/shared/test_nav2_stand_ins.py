@@ -29,6 +29,15 @@ def test_each_nav2_node_has_a_zendock_service_with_a_contract_naming_its_get_sta
     assert stand_ins("pose") == ("amcl",) and stand_ins("battery") == ()
 
 
-def test_both_ros2_faces_carry_every_get_state() -> None:
-    assert {s.name for s in SERVICES} == {get_state_service(n) for n in NAV2_LIFECYCLE_NODES}
-    assert {s.ros_type for s in SERVICES} == {"lifecycle_msgs/srv/GetState"}
+def test_both_ros2_faces_carry_every_get_state_and_the_costmap_services() -> None:
+    carried = {s.name: s.ros_type for s in SERVICES}
+    assert {get_state_service(n) for n in NAV2_LIFECYCLE_NODES} <= set(carried)
+    assert {carried[get_state_service(n)] for n in NAV2_LIFECYCLE_NODES} == {"lifecycle_msgs/srv/GetState"}
+    assert (
+        carried["global_costmap/get_costmap"]
+        == carried["local_costmap/get_costmap"]
+        == ("nav2_msgs/srv/GetCostmap")
+    )
+    assert carried["global_costmap/clear_entirely_global_costmap"] == "nav2_msgs/srv/ClearEntireCostmap"
+    assert carried["map_server/load_map"] == "nav2_msgs/srv/LoadMap"
+    assert all(s.unanswered is not None for s in SERVICES)  # a script waits for its reply, unbounded

@@ -17,6 +17,7 @@ from shared.interface_types import (
     GoalStatus,
     GoalStatusArray,
 )
+from shared.interfaces.costmap import Costmap, CostmapMetaData, GetCostmapRequest, GetCostmapResponse
 from shared.interfaces.docking import (
     DOCK_ROBOT,
     UNDOCK_ROBOT,
@@ -29,6 +30,10 @@ from shared.interfaces.docking import (
 from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateResponse
 from shared.interfaces.navigation import (
     NAVIGATE_TO_POSE,
+    ClearEntireCostmapRequest,
+    ClearEntireCostmapResponse,
+    LoadMapRequest,
+    LoadMapResponse,
     NavigateToPoseFeedback,
     NavigateToPoseGoal,
     NavigateToPoseResult,
@@ -90,6 +95,18 @@ EXAMPLES: dict[str, Message] = {
         HEADER, PoseWithCovariance(POSE, np.arange(36.0))
     ),
     "lifecycle_msgs/srv/GetState_Request": GetStateRequest(),
+    "nav2_msgs/srv/GetCostmap_Request": GetCostmapRequest(),
+    "nav2_msgs/srv/GetCostmap_Response": GetCostmapResponse(
+        Costmap(
+            HEADER,
+            CostmapMetaData(Time(1, 2), Time(3, 4), "global_costmap", 0.05, 3, 2, POSE),
+            np.array([0, 10, 253, 254, 255, 1], dtype=np.uint8),
+        )
+    ),
+    "nav2_msgs/srv/ClearEntireCostmap_Request": ClearEntireCostmapRequest(),
+    "nav2_msgs/srv/ClearEntireCostmap_Response": ClearEntireCostmapResponse(),
+    "nav2_msgs/srv/LoadMap_Request": LoadMapRequest("/maps/room.yaml"),
+    "nav2_msgs/srv/LoadMap_Response": LoadMapResponse(result=LoadMapResponse.RESULT_MAP_DOES_NOT_EXIST),
     "lifecycle_msgs/srv/GetState_Response": GetStateResponse(ACTIVE),
     "sensor_msgs/msg/LaserScan": LaserScan(
         HEADER,
@@ -302,6 +319,23 @@ def test_lifecycle_get_state_hash_is_jazzys() -> None:
     2.0.3 as packaged on PyPI: Nav2 scripts' ``amcl/get_state`` must match it on rmw_zenoh's keys."""
     assert types.type_hash("lifecycle_msgs/srv/GetState") == (
         "RIHS01_800a0a5aae599782b02932de0caf563f6dc4e7e94b794eadde075ba2cbef9795"
+    )
+
+
+def test_nav2_costmap_and_map_service_hashes_are_rosidls() -> None:
+    """The values are ``type_hashes`` in ``share/nav2_msgs/srv/*.json`` and ``msg/Costmap.json`` as rosidl
+    generates them (``make ros2``) from the same Jazzy definitions (Nav2 jazzy f4108e5b)."""
+    assert types.type_hash("nav2_msgs/srv/GetCostmap") == (
+        "RIHS01_1c3d7c36488ea60fb6ddf76482faf36cee004e29433fea60b8cee011fcd8ad73"
+    )
+    assert types.type_hash("nav2_msgs/srv/ClearEntireCostmap") == (
+        "RIHS01_553f54f9cadab44553fdf5627433fcb6701f71c1fc2eb55a7b4a004fdeeab952"
+    )
+    assert types.type_hash("nav2_msgs/srv/LoadMap") == (
+        "RIHS01_eb875de5ea9bb394573effc3f239015b19869dd7a8988136768372c6ef907ec1"
+    )
+    assert types.type_hash("nav2_msgs/msg/Costmap") == (
+        "RIHS01_d51bf7aecafdbb3f8f98215de648abe6d53f8db69156d6e143125d2ad2bf0027"
     )
 
 
