@@ -219,10 +219,12 @@ ifaces=""
 for kind in msg srv action; do
   mkdir -p "$N/$kind"
   for f in "$DEFS"/nav2_msgs/$kind/*.$kind; do
+    [ -e "$f" ] || continue  # none of this kind
     write_if_changed "$N/$kind/$(basename "$f")" < "$f"
     ifaces="$ifaces $kind/$(basename "$f")"
   done
   for f in "$N"/$kind/*.$kind; do
+    [ -e "$f" ] || continue
     [ -f "$DEFS/nav2_msgs/$kind/$(basename "$f")" ] || rm -f "$f"
   done
 done

@@ -54,16 +54,18 @@ def nav2_costmap_message(
     layer: str,
     window: tuple[float, float, float] | None = None,
 ) -> Costmap:
-    """The costs as ``nav2_msgs/Costmap`` (Nav2's scale already): the whole grid, or the cells of the
-    square ``window = (x, y, side_m)`` centred on a world point, cut to the grid."""
+    """The costs as ``nav2_msgs/Costmap`` (Nav2's scale already): the whole grid, or the ``n x n`` cells
+    (``n = side_m / resolution``, rounded) of the square ``window = (x, y, side_m)`` centred on a world point,
+    cut to the grid (``side_m`` 0: an empty square with the grid's frame)."""
     frame, costs = grid.frame, grid.costs
     ix0, iy0, ix1, iy1 = 0, 0, frame.width, frame.height
     if window is not None:
         x, y, side_m = window
-        (cx, cy) = frame.world_to_cell(x, y)
-        half = int(round(side_m / frame.resolution_m / 2.0))
-        ix0, iy0 = min(max(cx - half, 0), frame.width), min(max(cy - half, 0), frame.height)
-        ix1, iy1 = min(max(cx + half, 0), frame.width), min(max(cy + half, 0), frame.height)
+        n = int(round(side_m / frame.resolution_m))
+        gx, gy = frame.world_to_grid(np.array([[x, y]]))[0]
+        sx, sy = int(np.floor(gx - n / 2.0 + 0.5)), int(np.floor(gy - n / 2.0 + 0.5))
+        ix0, iy0 = min(max(sx, 0), frame.width), min(max(sy, 0), frame.height)
+        ix1, iy1 = min(max(sx + n, 0), frame.width), min(max(sy + n, 0), frame.height)
     ox, oy, yaw = frame.origin
     dx, dy = ix0 * frame.resolution_m, iy0 * frame.resolution_m
     origin = Pose2D(ox + dx * np.cos(yaw) - dy * np.sin(yaw), oy + dx * np.sin(yaw) + dy * np.cos(yaw), yaw)

@@ -233,7 +233,9 @@ class PlannerService:
         """Round the robot, as Nav2's local costmap is: the lidar's marks, and the glass within
         ``recovery_glass_clear_radius_m`` (a recovery's clearing; the rest of the glass memory stays)."""
         pose = self._tracker.current_pose(self._node.now(), self._params.pose_timeout_s)
-        self._costmap.change(self._layers.clear, GlassClearing.AROUND_ROBOT, pose)
+        # Without a pose there is no "round the robot": the lidar's marks only, the glass memory kept.
+        glass = GlassClearing.AROUND_ROBOT if pose is not None else GlassClearing.KEEP
+        self._costmap.change(self._layers.clear, glass, pose)
         return ClearEntireCostmapResponse()
 
     def _on_get_global_costmap(self, request: GetCostmapRequest) -> GetCostmapResponse:
@@ -247,13 +249,19 @@ class PlannerService:
     def _on_get_local_costmap(self, request: GetCostmapRequest) -> GetCostmapResponse:
         grid = self._costmap.grid
         now = self._node.now()
+        if grid is None:
+            raise ServiceError("no costmap yet (no map loaded)")
         pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
-        if grid is None or pose is None:
-            raise ServiceError("no costmap yet (no map loaded)" if grid is None else "no robot pose yet")
-        window = (pose.x, pose.y, self._params.local_costmap_size_m)
-        return GetCostmapResponse(
-            map=nav2_costmap_message(grid, now, topics.MAP_FRAME, "local_costmap", window)
+        # No pose yet: no square round the robot, but the grid's frame and resolution all the same.
+        window = (pose.x, pose.y, self._params.local_costmap_size_m) if pose is not None else None
+        costmap = nav2_costmap_message(
+            grid, now, topics.MAP_FRAME, "local_costmap", window or (0.0, 0.0, 0.0)
         )
+        if pose is None:
+            self._say.info(
+                "local-costmap-no-pose", "local_costmap/get_costmap: no robot pose yet: an empty square"
+            )
+        return GetCostmapResponse(map=costmap)
 
     # --- sensors ----------------------------------------------------------------------------------
 

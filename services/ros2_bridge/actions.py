@@ -75,7 +75,7 @@ ACTIONS: tuple[RelayedAction, ...] = tuple(_relayed(action) for action in bridge
 SERVICES: tuple[tuple[bridge_routes.BridgedService, RelayedService], ...] = tuple(
     (
         service,
-        RelayedService(service.name, service.ros_type, service.zendock, REQUEST_WAIT_S, service.unanswered),
+        RelayedService(service.name, service.ros_type, service.zendock, service.wait_s, service.unanswered),
     )
     for service in bridge_routes.SERVICES
 )

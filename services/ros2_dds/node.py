@@ -80,8 +80,6 @@ OWNERS: tuple[str, ...] = tuple(
         + [s.owner for s in SERVICES]
     )
 )
-#: How long a ROS 2 service request waits for zendock's service to answer.
-SERVICE_WAIT_S = 5.0
 
 
 class Params(ServiceParams):
@@ -441,7 +439,7 @@ class Ros2Dds:
         self._commands.handle(inbound.ros_topic, msg)
 
     def _serve(self, service: BridgedService, ros_request: Any, ros_response: Any) -> Any:
-        """rclpy's service callback (an executor thread): zendock's service answers, within SERVICE_WAIT_S;
+        """rclpy's service callback (an executor thread): zendock's service answers, within the service's wait_s;
         without an answer ROS 2 gets the response's defaults (a GetState's ``unknown``) and a log line."""
         where = f"/{service.name}"
         try:
@@ -451,7 +449,7 @@ class Ros2Dds:
             return ros_response
         try:
             reply = call_service(
-                self.node.session, self.node.key(service.name), service.zendock, request, SERVICE_WAIT_S
+                self.node.session, self.node.key(service.name), service.zendock, request, service.wait_s
             )
             answer = to_ros(reply, type(ros_response))
         except (ServiceError, ConversionError) as exc:

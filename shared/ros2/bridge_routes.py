@@ -114,6 +114,8 @@ class BridgedService:
     #: may wait for its reply without a timeout (Nav2 scripts do, for ``get_state``), and rmw_zenoh's
     #: drops error replies: such a client would wait forever.
     unanswered: Callable[[], Message] | None = None
+    #: How long a face waits for zendock's answer (a map load reads a file and re-inflates the costmap).
+    wait_s: float = 10.0
 
 
 def _unknown_state() -> GetStateResponse:
@@ -142,7 +144,7 @@ SERVICES: tuple[BridgedService, ...] = (
         )
         for name in (GLOBAL_COSTMAP_CLEAR, LOCAL_COSTMAP_CLEAR)
     ),
-    BridgedService(LOAD_MAP_SERVICE, interfaces.LOAD_MAP, "planner", LOAD_MAP, _map_not_loaded),
+    BridgedService(LOAD_MAP_SERVICE, interfaces.LOAD_MAP, "planner", LOAD_MAP, _map_not_loaded, wait_s=30.0),
 )
 
 

@@ -277,8 +277,8 @@ def test_a_ros2_peer_asks_what_a_nav2_script_asks_of_nav2s_servers(
 ) -> None:  # type: ignore[no-untyped-def]
     """``waitUntilNav2Active()`` polls ``amcl/get_state`` (lifecycle_msgs/srv/GetState) until ``active``: on
     rmw_zenoh's wire the bridge relays it to the pose service, which stands in for amcl. The costmap
-    services come from the planner; without a robot pose the local costmap cannot be cut, and the bridge
-    answers an empty one rather than leave a script waiting."""
+    services come from the planner; without a robot pose the local costmap is an empty square in the
+    grid's frame."""
     pose = spawn("pose")
     planner = spawn("planner", "-p", f"world={SEED_ROOM}")
     bridge = spawn("ros2_bridge")
@@ -293,7 +293,8 @@ def test_a_ros2_peer_asks_what_a_nav2_script_asks_of_nav2s_servers(
     assert meta["size_x"] * meta["size_y"] == len(whole["response"]["map"]["data"]) > 0, meta
     assert 254 in whole["response"]["map"]["data"]  # the room's walls, lethal
     local = _peer(router_endpoint, "call", "/local_costmap/get_costmap", "nav2_msgs/srv/GetCostmap")[0]
-    assert local["response"]["map"]["data"] == [], local
+    assert local["response"]["map"]["data"] == [], local  # no robot pose yet: an empty square
+    assert local["response"]["map"]["metadata"]["resolution"] > 0.0, local  # in the grid's frame
     cleared = _peer(
         router_endpoint,
         "call",
