@@ -17,7 +17,9 @@ loopback only (``discovery_range``):
   (``simulator/set_localisation``);
 * ``navigate_to_pose``, ``dock_robot``, ``undock_robot``: rclpy ActionServers relaying goal, feedback,
   result and cancel to zendock's action servers (:class:`shared.action.ActionClient`); zendock's server
-  decides acceptance, and is the only authority on a goal.
+  decides acceptance, and is the only authority on a goal;
+* Nav2's lifecycle, costmap and map services (:data:`shared.ros2.bridge_routes.SERVICES`), relayed;
+* each node's parameters are its zendock service's (``ros2 param``; :mod:`.parameters`).
 
 Messages convert by field name (:mod:`.convert`). Anything that does not convert is refused, counted and
 logged at most once per interval per kind; nothing from ROS 2 stops the face.
@@ -260,10 +262,14 @@ class Ros2Dds:
         from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: PLC0415
         from rclpy.callback_groups import ReentrantCallbackGroup  # noqa: PLC0415
 
+        from services.ros2_dds.parameters import ParameterRelay  # noqa: PLC0415 - rcl_interfaces: .venv-ros2
+
         with self._lock:
-            rnode = self._rclpy.create_node(owner, context=self.contexts[0])
+            # Its parameters are the zendock service's (ParameterRelay), not rclpy's own.
+            rnode = self._rclpy.create_node(owner, context=self.contexts[0], start_parameter_services=False)
             face = _Face(owner, rnode)
             group = ReentrantCallbackGroup()
+            face.services.extend(ParameterRelay(self.node, rnode, owner, group).services)
             for outlet in self.outlets:
                 if outlet.route.owner == owner:
                     outlet.publisher = rnode.create_publisher(

@@ -114,6 +114,10 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     world, local = costmaps["global"], costmaps["local"]
     assert world["frame"] == "map" and world["lethal"] > 0, costmaps  # the room's walls
     assert local["size"][0] <= 62 and local["size"][1] <= 62 and local["cells"] < world["cells"], costmaps
+    params = check("parameters")
+    assert "read at start-up" in params["refused"][1], params
+    docking_log = "\n".join(launcher.logs("docking"))
+    assert "auto_dock off" in docking_log, docking_log[-2000:]  # ros2 param set reached zendock's docking
     graph = check("graph")
     assert graph["topics"]["/cmd_vel"] == ["geometry_msgs/msg/Twist"], graph
     check("battery_status")

@@ -28,6 +28,9 @@ from lifecycle_msgs.srv import GetState
 from nav2_msgs.action import DockRobot, NavigateToPose
 from nav2_msgs.srv import ClearEntireCostmap, GetCostmap
 from nav_msgs.msg import OccupancyGrid, Odometry
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import DescribeParameters, GetParameters, ListParameters, SetParameters
 from rclpy.action import ActionClient
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -137,6 +140,80 @@ class User:
             cleared=cleared,
             **got,
         )
+
+    def _param_call(self, srv_type: Any, node: str, fill: Callable[[Any], None]) -> Any:
+        """One of ``ros2 param``'s requests to ``/<node>/<service>``."""
+        name = {
+            ListParameters: "list_parameters",
+            GetParameters: "get_parameters",
+            SetParameters: "set_parameters",
+            DescribeParameters: "describe_parameters",
+        }[srv_type]
+        client = self.node.create_client(srv_type, f"/{node}/{name}")
+        try:
+            if not client.wait_for_service(timeout_sec=10.0):
+                return None
+            request = srv_type.Request()
+            fill(request)
+            future = client.call_async(request)
+            self.spin_until(future.done, 10.0)
+            return future.result() if future.done() else None
+        finally:
+            self.node.destroy_client(client)
+
+    def parameters(self) -> None:
+        """``ros2 param list /docking``, ``get /docking use_sim_time``, ``get|set /docking auto_dock``, a
+        refused set of a read-only parameter, ``describe``; auto_dock is put back as it was."""
+
+        def names(r: Any) -> None:
+            r.names = ["auto_dock", "dock_database"]
+
+        def set_to(name: str, value: ParameterValue) -> Callable[[Any], None]:
+            return lambda r: setattr(r, "parameters", [ParameterMsg(name=name, value=value)])
+
+        listed = self._param_call(ListParameters, "docking", lambda r: None)
+        sim_time = self._param_call(GetParameters, "docking", lambda r: setattr(r, "names", ["use_sim_time"]))
+        before = self._param_call(GetParameters, "docking", names)
+        described = self._param_call(DescribeParameters, "docking", names)
+        off = self._param_call(
+            SetParameters, "docking", set_to("auto_dock", ParameterValue(type=ParameterType.PARAMETER_BOOL))
+        )
+        after = self._param_call(GetParameters, "docking", names)
+        refused = self._param_call(
+            SetParameters,
+            "docking",
+            set_to(
+                "dock_database", ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="x.yaml")
+            ),
+        )
+        back = self._param_call(
+            SetParameters,
+            "docking",
+            set_to("auto_dock", ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True)),
+        )
+        details = {
+            "listed": sorted(listed.result.names) if listed else None,
+            "use_sim_time": sim_time.values[0].bool_value if sim_time else None,
+            "auto_dock_before": before.values[0].bool_value if before else None,
+            "read_only": [d.read_only for d in described.descriptors] if described else None,
+            "set_off": off.results[0].successful if off else None,
+            "auto_dock_after": after.values[0].bool_value if after else None,
+            "refused": [refused.results[0].successful, refused.results[0].reason] if refused else None,
+            "set_back": back.results[0].successful if back else None,
+        }
+        ok = (
+            details["listed"] is not None
+            and "auto_dock" in details["listed"]
+            and details["use_sim_time"] is True
+            and details["auto_dock_before"] is True
+            and details["read_only"] == [False, True]
+            and details["set_off"] is True
+            and details["auto_dock_after"] is False
+            and details["refused"] is not None
+            and details["refused"][0] is False
+            and details["set_back"] is True
+        )
+        report("parameters", ok, **details)
 
     def nav2_active(self) -> None:
         """What ``waitUntilNav2Active()`` asks, in its order: the localiser active, an initial pose (all
@@ -497,6 +574,7 @@ class User:
 STEPS = (
     "nav2_active",
     "costmaps",
+    "parameters",
     "graph",
     "battery",
     "late_map",
