@@ -25,9 +25,9 @@ from typing import Any
 
 import psutil
 
-from deploy.launcher import Launcher, free_endpoint, load_stack
+from deploy.bench.ros2_dds import dds_face_stack
+from deploy.launcher import Launcher, free_endpoint
 from deploy.paths import REPO_ROOT
-from deploy.testing.config import DEFAULT_STACK, StackConfig
 
 ROS2_PYTHON = REPO_ROOT / ".venv-ros2" / "bin" / "python"
 USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
@@ -101,19 +101,7 @@ def _protocol_seconds(domain: int) -> float:
 def one_run(idle_s: float, busy_s: float) -> Nav2Run:
     domain = random.randint(100, 200)
     with tempfile.TemporaryDirectory(prefix="zendock-bench-nav2-") as tmp:
-        project = Path(tmp)
-        environment = {
-            **StackConfig(detector="synthetic", rtf="4").environment(free_endpoint(), project),
-            "ROS_DOMAIN_ID": str(domain),
-        }
-        stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
-        launcher = Launcher(
-            stack,
-            profiles=["ros2-dds"],
-            project_dir=project,
-            working_dir=REPO_ROOT,
-            project_name="bench-nav2",
-        )
+        launcher = dds_face_stack(Path(tmp), free_endpoint(), domain, "4", "bench-nav2")
         started = time.monotonic()
         try:
             launcher.up()

@@ -98,6 +98,19 @@ def _direct_round_trips(session: zenoh.Session, namespace: str, count: int) -> l
     return samples
 
 
+def dds_face_stack(project: Path, endpoint: str, domain: int, rtf: str, name: str) -> Launcher:
+    """The default stack (synthetic detector, ``rtf``) with the ros2-dds profile on ROS 2 ``domain``, its
+    router on ``endpoint`` and its project directory ``project``; not started."""
+    environment = {
+        **StackConfig(detector="synthetic", rtf=rtf).environment(endpoint, project),
+        "ROS_DOMAIN_ID": str(domain),
+    }
+    stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
+    return Launcher(
+        stack, profiles=["ros2-dds"], project_dir=project, working_dir=REPO_ROOT, project_name=name
+    )
+
+
 def run(rtf: str = "1", seconds: float = 10.0, round_trips: int = 20) -> dict[str, Any]:
     if not ROS2_PYTHON.exists():
         raise RuntimeError(f"{ROS2_PYTHON} is missing: `make ros2` builds it")
@@ -105,18 +118,7 @@ def run(rtf: str = "1", seconds: float = 10.0, round_trips: int = 20) -> dict[st
     with tempfile.TemporaryDirectory(prefix="zendock-bench-dds-") as tmp:
         project = Path(tmp)
         endpoint = free_endpoint()
-        environment = {
-            **StackConfig(detector="synthetic", rtf=rtf).environment(endpoint, project),
-            "ROS_DOMAIN_ID": str(domain),
-        }
-        stack = load_stack(DEFAULT_STACK, env=environment, project_dir=REPO_ROOT)
-        launcher = Launcher(
-            stack,
-            profiles=["ros2-dds"],
-            project_dir=project,
-            working_dir=REPO_ROOT,
-            project_name="zendock-bench",
-        )
+        launcher = dds_face_stack(project, endpoint, domain, rtf, "zendock-bench")
         with launcher, open_session(SessionSpec(mode="client", connect=(endpoint,))) as session:
             launcher.wait_healthy(timeout_s=90.0)
             pid = launcher.status("ros2_dds").pid
