@@ -9,9 +9,13 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
+from typing import TypeVar
 
 from deploy.replacements import Replacement, check_unique, parse_replacement
 from shared.config_errors import ConfigError
+
+T = TypeVar("T")
 
 
 def positive_number(text: str) -> float:
@@ -45,6 +49,20 @@ def real_time_factor(text: str) -> str:
     except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(f"must be a positive number or max, got {text!r}") from None
     return text
+
+
+def reporting(parse: Callable[[str], T]) -> Callable[[str], T]:
+    """An argument type from a parser that raises ``ValueError`` with the message to show (argparse alone
+    would say only 'invalid value')."""
+
+    def convert(text: str) -> T:
+        try:
+            return parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = parse.__name__
+    return convert
 
 
 def service_replacement(text: str) -> Replacement:

@@ -24,7 +24,7 @@ from deploy.keys.connection import BusOptions, open_bus
 from deploy.keys.errors import EXIT_NOT_FOUND, EXIT_USAGE, KeysError
 from shared import topics
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
-from shared.interfaces.parameters import GET_PARAMETER, GetParameterRequest
+from shared.interfaces.parameters import LIST_PARAMETERS, ListParametersRequest
 from shared.messages import BatteryState
 from shared.names import parameter_service, topic_key
 from shared.node import ServiceError, ServiceUnavailable, call_service
@@ -107,15 +107,16 @@ class BatteryReading:
         }
 
 
-def _parameter(session: zenoh.Session, namespace: str, name: str) -> Any:
-    key = topic_key(namespace, parameter_service(BATTERY_NODE, "get"))
+def _parameters(session: zenoh.Session, namespace: str) -> dict[str, Any]:
+    """The battery node's parameters by name (one request: the knobs are among them)."""
+    key = topic_key(namespace, parameter_service(BATTERY_NODE, "list"))
     try:
-        reply = call_service(session, key, GET_PARAMETER, GetParameterRequest(name=name), REQUEST_TIMEOUT_S)
+        reply = call_service(session, key, LIST_PARAMETERS, ListParametersRequest(), REQUEST_TIMEOUT_S)
     except ServiceUnavailable:
         raise KeysError(_no_battery(namespace, key), EXIT_NOT_FOUND) from None
     except ServiceError as exc:
         raise KeysError(f"battery: {str(exc).removeprefix(f'{key}: ')}", EXIT_USAGE) from None
-    return json.loads(reply.parameter.value_json)
+    return {p.name: json.loads(p.value_json) for p in reply.parameters}
 
 
 def _no_battery(namespace: str, key: str) -> str:
@@ -151,11 +152,12 @@ def _newest_status(session: zenoh.Session, namespace: str) -> BatteryState:
 def read_battery(options: BusOptions) -> BatteryReading:
     with open_bus(options) as session:
         state = _newest_status(session, options.namespace)
+        knobs = _parameters(session, options.namespace)
         return BatteryReading(
             state=state,
-            drain_scale=float(_parameter(session, options.namespace, "drain_scale")),
-            charge_scale=float(_parameter(session, options.namespace, "charge_scale")),
-            frozen=bool(_parameter(session, options.namespace, "frozen")),
+            drain_scale=float(knobs["drain_scale"]),
+            charge_scale=float(knobs["charge_scale"]),
+            frozen=bool(knobs["frozen"]),
         )
 
 
@@ -169,7 +171,7 @@ def set_battery(
     """``battery/set_state`` with what is given; the rest stays as it is."""
     key = topic_key(options.namespace, topics.BATTERY_SET_STATE)
     with open_bus(options) as session:
-        keep_frozen = bool(_parameter(session, options.namespace, "frozen")) if frozen is None else frozen
+        keep_frozen = bool(_parameters(session, options.namespace)["frozen"]) if frozen is None else frozen
         request = SetBatteryStateRequest(
             percentage=math.nan if level is None else level,
             drain_scale=math.nan if drain_scale is None else drain_scale,

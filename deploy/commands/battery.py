@@ -10,20 +10,9 @@ import argparse
 import sys
 from collections.abc import Callable
 
+from deploy.arg_types import reporting
 from deploy.battery import parse_level, parse_scale, run_battery_get, run_battery_set
 from deploy.keys.verbs import Verb, bus_flags, dispatch
-
-
-def _argument_type(parse: Callable[[str], float]) -> Callable[[str], float]:
-    """An argparse type that reports the parser's own message (argparse would say only 'invalid value')."""
-
-    def convert(text: str) -> float:
-        try:
-            return parse(text)
-        except ValueError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
-
-    return convert
 
 
 def _dispatch(verb: Verb) -> Callable[[argparse.Namespace], int]:
@@ -53,13 +42,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="set the charge (0.2 or 20%%) and the knobs",
         description="Set what is given; the rest stays as it is.",
     )
-    p.add_argument("level", nargs="?", type=_argument_type(parse_level), metavar="LEVEL", help="0.2 or 20%%")
-    p.add_argument(
-        "--drain-scale", type=_argument_type(parse_scale), metavar="X", help="drain X times faster"
-    )
-    p.add_argument(
-        "--charge-scale", type=_argument_type(parse_scale), metavar="X", help="charge X times faster"
-    )
+    p.add_argument("level", nargs="?", type=reporting(parse_level), metavar="LEVEL", help="0.2 or 20%%")
+    p.add_argument("--drain-scale", type=reporting(parse_scale), metavar="X", help="drain X times faster")
+    p.add_argument("--charge-scale", type=reporting(parse_scale), metavar="X", help="charge X times faster")
     freeze = p.add_mutually_exclusive_group()
     freeze.add_argument("--freeze", dest="frozen", action="store_const", const=True, help="hold the charge")
     freeze.add_argument("--thaw", dest="frozen", action="store_const", const=False, help="let it move again")

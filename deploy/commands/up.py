@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from deploy.arg_types import add_service_option
+from deploy.arg_types import add_service_option, reporting
 from deploy.commands.down import bring_down
 from deploy.launcher.api import is_ready
 from deploy.launcher.daemon import launch_argv, plan_input
@@ -50,18 +50,11 @@ def add_launch_options(parser: argparse.ArgumentParser) -> None:
         dest="sets",
         action="append",
         default=[],
-        type=_set_option,
+        type=reporting(parse_set),
         metavar="SERVICE.PARAM=VALUE",
         help="a parameter of one of zendock's services, over the stack's (repeatable; e.g. docking.auto_dock=false)",
     )
     add_service_option(parser)
-
-
-def _set_option(text: str) -> tuple[str, str, str]:
-    try:
-        return parse_set(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def launch_plan(args: argparse.Namespace, stack: Stack) -> LaunchPlan:

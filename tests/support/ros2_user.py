@@ -87,23 +87,25 @@ class User:
 
     def _lifecycle_state(self, nav2_node: str, timeout_s: float) -> str:
         """Ask ``<nav2_node>/get_state`` until it answers (as a Nav2 script does): its label."""
-        client = self.node.create_client(GetState, f"{nav2_node}/get_state")
-        try:
-            if not client.wait_for_service(timeout_sec=timeout_s):
-                return "no service"
-            future = client.call_async(GetState.Request())
-            self.spin_until(future.done, timeout_s)
-            return future.result().current_state.label if future.done() else "no answer"
-        finally:
-            self.node.destroy_client(client)
+        reply = self._call(GetState, f"{nav2_node}/get_state", timeout_s=timeout_s)
+        return reply.current_state.label if reply is not None else "no answer"
 
-    def _call(self, srv_type: Any, name: str, timeout_s: float = 10.0) -> Any:
-        """One call as a Nav2 script makes it (wait for the service, call, wait for the reply)."""
+    def _call(
+        self,
+        srv_type: Any,
+        name: str,
+        fill: Callable[[Any], None] = lambda _request: None,
+        timeout_s: float = 10.0,
+    ) -> Any:
+        """One call as a Nav2 script or ``ros2`` makes it (wait for the service, call, wait for the reply);
+        ``fill`` sets the request's fields. None without a service or a reply."""
         client = self.node.create_client(srv_type, name)
         try:
             if not client.wait_for_service(timeout_sec=timeout_s):
                 return None
-            future = client.call_async(srv_type.Request())
+            request = srv_type.Request()
+            fill(request)
+            future = client.call_async(request)
             self.spin_until(future.done, timeout_s)
             return future.result() if future.done() else None
         finally:
@@ -149,17 +151,7 @@ class User:
             SetParameters: "set_parameters",
             DescribeParameters: "describe_parameters",
         }[srv_type]
-        client = self.node.create_client(srv_type, f"/{node}/{name}")
-        try:
-            if not client.wait_for_service(timeout_sec=10.0):
-                return None
-            request = srv_type.Request()
-            fill(request)
-            future = client.call_async(request)
-            self.spin_until(future.done, 10.0)
-            return future.result() if future.done() else None
-        finally:
-            self.node.destroy_client(client)
+        return self._call(srv_type, f"/{node}/{name}", fill)
 
     def parameters(self) -> None:
         """``ros2 param list /docking``, ``get /docking use_sim_time``, ``get|set /docking auto_dock``, a
