@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -39,6 +40,7 @@ MEASUREMENT_FIELDS = (
     "order",
     "section",
     "status",
+    "headline",
     "what",
     "result",
     "command",
@@ -132,6 +134,14 @@ def load_measurements(directory: Path = MEASUREMENTS_DIR) -> list[dict[str, Any]
             raise ValueError(f"{path}: missing {', '.join(missing)}")
         if record["status"] not in STATUSES:
             raise ValueError(f"{path}: status must be one of {', '.join(STATUSES)}, not {record['status']!r}")
+        headline = record["headline"]
+        if (
+            not isinstance(headline, str)
+            or "\n" in headline
+            or not headline.strip()
+            or len(headline) > HEADLINE_MAX_CHARS
+        ):
+            raise ValueError(f"{path}: headline must be one line of at most {HEADLINE_MAX_CHARS} characters")
         if not isinstance(record["numbers"], dict) or not record["numbers"]:
             raise ValueError(f"{path}: numbers must be a non-empty object")
         record["_file"] = path.name
@@ -143,8 +153,28 @@ def _cell(text: str) -> str:
     return " ".join(str(text).split()).replace("|", "\\|")
 
 
+#: The longest headline a row of the measurements page carries (the story is on the measurement's own page).
+HEADLINE_MAX_CHARS = 100
+
+
+def measurement_stem(record: dict[str, Any]) -> str:
+    """The measurement's file name without ``.json``: its own page is ``measurements/<stem>.md``."""
+    return str(record["_file"]).removesuffix(".json")
+
+
+def commands_of(record: dict[str, Any]) -> list[str]:
+    """The commands a measurement names (its backquoted spans), or its whole command text if none is quoted."""
+    spans = re.findall(r"`([^`]+)`", str(record["command"]))
+    return spans or [" ".join(str(record["command"]).split())]
+
+
+def _commit_cell(record: dict[str, Any]) -> str:
+    return f"`{record['commit']}`" if record["commit"] else f"recorded in `{record['recorded_in']}`"
+
+
 def measurements_page(records: list[dict[str, Any]]) -> str:
-    """The measurements page (Markdown): current figures first, then the history, both in the data's order."""
+    """The measurements page (Markdown): one line per measurement (its headline figure, its first command, its
+    commit), current figures first, then the history; each row links to the measurement's own page."""
     out = [
         "# Measurements",
         "",
@@ -153,16 +183,15 @@ def measurements_page(records: list[dict[str, Any]]) -> str:
         "",
         "Each figure the documentation reports comes from one file under `docs/measurements/` "
         "(the command, the commit, the date, the machine and the numbers); this page is rendered from "
-        "them. Everything was measured on the 2-core development machine, which other jobs shared (so "
-        "timings are noisy); the command beside each number reproduces it. Trials run the whole "
+        "them, one line per measurement. Each row links to the measurement's own page: what was measured, "
+        "the whole result, every command, and the structured numbers. Everything was measured on the 2-core "
+        "development machine, which other jobs shared (so timings are noisy). Trials run the whole "
         "distributed stack, two robots sharing one simulator, with sensor noise and a map->odom "
-        'localisation error of (0.03 m, -0.02 m, 0.02 rad) on. The rows that say "five worlds" were '
-        'measured before `oblique_glass` joined the shipped worlds, and those that say "six" before '
-        "`glass_fins` did; `--world all` now runs seven.",
+        "localisation error of (0.03 m, -0.02 m, 0.02 rad) on; `--world all` runs every shipped world "
+        "(rows say how many there were then).",
         "",
         '*commit* is the commit the measurement names; where it names none ("the final code"), the '
-        "commit that recorded the row is given instead, marked *recorded in*. Rows refer to each other "
-        '("the row below") in the order of the complete table at the end of this page.',
+        "commit that recorded the row is given instead, marked *recorded in*.",
         "",
     ]
     for status, title, intro in (
@@ -179,30 +208,52 @@ def measurements_page(records: list[dict[str, Any]]) -> str:
             "",
             intro,
             "",
-            "| # | what | result | command | commit | date |",
-            "| --- | --- | --- | --- | --- | --- |",
+            "| # | figure | command | commit | date |",
+            "| --- | --- | --- | --- | --- |",
         ]
         for r in records:
             if r["status"] != status:
                 continue
-            commit = f"`{r['commit']}`" if r["commit"] else f"recorded in `{r['recorded_in']}`"
-            out.append(
-                f"| {r['order']} | {_cell(r['what'])} | {_cell(r['result'])} | {_cell(r['command'])} "
-                f"| {commit} | {r['date']} |"
+            commands = commands_of(r)
+            command = f"`{_cell(commands[0])}`" + (
+                f" (+{len(commands) - 1} more)" if len(commands) > 1 else ""
             )
+            link = f"[{_cell(r['headline'])}](measurements/{measurement_stem(r)}.md)"
+            out.append(f"| {r['order']} | {link} | {command} | {_commit_cell(r)} | {r['date']} |")
         out.append("")
-    out += [
-        "## The numbers, per file",
+    out += ["Each run's per-trial data, histograms and logs land in `runs/`.", ""]
+    return "\n".join(out)
+
+
+def measurement_detail_page(record: dict[str, Any]) -> str:
+    """One measurement's own page: the story its row on the measurements page stands for."""
+    numbers = json.dumps(record["numbers"], indent=2, ensure_ascii=False)
+    out = [
+        f"# {record['order']}. {record['headline']}",
         "",
-        "The structured numbers each file carries, for scripts and plots.",
+        f"<!-- Generated from docs/measurements/{record['_file']} by deploy/docs_site.py. -->",
         "",
-        "| # | file | section | numbers |",
-        "| --- | --- | --- | --- |",
+        f"*{record['section']}* · {record['status']} · {_commit_cell(record)} · {record['date']} · "
+        f"[all measurements](../measurements.md)",
+        "",
+        "## What was measured",
+        "",
+        str(record["what"]),
+        "",
+        "## Result",
+        "",
+        str(record["result"]),
+        "",
+        "## Commands",
+        "",
+        *[f"```\n{command}\n```\n" for command in commands_of(record)],
+        f"As the file gives them: {record['command']}",
+        "",
+        f"## Machine\n\n{record['machine']}",
+        "",
+        f"## Numbers\n\nFrom [`{record['_file']}`]({record['_file']}):\n\n```json\n{numbers}\n```",
+        "",
     ]
-    for r in records:
-        numbers = ", ".join(f"{k}: {json.dumps(v, ensure_ascii=False)}" for k, v in r["numbers"].items())
-        out.append(f"| {r['order']} | `{r['_file']}` | {r['section']} | {_cell(numbers)} |")
-    out += ["", "Each run's per-trial data, histograms and logs land in `runs/`.", ""]
     return "\n".join(out)
 
 
@@ -210,10 +261,13 @@ def measurements_page(records: list[dict[str, Any]]) -> str:
 
 
 def on_files(files: Any, config: Any) -> Any:
-    """mkdocs hook: add the generated CLI reference as ``cli.md``."""
+    """mkdocs hook: add the generated CLI reference as ``cli.md`` and each measurement's own page."""
     from mkdocs.structure.files import File  # noqa: PLC0415 - mkdocs is there only while the site builds
 
     files.append(File.generated(config, "cli.md", content=cli_reference()))
+    for record in load_measurements():
+        path = f"measurements/{measurement_stem(record)}.md"
+        files.append(File.generated(config, path, content=measurement_detail_page(record)))
     return files
 
 

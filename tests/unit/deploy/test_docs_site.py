@@ -6,7 +6,15 @@ from __future__ import annotations
 import argparse
 
 from deploy.cli import build_parser
-from deploy.docs_site import MEASUREMENTS_PAGE, cli_reference, load_measurements, measurements_page
+from deploy.docs_site import (
+    HEADLINE_MAX_CHARS,
+    MEASUREMENTS_PAGE,
+    cli_reference,
+    load_measurements,
+    measurement_detail_page,
+    measurement_stem,
+    measurements_page,
+)
 
 
 def test_committed_measurements_page_is_current():
@@ -25,6 +33,22 @@ def test_every_measurement_names_its_command_and_commit():
         assert record["command"].strip(), record["id"]
         assert record["commit"] or record["recorded_in"], record["id"]
         assert "2-core" in record["machine"], record["id"]
+
+
+def test_each_measurement_is_one_row_linking_to_a_page_with_its_whole_story():
+    records = load_measurements()
+    page = measurements_page(records)
+    rows = [line for line in page.splitlines() if line.startswith("| ") and not line.startswith("| #")]
+    assert len(rows) == len(records)
+    for record in records:
+        (row,) = [line for line in rows if line.startswith(f"| {record['order']} |")]
+        assert f"](measurements/{measurement_stem(record)}.md)" in row
+        assert len(record["headline"]) <= HEADLINE_MAX_CHARS and record["headline"] in row
+        assert record["result"] not in row or len(record["result"]) <= HEADLINE_MAX_CHARS
+        detail = measurement_detail_page(record)
+        for field in ("headline", "what", "result", "machine"):
+            assert str(record[field]) in detail, (record["id"], field)
+        assert f'"{next(iter(record["numbers"]))}"' in detail, record["id"]
 
 
 def _commands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
