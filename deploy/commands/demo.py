@@ -78,6 +78,7 @@ def _run(args: argparse.Namespace) -> int:
         timeout_sim_s=args.timeout,
         compose=args.compose,
         replacements=check_replacements(args.replacements),
+        **({"runs_dir": args.runs_dir} if args.runs_dir else {}),
     )
     # progress every 2 s on a terminal; with --json or into a pipe, a line every 10 s on stderr only
     interactive = not args.json and is_terminal(sys.stdout)
@@ -123,5 +124,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="give up this many sim seconds after the trigger",
     )
     add_service_option(parser)
+    parser.add_argument(
+        "--runs-dir",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="where the run directory goes (default: runs/ in the repository)",
+    )
     parser.add_argument("--json", action="store_true", help="print the JSON report as the last line")
     parser.set_defaults(func=_run)

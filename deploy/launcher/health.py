@@ -104,8 +104,16 @@ class LivelinessWatcher:
         return not closer.is_alive()
 
     def close(self) -> None:
-        """Blocking (run it off the loop): undeclare and close the session."""
+        """Blocking (run it off the loop): undeclare and close the session.
+
+        The connecting thread is waited for first (one attempt lasts at most ``_OPEN_ATTEMPT_MS``): left
+        inside Zenoh's open while the interpreter exits (a stack that failed before its router answered),
+        it came back to Python during finalization and the process aborted ("FATAL: exception not
+        rethrown", exit 134) after printing why the run had ended.
+        """
         self._closing.set()
+        if self._thread.is_alive() and self._thread is not threading.current_thread():
+            self._thread.join(_OPEN_ATTEMPT_MS / 1000.0 + 1.0)
         with self._lock:
             session, subscriber = self._session, self._subscriber
             self._session = self._subscriber = None
