@@ -95,7 +95,9 @@ class PerceptionService:
         self.detected_pub = node.create_publisher(PoseStamped, topics.DETECTED_DOCK_POSE, SENSOR_DATA)
         self.detections_pub = node.create_publisher(DockDetection, topics.DOCK_DETECTIONS, RELIABLE)
         self.debug_pub = node.create_publisher(Image, topics.ARUCO_DEBUG_IMAGE, IMAGE_QOS)
-        node.create_subscription(CameraInfo, topics.CAMERA_INFO, self._on_camera_info, QoS(depth=1))
+        node.create_subscription(
+            CameraInfo, topics.CAMERA_INFO, self._on_camera_info, QoS(reliable=False, depth=1)
+        )
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
         #: Images are read only while someone wants what comes of them (Zenoh's matching status on this
         #: service's outputs), so the simulator renders no frame that nobody uses. The demand is followed
