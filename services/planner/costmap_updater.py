@@ -154,6 +154,7 @@ class CostmapUpdater:
                 self._params.glass_suspicion_radius_m,
                 model=RangeSensorModel(trusted_range_m=self._params.glass_trusted_range_m),
                 echo_hold_s=self._params.glass_echo_hold_s,
+                pane_extension_m=self._params.glass_pane_extension_m,
             )
             kept = self._glass_store.load(occupancy) if self._glass_store is not None else None
             if kept is not None:
@@ -163,6 +164,7 @@ class CostmapUpdater:
                     self._params.glass_memory_file,
                     int(np.count_nonzero(kept == LETHAL_OBSTACLE)),
                 )
+        self.glass.set_walls(occupancy.data == OCC_OCCUPIED)
         self._applied_glass = None
         if self.costmap is None:
             self.costmap = LayeredCostmap(occupancy, self._params.costmap_params())

@@ -19,6 +19,13 @@ arc is also held as glass for ``echo_hold_s`` (Nav2 pairs its range layer with a
 the same reason): long enough to steer round what was just heard, too short to pile up false glass. The
 held arcs never enter the memory kept on file and never count in the yardstick; only the evidence does.
 
+A pane goes on in its own direction, too: a run of marks along a straight line, long enough to be a pane,
+is carried on along that line past both ends, through floor the sonar has never looked at, for
+``pane_extension_m`` (:mod:`services.planner.pane_extension`). Rounding the far end of a pane it had heard
+only from afar, the robot found the last marks 0.6-1.3 m short of the end, past the suspicion radius, and
+its corner clipped the end in 5 of 30 composed glass-room runs. No extension comes back into floor a
+recovery has just cleared round the robot.
+
 The node folds the glass into the costmap's static layer (it is as good as a wall until cleared), so
 the lidar's clearing never erases it; a recovery or a clear request forgets it.
 """
@@ -33,6 +40,7 @@ import numpy as np
 from services.planner.costmap import FREE_SPACE, LETHAL_OBSTACLE, NO_INFORMATION, CostmapParams
 from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.grid_frame import GridFrame
+from services.planner.pane_extension import pane_extensions
 from services.planner.range_sensor_model import RangeSensorModel, reading_evidence
 
 #: Evidence above this (log-odds; P = 0.55) and below the mark threshold is suspected glass.
@@ -52,9 +60,22 @@ class GlassMemory:
         suspicion_radius_m: float = 0.5,
         model: RangeSensorModel | None = None,
         echo_hold_s: float = 0.0,
+        pane_extension_m: float = 0.0,
     ) -> None:
         if not (math.isfinite(suspicion_radius_m) and suspicion_radius_m >= 0):
             raise ValueError(f"suspicion_radius_m must be a non-negative number, got {suspicion_radius_m}")
+        if not (math.isfinite(pane_extension_m) and pane_extension_m >= 0):
+            raise ValueError(f"pane_extension_m must be a non-negative number, got {pane_extension_m}")
+        self.pane_extension_m = pane_extension_m
+        #: Cells a pane's extension stops at: a wall of the static map, or too near one to leave the robot a
+        #: way between (see :meth:`set_walls`).
+        self._extension_stops: np.ndarray | None = None
+        #: Cells a recovery cleared (:meth:`clear_around`): no pane's extension comes back into them. It
+        #: would refill at once the floor the recovery had just forgotten to let the robot out, and the
+        #: robot would be blocked again, recovery after recovery.
+        self._cleared_by_recovery = np.zeros(frame.shape, dtype=bool)
+        #: The last extension and the marks it was drawn from (most updates change no mark).
+        self._extension_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         if not (math.isfinite(echo_hold_s) and echo_hold_s >= 0):
             raise ValueError(f"echo_hold_s must be a non-negative number, got {echo_hold_s}")
         self.echo_hold_s = echo_hold_s
@@ -214,6 +235,8 @@ class GlassMemory:
     def clear(self) -> None:
         self._log_odds[...] = 0.0
         self._seen[...] = False
+        self._cleared_by_recovery[...] = False
+        self._extension_cache = None
         self._held.clear()
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
@@ -221,6 +244,8 @@ class GlassMemory:
         inside = self.frame.cells_within(xy, radius_m)
         self._log_odds[inside[:, 1], inside[:, 0]] = 0.0
         self._seen[inside[:, 1], inside[:, 0]] = False
+        self._cleared_by_recovery[inside[:, 1], inside[:, 0]] = True
+        self._extension_cache = None
         self._held.clear()
 
     def restore(self, layer: np.ndarray) -> None:
@@ -245,7 +270,8 @@ class GlassMemory:
         self, near_xy: tuple[float, float] | None = None, radius_m: float = math.inf
     ) -> np.ndarray:
         """Centres ``(N, 2)`` of every cell the sonar has heard glass in: suspected, marked, or on a held
-        arc. The robot slows near them: where one pane is known its unheard end is near, and a plan that
+        arc, or where a marked pane probably goes on (:meth:`pane_extension_mask`). The robot slows near them:
+        where one pane is known its unheard end is near, and a plan that
         rounds a pane's end keeps changing as the end is heard (the robot once clipped ends at full speed
         while replanning several times a second).
 
@@ -259,12 +285,50 @@ class GlassMemory:
         heard = self._log_odds[rows, cols] > SUSPECTED_LOG_ODDS
         if self._held:
             heard = heard | self.held_mask()[rows, cols]
+        if self.pane_extension_m > 0:
+            # Where a pane probably goes on unheard, too: the robot rounded such ends at 0.45 m/s.
+            heard = heard | self.pane_extension_mask()[rows, cols]
         iy, ix = np.nonzero(heard)
         return self.frame.cells_to_world(np.stack([ix + cols.start, iy + rows.start], axis=1))
 
+    def set_walls(self, walls: np.ndarray) -> None:
+        """The static map's walls (boolean grid). A pane's extension stops a robot's width and a margin
+        short of them: a pane may well meet a wall, but an extension that did would close the gap beside
+        the pane's end before the sonar has looked, and the planner would find no way round."""
+        if walls.shape != self.frame.shape:
+            raise ValueError(f"walls of shape {walls.shape} do not fit the grid {self.frame.shape}")
+        reach_cells = self._robot_gap_m() / self.frame.resolution_m
+        self._extension_stops = squared_distance_to_marks(walls, reach_cells) <= reach_cells * reach_cells
+        self._extension_cache = None
+
+    def _robot_gap_m(self) -> float:
+        """The gap a pane's extension leaves before a wall or another pane: the robot's width and a margin."""
+        return 2.0 * self.params.circumscribed_radius_m + 0.1
+
+    def pane_extension_mask(self) -> np.ndarray:
+        """Boolean ``(height, width)``: where the marked panes probably go on, unseen (see the module doc)."""
+        marks = self._log_odds >= self.model.mark_log_odds
+        cached = self._extension_cache
+        if cached is not None and np.array_equal(cached[0], marks) and np.array_equal(cached[1], self._seen):
+            return cached[2]
+        stops = self._cleared_by_recovery
+        if self._extension_stops is not None:
+            stops = stops | self._extension_stops
+        extension = pane_extensions(
+            marks,
+            self._seen,
+            self.frame.resolution_m,
+            self.pane_extension_m,
+            blocked=stops,
+            clearance_m=self._robot_gap_m(),
+        )
+        self._extension_cache = (marks, self._seen.copy(), extension)
+        return extension
+
     def glass_mask(self) -> np.ndarray:
         """Boolean ``(height, width)``: marked by the sonar, unlooked-at within the suspicion radius of a
-        cell the sonar heard glass in (marked or suspected), or on a held arc.
+        cell the sonar heard glass in (marked or suspected), a marked pane's unseen continuation (see
+        :meth:`pane_extension_mask`), or on a held arc.
 
         Suspicion grows from every heard cell, not only from marks: rounding a pane's end seen obliquely,
         the last marks lay 0.3 m short of the end and the cells between held only echoes from the cone's
@@ -277,6 +341,8 @@ class GlassMemory:
             radius_cells = self.suspicion_radius_m / self.frame.resolution_m
             near = squared_distance_to_marks(heard, radius_cells) <= radius_cells * radius_cells
             glass = marks | (near & ~self._seen)
+        if self.pane_extension_m > 0:
+            glass = glass | self.pane_extension_mask()
         if self._held:
             glass = glass | self.held_mask()
         return glass

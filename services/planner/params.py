@@ -113,6 +113,13 @@ class Params(ServiceParams):
         description="each unexplained sonar echo's whole arc counts as glass this long (sim "
         "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)",
     )
+    glass_pane_extension_m: float = Field(
+        1.5,
+        ge=0.0,
+        description="a marked pane counts as going on along its own line this far past its ends, through "
+        "floor the sonar has never looked at and never closer to a wall than a robot's width: its unseen "
+        "end (0: off)",
+    )
     glass_trusted_range_m: float = Field(
         2.0,
         gt=0.0,

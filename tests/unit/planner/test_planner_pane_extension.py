@@ -1,0 +1,143 @@
+"""A marked pane is carried on along its own line through floor the sonar never looked at, and no further."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from services.planner.costmap import CostmapParams
+from services.planner.glass_memory import GlassMemory
+from services.planner.grid_frame import GridFrame
+from services.planner.pane_extension import pane_extensions, pane_runs
+
+RES = 0.05
+
+
+def _pane(shape: tuple[int, int] = (40, 80), row: int = 20, cols: range = range(10, 30)) -> np.ndarray:
+    marks = np.zeros(shape, dtype=bool)
+    marks[row, cols.start : cols.stop] = True
+    marks[row + 1, cols.start + 3 : cols.start + 6] = True  # a pane's marks are a band, not a line
+    return marks
+
+
+def test_a_pane_goes_on_along_its_line_for_the_extension_past_both_ends() -> None:
+    marks = _pane()
+    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=0.5)
+    columns = np.nonzero(extended.any(axis=0))[0]
+    assert set(range(30, 40)) <= set(columns.tolist())  # 0.5 m = 10 cells past the right end ...
+    assert set(range(0, 10)) <= set(columns.tolist())  # ... and past the left end
+    assert not extended[:, 41:].any()  # no further
+    assert not extended[marks].any()  # the marks stay marks
+    rows = np.nonzero(extended.any(axis=1))[0]
+    assert set(rows.tolist()) <= {20, 21}  # along the pane's own line, not sideways
+
+
+def test_the_extension_stops_at_floor_the_sonar_looked_at_and_at_walls() -> None:
+    marks = _pane()
+    looked_at = np.zeros_like(marks)
+    looked_at[:, 34] = True  # the sonar looked here and heard nothing: the pane ended before
+    walls = np.zeros_like(marks)
+    walls[:, 5] = True
+    extended = pane_extensions(marks, looked_at, RES, extension_m=1.0, blocked=walls)
+    columns = set(np.nonzero(extended.any(axis=0))[0].tolist())
+    assert columns == set(range(30, 34)) | set(range(6, 10))
+
+
+def test_spots_and_short_runs_are_not_extended_and_a_blob_only_along_its_long_side() -> None:
+    spot = np.zeros((40, 80), dtype=bool)
+    spot[20, 20:28] = True  # 0.4 m: no direction to speak of
+    assert not pane_extensions(spot, np.zeros_like(spot), RES, extension_m=1.0).any()
+    assert not pane_extensions(_pane(), np.zeros((40, 80), dtype=bool), RES, extension_m=0.0).any()
+
+
+def test_false_glass_beside_a_pane_does_not_tilt_its_line() -> None:
+    marks = _pane(cols=range(10, 40))
+    marks[21:26, 36:40] = True  # a clump of false glass in front of the pane's end, as the sonar leaves them
+    runs = pane_runs(marks, RES)
+    assert runs, "the pane is found"
+    _, direction, _ = runs[0]
+    assert abs(direction[1]) < 0.05, f"the pane's line is tilted: {direction}"
+    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=0.5)
+    assert not extended[24:, :].any(), "the extension cuts across the floor in front of the pane"
+
+
+def test_a_diagonal_pane_keeps_its_angle_and_collinear_runs_are_each_a_pane() -> None:
+    marks = np.zeros((60, 60), dtype=bool)
+    for i in range(10, 25):
+        marks[i, i] = True  # a 45 degree pane: its cells touch only at corners
+        marks[i, i + 1] = True
+    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=0.4)
+    assert extended[30, 30] and extended[5, 5] and not extended[40, 40]
+    two = np.zeros((20, 100), dtype=bool)
+    two[10, 5:20] = True
+    two[10, 60:75] = True  # the same line 2 m on: two panes, four ends
+    assert len(pane_runs(two, RES)) == 4
+
+
+def test_glass_memory_counts_a_marked_panes_unseen_continuation_as_glass() -> None:
+    frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=0.5)
+    # Facing +y from three places along x = 0.6 .. 1.4: a pane along y = 1.0.
+    for x in (0.6, 0.8, 1.0, 1.2, 1.4):
+        for _ in range(3):
+            memory.add_reading((x, 0.4, math.pi / 2), 0.6, 0.5, 0.02, 3.0)
+    ix, iy = frame.world_to_cell(1.8, 1.0)
+    assert memory.glass_mask()[iy, ix], "the pane goes on past its last mark"
+    assert not (memory.sonar_layer == 254)[iy, ix], "... but that is not what the sonar marked"
+    memory.add_reading((1.8, 0.4, math.pi / 2), math.inf, 0.5, 0.02, 3.0)  # the sonar looks: nothing there
+    assert not memory.glass_mask()[iy, ix]
+    off = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0)
+    with pytest.raises(ValueError, match="pane_extension_m"):
+        GlassMemory(frame, CostmapParams(), pane_extension_m=-1.0)
+    assert off.pane_extension_m == 0.0
+
+
+def test_an_extension_leaves_the_robot_a_way_between_the_pane_and_a_wall() -> None:
+    frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=2.0)
+    for x in (0.6, 0.8, 1.0, 1.2, 1.4):
+        for _ in range(3):
+            memory.add_reading((x, 0.4, math.pi / 2), 0.6, 0.5, 0.02, 3.0)
+    walls = np.zeros(frame.shape, dtype=bool)
+    walls[:, 70] = True  # a wall across the pane's line at x = 3.5
+    memory.set_walls(walls)
+    glass = memory.glass_mask()
+    row = frame.world_to_cell(0.0, 1.0)[1]
+    assert glass[row, frame.world_to_cell(2.5, 1.0)[0]]  # the pane goes on ...
+    gap = 2.0 * CostmapParams().circumscribed_radius_m
+    assert not glass[:, frame.world_to_cell(3.5 - gap, 1.0)[0] :].any()  # ... but leaves a way past its end
+    with pytest.raises(ValueError, match="walls"):
+        memory.set_walls(np.zeros((3, 3), dtype=bool))
+
+
+def test_a_pane_does_not_extend_back_into_floor_a_recovery_cleared() -> None:
+    frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=1.0)
+    for x in (0.6, 0.8, 1.0, 1.2, 1.4):
+        for _ in range(3):
+            memory.add_reading((x, 0.4, math.pi / 2), 0.6, 0.5, 0.02, 3.0)
+    ix, iy = frame.world_to_cell(2.1, 1.0)
+    assert memory.glass_mask()[iy, ix]
+    memory.clear_around((2.3, 1.0), 0.4)  # a recovery beside the pane's end forgets the glass round the robot
+    assert not memory.glass_mask()[iy, ix], "the extension came back into the floor the recovery cleared"
+    assert memory.glass_mask()[frame.world_to_cell(1.0, 1.0)[1], frame.world_to_cell(1.0, 1.0)[0]]
+    memory.clear()
+    assert not memory.glass_mask().any()
+
+
+def test_two_panes_extensions_leave_the_gap_between_their_ends_open() -> None:
+    marks = np.zeros((60, 80), dtype=bool)
+    for i in range(20):
+        marks[10 + i, 20 + i] = marks[10 + i, 21 + i] = True  # a pane up to (41, 30), at 45 degrees
+    marks[52, 30:60] = True  # another, across its line 1 m on: the gap between them is a robot's way
+    clearance = 0.6
+    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=1.5, clearance_m=clearance)
+    iy, ix = np.nonzero(extended)
+    others = np.nonzero(marks[52])[0]
+    for x, y in zip(ix.tolist(), iy.tolist(), strict=True):
+        if x >= 30 and y < 50:  # the diagonal pane's extension, heading for the other pane
+            nearest = min(math.hypot(x - o, y - 52) for o in others.tolist())
+            assert nearest * RES >= clearance - RES, (x, y)
+    assert extended[32, 43], "the diagonal pane still goes on, short of the other"
