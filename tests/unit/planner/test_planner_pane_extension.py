@@ -76,13 +76,17 @@ def test_a_diagonal_pane_keeps_its_angle_and_collinear_runs_are_each_a_pane() ->
     assert len(pane_runs(two, RES)) == 4
 
 
-def test_glass_memory_counts_a_marked_panes_unseen_continuation_as_glass() -> None:
-    frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
-    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=0.5)
-    # Facing +y from three places along x = 0.6 .. 1.4: a pane along y = 1.0.
+def _hear_a_pane_along_y_1(memory: GlassMemory) -> None:
+    """Facing +y from x = 0.6 .. 1.4, three pings each: a pane along y = 1.0, marked from x 0.4 to 1.6."""
     for x in (0.6, 0.8, 1.0, 1.2, 1.4):
         for _ in range(3):
             memory.add_reading((x, 0.4, math.pi / 2), 0.6, 0.5, 0.02, 3.0)
+
+
+def test_glass_memory_counts_a_marked_panes_unseen_continuation_as_glass() -> None:
+    frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=0.5)
+    _hear_a_pane_along_y_1(memory)
     ix, iy = frame.world_to_cell(1.8, 1.0)
     assert memory.glass_mask()[iy, ix], "the pane goes on past its last mark"
     assert not (memory.sonar_layer == 254)[iy, ix], "... but that is not what the sonar marked"
@@ -97,9 +101,7 @@ def test_glass_memory_counts_a_marked_panes_unseen_continuation_as_glass() -> No
 def test_an_extension_leaves_the_robot_a_way_between_the_pane_and_a_wall() -> None:
     frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
     memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=2.0)
-    for x in (0.6, 0.8, 1.0, 1.2, 1.4):
-        for _ in range(3):
-            memory.add_reading((x, 0.4, math.pi / 2), 0.6, 0.5, 0.02, 3.0)
+    _hear_a_pane_along_y_1(memory)
     walls = np.zeros(frame.shape, dtype=bool)
     walls[:, 70] = True  # a wall across the pane's line at x = 3.5
     memory.set_walls(walls)
@@ -115,9 +117,7 @@ def test_an_extension_leaves_the_robot_a_way_between_the_pane_and_a_wall() -> No
 def test_a_pane_does_not_extend_back_into_floor_a_recovery_cleared() -> None:
     frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
     memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=1.0)
-    for x in (0.6, 0.8, 1.0, 1.2, 1.4):
-        for _ in range(3):
-            memory.add_reading((x, 0.4, math.pi / 2), 0.6, 0.5, 0.02, 3.0)
+    _hear_a_pane_along_y_1(memory)
     ix, iy = frame.world_to_cell(2.1, 1.0)
     assert memory.glass_mask()[iy, ix]
     memory.clear_around((2.3, 1.0), 0.4)  # a recovery beside the pane's end forgets the glass round the robot

@@ -1,5 +1,6 @@
 """A service that can never start ends ``up --wait``, ``demo`` and ``trials`` at once, as a user runs them:
-one line naming the service, the cause and the fix, a failing exit status, and nothing left running.
+one line naming the service, the cause and the fix, a failing exit status, and nothing left running (the
+``mark`` fixture fails the test on any survivor).
 
 The cause is put in with ``--service battery=COMMAND``, the way a user's replacement arrives: a command
 that is not found, one that exits with a configuration error, one from a ``.venv-ros2`` that was never
@@ -22,7 +23,6 @@ from pathlib import Path
 import pytest
 
 from deploy.launcher.api import free_endpoint
-from tests.integration.launcher.conftest import kill_marked, marked_processes
 from tests.support.processes import REPO_ROOT
 
 #: The issue's bound: each command ends within 10 s of being started, cause included.
@@ -33,15 +33,6 @@ CAUSES = {
     "configuration-error": (f"{sys.executable} -c 'import sys; sys.exit(78)'", ("configuration error",)),
     "missing-ros2-venv": (".venv-ros2-absent/.venv-ros2/bin/python -m services.battery", ("run make ros2",)),
 }
-
-
-@pytest.fixture
-def mark() -> Iterator[str]:
-    value = uuid.uuid4().hex
-    yield value
-    survivors = marked_processes(value)
-    kill_marked(value)
-    assert not survivors, f"processes left behind: {[(p.pid, p.cmdline()) for p in survivors]}"
 
 
 @pytest.fixture
