@@ -1,17 +1,18 @@
 """Where a pane the sonar has only partly seen probably goes on: along its own line, past its last mark.
 
 The sonar looks forward through a narrow cone, so a pane is marked only where the robot faced it. Rounding
-the pane's far end, the robot faces away from it: the last marks can lie 0.6-0.8 m short of the real end
-(the glass room, seen from the north-west), the floor between is open on every layer, and the planner's
+the pane's far end, the robot faces away from it: the last marks can lie 0.6-1.3 m short of the real end
+(the glass room, heard from the north-west), the floor between is open on every layer, and the planner's
 path grazes the unseen end. Suspicion round the heard cells (:mod:`services.planner.glass_memory`) reaches
 only ``suspicion_radius_m`` in every direction; a pane goes on in one direction, its own.
 
 So each run of marks along a straight line, long enough to be a pane, is extended along that line past both
 of its ends, through floor the sonar has never looked at, for up to ``extension_m``. The line stops at the
 first cell the sonar has looked at (the pane ended before it, or the sonar would have heard it), a robot's
-width short of a wall (a pane may meet the wall, but an extension that did would close the way past the
-pane's end before the sonar has looked, and the planner would find no path), and at the grid's edge. Like suspicion, the
-extension never enters the kept memory: once the robot faces it, the cells are looked at and it is gone.
+width short of a wall or of a pane across its line (a pane may meet either, but an extension that did would
+close the way past its end before the sonar has looked, and the planner would find no path), and at the
+grid's edge. Like suspicion, the extension never enters the kept memory: once the robot faces it, the cells
+are looked at and it is gone.
 
 Pure numpy on grid arrays (``array[iy, ix]``): no bus, no costmap.
 """
