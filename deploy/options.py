@@ -1,8 +1,10 @@
-"""Options several commands share, each defined once: where the bus is, which controller, which detector."""
+"""Options several commands share, each defined once: where the bus is, which controller, which detector,
+where run directories go."""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from shared.controllers import CONTROLLERS, DEFAULT_CONTROLLER, DETECTORS, DetectorName, choices_help
 from shared.session import DEFAULT_ROUTER_ENDPOINT
@@ -40,6 +42,17 @@ def add_bus_options(parser: _Adds) -> None:
         default=DEFAULT_CONNECT_TIMEOUT_S,
         metavar="S",
         help=f"give up reaching the router after S seconds (default {DEFAULT_CONNECT_TIMEOUT_S:g})",
+    )
+
+
+def add_runs_dir_option(parser: _Adds, what: str = "the run directory goes") -> None:
+    """``--runs-dir DIR``: where ``what`` (default: runs/ in the repository)."""
+    parser.add_argument(
+        "--runs-dir",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help=f"where {what} (default: runs/ in the repository)",
     )
 
 

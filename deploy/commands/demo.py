@@ -12,7 +12,7 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, positive_number, real_time_factor
-from deploy.options import add_controller_option, add_detector_option
+from deploy.options import add_controller_option, add_detector_option, add_runs_dir_option
 from deploy.progress import is_terminal, progress_period_s
 from deploy.world_names import world_argument
 from shared.config_errors import ConfigError
@@ -124,12 +124,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="give up this many sim seconds after the trigger",
     )
     add_service_option(parser)
-    parser.add_argument(
-        "--runs-dir",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="where the run directory goes (default: runs/ in the repository)",
-    )
+    add_runs_dir_option(parser)
     parser.add_argument("--json", action="store_true", help="print the JSON report as the last line")
     parser.set_defaults(func=_run)

@@ -14,7 +14,7 @@ from rich.text import Text
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, positive_number, real_time_factor
-from deploy.options import add_detector_option
+from deploy.options import add_detector_option, add_runs_dir_option
 from deploy.progress import is_terminal
 from deploy.world_names import world_argument
 from shared.config_errors import ConfigError
@@ -208,13 +208,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="FRACTION",
         help="charge at which a docked robot undocks and patrols again (default 0.8)",
     )
-    parser.add_argument(
-        "--runs-dir",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="where the run directory goes (default: runs/ in the repository)",
-    )
+    add_runs_dir_option(parser)
     add_service_option(parser)
     parser.add_argument(
         "--compose",

@@ -22,7 +22,7 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
-from deploy.options import add_controller_option, add_detector_option
+from deploy.options import add_controller_option, add_detector_option, add_runs_dir_option
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
 from deploy.world_names import campaign_world
 from shared.config_errors import ConfigError
@@ -288,13 +288,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="run only the K-th of N disjoint slices of the campaign (the same starts as the "
         "whole run; combine them with `zendock trials merge`)",
     )
-    parser.add_argument(
-        "--runs-dir",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="where run directories go (default: runs/ in the repository)",
-    )
+    add_runs_dir_option(parser, "run directories go")
     add_service_option(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON on the last line")
     parser.set_defaults(func=_run)
@@ -312,13 +306,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="PATH",
         help="a shard's trials.json, its run directory, or a directory holding shard runs",
     )
-    merge.add_argument(
-        "--runs-dir",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="where the merged run directory goes (default: runs/ in the repository)",
-    )
+    add_runs_dir_option(merge, "the merged run directory goes")
     merge.add_argument(
         "--json", action="store_true", help="print the merged summary as JSON on the last line"
     )
