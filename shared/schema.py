@@ -1,7 +1,8 @@
 """Typed message schemas: dataclasses that mirror ROS 2 messages, encoded as msgpack maps.
 
-A message class is a dataclass decorated with :func:`message`, which records its ROS type name and
-compiles one validator per field. Decoding checks every field (type, range, finiteness, array shape)
+A message class is a dataclass decorated with :func:`message`, which records its ROS type name; one
+validator per field is compiled when the class is first encoded or decoded (:func:`compile_all` does
+it at once). Decoding checks every field (type, range, finiteness, array shape)
 and raises :class:`MessageError` naming the key, the type, the field path and the reason; encoding
 runs the same checks so an invalid message is refused at the sender.
 
@@ -209,22 +210,55 @@ def message(type_name: str) -> Callable[[type[M]], type[M]]:
         if not own_init:
             _GENERATED_INIT.add(cls)
         cls.TYPE_NAME = type_name
-        hints = typing.get_type_hints(cls, include_extras=True)
-        cls._FIELDS = tuple(
-            (f.name, *_compile(hints[f.name], f.name))
-            for f in dataclasses.fields(cls)  # type: ignore[arg-type]
-        )
-        _generate_fast_paths(cls, hints)
-        cls._FIXED = _generate_fixed_codec(cls)
-        if cls._FIXED is not None:
-            cls.decode = classmethod(cls._FIXED[0])  # type: ignore[assignment,method-assign]
-            cls.encode = cls._FIXED[1]  # type: ignore[method-assign]
+        for attribute in ("_FIELDS", "_FIXED"):
+            setattr(cls, attribute, _CompiledOnFirstRead(cls, attribute))
         if type_name in _REGISTRY and _REGISTRY[type_name].__qualname__ != cls.__qualname__:
             raise ValueError(f"message type {type_name} registered twice")
         _REGISTRY[type_name] = cls
         return cls
 
     return wrap
+
+
+class _CompiledOnFirstRead:
+    """Stands in for a message class's compiled codec until something first reads it.
+
+    A service imports a few hundred message classes (every interface its contracts name) and sends or
+    reads a dozen of them. Compiling a class (type hints, one validator per field, generated fast paths)
+    costs about as much as defining it, so it waits for the first encode or decode of that class: the
+    general path reads ``_FIELDS``, which lands here, and the compiled attributes replace this stand-in
+    on the class. Compiling twice from two threads at once gives the same result, so no lock is needed.
+    """
+
+    def __init__(self, cls: type[Message], attribute: str) -> None:
+        self._cls = cls
+        self._attribute = attribute
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        _compile_message(self._cls)
+        return self._cls.__dict__[self._attribute]
+
+
+def _compile_message(cls: type[Message]) -> None:
+    """Give ``cls`` its field validators, fast paths and, for all-float messages, the fixed codec."""
+    hints = typing.get_type_hints(cls, include_extras=True)
+    fields = tuple(
+        (f.name, *_compile(hints[f.name], f.name))
+        for f in dataclasses.fields(cls)  # type: ignore[arg-type]
+    )
+    cls._FIELDS = fields
+    _generate_fast_paths(cls, hints)
+    fixed = _generate_fixed_codec(cls)
+    if fixed is not None:
+        cls.decode = classmethod(fixed[0])  # type: ignore[assignment,method-assign]
+        cls.encode = fixed[1]  # type: ignore[method-assign]
+    cls._FIXED = fixed
+
+
+def compile_all() -> None:
+    """Compile every registered message class now (tests and tools that want annotation errors at once)."""
+    for cls in list(_REGISTRY.values()):
+        _ = cls._FIELDS
 
 
 # --- compilation of per-field validators and encoders -------------------------------------------
