@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import re
 import signal
 import sys
 import threading
@@ -41,7 +42,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
-import yaml
 import zenoh
 from pydantic import BaseModel, ValidationError
 
@@ -125,10 +125,36 @@ class ServiceOptions:
 def parse_parameter_value(text: str) -> Any:
     """A parameter's VALUE as YAML (``0.5``, ``true``, ``[0.1, 0, 0]``), the one reading of ``-p`` and
     ``zendock param set``; text that is not YAML stays text."""
+    plain = _plain_scalar(text)
+    if plain is not _NOT_PLAIN:
+        return plain
+    import yaml  # noqa: PLC0415 - most services are given only plain scalars, and yaml costs 20 ms to import
+
     try:
         return yaml.safe_load(text) if text.strip() else ""
     except yaml.YAMLError:
         return text
+
+
+_NOT_PLAIN = object()
+_PLAIN_INT = re.compile(r"-?(?:0|[1-9][0-9]*)")
+_PLAIN_FLOAT = re.compile(r"-?(?:0|[1-9][0-9]*)\.[0-9]+")
+_PLAIN_WORD = re.compile(r"[A-Za-z_/][A-Za-z0-9_/.\-]*")
+_YAML_WORDS = {"null", "true", "false", "yes", "no", "on", "off", "y", "n"}
+
+
+def _plain_scalar(text: str) -> Any:
+    """``true``, ``false``, ``12``, ``-0.5``, a name or a path, read as YAML reads them, without loading a YAML parser;
+    anything else (``yes``, ``1e3``, ``0o7``, lists) goes to YAML."""
+    if text in ("true", "false"):
+        return text == "true"
+    if _PLAIN_INT.fullmatch(text):
+        return int(text)
+    if _PLAIN_FLOAT.fullmatch(text):
+        return float(text)
+    if _PLAIN_WORD.fullmatch(text) and text.lower() not in _YAML_WORDS:
+        return text  # a name or a path
+    return _NOT_PLAIN
 
 
 def _parse_override(text: str) -> tuple[str, Any]:
@@ -250,6 +276,8 @@ def load_params(model: type[P], options: ServiceOptions) -> P:
     if options.config_file:
         path = Path(options.config_file)
         source = str(path)
+        import yaml  # noqa: PLC0415 - see parse_parameter_value
+
         try:
             data = yaml.safe_load(path.read_text()) or {}
         except OSError as exc:

@@ -251,7 +251,7 @@ def _compile_message(cls: type[Message]) -> None:
     fixed = _generate_fixed_codec(cls)
     if fixed is not None:
         cls.decode = classmethod(fixed[0])  # type: ignore[assignment,method-assign]
-        cls.encode = fixed[1]  # type: ignore[method-assign]
+        cls.encode = fixed[1]  # type: ignore[method-assign,assignment]
     cls._FIXED = fixed
 
 

@@ -23,8 +23,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
+from types import ModuleType
 
-import cv2
 import numpy as np
 from pydantic import Field
 
@@ -37,6 +37,21 @@ from shared.world import DOCK_GEOMETRY, Dock, DockMarker, World, dock_markers
 _OPAQUE_LAYERS = 8
 #: Marker pixels are the average of this many samples a side (area coverage at the edges).
 _SUPERSAMPLE = 3
+
+
+_OPENCV: list[ModuleType] = []
+
+
+def opencv(threads: int = 0) -> ModuleType:
+    """OpenCV, imported with the first rendered frame rather than at start-up: it costs a third of the
+    simulator's imports, and a run that nobody watches through the camera (the synthetic detector's)
+    never renders a frame. ``threads`` (0: OpenCV's default) is set on that first import."""
+    if not _OPENCV:
+        import cv2  # noqa: PLC0415
+
+        cv2.setNumThreads(threads or -1)  # -1: OpenCV's default
+        _OPENCV.append(cv2)
+    return _OPENCV[0]
 
 
 class CameraParams(ComponentParams):
@@ -234,6 +249,7 @@ class CameraRenderer:
     def marker_pixels(self, marker: DockMarker, robot_pose: Pose2D) -> np.ndarray | None:
         """Where the marker's corners (ArUco's order) fall in the image, exactly; None when behind the camera.
         The yardstick for corner accuracy."""
+        cv2 = opencv(self.params.opencv_threads)
         level = self._level
         pts = _project(
             marker_corners_world(marker), self.camera_pose(robot_pose), self.params.mount_z_m, level
@@ -248,6 +264,7 @@ class CameraRenderer:
         """The camera's image (uint8, height x width) with the robot's base_link at ``robot_pose``;
         ``others``: the footprints (4 x 2 corners) of other robots in the room, drawn as dark boxes."""
         p = self.params
+        cv2 = opencv(p.opencv_threads)
         level = self._level
         scene = self.scene
         if len(others):
@@ -381,6 +398,7 @@ class CameraRenderer:
     ) -> None:
         """Replace the face's flat white with the marker, warped by the homography of its corners. The face
         shows in rows ``[start, end)`` of each of ``columns`` (ascending)."""
+        cv2 = opencv(self.params.opencv_threads)
         marker = scene.markers[marker_index]
         corners = marker_corners_world(marker)  # (4, 3): TL, TR, BR, BL
         pts = _project(corners, camera, self.params.mount_z_m, view)
@@ -597,6 +615,7 @@ def _texture_size(side_px: float) -> int:
 @lru_cache(maxsize=64)
 def marker_texture(dictionary: str, marker_id: int, size_px: int) -> np.ndarray:
     """The marker's ink, uint8 (255 is white), ``size_px`` a side, border cells included."""
+    cv2 = opencv()
     d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
     cells = d.markerSize + 2
     # Draw at a whole number of pixels per cell, then resample with area averaging to the size asked.

@@ -21,7 +21,6 @@ import threading
 import time
 from typing import Any
 
-import cv2
 import numpy as np
 
 from services.simulator.camera import CameraRenderer, ReadNoise, build_scene
@@ -62,8 +61,6 @@ class SimulatorService:
         self.robots: dict[str, SimRobot] = {}
         self.channels = Channels(channel_table(params))
         scene = build_scene(self.world) if params.camera.enabled else None
-        if scene is not None:
-            cv2.setNumThreads(params.camera.opencv_threads or -1)  # -1: OpenCV's default
         noise = ReadNoise(np.random.default_rng([params.seed, 7])) if scene is not None else None
         #: Whether the robots share one room (a fleet world) and so step together.
         self.shared_room = bool(self.world.robots)

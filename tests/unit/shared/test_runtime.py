@@ -10,6 +10,7 @@ import threading
 from pathlib import Path
 
 import pytest
+import yaml
 from pydantic import BaseModel, ConfigDict, Field
 
 from shared.config_errors import ConfigError
@@ -19,6 +20,7 @@ from shared.runtime import (
     build_arg_parser,
     load_params,
     options_from_args,
+    parse_parameter_value,
     run_service,
 )
 from shared.waiting import wait_interruptibly
@@ -187,3 +189,48 @@ def test_wait_interruptibly_runs_a_handler_whose_signal_went_to_another_thread()
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "true",
+        "false",
+        "True",
+        "yes",
+        "off",
+        "12",
+        "-3",
+        "0",
+        "-0",
+        "007",
+        "1.5",
+        "-0.25",
+        "0.",
+        ".5",
+        "1e3",
+        "1.0e+3",
+        "0x1f",
+        "[0.1, 0, 0]",
+        "{a: 1}",
+        "abc",
+        "/tmp/world-1.yaml",
+        "r1/base_link",
+        "graceful",
+        "On",
+        "NULL",
+        "Y",
+        ".inf",
+        "_x",
+        "a:b",
+        "~",
+        "null",
+        "",
+        "  ",
+    ],
+)
+def test_a_parameter_value_reads_as_yaml_reads_it(text: str) -> None:
+    """Plain scalars skip the YAML parser; the value and its type must be the parser's all the same."""
+    expected = yaml.safe_load(text) if text.strip() else ""
+    got = parse_parameter_value(text)
+    assert got == expected and type(got) is type(expected)

@@ -1,0 +1,91 @@
+"""The planner service's contract."""
+
+from __future__ import annotations
+
+from shared import topics
+from shared.contracts.model import Action, Contract, Flag, Request, Topic
+from shared.contracts.services.common import USE_SIM_TIME, lifecycle_requests
+from shared.endpoints import RELIABLE, SENSOR_DATA, QoS
+from shared.interfaces.costmap import (
+    GET_COSTMAP,
+    GLOBAL_COSTMAP_CLEAR,
+    GLOBAL_COSTMAP_GET,
+    LOCAL_COSTMAP_CLEAR,
+    LOCAL_COSTMAP_GET,
+)
+from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE
+from shared.interfaces.navigation import (
+    CLEAR_COSTMAPS_SERVICE,
+    CLEAR_ENTIRE_COSTMAP,
+    LOAD_MAP,
+    LOAD_MAP_SERVICE,
+    NAVIGATE_TO_POSE,
+)
+from shared.messages import (
+    Float64MultiArray,
+    LaserScan,
+    OccupancyGrid,
+    Odometry,
+    Path,
+    Range,
+    TFMessage,
+    Twist,
+)
+
+CONTRACT = Contract(
+    service="planner",
+    summary="Navigation (Nav2's role): the map, a costmap with glass from the sonar, A*, a path follower.",
+    publishes=(
+        Topic(topics.CMD_VEL, Twist, RELIABLE, when="while navigating", about="drives toward the goal"),
+        Topic(topics.PLAN, Path, RELIABLE, about="the global plan, at each (re)plan"),
+        Topic(topics.MAP, OccupancyGrid, RELIABLE, about="the static map, on start and on load_map"),
+        Topic(
+            COSTMAP_TOPIC, OccupancyGrid, QoS(reliable=False, depth=1), about="the costmap with glass marks"
+        ),
+    ),
+    subscribes=(
+        Topic(topics.POSE2D, Float64MultiArray, QoS(depth=1), rate_hz=10.0),
+        Topic(topics.ODOM, Odometry, QoS(depth=5), rate_hz=20.0),
+        Topic(topics.SCAN, LaserScan, SENSOR_DATA, rate_hz=10.0),
+        Topic(topics.ULTRASONIC, Range, SENSOR_DATA, rate_hz=20.0),
+        Topic(topics.TF_STATIC, TFMessage, QoS(depth=5)),
+    ),
+    serves=(
+        Request(CLEAR_COSTMAPS_SERVICE, CLEAR_ENTIRE_COSTMAP),
+        Request(LOAD_MAP_SERVICE, LOAD_MAP),
+        Request(GET_MAP_SERVICE, GET_MAP),
+        Request(
+            GLOBAL_COSTMAP_GET, GET_COSTMAP, about="the whole costmap, Nav2's costs (0 free .. 254 lethal)"
+        ),
+        Request(LOCAL_COSTMAP_GET, GET_COSTMAP, about="the square of local_costmap_size_m round the robot"),
+        Request(
+            GLOBAL_COSTMAP_CLEAR,
+            CLEAR_ENTIRE_COSTMAP,
+            about="forget the lidar's marks and all the glass the sonar heard",
+        ),
+        Request(
+            LOCAL_COSTMAP_CLEAR,
+            CLEAR_ENTIRE_COSTMAP,
+            about="forget the lidar's marks and the glass round the robot",
+        ),
+        *lifecycle_requests("planner"),
+    ),
+    serves_actions=(
+        Action(
+            topics.NAVIGATE_TO_POSE,
+            NAVIGATE_TO_POSE,
+            about="one goal at a time: a new goal preempts the active one (CANCELED)",
+        ),
+    ),
+    flags=(
+        USE_SIM_TIME,
+        Flag("map_yaml", "the occupancy map (zendock map save)", needed=True),
+        Flag("glass_memory_file", "keep the glass marks across restarts"),
+        Flag("max_linear_vel_mps", "speed limit"),
+        Flag("costmap_update_rate_hz", "sensor folding rate"),
+    ),
+    behaviour=(
+        "navigates: a navigate_to_pose goal 1 m away gets feedback and SUCCEEDED, the robot within 25 cm of it",
+    ),
+    needs=("simulator", "pose"),
+)

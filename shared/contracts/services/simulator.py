@@ -1,0 +1,94 @@
+"""The simulator service's contract."""
+
+from __future__ import annotations
+
+from shared import topics
+from shared.contracts.model import Contract, Flag, Request, Topic
+from shared.contracts.services.common import CLOCK_QOS
+from shared.endpoints import BLOCKING, RELIABLE, SENSOR_DATA, QoS
+from shared.interfaces.simulator import SET_LOCALISATION, SIM_STATE, TELEPORT
+from shared.messages import (
+    CameraInfo,
+    Clock,
+    CollisionEvent,
+    DockContact,
+    DockInfraRed,
+    Float64MultiArray,
+    Image,
+    LaserScan,
+    Odometry,
+    PoseStamped,
+    Range,
+    TFMessage,
+    Twist,
+)
+
+CONTRACT = Contract(
+    service="simulator",
+    summary="The world (pymunk): a differential-drive robot, its sensors, the docks' contacts, the clock.",
+    publishes=(
+        Topic(topics.CLOCK, Clock, CLOCK_QOS, rate_hz=20.0, about="sim time: every other service's clock"),
+        Topic(topics.ODOM, Odometry, RELIABLE, rate_hz=20.0),
+        Topic(
+            topics.TF,
+            TFMessage,
+            RELIABLE,
+            rate_hz=20.0,
+            about="map -> odom (localisation) and odom -> base_link",
+        ),
+        Topic(topics.TF_STATIC, TFMessage, BLOCKING, rate_hz=1.0, about="the sensors' mounts on base_link"),
+        Topic(topics.SCAN, LaserScan, SENSOR_DATA, rate_hz=10.0, about="the lidar: glass is invisible to it"),
+        Topic(topics.ULTRASONIC, Range, SENSOR_DATA, rate_hz=20.0, about="the sonar: sees glass"),
+        Topic(topics.DOCK_CONTACT, DockContact, RELIABLE, rate_hz=20.0, about="mated with a dock's contacts"),
+        Topic(
+            topics.GROUND_TRUTH_POSE, PoseStamped, RELIABLE, rate_hz=20.0, about="the truth, for judging runs"
+        ),
+        Topic(
+            topics.COLLISIONS, CollisionEvent, BLOCKING, about="each new contact with the world or a robot"
+        ),
+        Topic(
+            topics.DETECTED_DOCK_POSE,
+            PoseStamped,
+            SENSOR_DATA,
+            about="with detection.source=synthetic: the true dock pose plus noise, while someone listens",
+        ),
+        Topic(
+            topics.IR_DOCK,
+            DockInfraRed,
+            SENSOR_DATA,
+            rate_hz=20.0,
+            when="while someone listens",
+            about="the infrared receivers' near/far left/centre/right bits",
+        ),
+        Topic(
+            topics.CAMERA_IMAGE,
+            Image,
+            SENSOR_DATA,
+            rate_hz=15.0,
+            when="with the camera enabled, while someone listens",
+        ),
+        Topic(topics.CAMERA_INFO, CameraInfo, SENSOR_DATA, rate_hz=15.0, when="with the camera enabled"),
+    ),
+    subscribes=(
+        Topic(topics.CMD_VEL, Twist, QoS(depth=1), about="the wheels' command; stops when it goes silent"),
+        Topic(topics.POSE2D, Float64MultiArray, QoS(depth=1), about="paces rtf: waits for late drivers"),
+    ),
+    serves=(
+        Request(topics.SIM_TELEPORT, TELEPORT, about="place the robot"),
+        Request(topics.SIM_STATE, SIM_STATE, about="the truth and counters"),
+        Request(topics.SIM_SET_LOCALISATION, SET_LOCALISATION, about="set the map -> odom error"),
+    ),
+    flags=(
+        Flag("world", "the world file (as --world)", needed=True),
+        Flag("rtf", "real-time factor, or max"),
+        Flag("seed", "noise seed"),
+        Flag("robots", "robot namespaces served"),
+        Flag("localisation.error", "[x_m, y_m, yaw_rad] map -> odom error"),
+        Flag("detection.source", "aruco (camera images) or synthetic (noisy truth)"),
+    ),
+    behaviour=(
+        "keeps the clock: sim time advances",
+        "drives: odom shows motion after cmd_vel",
+        "answers teleport: ground_truth_pose moves to the asked pose",
+    ),
+)
