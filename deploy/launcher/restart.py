@@ -70,6 +70,10 @@ class Backoff:
     ``max_s``. The first
     delay is 0.1 s, as Docker's restart policy starts: a service starts in 0.2-0.3 s on a quiet machine,
     so a longer first wait would be most of a recovery.
+
+    A service that was healthy and then died (killed, or a fault long after start) is restarted at once
+    the first time within ``reset_after_s``: the wait guards against crash loops, and one death after a
+    healthy run is not a loop. A second death within ``reset_after_s`` waits as any restart does.
     """
 
     initial_s: float = 0.1
@@ -78,3 +82,13 @@ class Backoff:
 
     def delay_s(self, consecutive_restarts: int) -> float:
         return min(self.max_s, self.initial_s * 2.0 ** min(consecutive_restarts, 32))
+
+    def restart_delay_s(
+        self, consecutive_restarts: int, *, run_was_healthy: bool, since_last_restart_s: float | None
+    ) -> float:
+        """The wait before this restart: none after a healthy run when no restart came in the last
+        ``reset_after_s`` (``since_last_restart_s`` None: never restarted), else :meth:`delay_s`."""
+        quiet = since_last_restart_s is None or since_last_restart_s >= self.reset_after_s
+        if run_was_healthy and quiet:
+            return 0.0
+        return self.delay_s(consecutive_restarts)

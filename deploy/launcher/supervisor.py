@@ -274,6 +274,7 @@ class ServiceRunner:
     async def _run_until_done(self) -> None:
         backoff = self._sup.backoff
         streak = 0
+        last_restart_at: float | None = None
         while not self._stopping:
             self._set_phase(Phase.WAITING, "")
             if not await self._wait_for_dependencies():
@@ -287,7 +288,8 @@ class ServiceRunner:
             self.last_exit = _describe_exit(code) + (f": {why}" if why else "")
             if self._stopping:
                 break
-            if self._healthy_this_run or time.monotonic() - launched_at >= backoff.reset_after_s:
+            run_was_healthy = self._healthy_this_run
+            if run_was_healthy or time.monotonic() - launched_at >= backoff.reset_after_s:
                 # A run that passed its healthcheck was not a crash at start-up, whatever ended it (a kill,
                 # a fault minutes in): the backoff guards against start-up crash loops, and a healthy
                 # service killed twice within reset_after_s would otherwise wait 0.2, 0.4, 0.8 ... s.
@@ -295,7 +297,13 @@ class ServiceRunner:
             if not self.plan.restart.should_restart(code, streak):
                 self._set_phase(Phase.EXITED, self.last_exit)
                 return
-            delay_s = backoff.delay_s(streak)
+            now = time.monotonic()
+            delay_s = backoff.restart_delay_s(
+                streak,
+                run_was_healthy=run_was_healthy,
+                since_last_restart_s=None if last_restart_at is None else now - last_restart_at,
+            )
+            last_restart_at = now
             streak += 1
             self.restarts += 1
             self.next_start_at = time.monotonic() + delay_s

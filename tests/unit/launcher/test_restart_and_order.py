@@ -49,6 +49,14 @@ def test_backoff_doubles_up_to_its_cap() -> None:
     assert backoff.delay_s(10_000) == 10.0
 
 
+def test_a_healthy_run_restarts_at_once_unless_it_restarted_lately() -> None:
+    backoff = Backoff(initial_s=0.1, max_s=10.0, reset_after_s=10.0)
+    assert backoff.restart_delay_s(0, run_was_healthy=True, since_last_restart_s=None) == 0.0
+    assert backoff.restart_delay_s(0, run_was_healthy=True, since_last_restart_s=12.0) == 0.0
+    assert backoff.restart_delay_s(0, run_was_healthy=True, since_last_restart_s=3.0) == 0.1
+    assert backoff.restart_delay_s(2, run_was_healthy=False, since_last_restart_s=None) == 0.4
+
+
 def test_dependency_order_puts_dependencies_first_and_keeps_file_order() -> None:
     deps = {"viz": ["router"], "planner": ["map", "router"], "map": [], "router": [], "docking": ["planner"]}
     order = dependency_order(deps)
