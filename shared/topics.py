@@ -43,6 +43,11 @@ FLEET_QUEUE = "fleet/queue"
 NAVIGATE_TO_POSE = "navigate_to_pose"
 DOCK_ROBOT = "dock_robot"
 UNDOCK_ROBOT = "undock_robot"
+#: Nav2's behaviours (the planner serves them): turn in place, reverse, drive straight, let time pass.
+SPIN = "spin"
+BACKUP = "backup"
+DRIVE_ON_HEADING = "drive_on_heading"
+WAIT = "wait"
 
 # Frames (REP 105)
 MAP_FRAME = "map"

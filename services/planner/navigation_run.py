@@ -28,12 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from services.planner.behaviors import DriveStraight, Outcome
 from services.planner.costmap import CostGrid
 from services.planner.params import Params
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanOutcome
 from services.planner.pure_pursuit import FollowStatus, RegulatedPurePursuit
-from services.planner.recovery import BackUp, BackUpStatus, GlassClearing, glass_clearing
+from services.planner.recovery import GlassClearing, glass_clearing
 from shared import topics
 from shared.frames import clock_went_back
 from shared.geometry import Pose2D
@@ -148,7 +149,7 @@ class NavigationRun:
         self.recovering_from_planning = False
         self.ended: NavEnd | None = None
         self.follower = RegulatedPurePursuit(params.follower_params())
-        self._backup = BackUp(params.backup_params())
+        self._backup: DriveStraight = params.recovery_backup()
         self._progress = ProgressChecker(
             params.required_movement_m, params.required_rotation_rad, params.progress_timeout_s
         )
@@ -414,14 +415,14 @@ class NavigationRun:
         self._blocked_since_s = None
         self.follower.reset()
         self.phase = Phase.BACKING_UP
-        self._backup.start(pose, self.clock_s)
+        self._backup = self.params.recovery_backup()
 
     def _recover(self, snap: NavSnapshot, pose: Pose2D, orders: NavOrders) -> None:
         assert snap.grid is not None
         if self.phase is Phase.BACKING_UP:
-            speed, status = self._backup.step(pose, self.clock_s, snap.grid)
-            if status is BackUpStatus.RUNNING:
-                orders.cmd = (speed, 0.0)
+            step = self._backup.step(pose, self.clock_s, snap.grid)
+            if step.outcome is Outcome.RUNNING:
+                orders.cmd = step.cmd
                 return
             orders.cmd = (0.0, 0.0)
             orders.clear = glass_clearing(self.recoveries, self.recovering_from_planning)

@@ -31,6 +31,7 @@ import time
 from collections import deque
 from typing import Any
 
+from services.planner.behavior_server import BehaviorServer
 from services.planner.costmap_thread import CostmapThread, LockedPoseTrack
 from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
 from services.planner.goal_check import check_goal_on_grid, goal_pose
@@ -180,6 +181,12 @@ class PlannerService:
             on_cancel=self._on_cancel,
             preempt_result=lambda: _result(NavigateErrorCode.PREEMPTED, "preempted by a newer goal"),
         )
+        self._behaviors = BehaviorServer(
+            node,
+            params.behavior_params(),
+            publish_cmd=self._publish_cmd,
+            navigating=lambda: self._run is not None,
+        )
         self._timers = [
             node.create_timer(1.0 / params.controller_rate_hz, self._on_control_tick),
             node.create_timer(1.0 / params.costmap_update_rate_hz, self._on_costmap_tick),
@@ -317,6 +324,7 @@ class PlannerService:
         if not handle.active:
             return  # preempted before it started
         now = self._node.now()
+        self._behaviors.preempt("preempted by a navigate_to_pose goal")
         run = NavigationRun(goal_pose(handle.goal.pose), self._params, now, self._generations.__next__)
         self._run, self._handle = run, handle
         handle.execute()
@@ -339,6 +347,10 @@ class PlannerService:
         self._carry_out(run.plan_outcome(outcome, self._snapshot()))
 
     def _on_control_tick(self) -> None:
+        if self._behaviors.active:
+            now = self._node.now()
+            pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
+            self._behaviors.tick(pose, self._costmap.grid)
         run, handle = self._run, self._handle
         if run is None or handle is None:
             return
@@ -436,6 +448,7 @@ class PlannerService:
         self._worker.close()
         self._costmap.close()
         self._action.close()
+        self._behaviors.close()
 
 
 def _add_flags(parser: Any) -> dict[str, str]:

@@ -13,13 +13,13 @@ import math
 from pydantic import Field, field_validator, model_validator
 
 from services.planner.astar import AStarParams
+from services.planner.behaviors import BehaviorParams, DriveStraight
 from services.planner.costmap import CostmapParams, inflation_cost
 from services.planner.global_planner import GlobalPlannerParams
 from services.planner.goal_heading import GoalHeadingParams
 from services.planner.occupancy_map import OccupancyMap, load_map
 from services.planner.pure_pursuit import PurePursuitParams
 from services.planner.rasterize import map_from_world
-from services.planner.recovery import BackUpParams
 from services.planner.smoothing import SmoothingParams
 from shared.parameters import ServiceParams, runtime_settable
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, load_world
@@ -209,7 +209,7 @@ class Params(ServiceParams):
         self.costmap_params()
         self.follower_params()
         self.planner_params()
-        self.backup_params()
+        self.recovery_backup()
         return self
 
     def costmap_params(self) -> CostmapParams:
@@ -275,13 +275,23 @@ class Params(ServiceParams):
             robot_width_m=self.robot_width_m,
         )
 
-    def backup_params(self) -> BackUpParams:
-        return BackUpParams(
-            distance_m=self.backup_distance_m,
-            speed_mps=self.backup_speed_mps,
-            time_allowance_s=4.0 * self.backup_distance_m / self.backup_speed_mps,
+    def behavior_params(self) -> BehaviorParams:
+        """The spin, back-up, drive-on-heading and wait behaviours': the footprint and top speeds."""
+        return BehaviorParams(
             robot_length_m=self.robot_length_m,
             robot_width_m=self.robot_width_m,
+            max_linear_vel_mps=self.max_linear_vel_mps,
+            max_angular_vel_radps=self.max_angular_vel_radps,
+            angular_accel_radps2=self.max_angular_accel_radps2,
+        )
+
+    def recovery_backup(self) -> DriveStraight:
+        """A recovery's back-up: ``backup_distance_m`` in reverse, given four times the time it needs."""
+        return DriveStraight(
+            self.backup_distance_m,
+            -self.backup_speed_mps,
+            4.0 * self.backup_distance_m / self.backup_speed_mps,
+            self.behavior_params(),
         )
 
 

@@ -16,6 +16,7 @@ from typing import Any
 from shared import topics
 from shared.action import action_key
 from shared.interface_types import ActionType, GoalStatusArray, ServiceType
+from shared.interfaces.behaviors import BACK_UP, DRIVE_ON_HEADING, SPIN, WAIT
 from shared.interfaces.costmap import (
     GET_COSTMAP,
     GLOBAL_COSTMAP_CLEAR,
@@ -98,6 +99,10 @@ ACTIONS: tuple[BridgedAction, ...] = (
     BridgedAction(topics.DOCK_ROBOT, interfaces.DOCK_ROBOT, "docking", DOCK_ROBOT),
     BridgedAction(topics.UNDOCK_ROBOT, interfaces.UNDOCK_ROBOT, "docking", UNDOCK_ROBOT),
     BridgedAction(topics.NAVIGATE_TO_POSE, interfaces.NAVIGATE_TO_POSE, "planner", NAVIGATE_TO_POSE),
+    BridgedAction(topics.SPIN, interfaces.SPIN, "planner", SPIN),
+    BridgedAction(topics.BACKUP, interfaces.BACK_UP, "planner", BACK_UP),
+    BridgedAction(topics.DRIVE_ON_HEADING, interfaces.DRIVE_ON_HEADING, "planner", DRIVE_ON_HEADING),
+    BridgedAction(topics.WAIT, interfaces.WAIT, "planner", WAIT),
 )
 
 

@@ -311,3 +311,12 @@ def test_a_ros2_peer_asks_what_a_nav2_script_asks_of_nav2s_servers(
     loaded = _peer(router_endpoint, *load, json.dumps({"map_url": f"file://{saved}"}))[0]
     assert loaded["response"]["result"] == 0, loaded
     assert loaded["response"]["map"]["info"]["width"] > 0, loaded["response"]["map"]["info"]
+    # The behaviours (BasicNavigator's spin, and wait): without a robot pose a spin cannot know how far it
+    # turned, so it ends at once with Nav2's TF_ERROR and says why; a wait needs no pose.
+    spin = _peer(router_endpoint, "action", "/spin", "nav2_msgs/action/Spin", '{"target_yaw": 1.0}')
+    assert spin[0]["accepted"] is True, spin
+    assert spin[1]["status"] == 6 and spin[1]["result"]["error_code"] == 702, spin  # ABORTED, TF_ERROR
+    assert "no robot pose" in spin[1]["result"]["error_msg"], spin
+    wait = _peer(router_endpoint, "action", "/wait", "nav2_msgs/action/Wait", '{"time": {"sec": 1}}')
+    assert wait[1]["status"] == 4 and wait[1]["feedback"] > 0, wait  # SUCCEEDED, with time_left on the way
+    assert wait[1]["result"]["total_elapsed_time"]["sec"] >= 1, wait

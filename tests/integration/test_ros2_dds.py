@@ -4,6 +4,7 @@ zendock robot through services.ros2_dds, and sees a stopped zendock service leav
 from __future__ import annotations
 
 import json
+import math
 import os
 import random
 import subprocess
@@ -128,6 +129,12 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("cmd_vel_odom")
     check("cmd_vel_stamped_odom")
     check("navigate_to_pose")
+    behaviors = check("behaviors")
+    turned_to = behaviors["poses"][1][2]
+    assert abs(turned_to - math.pi / 2) < 0.1, behaviors  # spin turned the robot to face +y
+    front_y = behaviors["poses"][2][1] + 0.2  # the footprint's front edge, facing +y
+    assert 4.5 < front_y < 5.0, behaviors  # stopped short of the top wall (y = 5), not on it
+    assert "obstacle" in behaviors["drive_on_heading"]["error_msg"], behaviors
     check("goal_pose")
     check("cancel")
     check("dock_robot")

@@ -23,9 +23,10 @@ from typing import Any
 
 import rclpy
 from action_msgs.msg import GoalStatus
+from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from lifecycle_msgs.srv import GetState
-from nav2_msgs.action import DockRobot, NavigateToPose
+from nav2_msgs.action import BackUp, DockRobot, DriveOnHeading, NavigateToPose, Spin, Wait
 from nav2_msgs.srv import ClearEntireCostmap, GetCostmap
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rcl_interfaces.msg import Parameter as ParameterMsg
@@ -412,6 +413,61 @@ class User:
         )
         client.destroy()
 
+    def behaviors(self) -> None:
+        """BasicNavigator's spin, driveOnHeading, backup, and the wait behaviour, from where navigate left
+        the robot ((0.3, 4.0) facing -x, the room's top wall at y = 5): turn to face the wall, drive at it
+        (zendock stops short of it and says why), back up, wait."""
+        outcomes: dict[str, Any] = {}
+
+        def run(name: str, action: Any, fill: Callable[[Any], None], timeout_s: float) -> dict[str, Any]:
+            client = ActionClient(self.node, action, f"/{name}")
+            goal = action.Goal()
+            fill(goal)
+            out = self.run_goal(client, goal, timeout_s)
+            client.destroy()
+            result = out.pop("result", None)
+            out.pop("last_feedback", None)
+            if result is not None:
+                out.update(error_code=result.error_code, error_msg=result.error_msg)
+                out["elapsed_s"] = round(
+                    result.total_elapsed_time.sec + result.total_elapsed_time.nanosec * 1e-9, 2
+                )
+            outcomes[name] = out
+            return out
+
+        def spin(goal: Any) -> None:
+            goal.target_yaw = -math.pi / 2  # from facing -x to facing +y
+            goal.time_allowance = Duration(sec=10)
+
+        def at_the_wall(goal: Any) -> None:
+            goal.target.x, goal.speed, goal.time_allowance = 2.0, 0.2, Duration(sec=30)
+
+        def back(goal: Any) -> None:
+            goal.target.x, goal.speed, goal.time_allowance = 0.15, 0.1, Duration(sec=10)
+
+        def wait(goal: Any) -> None:
+            goal.time = Duration(sec=1)
+
+        before = self.robot_pose()
+        turned = run("spin", Spin, spin, 30.0)
+        after_spin = self.robot_pose()
+        driven = run("drive_on_heading", DriveOnHeading, at_the_wall, 60.0)
+        at_wall = self.robot_pose()
+        backed = run("backup", BackUp, back, 30.0)
+        waited = run("wait", Wait, wait, 20.0)
+        succeeded = GoalStatus.STATUS_SUCCEEDED
+        report(
+            "behaviors",
+            turned.get("status") == succeeded
+            and driven.get("status") == GoalStatus.STATUS_ABORTED
+            and driven.get("error_code") == DriveOnHeading.Result.COLLISION_AHEAD
+            and backed.get("status") == succeeded
+            and waited.get("status") == succeeded
+            and waited.get("feedbacks", 0) > 0,
+            **outcomes,
+            poses=[[round(v, 3) for v in p] if p else None for p in (before, after_spin, at_wall)],
+        )
+
     def goal_pose(self) -> None:
         """RViz's 2D Goal Pose: a PoseStamped on /goal_pose, and the robot drives there."""
         target = (0.5, 2.6, -math.pi / 2)
@@ -574,6 +630,7 @@ STEPS = (
     "drive",
     "drive_stamped",
     "navigate",
+    "behaviors",
     "goal_pose",
     "cancel",
     "dock",

@@ -6,6 +6,7 @@ from shared import topics
 from shared.contracts.model import Action, Contract, Flag, Request, Topic
 from shared.contracts.services.common import USE_SIM_TIME, lifecycle_requests
 from shared.endpoints import RELIABLE, SENSOR_DATA, QoS
+from shared.interfaces.behaviors import BACK_UP, DRIVE_ON_HEADING, SPIN, WAIT
 from shared.interfaces.costmap import (
     GET_COSTMAP,
     GLOBAL_COSTMAP_CLEAR,
@@ -76,6 +77,14 @@ CONTRACT = Contract(
             NAVIGATE_TO_POSE,
             about="one goal at a time: a new goal preempts the active one (CANCELED)",
         ),
+        Action(topics.SPIN, SPIN, about="turn in place by target_yaw (rad); stops short of an obstacle"),
+        Action(topics.BACKUP, BACK_UP, about="reverse target.x (m) at speed; stops short of an obstacle"),
+        Action(
+            topics.DRIVE_ON_HEADING,
+            DRIVE_ON_HEADING,
+            about="drive target.x (m) straight at speed (same sign); stops short of an obstacle",
+        ),
+        Action(topics.WAIT, WAIT, about="let time pass; sends no command"),
     ),
     flags=(
         USE_SIM_TIME,

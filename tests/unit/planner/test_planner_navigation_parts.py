@@ -25,7 +25,7 @@ from services.planner.params import Params
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.rasterize import map_from_world
-from services.planner.recovery import BackUp, BackUpParams, BackUpStatus, GlassClearing, glass_clearing
+from services.planner.recovery import GlassClearing, glass_clearing
 from services.planner.shortest_path import shortest_path_length_m
 from services.planner.sonar_fusion import echo_explained_by_lidar
 from shared.geometry import Pose2D
@@ -150,31 +150,6 @@ def test_progress_checker_needs_movement_or_rotation_within_the_allowance() -> N
     assert checker.check(Pose2D(0.0, 0.0, 0.6), 29.0)  # turning counts
     assert checker.check(Pose2D(0.0, 0.0, 0.6), 38.0)
     assert not checker.check(Pose2D(0.0, 0.0, 0.6), 39.5)
-
-
-# --- back-up recovery ------------------------------------------------------------------------------
-
-
-def test_back_up_reverses_its_distance_then_stops() -> None:
-    grid = _grid(_room())
-    backup = BackUp(BackUpParams(distance_m=0.15, speed_mps=0.1))
-    pose = Pose2D(2.0, 1.5, 0.0)
-    backup.start(pose, 0.0)
-    speed, status = backup.step(pose, 0.0, grid)
-    assert (speed, status) == (-0.1, BackUpStatus.RUNNING)
-    assert backup.step(Pose2D(1.86, 1.5, 0.0), 1.4, grid) == (-0.1, BackUpStatus.RUNNING)
-    assert backup.step(Pose2D(1.84, 1.5, 0.0), 1.6, grid) == (0.0, BackUpStatus.DONE)
-
-
-def test_back_up_never_reverses_into_what_it_can_see_and_gives_up_in_time() -> None:
-    grid = _grid(_room(walls=[[[1.6, 0.0], [1.6, 3.0]]]))
-    backup = BackUp(BackUpParams(distance_m=0.15, speed_mps=0.1, time_allowance_s=2.0))
-    close_to_wall = Pose2D(1.85, 1.5, 0.0)  # rear edge 0.05 m in front of the wall
-    backup.start(close_to_wall, 0.0)
-    assert backup.step(close_to_wall, 0.0, grid) == (0.0, BackUpStatus.BLOCKED)
-    free = Pose2D(3.0, 1.5, 0.0)
-    backup.start(free, 0.0)
-    assert backup.step(free, 2.5, grid) == (0.0, BackUpStatus.TIMED_OUT)
 
 
 # --- messages --------------------------------------------------------------------------------------

@@ -17,6 +17,21 @@ from shared.interface_types import (
     GoalStatus,
     GoalStatusArray,
 )
+from shared.interfaces.behaviors import (
+    BACK_UP,
+    DRIVE_ON_HEADING,
+    SPIN,
+    WAIT,
+    BackUpFeedback,
+    BackUpGoal,
+    DriveOnHeadingFeedback,
+    DriveOnHeadingResult,
+    SpinFeedback,
+    SpinGoal,
+    SpinResult,
+    WaitFeedback,
+    WaitGoal,
+)
 from shared.interfaces.costmap import Costmap, CostmapMetaData, GetCostmapRequest, GetCostmapResponse
 from shared.interfaces.docking import (
     DOCK_ROBOT,
@@ -197,6 +212,33 @@ ACTION_EXAMPLES: dict[str, Message] = {
     "nav2_msgs/action/NavigateToPose_FeedbackMessage": NAVIGATE_TO_POSE.feedback_message(
         goal_id=GOAL_ID,
         feedback=NavigateToPoseFeedback(PoseStamped(HEADER, POSE), Duration(3, 0), Duration(9, 0), 1, 2.5),
+    ),
+    "nav2_msgs/action/Spin_SendGoal_Request": SPIN.send_goal_request(
+        goal_id=GOAL_ID, goal=SpinGoal(1.57, Duration(10, 0))
+    ),
+    "nav2_msgs/action/Spin_GetResult_Response": SPIN.get_result_response(
+        status=6, result=SpinResult(Duration(1, 500), 703, "an obstacle")
+    ),
+    "nav2_msgs/action/Spin_FeedbackMessage": SPIN.feedback_message(
+        goal_id=GOAL_ID, feedback=SpinFeedback(0.75)
+    ),
+    "nav2_msgs/action/BackUp_SendGoal_Request": BACK_UP.send_goal_request(
+        goal_id=GOAL_ID, goal=BackUpGoal(Point(0.15, 0.0, 0.0), 0.025, Duration(10, 0))
+    ),
+    "nav2_msgs/action/BackUp_FeedbackMessage": BACK_UP.feedback_message(
+        goal_id=GOAL_ID, feedback=BackUpFeedback(0.05)
+    ),
+    "nav2_msgs/action/DriveOnHeading_GetResult_Response": DRIVE_ON_HEADING.get_result_response(
+        status=4, result=DriveOnHeadingResult(Duration(6, 0), 0, "")
+    ),
+    "nav2_msgs/action/DriveOnHeading_FeedbackMessage": DRIVE_ON_HEADING.feedback_message(
+        goal_id=GOAL_ID, feedback=DriveOnHeadingFeedback(0.1)
+    ),
+    "nav2_msgs/action/Wait_SendGoal_Request": WAIT.send_goal_request(
+        goal_id=GOAL_ID, goal=WaitGoal(Duration(2, 0))
+    ),
+    "nav2_msgs/action/Wait_FeedbackMessage": WAIT.feedback_message(
+        goal_id=GOAL_ID, feedback=WaitFeedback(Duration(1, 250_000_000))
     ),
 }
 EXAMPLES.update(ACTION_EXAMPLES)
