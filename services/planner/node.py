@@ -40,6 +40,7 @@ from services.planner.map_server import MapServer
 from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
 from services.planner.occupancy_map import OccupancyMap
 from services.planner.params import Params, load_initial_map
+from services.planner.path_server import PathServer
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.recovery import GlassClearing
 from shared import topics
@@ -180,6 +181,12 @@ class PlannerService:
             on_accepted=self._on_accepted,
             on_cancel=self._on_cancel,
             preempt_result=lambda: _result(NavigateErrorCode.PREEMPTED, "preempted by a newer goal"),
+        )
+        self._paths = PathServer(
+            node,
+            params.planner_params(),
+            robot_pose=lambda: self._tracker.current_pose(self._node.now(), self._params.pose_timeout_s),
+            grid=lambda: self._costmap.grid,
         )
         self._behaviors = BehaviorServer(
             node,
@@ -449,6 +456,7 @@ class PlannerService:
         self._costmap.close()
         self._action.close()
         self._behaviors.close()
+        self._paths.close()
 
 
 def _add_flags(parser: Any) -> dict[str, str]:

@@ -1,4 +1,5 @@
-"""The navigation stack's interfaces, mirroring nav2_msgs: NavigateToPose, ClearEntireCostmap, LoadMap."""
+"""The navigation stack's interfaces, mirroring nav2_msgs: NavigateToPose, ComputePathToPose,
+ComputePathThroughPoses, ClearEntireCostmap, LoadMap."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from dataclasses import field
 from typing import Annotated, ClassVar
 
 from shared.interface_types import ActionType, Empty, ServiceType
-from shared.messages import Duration, OccupancyGrid, PoseStamped
+from shared.messages import Duration, OccupancyGrid, Path, PoseStamped
 from shared.schema import Message, Range, UInt16, message
 
 
@@ -51,6 +52,90 @@ class NavigateToPoseFeedback(Message):
 
 NAVIGATE_TO_POSE = ActionType(
     "nav2_msgs/action/NavigateToPose", NavigateToPoseGoal, NavigateToPoseResult, NavigateToPoseFeedback
+)
+
+
+class ComputePathErrorCode(enum.IntEnum):
+    """Why ``compute_path_to_pose`` found no path (Nav2's 200s); ``compute_path_through_poses`` uses the
+    same reasons 100 higher (:func:`through_poses_code`), and 309 for no via-points at all."""
+
+    NONE = 0
+    UNKNOWN = 200
+    INVALID_PLANNER = 201
+    TF_ERROR = 202
+    START_OUTSIDE_MAP = 203
+    GOAL_OUTSIDE_MAP = 204
+    START_OCCUPIED = 205
+    GOAL_OCCUPIED = 206
+    TIMEOUT = 207
+    NO_VALID_PATH = 208
+
+
+#: ComputePathThroughPoses' NO_VIAPOINTS_GIVEN: an empty list of goals.
+NO_VIAPOINTS_GIVEN = 309
+
+
+def through_poses_code(code: ComputePathErrorCode) -> int:
+    """The ComputePathThroughPoses code for the same reason (300s): 0 stays 0."""
+    return int(code) + 100 if code else 0
+
+
+@message("nav2_msgs/action/ComputePathToPose_Goal")
+class ComputePathToPoseGoal(Message):
+    goal: PoseStamped = field(default_factory=PoseStamped)
+    start: PoseStamped = field(default_factory=PoseStamped)
+    planner_id: str = ""
+    #: False: the path starts at the robot's pose; True: at ``start``.
+    use_start: bool = False
+
+
+@message("nav2_msgs/action/ComputePathToPose_Result")
+class ComputePathToPoseResult(Message):
+    path: Path = field(default_factory=Path)
+    planning_time: Duration = field(default_factory=Duration)
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/ComputePathToPose_Feedback")
+class ComputePathToPoseFeedback(Message):
+    pass
+
+
+COMPUTE_PATH_TO_POSE = ActionType(
+    "nav2_msgs/action/ComputePathToPose",
+    ComputePathToPoseGoal,
+    ComputePathToPoseResult,
+    ComputePathToPoseFeedback,
+)
+
+
+@message("nav2_msgs/action/ComputePathThroughPoses_Goal")
+class ComputePathThroughPosesGoal(Message):
+    goals: list[PoseStamped] = field(default_factory=list)
+    start: PoseStamped = field(default_factory=PoseStamped)
+    planner_id: str = ""
+    use_start: bool = False
+
+
+@message("nav2_msgs/action/ComputePathThroughPoses_Result")
+class ComputePathThroughPosesResult(Message):
+    path: Path = field(default_factory=Path)
+    planning_time: Duration = field(default_factory=Duration)
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/ComputePathThroughPoses_Feedback")
+class ComputePathThroughPosesFeedback(Message):
+    pass
+
+
+COMPUTE_PATH_THROUGH_POSES = ActionType(
+    "nav2_msgs/action/ComputePathThroughPoses",
+    ComputePathThroughPosesGoal,
+    ComputePathThroughPosesResult,
+    ComputePathThroughPosesFeedback,
 )
 
 

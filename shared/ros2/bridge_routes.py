@@ -29,6 +29,8 @@ from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.lifecycle import GET_STATE, UNKNOWN, GetStateResponse
 from shared.interfaces.navigation import (
     CLEAR_ENTIRE_COSTMAP,
+    COMPUTE_PATH_THROUGH_POSES,
+    COMPUTE_PATH_TO_POSE,
     LOAD_MAP,
     LOAD_MAP_SERVICE,
     NAVIGATE_TO_POSE,
@@ -99,6 +101,15 @@ ACTIONS: tuple[BridgedAction, ...] = (
     BridgedAction(topics.DOCK_ROBOT, interfaces.DOCK_ROBOT, "docking", DOCK_ROBOT),
     BridgedAction(topics.UNDOCK_ROBOT, interfaces.UNDOCK_ROBOT, "docking", UNDOCK_ROBOT),
     BridgedAction(topics.NAVIGATE_TO_POSE, interfaces.NAVIGATE_TO_POSE, "planner", NAVIGATE_TO_POSE),
+    BridgedAction(
+        topics.COMPUTE_PATH_TO_POSE, interfaces.COMPUTE_PATH_TO_POSE, "planner", COMPUTE_PATH_TO_POSE
+    ),
+    BridgedAction(
+        topics.COMPUTE_PATH_THROUGH_POSES,
+        interfaces.COMPUTE_PATH_THROUGH_POSES,
+        "planner",
+        COMPUTE_PATH_THROUGH_POSES,
+    ),
     BridgedAction(topics.SPIN, interfaces.SPIN, "planner", SPIN),
     BridgedAction(topics.BACKUP, interfaces.BACK_UP, "planner", BACK_UP),
     BridgedAction(topics.DRIVE_ON_HEADING, interfaces.DRIVE_ON_HEADING, "planner", DRIVE_ON_HEADING),

@@ -23,12 +23,24 @@ TypeDefs = dict[str, tuple[list[Any], list[Any]]]
 NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
 DOCK_ROBOT = "nav2_msgs/action/DockRobot"
 UNDOCK_ROBOT = "nav2_msgs/action/UndockRobot"
+COMPUTE_PATH_TO_POSE = "nav2_msgs/action/ComputePathToPose"
+COMPUTE_PATH_THROUGH_POSES = "nav2_msgs/action/ComputePathThroughPoses"
 SPIN = "nav2_msgs/action/Spin"
 BACK_UP = "nav2_msgs/action/BackUp"
 DRIVE_ON_HEADING = "nav2_msgs/action/DriveOnHeading"
 WAIT = "nav2_msgs/action/Wait"
 CANCEL_GOAL = "action_msgs/srv/CancelGoal"
-ACTIONS = (NAVIGATE_TO_POSE, DOCK_ROBOT, UNDOCK_ROBOT, SPIN, BACK_UP, DRIVE_ON_HEADING, WAIT)
+ACTIONS = (
+    NAVIGATE_TO_POSE,
+    DOCK_ROBOT,
+    UNDOCK_ROBOT,
+    COMPUTE_PATH_TO_POSE,
+    COMPUTE_PATH_THROUGH_POSES,
+    SPIN,
+    BACK_UP,
+    DRIVE_ON_HEADING,
+    WAIT,
+)
 GET_COSTMAP = "nav2_msgs/srv/GetCostmap"
 CLEAR_ENTIRE_COSTMAP = "nav2_msgs/srv/ClearEntireCostmap"
 LOAD_MAP = "nav2_msgs/srv/LoadMap"

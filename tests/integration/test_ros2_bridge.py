@@ -320,3 +320,21 @@ def test_a_ros2_peer_asks_what_a_nav2_script_asks_of_nav2s_servers(
     wait = _peer(router_endpoint, "action", "/wait", "nav2_msgs/action/Wait", '{"time": {"sec": 1}}')
     assert wait[1]["status"] == 4 and wait[1]["feedback"] > 0, wait  # SUCCEEDED, with time_left on the way
     assert wait[1]["result"]["total_elapsed_time"]["sec"] >= 1, wait
+    # getPath(): from a given start (there is no robot pose here), then without one (Nav2's TF_ERROR).
+    staging = {
+        "header": {"frame_id": "map"},
+        "pose": {"position": {"x": 0.0, "y": 2.0}, "orientation": {"w": 1.0}},
+    }
+    start = {
+        "header": {"frame_id": "map"},
+        "pose": {"position": {"x": 1.8, "y": 4.2}, "orientation": {"w": 1.0}},
+    }
+    compute = ("action", "/compute_path_to_pose", "nav2_msgs/action/ComputePathToPose")
+    path = _peer(router_endpoint, *compute, json.dumps({"goal": staging, "start": start, "use_start": True}))
+    assert path[1]["status"] == 4, path
+    poses = path[1]["result"]["path"]["poses"]
+    assert len(poses) > 2 and path[1]["result"]["path"]["header"]["frame_id"] == "map", path
+    assert poses[-1]["pose"]["position"]["x"] == 0.0 and poses[-1]["pose"]["position"]["y"] == 2.0, poses[-1]
+    no_start = _peer(router_endpoint, *compute, json.dumps({"goal": staging}))
+    assert no_start[1]["status"] == 6 and no_start[1]["result"]["error_code"] == 202, no_start
+    assert "no robot pose" in no_start[1]["result"]["error_msg"], no_start

@@ -128,6 +128,12 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     assert clock["sim_seconds_per_wall_second"] and clock["sim_seconds_per_wall_second"] > 1.5, clock
     check("cmd_vel_odom")
     check("cmd_vel_stamped_odom")
+    paths = check("paths")
+    assert paths["staging"]["frame"] == "map" and paths["staging"]["ends"][1] == [0.0, 2.0], paths
+    assert (
+        paths["through"]["ends"][1] == [0.3, 4.0] and paths["through"]["poses"] > paths["staging"]["poses"]
+    ), paths
+    assert "goal (-2.00, 3.80)" in paths["in_box"]["error_msg"], paths
     check("navigate_to_pose")
     behaviors = check("behaviors")
     turned_to = behaviors["poses"][1][2]

@@ -26,7 +26,16 @@ from action_msgs.msg import GoalStatus
 from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from lifecycle_msgs.srv import GetState
-from nav2_msgs.action import BackUp, DockRobot, DriveOnHeading, NavigateToPose, Spin, Wait
+from nav2_msgs.action import (
+    BackUp,
+    ComputePathThroughPoses,
+    ComputePathToPose,
+    DockRobot,
+    DriveOnHeading,
+    NavigateToPose,
+    Spin,
+    Wait,
+)
 from nav2_msgs.srv import ClearEntireCostmap, GetCostmap
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rcl_interfaces.msg import Parameter as ParameterMsg
@@ -393,6 +402,67 @@ class User:
         )
         return out
 
+    def paths(self) -> None:
+        """BasicNavigator's getPath and getPathThroughPoses: a path from the robot to the staging goal, one
+        through two poses, and the reasons for a goal inside the box and for a planner zendock lacks."""
+
+        def stamped(x: float, y: float) -> PoseStamped:
+            pose = PoseStamped()
+            pose.header.frame_id = "map"
+            pose.pose.position.x, pose.pose.position.y = x, y
+            pose.pose.orientation.w = 1.0
+            return pose
+
+        def ask(action: Any, name: str, fill: Callable[[Any], None]) -> dict[str, Any]:
+            client = ActionClient(self.node, action, f"/{name}")
+            goal = action.Goal()
+            fill(goal)
+            out = self.run_goal(client, goal, 30.0)
+            client.destroy()
+            result = out.pop("result", None)
+            out.pop("last_feedback", None)
+            if result is not None:
+                poses = result.path.poses
+                out.update(
+                    error_code=result.error_code,
+                    error_msg=result.error_msg,
+                    poses=len(poses),
+                    frame=result.path.header.frame_id,
+                    ends=[
+                        [round(p.pose.position.x, 2), round(p.pose.position.y, 2)]
+                        for p in poses[:1] + poses[-1:]
+                    ],
+                )
+            return out
+
+        def to(x: float, y: float, planner_id: str = "") -> Callable[[Any], None]:
+            def fill(goal: Any) -> None:
+                goal.goal, goal.planner_id = stamped(x, y), planner_id
+
+            return fill
+
+        def through(goal: Any) -> None:
+            goal.goals = [stamped(-1.0, 2.0), stamped(0.3, 4.0)]
+
+        succeeded, aborted = GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED
+        staging = ask(ComputePathToPose, "compute_path_to_pose", to(0.0, 2.0))
+        via = ask(ComputePathThroughPoses, "compute_path_through_poses", through)
+        in_box = ask(ComputePathToPose, "compute_path_to_pose", to(-2.0, 3.8))
+        other_planner = ask(ComputePathToPose, "compute_path_to_pose", to(0.0, 2.0, "SmacPlanner"))
+        report(
+            "paths",
+            staging.get("status") == succeeded
+            and staging.get("poses", 0) > 2
+            and via.get("status") == succeeded
+            and in_box.get("status") == aborted
+            and in_box.get("error_code") == ComputePathToPose.Result.GOAL_OCCUPIED
+            and other_planner.get("error_code") == ComputePathToPose.Result.INVALID_PLANNER,
+            staging=staging,
+            through=via,
+            in_box=in_box,
+            other_planner=other_planner,
+        )
+
     def navigate(self) -> None:
         client = ActionClient(self.node, NavigateToPose, "/navigate_to_pose")
         goal = NavigateToPose.Goal()
@@ -629,6 +699,7 @@ STEPS = (
     "clock",
     "drive",
     "drive_stamped",
+    "paths",
     "navigate",
     "behaviors",
     "goal_pose",

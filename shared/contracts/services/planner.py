@@ -18,6 +18,8 @@ from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE
 from shared.interfaces.navigation import (
     CLEAR_COSTMAPS_SERVICE,
     CLEAR_ENTIRE_COSTMAP,
+    COMPUTE_PATH_THROUGH_POSES,
+    COMPUTE_PATH_TO_POSE,
     LOAD_MAP,
     LOAD_MAP_SERVICE,
     NAVIGATE_TO_POSE,
@@ -76,6 +78,16 @@ CONTRACT = Contract(
             topics.NAVIGATE_TO_POSE,
             NAVIGATE_TO_POSE,
             about="one goal at a time: a new goal preempts the active one (CANCELED)",
+        ),
+        Action(
+            topics.COMPUTE_PATH_TO_POSE,
+            COMPUTE_PATH_TO_POSE,
+            about="a path from the robot (or start) to the goal, not driven; Nav2's 200s on failure",
+        ),
+        Action(
+            topics.COMPUTE_PATH_THROUGH_POSES,
+            COMPUTE_PATH_THROUGH_POSES,
+            about="a path through the goals in order, leg by leg, not driven; Nav2's 300s on failure",
         ),
         Action(topics.SPIN, SPIN, about="turn in place by target_yaw (rad); stops short of an obstacle"),
         Action(topics.BACKUP, BACK_UP, about="reverse target.x (m) at speed; stops short of an obstacle"),

@@ -44,9 +44,17 @@ from shared.interfaces.docking import (
 )
 from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateResponse
 from shared.interfaces.navigation import (
+    COMPUTE_PATH_THROUGH_POSES,
+    COMPUTE_PATH_TO_POSE,
     NAVIGATE_TO_POSE,
     ClearEntireCostmapRequest,
     ClearEntireCostmapResponse,
+    ComputePathThroughPosesFeedback,
+    ComputePathThroughPosesGoal,
+    ComputePathThroughPosesResult,
+    ComputePathToPoseFeedback,
+    ComputePathToPoseGoal,
+    ComputePathToPoseResult,
     LoadMapRequest,
     LoadMapResponse,
     NavigateToPoseFeedback,
@@ -212,6 +220,29 @@ ACTION_EXAMPLES: dict[str, Message] = {
     "nav2_msgs/action/NavigateToPose_FeedbackMessage": NAVIGATE_TO_POSE.feedback_message(
         goal_id=GOAL_ID,
         feedback=NavigateToPoseFeedback(PoseStamped(HEADER, POSE), Duration(3, 0), Duration(9, 0), 1, 2.5),
+    ),
+    "nav2_msgs/action/ComputePathToPose_SendGoal_Request": COMPUTE_PATH_TO_POSE.send_goal_request(
+        goal_id=GOAL_ID,
+        goal=ComputePathToPoseGoal(PoseStamped(HEADER, POSE), PoseStamped(), "GridBased", False),
+    ),
+    "nav2_msgs/action/ComputePathToPose_GetResult_Response": COMPUTE_PATH_TO_POSE.get_result_response(
+        status=4,
+        result=ComputePathToPoseResult(
+            Path(HEADER, [PoseStamped(HEADER, POSE)] * 3), Duration(0, 4_000_000), 0, ""
+        ),
+    ),
+    "nav2_msgs/action/ComputePathToPose_FeedbackMessage": COMPUTE_PATH_TO_POSE.feedback_message(
+        goal_id=GOAL_ID, feedback=ComputePathToPoseFeedback()
+    ),
+    "nav2_msgs/action/ComputePathThroughPoses_SendGoal_Request": COMPUTE_PATH_THROUGH_POSES.send_goal_request(
+        goal_id=GOAL_ID,
+        goal=ComputePathThroughPosesGoal([PoseStamped(HEADER, POSE)] * 2, PoseStamped(), "", True),
+    ),
+    "nav2_msgs/action/ComputePathThroughPoses_GetResult_Response": COMPUTE_PATH_THROUGH_POSES.get_result_response(
+        status=6, result=ComputePathThroughPosesResult(Path(), Duration(), 308, "no path")
+    ),
+    "nav2_msgs/action/ComputePathThroughPoses_FeedbackMessage": COMPUTE_PATH_THROUGH_POSES.feedback_message(
+        goal_id=GOAL_ID, feedback=ComputePathThroughPosesFeedback()
     ),
     "nav2_msgs/action/Spin_SendGoal_Request": SPIN.send_goal_request(
         goal_id=GOAL_ID, goal=SpinGoal(1.57, Duration(10, 0))
