@@ -46,6 +46,8 @@ UNDOCK_ROBOT = "undock_robot"
 #: Nav2's planner_server: a path, without driving it.
 COMPUTE_PATH_TO_POSE = "compute_path_to_pose"
 COMPUTE_PATH_THROUGH_POSES = "compute_path_through_poses"
+#: Nav2's smoother_server: a given path smoothed.
+SMOOTH_PATH = "smooth_path"
 #: Nav2's behaviours (the planner serves them): turn in place, reverse, drive straight, let time pass.
 SPIN = "spin"
 BACKUP = "backup"

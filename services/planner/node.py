@@ -187,6 +187,7 @@ class PlannerService:
             params.planner_params(),
             robot_pose=lambda: self._tracker.current_pose(self._node.now(), self._params.pose_timeout_s),
             grid=lambda: self._costmap.grid,
+            footprint_m=(params.robot_length_m, params.robot_width_m),
         )
         self._behaviors = BehaviorServer(
             node,

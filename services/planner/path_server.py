@@ -1,5 +1,6 @@
-"""The planner's stand-in for Nav2's planner_server: ``compute_path_to_pose`` and
-``compute_path_through_poses`` answer with a path, and nothing drives it.
+"""The planner's stand-in for Nav2's planner_server and smoother_server: ``compute_path_to_pose`` and
+``compute_path_through_poses`` answer with a path, and nothing drives it; ``smooth_path`` smooths a given
+one.
 
 The paths come from the same A* and smoothing as navigation's, on the current costmap, on a worker
 thread of their own (a script asking for paths never delays the robot's replanning). A path through poses
@@ -17,21 +18,25 @@ from typing import Any
 
 import numpy as np
 
-from services.planner.costmap import CostGrid
+from services.planner.costmap import LETHAL_OBSTACLE, NO_INFORMATION, CostGrid
 from services.planner.global_planner import GlobalPlannerParams
 from services.planner.goal_check import ACCEPTED_FRAMES, goal_pose
 from services.planner.map_messages import path_message
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
+from services.planner.smoothing import smooth_path
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
-from shared.geometry import Pose2D
+from shared.geometry import Pose2D, yaw_from_quaternion
 from shared.interfaces.navigation import (
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
     NO_VIAPOINTS_GIVEN,
+    SMOOTH_PATH,
     ComputePathErrorCode,
     ComputePathThroughPosesGoal,
     ComputePathToPoseGoal,
+    SmoothPathErrorCode,
+    SmoothPathGoal,
     through_poses_code,
 )
 from shared.messages import Duration
@@ -39,6 +44,8 @@ from shared.node import Node
 
 #: The planner_id a script may name: Nav2's default planner plugin's, or none.
 PLANNER_IDS = ("", "GridBased")
+#: The smoother_id a script may name: Nav2's default smoother plugin's, or none.
+SMOOTHER_IDS = ("", "simple_smoother")
 
 
 class _Request:
@@ -77,7 +84,9 @@ class PathServer:
         *,
         robot_pose: Callable[[], Pose2D | None],
         grid: Callable[[], CostGrid | None],
+        footprint_m: tuple[float, float],
     ) -> None:
+        """``footprint_m``: the robot's length and width, for ``smooth_path``'s collision check."""
         self._node = node
         self._log = node.log
         self._robot_pose = robot_pose
@@ -106,7 +115,77 @@ class PathServer:
                     error_msg="preempted by a newer request"
                 ),
             ),
+            ActionServer(
+                node,
+                SMOOTH_PATH,
+                topics.SMOOTH_PATH,
+                on_goal=lambda goal: None,
+                on_accepted=self._on_smooth,
+                on_cancel=lambda handle: None,  # answered within the call that accepts it
+            ),
         ]
+        self._smoothing = params.smoothing
+        self._footprint = footprint_m
+
+    def _on_smooth(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
+        """``smooth_path``: the given path shortcut and smoothed within the costmap's costs, as a plan is.
+        It takes milliseconds, so it is answered at once on the node's thread."""
+        if not handle.active:
+            return
+        handle.execute()
+        goal: SmoothPathGoal = handle.goal
+        started = time.monotonic()
+
+        def fail(code: SmoothPathErrorCode, reason: str) -> None:
+            self._log.info("%s failed (%d): %s", topics.SMOOTH_PATH, code, reason)
+            handle.abort(SMOOTH_PATH.result(error_code=int(code), error_msg=reason))
+
+        grid = self._grid()
+        frames = {p.header.frame_id.strip().lstrip("/") for p in goal.path.poses} | {
+            goal.path.header.frame_id.strip().lstrip("/")
+        }
+        if goal.smoother_id not in SMOOTHER_IDS:
+            return fail(
+                SmoothPathErrorCode.INVALID_SMOOTHER,
+                f"smoother_id {goal.smoother_id!r} is not one of zendock's ({', '.join(map(repr, SMOOTHER_IDS))})",
+            )
+        if len(goal.path.poses) < 2:
+            return fail(
+                SmoothPathErrorCode.INVALID_PATH, f"a path of {len(goal.path.poses)} poses: 2 at least"
+            )
+        if not frames <= set(ACCEPTED_FRAMES):
+            return fail(
+                SmoothPathErrorCode.INVALID_PATH, f"the path is not in the map frame: {sorted(frames)}"
+            )
+        if grid is None:
+            return fail(SmoothPathErrorCode.UNKNOWN, "no map loaded: load one with map_server/load_map first")
+        points = np.array([[p.pose.position.x, p.pose.position.y] for p in goal.path.poses], dtype=float)
+        if not np.isfinite(points).all():
+            return fail(SmoothPathErrorCode.INVALID_PATH, "the path has a pose that is not finite")
+        last = goal.path.poses[-1].pose.orientation
+        try:
+            poses = smooth_path(
+                grid, points, yaw_from_quaternion(last.x, last.y, last.z, last.w), self._smoothing
+            )
+        except ValueError as exc:
+            return fail(SmoothPathErrorCode.FAILED_TO_SMOOTH_PATH, str(exc))
+        elapsed = time.monotonic() - started
+        allowed = goal.max_smoothing_duration.to_sec()
+        if allowed > 0.0 and elapsed > allowed:
+            return fail(SmoothPathErrorCode.TIMEOUT, f"smoothing took {elapsed:.3f} s, over {allowed:g} s")
+        if goal.check_for_collisions:
+            costs = grid.footprint_costs(poses, *self._footprint)
+            hit = np.nonzero((costs >= LETHAL_OBSTACLE) & (costs != NO_INFORMATION))[0]
+            if len(hit):
+                x, y = poses[hit[0], :2]
+                return fail(
+                    SmoothPathErrorCode.SMOOTHED_PATH_IN_COLLISION,
+                    f"the smoothed path puts the robot on an obstacle at ({x:.2f}, {y:.2f})",
+                )
+        path = path_message(poses, self._node.now(), topics.MAP_FRAME)
+        handle.succeed(
+            SMOOTH_PATH.result(path=path, smoothing_duration=Duration.from_sec(elapsed), was_completed=True)
+        )
 
     def _on_accepted(self, handle: ServerGoalHandle[Any, Any, Any], *, through: bool) -> None:
         if not handle.active:

@@ -1,5 +1,5 @@
 """The navigation stack's interfaces, mirroring nav2_msgs: NavigateToPose, ComputePathToPose,
-ComputePathThroughPoses, ClearEntireCostmap, LoadMap."""
+ComputePathThroughPoses, SmoothPath, ClearEntireCostmap, LoadMap."""
 
 from __future__ import annotations
 
@@ -137,6 +137,41 @@ COMPUTE_PATH_THROUGH_POSES = ActionType(
     ComputePathThroughPosesResult,
     ComputePathThroughPosesFeedback,
 )
+
+
+class SmoothPathErrorCode(enum.IntEnum):
+    NONE = 0
+    UNKNOWN = 500
+    INVALID_SMOOTHER = 501
+    TIMEOUT = 502
+    SMOOTHED_PATH_IN_COLLISION = 503
+    FAILED_TO_SMOOTH_PATH = 504
+    INVALID_PATH = 505
+
+
+@message("nav2_msgs/action/SmoothPath_Goal")
+class SmoothPathGoal(Message):
+    path: Path = field(default_factory=Path)
+    smoother_id: str = ""
+    max_smoothing_duration: Duration = field(default_factory=Duration)
+    check_for_collisions: bool = False
+
+
+@message("nav2_msgs/action/SmoothPath_Result")
+class SmoothPathResult(Message):
+    path: Path = field(default_factory=Path)
+    smoothing_duration: Duration = field(default_factory=Duration)
+    was_completed: bool = False
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/SmoothPath_Feedback")
+class SmoothPathFeedback(Message):
+    pass
+
+
+SMOOTH_PATH = ActionType("nav2_msgs/action/SmoothPath", SmoothPathGoal, SmoothPathResult, SmoothPathFeedback)
 
 
 @message("nav2_msgs/srv/ClearEntireCostmap_Request")

@@ -34,6 +34,7 @@ from shared.interfaces.navigation import (
     LOAD_MAP,
     LOAD_MAP_SERVICE,
     NAVIGATE_TO_POSE,
+    SMOOTH_PATH,
     ClearEntireCostmapResponse,
     LoadMapResponse,
 )
@@ -110,6 +111,7 @@ ACTIONS: tuple[BridgedAction, ...] = (
         "planner",
         COMPUTE_PATH_THROUGH_POSES,
     ),
+    BridgedAction(topics.SMOOTH_PATH, interfaces.SMOOTH_PATH, "planner", SMOOTH_PATH),
     BridgedAction(topics.SPIN, interfaces.SPIN, "planner", SPIN),
     BridgedAction(topics.BACKUP, interfaces.BACK_UP, "planner", BACK_UP),
     BridgedAction(topics.DRIVE_ON_HEADING, interfaces.DRIVE_ON_HEADING, "planner", DRIVE_ON_HEADING),

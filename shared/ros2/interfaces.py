@@ -25,6 +25,7 @@ DOCK_ROBOT = "nav2_msgs/action/DockRobot"
 UNDOCK_ROBOT = "nav2_msgs/action/UndockRobot"
 COMPUTE_PATH_TO_POSE = "nav2_msgs/action/ComputePathToPose"
 COMPUTE_PATH_THROUGH_POSES = "nav2_msgs/action/ComputePathThroughPoses"
+SMOOTH_PATH = "nav2_msgs/action/SmoothPath"
 SPIN = "nav2_msgs/action/Spin"
 BACK_UP = "nav2_msgs/action/BackUp"
 DRIVE_ON_HEADING = "nav2_msgs/action/DriveOnHeading"
@@ -36,6 +37,7 @@ ACTIONS = (
     UNDOCK_ROBOT,
     COMPUTE_PATH_TO_POSE,
     COMPUTE_PATH_THROUGH_POSES,
+    SMOOTH_PATH,
     SPIN,
     BACK_UP,
     DRIVE_ON_HEADING,

@@ -134,6 +134,7 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
         paths["through"]["ends"][1] == [0.3, 4.0] and paths["through"]["poses"] > paths["staging"]["poses"]
     ), paths
     assert "goal (-2.00, 3.80)" in paths["in_box"]["error_msg"], paths
+    assert paths["smoothed"]["ends"][1] == [0.0, 2.0], paths
     check("navigate_to_pose")
     behaviors = check("behaviors")
     turned_to = behaviors["poses"][1][2]

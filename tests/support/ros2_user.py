@@ -33,6 +33,7 @@ from nav2_msgs.action import (
     DockRobot,
     DriveOnHeading,
     NavigateToPose,
+    SmoothPath,
     Spin,
     Wait,
 )
@@ -403,8 +404,9 @@ class User:
         return out
 
     def paths(self) -> None:
-        """BasicNavigator's getPath and getPathThroughPoses: a path from the robot to the staging goal, one
-        through two poses, and the reasons for a goal inside the box and for a planner zendock lacks."""
+        """BasicNavigator's getPath, smoothPath and getPathThroughPoses: a path from the robot to the staging
+        goal, smoothed, one through two poses, and the reasons for a goal inside the box and for a planner
+        zendock lacks."""
 
         def stamped(x: float, y: float) -> PoseStamped:
             pose = PoseStamped()
@@ -421,6 +423,7 @@ class User:
             client.destroy()
             result = out.pop("result", None)
             out.pop("last_feedback", None)
+            results[name] = result
             if result is not None:
                 poses = result.path.poses
                 out.update(
@@ -444,8 +447,15 @@ class User:
         def through(goal: Any) -> None:
             goal.goals = [stamped(-1.0, 2.0), stamped(0.3, 4.0)]
 
+        results: dict[str, Any] = {}
         succeeded, aborted = GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED
         staging = ask(ComputePathToPose, "compute_path_to_pose", to(0.0, 2.0))
+        planned = results["compute_path_to_pose"]
+
+        def smooth(goal: Any) -> None:
+            goal.path, goal.check_for_collisions = planned.path, True
+
+        smoothed = ask(SmoothPath, "smooth_path", smooth) if planned is not None else {}
         via = ask(ComputePathThroughPoses, "compute_path_through_poses", through)
         in_box = ask(ComputePathToPose, "compute_path_to_pose", to(-2.0, 3.8))
         other_planner = ask(ComputePathToPose, "compute_path_to_pose", to(0.0, 2.0, "SmacPlanner"))
@@ -453,11 +463,14 @@ class User:
             "paths",
             staging.get("status") == succeeded
             and staging.get("poses", 0) > 2
+            and smoothed.get("status") == succeeded
+            and smoothed.get("poses", 0) > 2
             and via.get("status") == succeeded
             and in_box.get("status") == aborted
             and in_box.get("error_code") == ComputePathToPose.Result.GOAL_OCCUPIED
             and other_planner.get("error_code") == ComputePathToPose.Result.INVALID_PLANNER,
             staging=staging,
+            smoothed=smoothed,
             through=via,
             in_box=in_box,
             other_planner=other_planner,

@@ -23,6 +23,7 @@ from shared.interfaces.navigation import (
     LOAD_MAP,
     LOAD_MAP_SERVICE,
     NAVIGATE_TO_POSE,
+    SMOOTH_PATH,
 )
 from shared.messages import (
     Float64MultiArray,
@@ -88,6 +89,11 @@ CONTRACT = Contract(
             topics.COMPUTE_PATH_THROUGH_POSES,
             COMPUTE_PATH_THROUGH_POSES,
             about="a path through the goals in order, leg by leg, not driven; Nav2's 300s on failure",
+        ),
+        Action(
+            topics.SMOOTH_PATH,
+            SMOOTH_PATH,
+            about="a given path shortcut and smoothed within the costmap's costs; Nav2's 500s on failure",
         ),
         Action(topics.SPIN, SPIN, about="turn in place by target_yaw (rad); stops short of an obstacle"),
         Action(topics.BACKUP, BACK_UP, about="reverse target.x (m) at speed; stops short of an obstacle"),

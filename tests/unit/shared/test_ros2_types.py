@@ -47,6 +47,7 @@ from shared.interfaces.navigation import (
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
     NAVIGATE_TO_POSE,
+    SMOOTH_PATH,
     ClearEntireCostmapRequest,
     ClearEntireCostmapResponse,
     ComputePathThroughPosesFeedback,
@@ -60,6 +61,9 @@ from shared.interfaces.navigation import (
     NavigateToPoseFeedback,
     NavigateToPoseGoal,
     NavigateToPoseResult,
+    SmoothPathFeedback,
+    SmoothPathGoal,
+    SmoothPathResult,
 )
 from shared.messages import (
     BatteryState,
@@ -243,6 +247,17 @@ ACTION_EXAMPLES: dict[str, Message] = {
     ),
     "nav2_msgs/action/ComputePathThroughPoses_FeedbackMessage": COMPUTE_PATH_THROUGH_POSES.feedback_message(
         goal_id=GOAL_ID, feedback=ComputePathThroughPosesFeedback()
+    ),
+    "nav2_msgs/action/SmoothPath_SendGoal_Request": SMOOTH_PATH.send_goal_request(
+        goal_id=GOAL_ID,
+        goal=SmoothPathGoal(Path(HEADER, [PoseStamped(HEADER, POSE)] * 2), "", Duration(1, 0), True),
+    ),
+    "nav2_msgs/action/SmoothPath_GetResult_Response": SMOOTH_PATH.get_result_response(
+        status=4,
+        result=SmoothPathResult(Path(HEADER, [PoseStamped(HEADER, POSE)]), Duration(0, 1000), True, 0, ""),
+    ),
+    "nav2_msgs/action/SmoothPath_FeedbackMessage": SMOOTH_PATH.feedback_message(
+        goal_id=GOAL_ID, feedback=SmoothPathFeedback()
     ),
     "nav2_msgs/action/Spin_SendGoal_Request": SPIN.send_goal_request(
         goal_id=GOAL_ID, goal=SpinGoal(1.57, Duration(10, 0))
