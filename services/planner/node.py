@@ -42,6 +42,7 @@ from services.planner.occupancy_map import OccupancyMap
 from services.planner.params import Params, load_initial_map
 from services.planner.path_server import PathServer
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
+from services.planner.pose_sequences import PoseSequences
 from services.planner.recovery import GlassClearing
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
@@ -189,6 +190,7 @@ class PlannerService:
             grid=lambda: self._costmap.grid,
             footprint_m=(params.robot_length_m, params.robot_width_m),
         )
+        self._sequences = PoseSequences(node, lambda: self._params.waypoint_stop_on_failure)
         self._behaviors = BehaviorServer(
             node,
             params.behavior_params(),
@@ -458,6 +460,7 @@ class PlannerService:
         self._action.close()
         self._behaviors.close()
         self._paths.close()
+        self._sequences.close()
 
 
 def _add_flags(parser: Any) -> dict[str, str]:

@@ -153,6 +153,11 @@ class Params(ServiceParams):
         description="avoid gaps only the inscribed circle fits through when a path with room to turn exists",
     )
     snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
+    waypoint_stop_on_failure: bool = Field(
+        False,
+        description="follow_waypoints ends at a waypoint it cannot reach (else records it as missed and goes on)",
+        json_schema_extra=runtime_settable("at the next waypoint that fails"),
+    )
     replan_period_s: float = Field(1.0, gt=0.0, description="replan this often while following (sim time)")
     min_replan_interval_s: float = Field(0.2, ge=0.0, description="urgent replans no more often than this")
     # control and action

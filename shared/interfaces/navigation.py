@@ -1,5 +1,5 @@
-"""The navigation stack's interfaces, mirroring nav2_msgs: NavigateToPose, ComputePathToPose,
-ComputePathThroughPoses, SmoothPath, ClearEntireCostmap, LoadMap."""
+"""The navigation stack's interfaces, mirroring nav2_msgs: NavigateToPose, NavigateThroughPoses,
+FollowWaypoints, ComputePathToPose, ComputePathThroughPoses, SmoothPath, ClearEntireCostmap, LoadMap."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import Annotated, ClassVar
 
 from shared.interface_types import ActionType, Empty, ServiceType
 from shared.messages import Duration, OccupancyGrid, Path, PoseStamped
-from shared.schema import Message, Range, UInt16, message
+from shared.schema import Message, Range, UInt16, UInt32, message
 
 
 @message("nav2_msgs/action/NavigateToPose_Goal")
@@ -52,6 +52,75 @@ class NavigateToPoseFeedback(Message):
 
 NAVIGATE_TO_POSE = ActionType(
     "nav2_msgs/action/NavigateToPose", NavigateToPoseGoal, NavigateToPoseResult, NavigateToPoseFeedback
+)
+
+
+@message("nav2_msgs/action/NavigateThroughPoses_Goal")
+class NavigateThroughPosesGoal(Message):
+    poses: list[PoseStamped] = field(default_factory=list)
+    behavior_tree: str = ""
+
+
+@message("nav2_msgs/action/NavigateThroughPoses_Result")
+class NavigateThroughPosesResult(Message):
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/NavigateThroughPoses_Feedback")
+class NavigateThroughPosesFeedback(Message):
+    current_pose: PoseStamped = field(default_factory=PoseStamped)
+    navigation_time: Duration = field(default_factory=Duration)
+    estimated_time_remaining: Duration = field(default_factory=Duration)
+    number_of_recoveries: Annotated[int, Range(-(2**15), 2**15 - 1)] = 0
+    distance_remaining: float = 0.0
+    number_of_poses_remaining: Annotated[int, Range(-(2**15), 2**15 - 1)] = 0
+
+
+NAVIGATE_THROUGH_POSES = ActionType(
+    "nav2_msgs/action/NavigateThroughPoses",
+    NavigateThroughPosesGoal,
+    NavigateThroughPosesResult,
+    NavigateThroughPosesFeedback,
+)
+
+
+class FollowWaypointsErrorCode(enum.IntEnum):
+    NONE = 0
+    UNKNOWN = 600
+    TASK_EXECUTOR_FAILED = 601
+
+
+@message("nav2_msgs/msg/MissedWaypoint")
+class MissedWaypoint(Message):
+    index: UInt32 = 0
+    goal: PoseStamped = field(default_factory=PoseStamped)
+    error_code: UInt16 = 0
+
+
+@message("nav2_msgs/action/FollowWaypoints_Goal")
+class FollowWaypointsGoal(Message):
+    #: How many times to go round again after the first pass (0: once).
+    number_of_loops: UInt32 = 0
+    #: The waypoint to start from.
+    goal_index: UInt32 = 0
+    poses: list[PoseStamped] = field(default_factory=list)
+
+
+@message("nav2_msgs/action/FollowWaypoints_Result")
+class FollowWaypointsResult(Message):
+    missed_waypoints: list[MissedWaypoint] = field(default_factory=list)
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/FollowWaypoints_Feedback")
+class FollowWaypointsFeedback(Message):
+    current_waypoint: UInt32 = 0
+
+
+FOLLOW_WAYPOINTS = ActionType(
+    "nav2_msgs/action/FollowWaypoints", FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback
 )
 
 

@@ -31,8 +31,10 @@ from shared.interfaces.navigation import (
     CLEAR_ENTIRE_COSTMAP,
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_WAYPOINTS,
     LOAD_MAP,
     LOAD_MAP_SERVICE,
+    NAVIGATE_THROUGH_POSES,
     NAVIGATE_TO_POSE,
     SMOOTH_PATH,
     ClearEntireCostmapResponse,
@@ -102,6 +104,10 @@ ACTIONS: tuple[BridgedAction, ...] = (
     BridgedAction(topics.DOCK_ROBOT, interfaces.DOCK_ROBOT, "docking", DOCK_ROBOT),
     BridgedAction(topics.UNDOCK_ROBOT, interfaces.UNDOCK_ROBOT, "docking", UNDOCK_ROBOT),
     BridgedAction(topics.NAVIGATE_TO_POSE, interfaces.NAVIGATE_TO_POSE, "planner", NAVIGATE_TO_POSE),
+    BridgedAction(
+        topics.NAVIGATE_THROUGH_POSES, interfaces.NAVIGATE_THROUGH_POSES, "planner", NAVIGATE_THROUGH_POSES
+    ),
+    BridgedAction(topics.FOLLOW_WAYPOINTS, interfaces.FOLLOW_WAYPOINTS, "planner", FOLLOW_WAYPOINTS),
     BridgedAction(
         topics.COMPUTE_PATH_TO_POSE, interfaces.COMPUTE_PATH_TO_POSE, "planner", COMPUTE_PATH_TO_POSE
     ),

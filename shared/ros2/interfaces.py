@@ -23,6 +23,8 @@ TypeDefs = dict[str, tuple[list[Any], list[Any]]]
 NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
 DOCK_ROBOT = "nav2_msgs/action/DockRobot"
 UNDOCK_ROBOT = "nav2_msgs/action/UndockRobot"
+NAVIGATE_THROUGH_POSES = "nav2_msgs/action/NavigateThroughPoses"
+FOLLOW_WAYPOINTS = "nav2_msgs/action/FollowWaypoints"
 COMPUTE_PATH_TO_POSE = "nav2_msgs/action/ComputePathToPose"
 COMPUTE_PATH_THROUGH_POSES = "nav2_msgs/action/ComputePathThroughPoses"
 SMOOTH_PATH = "nav2_msgs/action/SmoothPath"
@@ -35,6 +37,8 @@ ACTIONS = (
     NAVIGATE_TO_POSE,
     DOCK_ROBOT,
     UNDOCK_ROBOT,
+    NAVIGATE_THROUGH_POSES,
+    FOLLOW_WAYPOINTS,
     COMPUTE_PATH_TO_POSE,
     COMPUTE_PATH_THROUGH_POSES,
     SMOOTH_PATH,
@@ -137,7 +141,25 @@ def definitions() -> TypeDefs:
                 f"{action}_FeedbackMessage",
             )
         )
-    return defs
+    return _bare_names_to_messages(defs)
+
+
+def _bare_names_to_messages(defs: TypeDefs) -> TypeDefs:
+    """A bare type name in a ``.srv`` or ``.action`` file (``MissedWaypoint[] missed_waypoints``) is the
+    package's message (``nav2_msgs/msg/MissedWaypoint``), as rosidl reads it; rosbags files it beside the
+    service or action (``nav2_msgs/action/MissedWaypoint``), which names no type."""
+
+    def fixed(desc: Any) -> Any:
+        kind, detail = desc
+        if kind == 2 and detail not in defs:
+            package, _, name = detail.rpartition("/")
+            message = f"{package.rsplit('/', 1)[0]}/msg/{name}"
+            return (kind, message) if message in defs else desc
+        if kind in (3, 4):
+            return kind, (fixed(detail[0]), detail[1])
+        return desc
+
+    return {name: (consts, [(f, fixed(d)) for f, d in fields]) for name, (consts, fields) in defs.items()}
 
 
 def service_definitions(service: str, request: str, response: str) -> TypeDefs:

@@ -142,6 +142,10 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     front_y = behaviors["poses"][2][1] + 0.2  # the footprint's front edge, facing +y
     assert 4.5 < front_y < 5.0, behaviors  # stopped short of the top wall (y = 5), not on it
     assert "obstacle" in behaviors["drive_on_heading"]["error_msg"], behaviors
+    sequences = check("sequences")
+    assert math.dist(sequences["through"]["pose_after"][:2], (0.3, 4.0)) < 0.3, sequences
+    assert math.dist(sequences["waypoints"]["pose_after"][:2], (0.3, 4.0)) < 0.3, sequences
+    assert sequences["waypoints"]["missed"][0][1] == 9001, sequences  # INVALID_GOAL: the box
     check("goal_pose")
     check("cancel")
     check("dock_robot")

@@ -32,6 +32,8 @@ from nav2_msgs.action import (
     ComputePathToPose,
     DockRobot,
     DriveOnHeading,
+    FollowWaypoints,
+    NavigateThroughPoses,
     NavigateToPose,
     SmoothPath,
     Spin,
@@ -551,6 +553,49 @@ class User:
             poses=[[round(v, 3) for v in p] if p else None for p in (before, after_spin, at_wall)],
         )
 
+    def sequences(self) -> None:
+        """BasicNavigator's goThroughPoses, then followWaypoints with a waypoint inside the box: the others
+        are reached, that one is in missed_waypoints with the reason's code."""
+
+        def stamped(x: float, y: float) -> PoseStamped:
+            pose = PoseStamped()
+            pose.header.frame_id = "map"
+            pose.pose.position.x, pose.pose.position.y = x, y
+            pose.pose.orientation.w = 1.0
+            return pose
+
+        def run(action: Any, name: str, poses: list[PoseStamped]) -> dict[str, Any]:
+            client = ActionClient(self.node, action, f"/{name}")
+            goal = action.Goal()
+            goal.poses = poses
+            out = self.run_goal(client, goal, 90.0)
+            client.destroy()
+            result = out.pop("result", None)
+            last = out.pop("last_feedback", None)
+            if result is not None:
+                out.update(error_code=result.error_code, error_msg=result.error_msg)
+                missed = getattr(result, "missed_waypoints", [])
+                out["missed"] = [[m.index, m.error_code] for m in missed]
+            if last is not None and hasattr(last, "number_of_poses_remaining"):
+                out["last_poses_remaining"] = last.number_of_poses_remaining
+            out["pose_after"] = [round(v, 2) for v in self.robot_pose() or ()]
+            return out
+
+        through = run(NavigateThroughPoses, "navigate_through_poses", [stamped(1.0, 4.2), stamped(0.3, 4.0)])
+        waypoints = run(
+            FollowWaypoints, "follow_waypoints", [stamped(1.0, 4.2), stamped(-2.0, 3.8), stamped(0.3, 4.0)]
+        )
+        succeeded = GoalStatus.STATUS_SUCCEEDED
+        report(
+            "sequences",
+            through.get("status") == succeeded
+            and through.get("feedbacks", 0) > 0
+            and waypoints.get("status") == succeeded
+            and [m[0] for m in waypoints.get("missed", [])] == [1],
+            through=through,
+            waypoints=waypoints,
+        )
+
     def goal_pose(self) -> None:
         """RViz's 2D Goal Pose: a PoseStamped on /goal_pose, and the robot drives there."""
         target = (0.5, 2.6, -math.pi / 2)
@@ -715,6 +760,7 @@ STEPS = (
     "paths",
     "navigate",
     "behaviors",
+    "sequences",
     "goal_pose",
     "cancel",
     "dock",

@@ -20,8 +20,10 @@ from shared.interfaces.navigation import (
     CLEAR_ENTIRE_COSTMAP,
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_WAYPOINTS,
     LOAD_MAP,
     LOAD_MAP_SERVICE,
+    NAVIGATE_THROUGH_POSES,
     NAVIGATE_TO_POSE,
     SMOOTH_PATH,
 )
@@ -74,11 +76,28 @@ CONTRACT = Contract(
         ),
         *lifecycle_requests("planner"),
     ),
+    uses_actions=(
+        Action(
+            topics.NAVIGATE_TO_POSE,
+            NAVIGATE_TO_POSE,
+            about="its own, for follow_waypoints and navigate_through_poses: one goal a pose",
+        ),
+    ),
     serves_actions=(
         Action(
             topics.NAVIGATE_TO_POSE,
             NAVIGATE_TO_POSE,
             about="one goal at a time: a new goal preempts the active one (CANCELED)",
+        ),
+        Action(
+            topics.NAVIGATE_THROUGH_POSES,
+            NAVIGATE_THROUGH_POSES,
+            about="navigate_to_pose to each pose in turn; a failed leg ends it with that leg's code",
+        ),
+        Action(
+            topics.FOLLOW_WAYPOINTS,
+            FOLLOW_WAYPOINTS,
+            about="navigate_to_pose to each waypoint in turn; one it cannot reach is in missed_waypoints",
         ),
         Action(
             topics.COMPUTE_PATH_TO_POSE,

@@ -46,6 +46,8 @@ from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateRespons
 from shared.interfaces.navigation import (
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_WAYPOINTS,
+    NAVIGATE_THROUGH_POSES,
     NAVIGATE_TO_POSE,
     SMOOTH_PATH,
     ClearEntireCostmapRequest,
@@ -56,8 +58,15 @@ from shared.interfaces.navigation import (
     ComputePathToPoseFeedback,
     ComputePathToPoseGoal,
     ComputePathToPoseResult,
+    FollowWaypointsFeedback,
+    FollowWaypointsGoal,
+    FollowWaypointsResult,
     LoadMapRequest,
     LoadMapResponse,
+    MissedWaypoint,
+    NavigateThroughPosesFeedback,
+    NavigateThroughPosesGoal,
+    NavigateThroughPosesResult,
     NavigateToPoseFeedback,
     NavigateToPoseGoal,
     NavigateToPoseResult,
@@ -247,6 +256,27 @@ ACTION_EXAMPLES: dict[str, Message] = {
     ),
     "nav2_msgs/action/ComputePathThroughPoses_FeedbackMessage": COMPUTE_PATH_THROUGH_POSES.feedback_message(
         goal_id=GOAL_ID, feedback=ComputePathThroughPosesFeedback()
+    ),
+    "nav2_msgs/action/NavigateThroughPoses_SendGoal_Request": NAVIGATE_THROUGH_POSES.send_goal_request(
+        goal_id=GOAL_ID, goal=NavigateThroughPosesGoal([PoseStamped(HEADER, POSE)] * 2, "")
+    ),
+    "nav2_msgs/action/NavigateThroughPoses_GetResult_Response": NAVIGATE_THROUGH_POSES.get_result_response(
+        status=6, result=NavigateThroughPosesResult(9002, "pose 2: no valid path")
+    ),
+    "nav2_msgs/action/NavigateThroughPoses_FeedbackMessage": NAVIGATE_THROUGH_POSES.feedback_message(
+        goal_id=GOAL_ID,
+        feedback=NavigateThroughPosesFeedback(
+            PoseStamped(HEADER, POSE), Duration(3, 0), Duration(9, 0), 1, 2.5, 2
+        ),
+    ),
+    "nav2_msgs/action/FollowWaypoints_SendGoal_Request": FOLLOW_WAYPOINTS.send_goal_request(
+        goal_id=GOAL_ID, goal=FollowWaypointsGoal(1, 0, [PoseStamped(HEADER, POSE)] * 3)
+    ),
+    "nav2_msgs/action/FollowWaypoints_GetResult_Response": FOLLOW_WAYPOINTS.get_result_response(
+        status=4, result=FollowWaypointsResult([MissedWaypoint(1, PoseStamped(HEADER, POSE), 9001)], 0, "")
+    ),
+    "nav2_msgs/action/FollowWaypoints_FeedbackMessage": FOLLOW_WAYPOINTS.feedback_message(
+        goal_id=GOAL_ID, feedback=FollowWaypointsFeedback(2)
     ),
     "nav2_msgs/action/SmoothPath_SendGoal_Request": SMOOTH_PATH.send_goal_request(
         goal_id=GOAL_ID,
