@@ -1,4 +1,5 @@
-"""The planner's stand-in for Nav2's behavior_server: ``spin``, ``backup``, ``drive_on_heading`` and ``wait``.
+"""The planner's stand-in for Nav2's behavior_server (``spin``, ``backup``, ``drive_on_heading``, ``wait``)
+and for its controller_server's ``follow_path`` (:mod:`services.planner.path_following`).
 
 One behaviour runs at a time: a new behaviour goal of any kind ends the one running (CANCELED). Navigation
 comes first: a behaviour goal is refused while a ``navigate_to_pose`` goal runs, and a navigation goal ends
@@ -12,11 +13,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from services.planner.behaviors import BehaviorParams, DriveStraight, Outcome, Spin, Step, Wait
-from services.planner.costmap import CostGrid
+from services.planner.goal_check import ACCEPTED_FRAMES
+from services.planner.navigation_run import NavSnapshot
+from services.planner.path_following import FollowPath
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
-from shared.geometry import Pose2D
+from shared.geometry import yaw_from_quaternion
 from shared.interface_types import ActionType
 from shared.interfaces.behaviors import (
     BACK_UP,
@@ -35,10 +40,16 @@ from shared.interfaces.behaviors import (
     WaitFeedback,
     WaitGoal,
 )
+from shared.interfaces.navigation import (
+    FOLLOW_PATH,
+    FollowPathErrorCode,
+    FollowPathFeedback,
+    FollowPathGoal,
+)
 from shared.messages import Duration
 from shared.node import Node
 
-Behavior = Spin | DriveStraight | Wait
+Behavior = Spin | DriveStraight | Wait | FollowPath
 
 
 @dataclass(frozen=True)
@@ -50,6 +61,7 @@ class _Codes:
     tf_error: int
     collision_ahead: int
     invalid_input: int
+    no_progress: int = 0
 
 
 _SPIN_CODES = _Codes(
@@ -74,6 +86,16 @@ _DRIVE_CODES = _Codes(
     DriveOnHeadingErrorCode.INVALID_INPUT,
 )
 _WAIT_CODES = _Codes(0, 0, 0, 0, 0)  # Wait's result has error_code and error_msg but names no codes
+_FOLLOW_CODES = _Codes(
+    FollowPathErrorCode.UNKNOWN,
+    FollowPathErrorCode.CONTROLLER_TIMED_OUT,
+    FollowPathErrorCode.TF_ERROR,
+    FollowPathErrorCode.NO_VALID_CONTROL,
+    FollowPathErrorCode.INVALID_PATH,
+    FollowPathErrorCode.FAILED_TO_MAKE_PROGRESS,
+)
+#: The controller_id a script may name: Nav2's default controller plugin's, or none.
+CONTROLLER_IDS = ("", "FollowPath")
 
 
 class _Running:
@@ -100,6 +122,8 @@ class _Running:
 
 
 def _result(action: ActionType[Any, Any, Any], elapsed_s: float, code: int = 0, message: str = "") -> Any:
+    if action is FOLLOW_PATH:  # its result carries no elapsed time
+        return action.result(error_code=int(code), error_msg=message)
     elapsed = Duration.from_sec(max(0.0, elapsed_s))
     return action.result(total_elapsed_time=elapsed, error_code=int(code), error_msg=message)
 
@@ -118,18 +142,22 @@ class BehaviorServer:
         *,
         publish_cmd: Callable[[float, float], None],
         navigating: Callable[[], bool],
+        follow_path: Callable[[np.ndarray], FollowPath],
     ) -> None:
+        """``follow_path(poses)``: a :class:`FollowPath` with the planner's controller and limits."""
         self._node = node
         self._log = node.log
         self._params = params
         self._publish_cmd = publish_cmd
         self._navigating = navigating
+        self._follow_path = follow_path
         self._running: _Running | None = None
         self._servers = [
             self._serve(SPIN, topics.SPIN),
             self._serve(BACK_UP, topics.BACKUP),
             self._serve(DRIVE_ON_HEADING, topics.DRIVE_ON_HEADING),
             self._serve(WAIT, topics.WAIT),
+            self._serve(FOLLOW_PATH, topics.FOLLOW_PATH),
         ]
 
     def _serve(self, action: ActionType[Any, Any, Any], name: str) -> ActionServer[Any, Any, Any]:
@@ -168,9 +196,16 @@ class BehaviorServer:
         try:
             motion, codes, feedback = self._motion_for(handle.goal)
         except ValueError as exc:  # Nav2 accepts such a goal and aborts it with INVALID_INPUT
-            codes = _BACK_UP_CODES if isinstance(handle.goal, BackUpGoal) else _DRIVE_CODES
+            codes = {BackUpGoal: _BACK_UP_CODES, FollowPathGoal: _FOLLOW_CODES}.get(
+                type(handle.goal), _DRIVE_CODES
+            )
+            code = (
+                FollowPathErrorCode.INVALID_CONTROLLER
+                if isinstance(exc, _InvalidController)
+                else codes.invalid_input
+            )
             self._log.info("%s aborted: %s", action.type_name, exc)
-            handle.abort(_result(action, 0.0, codes.invalid_input, str(exc)))
+            handle.abort(_result(action, 0.0, code, str(exc)))
             return
         self._running = _Running(handle, action, motion, codes, feedback, now)
         self._log.info("%s started", action.type_name.rsplit("/", 1)[-1])
@@ -192,6 +227,15 @@ class BehaviorServer:
                 )
             drive = DriveStraight(abs(goal.target.x), goal.speed, _seconds(goal.time_allowance), p)
             return drive, _DRIVE_CODES, lambda step: DriveOnHeadingFeedback(distance_traveled=step.progress)
+        if isinstance(goal, FollowPathGoal):
+            follow = self._follow_path(_path_poses(goal))
+            return (
+                follow,
+                _FOLLOW_CODES,
+                lambda step: FollowPathFeedback(
+                    distance_to_goal=step.progress, speed=step.cmd[0] if step.cmd is not None else 0.0
+                ),
+            )
         assert isinstance(goal, WaitGoal)
         return (
             Wait(_seconds(goal.time)),
@@ -213,15 +257,16 @@ class BehaviorServer:
 
     # --- stepping -----------------------------------------------------------------------------------
 
-    def tick(self, pose: Pose2D | None, grid: CostGrid | None) -> None:
+    def tick(self, snap: NavSnapshot) -> None:
         running = self._running
         if running is None:
             return
         if not running.handle.active:  # ended elsewhere (preempted within its own server)
             self._running = None
             return
-        now = self._node.now()
-        step = running.motion.step(pose, now, grid)
+        now = snap.now_s
+        motion = running.motion
+        step = motion.step(snap) if isinstance(motion, FollowPath) else motion.step(snap.pose, now, snap.grid)
         if step.outcome is Outcome.RUNNING:
             if step.cmd is not None:
                 self._publish_cmd(*step.cmd)
@@ -250,6 +295,7 @@ class BehaviorServer:
                 Outcome.TIMED_OUT: running.codes.timeout,
                 Outcome.COLLISION_AHEAD: running.codes.collision_ahead,
                 Outcome.NO_POSE: running.codes.tf_error,
+                Outcome.NO_PROGRESS: running.codes.no_progress,
             }.get(outcome, running.codes.unknown)
             self._log.info("%s aborted (%d): %s", name, code, why)
             handle.abort(running.result(now, code, why))
@@ -263,3 +309,38 @@ class BehaviorServer:
 def _only_x(y: float, z: float) -> None:
     if y != 0.0 or z != 0.0:
         raise ValueError(f"only target.x is driven; target.y ({y:g}) and target.z ({z:g}) must be 0")
+
+
+def _path_poses(goal: FollowPathGoal) -> np.ndarray:
+    """The goal's path as ``(N, 3)`` map poses; ``ValueError`` (INVALID_PATH / INVALID_CONTROLLER) naming
+    what is wrong."""
+    if goal.controller_id not in CONTROLLER_IDS:
+        raise _InvalidController(
+            f"controller_id {goal.controller_id!r} is not one of zendock's ({', '.join(map(repr, CONTROLLER_IDS))})"
+        )
+    if not goal.path.poses:
+        raise ValueError("an empty path")
+    frames = {p.header.frame_id.strip().lstrip("/") for p in goal.path.poses}
+    frames.add(goal.path.header.frame_id.strip().lstrip("/"))
+    if not frames <= set(ACCEPTED_FRAMES):
+        raise ValueError(f"the path is not in the map frame: {sorted(frames)}")
+    poses = np.array(
+        [
+            (
+                p.pose.position.x,
+                p.pose.position.y,
+                yaw_from_quaternion(
+                    p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w
+                ),
+            )
+            for p in goal.path.poses
+        ],
+        dtype=float,
+    )
+    if not np.isfinite(poses).all():
+        raise ValueError("the path has a pose that is not finite")
+    return poses
+
+
+class _InvalidController(ValueError):
+    """A controller_id zendock does not have (Nav2's INVALID_CONTROLLER)."""

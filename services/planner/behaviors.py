@@ -27,6 +27,7 @@ class Outcome(enum.Enum):
     TIMED_OUT = "timed out"
     COLLISION_AHEAD = "collision ahead"
     NO_POSE = "no pose"
+    NO_PROGRESS = "no progress"
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ from services.planner.map_server import MapServer
 from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
 from services.planner.occupancy_map import OccupancyMap
 from services.planner.params import Params, load_initial_map
+from services.planner.path_following import FollowPath
 from services.planner.path_server import PathServer
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.pose_sequences import PoseSequences
@@ -196,6 +197,9 @@ class PlannerService:
             params.behavior_params(),
             publish_cmd=self._publish_cmd,
             navigating=lambda: self._run is not None,
+            follow_path=lambda poses: FollowPath(
+                poses, self._params.follower_params(), self._params.follow_limits()
+            ),
         )
         self._timers = [
             node.create_timer(1.0 / params.controller_rate_hz, self._on_control_tick),
@@ -358,9 +362,7 @@ class PlannerService:
 
     def _on_control_tick(self) -> None:
         if self._behaviors.active:
-            now = self._node.now()
-            pose = self._tracker.current_pose(now, self._params.pose_timeout_s)
-            self._behaviors.tick(pose, self._costmap.grid)
+            self._behaviors.tick(self._snapshot())
         run, handle = self._run, self._handle
         if run is None or handle is None:
             return

@@ -18,6 +18,7 @@ from services.planner.costmap import CostmapParams, inflation_cost
 from services.planner.global_planner import GlobalPlannerParams
 from services.planner.goal_heading import GoalHeadingParams
 from services.planner.occupancy_map import OccupancyMap, load_map
+from services.planner.path_following import FollowLimits
 from services.planner.pure_pursuit import PurePursuitParams
 from services.planner.rasterize import map_from_world
 from services.planner.smoothing import SmoothingParams
@@ -288,6 +289,19 @@ class Params(ServiceParams):
             max_linear_vel_mps=self.max_linear_vel_mps,
             max_angular_vel_radps=self.max_angular_vel_radps,
             angular_accel_radps2=self.max_angular_accel_radps2,
+        )
+
+    def follow_limits(self) -> FollowLimits:
+        """When a path given to follow_path counts as reached, stuck or blocked: navigation's own limits."""
+        return FollowLimits(
+            controller_period_s=1.0 / self.controller_rate_hz,
+            required_movement_m=self.required_movement_m,
+            required_rotation_rad=self.required_rotation_rad,
+            progress_timeout_s=self.progress_timeout_s,
+            blocked_timeout_s=self.blocked_timeout_s,
+            trans_stopped_mps=self.trans_stopped_velocity_mps,
+            rot_stopped_radps=self.rot_stopped_velocity_radps,
+            open_loop_acceleration=self.open_loop_acceleration,
         )
 
     def recovery_backup(self) -> DriveStraight:

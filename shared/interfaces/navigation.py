@@ -1,5 +1,6 @@
 """The navigation stack's interfaces, mirroring nav2_msgs: NavigateToPose, NavigateThroughPoses,
-FollowWaypoints, ComputePathToPose, ComputePathThroughPoses, SmoothPath, ClearEntireCostmap, LoadMap."""
+FollowWaypoints, FollowPath, ComputePathToPose, ComputePathThroughPoses, SmoothPath, ClearEntireCostmap,
+LoadMap."""
 
 from __future__ import annotations
 
@@ -122,6 +123,42 @@ class FollowWaypointsFeedback(Message):
 FOLLOW_WAYPOINTS = ActionType(
     "nav2_msgs/action/FollowWaypoints", FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback
 )
+
+
+class FollowPathErrorCode(enum.IntEnum):
+    NONE = 0
+    UNKNOWN = 100
+    INVALID_CONTROLLER = 101
+    TF_ERROR = 102
+    INVALID_PATH = 103
+    PATIENCE_EXCEEDED = 104
+    FAILED_TO_MAKE_PROGRESS = 105
+    NO_VALID_CONTROL = 106
+    CONTROLLER_TIMED_OUT = 107
+
+
+@message("nav2_msgs/action/FollowPath_Goal")
+class FollowPathGoal(Message):
+    path: Path = field(default_factory=Path)
+    controller_id: str = ""
+    goal_checker_id: str = ""
+    progress_checker_id: str = ""
+
+
+@message("nav2_msgs/action/FollowPath_Result")
+class FollowPathResult(Message):
+    # ROS 2's result also has ``std_msgs/Empty result``: nothing to carry, ROS 2's default is sent.
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/FollowPath_Feedback")
+class FollowPathFeedback(Message):
+    distance_to_goal: float = 0.0
+    speed: float = 0.0
+
+
+FOLLOW_PATH = ActionType("nav2_msgs/action/FollowPath", FollowPathGoal, FollowPathResult, FollowPathFeedback)
 
 
 class ComputePathErrorCode(enum.IntEnum):

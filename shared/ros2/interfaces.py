@@ -28,6 +28,7 @@ FOLLOW_WAYPOINTS = "nav2_msgs/action/FollowWaypoints"
 COMPUTE_PATH_TO_POSE = "nav2_msgs/action/ComputePathToPose"
 COMPUTE_PATH_THROUGH_POSES = "nav2_msgs/action/ComputePathThroughPoses"
 SMOOTH_PATH = "nav2_msgs/action/SmoothPath"
+FOLLOW_PATH = "nav2_msgs/action/FollowPath"
 SPIN = "nav2_msgs/action/Spin"
 BACK_UP = "nav2_msgs/action/BackUp"
 DRIVE_ON_HEADING = "nav2_msgs/action/DriveOnHeading"
@@ -42,6 +43,7 @@ ACTIONS = (
     COMPUTE_PATH_TO_POSE,
     COMPUTE_PATH_THROUGH_POSES,
     SMOOTH_PATH,
+    FOLLOW_PATH,
     SPIN,
     BACK_UP,
     DRIVE_ON_HEADING,

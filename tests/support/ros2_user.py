@@ -32,6 +32,7 @@ from nav2_msgs.action import (
     ComputePathToPose,
     DockRobot,
     DriveOnHeading,
+    FollowPath,
     FollowWaypoints,
     NavigateThroughPoses,
     NavigateToPose,
@@ -596,6 +597,42 @@ class User:
             waypoints=waypoints,
         )
 
+    def follow_path(self) -> None:
+        """BasicNavigator's followPath: a path from getPath, driven by the controller alone; then one from a
+        controller zendock lacks, refused with Nav2's INVALID_CONTROLLER."""
+        target = PoseStamped()
+        target.header.frame_id = "map"
+        target.pose.position.x, target.pose.position.y = 1.0, 4.2
+        target.pose.orientation.w = 1.0
+        planner = ActionClient(self.node, ComputePathToPose, "/compute_path_to_pose")
+        ask = ComputePathToPose.Goal()
+        ask.goal = target
+        planned = self.run_goal(planner, ask, 30.0)
+        planner.destroy()
+        path = planned["result"].path if planned.get("result") is not None else None
+        outcomes: dict[str, Any] = {}
+        for controller_id in ("FollowPath", "MPPI"):
+            client = ActionClient(self.node, FollowPath, "/follow_path")
+            goal = FollowPath.Goal()
+            goal.path, goal.controller_id = path, controller_id
+            out = self.run_goal(client, goal, 60.0) if path is not None else {}
+            client.destroy()
+            result = out.pop("result", None)
+            out.pop("last_feedback", None)
+            if result is not None:
+                out.update(error_code=result.error_code, error_msg=result.error_msg)
+            out["pose_after"] = [round(v, 2) for v in self.robot_pose() or ()]
+            outcomes[controller_id] = out
+        followed, refused = outcomes["FollowPath"], outcomes["MPPI"]
+        report(
+            "follow_path",
+            followed.get("status") == GoalStatus.STATUS_SUCCEEDED
+            and followed.get("feedbacks", 0) > 0
+            and refused.get("error_code") == FollowPath.Result.INVALID_CONTROLLER,
+            poses=len(path.poses) if path is not None else 0,
+            **outcomes,
+        )
+
     def goal_pose(self) -> None:
         """RViz's 2D Goal Pose: a PoseStamped on /goal_pose, and the robot drives there."""
         target = (0.5, 2.6, -math.pi / 2)
@@ -761,6 +798,7 @@ STEPS = (
     "navigate",
     "behaviors",
     "sequences",
+    "follow_path",
     "goal_pose",
     "cancel",
     "dock",

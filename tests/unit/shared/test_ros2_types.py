@@ -46,6 +46,7 @@ from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateRespons
 from shared.interfaces.navigation import (
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_PATH,
     FOLLOW_WAYPOINTS,
     NAVIGATE_THROUGH_POSES,
     NAVIGATE_TO_POSE,
@@ -58,6 +59,9 @@ from shared.interfaces.navigation import (
     ComputePathToPoseFeedback,
     ComputePathToPoseGoal,
     ComputePathToPoseResult,
+    FollowPathFeedback,
+    FollowPathGoal,
+    FollowPathResult,
     FollowWaypointsFeedback,
     FollowWaypointsGoal,
     FollowWaypointsResult,
@@ -277,6 +281,16 @@ ACTION_EXAMPLES: dict[str, Message] = {
     ),
     "nav2_msgs/action/FollowWaypoints_FeedbackMessage": FOLLOW_WAYPOINTS.feedback_message(
         goal_id=GOAL_ID, feedback=FollowWaypointsFeedback(2)
+    ),
+    "nav2_msgs/action/FollowPath_SendGoal_Request": FOLLOW_PATH.send_goal_request(
+        goal_id=GOAL_ID,
+        goal=FollowPathGoal(Path(HEADER, [PoseStamped(HEADER, POSE)] * 2), "FollowPath", "", ""),
+    ),
+    "nav2_msgs/action/FollowPath_GetResult_Response": FOLLOW_PATH.get_result_response(
+        status=6, result=FollowPathResult(106, "an obstacle on the path")
+    ),
+    "nav2_msgs/action/FollowPath_FeedbackMessage": FOLLOW_PATH.feedback_message(
+        goal_id=GOAL_ID, feedback=FollowPathFeedback(1.25, 0.3)
     ),
     "nav2_msgs/action/SmoothPath_SendGoal_Request": SMOOTH_PATH.send_goal_request(
         goal_id=GOAL_ID,
