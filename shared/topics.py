@@ -58,6 +58,8 @@ SPIN = "spin"
 BACKUP = "backup"
 DRIVE_ON_HEADING = "drive_on_heading"
 WAIT = "wait"
+#: Served only to refuse it with a reason (see docs/nav2-api.md).
+ASSISTED_TELEOP = "assisted_teleop"
 
 # Frames (REP 105)
 MAP_FRAME = "map"

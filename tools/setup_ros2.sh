@@ -212,7 +212,7 @@ cmakelists tf2_msgs "msg/TF2Error.msg msg/TFMessage.msg srv/FrameGraph.srv actio
   builtin_interfaces geometry_msgs action_msgs | write_if_changed "$T/CMakeLists.txt"
 
 # nav2_msgs: only what zendock serves (shared/ros2/definitions/nav2_msgs: the actions NavigateToPose,
-# DockRobot, UndockRobot, NavigateThroughPoses, FollowWaypoints, ComputePathToPose, ComputePathThroughPoses, SmoothPath, FollowPath, Spin, BackUp, DriveOnHeading, Wait --
+# DockRobot, UndockRobot, NavigateThroughPoses, FollowWaypoints, ComputePathToPose, ComputePathThroughPoses, SmoothPath, FollowPath, Spin, BackUp, DriveOnHeading, Wait, AssistedTeleop --
 # in Jazzy the docking actions are nav2_msgs', not opennav_docking_msgs' -- and
 # the costmap and map services with the messages they carry).
 N=$SRC/nav2_msgs

@@ -24,10 +24,13 @@ from shared.action import ActionServer, ServerGoalHandle
 from shared.geometry import yaw_from_quaternion
 from shared.interface_types import ActionType
 from shared.interfaces.behaviors import (
+    ASSISTED_TELEOP,
     BACK_UP,
     DRIVE_ON_HEADING,
     SPIN,
     WAIT,
+    AssistedTeleopErrorCode,
+    AssistedTeleopGoal,
     BackUpErrorCode,
     BackUpFeedback,
     BackUpGoal,
@@ -158,6 +161,7 @@ class BehaviorServer:
             self._serve(DRIVE_ON_HEADING, topics.DRIVE_ON_HEADING),
             self._serve(WAIT, topics.WAIT),
             self._serve(FOLLOW_PATH, topics.FOLLOW_PATH),
+            self._serve(ASSISTED_TELEOP, topics.ASSISTED_TELEOP),
         ]
 
     def _serve(self, action: ActionType[Any, Any, Any], name: str) -> ActionServer[Any, Any, Any]:
@@ -199,11 +203,13 @@ class BehaviorServer:
             codes = {BackUpGoal: _BACK_UP_CODES, FollowPathGoal: _FOLLOW_CODES}.get(
                 type(handle.goal), _DRIVE_CODES
             )
-            code = (
-                FollowPathErrorCode.INVALID_CONTROLLER
-                if isinstance(exc, _InvalidController)
-                else codes.invalid_input
-            )
+            code: int
+            if isinstance(exc, _InvalidController):
+                code = FollowPathErrorCode.INVALID_CONTROLLER
+            elif isinstance(exc, _NotServed):
+                code = AssistedTeleopErrorCode.UNKNOWN
+            else:
+                code = codes.invalid_input
             self._log.info("%s aborted: %s", action.type_name, exc)
             handle.abort(_result(action, 0.0, code, str(exc)))
             return
@@ -227,6 +233,8 @@ class BehaviorServer:
                 )
             drive = DriveStraight(abs(goal.target.x), goal.speed, _seconds(goal.time_allowance), p)
             return drive, _DRIVE_CODES, lambda step: DriveOnHeadingFeedback(distance_traveled=step.progress)
+        if isinstance(goal, AssistedTeleopGoal):
+            raise _NotServed(ASSISTED_TELEOP_REFUSAL)
         if isinstance(goal, FollowPathGoal):
             follow = self._follow_path(_path_poses(goal))
             return (
@@ -344,3 +352,15 @@ def _path_poses(goal: FollowPathGoal) -> np.ndarray:
 
 class _InvalidController(ValueError):
     """A controller_id zendock does not have (Nav2's INVALID_CONTROLLER)."""
+
+
+class _NotServed(ValueError):
+    """A behaviour zendock answers only to refuse, with the reason as ``error_msg``."""
+
+
+#: Why ``assisted_teleop`` is refused: it filters a second velocity topic (``cmd_vel_teleop``) that
+#: zendock does not carry; its collision-checked motions are the behaviours above.
+ASSISTED_TELEOP_REFUSAL = (
+    "assisted_teleop is not served by zendock: publish Twist on cmd_vel to drive, or use spin, backup "
+    "or drive_on_heading for a motion checked against the costmap"
+)

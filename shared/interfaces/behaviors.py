@@ -1,4 +1,5 @@
-"""The planner's behaviours, mirroring nav2_msgs' Spin, BackUp, DriveOnHeading and Wait actions.
+"""The planner's behaviours, mirroring nav2_msgs' Spin, BackUp, DriveOnHeading, Wait and AssistedTeleop
+actions.
 
 Nav2's behavior_server runs these short motions (and a robot's recoveries). zendock's planner serves them
 under the same names and Jazzy's fields, with Nav2's error codes (700s spin, 710s back-up, 720s drive on
@@ -123,3 +124,32 @@ DRIVE_ON_HEADING = ActionType(
     "nav2_msgs/action/DriveOnHeading", DriveOnHeadingGoal, DriveOnHeadingResult, DriveOnHeadingFeedback
 )
 WAIT = ActionType("nav2_msgs/action/Wait", WaitGoal, WaitResult, WaitFeedback)
+
+
+class AssistedTeleopErrorCode(enum.IntEnum):
+    NONE = 0
+    UNKNOWN = 730
+    TIMEOUT = 731
+    TF_ERROR = 732
+
+
+@message("nav2_msgs/action/AssistedTeleop_Goal")
+class AssistedTeleopGoal(Message):
+    time_allowance: Duration = field(default_factory=Duration)
+
+
+@message("nav2_msgs/action/AssistedTeleop_Result")
+class AssistedTeleopResult(Message):
+    total_elapsed_time: Duration = field(default_factory=Duration)
+    error_code: UInt16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/AssistedTeleop_Feedback")
+class AssistedTeleopFeedback(Message):
+    current_teleop_duration: Duration = field(default_factory=Duration)
+
+
+ASSISTED_TELEOP = ActionType(
+    "nav2_msgs/action/AssistedTeleop", AssistedTeleopGoal, AssistedTeleopResult, AssistedTeleopFeedback
+)

@@ -16,7 +16,7 @@ from typing import Any
 from shared import topics
 from shared.action import action_key
 from shared.interface_types import ActionType, GoalStatusArray, ServiceType
-from shared.interfaces.behaviors import BACK_UP, DRIVE_ON_HEADING, SPIN, WAIT
+from shared.interfaces.behaviors import ASSISTED_TELEOP, BACK_UP, DRIVE_ON_HEADING, SPIN, WAIT
 from shared.interfaces.costmap import (
     GET_COSTMAP,
     GLOBAL_COSTMAP_CLEAR,
@@ -124,6 +124,7 @@ ACTIONS: tuple[BridgedAction, ...] = (
     BridgedAction(topics.BACKUP, interfaces.BACK_UP, "planner", BACK_UP),
     BridgedAction(topics.DRIVE_ON_HEADING, interfaces.DRIVE_ON_HEADING, "planner", DRIVE_ON_HEADING),
     BridgedAction(topics.WAIT, interfaces.WAIT, "planner", WAIT),
+    BridgedAction(topics.ASSISTED_TELEOP, interfaces.ASSISTED_TELEOP, "planner", ASSISTED_TELEOP),
 )
 
 

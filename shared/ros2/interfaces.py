@@ -33,6 +33,7 @@ SPIN = "nav2_msgs/action/Spin"
 BACK_UP = "nav2_msgs/action/BackUp"
 DRIVE_ON_HEADING = "nav2_msgs/action/DriveOnHeading"
 WAIT = "nav2_msgs/action/Wait"
+ASSISTED_TELEOP = "nav2_msgs/action/AssistedTeleop"
 CANCEL_GOAL = "action_msgs/srv/CancelGoal"
 ACTIONS = (
     NAVIGATE_TO_POSE,
@@ -48,6 +49,7 @@ ACTIONS = (
     BACK_UP,
     DRIVE_ON_HEADING,
     WAIT,
+    ASSISTED_TELEOP,
 )
 GET_COSTMAP = "nav2_msgs/srv/GetCostmap"
 CLEAR_ENTIRE_COSTMAP = "nav2_msgs/srv/ClearEntireCostmap"

@@ -27,6 +27,7 @@ from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from lifecycle_msgs.srv import GetState
 from nav2_msgs.action import (
+    AssistedTeleop,
     BackUp,
     ComputePathThroughPoses,
     ComputePathToPose,
@@ -500,9 +501,10 @@ class User:
         client.destroy()
 
     def behaviors(self) -> None:
-        """BasicNavigator's spin, driveOnHeading, backup, and the wait behaviour, from where navigate left
-        the robot ((0.3, 4.0) facing -x, the room's top wall at y = 5): turn to face the wall, drive at it
-        (zendock stops short of it and says why), back up, wait."""
+        """BasicNavigator's spin, driveOnHeading, backup, the wait behaviour and assistedTeleop, from where
+        navigate left the robot ((0.3, 4.0) facing -x, the room's top wall at y = 5): turn to face the wall,
+        drive at it (zendock stops short of it and says why), back up, wait; assisted teleop is refused
+        with a reason."""
         outcomes: dict[str, Any] = {}
 
         def run(name: str, action: Any, fill: Callable[[Any], None], timeout_s: float) -> dict[str, Any]:
@@ -541,6 +543,7 @@ class User:
         at_wall = self.robot_pose()
         backed = run("backup", BackUp, back, 30.0)
         waited = run("wait", Wait, wait, 20.0)
+        teleop = run("assisted_teleop", AssistedTeleop, lambda goal: None, 20.0)
         succeeded = GoalStatus.STATUS_SUCCEEDED
         report(
             "behaviors",
@@ -549,7 +552,10 @@ class User:
             and driven.get("error_code") == DriveOnHeading.Result.COLLISION_AHEAD
             and backed.get("status") == succeeded
             and waited.get("status") == succeeded
-            and waited.get("feedbacks", 0) > 0,
+            and waited.get("feedbacks", 0) > 0
+            and teleop.get("status") == GoalStatus.STATUS_ABORTED
+            and teleop.get("error_code") == AssistedTeleop.Result.UNKNOWN
+            and "not served" in teleop.get("error_msg", ""),
             **outcomes,
             poses=[[round(v, 3) for v in p] if p else None for p in (before, after_spin, at_wall)],
         )

@@ -6,7 +6,7 @@ from shared import topics
 from shared.contracts.model import Action, Contract, Flag, Request, Topic
 from shared.contracts.services.common import USE_SIM_TIME, lifecycle_requests
 from shared.endpoints import RELIABLE, SENSOR_DATA, QoS
-from shared.interfaces.behaviors import BACK_UP, DRIVE_ON_HEADING, SPIN, WAIT
+from shared.interfaces.behaviors import ASSISTED_TELEOP, BACK_UP, DRIVE_ON_HEADING, SPIN, WAIT
 from shared.interfaces.costmap import (
     GET_COSTMAP,
     GLOBAL_COSTMAP_CLEAR,
@@ -128,6 +128,11 @@ CONTRACT = Contract(
             about="drive target.x (m) straight at speed (same sign); stops short of an obstacle",
         ),
         Action(topics.WAIT, WAIT, about="let time pass; sends no command"),
+        Action(
+            topics.ASSISTED_TELEOP,
+            ASSISTED_TELEOP,
+            about="not served: every goal ends at once, ABORTED with the reason",
+        ),
     ),
     flags=(
         USE_SIM_TIME,

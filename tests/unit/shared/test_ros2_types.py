@@ -18,10 +18,13 @@ from shared.interface_types import (
     GoalStatusArray,
 )
 from shared.interfaces.behaviors import (
+    ASSISTED_TELEOP,
     BACK_UP,
     DRIVE_ON_HEADING,
     SPIN,
     WAIT,
+    AssistedTeleopFeedback,
+    AssistedTeleopResult,
     BackUpFeedback,
     BackUpGoal,
     DriveOnHeadingFeedback,
@@ -302,6 +305,12 @@ ACTION_EXAMPLES: dict[str, Message] = {
     ),
     "nav2_msgs/action/SmoothPath_FeedbackMessage": SMOOTH_PATH.feedback_message(
         goal_id=GOAL_ID, feedback=SmoothPathFeedback()
+    ),
+    "nav2_msgs/action/AssistedTeleop_GetResult_Response": ASSISTED_TELEOP.get_result_response(
+        status=6, result=AssistedTeleopResult(Duration(), 730, "not served")
+    ),
+    "nav2_msgs/action/AssistedTeleop_FeedbackMessage": ASSISTED_TELEOP.feedback_message(
+        goal_id=GOAL_ID, feedback=AssistedTeleopFeedback(Duration(2, 0))
     ),
     "nav2_msgs/action/Spin_SendGoal_Request": SPIN.send_goal_request(
         goal_id=GOAL_ID, goal=SpinGoal(1.57, Duration(10, 0))
