@@ -71,7 +71,7 @@ ROS2_VENV := .venv-ros2
 .PHONY: ros2
 ros2: $(ROS2_VENV)/.ros2-ready
 
-$(ROS2_VENV)/.ros2-ready: tools/setup_ros2.sh pyproject.toml $(wildcard shared/ros2/definitions/nav2_msgs/action/*.action)
+$(ROS2_VENV)/.ros2-ready: tools/setup_ros2.sh pyproject.toml $(wildcard shared/ros2/definitions/*/*/*.*)
 	bash tools/setup_ros2.sh $(ROS2_VENV)
 	touch $@
 

@@ -102,6 +102,7 @@ class _ArraySpec:
 FloatAny = Annotated[float, _AllowNonFinite()]
 UInt8 = Annotated[int, Range(0, 255)]
 Int8 = Annotated[int, Range(-128, 127)]
+Int16 = Annotated[int, Range(-(2**15), 2**15 - 1)]
 UInt16 = Annotated[int, Range(0, 65535)]
 Int32 = Annotated[int, Range(-(2**31), 2**31 - 1)]
 UInt32 = Annotated[int, Range(0, 2**32 - 1)]

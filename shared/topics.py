@@ -46,6 +46,8 @@ UNDOCK_ROBOT = "undock_robot"
 #: Nav2's bt_navigator and waypoint_follower: navigate_to_pose goals one after another.
 NAVIGATE_THROUGH_POSES = "navigate_through_poses"
 FOLLOW_WAYPOINTS = "follow_waypoints"
+#: Served only to refuse it: zendock's worlds have no GPS.
+FOLLOW_GPS_WAYPOINTS = "follow_gps_waypoints"
 #: Nav2's controller_server: drive along a given path.
 FOLLOW_PATH = "follow_path"
 #: Nav2's planner_server: a path, without driving it.

@@ -211,8 +211,18 @@ pkg_xml tf2_msgs 0.36.14 builtin_interfaces geometry_msgs action_msgs | write_if
 cmakelists tf2_msgs "msg/TF2Error.msg msg/TFMessage.msg srv/FrameGraph.srv action/LookupTransform.action" \
   builtin_interfaces geometry_msgs action_msgs | write_if_changed "$T/CMakeLists.txt"
 
+# geographic_msgs (ros-geographic-info, ros2): not on PyPI; only GeoPoint and GeoPose, which Nav2's
+# FollowGPSWaypoints goal carries (shared/ros2/definitions/geographic_msgs).
+G=$SRC/geographic_msgs
+mkdir -p "$G/msg"
+for f in "$DEFS"/geographic_msgs/msg/*.msg; do
+  write_if_changed "$G/msg/$(basename "$f")" < "$f"
+done
+pkg_xml geographic_msgs 1.0.5 geometry_msgs | write_if_changed "$G/package.xml"
+cmakelists geographic_msgs "msg/GeoPoint.msg msg/GeoPose.msg" geometry_msgs | write_if_changed "$G/CMakeLists.txt"
+
 # nav2_msgs: only what zendock serves (shared/ros2/definitions/nav2_msgs: the actions NavigateToPose,
-# DockRobot, UndockRobot, NavigateThroughPoses, FollowWaypoints, ComputePathToPose, ComputePathThroughPoses, SmoothPath, FollowPath, Spin, BackUp, DriveOnHeading, Wait, AssistedTeleop --
+# DockRobot, UndockRobot, NavigateThroughPoses, FollowWaypoints, ComputePathToPose, ComputePathThroughPoses, SmoothPath, FollowPath, Spin, BackUp, DriveOnHeading, Wait, AssistedTeleop, FollowGPSWaypoints --
 # in Jazzy the docking actions are nav2_msgs', not opennav_docking_msgs' -- and
 # the costmap and map services with the messages they carry).
 N=$SRC/nav2_msgs
@@ -229,17 +239,17 @@ for kind in msg srv action; do
     [ -f "$DEFS/nav2_msgs/$kind/$(basename "$f")" ] || rm -f "$f"
   done
 done
-pkg_xml nav2_msgs 1.3.13 builtin_interfaces geometry_msgs std_msgs nav_msgs action_msgs \
+pkg_xml nav2_msgs 1.3.13 builtin_interfaces geometry_msgs std_msgs nav_msgs action_msgs geographic_msgs \
   | write_if_changed "$N/package.xml"
-cmakelists nav2_msgs "$ifaces" builtin_interfaces geometry_msgs std_msgs nav_msgs action_msgs \
+cmakelists nav2_msgs "$ifaces" builtin_interfaces geometry_msgs std_msgs nav_msgs action_msgs geographic_msgs \
   | write_if_changed "$N/CMakeLists.txt"
 step_done sources checked
 
 # ---- 6. colcon build into the venv ------------------------------------------------------------------
 step_start
 want=$( (cd "$SRC" && find . -type f | LC_ALL=C sort | xargs sha256sum; cat "$STAMPS/runtime" "$STAMPS/buildtools") | digest)
-if stamp_ok interfaces "$want" && "$VPY" -c 'import nav2_msgs.action, nav2_msgs.srv, tf2_msgs.msg' 2>/dev/null; then
-  step_done 'nav2_msgs, tf2_msgs' cached
+if stamp_ok interfaces "$want" && "$VPY" -c 'import nav2_msgs.action, nav2_msgs.srv, tf2_msgs.msg, geographic_msgs.msg' 2>/dev/null; then
+  step_done 'nav2_msgs, tf2_msgs, geographic_msgs' cached
 else
   (
     export PATH="$VENV/bin:$PATH"
@@ -254,10 +264,10 @@ else
         "-DPython3_EXECUTABLE=$VPY" "-DPYTHON_EXECUTABLE=$VPY" \
       > "$BUILD/colcon.out" 2>&1 || { tail -60 "$BUILD/colcon.out" >&2; exit 1; }
   )
-  "$VPY" -c 'import nav2_msgs.action, nav2_msgs.srv, tf2_msgs.msg' \
+  "$VPY" -c 'import nav2_msgs.action, nav2_msgs.srv, tf2_msgs.msg, geographic_msgs.msg' \
     || { echo "setup_ros2: the built packages do not import (see $BUILD/colcon.out)" >&2; exit 1; }
   stamp interfaces "$want"
-  step_done 'nav2_msgs, tf2_msgs' built
+  step_done 'nav2_msgs, tf2_msgs, geographic_msgs' built
 fi
 
 printf 'setup_ros2: ready: %s (%.1f s); run with ROS_DOMAIN_ID=N ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST %s/bin/python\n' \

@@ -21,6 +21,7 @@ from typing import Any
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.interfaces.navigation import (
+    FOLLOW_GPS_WAYPOINTS,
     FOLLOW_WAYPOINTS,
     NAVIGATE_THROUGH_POSES,
     FollowWaypointsErrorCode,
@@ -79,6 +80,16 @@ class PoseSequences:
                 (NAVIGATE_THROUGH_POSES, topics.NAVIGATE_THROUGH_POSES),
             )
         ]
+        self._servers.append(
+            ActionServer(
+                node,
+                FOLLOW_GPS_WAYPOINTS,
+                topics.FOLLOW_GPS_WAYPOINTS,
+                on_goal=lambda goal: None,
+                on_accepted=_refuse_gps,
+                on_cancel=lambda handle: None,  # ended within the call that accepts it
+            )
+        )
         self._timer = node.create_timer(0.2, self._publish_feedback, wall=True)
 
     def _on_accepted(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
@@ -223,3 +234,21 @@ def _straight_line_m(poses: list[PoseStamped]) -> float:
     """The length of the straight lines joining ``poses``: the rest of the way after the current leg."""
     points = [(p.pose.position.x, p.pose.position.y) for p in poses]
     return sum(math.dist(a, b) for a, b in zip(points, points[1:], strict=False))
+
+
+#: Why ``follow_gps_waypoints`` is refused: no world of zendock's is placed on the globe.
+GPS_REFUSAL = (
+    "follow_gps_waypoints is not served: zendock's worlds have no GPS and no map-to-globe datum; "
+    "give the waypoints as map poses to follow_waypoints"
+)
+
+
+def _refuse_gps(handle: ServerGoalHandle[Any, Any, Any]) -> None:
+    """Accept and end at once with the reason (a rejection would reach a ROS 2 client without one)."""
+    if handle.active:
+        handle.execute()
+        handle.abort(
+            FOLLOW_GPS_WAYPOINTS.result(
+                error_code=int(FollowWaypointsErrorCode.UNKNOWN), error_msg=GPS_REFUSAL
+            )
+        )

@@ -9,8 +9,8 @@ from dataclasses import field
 from typing import Annotated, ClassVar
 
 from shared.interface_types import ActionType, Empty, ServiceType
-from shared.messages import Duration, OccupancyGrid, Path, PoseStamped
-from shared.schema import Message, Range, UInt16, UInt32, message
+from shared.messages import Duration, OccupancyGrid, Path, PoseStamped, Quaternion
+from shared.schema import FloatAny, Int16, Message, Range, UInt16, UInt32, message
 
 
 @message("nav2_msgs/action/NavigateToPose_Goal")
@@ -122,6 +122,47 @@ class FollowWaypointsFeedback(Message):
 
 FOLLOW_WAYPOINTS = ActionType(
     "nav2_msgs/action/FollowWaypoints", FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback
+)
+
+
+@message("geographic_msgs/msg/GeoPoint")
+class GeoPoint(Message):
+    latitude: float = 0.0
+    longitude: float = 0.0
+    #: NaN when unspecified, as geographic_msgs has it.
+    altitude: FloatAny = 0.0
+
+
+@message("geographic_msgs/msg/GeoPose")
+class GeoPose(Message):
+    position: GeoPoint = field(default_factory=GeoPoint)
+    orientation: Quaternion = field(default_factory=Quaternion)
+
+
+@message("nav2_msgs/action/FollowGPSWaypoints_Goal")
+class FollowGPSWaypointsGoal(Message):
+    number_of_loops: UInt32 = 0
+    goal_index: UInt32 = 0
+    gps_poses: list[GeoPose] = field(default_factory=list)
+
+
+@message("nav2_msgs/action/FollowGPSWaypoints_Result")
+class FollowGPSWaypointsResult(Message):
+    missed_waypoints: list[MissedWaypoint] = field(default_factory=list)
+    error_code: Int16 = 0
+    error_msg: str = ""
+
+
+@message("nav2_msgs/action/FollowGPSWaypoints_Feedback")
+class FollowGPSWaypointsFeedback(Message):
+    current_waypoint: UInt32 = 0
+
+
+FOLLOW_GPS_WAYPOINTS = ActionType(
+    "nav2_msgs/action/FollowGPSWaypoints",
+    FollowGPSWaypointsGoal,
+    FollowGPSWaypointsResult,
+    FollowGPSWaypointsFeedback,
 )
 
 

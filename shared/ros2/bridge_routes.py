@@ -31,6 +31,7 @@ from shared.interfaces.navigation import (
     CLEAR_ENTIRE_COSTMAP,
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_GPS_WAYPOINTS,
     FOLLOW_PATH,
     FOLLOW_WAYPOINTS,
     LOAD_MAP,
@@ -109,6 +110,9 @@ ACTIONS: tuple[BridgedAction, ...] = (
         topics.NAVIGATE_THROUGH_POSES, interfaces.NAVIGATE_THROUGH_POSES, "planner", NAVIGATE_THROUGH_POSES
     ),
     BridgedAction(topics.FOLLOW_WAYPOINTS, interfaces.FOLLOW_WAYPOINTS, "planner", FOLLOW_WAYPOINTS),
+    BridgedAction(
+        topics.FOLLOW_GPS_WAYPOINTS, interfaces.FOLLOW_GPS_WAYPOINTS, "planner", FOLLOW_GPS_WAYPOINTS
+    ),
     BridgedAction(
         topics.COMPUTE_PATH_TO_POSE, interfaces.COMPUTE_PATH_TO_POSE, "planner", COMPUTE_PATH_TO_POSE
     ),

@@ -25,6 +25,7 @@ DOCK_ROBOT = "nav2_msgs/action/DockRobot"
 UNDOCK_ROBOT = "nav2_msgs/action/UndockRobot"
 NAVIGATE_THROUGH_POSES = "nav2_msgs/action/NavigateThroughPoses"
 FOLLOW_WAYPOINTS = "nav2_msgs/action/FollowWaypoints"
+FOLLOW_GPS_WAYPOINTS = "nav2_msgs/action/FollowGPSWaypoints"
 COMPUTE_PATH_TO_POSE = "nav2_msgs/action/ComputePathToPose"
 COMPUTE_PATH_THROUGH_POSES = "nav2_msgs/action/ComputePathThroughPoses"
 SMOOTH_PATH = "nav2_msgs/action/SmoothPath"
@@ -41,6 +42,7 @@ ACTIONS = (
     UNDOCK_ROBOT,
     NAVIGATE_THROUGH_POSES,
     FOLLOW_WAYPOINTS,
+    FOLLOW_GPS_WAYPOINTS,
     COMPUTE_PATH_TO_POSE,
     COMPUTE_PATH_THROUGH_POSES,
     SMOOTH_PATH,
@@ -117,6 +119,7 @@ def definitions() -> TypeDefs:
     """Every type above (and the services' description types), ready for a rosbags type store."""
     defs: TypeDefs = {}
     defs.update(service_definitions(CANCEL_GOAL, _CANCEL_REQUEST, _CANCEL_RESPONSE))
+    defs.update(package_messages("geographic_msgs"))
     defs.update(package_messages("nav2_msgs"))
     defs.update(package_services("nav2_msgs"))
     defs.update(service_definitions(GET_STATE, "", _GET_STATE_RESPONSE))

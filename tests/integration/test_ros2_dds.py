@@ -146,6 +146,7 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     assert math.dist(sequences["through"]["pose_after"][:2], (0.3, 4.0)) < 0.3, sequences
     assert math.dist(sequences["waypoints"]["pose_after"][:2], (0.3, 4.0)) < 0.3, sequences
     assert sequences["waypoints"]["missed"][0][1] == 9001, sequences  # INVALID_GOAL: the box
+    assert sequences["gps"]["seconds"] < 5.0, sequences  # refused within seconds
     followed = check("follow_path")
     assert math.dist(followed["FollowPath"]["pose_after"][:2], (1.0, 4.2)) < 0.3, followed
     assert "MPPI" in followed["MPPI"]["error_msg"], followed

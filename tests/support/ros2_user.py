@@ -24,6 +24,7 @@ from typing import Any
 import rclpy
 from action_msgs.msg import GoalStatus
 from builtin_interfaces.msg import Duration
+from geographic_msgs.msg import GeoPose
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from lifecycle_msgs.srv import GetState
 from nav2_msgs.action import (
@@ -33,6 +34,7 @@ from nav2_msgs.action import (
     ComputePathToPose,
     DockRobot,
     DriveOnHeading,
+    FollowGPSWaypoints,
     FollowPath,
     FollowWaypoints,
     NavigateThroughPoses,
@@ -562,7 +564,8 @@ class User:
 
     def sequences(self) -> None:
         """BasicNavigator's goThroughPoses, then followWaypoints with a waypoint inside the box: the others
-        are reached, that one is in missed_waypoints with the reason's code."""
+        are reached, that one is in missed_waypoints with the reason's code; followGpsWaypoints is refused
+        at once with a reason."""
 
         def stamped(x: float, y: float) -> PoseStamped:
             pose = PoseStamped()
@@ -592,15 +595,29 @@ class User:
         waypoints = run(
             FollowWaypoints, "follow_waypoints", [stamped(1.0, 4.2), stamped(-2.0, 3.8), stamped(0.3, 4.0)]
         )
+        gps_client = ActionClient(self.node, FollowGPSWaypoints, "/follow_gps_waypoints")
+        gps_goal = FollowGPSWaypoints.Goal()
+        gps_goal.gps_poses = [GeoPose()]
+        asked = time.monotonic()
+        gps = self.run_goal(gps_client, gps_goal, 15.0)
+        gps_client.destroy()
+        gps_result = gps.pop("result", None)
+        gps.pop("last_feedback", None)
+        gps["seconds"] = round(time.monotonic() - asked, 2)
+        if gps_result is not None:
+            gps.update(error_code=gps_result.error_code, error_msg=gps_result.error_msg)
         succeeded = GoalStatus.STATUS_SUCCEEDED
         report(
             "sequences",
             through.get("status") == succeeded
             and through.get("feedbacks", 0) > 0
             and waypoints.get("status") == succeeded
-            and [m[0] for m in waypoints.get("missed", [])] == [1],
+            and [m[0] for m in waypoints.get("missed", [])] == [1]
+            and gps.get("status") == GoalStatus.STATUS_ABORTED
+            and "no GPS" in gps.get("error_msg", ""),
             through=through,
             waypoints=waypoints,
+            gps=gps,
         )
 
     def follow_path(self) -> None:

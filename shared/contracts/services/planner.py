@@ -20,6 +20,7 @@ from shared.interfaces.navigation import (
     CLEAR_ENTIRE_COSTMAP,
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_GPS_WAYPOINTS,
     FOLLOW_PATH,
     FOLLOW_WAYPOINTS,
     LOAD_MAP,
@@ -99,6 +100,11 @@ CONTRACT = Contract(
             topics.FOLLOW_WAYPOINTS,
             FOLLOW_WAYPOINTS,
             about="navigate_to_pose to each waypoint in turn; one it cannot reach is in missed_waypoints",
+        ),
+        Action(
+            topics.FOLLOW_GPS_WAYPOINTS,
+            FOLLOW_GPS_WAYPOINTS,
+            about="not served (no GPS in zendock's worlds): every goal ends at once, ABORTED with the reason",
         ),
         Action(
             topics.COMPUTE_PATH_TO_POSE,

@@ -49,6 +49,7 @@ from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateRespons
 from shared.interfaces.navigation import (
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
+    FOLLOW_GPS_WAYPOINTS,
     FOLLOW_PATH,
     FOLLOW_WAYPOINTS,
     NAVIGATE_THROUGH_POSES,
@@ -62,12 +63,17 @@ from shared.interfaces.navigation import (
     ComputePathToPoseFeedback,
     ComputePathToPoseGoal,
     ComputePathToPoseResult,
+    FollowGPSWaypointsFeedback,
+    FollowGPSWaypointsGoal,
+    FollowGPSWaypointsResult,
     FollowPathFeedback,
     FollowPathGoal,
     FollowPathResult,
     FollowWaypointsFeedback,
     FollowWaypointsGoal,
     FollowWaypointsResult,
+    GeoPoint,
+    GeoPose,
     LoadMapRequest,
     LoadMapResponse,
     MissedWaypoint,
@@ -294,6 +300,18 @@ ACTION_EXAMPLES: dict[str, Message] = {
     ),
     "nav2_msgs/action/FollowPath_FeedbackMessage": FOLLOW_PATH.feedback_message(
         goal_id=GOAL_ID, feedback=FollowPathFeedback(1.25, 0.3)
+    ),
+    "nav2_msgs/action/FollowGPSWaypoints_SendGoal_Request": FOLLOW_GPS_WAYPOINTS.send_goal_request(
+        goal_id=GOAL_ID,
+        goal=FollowGPSWaypointsGoal(
+            0, 0, [GeoPose(GeoPoint(48.1, 11.5, math.nan), Quaternion(0.0, 0.0, 0.0, 1.0))]
+        ),
+    ),
+    "nav2_msgs/action/FollowGPSWaypoints_GetResult_Response": FOLLOW_GPS_WAYPOINTS.get_result_response(
+        status=6, result=FollowGPSWaypointsResult([], 600, "no GPS")
+    ),
+    "nav2_msgs/action/FollowGPSWaypoints_FeedbackMessage": FOLLOW_GPS_WAYPOINTS.feedback_message(
+        goal_id=GOAL_ID, feedback=FollowGPSWaypointsFeedback(0)
     ),
     "nav2_msgs/action/SmoothPath_SendGoal_Request": SMOOTH_PATH.send_goal_request(
         goal_id=GOAL_ID,
