@@ -153,6 +153,7 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("goal_pose")
     check("cancel")
     check("dock_robot")
+    check("undock_robot")
     check("bad_input")
     check("initial_pose")
     refusals = "\n".join(launcher.logs("ros2_dds"))

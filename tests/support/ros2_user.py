@@ -41,6 +41,7 @@ from nav2_msgs.action import (
     NavigateToPose,
     SmoothPath,
     Spin,
+    UndockRobot,
     Wait,
 )
 from nav2_msgs.srv import ClearEntireCostmap, GetCostmap
@@ -723,6 +724,26 @@ class User:
         )
         client.destroy()
 
+    def undock(self) -> None:
+        """BasicNavigator's undockRobot from the dock just reached: SUCCEEDED, and the battery stops charging."""
+        client = ActionClient(self.node, UndockRobot, "/undock_robot")
+        out = self.run_goal(client, UndockRobot.Goal(dock_type=""), 60.0)
+        client.destroy()
+        result = out.pop("result", None)
+        out.pop("last_feedback", None)
+        battery = self.collect(BatteryState, "/battery_status", 2, 10.0)
+        report(
+            "undock_robot",
+            out.get("status") == GoalStatus.STATUS_SUCCEEDED
+            and bool(result and result.success)
+            and bool(battery)
+            and battery[-1].power_supply_status != CHARGING,
+            **out,
+            success=bool(result.success) if result is not None else None,
+            error_code=result.error_code if result is not None else None,
+            power_supply_status=battery[-1].power_supply_status if battery else None,
+        )
+
     def bad_input(self) -> None:
         """What zendock cannot take is refused (a NaN velocity, a goal in the odom frame, a NaN goal), and the
         face goes on: still in the graph, still forwarding."""
@@ -825,6 +846,7 @@ STEPS = (
     "goal_pose",
     "cancel",
     "dock",
+    "undock",
     "bad_input",
     "initial_pose",
     "node_leaves",
