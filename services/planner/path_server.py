@@ -97,24 +97,19 @@ class PathServer:
         self._servers: list[ActionServer[Any, Any, Any]] = [
             ActionServer(
                 node,
-                COMPUTE_PATH_TO_POSE,
-                topics.COMPUTE_PATH_TO_POSE,
+                action,
+                name,
                 on_goal=lambda goal: None,
-                on_accepted=lambda handle: self._on_accepted(handle, through=False),
+                on_accepted=self._on_accepted,
                 on_cancel=self._on_cancel,
-                preempt_result=lambda: COMPUTE_PATH_TO_POSE.result(error_msg="preempted by a newer request"),
-            ),
-            ActionServer(
-                node,
-                COMPUTE_PATH_THROUGH_POSES,
-                topics.COMPUTE_PATH_THROUGH_POSES,
-                on_goal=lambda goal: None,
-                on_accepted=lambda handle: self._on_accepted(handle, through=True),
-                on_cancel=self._on_cancel,
-                preempt_result=lambda: COMPUTE_PATH_THROUGH_POSES.result(
-                    error_msg="preempted by a newer request"
-                ),
-            ),
+                preempt_result=_preempted(action),
+            )
+            for action, name in (
+                (COMPUTE_PATH_TO_POSE, topics.COMPUTE_PATH_TO_POSE),
+                (COMPUTE_PATH_THROUGH_POSES, topics.COMPUTE_PATH_THROUGH_POSES),
+            )
+        ]
+        self._servers.append(
             ActionServer(
                 node,
                 SMOOTH_PATH,
@@ -122,8 +117,8 @@ class PathServer:
                 on_goal=lambda goal: None,
                 on_accepted=self._on_smooth,
                 on_cancel=lambda handle: None,  # answered within the call that accepts it
-            ),
-        ]
+            )
+        )
         self._smoothing = params.smoothing
         self._footprint = footprint_m
 
@@ -187,9 +182,10 @@ class PathServer:
             SMOOTH_PATH.result(path=path, smoothing_duration=Duration.from_sec(elapsed), was_completed=True)
         )
 
-    def _on_accepted(self, handle: ServerGoalHandle[Any, Any, Any], *, through: bool) -> None:
+    def _on_accepted(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
         if not handle.active:
             return
+        through = isinstance(handle.goal, ComputePathThroughPosesGoal)
         handle.execute()
         goal: ComputePathToPoseGoal | ComputePathThroughPosesGoal = handle.goal
         try:
@@ -302,3 +298,7 @@ def _pose(stamped: Any) -> Pose2D:
         return goal_pose(stamped)
     except ValueError as exc:
         raise _Refusal(ComputePathErrorCode.UNKNOWN, str(exc)) from None
+
+
+def _preempted(action: Any) -> Callable[[], Any]:
+    return lambda: action.result(error_msg="preempted by a newer request")

@@ -82,6 +82,15 @@ def report(step: str, ok: bool, **details: Any) -> None:
     print(json.dumps({"step": step, "ok": ok, **details}), flush=True)
 
 
+def _map_pose(x: float, y: float) -> PoseStamped:
+    """A pose in ``map`` at (x, y), facing +x."""
+    pose = PoseStamped()
+    pose.header.frame_id = "map"
+    pose.pose.position.x, pose.pose.position.y = x, y
+    pose.pose.orientation.w = 1.0
+    return pose
+
+
 class User:
     def __init__(self, node: Node) -> None:
         self.node = node
@@ -415,13 +424,6 @@ class User:
         goal, smoothed, one through two poses, and the reasons for a goal inside the box and for a planner
         zendock lacks."""
 
-        def stamped(x: float, y: float) -> PoseStamped:
-            pose = PoseStamped()
-            pose.header.frame_id = "map"
-            pose.pose.position.x, pose.pose.position.y = x, y
-            pose.pose.orientation.w = 1.0
-            return pose
-
         def ask(action: Any, name: str, fill: Callable[[Any], None]) -> dict[str, Any]:
             client = ActionClient(self.node, action, f"/{name}")
             goal = action.Goal()
@@ -447,12 +449,12 @@ class User:
 
         def to(x: float, y: float, planner_id: str = "") -> Callable[[Any], None]:
             def fill(goal: Any) -> None:
-                goal.goal, goal.planner_id = stamped(x, y), planner_id
+                goal.goal, goal.planner_id = _map_pose(x, y), planner_id
 
             return fill
 
         def through(goal: Any) -> None:
-            goal.goals = [stamped(-1.0, 2.0), stamped(0.3, 4.0)]
+            goal.goals = [_map_pose(-1.0, 2.0), _map_pose(0.3, 4.0)]
 
         results: dict[str, Any] = {}
         succeeded, aborted = GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED
@@ -568,13 +570,6 @@ class User:
         are reached, that one is in missed_waypoints with the reason's code; followGpsWaypoints is refused
         at once with a reason."""
 
-        def stamped(x: float, y: float) -> PoseStamped:
-            pose = PoseStamped()
-            pose.header.frame_id = "map"
-            pose.pose.position.x, pose.pose.position.y = x, y
-            pose.pose.orientation.w = 1.0
-            return pose
-
         def run(action: Any, name: str, poses: list[PoseStamped]) -> dict[str, Any]:
             client = ActionClient(self.node, action, f"/{name}")
             goal = action.Goal()
@@ -592,9 +587,13 @@ class User:
             out["pose_after"] = [round(v, 2) for v in self.robot_pose() or ()]
             return out
 
-        through = run(NavigateThroughPoses, "navigate_through_poses", [stamped(1.0, 4.2), stamped(0.3, 4.0)])
+        through = run(
+            NavigateThroughPoses, "navigate_through_poses", [_map_pose(1.0, 4.2), _map_pose(0.3, 4.0)]
+        )
         waypoints = run(
-            FollowWaypoints, "follow_waypoints", [stamped(1.0, 4.2), stamped(-2.0, 3.8), stamped(0.3, 4.0)]
+            FollowWaypoints,
+            "follow_waypoints",
+            [_map_pose(1.0, 4.2), _map_pose(-2.0, 3.8), _map_pose(0.3, 4.0)],
         )
         gps_client = ActionClient(self.node, FollowGPSWaypoints, "/follow_gps_waypoints")
         gps_goal = FollowGPSWaypoints.Goal()
@@ -624,10 +623,7 @@ class User:
     def follow_path(self) -> None:
         """BasicNavigator's followPath: a path from getPath, driven by the controller alone; then one from a
         controller zendock lacks, refused with Nav2's INVALID_CONTROLLER."""
-        target = PoseStamped()
-        target.header.frame_id = "map"
-        target.pose.position.x, target.pose.position.y = 1.0, 4.2
-        target.pose.orientation.w = 1.0
+        target = _map_pose(1.0, 4.2)
         planner = ActionClient(self.node, ComputePathToPose, "/compute_path_to_pose")
         ask = ComputePathToPose.Goal()
         ask.goal = target

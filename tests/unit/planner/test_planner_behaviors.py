@@ -7,10 +7,8 @@ import math
 import pytest
 
 from services.planner.behaviors import BehaviorParams, DriveStraight, Outcome, Spin, Wait
-from services.planner.costmap import CostmapParams, LayeredCostmap
-from services.planner.rasterize import map_from_world
 from shared.geometry import Pose2D
-from shared.world import World
+from tests.unit.planner.rooms import room_grid
 
 PARAMS = BehaviorParams(
     robot_length_m=0.4, robot_width_m=0.3, max_linear_vel_mps=0.5, max_angular_vel_radps=1.5
@@ -18,15 +16,7 @@ PARAMS = BehaviorParams(
 
 
 def _grid(walls: list | None = None):  # type: ignore[no-untyped-def]
-    world = World.model_validate(
-        {
-            "name": "room",
-            "bounds": [0.0, 0.0, 4.0, 3.0],
-            "walls": walls or [],
-            "robot": {"start": [0.5, 1.5, 0.0]},
-        }
-    )
-    return LayeredCostmap(map_from_world(world), CostmapParams()).grid()
+    return room_grid(4.0, walls)
 
 
 def test_back_up_reverses_its_distance_then_stops() -> None:

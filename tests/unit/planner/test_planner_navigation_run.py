@@ -6,30 +6,20 @@ from __future__ import annotations
 import itertools
 
 from services.planner.astar import PlanningError
-from services.planner.costmap import CostmapParams, LayeredCostmap
 from services.planner.global_planner import GlobalPlanner
 from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
 from services.planner.params import Params
 from services.planner.planning_worker import PlanOutcome, PlanRequest, blocked_end_of
-from services.planner.rasterize import map_from_world
 from services.planner.recovery import GlassClearing
 from shared.geometry import Pose2D
 from shared.interfaces.navigation import NavigateErrorCode
-from shared.world import World
+from tests.unit.planner.rooms import room_grid
 
 DT_S = 0.05
 
 
 def _grid(walls: list | None = None):  # type: ignore[no-untyped-def]
-    world = World.model_validate(
-        {
-            "name": "room",
-            "bounds": [0.0, 0.0, 5.0, 3.0],
-            "walls": walls or [],
-            "robot": {"start": [0.6, 1.5, 0.0]},
-        }
-    )
-    return LayeredCostmap(map_from_world(world), CostmapParams()).grid()
+    return room_grid(5.0, walls, start=(0.6, 1.5, 0.0))
 
 
 class KinematicWorld:

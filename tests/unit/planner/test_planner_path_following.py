@@ -8,27 +8,17 @@ import math
 import numpy as np
 
 from services.planner.behaviors import Outcome
-from services.planner.costmap import CostmapParams, LayeredCostmap
 from services.planner.navigation_run import NavSnapshot
 from services.planner.params import Params
 from services.planner.path_following import FollowPath
-from services.planner.rasterize import map_from_world
 from shared.geometry import Pose2D
-from shared.world import World
+from tests.unit.planner.rooms import room_grid
 
 PARAMS = Params()
 
 
 def _grid(walls: list | None = None):  # type: ignore[no-untyped-def]
-    world = World.model_validate(
-        {
-            "name": "room",
-            "bounds": [0.0, 0.0, 6.0, 3.0],
-            "walls": walls or [],
-            "robot": {"start": [0.5, 1.5, 0.0]},
-        }
-    )
-    return LayeredCostmap(map_from_world(world), CostmapParams()).grid()
+    return room_grid(6.0, walls)
 
 
 def _drive(follow: FollowPath, grid, pose: Pose2D, seconds: float):  # type: ignore[no-untyped-def]
