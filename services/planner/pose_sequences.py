@@ -20,6 +20,7 @@ from typing import Any
 
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
+from shared.executor import Timer
 from shared.interfaces.navigation import (
     FOLLOW_GPS_WAYPOINTS,
     FOLLOW_WAYPOINTS,
@@ -63,7 +64,10 @@ class PoseSequences:
         self._node = node
         self._log = node.log
         self._stop_on_failure = stop_on_failure
-        self._navigation = NavigationClient(node)
+        # Both made with the first goal: until a script asks for a sequence, the planner neither reads its
+        # own navigation feedback nor wakes for this feedback (flat out, every wake-up costs sim time).
+        self._client: NavigationClient | None = None
+        self._timer: Timer | None = None
         self._task: _Task | None = None
         self._servers: list[ActionServer[Any, Any, Any]] = [
             ActionServer(
@@ -90,7 +94,12 @@ class PoseSequences:
                 on_cancel=lambda handle: None,  # ended within the call that accepts it
             )
         )
-        self._timer = node.create_timer(0.2, self._publish_feedback, wall=True)
+
+    @property
+    def _navigation(self) -> NavigationClient:
+        if self._client is None:
+            self._client = NavigationClient(self._node)
+        return self._client
 
     def _on_accepted(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
         if not handle.active:
@@ -127,6 +136,8 @@ class PoseSequences:
         self._next_leg(task)
 
     def _next_leg(self, task: _Task) -> None:
+        if self._timer is None:
+            self._timer = self._node.create_timer(0.2, self._publish_feedback, wall=True)
         index = task.index
         self._navigation.go_to_pose(task.poses[index], on_done=lambda: self._leg_done(task, index))
         self._publish_feedback()
@@ -195,6 +206,9 @@ class PoseSequences:
     def _publish_feedback(self) -> None:
         task = self._task
         if task is None or not task.handle.active:
+            if self._timer is not None:  # nothing to report until the next goal
+                self._timer.cancel()
+                self._timer = None
             return
         if task.waypoints:
             task.handle.publish_feedback(FollowWaypointsFeedback(current_waypoint=task.index))
@@ -213,7 +227,8 @@ class PoseSequences:
         )
 
     def close(self) -> None:
-        self._timer.cancel()
+        if self._timer is not None:
+            self._timer.cancel()
         if self._task is not None and self._task.handle.active:
             self._task.handle.abort(self._result(self._task, 0, "the planner is shutting down"))
         self._task = None
