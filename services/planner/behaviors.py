@@ -3,7 +3,9 @@ heading), wait.
 
 Each is stepped once a control cycle with the robot's pose and the current costmap, and answers with the
 command to publish and whether it is done. Before every step the rest of the motion, up to
-``simulate_ahead_s`` of it, is laid over the costmap with the robot's footprint; a motion that would put
+``simulate_ahead_s`` of it, is laid over the costmap with the robot's footprint, from the first step on
+(not where the robot stands: a robot touching an obstacle, as one is when a recovery starts, may still back
+away from it); a motion that would put
 the footprint on a lethal cell stops there with COLLISION_AHEAD (a robot next to a wall or a pane the
 sonar heard refuses at its first step). As in Nav2, a time allowance of 0 means no limit.
 """
@@ -106,8 +108,8 @@ class Spin(_Timed):
         w = math.copysign(speed, self.target_rad)
         if grid is not None:
             ahead_rad = min(remaining, speed * p.simulate_ahead_s)
-            count = max(2, math.ceil(ahead_rad / 0.05))
-            times = np.linspace(0.0, ahead_rad / speed, count)
+            count = max(1, math.ceil(ahead_rad / 0.05))
+            times = np.arange(1, count + 1) * (ahead_rad / count) / speed  # from the first step on
             poses = project_arc(pose, 0.0, w, times)
             if _lethal(grid.footprint_costs(poses, p.robot_length_m, p.robot_width_m)):
                 return Step(
@@ -156,8 +158,10 @@ class DriveStraight(_Timed):
             )
         if grid is not None:
             ahead_m = min(remaining, abs(self.speed_mps) * p.simulate_ahead_s)
-            count = max(2, math.ceil(ahead_m / (0.5 * grid.frame.resolution_m)))
-            times = np.linspace(0.0, ahead_m / abs(self.speed_mps), count)
+            count = max(1, math.ceil(ahead_m / (0.5 * grid.frame.resolution_m)))
+            times = (
+                np.arange(1, count + 1) * (ahead_m / count) / abs(self.speed_mps)
+            )  # from the first step on
             poses = project_arc(pose, self.speed_mps, 0.0, times)
             if _lethal(grid.footprint_costs(poses, p.robot_length_m, p.robot_width_m)):
                 way = "backwards" if self.speed_mps < 0 else "forwards"

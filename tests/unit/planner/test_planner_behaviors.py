@@ -108,3 +108,10 @@ def test_wait_counts_down_and_commands_nothing() -> None:
     assert (first.cmd, first.outcome, first.progress) == (None, Outcome.RUNNING, 2.0)
     assert wait.step(None, 11.5, None).progress == pytest.approx(0.5)
     assert wait.step(None, 12.0, None).outcome is Outcome.SUCCEEDED
+
+
+def test_a_robot_touching_an_obstacle_may_still_back_away_from_it() -> None:
+    grid = _grid(walls=[[[2.2, 0.0], [2.2, 3.0]]])
+    touching = Pose2D(2.0, 1.5, 0.0)  # its front edge on the wall's cells
+    assert DriveStraight(0.15, -0.1, 0.0, PARAMS).step(touching, 0.0, grid).outcome is Outcome.RUNNING
+    assert DriveStraight(0.15, 0.1, 0.0, PARAMS).step(touching, 0.0, grid).outcome is Outcome.COLLISION_AHEAD
