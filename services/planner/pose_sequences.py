@@ -7,8 +7,8 @@ robot stops at each pose (Nav2's navigate_through_poses passes through them; zen
 turn). A waypoint that fails is recorded in ``missed_waypoints`` with its navigation error code, and the
 follower goes on to the next unless ``waypoint_stop_on_failure`` (Nav2's ``stop_on_failure``) is set;
 through poses, a failed leg ends the goal with that leg's code and reason. A newer goal on either action
-ends the one running, as does a ``navigate_to_pose`` goal from anyone else (zendock's docking, say),
-which then reads as that leg's failure.
+ends the one running. So does a ``navigate_to_pose`` goal from anyone else (zendock's docking, say): the
+sequence ends there rather than take the robot back with its next leg.
 """
 
 from __future__ import annotations
@@ -161,9 +161,12 @@ class PoseSequences:
                 else NavigateErrorCode.INVALID_GOAL
             )
             reason = self._navigation.failure_reason() or outcome.name.lower()
-            if outcome is TaskResult.CANCELED and not reason:
-                reason = "navigate_to_pose was preempted"
-            if not task.waypoints or self._stop_on_failure():
+            # Canceled without our asking: another navigate_to_pose goal (zendock's docking, say) took the
+            # robot. Going on to the next waypoint would take it back, so the sequence ends here.
+            taken = outcome is TaskResult.CANCELED
+            if taken:
+                reason = f"navigate_to_pose was taken by another goal ({reason or 'preempted'})"
+            if taken or not task.waypoints or self._stop_on_failure():
                 self._task = None
                 self._log.info("pose %d of %d failed (%d): %s", index + 1, len(task.poses), code, reason)
                 final = FollowWaypointsErrorCode.TASK_EXECUTOR_FAILED if task.waypoints else code

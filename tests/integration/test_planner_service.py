@@ -20,12 +20,14 @@ import zenoh
 
 from services.planner.occupancy_map import save_map
 from services.planner.rasterize import map_from_world
-from shared.action import spin_in_background
+from shared.action import ActionClient, spin_in_background
 from shared.geometry import Pose2D, wrap_angle
-from shared.interface_types import UUID
+from shared.interface_types import UUID, GoalStatusCode
 from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE, GetMapRequest
 from shared.interfaces.navigation import (
+    FOLLOW_WAYPOINTS,
     NAVIGATE_TO_POSE,
+    FollowWaypointsGoal,
     LoadMapResponse,
     NavigateErrorCode,
     NavigateToPoseGoal,
@@ -382,3 +384,29 @@ def test_without_the_range_layer_the_robot_drives_into_the_glass(  # type: ignor
     hit = collisions.wait_for(lambda m: m.kind == "glass", timeout_s=GOAL_TIMEOUT_S)
     assert hit.count >= 1
     nav.cancel_task()
+
+
+def test_a_navigation_goal_from_elsewhere_ends_a_waypoint_sequence(  # type: ignore[no-untyped-def]
+    spawn, bus: zenoh.Session, namespace: str, nav_node: Node
+) -> None:
+    """follow_waypoints drives the planner's own navigate_to_pose; when another goal takes the robot (zendock's
+    docking, say), the sequence ends with a reason instead of taking the robot back with its next leg."""
+    odom = KeyRecorder(bus, f"{namespace}/odom", Odometry)
+    planner = _start_stack(spawn, SEED_ROOM, "-p", f"world={SEED_ROOM}")
+    waypoints = ActionClient(nav_node, FOLLOW_WAYPOINTS, "follow_waypoints")
+    assert waypoints.server_ready(30.0)
+    poses = [
+        PoseStamped(Header(frame_id="map"), Pose.from_pose2d(Pose2D(x, y, 0.0)))
+        for x, y in ((-1.5, 1.6), (0.5, 4.0))
+    ]
+    sequence = waypoints.send_goal(FollowWaypointsGoal(poses=poses))
+    wait_until(lambda: _moving(odom), GOAL_TIMEOUT_S, "the robot never got going on the first waypoint")
+    other = NavigationClient(nav_node)
+    near = Pose2D(0.5, 4.0, math.pi)
+    other.go_to_pose(near)
+    wait_until(lambda: sequence.done, 20.0, lambda: f"the sequence went on: {sequence}")
+    assert sequence.status is GoalStatusCode.ABORTED, sequence
+    assert sequence.result is not None and "taken by another goal" in sequence.result.error_msg, sequence
+    assert _wait_done(other) is TaskResult.SUCCEEDED, other.failure_reason()  # not taken back
+    _assert_at(bus, namespace, near)
+    _assert_no_errors(planner)
