@@ -72,6 +72,11 @@ class ServerGoalHandle(Generic[G, R, F]):
         return self.goal_id.hex()
 
     @property
+    def action(self) -> ActionType[G, R, F]:
+        """The action this goal belongs to (for a server of several actions to build its result)."""
+        return self._server.action
+
+    @property
     def active(self) -> bool:
         return not self.status.terminal
 
@@ -97,7 +102,7 @@ class ActionServer(Generic[G, R, F]):
     """Serves one action on a node.
 
     ``on_goal(goal) -> None`` validates a goal (raise ``ValueError(reason)`` to reject it: the client sees
-    the reason). ``on_accepted(handle)`` starts work, normally by remembering the handle for a timer to
+    the reason); without one every goal is accepted. ``on_accepted(handle)`` starts work, normally by remembering the handle for a timer to
     step. ``on_cancel(handle)`` is told of a cancel request; it ends the goal itself (``handle.canceled``)
     once the robot is stopped. ``on_preempt(old)`` is told when a new goal replaces the active one;
     by default the old goal ends CANCELED with ``preempt_result()``.
@@ -109,7 +114,7 @@ class ActionServer(Generic[G, R, F]):
         action: ActionType[G, R, F],
         name: str,
         *,
-        on_goal: Callable[[G], None],
+        on_goal: Callable[[G], None] | None = None,
         on_accepted: Callable[[ServerGoalHandle[G, R, F]], None],
         on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
         preempt_result: Callable[[], R] | None = None,
@@ -139,7 +144,8 @@ class ActionServer(Generic[G, R, F]):
     # request handlers (executor thread)
 
     def _handle_send_goal(self, request: Any) -> Any:
-        self._on_goal(request.goal)  # ValueError -> the client gets the reason
+        if self._on_goal is not None:
+            self._on_goal(request.goal)  # ValueError -> the client gets the reason
         handle: ServerGoalHandle[G, R, F] = ServerGoalHandle(
             self, request.goal_id, request.goal, self.node.now_msg()
         )

@@ -171,7 +171,7 @@ class BehaviorServer:
             name,
             on_goal=self._on_goal,
             on_accepted=lambda handle: self._on_accepted(action, handle),
-            on_cancel=lambda handle: self._on_cancel(action, handle),
+            on_cancel=self._on_cancel,
             preempt_result=lambda: _result(action, 0.0, 0, "preempted by a newer goal"),
         )
 
@@ -251,12 +251,12 @@ class BehaviorServer:
             lambda step: WaitFeedback(time_left=Duration.from_sec(max(0.0, step.progress))),
         )
 
-    def _on_cancel(self, action: ActionType[Any, Any, Any], handle: ServerGoalHandle[Any, Any, Any]) -> None:
+    def _on_cancel(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
         running = self._running
         if running is not None and running.handle is handle:
             self._end(running, self._node.now(), Outcome.RUNNING, "canceled on request", cancel=True)
         elif handle.active:
-            handle.canceled(_result(action, 0.0, 0, "canceled on request"))
+            handle.canceled(_result(handle.action, 0.0, 0, "canceled on request"))
 
     def preempt(self, why: str) -> None:
         """End the running behaviour (a navigation goal takes the robot)."""

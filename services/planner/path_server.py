@@ -99,7 +99,6 @@ class PathServer:
                 node,
                 action,
                 name,
-                on_goal=lambda goal: None,
                 on_accepted=self._on_accepted,
                 on_cancel=self._on_cancel,
                 preempt_result=_preempted(action),
@@ -114,7 +113,6 @@ class PathServer:
                 node,
                 SMOOTH_PATH,
                 topics.SMOOTH_PATH,
-                on_goal=lambda goal: None,
                 on_accepted=self._on_smooth,
                 on_cancel=lambda handle: None,  # answered within the call that accepts it
             )
@@ -271,9 +269,7 @@ class PathServer:
 
     def _on_cancel(self, handle: ServerGoalHandle[Any, Any, Any]) -> None:
         if handle.active:
-            through = isinstance(handle.goal, ComputePathThroughPosesGoal)
-            action = COMPUTE_PATH_THROUGH_POSES if through else COMPUTE_PATH_TO_POSE
-            handle.canceled(action.result(error_msg="canceled on request"))
+            handle.canceled(handle.action.result(error_msg="canceled on request"))
 
     def close(self) -> None:
         self._worker.close()

@@ -74,7 +74,6 @@ class PoseSequences:
                 node,
                 action,
                 name,
-                on_goal=lambda goal: None,
                 on_accepted=self._on_accepted,
                 on_cancel=self._on_cancel,
                 preempt_result=_preempted(action),
@@ -89,7 +88,6 @@ class PoseSequences:
                 node,
                 FOLLOW_GPS_WAYPOINTS,
                 topics.FOLLOW_GPS_WAYPOINTS,
-                on_goal=lambda goal: None,
                 on_accepted=_refuse_gps,
                 on_cancel=lambda handle: None,  # ended within the call that accepts it
             )
@@ -112,7 +110,7 @@ class PoseSequences:
         if not goal.poses:
             self._task = None
             code = FollowWaypointsErrorCode.UNKNOWN if isinstance(goal, FollowWaypointsGoal) else 0
-            handle.abort(_action_of(handle).result(error_code=int(code), error_msg="no poses to go to"))
+            handle.abort(handle.action.result(error_code=int(code), error_msg="no poses to go to"))
             return
         if isinstance(goal, FollowWaypointsGoal):
             if goal.goal_index >= len(goal.poses):
@@ -204,7 +202,7 @@ class PoseSequences:
             else:
                 self._navigation.cancel_task()  # the leg's end finishes the cancel
         elif handle.active:
-            handle.canceled(_action_of(handle).result(error_msg="canceled on request"))
+            handle.canceled(handle.action.result(error_msg="canceled on request"))
 
     def _publish_feedback(self) -> None:
         task = self._task
@@ -241,11 +239,6 @@ class PoseSequences:
 
 def _preempted(action: Any) -> Callable[[], Any]:
     return lambda: action.result(error_msg="preempted by a newer goal")
-
-
-def _action_of(handle: ServerGoalHandle[Any, Any, Any]) -> Any:
-    """The action a goal belongs to."""
-    return FOLLOW_WAYPOINTS if isinstance(handle.goal, FollowWaypointsGoal) else NAVIGATE_THROUGH_POSES
 
 
 def _straight_line_m(poses: list[PoseStamped]) -> float:
