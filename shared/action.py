@@ -140,10 +140,15 @@ class ActionServer(Generic[G, R, F]):
         self._result_key = node.key(action_key(name, "get_result"))
         self._result_queryable = node.session.declare_queryable(self._result_key, self._on_result_query)
         node.declare_endpoint("act", action.type_name, node.key(name))
+        node.action_servers[name] = self
 
     # request handlers (executor thread)
 
     def _handle_send_goal(self, request: Any) -> Any:
+        gate = self.node.work_gate
+        refusal = gate(self.name) if gate is not None else None
+        if refusal is not None:
+            raise ValueError(refusal)
         if self._on_goal is not None:
             self._on_goal(request.goal)  # ValueError -> the client gets the reason
         handle: ServerGoalHandle[G, R, F] = ServerGoalHandle(
@@ -157,6 +162,17 @@ class ActionServer(Generic[G, R, F]):
         self._publish_status()
         self.node.post(self._on_accepted, handle)
         return self.action.send_goal_response(accepted=True, stamp=handle.info.stamp)
+
+    def cancel_active(self) -> bool:
+        """Ask the running goal to stop, as a client's cancel would (its server stops the robot, then ends
+        it CANCELED); False when none runs."""
+        goal = self.active_goal
+        if goal is None or not goal.active or goal.cancel_requested:
+            return False
+        goal.cancel_requested = True
+        self._set_status(goal, GoalStatusCode.CANCELING)
+        self.node.post(self._on_cancel, goal)
+        return True
 
     def _handle_cancel(self, request: CancelGoalRequest) -> CancelGoalResponse:
         goal = self.active_goal

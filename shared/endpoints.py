@@ -314,17 +314,47 @@ class Subscription(Generic[M]):
         self._subscriber.undeclare()
 
 
+class Deferred(Generic[Res]):
+    """A service's answer still to come: a handler that must ask other services first (a lifecycle
+    manager asks each node it manages) returns one, and calls :meth:`resolve` (or :meth:`fail`) exactly
+    once, later, on the node's executor. The request stays open until then; the client's own timeout bounds
+    the wait."""
+
+    def __init__(self) -> None:
+        self._result: object = None
+        self._done = False
+        self._then: Callable[[object], None] | None = None
+
+    def resolve(self, response: Res) -> None:
+        self._settle(response)
+
+    def fail(self, reason: str) -> None:
+        self._settle(ServiceError(reason))
+
+    def bind(self, then: Callable[[object], None]) -> None:
+        self._then = then
+        if self._done:
+            then(self._result)
+
+    def _settle(self, result: object) -> None:
+        if self._done:
+            raise RuntimeError("a deferred answer is given once")
+        self._done, self._result = True, result
+        if self._then is not None:
+            self._then(result)
+
+
 class ServiceServer(Generic[Req, Res]):
     """Answers requests on ``<ns>/<name>`` (a Zenoh queryable); the handler runs on the executor.
 
-    The handler returns a response message, or raises :class:`ServiceError` / ``ValueError`` to reply
-    with an error that names the reason. Malformed requests are rejected before the handler sees them.
+    The handler returns a response message (or a :class:`Deferred` one), or raises :class:`ServiceError`
+    / ``ValueError`` to reply with an error that names the reason. Malformed requests are rejected before the handler sees them.
     Any other exception is a bug in the handler: the client gets an internal error and the executor
     logs and counts it as a failed callback.
     """
 
     def __init__(
-        self, node: Node, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res]
+        self, node: Node, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res | Deferred[Res]]
     ) -> None:
         self._node = node
         self.srv = srv
@@ -345,13 +375,14 @@ class ServiceServer(Generic[Req, Res]):
         self._node.post(self._answer, query, request)
 
     def _answer(self, query: zenoh.Query, request: Req) -> None:
+        deferred = False
         try:
             response = self._handler(request)
-            if not isinstance(response, self.srv.response):
-                raise ServiceError(
-                    f"handler returned {type(response).__name__}, expected {self.srv.response.__name__}"
-                )
-            query.reply(self.key, response.encode(), encoding=encoding_for(self.srv.response.TYPE_NAME))
+            if isinstance(response, Deferred):
+                deferred = True
+                response.bind(lambda result: self._reply_later(query, result))
+                return
+            self._reply(query, response)
         except (ServiceError, ValueError) as exc:
             query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
         except Exception as exc:  # a bug in a handler: answer, then let the executor log it; keep serving
@@ -359,6 +390,25 @@ class ServiceServer(Generic[Req, Res]):
                 f"internal error: {type(exc).__name__}: {exc}".encode(), encoding=zenoh.Encoding("text/plain")
             )
             raise
+        finally:
+            if not deferred:
+                query.drop()
+
+    def _reply(self, query: zenoh.Query, response: object) -> None:
+        if not isinstance(response, self.srv.response):
+            raise ServiceError(
+                f"handler returned {type(response).__name__}, expected {self.srv.response.__name__}"
+            )
+        query.reply(self.key, response.encode(), encoding=encoding_for(self.srv.response.TYPE_NAME))
+
+    def _reply_later(self, query: zenoh.Query, result: object) -> None:
+        """A deferred answer: the response, or the exception that says why there is none."""
+        try:
+            if isinstance(result, BaseException):
+                raise result
+            self._reply(query, result)
+        except (ServiceError, ValueError) as exc:
+            query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
         finally:
             query.drop()
 

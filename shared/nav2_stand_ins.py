@@ -4,12 +4,17 @@ A Nav2 script waits for ``amcl`` and ``bt_navigator`` to be ``active`` (``<node>
 the others; zendock runs no particle filter and no behaviour tree, so the service that does each job
 answers for that node's name: the pose service for ``amcl`` (map -> base_link; it publishes
 ``amcl_pose``), the planner for Nav2's navigation servers, the docking service for ``docking_server``.
-A zendock service serves ``<name>/get_state`` for each node it stands in for, always ``active``: it has
-no lifecycle, and one that serves is running (:mod:`shared.lifecycle_states`). The ROS 2 faces carry
-these services as they carry any. Pure: the contracts and the faces read the table without the bus.
+A zendock service serves ``<name>/get_state`` and ``<name>/change_state`` for each node it stands in for
+(:mod:`shared.lifecycle_states`): it starts ``active``, and a node taken out of ``active`` (by its
+lifecycle manager, say) refuses the actions it owns (:data:`NAV2_WORK`) until it is active again. Nav2's
+two lifecycle managers are served by the service named in :data:`NAV2_LIFECYCLE_MANAGERS`. The ROS 2
+faces carry these services as they carry any. Pure: the contracts and the faces read the tables without
+the bus.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 #: Nav2 lifecycle node -> the zendock service that answers for it.
 NAV2_STAND_INS: dict[str, str] = {
@@ -33,3 +38,66 @@ def stand_ins(service: str) -> tuple[str, ...]:
 def get_state_service(nav2_node: str) -> str:
     """``amcl`` -> ``amcl/get_state`` (relative to the robot's namespace, as Nav2's)."""
     return f"{nav2_node}/get_state"
+
+
+def change_state_service(nav2_node: str) -> str:
+    """``amcl`` -> ``amcl/change_state``."""
+    return f"{nav2_node}/change_state"
+
+
+#: Each of zendock's Nav2 actions -> the Nav2 node whose work it is (a node not active refuses it).
+NAV2_WORK: dict[str, str] = {
+    "navigate_to_pose": "bt_navigator",
+    "navigate_through_poses": "bt_navigator",
+    "compute_path_to_pose": "planner_server",
+    "compute_path_through_poses": "planner_server",
+    "follow_path": "controller_server",
+    "smooth_path": "smoother_server",
+    "spin": "behavior_server",
+    "backup": "behavior_server",
+    "drive_on_heading": "behavior_server",
+    "wait": "behavior_server",
+    "assisted_teleop": "behavior_server",
+    "follow_waypoints": "waypoint_follower",
+    "follow_gps_waypoints": "waypoint_follower",
+    "dock_robot": "docking_server",
+    "undock_robot": "docking_server",
+}
+
+
+@dataclass(frozen=True)
+class LifecycleManager:
+    """One of Nav2's lifecycle managers: the zendock service that serves its ``manage_nodes``, and the
+    nodes it manages in Nav2's bring-up order (those zendock stands in for)."""
+
+    name: str
+    host: str
+    nodes: tuple[str, ...]
+
+    @property
+    def manage_nodes(self) -> str:
+        return f"{self.name}/manage_nodes"
+
+
+#: Nav2's two managers, as its bring-up launches them (nodes zendock does not stand in for left out).
+NAV2_LIFECYCLE_MANAGERS: tuple[LifecycleManager, ...] = (
+    LifecycleManager(
+        "lifecycle_manager_navigation",
+        "planner",
+        (
+            "controller_server",
+            "smoother_server",
+            "planner_server",
+            "behavior_server",
+            "bt_navigator",
+            "waypoint_follower",
+            "docking_server",
+        ),
+    ),
+    LifecycleManager("lifecycle_manager_localization", "pose", ("map_server", "amcl")),
+)
+
+
+def managers_hosted_by(service: str) -> tuple[LifecycleManager, ...]:
+    """The lifecycle managers ``service`` serves ``manage_nodes`` for."""
+    return tuple(m for m in NAV2_LIFECYCLE_MANAGERS if m.host == service)

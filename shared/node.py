@@ -44,6 +44,7 @@ from shared.endpoints import (
     BLOCKING,
     RELIABLE,
     SENSOR_DATA,
+    Deferred,
     Publisher,
     QoS,
     ServiceError,
@@ -134,6 +135,11 @@ class Node:
         #: Called with ``(kind, type name, key)`` before each endpoint is declared (the service's contract,
         #: :mod:`shared.contracts.enforce`); it raises to refuse one.
         self.endpoint_check: Callable[[str, str, str], None] | None = None
+        #: This node's action servers by name, for whoever must reach a running goal (a lifecycle change).
+        self.action_servers: dict[str, Any] = {}
+        #: Asked before an action server accepts a goal: the reason to refuse it, or None
+        #: (the Nav2 stand-ins' lifecycle, :mod:`shared.lifecycle_states`).
+        self.work_gate: Callable[[str], str | None] | None = None
         self._clock_sub: Subscription[Clock] | None = None
         if use_sim_time:
             self._clock_sub = self.create_subscription(
@@ -196,7 +202,7 @@ class Node:
         return timer
 
     def create_service(
-        self, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res]
+        self, srv: ServiceType[Req, Res], name: str, handler: Callable[[Req], Res | Deferred[Res]]
     ) -> ServiceServer[Req, Res]:
         server = ServiceServer(self, srv, name, handler)
         self._entities.append(server)

@@ -26,7 +26,15 @@ from shared.interfaces.costmap import (
     GetCostmapResponse,
 )
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
-from shared.interfaces.lifecycle import GET_STATE, UNKNOWN, GetStateResponse
+from shared.interfaces.lifecycle import (
+    CHANGE_STATE,
+    GET_STATE,
+    MANAGE_LIFECYCLE_NODES,
+    UNKNOWN,
+    ChangeStateResponse,
+    GetStateResponse,
+    ManageLifecycleNodesResponse,
+)
 from shared.interfaces.navigation import (
     CLEAR_ENTIRE_COSTMAP,
     COMPUTE_PATH_THROUGH_POSES,
@@ -58,7 +66,12 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
-from shared.nav2_stand_ins import NAV2_STAND_INS, get_state_service
+from shared.nav2_stand_ins import (
+    NAV2_LIFECYCLE_MANAGERS,
+    NAV2_STAND_INS,
+    change_state_service,
+    get_state_service,
+)
 from shared.ros2 import interfaces
 from shared.ros2.wire import LATCHED, RELIABLE, SENSOR_DATA, QosProfile
 from shared.schema import Message
@@ -153,12 +166,21 @@ def _unknown_state() -> GetStateResponse:
     return GetStateResponse(current_state=UNKNOWN)
 
 
+def _not_done() -> ChangeStateResponse:
+    return ChangeStateResponse(success=False)
+
+
+def _not_managed() -> ManageLifecycleNodesResponse:
+    return ManageLifecycleNodesResponse(success=False)
+
+
 def _map_not_loaded() -> LoadMapResponse:
     return LoadMapResponse(result=LoadMapResponse.RESULT_UNDEFINED_FAILURE)
 
 
-#: Nav2's lifecycle queries, answered by the zendock service standing in for each Nav2 node (``unknown``
-#: while it does not answer: a script asks again); the planner's costmap and map services under Nav2's
+#: Nav2's lifecycle queries and changes, answered by the zendock service standing in for each Nav2 node
+#: (``unknown``, or ``success: false``, while it does not answer: a script asks again), and its lifecycle
+#: managers' ``manage_nodes``; the planner's costmap and map services under Nav2's
 #: names (an empty costmap, or a failed load, while it does not answer).
 SERVICES: tuple[BridgedService, ...] = (
     *(
@@ -176,6 +198,23 @@ SERVICES: tuple[BridgedService, ...] = (
         for name in (GLOBAL_COSTMAP_CLEAR, LOCAL_COSTMAP_CLEAR)
     ),
     BridgedService(LOAD_MAP_SERVICE, interfaces.LOAD_MAP, "planner", LOAD_MAP, _map_not_loaded, wait_s=30.0),
+    *(
+        BridgedService(
+            change_state_service(nav2_node), interfaces.CHANGE_STATE, owner, CHANGE_STATE, _not_done
+        )
+        for nav2_node, owner in NAV2_STAND_INS.items()
+    ),
+    *(
+        BridgedService(
+            manager.manage_nodes,
+            interfaces.MANAGE_LIFECYCLE_NODES,
+            manager.host,
+            MANAGE_LIFECYCLE_NODES,
+            _not_managed,
+            wait_s=30.0,
+        )
+        for manager in NAV2_LIFECYCLE_MANAGERS
+    ),
 )
 
 

@@ -56,6 +56,7 @@ ACTIONS = (
 GET_COSTMAP = "nav2_msgs/srv/GetCostmap"
 CLEAR_ENTIRE_COSTMAP = "nav2_msgs/srv/ClearEntireCostmap"
 LOAD_MAP = "nav2_msgs/srv/LoadMap"
+MANAGE_LIFECYCLE_NODES = "nav2_msgs/srv/ManageLifecycleNodes"
 #: Nav2's ``.action``, ``.srv`` and ``.msg`` files, shipped with their licence notice (see the README there).
 DEFINITIONS = Path(__file__).parent / "definitions"
 
@@ -92,6 +93,8 @@ def action_text(action: str) -> tuple[str, str, str]:
 #: lifecycle_msgs/srv/GetState (rcl_interfaces): what Nav2 scripts poll (:mod:`shared.nav2_stand_ins`).
 GET_STATE = "lifecycle_msgs/srv/GetState"
 _GET_STATE_RESPONSE = "lifecycle_msgs/State current_state"
+#: lifecycle_msgs/srv/ChangeState (rcl_interfaces): what Nav2's lifecycle managers ask of each node.
+CHANGE_STATE = "lifecycle_msgs/srv/ChangeState"
 #: action_msgs/srv/CancelGoal (rcl_interfaces), request and response.
 _CANCEL_REQUEST = "action_msgs/GoalInfo goal_info"
 _CANCEL_RESPONSE = "int8 return_code\naction_msgs/GoalInfo[] goals_canceling"
@@ -123,6 +126,7 @@ def definitions() -> TypeDefs:
     defs.update(package_messages("nav2_msgs"))
     defs.update(package_services("nav2_msgs"))
     defs.update(service_definitions(GET_STATE, "", _GET_STATE_RESPONSE))
+    defs.update(service_definitions(CHANGE_STATE, "lifecycle_msgs/Transition transition", "bool success"))
     for action in ACTIONS:
         goal, result, feedback = action_text(action)
         defs.update(_messages(goal, f"{action}_Goal"))

@@ -23,6 +23,15 @@ from services.planner.rasterize import map_from_world
 from shared.action import ActionClient, spin_in_background
 from shared.geometry import Pose2D, wrap_angle
 from shared.interface_types import UUID, GoalStatusCode
+from shared.interfaces.lifecycle import (
+    CHANGE_STATE,
+    GET_STATE,
+    MANAGE_LIFECYCLE_NODES,
+    ChangeStateRequest,
+    GetStateRequest,
+    ManageLifecycleNodesRequest,
+)
+from shared.interfaces.lifecycle import Transition as LifecycleTransition
 from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE, GetMapRequest
 from shared.interfaces.navigation import (
     FOLLOW_WAYPOINTS,
@@ -39,6 +48,7 @@ from shared.interfaces.simulator import (
     SimStateResponse,
     TeleportRequest,
 )
+from shared.lifecycle import Command, Transition
 from shared.messages import (
     Clock,
     CollisionEvent,
@@ -409,4 +419,62 @@ def test_a_navigation_goal_from_elsewhere_ends_a_waypoint_sequence(  # type: ign
     assert sequence.result is not None and "taken by another goal" in sequence.result.error_msg, sequence
     assert _wait_done(other) is TaskResult.SUCCEEDED, other.failure_reason()  # not taken back
     _assert_at(bus, namespace, near)
+    _assert_no_errors(planner)
+
+
+def _lifecycle_state(bus: zenoh.Session, ns: str, nav2_node: str) -> str:
+    response = call_service(bus, f"{ns}/{nav2_node}/get_state", GET_STATE, GetStateRequest(), timeout_s=5.0)
+    return response.current_state.label
+
+
+def _change(bus: zenoh.Session, ns: str, nav2_node: str, transition: Transition) -> bool:
+    request = ChangeStateRequest(LifecycleTransition(id=int(transition), label=transition.label))
+    return call_service(bus, f"{ns}/{nav2_node}/change_state", CHANGE_STATE, request, timeout_s=5.0).success
+
+
+def _manage(bus: zenoh.Session, ns: str, manager: str, command: Command) -> bool:
+    request = ManageLifecycleNodesRequest(command=int(command))
+    key = f"{ns}/{manager}/manage_nodes"
+    return call_service(bus, key, MANAGE_LIFECYCLE_NODES, request, timeout_s=20.0).success
+
+
+def test_a_navigator_taken_out_of_active_stops_the_robot_and_refuses_goals_until_activated(  # type: ignore[no-untyped-def]
+    spawn, bus: zenoh.Session, namespace: str, nav_node: Node
+) -> None:
+    """Nav2's lifecycle on the stand-ins: deactivating bt_navigator cancels its running goal and refuses
+    the next with a reason; a lifecycle manager moves the nodes it manages, across services, and a
+    STARTUP of nodes already active fails as Nav2's does."""
+    odom = KeyRecorder(bus, f"{namespace}/odom", Odometry)
+    planner = _start_stack(spawn, SEED_ROOM, "-p", f"world={SEED_ROOM}")
+    nav = NavigationClient(nav_node)
+    assert nav.wait_until_active(30.0)
+    nav.go_to_pose(Pose2D(-1.5, 1.6, 0.0))
+    wait_until(lambda: _moving(odom), GOAL_TIMEOUT_S, lambda: f"robot never got going: {nav.get_feedback()}")
+
+    assert _change(bus, namespace, "bt_navigator", Transition.DEACTIVATE)
+    assert _wait_done(nav, 20.0) is TaskResult.CANCELED
+    assert _lifecycle_state(bus, namespace, "bt_navigator") == "inactive"
+    assert _lifecycle_state(bus, namespace, "planner_server") == "active"  # one node, not the service
+    odom.wait_for(lambda m: abs(m.twist.twist.linear.x) < 0.01, timeout_s=20.0, after=odom.count)
+    nav.go_to_pose(Pose2D(0.5, 4.0, math.pi))
+    wait_until(nav.is_task_complete, 10.0, "a goal to an inactive bt_navigator was neither refused nor done")
+    assert "bt_navigator is inactive" in nav.failure_reason(), nav.failure_reason()
+    assert not _change(bus, namespace, "bt_navigator", Transition.DEACTIVATE)  # already inactive
+
+    # the localisation manager (served by the pose service) moves the planner's map_server and its own amcl
+    assert _manage(bus, namespace, "lifecycle_manager_localization", Command.PAUSE)
+    assert {_lifecycle_state(bus, namespace, n) for n in ("map_server", "amcl")} == {"inactive"}
+    assert _manage(bus, namespace, "lifecycle_manager_localization", Command.RESUME)
+    assert {_lifecycle_state(bus, namespace, n) for n in ("map_server", "amcl")} == {"active"}
+
+    assert _change(bus, namespace, "bt_navigator", Transition.ACTIVATE)
+    nav.go_to_pose(Pose2D(0.5, 4.0, math.pi))
+    wait_until(
+        lambda: _moving(odom), GOAL_TIMEOUT_S, lambda: f"robot never got going: {nav.failure_reason()}"
+    )
+    nav.cancel_task()
+    assert _wait_done(nav, 20.0) is TaskResult.CANCELED
+    # STARTUP configures first: nodes already active refuse it, and the command fails, as Nav2's would
+    assert not _manage(bus, namespace, "lifecycle_manager_navigation", Command.STARTUP)
+    assert _lifecycle_state(bus, namespace, "controller_server") == "active"
     _assert_no_errors(planner)

@@ -73,7 +73,9 @@ def test_a_foxglove_client_sees_the_live_stack(spawn, bus: zenoh.Session, namesp
                 "protobuf",
                 "protobuf",
             ), channel
-        assert _subscribe_until_each_delivers(client, list(wanted)), {t: len(client.received(t)) for t in wanted}
+        assert _subscribe_until_each_delivers(client, list(wanted)), {
+            t: len(client.received(t)) for t in wanted
+        }
         assert client.pump_until(lambda c: bool(c.times_ns), 10.0), "no time broadcast from the live view"
         world = client.received(f"{ns}/world")[0].payload
         assert b"glass" in world and b"staging/home" in world  # latched: sent when the client subscribed

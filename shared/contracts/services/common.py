@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from shared.contracts.model import Flag, Request
 from shared.endpoints import QoS
-from shared.interfaces.lifecycle import GET_STATE
-from shared.nav2_stand_ins import get_state_service, stand_ins
+from shared.interfaces.lifecycle import CHANGE_STATE, GET_STATE, MANAGE_LIFECYCLE_NODES
+from shared.nav2_stand_ins import change_state_service, get_state_service, managers_hosted_by, stand_ins
 
 #: The docking service's phase, in words (``docking/state``).
 DOCKING_STATE = "docking/state"
@@ -18,16 +18,38 @@ USE_SIM_TIME = Flag(
 
 
 def lifecycle_requests(service: str) -> tuple[Request, ...]:
-    """``<nav2 node>/get_state`` for each Nav2 node ``service`` stands in for (:mod:`shared.nav2_stand_ins`)."""
-    return tuple(
-        Request(
-            get_state_service(name),
-            GET_STATE,
-            when="for Nav2 scripts (zendock's runtime serves it)",
-            about=f"stands in for Nav2's {name}: `active` while the service runs",
+    """``<nav2 node>/get_state`` and ``change_state`` for each Nav2 node ``service`` stands in for, and
+    ``manage_nodes`` for each lifecycle manager it hosts (:mod:`shared.nav2_stand_ins`)."""
+    requests: list[Request] = []
+    for name in stand_ins(service):
+        requests.append(
+            Request(
+                get_state_service(name),
+                GET_STATE,
+                when="for Nav2 scripts (zendock's runtime serves it)",
+                about=f"stands in for Nav2's {name}: `active` while the service runs, until a lifecycle change",
+            )
         )
-        for name in stand_ins(service)
-    )
+        requests.append(
+            Request(
+                change_state_service(name),
+                CHANGE_STATE,
+                when="for Nav2's lifecycle managers and `ros2 lifecycle set` (zendock's runtime serves it)",
+                about=f"moves {name} between Nav2's lifecycle states; out of `active` it refuses its actions' goals"
+                " and cancels the running one",
+            )
+        )
+    for manager in managers_hosted_by(service):
+        requests.append(
+            Request(
+                manager.manage_nodes,
+                MANAGE_LIFECYCLE_NODES,
+                when="for Nav2 scripts' lifecycleStartup() and lifecycleShutdown() (zendock's runtime serves it)",
+                about=f"Nav2's {manager.name}: STARTUP, PAUSE, RESUME, RESET, SHUTDOWN, CONFIGURE or CLEANUP "
+                f"of {', '.join(manager.nodes)}, in Nav2's order",
+            )
+        )
+    return tuple(requests)
 
 
 DOCK_DATABASE = Flag("dock_database", "the world file: its docks (pose, marker id, size) and staging offsets")

@@ -45,7 +45,16 @@ from shared.interfaces.docking import (
     UndockRobotFeedback,
     UndockRobotGoal,
 )
-from shared.interfaces.lifecycle import ACTIVE, GetStateRequest, GetStateResponse
+from shared.interfaces.lifecycle import (
+    ACTIVE,
+    ChangeStateRequest,
+    ChangeStateResponse,
+    GetStateRequest,
+    GetStateResponse,
+    ManageLifecycleNodesRequest,
+    ManageLifecycleNodesResponse,
+    Transition,
+)
 from shared.interfaces.navigation import (
     COMPUTE_PATH_THROUGH_POSES,
     COMPUTE_PATH_TO_POSE,
@@ -144,6 +153,10 @@ EXAMPLES: dict[str, Message] = {
         HEADER, PoseWithCovariance(POSE, np.arange(36.0))
     ),
     "lifecycle_msgs/srv/GetState_Request": GetStateRequest(),
+    "lifecycle_msgs/srv/ChangeState_Request": ChangeStateRequest(Transition(id=4, label="deactivate")),
+    "lifecycle_msgs/srv/ChangeState_Response": ChangeStateResponse(success=True),
+    "nav2_msgs/srv/ManageLifecycleNodes_Request": ManageLifecycleNodesRequest(command=1),
+    "nav2_msgs/srv/ManageLifecycleNodes_Response": ManageLifecycleNodesResponse(success=True),
     "nav2_msgs/srv/GetCostmap_Request": GetCostmapRequest(),
     "nav2_msgs/srv/GetCostmap_Response": GetCostmapResponse(
         Costmap(
@@ -478,6 +491,14 @@ def test_lifecycle_get_state_hash_is_jazzys() -> None:
     2.0.3 as packaged on PyPI: Nav2 scripts' ``amcl/get_state`` must match it on rmw_zenoh's keys."""
     assert types.type_hash("lifecycle_msgs/srv/GetState") == (
         "RIHS01_800a0a5aae599782b02932de0caf563f6dc4e7e94b794eadde075ba2cbef9795"
+    )
+
+
+def test_lifecycle_change_state_hash_is_jazzys() -> None:
+    """``type_hashes`` in ``share/lifecycle_msgs/srv/ChangeState.json`` of Jazzy's lifecycle_msgs 2.0.3 (PyPI):
+    what Nav2's lifecycle managers and ``ros2 lifecycle set`` ask on rmw_zenoh's keys."""
+    assert types.type_hash("lifecycle_msgs/srv/ChangeState") == (
+        "RIHS01_356fe34f0475a43acf54542013af4167b0e729f77ea22ffb045c6ad8e20668e5"
     )
 
 
