@@ -301,9 +301,12 @@ class LayeredCostmap:
         self._set_cells(self._obstacle, self._frame.world_to_cells(endpoints[marks]), LETHAL_OBSTACLE)
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
-        """Forget what the sensors said within ``radius_m`` of a point (nav2 ``ClearCostmapAroundRobot``)."""
-        inside = self._frame.cells_within(xy, radius_m)
-        self._set_cells(self._obstacle, inside, NO_INFORMATION)
+        """Forget what the sensors said within ``radius_m`` of a point."""
+        self.clear_cells(self._frame.cells_within(xy, radius_m))
+
+    def clear_cells(self, cells: np.ndarray) -> None:
+        """Forget what the sensors said in ``cells`` (``(N, 2)``; nav2's region clears)."""
+        self._set_cells(self._obstacle, cells, NO_INFORMATION)
 
     def clear_footprint(self, pose: tuple[float, float, float]) -> None:
         """Free the cells under the robot in the dynamic layers (nav2 ``footprint_clearing_enabled``)."""

@@ -301,6 +301,26 @@ class CostmapUpdater:
             self.apply_glass()
         self._log.info("costmap cleared (%s)", what)
 
+    def clear_square(self, centre: tuple[float, float], side_m: float, outside: bool) -> int:
+        """Forget what the lidar saw and the glass memory inside the square of side ``side_m`` round
+        ``centre`` (or, ``outside``, everywhere else): Nav2's region clears. The number of cells cleared."""
+        if self.costmap is None:
+            return 0
+        cells = self.costmap.frame.cells_in_square(centre, side_m, outside)
+        self.costmap.clear_cells(cells)
+        if self.glass is not None:
+            self.glass.clear_cells(cells)
+            self.apply_glass()
+        where = "outside" if outside else "inside"
+        self._log.info(
+            "costmap cleared %s the %.2f m square round (%.2f, %.2f): lidar and glass memory, %d cells",
+            where,
+            side_m,
+            *centre,
+            len(cells),
+        )
+        return len(cells)
+
     def observe_turning_circle(self, pose: Pose2D) -> None:
         """The robot stands still here: let it turn (see :meth:`GlassMemory.observe_turning_circle`)."""
         if self.glass is None:

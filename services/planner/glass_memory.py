@@ -241,7 +241,12 @@ class GlassMemory:
 
     def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
         """Forget evidence and looks within ``radius_m`` of a point; glass found farther away stays known."""
-        inside = self.frame.cells_within(xy, radius_m)
+        self.clear_cells(self.frame.cells_within(xy, radius_m))
+
+    def clear_cells(self, inside: np.ndarray) -> None:
+        """Forget evidence and looks in ``inside`` (cells ``(N, 2)``); glass found elsewhere stays known."""
+        if len(inside) == 0:
+            return
         self._log_odds[inside[:, 1], inside[:, 0]] = 0.0
         self._seen[inside[:, 1], inside[:, 0]] = False
         self._cleared_by_recovery[inside[:, 1], inside[:, 0]] = True

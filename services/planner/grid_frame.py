@@ -107,6 +107,17 @@ class GridFrame:
         centres = self.cells_to_world(cells)
         return cells[np.hypot(centres[:, 0] - x, centres[:, 1] - y) <= radius_m]
 
+    def cells_in_square(self, xy: tuple[float, float], side_m: float, outside: bool = False) -> np.ndarray:
+        """On-grid cells ``(N, 2)`` whose centres lie inside the axis-aligned square of side ``side_m``
+        centred on a point, or (``outside``) every other cell: Nav2's clearing regions."""
+        height, width = self.shape
+        iy, ix = np.mgrid[0:height, 0:width]
+        cells = np.stack([ix.ravel(), iy.ravel()], axis=1)
+        centres = self.cells_to_world(cells)
+        half = 0.5 * side_m
+        inside = (np.abs(centres[:, 0] - xy[0]) <= half) & (np.abs(centres[:, 1] - xy[1]) <= half)
+        return cells[~inside if outside else inside]
+
     def cells_under_rectangle(
         self, pose: tuple[float, float, float], length_m: float, width_m: float
     ) -> np.ndarray:

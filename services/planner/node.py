@@ -49,13 +49,23 @@ from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.geometry import Pose2D
 from shared.interfaces.costmap import (
+    CLEAR_COSTMAP_AROUND_POSE,
+    CLEAR_COSTMAP_AROUND_ROBOT,
+    CLEAR_COSTMAP_EXCEPT_REGION,
     GET_COSTMAP,
     GLOBAL_COSTMAP_CLEAR,
     GLOBAL_COSTMAP_GET,
     LOCAL_COSTMAP_CLEAR,
     LOCAL_COSTMAP_GET,
+    ClearCostmapAroundPoseRequest,
+    ClearCostmapAroundPoseResponse,
+    ClearCostmapAroundRobotRequest,
+    ClearCostmapAroundRobotResponse,
+    ClearCostmapExceptRegionRequest,
+    ClearCostmapExceptRegionResponse,
     GetCostmapRequest,
     GetCostmapResponse,
+    region_clear_service,
 )
 from shared.interfaces.map_server import (
     COSTMAP_TOPIC,
@@ -173,6 +183,22 @@ class PlannerService:
         # Nav2's names for what Nav2 scripts ask (shared/interfaces/costmap.py): one costmap answers both.
         node.create_service(CLEAR_ENTIRE_COSTMAP, GLOBAL_COSTMAP_CLEAR, self._on_clear_costmaps)
         node.create_service(CLEAR_ENTIRE_COSTMAP, LOCAL_COSTMAP_CLEAR, self._on_clear_local_costmap)
+        for costmap in ("global", "local"):
+            node.create_service(
+                CLEAR_COSTMAP_EXCEPT_REGION,
+                region_clear_service(costmap, "except_region"),
+                self._on_clear_except_region,
+            )
+            node.create_service(
+                CLEAR_COSTMAP_AROUND_ROBOT,
+                region_clear_service(costmap, "around_robot"),
+                self._on_clear_around_robot,
+            )
+            node.create_service(
+                CLEAR_COSTMAP_AROUND_POSE,
+                region_clear_service(costmap, "around_pose"),
+                self._on_clear_around_pose,
+            )
         node.create_service(GET_COSTMAP, GLOBAL_COSTMAP_GET, self._on_get_global_costmap)
         node.create_service(GET_COSTMAP, LOCAL_COSTMAP_GET, self._on_get_local_costmap)
         self._action = ActionServer(
@@ -258,6 +284,43 @@ class PlannerService:
         glass = GlassClearing.AROUND_ROBOT if pose is not None else GlassClearing.KEEP
         self._costmap.change(self._layers.clear, glass, pose)
         return ClearEntireCostmapResponse()
+
+    # Nav2's region clears: one costmap answers for both names, so a global and a local clear do the same.
+
+    def _on_clear_except_region(
+        self, request: ClearCostmapExceptRegionRequest
+    ) -> ClearCostmapExceptRegionResponse:
+        self._clear_square(self._robot_xy(), request.reset_distance, outside=True)
+        return ClearCostmapExceptRegionResponse()
+
+    def _on_clear_around_robot(
+        self, request: ClearCostmapAroundRobotRequest
+    ) -> ClearCostmapAroundRobotResponse:
+        self._clear_square(self._robot_xy(), request.reset_distance, outside=False)
+        return ClearCostmapAroundRobotResponse()
+
+    def _on_clear_around_pose(self, request: ClearCostmapAroundPoseRequest) -> ClearCostmapAroundPoseResponse:
+        frame = request.pose.header.frame_id.lstrip("/")
+        if frame not in ("", topics.MAP_FRAME):
+            raise ValueError(f"the pose must be in {topics.MAP_FRAME!r}, not {frame!r}")
+        position = request.pose.pose.position
+        self._clear_square((position.x, position.y), request.reset_distance, outside=False)
+        return ClearCostmapAroundPoseResponse()
+
+    def _robot_xy(self) -> tuple[float, float]:
+        pose = self._tracker.current_pose(self._node.now(), self._params.pose_timeout_s)
+        if pose is None:
+            raise ServiceError("no robot pose (map_to_base_link_pose2d): nothing to clear round")
+        return pose.x, pose.y
+
+    def _clear_square(self, centre: tuple[float, float], side_m: float, outside: bool) -> None:
+        if not (math.isfinite(side_m) and side_m > 0.0):
+            raise ValueError(f"reset_distance must be a positive number of metres, got {side_m}")
+        if not all(math.isfinite(c) for c in centre):
+            raise ValueError(f"the pose must be finite, got {centre}")
+        if self._costmap.grid is None:
+            raise ServiceError("no costmap yet (no map loaded)")
+        self._costmap.change(self._layers.clear_square, centre, side_m, outside)
 
     def _on_get_global_costmap(self, request: GetCostmapRequest) -> GetCostmapResponse:
         grid = self._costmap.grid

@@ -11,12 +11,12 @@ lethal, 255 unknown, and in between the inflation's decay.
 from __future__ import annotations
 
 from dataclasses import field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
-from shared.interface_types import ServiceType
-from shared.messages import Header, Pose, Time
+from shared.interface_types import Empty, ServiceType
+from shared.messages import Header, Pose, PoseStamped, Time
 from shared.schema import Message, UInt8Array, UInt32, message
 
 
@@ -64,3 +64,66 @@ GLOBAL_COSTMAP_GET = "global_costmap/get_costmap"
 LOCAL_COSTMAP_GET = "local_costmap/get_costmap"
 GLOBAL_COSTMAP_CLEAR = "global_costmap/clear_entirely_global_costmap"
 LOCAL_COSTMAP_CLEAR = "local_costmap/clear_entirely_local_costmap"
+
+
+@message("nav2_msgs/srv/ClearCostmapExceptRegion_Request")
+class ClearCostmapExceptRegionRequest(Message):
+    """Clear all but the square of side ``reset_distance`` (m) centred on the robot."""
+
+    reset_distance: float = 0.0
+
+
+@message("nav2_msgs/srv/ClearCostmapExceptRegion_Response")
+class ClearCostmapExceptRegionResponse(Message):
+    response: Empty = field(default_factory=Empty)
+
+
+@message("nav2_msgs/srv/ClearCostmapAroundRobot_Request")
+class ClearCostmapAroundRobotRequest(Message):
+    """Clear the square of side ``reset_distance`` (m) centred on the robot."""
+
+    reset_distance: float = 0.0
+
+
+@message("nav2_msgs/srv/ClearCostmapAroundRobot_Response")
+class ClearCostmapAroundRobotResponse(Message):
+    response: Empty = field(default_factory=Empty)
+
+
+@message("nav2_msgs/srv/ClearCostmapAroundPose_Request")
+class ClearCostmapAroundPoseRequest(Message):
+    """Clear the square of side ``reset_distance`` (m) centred on ``pose`` (in ``map``)."""
+
+    pose: PoseStamped = field(default_factory=PoseStamped)
+    reset_distance: float = 0.0
+
+
+@message("nav2_msgs/srv/ClearCostmapAroundPose_Response")
+class ClearCostmapAroundPoseResponse(Message):
+    response: Empty = field(default_factory=Empty)
+
+
+CLEAR_COSTMAP_EXCEPT_REGION = ServiceType(
+    "nav2_msgs/srv/ClearCostmapExceptRegion",
+    ClearCostmapExceptRegionRequest,
+    ClearCostmapExceptRegionResponse,
+)
+CLEAR_COSTMAP_AROUND_ROBOT = ServiceType(
+    "nav2_msgs/srv/ClearCostmapAroundRobot", ClearCostmapAroundRobotRequest, ClearCostmapAroundRobotResponse
+)
+CLEAR_COSTMAP_AROUND_POSE = ServiceType(
+    "nav2_msgs/srv/ClearCostmapAroundPose", ClearCostmapAroundPoseRequest, ClearCostmapAroundPoseResponse
+)
+
+
+def region_clear_service(costmap: str, what: str) -> str:
+    """``("local", "around_robot")`` -> ``local_costmap/clear_costmap_around_robot`` (Nav2's names)."""
+    return f"{costmap}_costmap/clear_costmap_{what}"
+
+
+#: Nav2's region clears, each on both costmaps: (what, type).
+REGION_CLEARS: tuple[tuple[str, ServiceType[Any, Any]], ...] = (
+    ("except_region", CLEAR_COSTMAP_EXCEPT_REGION),
+    ("around_robot", CLEAR_COSTMAP_AROUND_ROBOT),
+    ("around_pose", CLEAR_COSTMAP_AROUND_POSE),
+)

@@ -23,7 +23,9 @@ from shared.interfaces.costmap import (
     GLOBAL_COSTMAP_GET,
     LOCAL_COSTMAP_CLEAR,
     LOCAL_COSTMAP_GET,
+    REGION_CLEARS,
     GetCostmapResponse,
+    region_clear_service,
 )
 from shared.interfaces.docking import DOCK_ROBOT, UNDOCK_ROBOT
 from shared.interfaces.lifecycle import (
@@ -196,6 +198,11 @@ SERVICES: tuple[BridgedService, ...] = (
             name, interfaces.CLEAR_ENTIRE_COSTMAP, "planner", CLEAR_ENTIRE_COSTMAP, ClearEntireCostmapResponse
         )
         for name in (GLOBAL_COSTMAP_CLEAR, LOCAL_COSTMAP_CLEAR)
+    ),
+    *(
+        BridgedService(region_clear_service(costmap, what), srv.type_name, "planner", srv, srv.response)
+        for costmap in ("global", "local")
+        for what, srv in REGION_CLEARS
     ),
     BridgedService(LOAD_MAP_SERVICE, interfaces.LOAD_MAP, "planner", LOAD_MAP, _map_not_loaded, wait_s=30.0),
     *(

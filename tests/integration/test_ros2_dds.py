@@ -150,6 +150,8 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     followed = check("follow_path")
     assert math.dist(followed["FollowPath"]["pose_after"][:2], (1.0, 4.2)) < 0.3, followed
     assert "MPPI" in followed["MPPI"]["error_msg"], followed
+    lifecycle = check("lifecycle")
+    assert lifecycle["startup_s"] < 10.0, lifecycle  # lifecycleStartup() returns, it does not wait
     check("goal_pose")
     check("cancel")
     check("dock_robot")

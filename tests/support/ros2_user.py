@@ -7,7 +7,7 @@ first what a Nav2 script's ``waitUntilNav2Active()`` does (``amcl/get_state`` un
 ``/initialpose`` until ``/amcl_pose`` comes, ``bt_navigator/get_state``; the protocol, written here), then
 lists nodes and topics, echoes ``/battery_status``, joins ``/map`` late (TRANSIENT_LOCAL), follows ``/clock``
 with ``use_sim_time``, drives with ``/cmd_vel`` (Twist, then TwistStamped) and watches ``/odom``, sends NavigateToPose and DockRobot
-goals (feedback, result, CHARGING), sends a ``/goal_pose`` and sees the robot arrive, cancels a goal, sends what zendock refuses, sets the localiser's belief with ``/initialpose``, and, after printing ``{"step": "stop_planner"}``, waits
+goals (feedback, result, CHARGING), asks Nav2's lifecycle managers to start up, pause and resume, sends a ``/goal_pose`` and sees the robot arrive, cancels a goal, sends what zendock refuses, sets the localiser's belief with ``/initialpose``, and, after printing ``{"step": "stop_planner"}``, waits
 for ``/planner`` to leave the graph. It imports nothing of zendock's.
 """
 
@@ -44,7 +44,14 @@ from nav2_msgs.action import (
     UndockRobot,
     Wait,
 )
-from nav2_msgs.srv import ClearEntireCostmap, GetCostmap
+from nav2_msgs.srv import (
+    ClearCostmapAroundPose,
+    ClearCostmapAroundRobot,
+    ClearCostmapExceptRegion,
+    ClearEntireCostmap,
+    GetCostmap,
+    ManageLifecycleNodes,
+)
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
@@ -139,13 +146,34 @@ class User:
             self.node.destroy_client(client)
 
     def costmaps(self) -> None:
-        """``clearAllCostmaps()`` (local, then global), ``getGlobalCostmap()`` and ``getLocalCostmap()``."""
+        """``clearAllCostmaps()`` (local, then global), the local costmap's region clears, ``getGlobalCostmap()``
+        and ``getLocalCostmap()``."""
         cleared = [
             self._call(ClearEntireCostmap, name) is not None
             for name in (
                 "local_costmap/clear_entirely_local_costmap",
                 "global_costmap/clear_entirely_global_costmap",
             )
+        ]
+
+        def distance(value: float) -> Callable[[Any], None]:
+            def fill(request: Any) -> None:
+                request.reset_distance = value
+
+            return fill
+
+        def around_pose(request: Any) -> None:
+            request.pose = _map_pose(1.0, 4.2)
+            request.reset_distance = 1.0
+
+        # clearCostmapExceptRegion(), clearCostmapAroundRobot(), clearCostmapAroundPose(): the local costmap's
+        region = [
+            self._call(ClearCostmapExceptRegion, "local_costmap/clear_costmap_except_region", distance(3.0))
+            is not None,
+            self._call(ClearCostmapAroundRobot, "local_costmap/clear_costmap_around_robot", distance(1.0))
+            is not None,
+            self._call(ClearCostmapAroundPose, "local_costmap/clear_costmap_around_pose", around_pose)
+            is not None,
         ]
         got = {}
         for which in ("global", "local"):
@@ -165,8 +193,10 @@ class User:
         report(
             "costmaps",
             all(cleared)
+            and all(region)
             and all(g is not None and g["cells"] == g["size"][0] * g["size"][1] > 0 for g in got.values()),
             cleared=cleared,
+            region=region,
             **got,
         )
 
@@ -653,6 +683,62 @@ class User:
             **outcomes,
         )
 
+    def lifecycle(self) -> None:
+        """``lifecycleStartup()``'s protocol: every ``nav2_msgs/srv/ManageLifecycleNodes`` service in the graph
+        asked to ``STARTUP`` (a running stack is already active: each answers, ``success: false``). Then a
+        ``PAUSE`` of the navigation manager: ``bt_navigator`` says ``inactive`` and refuses a navigate goal,
+        until a ``RESUME``."""
+        managers = sorted(
+            name
+            for name, types in self.node.get_service_names_and_types()
+            if "nav2_msgs/srv/ManageLifecycleNodes" in types
+        )
+
+        def command(value: int) -> Callable[[Any], None]:
+            def fill(request: Any) -> None:
+                request.command = value
+
+            return fill
+
+        started = time.monotonic()
+        startup = {}
+        for name in managers:
+            reply = self._call(
+                ManageLifecycleNodes, name, command(ManageLifecycleNodes.Request.STARTUP), 30.0
+            )
+            startup[name] = None if reply is None else reply.success
+        startup_s = round(time.monotonic() - started, 2)
+        navigation = "/lifecycle_manager_navigation/manage_nodes"
+        paused = self._call(
+            ManageLifecycleNodes, navigation, command(ManageLifecycleNodes.Request.PAUSE), 30.0
+        )
+        state_paused = self._lifecycle_state("bt_navigator", 10.0)
+        goal = NavigateToPose.Goal()
+        goal.pose = _map_pose(1.0, 4.2)
+        refused = self.run_goal(ActionClient(self.node, NavigateToPose, "navigate_to_pose"), goal, 10.0)
+        resumed = self._call(
+            ManageLifecycleNodes, navigation, command(ManageLifecycleNodes.Request.RESUME), 30.0
+        )
+        state_resumed = self._lifecycle_state("bt_navigator", 10.0)
+        report(
+            "lifecycle",
+            managers == ["/lifecycle_manager_localization/manage_nodes", navigation]
+            and set(startup.values()) == {False}
+            and paused is not None
+            and paused.success
+            and state_paused == "inactive"
+            and refused.get("accepted") is False
+            and resumed is not None
+            and resumed.success
+            and state_resumed == "active",
+            managers=managers,
+            startup=startup,
+            startup_s=startup_s,
+            paused=state_paused,
+            goal_while_paused=refused,
+            resumed=state_resumed,
+        )
+
     def goal_pose(self) -> None:
         """RViz's 2D Goal Pose: a PoseStamped on /goal_pose, and the robot drives there."""
         target = (0.5, 2.6, -math.pi / 2)
@@ -839,6 +925,7 @@ STEPS = (
     "behaviors",
     "sequences",
     "follow_path",
+    "lifecycle",
     "goal_pose",
     "cancel",
     "dock",

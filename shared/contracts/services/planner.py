@@ -13,6 +13,8 @@ from shared.interfaces.costmap import (
     GLOBAL_COSTMAP_GET,
     LOCAL_COSTMAP_CLEAR,
     LOCAL_COSTMAP_GET,
+    REGION_CLEARS,
+    region_clear_service,
 )
 from shared.interfaces.map_server import COSTMAP_TOPIC, GET_MAP, GET_MAP_SERVICE
 from shared.interfaces.navigation import (
@@ -75,6 +77,22 @@ CONTRACT = Contract(
             LOCAL_COSTMAP_CLEAR,
             CLEAR_ENTIRE_COSTMAP,
             about="forget the lidar's marks and the glass round the robot",
+        ),
+        *(
+            Request(
+                region_clear_service(costmap, what),
+                srv,
+                about={
+                    "except_region": "forget the lidar's marks and the glass memory outside the square of side "
+                    "reset_distance round the robot",
+                    "around_robot": "forget the lidar's marks and the glass memory inside the square of side "
+                    "reset_distance round the robot",
+                    "around_pose": "forget the lidar's marks and the glass memory inside the square of side "
+                    "reset_distance round the pose (in map)",
+                }[what],
+            )
+            for costmap in ("global", "local")
+            for what, srv in REGION_CLEARS
         ),
         *lifecycle_requests("planner"),
     ),

@@ -288,3 +288,26 @@ def test_inflating_round_the_changes_gives_the_whole_grid_inflated_anew(seed: in
         if scan is not None:
             costmap.update_with_scan(*scan)  # the same scan again: the layers are as they were
             assert costmap.grid() is before
+
+
+def test_a_square_clear_forgets_marks_inside_it_or_everywhere_else() -> None:
+    """Nav2's region clears: the square of side reset_distance round a point, or all but it."""
+    costmap = LayeredCostmap(_free_map())
+    sensor = (1.5, 1.5)
+    marks = np.array([[1.7, 1.5], [2.8, 1.5]])  # 0.2 m and 1.3 m from the square's centre
+    costmap.update_with_scan(sensor, marks)
+    frame = costmap.frame
+    near, far = frame.world_to_cell(1.7, 1.5), frame.world_to_cell(2.8, 1.5)
+    layer = costmap.obstacle_layer
+    assert layer[near[1], near[0]] == layer[far[1], far[0]] == LETHAL_OBSTACLE
+
+    inside = frame.cells_in_square(sensor, 1.0)
+    assert len(inside) == 20 * 20  # 1 m at 0.05 m: the centres within 0.5 m each way
+    costmap.clear_cells(inside)
+    assert layer[near[1], near[0]] == NO_INFORMATION and layer[far[1], far[0]] == LETHAL_OBSTACLE
+
+    costmap.update_with_scan(sensor, marks)
+    outside = frame.cells_in_square(sensor, 1.0, outside=True)
+    assert len(outside) + len(inside) == 60 * 60
+    costmap.clear_cells(outside)
+    assert layer[near[1], near[0]] == LETHAL_OBSTACLE and layer[far[1], far[0]] == NO_INFORMATION

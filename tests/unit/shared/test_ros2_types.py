@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from services.ros2_bridge.actions import ACTIONS
+from shared.geometry import Pose2D
 from shared.interface_types import (
     UUID,
     CancelGoalRequest,
@@ -35,7 +36,18 @@ from shared.interfaces.behaviors import (
     WaitFeedback,
     WaitGoal,
 )
-from shared.interfaces.costmap import Costmap, CostmapMetaData, GetCostmapRequest, GetCostmapResponse
+from shared.interfaces.costmap import (
+    ClearCostmapAroundPoseRequest,
+    ClearCostmapAroundPoseResponse,
+    ClearCostmapAroundRobotRequest,
+    ClearCostmapAroundRobotResponse,
+    ClearCostmapExceptRegionRequest,
+    ClearCostmapExceptRegionResponse,
+    Costmap,
+    CostmapMetaData,
+    GetCostmapRequest,
+    GetCostmapResponse,
+)
 from shared.interfaces.docking import (
     DOCK_ROBOT,
     UNDOCK_ROBOT,
@@ -156,6 +168,14 @@ EXAMPLES: dict[str, Message] = {
     "lifecycle_msgs/srv/ChangeState_Request": ChangeStateRequest(Transition(id=4, label="deactivate")),
     "lifecycle_msgs/srv/ChangeState_Response": ChangeStateResponse(success=True),
     "nav2_msgs/srv/ManageLifecycleNodes_Request": ManageLifecycleNodesRequest(command=1),
+    "nav2_msgs/srv/ClearCostmapExceptRegion_Request": ClearCostmapExceptRegionRequest(reset_distance=1.5),
+    "nav2_msgs/srv/ClearCostmapExceptRegion_Response": ClearCostmapExceptRegionResponse(),
+    "nav2_msgs/srv/ClearCostmapAroundRobot_Request": ClearCostmapAroundRobotRequest(reset_distance=0.5),
+    "nav2_msgs/srv/ClearCostmapAroundRobot_Response": ClearCostmapAroundRobotResponse(),
+    "nav2_msgs/srv/ClearCostmapAroundPose_Request": ClearCostmapAroundPoseRequest(
+        PoseStamped(Header(Time(3, 0), "map"), Pose.from_pose2d(Pose2D(1.0, 2.0, 0.5))), 0.75
+    ),
+    "nav2_msgs/srv/ClearCostmapAroundPose_Response": ClearCostmapAroundPoseResponse(),
     "nav2_msgs/srv/ManageLifecycleNodes_Response": ManageLifecycleNodesResponse(success=True),
     "nav2_msgs/srv/GetCostmap_Request": GetCostmapRequest(),
     "nav2_msgs/srv/GetCostmap_Response": GetCostmapResponse(
@@ -513,6 +533,18 @@ def test_nav2_costmap_and_map_service_hashes_are_rosidls() -> None:
     )
     assert types.type_hash("nav2_msgs/srv/LoadMap") == (
         "RIHS01_eb875de5ea9bb394573effc3f239015b19869dd7a8988136768372c6ef907ec1"
+    )
+    assert types.type_hash("nav2_msgs/srv/ManageLifecycleNodes") == (
+        "RIHS01_1850f4f677251bb8f7744e3c0a87ef4f66c205e2f8740a8330251af7d1804460"
+    )
+    assert types.type_hash("nav2_msgs/srv/ClearCostmapAroundPose") == (
+        "RIHS01_cd006590d0a7b5a357138518c1ac6f733782a0317f5d8fc92f46158e5438138c"
+    )
+    assert types.type_hash("nav2_msgs/srv/ClearCostmapAroundRobot") == (
+        "RIHS01_24973b6e8b3e7ec70c37d6b411f1e32cef44051dfe7f34ad0ee7d6d9055cd6ea"
+    )
+    assert types.type_hash("nav2_msgs/srv/ClearCostmapExceptRegion") == (
+        "RIHS01_66032323269ef923ab356273a7b7fc1c5acd9ccd46cd14bdcd265642a4012b05"
     )
     assert types.type_hash("nav2_msgs/msg/Costmap") == (
         "RIHS01_d51bf7aecafdbb3f8f98215de648abe6d53f8db69156d6e143125d2ad2bf0027"
