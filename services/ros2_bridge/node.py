@@ -14,6 +14,8 @@ them on rmw_zenoh's data keys:
   AdvancedSubscriber with history and late-publisher detection) takes the cached samples itself.
 * Every sample's attachment carries what rmw_zenoh's does: a sequence number starting at 1 and the
   publisher's gid, the hash of its liveliness token key (:func:`shared.ros2.wire.entity_gid`).
+* Each node serves ``rcl_interfaces``' parameter services (``ros2 param``), answered from its zendock
+  service's parameters (:mod:`.parameters`).
 * ROS 2 -> zendock: ``/cmd_vel`` (Twist or TwistStamped) drives the robot; ``/goal_pose`` (what RViz's
   goal tool sends) becomes a ``navigate_to_pose`` goal; ``/initialpose`` (RViz's pose estimate) sets what
   the simulated localiser believes (``simulator/set_localisation``).
@@ -37,12 +39,14 @@ from pydantic import Field, field_validator
 from services.ros2_bridge.actions import ACTIONS, SERVICES, ActionRelay, QueryRelay
 from services.ros2_bridge.demand import PeerSubscriptions
 from services.ros2_bridge.graph import GraphMirror
+from services.ros2_bridge.parameters import ParameterRelay
 from shared.messages import PoseStamped
 from shared.names import node_token_key, parse_token_key
 from shared.navigation import NavigationClient
 from shared.node import SENSOR_DATA, Node, QoS, Subscription
 from shared.parameters import ServiceParams
 from shared.ratelimit import RateLimitedLogger
+from shared.ros2 import interfaces as ros_interfaces
 from shared.ros2 import types as ros_types
 from shared.ros2.bridge_routes import (
     INBOUND,
@@ -138,6 +142,7 @@ class Ros2Bridge:
             self._open_inlet(ros_topic, [i for i in INBOUND if i.ros_topic == ros_topic])
         self.actions = [self._open_action(action) for action in ACTIONS]
         self.services = self._open_services()
+        self.parameters = self._open_parameters()
         # zendock's services, past and future: which of them ROS 2 sees.
         self._services_watch = self.session.liveliness().declare_subscriber(
             node_token_key(node.namespace, "*"), self._on_service_token, history=True
@@ -371,6 +376,17 @@ class Ros2Bridge:
             relay.serve(name, relayed, bridged.name)
         return relay
 
+    def _open_parameters(self) -> ParameterRelay:
+        """Each node's ``rcl_interfaces`` parameter services, answered from its zendock service's parameters."""
+        relay = ParameterRelay(self.node, self.params.domain_id, self._refuse, self._count)
+        for owner in self.graph.nodes:
+            for verb, (ros_type, _request, _response) in ros_interfaces.PARAMETER_SERVICES.items():
+                name = self.ros_topic(f"{owner}/{verb}")
+                type_hash = ros_types.type_hash(ros_type)
+                self._declare_endpoint(owner, EntityKind.SERVICE, name, ros_type, type_hash, ROS_RELIABLE)
+                relay.serve(owner, verb, name)
+        return relay
+
     def _count(self, what: str) -> None:
         self.counts[what] += 1
 
@@ -393,6 +409,7 @@ class Ros2Bridge:
         for relay in self.actions:
             relay.close()
         self.services.close()
+        self.parameters.close()
         for outlet in self.outlets.values():
             outlet.publisher.undeclare()
         self.graph.close()

@@ -95,6 +95,35 @@ GET_STATE = "lifecycle_msgs/srv/GetState"
 _GET_STATE_RESPONSE = "lifecycle_msgs/State current_state"
 #: lifecycle_msgs/srv/ChangeState (rcl_interfaces): what Nav2's lifecycle managers ask of each node.
 CHANGE_STATE = "lifecycle_msgs/srv/ChangeState"
+#: rcl_interfaces' parameter services (every ROS 2 node's ``~/<name>``): name -> (type, request, response).
+PARAMETER_SERVICES: dict[str, tuple[str, str, str]] = {
+    "list_parameters": (
+        "rcl_interfaces/srv/ListParameters",
+        "uint64 DEPTH_RECURSIVE=0\nstring[] prefixes\nuint64 depth",
+        "rcl_interfaces/ListParametersResult result",
+    ),
+    "get_parameters": (
+        "rcl_interfaces/srv/GetParameters",
+        "string[] names",
+        "rcl_interfaces/ParameterValue[] values",
+    ),
+    "set_parameters": (
+        "rcl_interfaces/srv/SetParameters",
+        "rcl_interfaces/Parameter[] parameters",
+        "rcl_interfaces/SetParametersResult[] results",
+    ),
+    "set_parameters_atomically": (
+        "rcl_interfaces/srv/SetParametersAtomically",
+        "rcl_interfaces/Parameter[] parameters",
+        "rcl_interfaces/SetParametersResult result",
+    ),
+    "describe_parameters": (
+        "rcl_interfaces/srv/DescribeParameters",
+        "string[] names",
+        "rcl_interfaces/ParameterDescriptor[] descriptors",
+    ),
+    "get_parameter_types": ("rcl_interfaces/srv/GetParameterTypes", "string[] names", "uint8[] types"),
+}
 #: action_msgs/srv/CancelGoal (rcl_interfaces), request and response.
 _CANCEL_REQUEST = "action_msgs/GoalInfo goal_info"
 _CANCEL_RESPONSE = "int8 return_code\naction_msgs/GoalInfo[] goals_canceling"
@@ -127,6 +156,8 @@ def definitions() -> TypeDefs:
     defs.update(package_services("nav2_msgs"))
     defs.update(service_definitions(GET_STATE, "", _GET_STATE_RESPONSE))
     defs.update(service_definitions(CHANGE_STATE, "lifecycle_msgs/Transition transition", "bool success"))
+    for service, request, response in PARAMETER_SERVICES.values():
+        defs.update(service_definitions(service, request, response))
     for action in ACTIONS:
         goal, result, feedback = action_text(action)
         defs.update(_messages(goal, f"{action}_Goal"))

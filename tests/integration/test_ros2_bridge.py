@@ -320,6 +320,28 @@ def test_a_ros2_peer_asks_what_a_nav2_script_asks_of_nav2s_servers(
     wait = _peer(router_endpoint, "action", "/wait", "nav2_msgs/action/Wait", '{"time": {"sec": 1}}')
     assert wait[1]["status"] == 4 and wait[1]["feedback"] > 0, wait  # SUCCEEDED, with time_left on the way
     assert wait[1]["result"]["total_elapsed_time"]["sec"] >= 1, wait
+    # ros2 param: the planner's parameters as its ROS 2 node's, a read-only one refused with zendock's reason
+    params = ("/planner/list_parameters", "rcl_interfaces/srv/ListParameters")
+    names = _peer(router_endpoint, "call", *params)[0]["response"]["result"]["names"]
+    assert "use_sim_time" in names and "waypoint_stop_on_failure" in names, names
+    describe = ("call", "/planner/describe_parameters", "rcl_interfaces/srv/DescribeParameters")
+    described = _peer(
+        router_endpoint, *describe, json.dumps({"names": ["use_sim_time", "waypoint_stop_on_failure"]})
+    )
+    sim_time, stop = described[0]["response"]["descriptors"]
+    assert sim_time["read_only"] and sim_time["type"] == 1 and not stop["read_only"], described
+    get = ("call", "/planner/get_parameters", "rcl_interfaces/srv/GetParameters")
+    value = _peer(router_endpoint, *get, json.dumps({"names": ["waypoint_stop_on_failure"]}))[0]
+    current = value["response"]["values"][0]
+    assert current["type"] == 1, value  # BOOL
+    flip = {"type": 1, "bool_value": not current["bool_value"]}
+    set_ = ("call", "/planner/set_parameters", "rcl_interfaces/srv/SetParameters")
+    both = [{"name": "waypoint_stop_on_failure", "value": flip}, {"name": "use_sim_time", "value": flip}]
+    results = _peer(router_endpoint, *set_, json.dumps({"parameters": both}))[0]["response"]["results"]
+    assert results[0]["successful"], results
+    assert not results[1]["successful"] and "read at start-up" in results[1]["reason"], results
+    again = _peer(router_endpoint, *get, json.dumps({"names": ["waypoint_stop_on_failure"]}))[0]
+    assert again["response"]["values"][0]["bool_value"] == flip["bool_value"], again
     # getPath(): from a given start (there is no robot pose here), then without one (Nav2's TF_ERROR).
     staging = {
         "header": {"frame_id": "map"},

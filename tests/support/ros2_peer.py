@@ -71,8 +71,14 @@ def _fill(cls: Any, data: dict[str, Any], store: Any) -> Any:
             values[name] = given if given is not None else default
         elif kind == 3 and given is None:  # a fixed array (a covariance): zeros of its length
             values[name] = np.zeros(detail[1], dtype=np.float64)
-        else:
-            values[name] = np.asarray(given or [], dtype=np.float64)
+        else:  # a sequence, or a fixed array given: of messages, of strings, or of numbers
+            (sub_kind, sub_detail), _length = detail
+            if sub_kind == 2:
+                values[name] = [_fill(store.types[sub_detail], item, store) for item in given or []]
+            elif sub_kind == 1 and sub_detail[0] == "string":
+                values[name] = list(given or [])
+            else:
+                values[name] = np.asarray(given or [], dtype=np.float64)
     return cls(**values)
 
 

@@ -522,6 +522,21 @@ def test_lifecycle_change_state_hash_is_jazzys() -> None:
     )
 
 
+def test_parameter_service_hashes_are_jazzys() -> None:
+    """``type_hashes`` in ``share/rcl_interfaces/srv/*.json`` of Jazzy's rcl_interfaces (PyPI): what
+    ``ros2 param`` asks on rmw_zenoh's keys."""
+    expected = {
+        "ListParameters": "3e6062bfbb27bfb8730d4cef2558221f51a11646d78e7bb30a1e83afac3aad9d",
+        "GetParameters": "bf9803d5c74cf989a5de3e0c2e99444599a627c7ff75f97b8c05b01003675cbc",
+        "SetParameters": "56eed9a67e169f9cb6c1f987bc88f868c14a8fc9f743a263bc734c154015d7e0",
+        "SetParametersAtomically": "0e192ef259c07fc3c07a13191d27002222e65e00ccec653ca05e856f79285fcd",
+        "DescribeParameters": "845b484d71eb0673dae682f2e3ba3c4851a65a3dcfb97bddd82c5b57e91e4cff",
+        "GetParameterTypes": "da199c878688b3e530bdfe3ca8f74cb9fa0c303101e980a9e8f260e25e1c80ca",
+    }
+    for name, digest in expected.items():
+        assert types.type_hash(f"rcl_interfaces/srv/{name}") == f"RIHS01_{digest}", name
+
+
 def test_nav2_costmap_and_map_service_hashes_are_rosidls() -> None:
     """The values are ``type_hashes`` in ``share/nav2_msgs/srv/*.json`` and ``msg/Costmap.json`` as rosidl
     generates them (``make ros2``) from the same Jazzy definitions (Nav2 jazzy f4108e5b)."""
