@@ -211,8 +211,8 @@ class User:
         return self._call(srv_type, f"/{node}/{name}", fill)
 
     def parameters(self) -> None:
-        """``ros2 param list /docking``, ``get /docking use_sim_time``, ``get|set /docking auto_dock``, a
-        refused set of a read-only parameter, ``describe``; auto_dock is put back as it was."""
+        """``ros2 param list /docking``, ``get /docking use_sim_time`` (and the simulator's), ``get|set /docking
+        auto_dock``, a refused set of a read-only parameter, ``describe``; auto_dock is put back as it was."""
 
         def names(r: Any) -> None:
             r.names = ["auto_dock", "dock_database"]
@@ -222,6 +222,10 @@ class User:
 
         listed = self._param_call(ListParameters, "docking", lambda r: None)
         sim_time = self._param_call(GetParameters, "docking", lambda r: setattr(r, "names", ["use_sim_time"]))
+        # the simulator makes the clock rather than following it: its use_sim_time is false
+        clock_maker = self._param_call(
+            GetParameters, "simulator", lambda r: setattr(r, "names", ["use_sim_time"])
+        )
         before = self._param_call(GetParameters, "docking", names)
         described = self._param_call(DescribeParameters, "docking", names)
         off = self._param_call(
@@ -243,6 +247,7 @@ class User:
         details = {
             "listed": sorted(listed.result.names) if listed else None,
             "use_sim_time": sim_time.values[0].bool_value if sim_time else None,
+            "simulator_use_sim_time": clock_maker.values[0].bool_value if clock_maker else None,
             "auto_dock_before": before.values[0].bool_value if before else None,
             "read_only": [d.read_only for d in described.descriptors] if described else None,
             "set_off": off.results[0].successful if off else None,
@@ -254,6 +259,7 @@ class User:
             details["listed"] is not None
             and "auto_dock" in details["listed"]
             and details["use_sim_time"] is True
+            and details["simulator_use_sim_time"] is False
             and details["auto_dock_before"] is True
             and details["read_only"] == [False, True]
             and details["set_off"] is True
