@@ -19,22 +19,12 @@ from typing import Any
 import numpy as np
 import zenoh
 
-from shared.interfaces.parameters import (
-    LIST_PARAMETERS,
-    SET_PARAMETER,
-    ListParametersRequest,
-    SetParameterRequest,
-)
-from shared.interfaces.parameters import ParameterDescriptor as ZendockDescriptor
-from shared.names import parameter_service, topic_key
-from shared.node import Node, ServiceError, call_service
+from shared.node import Node
 from shared.ros2 import interfaces, parameter_values
 from shared.ros2 import types as ros_types
-from shared.ros2.parameter_answers import ParameterAnswers, SetOutcome, Value
+from shared.ros2.parameter_answers import ParameterAnswers, SetOutcome, Value, answers_from_bus
 from shared.ros2.wire import Attachment, data_key
 
-#: How long a parameter request waits for the zendock node (s).
-PARAMETER_WAIT_S = 5.0
 #: A numeric array field's dtype in rosbags' messages.
 _ARRAY_DTYPES = {
     "bool_array_value": np.bool_,
@@ -117,7 +107,7 @@ class ParameterRelay:
         """Answer ROS 2's ``ros_name`` (``/<node>/<verb>``, fully qualified) for zendock's ``owner``."""
         ros_type = interfaces.PARAMETER_SERVICES[verb][0]
         key = data_key(self._domain_id, ros_name, ros_type, ros_types.type_hash(ros_type))
-        answers = ParameterAnswers(lambda: self._fetch(owner), lambda n, v: self._store(owner, n, v))
+        answers = answers_from_bus(self._node.session, self._node.namespace, owner)
 
         def on_query(query: zenoh.Query) -> None:
             payload = query.payload.to_bytes() if query.payload is not None else b""
@@ -156,32 +146,6 @@ class ParameterRelay:
             query.reply_err(f"{where}: internal error".encode())
         finally:
             query.drop()
-
-    def _key(self, owner: str, verb: str) -> str:
-        return topic_key(self._node.namespace, parameter_service(owner, verb))
-
-    def _fetch(self, owner: str) -> dict[str, ZendockDescriptor]:
-        try:
-            reply = call_service(
-                self._node.session,
-                self._key(owner, "list"),
-                LIST_PARAMETERS,
-                ListParametersRequest(),
-                PARAMETER_WAIT_S,
-            )
-        except ServiceError:
-            return {}
-        return {p.name: p for p in reply.parameters}
-
-    def _store(self, owner: str, name: str, value_json: str) -> SetOutcome:
-        request = SetParameterRequest(name=name, value_json=value_json)
-        try:
-            reply = call_service(
-                self._node.session, self._key(owner, "set"), SET_PARAMETER, request, PARAMETER_WAIT_S
-            )
-        except ServiceError as exc:
-            return False, f"{name}: {exc}"
-        return reply.successful, reply.reason
 
     def close(self) -> None:
         for queryable in self._queryables:

@@ -26,20 +26,9 @@ from rcl_interfaces.srv import (
     SetParametersAtomically,
 )
 
-from shared.interfaces.parameters import (
-    LIST_PARAMETERS,
-    SET_PARAMETER,
-    ListParametersRequest,
-    SetParameterRequest,
-)
-from shared.interfaces.parameters import ParameterDescriptor as ZendockDescriptor
-from shared.names import parameter_service, topic_key
-from shared.node import Node, ServiceError, call_service
+from shared.node import Node
 from shared.ros2 import parameter_values
-from shared.ros2.parameter_answers import ParameterAnswers, SetOutcome, Value
-
-#: How long a ROS 2 parameter request waits for the zendock node.
-PARAMETER_WAIT_S = 5.0
+from shared.ros2.parameter_answers import SetOutcome, Value, answers_from_bus
 
 
 def ros_value(value: Value) -> Any:
@@ -63,9 +52,7 @@ class ParameterRelay:
     """The parameter services of one face node, answering from zendock's node ``owner``."""
 
     def __init__(self, zendock: Node, rnode: Any, owner: str, callback_group: Any) -> None:
-        self._zendock = zendock
-        self._owner = owner
-        self._answers = ParameterAnswers(self._fetch, self._store)
+        self._answers = answers_from_bus(zendock.session, zendock.namespace, owner)
         self.services = [
             rnode.create_service(srv, f"~/{name}", handler, callback_group=callback_group)
             for srv, name, handler in (
@@ -77,33 +64,6 @@ class ParameterRelay:
                 (GetParameterTypes, "get_parameter_types", self._types),
             )
         ]
-
-    def _key(self, verb: str) -> str:
-        return topic_key(self._zendock.namespace, parameter_service(self._owner, verb))
-
-    def _fetch(self) -> dict[str, ZendockDescriptor]:
-        """Every parameter of the zendock node, by name (empty when it does not answer: ROS 2 sees none)."""
-        try:
-            reply = call_service(
-                self._zendock.session,
-                self._key("list"),
-                LIST_PARAMETERS,
-                ListParametersRequest(),
-                PARAMETER_WAIT_S,
-            )
-        except ServiceError:
-            return {}
-        return {p.name: p for p in reply.parameters}
-
-    def _store(self, name: str, value_json: str) -> SetOutcome:
-        request = SetParameterRequest(name=name, value_json=value_json)
-        try:
-            reply = call_service(
-                self._zendock.session, self._key("set"), SET_PARAMETER, request, PARAMETER_WAIT_S
-            )
-        except ServiceError as exc:
-            return False, f"{name}: {exc}"
-        return reply.successful, reply.reason
 
     def _list(self, request: Any, response: Any) -> Any:
         names, prefixes = self._answers.names(list(request.prefixes))

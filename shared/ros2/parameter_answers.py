@@ -6,7 +6,8 @@ answer is the same and is decided here, from the zendock node's parameter list (
 :mod:`shared.parameter_server`) and its ``_param/set``: names and prefixes, values and types (through
 :mod:`shared.ros2.parameter_values`), descriptors with a read-only parameter marked so, and sets, one at
 a time (an atomic set of more than one is refused). A face turns these plain answers into its messages.
-Pure: the two zendock calls are passed in.
+:class:`ParameterAnswers` takes the two zendock calls as functions (tests pass their own);
+:func:`answers_from_bus` makes them blocking requests to the zendock node, from a face's own thread.
 """
 
 from __future__ import annotations
@@ -16,8 +17,21 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import zenoh
+
+from shared.interfaces.parameters import (
+    LIST_PARAMETERS,
+    SET_PARAMETER,
+    ListParametersRequest,
+    SetParameterRequest,
+)
 from shared.interfaces.parameters import ParameterDescriptor as ZendockDescriptor
+from shared.names import parameter_service, topic_key
+from shared.node import ServiceError, call_service
 from shared.ros2 import parameter_values
+
+#: How long a ROS 2 parameter request waits for the zendock node (s).
+PARAMETER_WAIT_S = 5.0
 
 #: ``(successful, reason)`` of setting one parameter.
 SetOutcome = tuple[bool, str]
@@ -116,3 +130,30 @@ class ParameterAnswers:
 def _value(descriptor: ZendockDescriptor) -> Value:
     type_code, field_value = parameter_values.to_ros(json.loads(descriptor.value_json))
     return Value(type_code, field_value)
+
+
+def answers_from_bus(
+    session: zenoh.Session, namespace: str, owner: str, wait_s: float = PARAMETER_WAIT_S
+) -> ParameterAnswers:
+    """Answers for zendock's node ``owner`` in ``namespace``, asking its ``_param/list`` and ``_param/set``
+    (blocking: call from a thread that may wait, never a Zenoh callback)."""
+
+    def key(verb: str) -> str:
+        return topic_key(namespace, parameter_service(owner, verb))
+
+    def fetch() -> dict[str, ZendockDescriptor]:
+        try:
+            reply = call_service(session, key("list"), LIST_PARAMETERS, ListParametersRequest(), wait_s)
+        except ServiceError:
+            return {}  # the node does not answer: ROS 2 sees no parameters
+        return {p.name: p for p in reply.parameters}
+
+    def store(name: str, value_json: str) -> SetOutcome:
+        request = SetParameterRequest(name=name, value_json=value_json)
+        try:
+            reply = call_service(session, key("set"), SET_PARAMETER, request, wait_s)
+        except ServiceError as exc:
+            return False, f"{name}: {exc}"
+        return reply.successful, reply.reason
+
+    return ParameterAnswers(fetch, store)
