@@ -30,7 +30,6 @@ from shared.interfaces.lifecycle import (
     Transition,
 )
 from shared.lifecycle import NodeLifecycle, managed_state, plan
-from shared.lifecycle import State as LifecycleState
 from shared.nav2_stand_ins import (
     NAV2_WORK,
     LifecycleManager,
@@ -52,7 +51,6 @@ class StandInLifecycles:
         self._node = node
         self.nodes = {name: NodeLifecycle(name) for name in stand_ins(service)}
         self.managers = {m.name: m for m in managers_hosted_by(service)}
-        self.managed_states = {m.name: LifecycleState.ACTIVE for m in self.managers.values()}
         self.servers: list[Any] = []
         for name in self.nodes:
             self.servers.append(node.create_service(GET_STATE, get_state_service(name), self._getter(name)))
@@ -122,12 +120,16 @@ class StandInLifecycles:
 
         def finish() -> None:
             success = not failures
-            self.managed_states[manager.name] = managed_state(command, success)
+            managed = managed_state(command, success).label  # as Nav2's manager reports its nodes
             if success:
-                self._node.log.info("%s: command %d done", manager.name, command)
+                self._node.log.info("%s: command %d done: managed nodes %s", manager.name, command, managed)
             else:
                 self._node.log.warning(
-                    "%s: command %d failed: %s", manager.name, command, "; ".join(failures)
+                    "%s: command %d failed (managed nodes %s): %s",
+                    manager.name,
+                    command,
+                    managed,
+                    "; ".join(failures),
                 )
             answer.resolve(ManageLifecycleNodesResponse(success=success))
 
