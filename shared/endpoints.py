@@ -316,32 +316,24 @@ class Subscription(Generic[M]):
 
 class Deferred(Generic[Res]):
     """A service's answer still to come: a handler that must ask other services first (a lifecycle
-    manager asks each node it manages) returns one, and calls :meth:`resolve` (or :meth:`fail`) exactly
-    once, later, on the node's executor. The request stays open until then; the client's own timeout bounds
-    the wait."""
+    manager asks each node it manages) returns one, and calls :meth:`resolve` exactly once, later, on the
+    node's executor. The request stays open until then; the client's own timeout bounds the wait."""
 
     def __init__(self) -> None:
-        self._result: object = None
-        self._done = False
-        self._then: Callable[[object], None] | None = None
+        self._response: Res | None = None
+        self._then: Callable[[Res], None] | None = None
 
     def resolve(self, response: Res) -> None:
-        self._settle(response)
-
-    def fail(self, reason: str) -> None:
-        self._settle(ServiceError(reason))
-
-    def bind(self, then: Callable[[object], None]) -> None:
-        self._then = then
-        if self._done:
-            then(self._result)
-
-    def _settle(self, result: object) -> None:
-        if self._done:
+        if self._response is not None:
             raise RuntimeError("a deferred answer is given once")
-        self._done, self._result = True, result
+        self._response = response
         if self._then is not None:
-            self._then(result)
+            self._then(response)
+
+    def bind(self, then: Callable[[Res], None]) -> None:
+        self._then = then
+        if self._response is not None:
+            then(self._response)
 
 
 class ServiceServer(Generic[Req, Res]):
@@ -401,13 +393,11 @@ class ServiceServer(Generic[Req, Res]):
             )
         query.reply(self.key, response.encode(), encoding=encoding_for(self.srv.response.TYPE_NAME))
 
-    def _reply_later(self, query: zenoh.Query, result: object) -> None:
-        """A deferred answer: the response, or the exception that says why there is none."""
+    def _reply_later(self, query: zenoh.Query, response: object) -> None:
+        """A deferred answer, given."""
         try:
-            if isinstance(result, BaseException):
-                raise result
-            self._reply(query, result)
-        except (ServiceError, ValueError) as exc:
+            self._reply(query, response)
+        except ServiceError as exc:
             query.reply_err(str(exc).encode(), encoding=zenoh.Encoding("text/plain"))
         finally:
             query.drop()

@@ -13,7 +13,6 @@ manages over the bus, in Nav2's order (:mod:`shared.lifecycle`), so it reaches n
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 from shared.endpoints import Deferred, ServiceError
 from shared.interfaces.lifecycle import (
@@ -50,17 +49,12 @@ class StandInLifecycles:
     def __init__(self, node: Node, service: str) -> None:
         self._node = node
         self.nodes = {name: NodeLifecycle(name) for name in stand_ins(service)}
-        self.managers = {m.name: m for m in managers_hosted_by(service)}
-        self.servers: list[Any] = []
+        # the node holds its services and closes them with itself
         for name in self.nodes:
-            self.servers.append(node.create_service(GET_STATE, get_state_service(name), self._getter(name)))
-            self.servers.append(
-                node.create_service(CHANGE_STATE, change_state_service(name), self._changer(name))
-            )
-        for manager in self.managers.values():
-            self.servers.append(
-                node.create_service(MANAGE_LIFECYCLE_NODES, manager.manage_nodes, self._manager(manager))
-            )
+            node.create_service(GET_STATE, get_state_service(name), self._getter(name))
+            node.create_service(CHANGE_STATE, change_state_service(name), self._changer(name))
+        for manager in managers_hosted_by(service):
+            node.create_service(MANAGE_LIFECYCLE_NODES, manager.manage_nodes, self._manager(manager))
         if self.nodes:
             node.work_gate = self.refusal
 

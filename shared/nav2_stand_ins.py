@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from shared import topics
+
 #: Nav2 lifecycle node -> the zendock service that answers for it.
 NAV2_STAND_INS: dict[str, str] = {
     "amcl": "pose",
@@ -47,21 +49,21 @@ def change_state_service(nav2_node: str) -> str:
 
 #: Each of zendock's Nav2 actions -> the Nav2 node whose work it is (a node not active refuses it).
 NAV2_WORK: dict[str, str] = {
-    "navigate_to_pose": "bt_navigator",
-    "navigate_through_poses": "bt_navigator",
-    "compute_path_to_pose": "planner_server",
-    "compute_path_through_poses": "planner_server",
-    "follow_path": "controller_server",
-    "smooth_path": "smoother_server",
-    "spin": "behavior_server",
-    "backup": "behavior_server",
-    "drive_on_heading": "behavior_server",
-    "wait": "behavior_server",
-    "assisted_teleop": "behavior_server",
-    "follow_waypoints": "waypoint_follower",
-    "follow_gps_waypoints": "waypoint_follower",
-    "dock_robot": "docking_server",
-    "undock_robot": "docking_server",
+    topics.NAVIGATE_TO_POSE: "bt_navigator",
+    topics.NAVIGATE_THROUGH_POSES: "bt_navigator",
+    topics.COMPUTE_PATH_TO_POSE: "planner_server",
+    topics.COMPUTE_PATH_THROUGH_POSES: "planner_server",
+    topics.FOLLOW_PATH: "controller_server",
+    topics.SMOOTH_PATH: "smoother_server",
+    topics.SPIN: "behavior_server",
+    topics.BACKUP: "behavior_server",
+    topics.DRIVE_ON_HEADING: "behavior_server",
+    topics.WAIT: "behavior_server",
+    topics.ASSISTED_TELEOP: "behavior_server",
+    topics.FOLLOW_WAYPOINTS: "waypoint_follower",
+    topics.FOLLOW_GPS_WAYPOINTS: "waypoint_follower",
+    topics.DOCK_ROBOT: "docking_server",
+    topics.UNDOCK_ROBOT: "docking_server",
 }
 
 

@@ -301,11 +301,11 @@ class CostmapUpdater:
             self.apply_glass()
         self._log.info("costmap cleared (%s)", what)
 
-    def clear_square(self, centre: tuple[float, float], side_m: float, outside: bool) -> int:
+    def clear_square(self, centre: tuple[float, float], side_m: float, outside: bool) -> None:
         """Forget what the lidar saw and the glass memory inside the square of side ``side_m`` round
-        ``centre`` (or, ``outside``, everywhere else): Nav2's region clears. The number of cells cleared."""
+        ``centre`` (or, ``outside``, everywhere else): Nav2's region clears."""
         if self.costmap is None:
-            return 0
+            return
         cells = self.costmap.frame.cells_in_square(centre, side_m, outside)
         self.costmap.clear_cells(cells)
         if self.glass is not None:
@@ -319,7 +319,6 @@ class CostmapUpdater:
             *centre,
             len(cells),
         )
-        return len(cells)
 
     def observe_turning_circle(self, pose: Pose2D) -> None:
         """The robot stands still here: let it turn (see :meth:`GlassMemory.observe_turning_circle`)."""

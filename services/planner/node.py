@@ -29,6 +29,7 @@ import itertools
 import math
 import time
 from collections import deque
+from collections.abc import Callable
 from typing import Any
 
 from services.planner.behavior_server import BehaviorServer
@@ -49,14 +50,12 @@ from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.geometry import Pose2D
 from shared.interfaces.costmap import (
-    CLEAR_COSTMAP_AROUND_POSE,
-    CLEAR_COSTMAP_AROUND_ROBOT,
-    CLEAR_COSTMAP_EXCEPT_REGION,
     GET_COSTMAP,
     GLOBAL_COSTMAP_CLEAR,
     GLOBAL_COSTMAP_GET,
     LOCAL_COSTMAP_CLEAR,
     LOCAL_COSTMAP_GET,
+    REGION_CLEARS,
     ClearCostmapAroundPoseRequest,
     ClearCostmapAroundPoseResponse,
     ClearCostmapAroundRobotRequest,
@@ -183,22 +182,14 @@ class PlannerService:
         # Nav2's names for what Nav2 scripts ask (shared/interfaces/costmap.py): one costmap answers both.
         node.create_service(CLEAR_ENTIRE_COSTMAP, GLOBAL_COSTMAP_CLEAR, self._on_clear_costmaps)
         node.create_service(CLEAR_ENTIRE_COSTMAP, LOCAL_COSTMAP_CLEAR, self._on_clear_local_costmap)
+        region_clears: dict[str, Callable[[Any], Any]] = {
+            "except_region": self._on_clear_except_region,
+            "around_robot": self._on_clear_around_robot,
+            "around_pose": self._on_clear_around_pose,
+        }
         for costmap in ("global", "local"):
-            node.create_service(
-                CLEAR_COSTMAP_EXCEPT_REGION,
-                region_clear_service(costmap, "except_region"),
-                self._on_clear_except_region,
-            )
-            node.create_service(
-                CLEAR_COSTMAP_AROUND_ROBOT,
-                region_clear_service(costmap, "around_robot"),
-                self._on_clear_around_robot,
-            )
-            node.create_service(
-                CLEAR_COSTMAP_AROUND_POSE,
-                region_clear_service(costmap, "around_pose"),
-                self._on_clear_around_pose,
-            )
+            for what, srv in REGION_CLEARS:
+                node.create_service(srv, region_clear_service(costmap, what), region_clears[what])
         node.create_service(GET_COSTMAP, GLOBAL_COSTMAP_GET, self._on_get_global_costmap)
         node.create_service(GET_COSTMAP, LOCAL_COSTMAP_GET, self._on_get_local_costmap)
         self._action = ActionServer(
