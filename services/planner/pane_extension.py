@@ -9,11 +9,9 @@ only ``suspicion_radius_m`` in every direction; a pane goes on in one direction,
 So each run of marks along a straight line, long enough to be a pane, is extended along that line past both
 of its ends, through floor the sonar has never looked at, for up to ``extension_m``. The line stops at the
 first cell the sonar has looked at (the pane ended before it, or the sonar would have heard it), a robot's
-width short of a wall or of a pane across its line or ahead of it (a pane may meet either, but an extension
-that did would close the way past its end before the sonar has looked, and the planner would find no path),
-and at the grid's edge. A short line of marks (under :data:`MAX_STRAY_LENGTH_M`) that starts beside the end
-and draws away from the line, on one side of it (false glass heard at the end, at an angle), stops it only
-where the extension heads for it. Like suspicion, the extension never enters the kept memory: once the robot faces it, the cells
+width short of a wall or of a pane across its line (a pane may meet either, but an extension that did would
+close the way past its end before the sonar has looked, and the planner would find no path), and at the
+grid's edge. Like suspicion, the extension never enters the kept memory: once the robot faces it, the cells
 are looked at and it is gone.
 
 Pure numpy on grid arrays (``array[iy, ix]``): no bus, no costmap.
@@ -25,12 +23,6 @@ import math
 
 import numpy as np
 
-#: An extension is heading for another pane once it is this much (cells) nearer it than the pane's end is:
-#: the marks' band makes the distance waver by about half a cell as the extension goes on.
-CLOSING_MARGIN_CELLS = 1.0
-#: A line of marks shorter than this, all on one side of a pane's line, may be false glass heard at the
-#: pane's end: it stops the pane's extension only where the extension heads for it. A longer one is a pane.
-MAX_STRAY_LENGTH_M = 1.0
 #: A run of marks along a line shorter than this is not extended: a spot, or a little false glass, says
 #: nothing of a pane's direction.
 MIN_PANE_LENGTH_M = 0.5
@@ -102,10 +94,8 @@ def pane_extensions(
 ) -> np.ndarray:
     """Boolean grid: each run of ``marks`` along a line (:func:`pane_runs`) carried on past both ends through
     cells not ``looked_at`` and not ``blocked`` (walls, and the margin a robot needs beside them), for up to
-    ``extension_m``, and never closer than ``clearance_m`` to another line's marks across its line or ahead
-    of it: two panes' extensions closed the gap between their ends, the way to the dock in oblique_glass,
-    before the sonar had looked. A short line all on one side stops it only once the extension is heading
-    for it (nearer it than the end is)."""
+    ``extension_m``, and never closer than ``clearance_m`` to another line's marks: two panes' extensions
+    closed the gap between their ends, the way to the dock in oblique_glass, before the sonar had looked."""
     extended = np.zeros(marks.shape, dtype=bool)
     if extension_m <= 0 or not marks.any():
         return extended
@@ -120,30 +110,17 @@ def pane_extensions(
             # Other panes: lines across this one. A line alongside it is its own false glass, or the
             # other side of its band of marks.
             crossing = [
-                (other_direction, points)
+                points
                 for _, other_direction, points in runs
                 if points is not own
                 and abs(direction[0] * other_direction[1] - direction[1] * other_direction[0]) > CROSSING_SIN
             ]
-            normal = np.array([-direction[1], direction[0]])
-            cut = len(path)
-            for other_direction, points in crossing:
-                distance = np.sqrt(((path[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
-                near = distance < clearance_cells
-                side = (points - end) @ normal
-                along = points @ other_direction
-                short = (along.max() - along.min()) * resolution_m < MAX_STRAY_LENGTH_M
-                if short and (side.min() > -LINE_BAND_CELLS or side.max() < LINE_BAND_CELLS):
-                    # A short line all on one side: heading for it closes the way between them; marks that
-                    # start beside the end and draw away (false glass heard at the end, at an angle) leave
-                    # the extension be. Cut there, the pane's unseen end was open floor to the planner, and
-                    # in one composed glass-room run of ten the robot's corner clipped it.
-                    from_end = float(np.sqrt(((points - end) ** 2).sum(axis=1)).min())
-                    near &= distance < from_end - CLOSING_MARGIN_CELLS
-                hits = np.nonzero(near)[0]
-                if len(hits):
-                    cut = min(cut, int(hits[0]))
-            path = path[:cut]
+            others = np.concatenate(crossing) if crossing else np.zeros((0, 2))
+            if len(others):
+                distance = np.sqrt(((path[:, None, :] - others[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+                too_close = np.nonzero(distance < clearance_cells)[0]
+                if len(too_close):
+                    path = path[: too_close[0]]
         for x, y in path:
             ix, iy = math.floor(x), math.floor(y)
             if not (0 <= ix < width and 0 <= iy < height):

@@ -141,35 +141,3 @@ def test_two_panes_extensions_leave_the_gap_between_their_ends_open() -> None:
             nearest = min(math.hypot(x - o, y - 52) for o in others.tolist())
             assert nearest * RES >= clearance - RES, (x, y)
     assert extended[32, 43], "the diagonal pane still goes on, short of the other"
-
-
-def test_false_glass_drawing_away_from_a_panes_end_does_not_cut_its_extension() -> None:
-    """A composed glass-room run: false glass heard at 45 degrees off the end of the partition (30 marks,
-    0.6 m) cut the partition's extension at once, its unseen last 0.75 m was open floor, and the robot's
-    corner clipped its end. Marks that draw away from the line leave the extension be."""
-    marks = np.zeros((60, 100), dtype=bool)
-    marks[30:32, 10:55] = True  # the pane, heard up to x = 55
-    for i in range(12):
-        marks[32 + i, 50 + i] = marks[32 + i, 51 + i] = True  # false glass from its end, up and away
-    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=1.5, clearance_m=0.3)
-    assert extended[29:33, 56:80].any(axis=0).all(), "the pane goes on past the false glass"
-    # the false glass is itself a short run: the pane still may not be extended into it
-    assert not (extended & marks).any()
-
-
-def test_a_pane_meeting_another_at_its_end_is_not_extended_through_it() -> None:
-    marks = np.zeros((60, 100), dtype=bool)
-    marks[30:32, 10:50] = True  # the pane, ending at x = 50
-    marks[15:50, 50:52] = True  # another across its end
-    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=1.5, clearance_m=0.3)
-    assert not extended[25:36, 52:].any(), "extended through the pane across its end"
-
-
-def test_a_pane_starting_beside_anothers_end_still_keeps_its_extension_a_robots_width_off() -> None:
-    """Only a short line (false glass) drawing away is passed by: a pane that long may close the way."""
-    marks = np.zeros((80, 120), dtype=bool)
-    marks[30:32, 10:55] = True
-    for i in range(30):  # 1.5 m at 45 degrees from beside the end: a pane, not stray marks
-        marks[32 + i, 50 + i] = marks[32 + i, 51 + i] = True
-    extended = pane_extensions(marks, np.zeros_like(marks), RES, extension_m=1.5, clearance_m=0.3)
-    assert not extended[29:33, 56:].any(), "extended beside a pane starting at its end"
