@@ -367,7 +367,9 @@ def _set_battery(ctx: Context, **values: Any) -> None:
 
 
 def _wait_sim(ctx: Context, seconds: float, wall_limit_s: float = 30.0) -> None:
-    start, start_wall = ctx.probe.now(True), time.monotonic()
+    start_wall = time.monotonic()
+    ctx.probe.wait_clock(wall_limit_s)
+    start = ctx.probe.now(True)
     while ctx.probe.now(True) - start < seconds and time.monotonic() - start_wall < wall_limit_s:
         time.sleep(0.05)
 
@@ -454,6 +456,7 @@ def pose_behaviour(ctx: Context) -> list[Check]:
 
 def simulator_behaviour(ctx: Context) -> list[Check]:
     def clock() -> tuple[bool, str]:
+        ctx.probe.wait_clock(5.0)
         first = ctx.probe.sim_now()
         time.sleep(1.5)
         later = ctx.probe.sim_now()

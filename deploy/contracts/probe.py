@@ -76,6 +76,18 @@ class Probe:
         with self._lock:
             return self._sim_s
 
+    def wait_clock(self, timeout_s: float) -> bool:
+        """Whether the sim clock has been heard, waiting up to ``timeout_s`` (wall) for its first message.
+
+        Spans on sim time start only once it has: a span begun on wall time and ended on sim time would mix
+        two clocks, and read as a clock that never advances."""
+        deadline = time.monotonic() + timeout_s
+        while self.sim_now() is None:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
+        return True
+
     def now(self, sim: bool) -> float:
         """Sim time when asked and a clock runs, else wall time (monotonic)."""
         if sim:
@@ -142,9 +154,11 @@ class Probe:
 
     def collect(self, key: str, msg_type: type[M], span_s: float, sim: bool, wall_limit_s: float) -> Samples:
         """Samples on ``key`` over ``span_s`` seconds of sim (or wall) time, at most ``wall_limit_s`` wall."""
+        start_wall = time.monotonic()
+        if sim:
+            self.wait_clock(wall_limit_s)
         tally, sub = self.watch(key, msg_type, sim)
         try:
-            start_wall = time.monotonic()
             start = self.now(sim)
             while self.now(sim) - start < span_s and time.monotonic() - start_wall < wall_limit_s:
                 time.sleep(0.05)

@@ -18,7 +18,9 @@ started afresh at the staging pose, and with ``handover_distance_m`` the approac
 the robot is near the staging pose, behind the dock and facing it or coming side-on where it can still
 curve onto the dock's axis: the planner's goal is cancelled instead of being driven to a standstill
 and turned to its heading, INITIAL_PERCEPTION lasts one tick while the planner lets go, and nothing is
-driven before it has. An approach that comes up to the plate off the dock's axis backs off along it and
+driven before it has The approach then waits for detections as the staging pose would have: with none in
+``initial_perception_timeout_s``, or none before it reaches the dock, it goes on blind on the database pose,
+saying so (or fails with 904). An approach that comes up to the plate off the dock's axis backs off along it and
 tries again from there, without the planner.
 
 A failure in 2-5 is retried (RETRY: stop, back off if at the dock, stage again) up to ``max_retries``
@@ -222,6 +224,8 @@ class DockingRun(Task[RunPhase]):
         self._retreat_to_staging = False
         self._realign = False
         self._handed_over = False
+        #: Handed over with the dock out of view: since when the approach has steered on the database pose.
+        self._unseen_since_s: float | None = None
         self._blocked_since_s: float | None = None
         self._last_pose: Pose2D | None = None
 
@@ -511,10 +515,15 @@ class DockingRun(Task[RunPhase]):
         return STOP
 
     def _start_control(self, now: float) -> Intent:
-        if self.config.continuous_perception and not self._dock_in_view(now):
+        config = self.config
+        in_view = self._dock_in_view(now)
+        if config.continuous_perception and not in_view:
             # Detections from long ago (placed with whatever the localiser said then): steer on the
             # database pose until the dock comes into view again.
             self.tracker.reset()
+        # A handover skips the wait for detections; the approach then gives them as long to come.
+        waits = config.use_detection and config.wait_for_detection
+        self._unseen_since_s = now if self._handed_over and waits and not in_view else None
         dock = self.dock_pose
         assert dock is not None
         self.approach.begin(dock)
@@ -527,6 +536,8 @@ class DockingRun(Task[RunPhase]):
     def _controlling(self, inputs: TickInputs) -> Intent:
         now = inputs.now_s
         if inputs.charging:
+            if self._unseen_since_s is not None and not self._dock_in_view(now):
+                self._went_blind("since taking over from navigation")  # on the plate all the same
             self._log_believed_error(now)
             return self._succeed("charging")
         if self.phase_time_s(now) > self.config.approach_timeout_s:
@@ -534,6 +545,8 @@ class DockingRun(Task[RunPhase]):
                 DockingErrorCode.FAILED_TO_CONTROL,
                 f"not on the dock within {self.config.approach_timeout_s:g} s",
             )
+        if self._unseen_since_s is not None and (failed := self._still_unseen(now, arrived=False)):
+            return failed
         if inputs.nav.busy:
             # Handed over while navigating: nothing is published until the planner has let go.
             self.approach.hold()
@@ -570,6 +583,8 @@ class DockingRun(Task[RunPhase]):
                     DockingErrorCode.FAILED_TO_CONTROL,
                     "came up to the plate off its axis: backing off to approach again",
                 )
+            if self._unseen_since_s is not None and (failed := self._still_unseen(now, arrived=True)):
+                return failed
             self.enter(RunPhase.WAIT_FOR_CHARGE, now)
             return STOP
         blocked = inputs.blocked_ahead if command.linear_x_mps > 0.0 else inputs.blocked_behind
@@ -585,6 +600,32 @@ class DockingRun(Task[RunPhase]):
             return self.hold("obstacle ahead" if command.linear_x_mps > 0.0 else "obstacle behind")
         self._blocked_since_s = None
         return command
+
+    def _still_unseen(self, now: float, arrived: bool) -> Intent | None:
+        """After a handover with the dock out of view: once it comes into view, nothing to say; without it
+        for ``initial_perception_timeout_s``, or all the way to the dock, what the wait at the staging pose
+        would have done: fail with 904, or go on blind on the database pose, saying so."""
+        assert self._unseen_since_s is not None
+        config = self.config
+        if self._dock_in_view(now):
+            self._unseen_since_s = None
+            return None
+        if arrived:
+            when = "since taking over from navigation"
+        elif now - self._unseen_since_s > config.initial_perception_timeout_s:
+            when = f"within {config.initial_perception_timeout_s:g} s of taking over from navigation"
+        else:
+            return None
+        if not config.allow_blind_docking:
+            self._unseen_since_s = None
+            return self._fail(DockingErrorCode.FAILED_TO_DETECT_DOCK, f"no detection of the dock {when}")
+        self._went_blind(when)
+        return None
+
+    def _went_blind(self, when: str) -> None:
+        self._unseen_since_s = None
+        self.blind = True
+        log.warning("no detection of the dock %s: docking on the database pose", when)
 
     def _log_believed_error(self, now: float) -> None:
         """Where the robot believes it stands against the dock as charging begins (judged on truth elsewhere)."""

@@ -313,6 +313,34 @@ def test_a_robot_coming_side_on_is_taken_over_while_it_can_still_curve_in() -> N
     assert abs(dock_frame_error(world.true_pose, SEED_DOCK).lateral_m) < 0.01
 
 
+@pytest.mark.parametrize("allow_blind", [True, False])
+def test_a_takeover_with_no_dock_in_view_goes_blind_as_the_staging_pose_would(
+    allow_blind: bool, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Handed over at once (the robot starts at the staging pose) and no detection ever comes: the approach
+    gives them the perception timeout, then docks on the database pose saying so, or fails with 904."""
+    # Without the permission, a localisation error keeps the robot off the plate: it arrives uncharged.
+    error = Pose2D(0.0, 0.0, 0.0) if allow_blind else Pose2D(0.03, 0.06, 0.03)
+    world = KinematicWorld(graceful_staging_pose(SEED_DOCK), detections=False, error=error)
+    run = handover_run(allow_blind_docking=allow_blind, max_retries=0)
+    with caplog.at_level("WARNING", logger="services.docking.docking_run"):
+        world.run(run, 60.0)
+    assert run.result is not None and not world.log.goals  # no navigation: the approach took over at once
+    if allow_blind:
+        assert run.result.success and world.mated and run.blind
+        assert "docking on the database pose" in caplog.text
+    else:
+        assert run.result.error_code is DockingErrorCode.FAILED_TO_DETECT_DOCK and not run.blind
+        assert "taking over from navigation" in run.result.message
+
+
+def test_a_takeover_that_sees_the_dock_is_not_blind() -> None:
+    world = KinematicWorld(graceful_staging_pose(SEED_DOCK))
+    run = handover_run(max_retries=0)
+    world.run(run, 60.0)
+    assert run.result is not None and run.result.success and not run.blind and not world.log.goals
+
+
 def test_no_takeover_far_from_staging_or_facing_away() -> None:
     # Far; facing away; and within the yaw and bearing limits but so close to the axis, heading off it,
     # that the approach would have to stop and turn on the spot first (its curve 9.5 /m).
