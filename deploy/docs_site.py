@@ -29,6 +29,7 @@ from typing import Any
 
 from deploy.contracts.document import stale_files, write_files
 from deploy.paths import REPO_ROOT
+from shared.config_errors import ConfigError
 
 DOCS_DIR = REPO_ROOT / "docs"
 MEASUREMENTS_DIR = DOCS_DIR / "measurements"
@@ -295,4 +296,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except ConfigError as exc:  # a contract changed under its version: say which and how to fix it
+        print(f"python -m deploy.docs_site: {exc}", file=sys.stderr)
+        sys.exit(2)

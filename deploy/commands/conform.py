@@ -20,17 +20,24 @@ from deploy.world_names import world_argument
 from shared.config_errors import ConfigError
 from shared.contracts import CONTRACTS
 
+RESULT_STYLE = {"pass": "[green]{}[/]", "FAIL": "[red]{}[/]", "not run": "[yellow]{}[/]"}
+
 
 def _table(report, console: Console) -> None:
     verdict = (
-        "[green]conforms[/]" if report.passed else f"[red]does not conform[/] ({len(report.failed())} failed)"
+        "[green]conforms[/]"
+        if report.passed
+        else f"[red]does not conform[/] ({len(report.failed())} failed, {len(report.not_run())} not run)"
     )
-    table = Table(title=f"zendock conform {report.service}: {verdict} in {report.wall_s:.0f} s")
+    table = Table(
+        title=f"zendock conform {report.service} (contract {report.contract_version}): {verdict} "
+        f"in {report.wall_s:.0f} s"
+    )
     table.add_column("check")
     table.add_column("result")
     table.add_column("evidence", overflow="fold")
     for check in report.checks:
-        table.add_row(check.name, "[green]pass[/]" if check.passed else "[red]FAIL[/]", check.evidence)
+        table.add_row(check.name, RESULT_STYLE[check.result].format(check.result), check.evidence)
     console.print(table)
     console.print(f"command: {' '.join(report.command)}\nits output: {report.log}", highlight=False)
 

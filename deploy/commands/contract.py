@@ -18,9 +18,9 @@ from shared.contracts import CONTRACTS, Contract
 
 
 def _table(contract: Contract, console: Console) -> None:
-    console.print(f"[bold]{contract.service}[/]: {contract.summary}")
+    console.print(f"[bold]{contract.service}[/] (contract {contract.version}): {contract.summary}")
     table = Table(show_header=True, header_style="bold")
-    for column in ("kind", "key", "type", "rate (sim)", "when"):
+    for column in ("kind", "key", "type", "rate (sim)", "frame", "when"):
         table.add_column(column)
     for t in contract.publishes:
         table.add_row(
@@ -28,20 +28,26 @@ def _table(contract: Contract, console: Console) -> None:
             t.name,
             t.type.TYPE_NAME,
             f"{t.rate_hz:g} Hz" if t.rate_hz else "events",
+            t.frame_id,
             t.when or "always",
         )
     for t in contract.subscribes:
         table.add_row(
-            "subscribes", ("*/" if t.fleet_wide else "") + t.name, t.type.TYPE_NAME, "", t.when or "always"
+            "subscribes",
+            ("*/" if t.fleet_wide else "") + t.name,
+            t.type.TYPE_NAME,
+            "",
+            "",
+            t.when or "always",
         )
     for r in contract.serves:
-        table.add_row("serves", r.name, r.type.type_name, "", r.when or "always")
+        table.add_row("serves", r.name, r.type.type_name, "", "", r.when or "always")
     for r in contract.calls:
-        table.add_row("calls", r.name, r.type.type_name, "", r.when or "always")
+        table.add_row("calls", r.name, r.type.type_name, "", "", r.when or "always")
     for a in contract.serves_actions:
-        table.add_row("serves action", a.name, a.type.type_name, "", a.when or "always")
+        table.add_row("serves action", a.name, a.type.type_name, "", "", a.when or "always")
     for a in contract.uses_actions:
-        table.add_row("uses action", a.name, a.type.type_name, "", a.when or "always")
+        table.add_row("uses action", a.name, a.type.type_name, "", "", a.when or "always")
     console.print(table)
     for line in contract.behaviour:
         console.print(f"conform checks: {line}")

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from deploy.contracts.candidate import SIGTERM_LIMIT_S, Candidate
-from deploy.contracts.probe import MALFORMED_PAYLOADS, Probe
+from deploy.contracts.probe import MALFORMED_PAYLOADS, Probe, Samples
 from deploy.paths import REPO_ROOT
 from shared.action import ActionClient, spin_in_background
-from shared.contracts import Contract
+from shared.contracts import Contract, Topic
 from shared.encoding import ENCODING_PREFIX
 from shared.geometry import Pose2D, wrap_angle
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
@@ -47,30 +47,78 @@ from shared.messages import (
     Vector3,
 )
 from shared.node import Node, call_service
-from shared.world import World
+from shared.world import DOCK_GEOMETRY, World
 
 #: How long a started service has to announce itself.
 START_LIMIT_S = 20.0
 #: A measured rate within this fraction of the contract's passes.
 RATE_TOLERANCE = 0.3
+#: An event topic may burst this much over its ``max_rate_hz`` (plus one message) within a second.
+RATE_TOLERANCE_ABOVE = 1.3
 #: Sim seconds over which a rate is measured.
 RATE_SPAN_S = 3.0
 
 
 @dataclass
 class Check:
+    """One row of the report: pass, FAIL, or not run (``ran`` false, the evidence saying why)."""
+
     name: str
     passed: bool
     evidence: str
     seconds: float = 0.0
+    ran: bool = True
+
+    @property
+    def result(self) -> str:
+        return "pass" if self.passed else "FAIL" if self.ran else "not run"
 
     def as_dict(self) -> dict[str, Any]:
         return {
             "check": self.name,
+            "result": self.result,
             "passed": self.passed,
             "evidence": self.evidence,
             "seconds": round(self.seconds, 2),
         }
+
+
+@dataclass(frozen=True)
+class PlannedCheck:
+    """A check named before any runs, so that every one gets its row even when it cannot run."""
+
+    name: str
+    body: Callable[[], tuple[bool, str]]
+    #: Asked just before it would run: why it cannot (``""``: it can).
+    blocked: Callable[[], str] | None = None
+    #: When it fails, the checks after it do not run, for this reason.
+    stops_the_rest: str = ""
+
+    def run(self) -> Check:
+        start = time.monotonic()
+        try:
+            passed, evidence = self.body()
+        except Exception as exc:  # a check that cannot finish has failed: say why, go on to the next
+            passed, evidence = False, f"{type(exc).__name__}: {exc}"
+        return Check(self.name, passed, evidence, time.monotonic() - start)
+
+    def not_run(self, why: str) -> Check:
+        return Check(self.name, False, f"not run: {why}", ran=False)
+
+
+def run_in_turn(planned: list[PlannedCheck], on_row: Callable[[Check], None]) -> list[Check]:
+    """Every planned check's row, in order: run, or not run with the reason (an earlier gate failed, or its
+    own precondition does not hold)."""
+    rows: list[Check] = []
+    stopped = ""
+    for check in planned:
+        why = stopped or (check.blocked() if check.blocked else "")
+        row = check.not_run(why) if why else check.run()
+        rows.append(row)
+        on_row(row)
+        if row.ran and not row.passed and check.stops_the_rest:
+            stopped = check.stops_the_rest
+    return rows
 
 
 @dataclass
@@ -96,19 +144,15 @@ class Context:
         return self.probe.key(name, self.robot_namespace)
 
 
-def timed(name: str, body: Callable[[], tuple[bool, str]]) -> Check:
-    start = time.monotonic()
-    try:
-        passed, evidence = body()
-    except Exception as exc:  # a check that cannot finish has failed: say why, go on to the next
-        passed, evidence = False, f"{type(exc).__name__}: {exc}"
-    return Check(name, passed, evidence, time.monotonic() - start)
+def timed(name: str, body: Callable[[], tuple[bool, str]]) -> PlannedCheck:
+    """The check ``name``, timed when it runs."""
+    return PlannedCheck(name, body)
 
 
 # --- the checks every service gets ---------------------------------------------------------------------------
 
 
-def check_starts(ctx: Context) -> Check:
+def check_starts(ctx: Context) -> PlannedCheck:
     def body() -> tuple[bool, str]:
         took = ctx.probe.wait_node(
             ctx.namespace, ctx.contract.service, START_LIMIT_S, lambda: ctx.candidate.running
@@ -125,7 +169,7 @@ def check_starts(ctx: Context) -> Check:
             )
         return True, f"node token after {took:.1f} s"
 
-    return timed("starts: announces its node token", body)
+    return PlannedCheck("starts: announces its node token", body, stops_the_rest="it did not start")
 
 
 def _full_required(ctx: Context) -> set[tuple[str, str, str]]:
@@ -136,7 +180,7 @@ def _full_required(ctx: Context) -> set[tuple[str, str, str]]:
     }
 
 
-def check_endpoints(ctx: Context) -> list[Check]:
+def check_endpoints(ctx: Context) -> list[PlannedCheck]:
     declared: set[tuple[str, str, str]] = set()
 
     def required() -> tuple[bool, str]:
@@ -171,8 +215,8 @@ def check_endpoints(ctx: Context) -> list[Check]:
     ]
 
 
-def check_publishes(ctx: Context) -> list[Check]:
-    checks = []
+def check_publishes(ctx: Context) -> list[PlannedCheck]:
+    checks: list[PlannedCheck] = []
     for topic in ctx.contract.publishes:
         if not topic.required or topic.rate_hz is None:
             continue
@@ -208,7 +252,98 @@ def check_publishes(ctx: Context) -> list[Check]:
     return checks
 
 
-def check_bad_requests(ctx: Context) -> Check:
+class RunWatch:
+    """What a service publishes over the whole run, from before it starts: the frames its messages carry,
+    and how fast its event topics come. Event topics are judged on what the behaviour checks drew out."""
+
+    def __init__(self, ctx: Context) -> None:
+        # not what is published only while someone listens: watching would change what the service does
+        self.topics = [
+            t
+            for t in ctx.contract.publishes
+            if not t.fleet_wide and not t.on_demand and (t.frame_id or t.max_rate_hz)
+        ]
+        self._tallies: dict[str, Samples] = {}
+        self._subscribers: list[Any] = []
+        for topic in self.topics:
+            tally, sub = ctx.probe.watch(
+                ctx.key(topic.name), topic.type, ctx.sim, keep_times=topic.max_rate_hz is not None
+            )
+            self._tallies[topic.name] = tally
+            self._subscribers.append(sub)
+
+    def tally(self, topic: Topic) -> Samples:
+        return self._tallies[topic.name]
+
+    def close(self) -> None:
+        for sub in self._subscribers:
+            sub.undeclare()
+        self._subscribers = []
+
+
+def _frame_words(frame: str, child: str, with_child: bool) -> str:
+    return f"{frame!r}" + (f", child {child!r}" if with_child else "")
+
+
+def check_frames(ctx: Context, watch: RunWatch) -> PlannedCheck | None:
+    """Every message seen on a key whose contract names its frame carries that frame (``None``: the contract
+    names no frame)."""
+    framed = [t for t in watch.topics if t.frame_id]
+    if not framed:
+        return None
+
+    def body() -> tuple[bool, str]:
+        watch.close()
+        wrong, seen, heard = [], 0, []
+        for topic in framed:
+            frames = watch.tally(topic).frames
+            if frames:
+                heard.append(topic.name)
+            with_child = bool(topic.child_frame_id)
+            for (frame, child), count in frames.items():
+                seen += count
+                if frame != topic.frame_id or (with_child and child != topic.child_frame_id):
+                    wrong.append(
+                        f"{topic.name}: {count} in {_frame_words(frame, child, with_child)}, the contract says "
+                        f"{_frame_words(topic.frame_id, topic.child_frame_id, with_child)}"
+                    )
+        if wrong:
+            return False, "; ".join(wrong)
+        if not seen:
+            return False, f"no message on {', '.join(t.name for t in framed)} to check"
+        return True, f"{seen} messages on {', '.join(heard)}, each in the contract's frame"
+
+    return PlannedCheck("frames: every header names the contract's frame", body)
+
+
+def check_event_rates(ctx: Context, watch: RunWatch) -> PlannedCheck | None:
+    """No event topic comes faster than its contract's ``max_rate_hz`` in any second of the run (``None``:
+    the contract bounds none)."""
+    bounded = [t for t in watch.topics if t.max_rate_hz is not None]
+    if not bounded:
+        return None
+    clock = "sim" if ctx.sim else "wall"
+
+    def body() -> tuple[bool, str]:
+        watch.close()
+        over, peaks = [], []
+        for topic in bounded:
+            assert topic.max_rate_hz is not None
+            peak = watch.tally(topic).peak_per_s()
+            peaks.append(f"{topic.name} {peak}")
+            if peak > RATE_TOLERANCE_ABOVE * topic.max_rate_hz + 1:
+                over.append(
+                    f"{topic.name}: {peak} in one second of {clock} time, the contract allows "
+                    f"{topic.max_rate_hz:g}/s"
+                )
+        if over:
+            return False, "; ".join(over)
+        return True, f"most in any second of {clock} time: {', '.join(peaks)}"
+
+    return PlannedCheck("events: none faster than the contract allows", body)
+
+
+def check_bad_requests(ctx: Context) -> PlannedCheck:
     def body() -> tuple[bool, str]:
         keys = [ctx.key(r.name) for r in ctx.contract.serves if r.required]
         keys += [ctx.key(f"{a.name}/_action/send_goal") for a in ctx.contract.serves_actions if a.required]
@@ -226,15 +361,17 @@ def check_bad_requests(ctx: Context) -> Check:
     return timed("bad requests get an error reply", body)
 
 
-def check_malformed_burst(ctx: Context, still_serving: Callable[[], tuple[bool, str]]) -> Check:
+def check_malformed_burst(ctx: Context, still_serving: Callable[[], tuple[bool, str]]) -> PlannedCheck:
     def body() -> tuple[bool, str]:
-        keys = [ctx.key(t.name) for t in ctx.contract.subscribes if t.required and not t.fleet_wide]
-        # and whatever it subscribes right now (on-demand subscriptions too), the shared clock aside
+        # every key the contract names it subscribes or serves, required or not (a service that left its
+        # tokens out is flooded all the same), and whatever it subscribes right now (on-demand subscriptions
+        # too), the shared clock aside
+        keys = [ctx.key(t.name) for t in ctx.contract.subscribes if not t.fleet_wide]
         declared = ctx.probe.node_endpoints(ctx.namespace, ctx.contract.service)
         keys += sorted(
             {key for kind, key, _type in declared if kind == "sub" and not key.endswith("clock")} - set(keys)
         )
-        keys += [ctx.key(r.name) for r in ctx.contract.serves if r.required]
+        keys += [ctx.key(r.name) for r in ctx.contract.serves]
         sent = 0
         for key in keys:
             for _ in range(10):
@@ -275,17 +412,20 @@ def still_serving(ctx: Context) -> Callable[[], tuple[bool, str]]:
     return body
 
 
-def check_sigterm(ctx: Context) -> Check:
+def check_sigterm(ctx: Context) -> PlannedCheck:
     def body() -> tuple[bool, str]:
         code, took = ctx.candidate.terminate(SIGTERM_LIMIT_S)
         if code is None:
             return False, f"still running {SIGTERM_LIMIT_S:g} s after SIGTERM"
         return code == 0, f"exit code {code} after {took:.2f} s"
 
-    return timed(f"SIGTERM: exit 0 within {SIGTERM_LIMIT_S:g} s", body)
+    def exited() -> str:
+        return "" if ctx.candidate.running else f"it had already exited (code {ctx.candidate.exit_code})"
+
+    return PlannedCheck(f"SIGTERM: exit 0 within {SIGTERM_LIMIT_S:g} s", body, blocked=exited)
 
 
-def check_restart(ctx: Context) -> Check:
+def check_restart(ctx: Context) -> PlannedCheck:
     def body() -> tuple[bool, str]:
         ctx.candidate.close()
         ctx.candidate.start()
@@ -374,7 +514,7 @@ def _wait_sim(ctx: Context, seconds: float, wall_limit_s: float = 30.0) -> None:
         time.sleep(0.05)
 
 
-def battery_behaviour(ctx: Context) -> list[Check]:
+def battery_behaviour(ctx: Context) -> list[PlannedCheck]:
     def answers() -> tuple[bool, str]:
         _set_battery(ctx, percentage=0.5, drain_scale=1.0, charge_scale=1.0)
         msg = ctx.probe.wait_for(
@@ -434,7 +574,7 @@ def battery_behaviour(ctx: Context) -> list[Check]:
     ]
 
 
-def pose_behaviour(ctx: Context) -> list[Check]:
+def pose_behaviour(ctx: Context) -> list[PlannedCheck]:
     def follows() -> tuple[bool, str]:
         target = in_front_of_dock(ctx.world, 1.0)
         _teleport(ctx, target)
@@ -454,7 +594,7 @@ def pose_behaviour(ctx: Context) -> list[Check]:
     return [timed("follows the robot", follows)]
 
 
-def simulator_behaviour(ctx: Context) -> list[Check]:
+def simulator_behaviour(ctx: Context) -> list[PlannedCheck]:
     def clock() -> tuple[bool, str]:
         ctx.probe.wait_clock(5.0)
         first = ctx.probe.sim_now()
@@ -503,7 +643,7 @@ def _node_client(ctx: Context) -> Node:
     return node
 
 
-def planner_behaviour(ctx: Context) -> list[Check]:
+def planner_behaviour(ctx: Context) -> list[PlannedCheck]:
     def navigates() -> tuple[bool, str]:
         start = in_front_of_dock(ctx.world, 1.8)
         _teleport(ctx, start)
@@ -546,7 +686,7 @@ def _supply_status(msg: BatteryState | None) -> str:
     return "FULL" if msg.power_supply_status == BatteryState.POWER_SUPPLY_STATUS_FULL else "CHARGING"
 
 
-def docking_behaviour(ctx: Context) -> list[Check]:
+def docking_behaviour(ctx: Context) -> list[PlannedCheck]:
     def docks() -> tuple[bool, str]:
         _teleport(ctx, in_front_of_dock(ctx.world, 1.5))
         node = _node_client(ctx)
@@ -579,29 +719,148 @@ def docking_behaviour(ctx: Context) -> list[Check]:
     return [timed("docks", docks)]
 
 
-def perception_behaviour(ctx: Context) -> list[Check]:
+#: How far a detected dock may lie from the truth and still count as seen, in metres and radians.
+SEEN_WITHIN_M = 0.05
+SEEN_WITHIN_RAD = 0.1
+
+
+def units_hint(got_m: float, truth_m: float) -> str:
+    """A guess at the unit a distance came in, when it is off by a factor a unit explains."""
+    if truth_m < 0.1:
+        return ""
+    ratio = got_m / truth_m
+    for factor, unit in ((1000.0, "millimetres"), (100.0, "centimetres")):
+        if 0.8 * factor < ratio < 1.2 * factor:
+            return f": {unit}?"
+    return ""
+
+
+def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
     def sees() -> tuple[bool, str]:
         robot = in_front_of_dock(ctx.world, 1.0)
         _teleport(ctx, robot)
         truth = ctx.world.docks[0].pose2d.relative_to(robot)
-        msg = ctx.probe.wait_for(
-            ctx.key("detected_dock_pose"),
-            PoseStamped,
-            lambda m: math.hypot(m.pose.position.x - truth.x, m.pose.position.y - truth.y) < 0.05,
-            15.0,
+        arrived: list[Pose2D] = []
+
+        def close(m: PoseStamped) -> bool:
+            seen = m.pose.to_pose2d()
+            arrived.append(seen)
+            off_m = math.hypot(seen.x - truth.x, seen.y - truth.y)
+            return off_m < SEEN_WITHIN_M and abs(wrap_angle(seen.yaw - truth.yaw)) < SEEN_WITHIN_RAD
+
+        msg = ctx.probe.wait_for(ctx.key("detected_dock_pose"), PoseStamped, close, 15.0)
+        wanted = f"({truth.x:.3f}, {truth.y:.3f}, yaw {truth.yaw:.3f})"
+        if msg is not None:
+            seen = msg.pose.to_pose2d()
+            return (
+                True,
+                f"dock at ({seen.x:.3f}, {seen.y:.3f}, yaw {seen.yaw:.3f}) in base_link, truth {wanted}",
+            )
+        within = f"within {SEEN_WITHIN_M * 100:g} cm and {SEEN_WITHIN_RAD:g} rad of {wanted} in 15 s"
+        if not arrived:
+            return False, f"no detection {within}: none arrived"
+        last = arrived[-1]
+        hint = units_hint(math.hypot(last.x, last.y), math.hypot(truth.x, truth.y))
+        turned = abs(wrap_angle(last.yaw - truth.yaw))
+        if not hint and turned > SEEN_WITHIN_RAD:
+            hint = f": yaw off by {turned:.2f} rad" + (", turned by pi?" if turned > 3.0 else "")
+        return False, (
+            f"no detection {within}: {len(arrived)} arrived, the last at x = {last.x:.3f}, y = {last.y:.3f}, "
+            f"yaw {last.yaw:.3f}{hint}"
         )
-        return (
-            msg is not None,
-            f"dock at ({msg.pose.position.x:.3f}, {msg.pose.position.y:.3f}) in base_link, truth "
-            f"({truth.x:.3f}, {truth.y:.3f})"
-            if msg
-            else f"no detection within 5 cm of ({truth.x:.3f}, {truth.y:.3f}) in 15 s",
+
+    def sees_round() -> tuple[bool, str]:
+        marker = DOCK_GEOMETRY.marker_pose(ctx.world.docks[0])
+        dock = ctx.world.docks[0].pose2d
+        worst_m, worst_rad, problems, looked = 0.0, 0.0, [], 0
+        for range_m, angle_deg in VIEWPOINTS:
+            robot = viewpoint(marker, range_m, math.radians(angle_deg))
+            where = f"{range_m:g} m, {angle_deg:+g} deg"
+            why = ctx.world.placement_problem(robot.x, robot.y)
+            if why is None:
+                try:
+                    _teleport(ctx, robot)
+                except ValueError as exc:
+                    why = str(exc)
+            if why is not None:
+                problems.append(f"{where}: no room for the robot in this world ({why})")
+                continue
+            _wait_sim(ctx, 0.5)  # detections of frames from before the move are out of the way
+            samples = ctx.probe.collect(
+                ctx.key("detected_dock_pose"),
+                PoseStamped,
+                1.5,
+                ctx.sim,
+                wall_limit_s=10.0,
+                keep_messages=True,
+            )
+            looked += 1
+            truth = dock.relative_to(robot)
+            errors = [_pose_error(m.pose.to_pose2d(), truth) for m in samples.messages or []]
+            if not errors:
+                problems.append(f"{where}: no detection in 1.5 s")
+                continue
+            position_m = sorted(e[0] for e in errors)[len(errors) // 2]
+            yaw_rad = sorted(e[1] for e in errors)[len(errors) // 2]
+            flipped = sum(1 for e in errors if e[1] > FLIPPED_RAD)
+            worst_m, worst_rad = max(worst_m, position_m), max(worst_rad, yaw_rad)
+            limit_m = ROUND_WITHIN_M + ROUND_WITHIN_PER_M * range_m
+            if position_m > limit_m or yaw_rad > ROUND_WITHIN_RAD or flipped:
+                problems.append(
+                    f"{where}: median {1000 * position_m:.0f} mm and {yaw_rad:.3f} rad off over {len(errors)} "
+                    f"detections (limits {1000 * limit_m:.0f} mm, {ROUND_WITHIN_RAD:g} rad)"
+                    + (
+                        f", {flipped} turned more than {FLIPPED_RAD:g} rad (a flipped solution?)"
+                        if flipped
+                        else ""
+                    )
+                )
+        failed = [p for p in problems if "no room" not in p]
+        evidence = f"{looked} viewpoints, worst median {1000 * worst_m:.0f} mm and {worst_rad:.3f} rad" + (
+            "; " + "; ".join(problems) if problems else ""
         )
+        return not failed and looked > 0, evidence
 
-    return [timed("sees the dock", sees)]
+    return [
+        timed("sees the dock", sees),
+        timed("sees the dock from 0.4 to 3 m and 40 degrees aside", sees_round),
+    ]
 
 
-def fleet_behaviour(ctx: Context) -> list[Check]:
+#: ``(range_m, angle_deg)``: base_link to the marker's centre, and off the marker's axis (either side).
+VIEWPOINTS = (
+    (0.4, 0.0),
+    (0.4, -40.0),
+    (0.4, 40.0),
+    (1.0, -40.0),
+    (1.0, 40.0),
+    (2.0, 0.0),
+    (2.0, -40.0),
+    (2.0, 40.0),
+    (3.0, 0.0),
+    (3.0, -30.0),
+    (3.0, 30.0),
+)
+#: A viewpoint's median detection is within this much plus ``ROUND_WITHIN_PER_M`` a metre of range ...
+ROUND_WITHIN_M = 0.02
+ROUND_WITHIN_PER_M = 0.02
+#: ... and this much of the dock's heading; no single detection is turned further than ``FLIPPED_RAD``.
+ROUND_WITHIN_RAD = 0.1
+FLIPPED_RAD = 0.3
+
+
+def viewpoint(marker: Pose2D, range_m: float, angle_rad: float) -> Pose2D:
+    """Where the robot stands ``range_m`` from the marker's centre, ``angle_rad`` off its axis, facing it."""
+    x = marker.x + range_m * math.cos(marker.yaw + angle_rad)
+    y = marker.y + range_m * math.sin(marker.yaw + angle_rad)
+    return Pose2D(x, y, math.atan2(marker.y - y, marker.x - x))
+
+
+def _pose_error(seen: Pose2D, truth: Pose2D) -> tuple[float, float]:
+    return math.hypot(seen.x - truth.x, seen.y - truth.y), abs(wrap_angle(seen.yaw - truth.yaw))
+
+
+def fleet_behaviour(ctx: Context) -> list[PlannedCheck]:
     def reserves() -> tuple[bool, str]:
         session = ctx.probe.session
         granted = call_service(
@@ -638,7 +897,7 @@ def fleet_behaviour(ctx: Context) -> list[Check]:
     return [timed("reserves and releases", reserves)]
 
 
-def ros2_bridge_behaviour(ctx: Context) -> list[Check]:
+def ros2_bridge_behaviour(ctx: Context) -> list[PlannedCheck]:
     def shows() -> tuple[bool, str]:
         deadline = time.monotonic() + 10.0
         names: set[str] = set()
@@ -679,7 +938,7 @@ rclpy.shutdown()
 """
 
 
-def ros2_dds_behaviour(ctx: Context) -> list[Check]:
+def ros2_dds_behaviour(ctx: Context) -> list[PlannedCheck]:
     def shows() -> tuple[bool, str]:
         python = REPO_ROOT / ".venv-ros2" / "bin" / "python"
         if not python.exists():
@@ -703,7 +962,7 @@ def ros2_dds_behaviour(ctx: Context) -> list[Check]:
     return [timed("shows zendock to ROS 2 on DDS (real rclpy)", shows)]
 
 
-BEHAVIOURS: dict[str, Callable[[Context], list[Check]]] = {
+BEHAVIOURS: dict[str, Callable[[Context], list[PlannedCheck]]] = {
     "battery": battery_behaviour,
     "docking": docking_behaviour,
     "fleet": fleet_behaviour,

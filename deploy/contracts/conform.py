@@ -25,13 +25,18 @@ from deploy.contracts.checks import (
     BEHAVIOURS,
     Check,
     Context,
+    PlannedCheck,
+    RunWatch,
     check_bad_requests,
     check_endpoints,
+    check_event_rates,
+    check_frames,
     check_malformed_burst,
     check_publishes,
     check_restart,
     check_sigterm,
     check_starts,
+    run_in_turn,
     still_serving,
 )
 from deploy.contracts.probe import Probe
@@ -64,6 +69,8 @@ class ConformOptions:
 class ConformReport:
     service: str
     command: list[str]
+    #: The version of the contract the program was held to.
+    contract_version: str = ""
     checks: list[Check] = field(default_factory=list)
     wall_s: float = 0.0
     log: str = ""
@@ -73,15 +80,20 @@ class ConformReport:
         return bool(self.checks) and all(c.passed for c in self.checks)
 
     def failed(self) -> list[str]:
-        return [c.name for c in self.checks if not c.passed]
+        return [c.name for c in self.checks if c.ran and not c.passed]
+
+    def not_run(self) -> list[str]:
+        return [c.name for c in self.checks if not c.ran]
 
     def as_dict(self) -> dict[str, Any]:
         return {
             "service": self.service,
+            "contract_version": self.contract_version,
             "command": self.command,
             "passed": self.passed,
             "wall_s": round(self.wall_s, 1),
             "failed": self.failed(),
+            "not_run": self.not_run(),
             "checks": [c.as_dict() for c in self.checks],
             "log": self.log,
         }
@@ -146,7 +158,7 @@ def run_conform(
     argv = resolve_argv(
         [absolute_if_file(w.replace(ROBOT_PLACEHOLDER, namespace)) for w in words]
     ) + _flags_for(service, stack, world_path)
-    report = ConformReport(service, argv, log=str(run_dir / "candidate.log"))
+    report = ConformReport(service, argv, contract.version, log=str(run_dir / "candidate.log"))
     # what it needs, and what zendock's own waits for in the stack file (the planner: the map step)
     own_dependencies = set(stack.services[service].depends_on) if service in stack.services else set()
     rest = sorted((set(contract.needs) | own_dependencies) - {service}, key=list(stack.services).index)
@@ -194,19 +206,18 @@ def run_conform(
                 sim="simulator" in contract.needs or service == "simulator",
                 domain_id=domain_id,
             )
+            planned = _planned_checks(ctx)
             try:
                 try:
                     candidate.start()
                 except OSError as exc:  # no such program, not executable
-                    report.checks.append(
-                        Check(
-                            "starts: announces its node token",
-                            False,
-                            f"could not run {argv[0]}: {exc.strerror or exc}",
-                        )
-                    )
+                    why = f"could not run {argv[0]}: {exc.strerror or exc}"
+                    report.checks.append(Check(planned[0].name, False, why))
+                    report.checks += [check.not_run(why) for check in planned[1:]]
                 else:
-                    _run_checks(ctx, report, log)
+                    report.checks += run_in_turn(
+                        planned, lambda row: log(f"{row.result}  {row.name}: {row.evidence}")
+                    )
             finally:
                 candidate.close()
                 probe.close()
@@ -214,22 +225,18 @@ def run_conform(
     return report
 
 
-def _run_checks(ctx: Context, report: ConformReport, log: Callable[[str], None]) -> None:
-    def add(checks: Check | list[Check]) -> bool:
-        for check in checks if isinstance(checks, list) else [checks]:
-            report.checks.append(check)
-            log(f"{'pass' if check.passed else 'FAIL'}  {check.name}: {check.evidence}")
-        return all(c.passed for c in (checks if isinstance(checks, list) else [checks]))
-
-    if not add(check_starts(ctx)):
-        return
-    add(check_endpoints(ctx))
-    add(check_publishes(ctx))
+def _planned_checks(ctx: Context) -> list[PlannedCheck]:
+    """Every check of the contract, in the order they run: each gets its row, run or not."""
     behaviour = BEHAVIOURS.get(ctx.contract.service)
-    if behaviour is not None:
-        add(behaviour(ctx))
-    add(check_bad_requests(ctx))
-    add(check_malformed_burst(ctx, still_serving(ctx)))
-    if ctx.candidate.running:
-        add(check_sigterm(ctx))
-    add(check_restart(ctx))
+    watch = RunWatch(ctx)  # from before the service starts, to the checks that read it
+    return [
+        check_starts(ctx),
+        *check_endpoints(ctx),
+        *check_publishes(ctx),
+        *(behaviour(ctx) if behaviour is not None else []),
+        *[check for check in (check_frames(ctx, watch), check_event_rates(ctx, watch)) if check is not None],
+        check_bad_requests(ctx),
+        check_malformed_burst(ctx, still_serving(ctx)),
+        check_sigterm(ctx),
+        check_restart(ctx),
+    ]

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from shared.contracts import CONTRACTS, Contract, Request, Topic
-from shared.contracts.model import ANNOUNCEMENTS, COMMON_FLAGS, DUTIES, ENVIRONMENT, Action
+from shared.contracts.model import ANNOUNCEMENTS, COMMON_FLAGS, DUTIES, ENVIRONMENT, FRAME_RULES, Action
 from shared.contracts.wire_schema import WIRE_RULES, json_schema
 from shared.schema import Message
 
@@ -40,10 +40,13 @@ def _topic(topic: Topic) -> dict[str, Any]:
         "type": topic.type.TYPE_NAME,
         "qos": asdict(topic.qos),
         "rate_hz": topic.rate_hz,
+        **({"max_rate_hz": topic.max_rate_hz} if topic.max_rate_hz else {}),
         "required": topic.required,
         "when": topic.when,
         "about": topic.about,
         **({"fleet_wide": True} if topic.fleet_wide else {}),
+        **({"frame_id": topic.frame_id} if topic.frame_id else {}),
+        **({"child_frame_id": topic.child_frame_id} if topic.child_frame_id else {}),
     }
 
 
@@ -84,6 +87,7 @@ def contract_json(contract: Contract, with_schemas: bool = True) -> dict[str, An
     """The whole contract as one JSON document (with the JSON Schema of every type it carries)."""
     body: dict[str, Any] = {
         "service": contract.service,
+        "version": contract.version,
         "summary": contract.summary,
         "launch": {
             "environment": ENVIRONMENT,
@@ -102,6 +106,7 @@ def contract_json(contract: Contract, with_schemas: bool = True) -> dict[str, An
         "behaviour": list(contract.behaviour),
         "conform_runs_beside": list(contract.needs),
         "notes": list(contract.notes),
+        "frames": list(FRAME_RULES),
         "wire": list(WIRE_RULES),
     }
     if with_schemas:
@@ -122,6 +127,20 @@ def _qos_words(topic: Topic) -> str:
     return ", ".join(words)
 
 
+def _rate_words(topic: Topic) -> str:
+    if topic.rate_hz:
+        return f"{topic.rate_hz:g} Hz"
+    return f"on events, at most {topic.max_rate_hz:g}/s" if topic.max_rate_hz else "on events"
+
+
+def _frame_words(topic: Topic) -> str:
+    """``header.frame_id`` (and ``child_frame_id``) every message carries, or a dash when free."""
+    if not topic.frame_id:
+        return "-"
+    child = f", child `{topic.child_frame_id}`" if topic.child_frame_id else ""
+    return f"`{topic.frame_id}`{child}"
+
+
 def _schema_link(type_name: str) -> str:
     return f"[`{type_name}`](schemas/{schema_file_name(type_name)})"
 
@@ -135,6 +154,8 @@ def contract_markdown(contract: Contract) -> str:
         "",
         contract.summary,
         "",
+        f"Contract version **{contract.version}** ([what changed](changelog.md)).",
+        "",
         f"Check a program against it: `zendock conform {contract.service} -- COMMAND ...`. "
         f"Run it in a stack: `zendock demo --service {contract.service}=COMMAND`. "
         "Keys are relative to the robot's namespace; the rules every service follows are on "
@@ -145,19 +166,21 @@ def contract_markdown(contract: Contract) -> str:
     def topics_table(title: str, rows: tuple[Topic, ...]) -> None:
         if not rows:
             return
+        framed = any(t.frame_id for t in rows)
         out.extend(
             [
                 f"## {title}",
                 "",
-                "| key | type | delivery | rate (sim) | when | about |",
-                "|---|---|---|---|---|---|",
+                "| key | type | delivery | rate (sim) |" + (" frame |" if framed else "") + " when | about |",
+                "|---|---|---|---|" + ("---|" if framed else "") + "---|---|",
             ]
         )
         for t in rows:
-            rate = f"{t.rate_hz:g} Hz" if t.rate_hz else "on events"
+            rate = _rate_words(t)
             key = f"`*/{t.name}` (every robot)" if t.fleet_wide else f"`{t.name}`"
+            frame = f" {_frame_words(t)} |" if framed else ""
             out.append(
-                f"| {key} | {_schema_link(t.type.TYPE_NAME)} | {_qos_words(t)} | {rate} | "
+                f"| {key} | {_schema_link(t.type.TYPE_NAME)} | {_qos_words(t)} | {rate} |{frame} "
                 f"{_md_cell(t.when or 'always')} | {_md_cell(t.about)} |"
             )
         out.append("")
@@ -261,6 +284,8 @@ def index_markdown() -> str:
     out += [f"- {line}" for line in ANNOUNCEMENTS]
     out.extend(["", "## What every service must survive", ""])
     out += [f"- {line}" for line in DUTIES]
+    out.extend(["", "## Frames and units", ""])
+    out += [f"- {line}" for line in FRAME_RULES]
     out.extend(["", "## The wire", ""])
     out += [f"- {line}" for line in WIRE_RULES]
     out.extend(
@@ -308,9 +333,15 @@ def schemas_index() -> str:
     return "\n".join(out) + "\n"
 
 
-def rendered_files() -> dict[str, str]:
+#: Written by hand beside the generated files: kept by :func:`write_files`, not judged by :func:`stale_files`.
+HAND_WRITTEN = frozenset({"changelog.md"})
+
+
+def rendered_files(directory: Path = CONTRACTS_DIR) -> dict[str, str]:
     """Every generated file under ``docs/contracts/`` (relative path -> text)."""
-    files = {"index.md": index_markdown()}
+    from deploy.contracts.versions import VERSIONS_FILE, versions_json  # noqa: PLC0415 - it imports this module
+
+    files = {"index.md": index_markdown(), VERSIONS_FILE: versions_json(directory)}
     files.update({f"{c.service}.md": contract_markdown(c) for c in CONTRACTS.values()})
     files["schemas/index.md"] = schemas_index()
     for cls in all_message_types():
@@ -320,7 +351,7 @@ def rendered_files() -> dict[str, str]:
 
 def stale_files(directory: Path = CONTRACTS_DIR) -> list[str]:
     """Generated files that are missing, differ, or should not be there."""
-    wanted = rendered_files()
+    wanted = rendered_files(directory)
     problems = [
         name
         for name, text in wanted.items()
@@ -331,14 +362,15 @@ def stale_files(directory: Path = CONTRACTS_DIR) -> list[str]:
         if directory.is_dir()
         else set()
     )
-    return sorted(problems + [name for name in present - set(wanted)])
+    return sorted(problems + [name for name in present - set(wanted) - HAND_WRITTEN])
 
 
 def write_files(directory: Path = CONTRACTS_DIR) -> None:
-    wanted = rendered_files()
+    wanted = rendered_files(directory)
     if directory.is_dir():
         for path in directory.rglob("*"):
-            if path.is_file() and str(path.relative_to(directory)) not in wanted:
+            name = str(path.relative_to(directory))
+            if path.is_file() and name not in wanted and name not in HAND_WRITTEN:
                 path.unlink()
     for name, text in wanted.items():
         target = directory / name

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
@@ -18,6 +19,7 @@ import zenoh
 from deploy.keys.graph import node_display_name, query_graph
 from deploy.nodes import nodes_of
 from shared.encoding import schema_of
+from shared.frames import frame_name
 from shared.messages import Clock
 from shared.names import node_token_key, topic_key
 from shared.schema import Message, MessageError
@@ -47,6 +49,21 @@ class Samples:
     first_s: float | None = None
     last_s: float | None = None
     latest: Any = None
+    #: ``(header.frame_id, child_frame_id)`` of the decoded messages that have a header, leading ``/`` dropped.
+    frames: Counter[tuple[str, str]] = field(default_factory=Counter)
+    #: Arrival times (sim or wall) of every decoded message, kept when asked (event topics: few messages).
+    times: list[float] | None = None
+    #: Every decoded message, kept when asked.
+    messages: list[Any] | None = None
+
+    def peak_per_s(self) -> int:
+        """The most messages that arrived within any one second (of the clock they were timed on)."""
+        times, most, first = self.times or [], 0, 0
+        for last, t in enumerate(times):
+            while t - times[first] >= 1.0:
+                first += 1
+            most = max(most, last - first + 1)
+        return most
 
     def rate_hz(self) -> float | None:
         if self.first_s is None or self.last_s is None or self.last_s <= self.first_s or self.decoded < 2:
@@ -128,9 +145,11 @@ class Probe:
 
     # --- samples ---------------------------------------------------------------------------------------------
 
-    def watch(self, key: str, msg_type: type[M], sim: bool) -> tuple[Samples, Any]:
+    def watch(
+        self, key: str, msg_type: type[M], sim: bool, keep_times: bool = False, keep_messages: bool = False
+    ) -> tuple[Samples, Any]:
         """Start collecting ``key``; returns the live tally and the subscriber (undeclare it when done)."""
-        tally = Samples(key)
+        tally = Samples(key, times=[] if keep_times else None, messages=[] if keep_messages else None)
         lock = threading.Lock()
 
         def on_sample(sample: zenoh.Sample) -> None:
@@ -146,18 +165,34 @@ class Probe:
                     return
                 tally.decoded += 1
                 tally.latest = msg
+                header = getattr(msg, "header", None)
+                if header is not None:
+                    child = getattr(msg, "child_frame_id", "")
+                    tally.frames[(frame_name(header.frame_id), frame_name(child))] += 1
                 if tally.first_s is None:
                     tally.first_s = now
                 tally.last_s = now
+                if tally.times is not None:
+                    tally.times.append(now)
+                if tally.messages is not None:
+                    tally.messages.append(msg)
 
         return tally, self.session.declare_subscriber(key, on_sample)
 
-    def collect(self, key: str, msg_type: type[M], span_s: float, sim: bool, wall_limit_s: float) -> Samples:
+    def collect(
+        self,
+        key: str,
+        msg_type: type[M],
+        span_s: float,
+        sim: bool,
+        wall_limit_s: float,
+        keep_messages: bool = False,
+    ) -> Samples:
         """Samples on ``key`` over ``span_s`` seconds of sim (or wall) time, at most ``wall_limit_s`` wall."""
         start_wall = time.monotonic()
         if sim:
             self.wait_clock(wall_limit_s)
-        tally, sub = self.watch(key, msg_type, sim)
+        tally, sub = self.watch(key, msg_type, sim, keep_messages=keep_messages)
         try:
             start = self.now(sim)
             while self.now(sim) - start < span_s and time.monotonic() - start_wall < wall_limit_s:

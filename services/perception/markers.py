@@ -367,11 +367,20 @@ AMBIGUOUS_RESIDUAL_RATIO = 2.0
 #: The previous pose settles an ambiguity only when it is this much nearer one fit's heading than the other's;
 #: a previous pose about as far from both (the view jumped, or the robot turned a lot) says nothing.
 CONTINUITY_MARGIN_RAD = math.radians(8.0)
+#: With the dock database's heading to go by (the robot's pose known), fits up to this many times worse than
+#: the best stay candidates: a small, far marker's mirror solution can fit better than the truth in every
+#: frame (2.5 m and 30 degrees aside in the simulator's images: about half the truth's residual), which
+#: no continuity can undo; the database's heading is 60 degrees from it there.
+EXPECTED_RESIDUAL_RATIO = 4.0
 #: Fits whose headings differ by less than this are one solution (seeds that converged to the same fit).
 SAME_FIT_RAD = math.radians(1.0)
 
 
-def choose_fit(fits: Sequence[tuple[float, Pose2D]], previous: Pose2D | None) -> tuple[float, Pose2D]:
+def choose_fit(
+    fits: Sequence[tuple[float, Pose2D]],
+    previous: Pose2D | None,
+    ambiguous_ratio: float = AMBIGUOUS_RESIDUAL_RATIO,
+) -> tuple[float, Pose2D]:
     """The fit to believe among ``(residual, marker pose)`` fits: the best residual, unless another explains
     the corners nearly as well (within ``AMBIGUOUS_RESIDUAL_RATIO``) and a recent ``previous`` pose is clearly
     nearer one of them in heading (by ``CONTINUITY_MARGIN_RAD``): then that one (continuity, since a planar
@@ -383,7 +392,7 @@ def choose_fit(fits: Sequence[tuple[float, Pose2D]], previous: Pose2D | None) ->
         return best
     rivals: list[tuple[float, Pose2D]] = []
     for fit in ranked:
-        if fit[0] > AMBIGUOUS_RESIDUAL_RATIO * max(best[0], 1e-6):
+        if fit[0] > ambiguous_ratio * max(best[0], 1e-6):
             break
         if all(abs(math.remainder(fit[1].yaw - r[1].yaw, math.tau)) >= SAME_FIT_RAD for r in rivals):
             rivals.append(fit)
@@ -404,13 +413,16 @@ def locate_dock(
     distortion: np.ndarray,
     base_from_optical: Rigid3,
     previous: Pose2D | None = None,
+    expected: Pose2D | None = None,
 ) -> DockSighting | None:
     """The dock a sighted marker belongs to, in base_link; None when no upright pose explains the corners.
 
     Each upright IPPE solution, and a face-on guess (:func:`facing_seed`), seeds a planar refinement
     (:func:`refine_upright`); the fit with the smaller residual wins, which settles the mirror ambiguity of
-    a square seen from the side, unless the fits are nearly as good: then ``previous`` (the dock's pose in
-    base_link a moment ago, when known) picks the one that continues it (:func:`choose_fit`).
+    a square seen from the side, unless the fits are nearly as good: then ``expected`` (the dock database's
+    pose in base_link, from the robot's pose) picks the one nearer its heading, among fits up to
+    ``EXPECTED_RESIDUAL_RATIO`` worse; without it, ``previous`` (the dock's pose in base_link a moment ago)
+    picks the one that continues it (:func:`choose_fit`).
     """
     poses = [
         p
@@ -430,8 +442,13 @@ def locate_dock(
             seed, observed, marker.size_m, marker.centre_height_m, base_from_optical
         )
         fits.append((residual, fitted))
-    previous_marker = previous.compose(_DOCK_FROM_MARKER.inverse()) if previous is not None else None
-    residual, fitted = choose_fit(fits, previous_marker)
+    if expected is not None:
+        residual, fitted = choose_fit(
+            fits, expected.compose(_DOCK_FROM_MARKER.inverse()), EXPECTED_RESIDUAL_RATIO
+        )
+    else:
+        previous_marker = previous.compose(_DOCK_FROM_MARKER.inverse()) if previous is not None else None
+        residual, fitted = choose_fit(fits, previous_marker)
     pose = poses[0]
     centre = np.array([fitted.x, fitted.y, marker.centre_height_m])
     return DockSighting(

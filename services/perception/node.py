@@ -2,7 +2,9 @@
 
 Subscribes to ``camera/image_raw``, ``camera/camera_info`` and ``tf_static`` (where the camera's optical
 frame sits on base_link); finds ArUco markers and turns each known one into its dock's pose in base_link
-(:mod:`services.perception.markers`). The nearest dock seen goes out on ``detected_dock_pose``
+(:mod:`services.perception.markers`). The robot's pose (``map_to_base_link_pose2d``), while it comes, puts
+the dock database's heading in base_link, which settles a marker's mirror ambiguity: a small, far marker
+seen from the side fits both headings about equally well, and sometimes the wrong one better. The nearest dock seen goes out on ``detected_dock_pose``
 (geometry_msgs/PoseStamped in base_link, stamped with the image's time: what the docking service
 consumes), and every dock seen on ``dock_detections`` with its id and fit. ``aruco/debug_image`` (the
 frame with the markers and their axes drawn) is drawn only while someone subscribes.
@@ -32,6 +34,7 @@ from shared.geometry import Pose2D
 from shared.messages import (
     CameraInfo,
     DockDetection,
+    Float64MultiArray,
     Header,
     Image,
     Pose,
@@ -51,6 +54,8 @@ IMAGE_QOS = QoS(reliable=False, block=False, depth=1)
 STATS_PERIOD_S = 30.0
 #: A marker's last pose helps choose between ambiguous fits for this long (image stamps, s).
 CONTINUITY_S = 0.5
+#: The robot's pose settles ambiguous fits with the dock database's heading while it is this fresh (wall, s).
+ROBOT_POSE_FRESH_S = 1.0
 #: The marker's pose in the dock pose's frame: on the dock's face, facing the docked robot.
 _MARKER_ON_DOCK = Pose2D(ROBOT_FRONT_M, 0.0, math.pi)
 
@@ -91,6 +96,9 @@ class PerceptionService:
         self.counts: Counter[str] = Counter()
         #: Each marker's last dock pose in base_link and its image stamp: what an ambiguous fit continues.
         self._previous: dict[int, tuple[float, Pose2D]] = {}
+        #: The docks' database poses (map) by id, and the robot's latest map pose with when it came (monotonic).
+        self._dock_poses = {dock.id: dock.pose2d for dock in world.docks}
+        self._robot: tuple[float, Pose2D] | None = None
         self._stats_at = time.monotonic()
         self.detected_pub = node.create_publisher(PoseStamped, topics.DETECTED_DOCK_POSE, SENSOR_DATA)
         self.detections_pub = node.create_publisher(DockDetection, topics.DOCK_DETECTIONS, RELIABLE)
@@ -99,6 +107,7 @@ class PerceptionService:
             CameraInfo, topics.CAMERA_INFO, self._on_camera_info, QoS(reliable=False, depth=1)
         )
         node.create_subscription(TFMessage, topics.TF_STATIC, self._on_tf_static, QoS(depth=20))
+        node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_robot_pose, QoS(depth=1))
         #: Images are read only while someone wants what comes of them (Zenoh's matching status on this
         #: service's outputs), so the simulator renders no frame that nobody uses. The demand is followed
         #: as Zenoh reports each change: flat out, a poll even every 0.2 s of wall time let a dozen frames
@@ -148,6 +157,22 @@ class PerceptionService:
             return
         self._camera_matrix = K
         self._distortion = np.asarray(msg.d, dtype=np.float64) if msg.d.size else np.zeros(5)
+
+    def _on_robot_pose(self, msg: Float64MultiArray) -> None:
+        data = msg.data
+        if len(data) < 3 or not all(math.isfinite(float(v)) for v in data[:3]):
+            self._refuse(
+                "robot-pose", "ignored a map_to_base_link_pose2d that is not [x, y, yaw]: %s", list(data)
+            )
+            return
+        self._robot = (time.monotonic(), Pose2D(float(data[0]), float(data[1]), float(data[2])))
+
+    def _expected(self, dock_id: str) -> Pose2D | None:
+        """The dock database's pose of ``dock_id`` in base_link, from a fresh robot pose, else None."""
+        dock = self._dock_poses.get(dock_id)
+        if self._robot is None or dock is None or time.monotonic() - self._robot[0] > ROBOT_POSE_FRESH_S:
+            return None
+        return dock.relative_to(self._robot[1])
 
     def _on_tf_static(self, msg: TFMessage) -> None:
         for link, why in self.frames.add_message(msg, static=True).refused:
@@ -211,7 +236,13 @@ class PerceptionService:
             last = self._previous.get(sighting.marker_id)
             previous = last[1] if last is not None and 0.0 <= stamp_s - last[0] <= CONTINUITY_S else None
             dock = locate_dock(
-                sighting, marker, self._camera_matrix, self._distortion, base_from_camera, previous
+                sighting,
+                marker,
+                self._camera_matrix,
+                self._distortion,
+                base_from_camera,
+                previous,
+                self._expected(marker.dock_id),
             )
             if dock is None:
                 self._refuse("not-upright", "marker %d: no upright pose fits its corners", sighting.marker_id)

@@ -42,11 +42,23 @@ class Topic(_Conditional):
     qos: QoS
     #: Messages per second of sim time while the service runs (``None``: on events, or as its inputs come).
     rate_hz: float | None = None
+    #: Events: at most this many messages in any second of sim time (``None``: a steady ``rate_hz``).
+    max_rate_hz: float | None = None
     #: ``""``: always declared while the service runs; otherwise when it is (``"while docking"``).
     when: str = ""
     about: str = ""
     #: A key outside the robot's namespace, matched by its last parts (the fleet's peers ``*/battery_status``).
     fleet_wide: bool = False
+    #: ``header.frame_id`` of every message at the defaults (``""``: the type has no header, or any frame).
+    #: Frames are never prefixed with the robot's name on the bus: the key's namespace tells robots apart.
+    frame_id: str = ""
+    #: ``child_frame_id`` of every message (odometry's moving frame), likewise.
+    child_frame_id: str = ""
+
+    @property
+    def on_demand(self) -> bool:
+        """Published only while someone listens: a listener changes what the service does."""
+        return "someone listens" in f"{self.when} {self.about}"
 
 
 @dataclass(frozen=True)
@@ -84,6 +96,10 @@ class Contract:
 
     service: str
     summary: str
+    #: ``major.minor``: the major rises when a replacement written to the old pages would break (a key, a
+    #: type or a frame changed, a duty added), the minor for what only adds (an optional key, words).
+    #: Each version has its entry in ``docs/contracts/changelog.md``; a test holds both to every change.
+    version: str
     publishes: tuple[Topic, ...] = ()
     subscribes: tuple[Topic, ...] = ()
     serves: tuple[Request, ...] = ()
@@ -126,12 +142,14 @@ class Contract:
         return out
 
     def required_endpoints(self) -> list[tuple[str, str, str]]:
-        """What every implementation must declare: what it publishes, serves and offers as actions. What it
-        subscribes is what it may read: zendock's own reads all of it, a replacement what it needs."""
+        """What every implementation must declare: every endpoint without a ``when``, subscriptions too
+        (an input the service cannot do without, such as the simulator's ``cmd_vel``). A subscription a
+        replacement may do without says so in its ``when`` ("optional: ..."); a service that subscribes on
+        demand (the ROS 2 faces) has no required subscription."""
         return [
             (kind, key, type_name)
             for kind, key, type_name, required in self.endpoints()
-            if required and kind != "sub"
+            if required and not (kind == "sub" and self.subscribes_on_demand)
         ]
 
     def check_endpoint(
@@ -195,7 +213,22 @@ ANNOUNCEMENTS: tuple[str, ...] = (
     "`<ns>` is the namespace with `/` written `%`, and `%` alone for none.",
     "Each endpoint: a liveliness token `@zendock/<kind>/<ns>/<service>/<type>/<key>` with kind pub, sub, srv or act, "
     "`<type>` the ROS type name with `/` written `%`, and `<key>` the full key.",
+    "Required: every endpoint whose `when` reads `always`, subscriptions included, has its token while the "
+    "service runs (`zendock conform` fails a missing one); an `optional: ...` subscription a replacement "
+    "may leave out; any other `when` says when the endpoint is there.",
 )
+#: How frames are named on the bus (the ``frame`` column of each contract's publishes).
+FRAME_RULES: tuple[str, ...] = (
+    "Every stamped message's `header.frame_id` is the frame its contract names at the defaults "
+    "(`map`, `odom`, `base_link`, `lidar_link`, `ultrasonic_link`, `camera_optical_frame`); "
+    "a leading `/` is ignored, as tf ignores it. `zendock conform` checks every message it sees.",
+    "Frames are never prefixed with the robot's name on the bus: in a fleet each robot's messages say "
+    "`base_link`, and the key's namespace (`r1/odom`) tells robots apart. Only the live view shows them "
+    "side by side as `r1/base_link`.",
+    "Positions are in metres and angles in radians, as in ROS; a pose's orientation is a unit quaternion "
+    "whose yaw is the heading in its frame.",
+)
+
 #: What every service must survive and how it must end.
 DUTIES: tuple[str, ...] = (
     "Bad input never ends it: a payload that does not decode as the key's type is refused and counted; "

@@ -25,7 +25,9 @@ WIRE_RULES: tuple[str, ...] = (
     f"A sample's payload is one msgpack map whose keys are the ROS 2 field names; at most {MAX_PAYLOAD_BYTES} bytes.",
     f"Its Zenoh encoding is `{ENCODING_PREFIX};<ROS type name>`, e.g. `{ENCODING_PREFIX};sensor_msgs/msg/BatteryState`.",
     f"Its attachment is {ATTACHMENT_SIZE} bytes: the publisher's sequence number (u64 little-endian, from 1), then "
-    "the publisher's 16-byte session id and 4-byte entity id (little-endian). Receivers accept a sample without one.",
+    "the publisher's 16-byte session id and 4-byte entity id (little-endian). The session id is Zenoh's id of "
+    "the publishing session (`str(session.zid())`, hexadecimal) read as a number and written as 16 bytes "
+    "little-endian; the entity id is the publisher's own. Receivers accept a sample without an attachment.",
     "Every field is present and no other: a map with a missing or an unknown field is refused (counted, logged once).",
     "Numbers: floats are msgpack float 64 (an integer is accepted where a float is expected); they must be finite "
     "unless the schema says NaN is allowed (then NaN means 'unknown', as ROS 2 uses it). Integers are range-checked.",

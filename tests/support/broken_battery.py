@@ -1,6 +1,7 @@
 """A deliberately broken battery for the conformance kit's own test: ``zendock conform battery`` must fail it,
 naming the checks it breaks. It announces itself but none of its endpoints, publishes at 2 Hz of wall time
-instead of 10 Hz of sim time, never changes its charge, serves no set_state, and ignores SIGTERM."""
+instead of 10 Hz of sim time and with no frame in its header, never changes its charge, serves no set_state,
+and ignores SIGTERM."""
 
 import json
 import os

@@ -16,12 +16,14 @@ from shared.messages import (
 CONTRACT = Contract(
     service="battery",
     summary="A simulated battery: drains with motion, charges while the robot is mated with a dock.",
+    version="1.0",
     publishes=(
         Topic(
             topics.BATTERY_STATUS,
             BatteryState,
             RELIABLE,
             rate_hz=10.0,
+            frame_id=topics.BASE_FRAME,
             about="the charge; power_supply_status CHARGING (1) while mated, DISCHARGING (2) otherwise, FULL (4)",
         ),
     ),

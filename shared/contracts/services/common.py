@@ -52,4 +52,9 @@ def lifecycle_requests(service: str) -> tuple[Request, ...]:
     return tuple(requests)
 
 
-DOCK_DATABASE = Flag("dock_database", "the world file: its docks (pose, marker id, size) and staging offsets")
+DOCK_DATABASE = Flag(
+    "dock_database",
+    "the world file, YAML (docs/worlds.md): its `docks` list, each `{id, pose: [x_m, y_m, yaw_rad], type, "
+    "marker_id, marker_size_m}` in the map frame (marker_id: the dock's index when absent; marker_size_m: "
+    "0.12 when absent). PyYAML's `yaml.safe_load` reads it",
+)

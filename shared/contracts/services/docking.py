@@ -29,9 +29,17 @@ from shared.messages import (
 CONTRACT = Contract(
     service="docking",
     summary="Docking: on low battery or a dock_robot goal, navigate to the staging pose, approach, charge.",
+    version="1.0",
     publishes=(
-        Topic(topics.CMD_VEL, Twist, RELIABLE, when="while approaching or undocking"),
-        Topic(DOCKING_STATE, String, RELIABLE, about="the phase in words, at each change"),
+        Topic(
+            topics.CMD_VEL,
+            Twist,
+            RELIABLE,
+            max_rate_hz=20.0,
+            when="while approaching or undocking",
+            about="one command per control tick",
+        ),
+        Topic(DOCKING_STATE, String, RELIABLE, max_rate_hz=10.0, about="the phase in words, at each change"),
     ),
     subscribes=(
         Topic(
@@ -39,9 +47,9 @@ CONTRACT = Contract(
         ),
         Topic(topics.POSE2D, Float64MultiArray, QoS(depth=1)),
         Topic(topics.ODOM, Odometry, SENSOR_DATA),
-        Topic(topics.SCAN, LaserScan, SENSOR_DATA),
-        Topic(topics.ULTRASONIC, Range, SENSOR_DATA),
-        Topic(topics.TF_STATIC, TFMessage, QoS(depth=20)),
+        Topic(topics.SCAN, LaserScan, SENSOR_DATA, when="optional: holds the approach before an obstacle"),
+        Topic(topics.ULTRASONIC, Range, SENSOR_DATA, when="optional: holds the approach before glass"),
+        Topic(topics.TF_STATIC, TFMessage, QoS(depth=20), when="optional: the sensors' mounts for the above"),
         Topic(topics.DETECTED_DOCK_POSE, PoseStamped, SENSOR_DATA, when="while it wants dock detections"),
         Topic(topics.IR_DOCK, DockInfraRed, SENSOR_DATA, when="with controller=ir"),
         Topic(

@@ -45,12 +45,39 @@ from shared.messages import (
 CONTRACT = Contract(
     service="planner",
     summary="Navigation (Nav2's role): the map, a costmap with glass from the sonar, A*, a path follower.",
+    version="1.0",
     publishes=(
-        Topic(topics.CMD_VEL, Twist, RELIABLE, when="while navigating", about="drives toward the goal"),
-        Topic(topics.PLAN, Path, RELIABLE, about="the global plan, at each (re)plan"),
-        Topic(topics.MAP, OccupancyGrid, RELIABLE, about="the static map, on start and on load_map"),
         Topic(
-            COSTMAP_TOPIC, OccupancyGrid, QoS(reliable=False, depth=1), about="the costmap with glass marks"
+            topics.CMD_VEL,
+            Twist,
+            RELIABLE,
+            max_rate_hz=20.0,
+            when="while navigating",
+            about="drives toward the goal, one command per control tick",
+        ),
+        Topic(
+            topics.PLAN,
+            Path,
+            RELIABLE,
+            max_rate_hz=5.0,
+            frame_id=topics.MAP_FRAME,
+            about="the global plan, at each (re)plan",
+        ),
+        Topic(
+            topics.MAP,
+            OccupancyGrid,
+            RELIABLE,
+            max_rate_hz=1.0,
+            frame_id=topics.MAP_FRAME,
+            about="the static map, on start and on load_map",
+        ),
+        Topic(
+            COSTMAP_TOPIC,
+            OccupancyGrid,
+            QoS(reliable=False, depth=1),
+            max_rate_hz=5.0,
+            frame_id=topics.MAP_FRAME,
+            about="the costmap with glass marks",
         ),
     ),
     subscribes=(
@@ -58,7 +85,12 @@ CONTRACT = Contract(
         Topic(topics.ODOM, Odometry, QoS(depth=5), rate_hz=20.0),
         Topic(topics.SCAN, LaserScan, SENSOR_DATA, rate_hz=10.0),
         Topic(topics.ULTRASONIC, Range, SENSOR_DATA, rate_hz=20.0),
-        Topic(topics.TF_STATIC, TFMessage, QoS(depth=5)),
+        Topic(
+            topics.TF_STATIC,
+            TFMessage,
+            QoS(depth=5),
+            when="optional: the sensors' mounts (zendock's robot's by default)",
+        ),
     ),
     serves=(
         Request(CLEAR_COSTMAPS_SERVICE, CLEAR_ENTIRE_COSTMAP),

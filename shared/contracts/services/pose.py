@@ -15,6 +15,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="pose",
     summary="The robot's 2-D pose in the map, [x, y, yaw], from the tf tree (map -> odom -> base_link).",
+    version="1.0",
     publishes=(
         Topic(
             topics.POSE2D,
@@ -27,13 +28,21 @@ CONTRACT = Contract(
             topics.AMCL_POSE,
             PoseWithCovarianceStamped,
             RELIABLE,
+            max_rate_hz=10.0,
+            frame_id=topics.MAP_FRAME,
             when="for Nav2 scripts (zendock's pose service always)",
             about="the pose as Nav2's amcl_pose: on moving 0.25 m or turning 0.2 rad (as AMCL), and once a second",
         ),
     ),
     subscribes=(
         Topic(topics.TF, TFMessage, QoS(reliable=False, depth=100), rate_hz=20.0),
-        Topic(topics.TF_STATIC, TFMessage, QoS(reliable=True, depth=20), rate_hz=1.0),
+        Topic(
+            topics.TF_STATIC,
+            TFMessage,
+            QoS(reliable=True, depth=20),
+            rate_hz=1.0,
+            when="optional: needed for a target_frame other than base_link",
+        ),
     ),
     serves=lifecycle_requests("pose"),
     flags=(USE_SIM_TIME,),

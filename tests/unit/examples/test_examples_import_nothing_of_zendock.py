@@ -1,6 +1,7 @@
 """The examples prove a user can replace a zendock service from its contracts alone, so their code must not
 lean on zendock: no import of ``shared``, ``services`` or ``deploy``, and nothing beyond eclipse-zenoh,
-msgpack, numpy and the standard library (plus the examples' own modules, such as ``wire``).
+msgpack, numpy, OpenCV, PyYAML (the world file a dock database is) and the standard library (plus the
+examples' own modules, such as ``wire``).
 
 A user's tests under ``examples/tests/`` drive a zendock stack through zendock's pytest plugin, so they may
 import ``deploy.testing`` (and pytest), nothing else of zendock: it is the replacement services that must
@@ -17,7 +18,7 @@ import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 ZENDOCK_PACKAGES = {"shared", "services", "deploy"}
-ALLOWED_THIRD_PARTY = {"zenoh", "msgpack", "numpy"}
+ALLOWED_THIRD_PARTY = {"zenoh", "msgpack", "numpy", "cv2", "yaml"}
 #: What a user's tests may import of zendock: its pytest plugin.
 TEST_PLUGIN = "deploy.testing"
 

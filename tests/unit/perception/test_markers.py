@@ -163,3 +163,36 @@ def test_the_perception_bench_waits_out_the_marker_memory() -> None:
     from services.perception.node import CONTINUITY_S
 
     assert PERCEPTION_MEMORY_S == CONTINUITY_S
+
+
+def test_the_database_heading_settles_the_mirror_that_fits_a_far_oblique_marker_better() -> None:
+    """2.5 m from the marker, 30 degrees aside: the mirror solution fits the corners better than the truth in
+    most frames, and no continuity undoes that; the dock database's heading seen from the robot does."""
+    world = _world()
+    params = CameraParams()
+    marker = dock_markers(world)[0]
+    face = marker.pose
+    angle = math.radians(-30.0)
+    x, y = face.x + 2.5 * math.cos(face.yaw + angle), face.y + 2.5 * math.sin(face.yaw + angle)
+    robot = Pose2D(x, y, math.atan2(face.y - y, face.x - x))
+    truth = world.docks[0].pose2d.relative_to(robot)
+    expected = Pose2D(truth.x + 0.03, truth.y - 0.02, truth.yaw + 0.05)  # as a localiser's error leaves it
+    base_from_optical = _base_from_optical(params)
+    finder = MarkerFinder(world.aruco_dictionary)
+    wrong_alone = wrong_expected = 0
+    for seed in range(8):
+        image = CameraRenderer(build_scene(world), params, np.random.default_rng(seed)).render(robot)
+        (sighting,) = finder.find(image)
+        for prior, count in ((None, "alone"), (expected, "expected")):
+            dock = locate_dock(
+                sighting, marker, params.intrinsics(), np.zeros(5), base_from_optical, expected=prior
+            )
+            assert dock is not None
+            off = abs(math.remainder(dock.dock_in_base.yaw - truth.yaw, math.tau))
+            if off > 0.3:
+                if count == "alone":
+                    wrong_alone += 1
+                else:
+                    wrong_expected += 1
+    assert wrong_expected == 0
+    assert wrong_alone >= 4, "the mirror no longer wins here: this test no longer shows what it is for"
