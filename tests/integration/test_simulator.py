@@ -139,7 +139,9 @@ def test_a_fleet_world_puts_its_robots_in_one_room(
     spawn, bus: zenoh.Session, namespace: str, tmp_path
 ) -> None:  # type: ignore[no-untyped-def]
     """Two robots of a world's ``robots`` list, each under its own namespace: each one's lidar sees the
-    other, and when one drives into the other both report a collision naming the other."""
+    other, and when one drives into the other both report a collision naming the other. Frames are not
+    prefixed on the bus: each robot's odometry and tf say ``odom`` and ``base_link`` (the contract's
+    frames), the namespace telling them apart."""
     world = tmp_path / "pair.yaml"
     world.write_text(
         "name: pair\nbounds: [-3.0, -2.0, 3.0, 2.0]\n"
@@ -148,8 +150,15 @@ def test_a_fleet_world_puts_its_robots_in_one_room(
     collisions = {r: KeyRecorder(bus, f"{namespace}/{r}/collisions", CollisionEvent) for r in ("r1", "r2")}
     scan = KeyRecorder(bus, f"{namespace}/r1/scan", LaserScan)
     clock = KeyRecorder(bus, f"{namespace}/r1/clock", Clock)
+    odom = {r: KeyRecorder(bus, f"{namespace}/{r}/odom", Odometry) for r in ("r1", "r2")}
+    tf = KeyRecorder(bus, f"{namespace}/r2/tf", TFMessage)
     spawn("simulator", "--world", str(world), "-p", "rtf=4")
     clock.wait_for(timeout_s=20.0)
+    for robot, recorder in odom.items():
+        msg = recorder.wait_for(timeout_s=10.0)
+        assert (msg.header.frame_id, msg.child_frame_id) == ("odom", "base_link"), (robot, msg.header)
+    links = {(t.header.frame_id, t.child_frame_id) for t in tf.wait_for(timeout_s=10.0).transforms}
+    assert links <= {("map", "odom"), ("odom", "base_link")}, links
     ahead = scan.wait_for(timeout_s=10.0).ranges[180]
     assert abs(ahead - (2.0 - 0.2 - 0.1)) < 0.05, f"r1's lidar reads {ahead} m ahead, where r2's front stands"
     cmd = bus.declare_publisher(f"{namespace}/r1/cmd_vel")
