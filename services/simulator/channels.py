@@ -23,6 +23,7 @@ import numpy as np
 
 from services.simulator.camera import CameraRenderer, Motion
 from services.simulator.camera_frames import camera_info, camera_mount_transforms
+from services.simulator.pacing import CommandCadence
 from services.simulator.params import Params
 from services.simulator.physics import Robot
 from shared import topics
@@ -65,6 +66,8 @@ class SimRobot:
     cmd_v: float = 0.0
     cmd_w: float = 0.0
     last_cmd_s: float = -math.inf
+    #: The cadence of its commands: its controller's period, which lockstep holds the world to.
+    cadence: CommandCadence = field(default_factory=CommandCadence)
     #: Sim time of the last map_to_base_link_pose2d (the localisation the controllers steer on).
     last_pose_s: float = -math.inf
     watchdog_tripped: bool = True

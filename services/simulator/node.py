@@ -133,6 +133,7 @@ class SimulatorService:
         robot.cmd_v = msg.linear.x
         robot.cmd_w = msg.angular.z
         robot.last_cmd_s = self.time_s
+        robot.cadence.heard(self.time_s, self.dt_s)
         robot.watchdog_tripped = False
 
     def _on_pose(self, robot: SimRobot) -> None:
@@ -228,7 +229,9 @@ class SimulatorService:
         drivers = []
         for ns, robot in self.robots.items():
             moving = not robot.watchdog_tripped and (robot.cmd_v != 0.0 or robot.cmd_w != 0.0)
-            drivers.append(Driver(ns, robot.last_cmd_s, moving))
+            drivers.append(
+                Driver(ns, robot.last_cmd_s, moving, robot.cadence.gap_s(self.params.pacing, self.dt_s))
+            )
             if robot.last_pose_s > -math.inf:
                 drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, self.params.pacing.pose_gap_s))
         return drivers

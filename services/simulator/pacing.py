@@ -57,6 +57,52 @@ class PacingParams(ComponentParams):
     )
     #: A robot's pose is late once this old (sim seconds): three periods of the 10 Hz pose.
     pose_gap_s: float = Field(0.3, gt=0, description="a robot's pose older than this (sim) is late")
+    #: Lockstep: a moving robot's command is late once its own controller's period (from the cadence of its
+    #: recent commands) has passed by this factor, rather than after ``driver_gap_s``: the world does not
+    #: run on past the step a command answers, whatever the speed-up (0: ``driver_gap_s`` alone).
+    lockstep_factor: float = Field(
+        1.2, ge=0, description="a moving robot's command is late after this many of its own periods (0: off)"
+    )
+
+
+class CommandCadence:
+    """When a robot's commands arrive (sim time), and so the period its controller runs at: the median of
+    its recent intervals. Commands heard within one step count once; a pause longer than
+    :data:`CADENCE_BREAK_S` starts the count again (a new controller, or one that paused)."""
+
+    def __init__(self, keep: int = 8) -> None:
+        self._keep = keep
+        self._intervals: list[float] = []
+        self._last_s = -math.inf
+
+    def heard(self, sim_s: float, step_s: float) -> None:
+        interval = sim_s - self._last_s
+        if interval < step_s / 2.0:
+            return  # the same step: one more command for it, not a new period
+        self._last_s = sim_s
+        if interval > CADENCE_BREAK_S:
+            self._intervals.clear()
+            return
+        self._intervals = [*self._intervals[-(self._keep - 1) :], interval]
+
+    def period_s(self) -> float | None:
+        """The controller's period, once three intervals say it; else None."""
+        if len(self._intervals) < 3:
+            return None
+        ordered = sorted(self._intervals)
+        return ordered[len(ordered) // 2]
+
+    def gap_s(self, params: PacingParams, step_s: float) -> float | None:
+        """How old its last command may grow while it moves: ``lockstep_factor`` periods, at least two
+        steps, at most ``driver_gap_s``; None (the pacer's default) when the cadence is not known yet."""
+        period = self.period_s()
+        if period is None or params.lockstep_factor <= 0.0:
+            return None
+        return min(params.driver_gap_s, max(2.0 * step_s, params.lockstep_factor * period))
+
+
+#: Commands further apart than this (sim s) are not one controller's stream.
+CADENCE_BREAK_S = 0.5
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ import pytest
 from services.simulator.pacing import (
     CATCH_UP_FACTOR,
     CATCH_UP_LIMIT_S,
+    CommandCadence,
     Driver,
     DriverPacer,
     PacingParams,
@@ -47,6 +48,27 @@ def test_a_late_pose_holds_the_world_on_its_own_gap_even_with_the_robot_still() 
     assert pacer.hold(2.0, 0.0, [still, Driver("r0:pose", 1.6, True, gap_s=0.3)])  # 0.4 s old: wait
     assert not pacer.hold(2.0, 0.2, [still, Driver("r0:pose", 1.6, True, gap_s=0.3)])  # budget spent: a dead
     assert pacer.holds == 1  # pose service costs one wait, not a frozen world
+
+
+def test_lockstep_holds_a_moving_robot_to_its_own_controllers_period() -> None:
+    """A 20 Hz controller's command is late 0.06 s after the last (1.2 periods), not after driver_gap_s; a
+    10 Hz one's after 0.12 s; the cadence counts one step's commands once and starts again after a pause."""
+    step = 0.01
+    fast, slow = CommandCadence(), CommandCadence()
+    assert fast.gap_s(PARAMS, step) is None  # not known yet: the pacer's default gap
+    for i in range(6):
+        fast.heard(1.0 + 0.05 * i, step)
+        fast.heard(1.0 + 0.05 * i + 0.001, step)  # a second command in the same step
+        slow.heard(1.0 + 0.1 * i, step)
+    assert fast.period_s() == pytest.approx(0.05) and fast.gap_s(PARAMS, step) == pytest.approx(0.06)
+    assert slow.gap_s(PARAMS, step) == pytest.approx(0.12)
+    pacer = DriverPacer(PARAMS)
+    last = 1.25
+    assert not pacer.hold(1.30, 0.0, [Driver("r0", last, True, fast.gap_s(PARAMS, step))])
+    assert pacer.hold(1.32, 0.0, [Driver("r0", last, True, fast.gap_s(PARAMS, step))])  # 0.07 s: late
+    assert fast.gap_s(PacingParams(lockstep_factor=0.0), step) is None  # lockstep off: the default gap
+    fast.heard(3.0, step)  # after a pause: a new stream, its period unknown again
+    assert fast.period_s() is None
 
 
 def test_held_time_is_counted_by_what_was_late() -> None:
