@@ -59,5 +59,17 @@ def world_argument(text: str) -> str:
 
 
 def campaign_world(text: str) -> str:
-    """``zendock trials --world``'s type: as :func:`world_argument`, and ``all`` for every shipped world."""
-    return text if text == "all" else world_argument(text)
+    """``zendock trials --world``'s type: as :func:`world_argument`, ``all`` for every shipped world, and
+    ``generated:KIND`` for rooms drawn from the campaign's seed (:mod:`deploy.generated_worlds`)."""
+    if text == "all":
+        return text
+    if text.startswith("generated:"):
+        kind = text.removeprefix("generated:")
+        from shared.world_gen import KINDS  # noqa: PLC0415 - only a generated campaign needs it
+
+        if kind not in KINDS:
+            raise argparse.ArgumentTypeError(
+                f"no kind of generated world {kind!r} (generated:KIND, KIND one of: {', '.join(KINDS)})"
+            )
+        return text
+    return world_argument(text)

@@ -61,18 +61,38 @@ def _summary_table(summary: dict) -> Table:
     return table
 
 
-def _worlds(args: argparse.Namespace) -> list[Path]:
+def _worlds(args: argparse.Namespace) -> list[tuple[Path, int]]:
+    """Each world of the campaign with its number of trials: ``--n`` each, or for ``generated:KIND`` one
+    trial in each of ``--n`` fresh rooms (seeds from ``--seed``), written under the runs directory."""
     names = args.world or [DEFAULT_WORLD]
     if names == ["all"]:
-        worlds = sorted(SHIPPED_WORLDS.glob("*.yaml"))
-    else:  # a directory stands for every world file in it (deploy/worlds/unseen, a user's own set)
-        worlds = world_files(names)
+        return [(world.resolve(), args.n) for world in sorted(SHIPPED_WORLDS.glob("*.yaml"))]
+    out: list[tuple[Path, int]] = []
+    for name in names:
+        if name.startswith("generated:"):  # the kind was checked by campaign_world
+            kind = name.removeprefix("generated:")
+            out += [(room.resolve(), 1) for room in _generated_rooms(args, kind)]
+            continue
+        worlds = world_files([name])  # a directory stands for every world file in it (deploy/worlds/unseen)
         if not worlds:
-            raise ConfigError(f"--world {' '.join(names)}: no world file (*.yaml) there")
-    for world in worlds:
-        if not world.is_file():
-            raise ConfigError(f"--world {world}: no such file")
-    return [world.resolve() for world in worlds]
+            raise ConfigError(f"--world {name}: no world file (*.yaml) there")
+        for world in worlds:
+            if not world.is_file():
+                raise ConfigError(f"--world {world}: no such file")
+        out += [(world.resolve(), args.n) for world in worlds]
+    return out
+
+
+def _generated_rooms(args: argparse.Namespace, kind: str) -> list[Path]:
+    from deploy.generated_worlds import generate_rooms  # noqa: PLC0415 - the planner's tool only when used
+    from deploy.paths import REPO_ROOT  # noqa: PLC0415
+
+    runs: Path = args.runs_dir or REPO_ROOT / "runs"  # where TrialOptions puts runs by default
+    directory = runs / "generated" / f"{kind}-seed{args.seed}-n{args.n}"
+    try:
+        return generate_rooms(kind, args.seed, args.n, directory)
+    except RuntimeError as exc:
+        raise ConfigError(f"--world generated:{kind}: {exc}") from None
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -83,12 +103,12 @@ def _run(args: argparse.Namespace) -> int:
     worlds = _worlds(args)
     console = Console(stderr=args.json)
     per_world = []
-    for number, world in enumerate(worlds):
+    for number, (world, n) in enumerate(worlds):
         # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
         starts = args.starts or CONTROLLERS[args.controller].starts
         options = TrialOptions(
             world=world,
-            n=args.n,
+            n=n,
             controller=args.controller,
             detector=args.detector,
             starts=starts,
@@ -239,11 +259,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--world",
         type=campaign_world,
         action="append",
-        metavar="FILE|DIR",
-        help=f"world file or directory of them (repeat for a campaign across worlds; 'all': every shipped world); "
+        metavar="FILE|DIR|generated:KIND",
+        help=f"world file or directory of them (repeat for a campaign across worlds; 'all': every shipped world; "
+        f"generated:room or generated:glass: --n fresh rooms drawn from --seed, one docking each); "
         f"default {DEFAULT_WORLD}",
     )
-    parser.add_argument("--n", type=count, default=10, help="number of dockings (per world)")
+    parser.add_argument(
+        "--n", type=count, default=10, help="number of dockings (per world; with generated:KIND, of rooms)"
+    )
     add_controller_option(parser)
     parser.add_argument(
         "--starts",
