@@ -137,6 +137,6 @@ def test_trials_merge_names_itself_once(capsys: pytest.CaptureFixture[str]) -> N
 def test_help_shows_the_defaults_an_option_has(capsys: pytest.CaptureFixture[str]) -> None:
     assert _exit_code(["trials", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
-    assert "number of dockings (per world) (default: 10)" in text
+    assert "number of dockings (per world; with generated:KIND, of rooms) (default: 10)" in text
     assert "(default: 0)" in text, "a zero default is a default worth showing"
     assert "(default: None)" not in text and "(default: False)" not in text
