@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from shared.geometry import Pose2D
+from shared.starts import START_CLEARANCE_M, distance_to_segment
 from shared.world import DOCK_GEOMETRY, ROBOT_FRONT_M, ROBOT_WIDTH_M, World, parse_world
 
 KINDS = ("room", "glass")
@@ -79,7 +80,8 @@ def generate_world(kind: str, seed: int, attempt: int = 0) -> dict[str, Any]:
 
 def room_problems(doc: dict[str, Any]) -> list[str]:
     """Why a drawn room may not be kept (empty: it may): its document does not parse, something stands in
-    the approach to the dock, or the start has no room or is too near the dock."""
+    the approach to the dock, or the start is nearer a surface than trials' starts may be (whatever its
+    heading, the body then clears everything) or too near the dock."""
     try:
         world = parse_world(doc, doc.get("name", "<generated>"))
     except Exception as exc:  # a ConfigError naming the field
@@ -93,9 +95,9 @@ def room_problems(doc: dict[str, Any]) -> list[str]:
             problems.append(f"{label} stands in the approach to the dock")
             break
     start = Pose2D(*world.robot.start)
-    why = world.placement_problem(start.x, start.y)
-    if why is not None:
-        problems.append(f"the start: {why}")
+    segments = world.opaque_segments() + list(world.glass)
+    if min(distance_to_segment((start.x, start.y), seg) for seg in segments) < START_CLEARANCE_M:
+        problems.append("the start: too near a wall, a pane, a box or the dock")
     if start.distance_to(dock) < START_AWAY_M:
         problems.append("the start is too near the dock")
     return problems

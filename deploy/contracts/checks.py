@@ -827,7 +827,8 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
     ]
 
 
-#: ``(range_m, angle_deg)``: base_link to the marker's centre, and off the marker's axis (either side).
+#: ``(range_m, angle_deg)``: base_link to the marker's centre, and off the marker's axis (either side). A
+#: viewpoint the world has no room for (seed_room's west wall at 3 m and -40 degrees) is named and skipped.
 VIEWPOINTS = (
     (0.4, 0.0),
     (0.4, -40.0),
@@ -840,6 +841,8 @@ VIEWPOINTS = (
     (3.0, 0.0),
     (3.0, -30.0),
     (3.0, 30.0),
+    (3.0, -40.0),
+    (3.0, 40.0),
 )
 #: A viewpoint's median detection is within this much plus ``ROUND_WITHIN_PER_M`` a metre of range ...
 ROUND_WITHIN_M = 0.02
