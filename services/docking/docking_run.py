@@ -18,10 +18,10 @@ started afresh at the staging pose, and with ``handover_distance_m`` the approac
 the robot is near the staging pose, behind the dock and facing it or coming side-on where it can still
 curve onto the dock's axis: the planner's goal is cancelled instead of being driven to a standstill
 and turned to its heading, INITIAL_PERCEPTION lasts one tick while the planner lets go, and nothing is
-driven before it has The approach then waits for detections as the staging pose would have: with none in
-``initial_perception_timeout_s``, or none before it reaches the dock, it goes on blind on the database pose,
-saying so (or fails with 904). An approach that comes up to the plate off the dock's axis backs off along it and
-tries again from there, without the planner.
+driven before it has. The approach then waits for detections as the staging pose would have: with none
+in ``initial_perception_timeout_s``, or none before it reaches the dock, it goes on blind on the database
+pose, saying so (or fails with 904). An approach that comes up to the plate off the dock's axis backs off
+along it and tries again from there, without the planner.
 
 A failure in 2-5 is retried (RETRY: stop, back off if at the dock, stage again) up to ``max_retries``
 times; then the run fails with the last error. Cancelling commands zero and ends the run. The whole

@@ -4,9 +4,10 @@ Subscribes to ``camera/image_raw``, ``camera/camera_info`` and ``tf_static`` (wh
 frame sits on base_link); finds ArUco markers and turns each known one into its dock's pose in base_link
 (:mod:`services.perception.markers`). The robot's pose (``map_to_base_link_pose2d``), while it comes, puts
 the dock database's heading in base_link, which settles a marker's mirror ambiguity: a small, far marker
-seen from the side fits both headings about equally well, and sometimes the wrong one better. The nearest dock seen goes out on ``detected_dock_pose``
-(geometry_msgs/PoseStamped in base_link, stamped with the image's time: what the docking service
-consumes), and every dock seen on ``dock_detections`` with its id and fit. ``aruco/debug_image`` (the
+seen from the side fits both headings about equally well, and sometimes the wrong one better. The
+nearest dock seen goes out on ``detected_dock_pose`` (geometry_msgs/PoseStamped in base_link, stamped
+with the image's time: what the docking service consumes), and every dock seen on ``dock_detections``
+with its id and fit. ``aruco/debug_image`` (the
 frame with the markers and their axes drawn) is drawn only while someone subscribes.
 
 Frames the detector cannot use (bad encoding or size, no calibration yet, no camera mount yet), markers
