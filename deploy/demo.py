@@ -25,7 +25,7 @@ from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.launcher.overrides import with_params
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
-from deploy.paths import REPO_ROOT
+from deploy.paths import REPO_ROOT, RUNS_DIR
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, demo_line
 from deploy.replacements import Replacement, apply_replacements, replacements_report
 from deploy.service_tools import run_tool
@@ -65,7 +65,7 @@ class DemoOptions:
     #: CHARGING: the picture shows the charge rise (at 1x, 5 s on the dock add 0.07 %).
     charge_scale: float = 60.0
     charging_shown_s: float = 5.0
-    runs_dir: Path = REPO_ROOT / "runs"
+    runs_dir: Path = RUNS_DIR
     #: map->odom error of the simulated localisation (x_m, y_m, yaw_rad); trials turn it on.
     localisation_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
     #: The robot's services in one process (``zendock container``) instead of one process each.

@@ -85,10 +85,9 @@ def _worlds(args: argparse.Namespace) -> list[tuple[Path, int]]:
 
 def _generated_rooms(args: argparse.Namespace, kind: str) -> list[Path]:
     from deploy.generated_worlds import generate_rooms  # noqa: PLC0415 - the planner's tool only when used
-    from deploy.paths import REPO_ROOT  # noqa: PLC0415
+    from deploy.paths import RUNS_DIR  # noqa: PLC0415
 
-    runs: Path = args.runs_dir or REPO_ROOT / "runs"  # where TrialOptions puts runs by default
-    directory = runs / "generated" / f"{kind}-seed{args.seed}-n{args.n}"
+    directory = (args.runs_dir or RUNS_DIR) / "generated" / f"{kind}-seed{args.seed}-n{args.n}"
     try:
         return generate_rooms(kind, args.seed, args.n, directory)
     except RuntimeError as exc:
@@ -152,7 +151,7 @@ def _report_campaign(console: Console, per_world: list, controller: str, as_json
 
 
 def _merge(args: argparse.Namespace) -> int:
-    from deploy.paths import REPO_ROOT  # noqa: PLC0415
+    from deploy.paths import RUNS_DIR  # noqa: PLC0415
     from deploy.trials.merge import MergeError, find_reports, merge_reports, read_shard, write_merged  # noqa: PLC0415
 
     console = Console(stderr=args.json)
@@ -161,7 +160,7 @@ def _merge(args: argparse.Namespace) -> int:
         merged = merge_reports(reports)
     except MergeError as exc:
         raise ConfigError(str(exc)) from None
-    out = write_merged(merged, args.runs_dir or REPO_ROOT / "runs")
+    out = write_merged(merged, args.runs_dir or RUNS_DIR)
     per_world = []
     for result in merged.values():
         _print_summary(console, result.summary)

@@ -20,6 +20,7 @@ from typing import Any
 from deploy.contracts.candidate import SIGTERM_LIMIT_S, Candidate
 from deploy.contracts.probe import MALFORMED_PAYLOADS, Probe, Samples
 from deploy.paths import REPO_ROOT
+from deploy.percentiles import median
 from shared.action import ActionClient, spin_in_background
 from shared.contracts import Contract, Topic
 from shared.encoding import ENCODING_PREFIX
@@ -144,11 +145,6 @@ class Context:
         return self.probe.key(name, self.robot_namespace)
 
 
-def timed(name: str, body: Callable[[], tuple[bool, str]]) -> PlannedCheck:
-    """The check ``name``, timed when it runs."""
-    return PlannedCheck(name, body)
-
-
 # --- the checks every service gets ---------------------------------------------------------------------------
 
 
@@ -210,8 +206,8 @@ def check_endpoints(ctx: Context) -> list[PlannedCheck]:
         )
 
     return [
-        timed("endpoints: announces every required one", required),
-        timed("endpoints: declares only what the contract names", only_named),
+        PlannedCheck("endpoints: announces every required one", required),
+        PlannedCheck("endpoints: declares only what the contract names", only_named),
     ]
 
 
@@ -248,7 +244,7 @@ def check_publishes(ctx: Context) -> list[PlannedCheck]:
                 f"{samples.decoded} messages, {rate:.1f} Hz of {clock} time (contract {expected:g} Hz), all decode",
             )
 
-        checks.append(timed(f"publishes {topic.name}", body))
+        checks.append(PlannedCheck(f"publishes {topic.name}", body))
     return checks
 
 
@@ -358,7 +354,7 @@ def check_bad_requests(ctx: Context) -> PlannedCheck:
                 answered.append(f'{key}: "{text[:60]}"')
         return (not problems, "; ".join(problems) if problems else "error replies: " + "; ".join(answered))
 
-    return timed("bad requests get an error reply", body)
+    return PlannedCheck("bad requests get an error reply", body)
 
 
 def check_malformed_burst(ctx: Context, still_serving: Callable[[], tuple[bool, str]]) -> PlannedCheck:
@@ -387,7 +383,7 @@ def check_malformed_burst(ctx: Context, still_serving: Callable[[], tuple[bool, 
         ok, evidence = still_serving()
         return ok, f"{sent} malformed payloads on {len(keys)} keys; {evidence}"
 
-    return timed("survives malformed payloads on every key", body)
+    return PlannedCheck("survives malformed payloads on every key", body)
 
 
 def still_serving(ctx: Context) -> Callable[[], tuple[bool, str]]:
@@ -437,7 +433,7 @@ def check_restart(ctx: Context) -> PlannedCheck:
         ok, evidence = still_serving(ctx)()
         return ok, f"back after {took:.1f} s; {evidence}"
 
-    return timed("restarted, it comes back", body)
+    return PlannedCheck("restarted, it comes back", body)
 
 
 # --- behaviour: what each service does with its inputs ---------------------------------------------------------
@@ -507,11 +503,7 @@ def _set_battery(ctx: Context, **values: Any) -> None:
 
 
 def _wait_sim(ctx: Context, seconds: float, wall_limit_s: float = 30.0) -> None:
-    start_wall = time.monotonic()
-    ctx.probe.wait_clock(wall_limit_s)
-    start = ctx.probe.now(True)
-    while ctx.probe.now(True) - start < seconds and time.monotonic() - start_wall < wall_limit_s:
-        time.sleep(0.05)
+    ctx.probe.pass_time(seconds, True, wall_limit_s)
 
 
 def battery_behaviour(ctx: Context) -> list[PlannedCheck]:
@@ -568,9 +560,9 @@ def battery_behaviour(ctx: Context) -> list[PlannedCheck]:
         )
 
     return [
-        timed("answers set_state", answers),
-        timed("drains while the robot drives", drains),
-        timed("charges while mated", charges),
+        PlannedCheck("answers set_state", answers),
+        PlannedCheck("drains while the robot drives", drains),
+        PlannedCheck("charges while mated", charges),
     ]
 
 
@@ -591,7 +583,7 @@ def pose_behaviour(ctx: Context) -> list[PlannedCheck]:
             else f"map_to_base_link_pose2d never came within 5 cm / 0.05 rad of {target}",
         )
 
-    return [timed("follows the robot", follows)]
+    return [PlannedCheck("follows the robot", follows)]
 
 
 def simulator_behaviour(ctx: Context) -> list[PlannedCheck]:
@@ -627,7 +619,11 @@ def simulator_behaviour(ctx: Context) -> list[PlannedCheck]:
             f"odom turning at {msg.twist.twist.angular.z:.2f} rad/s" if msg else "odom never showed the turn",
         )
 
-    return [timed("keeps the clock", clock), timed("answers teleport", teleport), timed("drives", drives)]
+    return [
+        PlannedCheck("keeps the clock", clock),
+        PlannedCheck("answers teleport", teleport),
+        PlannedCheck("drives", drives),
+    ]
 
 
 def _cancel(client: ActionClient[Any, Any, Any], handle: Any) -> None:
@@ -677,7 +673,7 @@ def planner_behaviour(ctx: Context) -> list[PlannedCheck]:
             f"status {handle.status.name}, {len(feedback)} feedback, {miss:.2f} m from the goal {handle.rejection or handle.error}".rstrip(),
         )
 
-    return [timed("navigates", navigates)]
+    return [PlannedCheck("navigates", navigates)]
 
 
 def _supply_status(msg: BatteryState | None) -> str:
@@ -716,7 +712,7 @@ def docking_behaviour(ctx: Context) -> list[PlannedCheck]:
             f"{_supply_status(charging)} {handle.rejection or handle.error}"
         ).rstrip()
 
-    return [timed("docks", docks)]
+    return [PlannedCheck("docks", docks)]
 
 
 #: How far a detected dock may lie from the truth and still count as seen, in metres and radians.
@@ -747,8 +743,8 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
         def close(m: PoseStamped) -> bool:
             seen = m.pose.to_pose2d()
             arrived.append(seen)
-            off_m = math.hypot(seen.x - truth.x, seen.y - truth.y)
-            return off_m < SEEN_WITHIN_M and abs(wrap_angle(seen.yaw - truth.yaw)) < SEEN_WITHIN_RAD
+            off_m, off_rad = _pose_error(seen, truth)
+            return off_m < SEEN_WITHIN_M and off_rad < SEEN_WITHIN_RAD
 
         msg = ctx.probe.wait_for(ctx.key("detected_dock_pose"), PoseStamped, close, SEEN_WAIT_S)
         wanted = f"({truth.x:.3f}, {truth.y:.3f}, yaw {truth.yaw:.3f})"
@@ -765,7 +761,7 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
             return False, f"no detection {within}: none arrived"
         last = arrived[-1]
         hint = units_hint(math.hypot(last.x, last.y), math.hypot(truth.x, truth.y))
-        turned = abs(wrap_angle(last.yaw - truth.yaw))
+        turned = _pose_error(last, truth)[1]
         if not hint and turned > SEEN_WITHIN_RAD:
             hint = f": yaw off by {turned:.2f} rad" + (", turned by pi?" if turned > 3.0 else "")
         return False, (
@@ -804,8 +800,7 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
             if not errors:
                 problems.append(f"{where}: no detection in 1.5 s")
                 continue
-            position_m = sorted(e[0] for e in errors)[len(errors) // 2]
-            yaw_rad = sorted(e[1] for e in errors)[len(errors) // 2]
+            position_m, yaw_rad = median(e[0] for e in errors), median(e[1] for e in errors)
             flipped = sum(1 for e in errors if e[1] > FLIPPED_RAD)
             worst_m, worst_rad = max(worst_m, position_m), max(worst_rad, yaw_rad)
             limit_m = ROUND_WITHIN_M + ROUND_WITHIN_PER_M * range_m
@@ -826,8 +821,8 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
         return not failed and looked > 0, evidence
 
     return [
-        timed("sees the dock", sees),
-        timed("sees the dock from 0.4 to 3 m and 40 degrees aside", sees_round),
+        PlannedCheck("sees the dock", sees),
+        PlannedCheck("sees the dock from 0.4 to 3 m and 40 degrees aside", sees_round),
     ]
 
 
@@ -901,7 +896,7 @@ def fleet_behaviour(ctx: Context) -> list[PlannedCheck]:
             f"{'then free' if freed else 'never shown free again'}",
         )
 
-    return [timed("reserves and releases", reserves)]
+    return [PlannedCheck("reserves and releases", reserves)]
 
 
 def ros2_bridge_behaviour(ctx: Context) -> list[PlannedCheck]:
@@ -923,7 +918,7 @@ def ros2_bridge_behaviour(ctx: Context) -> list[PlannedCheck]:
             f"no rmw_zenoh node token for the simulator on domain {ctx.domain_id} (saw {sorted(names)})",
         )
 
-    return [timed("shows zendock to ROS 2", shows)]
+    return [PlannedCheck("shows zendock to ROS 2", shows)]
 
 
 #: What a ROS 2 machine sees: real rclpy, on the face's domain, loopback discovery; prints the node names it finds.
@@ -966,7 +961,7 @@ def ros2_dds_behaviour(ctx: Context) -> list[PlannedCheck]:
             else f"no /simulator node on DDS domain {ctx.domain_id} (saw {names})"
         )
 
-    return [timed("shows zendock to ROS 2 on DDS (real rclpy)", shows)]
+    return [PlannedCheck("shows zendock to ROS 2 on DDS (real rclpy)", shows)]
 
 
 BEHAVIOURS: dict[str, Callable[[Context], list[PlannedCheck]]] = {

@@ -105,6 +105,16 @@ class Probe:
             time.sleep(0.02)
         return True
 
+    def pass_time(self, span_s: float, sim: bool, wall_limit_s: float) -> None:
+        """Return once ``span_s`` seconds of sim (or wall) time have passed, or ``wall_limit_s`` of wall time;
+        on sim time, counted from the clock's first message."""
+        start_wall = time.monotonic()
+        if sim:
+            self.wait_clock(wall_limit_s)
+        start = self.now(sim)
+        while self.now(sim) - start < span_s and time.monotonic() - start_wall < wall_limit_s:
+            time.sleep(0.05)
+
     def now(self, sim: bool) -> float:
         """Sim time when asked and a clock runs, else wall time (monotonic)."""
         if sim:
@@ -194,9 +204,7 @@ class Probe:
             self.wait_clock(wall_limit_s)
         tally, sub = self.watch(key, msg_type, sim, keep_messages=keep_messages)
         try:
-            start = self.now(sim)
-            while self.now(sim) - start < span_s and time.monotonic() - start_wall < wall_limit_s:
-                time.sleep(0.05)
+            self.pass_time(span_s, sim, wall_limit_s - (time.monotonic() - start_wall))
         finally:
             sub.undeclare()
         return tally

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-from deploy.paths import REPO_ROOT
+from deploy.paths import RUNS_DIR
 from deploy.replacements import Replacement
 from shared.controllers import DEFAULT_CONTROLLER, ControllerName, DetectorName
 
@@ -69,7 +69,7 @@ class TrialOptions:
     localisation_error: tuple[float, float, float] = (0.03, -0.02, 0.02)
     battery_start: float = 0.255
     drain_scale: float = 20.0
-    runs_dir: Path = REPO_ROOT / "runs"
+    runs_dir: Path = RUNS_DIR
     #: Fault injection: every ``chaos_period_s`` wall seconds on average, kill -9 a random robot service
     #: (battery, pose, planner or docking; never the simulator) and let the launcher restart it. 0: off.
     chaos_period_s: float = 0.0
