@@ -4,11 +4,13 @@ For each service, several times over, on a router of its own: a bare interpreter
 the import of the service's node module (timed inside the interpreter), and the whole service from
 ``exec`` to its liveliness token on the bus (what the launcher's health check waits for). The differences are the phases: interpreter,
 imports, and the rest (parameters, session open, declarations, ready). ``-X importtime`` then names the
-imports that cost most, so a cut can aim at them.
+imports that cost most, so a cut can aim at them. Last, the same service from a warm standby
+(:mod:`deploy.standby`, ``--standby``): from ``go`` to the token, the floor of a restart that starts from one.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -19,9 +21,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+import psutil
+
 from deploy.bench.processes import free_port
 from deploy.paths import REPO_ROOT
 from deploy.percentiles import median
+from deploy.standby import GO, STATUS_FD_ENV
 from shared.names import node_token_key
 from shared.session import SessionSpec, open_session
 
@@ -56,46 +61,103 @@ def _import_s(module: str) -> float:
     return float(done.stdout.strip().splitlines()[-1])
 
 
-def _to_token(service: str, args: list[str], endpoint: str, namespace: str, session: Any) -> float:
-    """Wall seconds from starting ``python -m services.<service>`` to its node token reaching the router."""
+def _wait_idle(proc: subprocess.Popen[bytes], timeout_s: float = 60.0) -> None:
+    """Until a standby has done its imports: its CPU time stands still for three looks 0.1 s apart."""
+    watched = psutil.Process(proc.pid)
+    deadline = time.monotonic() + timeout_s
+    still, last = 0, -1.0
+    while still < 3:
+        if proc.poll() is not None or time.monotonic() > deadline:
+            raise RuntimeError(f"the standby did not settle (exit {proc.poll()})")
+        cpu = sum(watched.cpu_times()[:2])
+        still = still + 1 if cpu == last else 0
+        last = cpu
+        time.sleep(0.1)
+
+
+def _stop_group(pgid: int, proc: subprocess.Popen[bytes] | None = None) -> None:
+    """SIGINT to a process group, SIGKILL after 10 s; ``proc`` (the supervisor's child) is reaped."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(pgid, signal.SIGINT)
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        if proc is not None and proc.poll() is not None or proc is None and not _group_alive(pgid):
+            return
+        time.sleep(0.02)
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(pgid, signal.SIGKILL)
+    if proc is not None:
+        proc.wait()
+
+
+def _group_alive(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    return any(
+        p.info["status"] != psutil.STATUS_ZOMBIE
+        for p in psutil.process_iter(["status"])
+        if _pgid(p.pid) == pgid
+    )
+
+
+def _pgid(pid: int) -> int | None:
+    try:
+        return os.getpgid(pid)
+    except ProcessLookupError:
+        return None
+
+
+def _to_token(
+    service: str, args: list[str], endpoint: str, namespace: str, session: Any, standby: bool = False
+) -> float:
+    """Wall seconds from starting ``python -m services.<service>`` to its node token reaching the router;
+    with ``standby``, from telling an idle warm standby ``go`` (:mod:`deploy.standby`)."""
     key = node_token_key(namespace, service)
     seen = threading.Event()
     watcher = session.liveliness().declare_subscriber(key, lambda sample: seen.set())
+    flags = ["--connect", endpoint, "--namespace", namespace, *args]
+    status_r, status_w = os.pipe()
     try:
         start = time.perf_counter()
         proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                f"services.{service}",
-                "--connect",
-                endpoint,
-                "--namespace",
-                namespace,
-                *args,
-            ],
+            [sys.executable, "-m", "deploy.standby", f"services.{service}", *flags]
+            if standby
+            else [sys.executable, "-m", f"services.{service}", *flags],
             cwd=REPO_ROOT,
+            stdin=subprocess.PIPE if standby else subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             start_new_session=True,
+            env={**os.environ, STATUS_FD_ENV: str(status_w)},
+            pass_fds=(status_w,),
         )
+        os.close(status_w)
+        service_pgid = proc.pid
         try:
+            if standby:
+                assert proc.stdin is not None
+                _wait_idle(proc)
+                start = time.perf_counter()
+                proc.stdin.write(GO)
+                proc.stdin.flush()
+                with os.fdopen(os.dup(status_r), "rb") as reports:
+                    words = reports.readline().split()
+                if words[:1] != [b"started"]:
+                    raise RuntimeError(f"the {service} standby did not fork: {words!r}")
+                service_pgid = int(words[1])
             if not seen.wait(60.0):
-                proc.kill()
-                raise RuntimeError(
-                    f"{service} never declared its token: {proc.communicate()[1].decode()[-500:]}"
-                )
-            elapsed = time.perf_counter() - start
+                raise RuntimeError(f"{service} never declared its token")
+            return time.perf_counter() - start
         finally:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-                try:
-                    proc.wait(10.0)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait()
-        return elapsed
+            if standby:
+                _stop_group(service_pgid)
+                assert proc.stdin is not None
+                proc.stdin.close()
+            _stop_group(proc.pid, proc)
     finally:
+        os.close(status_r)
         watcher.undeclare()
 
 
@@ -162,6 +224,10 @@ def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> di
                     _to_token(service, commands[service], endpoint, f"startup{i}", session)
                     for i in range(repeats)
                 ]
+                warm = [
+                    _to_token(service, commands[service], endpoint, f"standby{i}", session, standby=True)
+                    for i in range(repeats)
+                ]
                 report["services"][service] = {
                     "interpreter_ms": round(1000 * interpreter, 1),
                     "imports_ms": round(1000 * imports, 1),
@@ -169,6 +235,8 @@ def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> di
                     "session_and_ready_ms": round(1000 * (median(ready) - interpreter - imports), 1),
                     "to_token_ms": round(1000 * median(ready), 1),
                     "to_token_max_ms": round(1000 * max(ready), 1),
+                    "from_standby_ms": round(1000 * median(warm), 1),
+                    "from_standby_max_ms": round(1000 * max(warm), 1),
                     "top_imports_ms": dict(top_imports(module)),
                 }
         return report

@@ -399,7 +399,15 @@ def _bench_startup(args: argparse.Namespace) -> int:
         print(strict_json.dumps(report))
         return 0
     table = Table(title=f"start-up, exec to liveliness token (median of {report['repeats']})")
-    for column in ("service", "interpreter", "imports", "session and ready", "to token", "max"):
+    for column in (
+        "service",
+        "interpreter",
+        "imports",
+        "session and ready",
+        "to token",
+        "max",
+        "from standby",
+    ):
         table.add_column(column, justify="left" if column == "service" else "right")
     for name, row in report["services"].items():
         table.add_row(
@@ -409,6 +417,7 @@ def _bench_startup(args: argparse.Namespace) -> int:
             f"{row['session_and_ready_ms']} ms",
             f"{row['to_token_ms']} ms",
             f"{row['to_token_max_ms']} ms",
+            f"{row['from_standby_ms']} ms",
         )
     Console().print(table)
     for name, row in report["services"].items():

@@ -116,6 +116,7 @@ def _run(args: argparse.Namespace) -> int:
             workers=args.workers,
             timeout_sim_s=args.timeout,
             chaos_period_s=args.chaos,
+            standby=args.standby,
             compose=args.compose,
             shard=args.shard,
             replacements=check_replacements(args.replacements),
@@ -292,6 +293,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="PERIOD_S",
         help="kill -9 a random robot service (with --compose: a robot's group process) every "
         "PERIOD_S wall seconds on average (0: off)",
+    )
+    parser.add_argument(
+        "--standby",
+        action="store_true",
+        help="keep a warm standby of each restartable zendock service, its imports done: a killed service "
+        "is back in a fraction of the cold start, for a second process's memory per service",
     )
     parser.add_argument(
         "--compose",

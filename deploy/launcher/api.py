@@ -98,6 +98,7 @@ class Launcher:
         environment: Mapping[str, str] | None = None,
         backoff: Backoff | None = None,
         output: TextIO | None = None,
+        standby: bool = False,
     ) -> None:
         self.project_dir = Path(project_dir).resolve() if project_dir is not None else Path.cwd()
         if not isinstance(stack, Stack):
@@ -111,6 +112,7 @@ class Launcher:
             namespace=namespace,
             connect=connect,
             environment=environment,
+            standby=standby,
         )
         if project_name:
             self.plan = replace(self.plan, project=project_name)

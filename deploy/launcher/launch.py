@@ -154,6 +154,26 @@ def run_words(run: Run) -> list[str]:
     return list(run.words)
 
 
+#: The program a warm standby runs (:mod:`deploy.standby`): it imports a service, then waits to become it.
+STANDBY_MODULE = "deploy.standby"
+
+
+def standby_words(run: Run) -> list[str] | None:
+    """The words of a warm standby for ``run``: one of zendock's services on the launcher's own interpreter
+    (a standby imports that interpreter's packages). None for anything else: a group, a program, a service on
+    another interpreter (the DDS face)."""
+    if not isinstance(run, ModuleRun) or run.python != "python":
+        return None
+    return [
+        run.python,
+        *run.python_options,
+        "-m",
+        STANDBY_MODULE,
+        f"{SERVICES_PACKAGE}.{run.service}",
+        *run.flags,
+    ]
+
+
 def as_text(value: object) -> str:
     """A YAML scalar as a command word or a variable's value (``true``, ``8``, ``0.5``)."""
     if isinstance(value, bool):

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import deploy
-from deploy.launcher.launch import Healthcheck, ServiceLaunch, run_words
+from deploy.launcher.launch import Healthcheck, ServiceLaunch, run_words, standby_words
 from deploy.launcher.restart import RestartPolicy
 from deploy.launcher.stack_file import (
     DEFAULT_CHECK_TIMEOUT_S,
@@ -74,6 +74,9 @@ class ServicePlan:
     depends_on: Mapping[str, str]
     #: For a composed group (``zendock container``): the services its one process runs.
     members: tuple[str, ...] = ()
+    #: A warm standby's argv (:mod:`deploy.standby`), for a supervisor that keeps one: None where a
+    #: standby cannot stand in (a group, another program, another interpreter).
+    standby_argv: tuple[str, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -84,6 +87,9 @@ class LaunchPlan:
     services: Mapping[str, ServicePlan]
     #: The Zenoh json5 file of the launcher's own session (absolute), from the stack's ``zenoh.config``.
     zenoh_config: str | None = None
+    #: Keep a warm standby of each restartable zendock service (:mod:`deploy.standby`): a restart starts
+    #: from it, its imports done, at the cost of a second process's memory per service.
+    standby: bool = False
 
     @property
     def liveliness_needed(self) -> bool:
@@ -144,6 +150,7 @@ def plan_launch(
     connect: Sequence[str] | None = None,
     environment: Mapping[str, str] | None = None,
     base_environment: Mapping[str, str] | None = None,
+    standby: bool = False,
 ) -> LaunchPlan:
     """Resolve every service of ``stack``. ``working_dir`` (default: the current directory) is where
     services run and what relative ``working_dir`` keys are resolved against."""
@@ -173,6 +180,7 @@ def plan_launch(
             stop_grace_s=spec.stop_grace_period,
             depends_on={dep: d.condition for dep, d in spec.depends_on.items()},
             members=spec.members,
+            standby_argv=_optional_tuple(resolve_argv(words) if (words := standby_words(spec.run)) else None),
         )
     zenoh_config = str((root / stack.zenoh_config).resolve()) if stack.zenoh_config else None
     return LaunchPlan(
@@ -181,6 +189,7 @@ def plan_launch(
         connect=endpoints,
         services=services,
         zenoh_config=zenoh_config,
+        standby=standby,
     )
 
 
@@ -192,6 +201,7 @@ def plan_to_json(plan: LaunchPlan) -> str:
             "namespace": plan.namespace,
             "connect": list(plan.connect),
             "zenoh_config": plan.zenoh_config,
+            "standby": plan.standby,
             "services": [
                 {
                     "name": s.name,
@@ -204,6 +214,7 @@ def plan_to_json(plan: LaunchPlan) -> str:
                     "stop_grace_s": s.stop_grace_s,
                     "depends_on": dict(s.depends_on),
                     "members": list(s.members),
+                    "standby_argv": None if s.standby_argv is None else list(s.standby_argv),
                 }
                 for s in plan.services.values()
             ],
@@ -229,6 +240,7 @@ def plan_from_json(text: str) -> LaunchPlan:
                 stop_grace_s=float(s["stop_grace_s"]),
                 depends_on=dict(s["depends_on"]),
                 members=tuple(s["members"]),
+                standby_argv=_optional_tuple(s.get("standby_argv")),
             )
             for s in data["services"]
         }
@@ -238,6 +250,7 @@ def plan_from_json(text: str) -> LaunchPlan:
             connect=tuple(data["connect"]),
             services=services,
             zenoh_config=data["zenoh_config"],
+            standby=bool(data.get("standby", False)),
         )
     except (ValueError, KeyError, TypeError) as exc:
         raise ValueError(f"not a launch plan: {exc}") from None

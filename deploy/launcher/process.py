@@ -60,64 +60,33 @@ def is_alive(proc: psutil.Process) -> bool:
         return False
 
 
-class ServiceProcess:
-    """A started child. Create with :meth:`spawn`; :meth:`wait` returns the exit code once the main
-    process has exited and its group is gone; :meth:`stop` escalates signals until then."""
+class GroupProcess:
+    """A process that leads its own session and group: :meth:`wait` returns the exit code once the main
+    process has exited and its group is gone; :meth:`stop` escalates signals until then. How the exit is
+    learnt is the subclass's: :class:`ServiceProcess` is the supervisor's own child, :class:`ForkedChild` a
+    warm standby's (:mod:`deploy.launcher.zygote`)."""
 
-    def __init__(self, proc: asyncio.subprocess.Process, on_line: Callable[[str], None]) -> None:
-        self._proc = proc
-        self.pid = proc.pid
-        self.pgid = proc.pid  # start_new_session: the child leads its own session and group
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.pgid = pid  # a new session: the process leads its own session and group
         self.started_at = time.monotonic()
         try:
-            self.create_time: float | None = psutil.Process(proc.pid).create_time()
+            self.create_time: float | None = psutil.Process(pid).create_time()
         except psutil.Error:
             self.create_time = None
         self._descendants: dict[int, psutil.Process] = {}
         self._stop_task: asyncio.Task[None] | None = None
-        self._pump = asyncio.ensure_future(self._pump_output(on_line))
-
-    @classmethod
-    async def spawn(
-        cls,
-        argv: Sequence[str],
-        *,
-        cwd: Path,
-        env: Mapping[str, str],
-        on_line: Callable[[str], None],
-    ) -> ServiceProcess:
-        """Start ``argv`` in a new session; stdout and stderr are merged (ordering kept) into ``on_line``."""
-        proc = await asyncio.create_subprocess_exec(
-            *argv,
-            cwd=str(cwd),
-            env=dict(env),
-            stdin=asyncio.subprocess.DEVNULL,
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.STDOUT,
-            start_new_session=True,
-        )
-        return cls(proc, on_line)
 
     @property
     def returncode(self) -> int | None:
-        return self._proc.returncode
+        raise NotImplementedError
 
-    async def _pump_output(self, on_line: Callable[[str], None]) -> None:
-        assert self._proc.stdout is not None
-        pending = b""
-        while True:
-            chunk = await self._proc.stdout.read(_READ_CHUNK)
-            if not chunk:
-                break
-            pending += chunk
-            *lines, pending = pending.split(b"\n")
-            while len(pending) > _MAX_LINE:
-                lines.append(pending[:_MAX_LINE])
-                pending = pending[_MAX_LINE:]
-            for raw in lines:
-                on_line(raw.decode("utf-8", errors="replace").rstrip("\r"))
-        if pending:
-            on_line(pending.decode("utf-8", errors="replace").rstrip("\r"))
+    async def _exited(self) -> int:
+        """The main process's exit code, once it has exited."""
+        raise NotImplementedError
+
+    async def _output_done(self) -> None:
+        """Once the process has exited: until its last output has been passed on."""
 
     def remember_descendants(self) -> None:
         """Note the main process's descendants now, so ones that left the group can still be reaped."""
@@ -135,7 +104,7 @@ class ServiceProcess:
         return list(members.values())
 
     def _gone(self) -> bool:
-        return self._proc.returncode is not None and not self._leftovers()
+        return self.returncode is not None and not self._leftovers()
 
     def _signal_all(self, sig: int) -> None:
         signal_group(self.pgid, sig)
@@ -184,7 +153,7 @@ class ServiceProcess:
             self.remember_descendants()
             try:
                 async with asyncio.timeout(DESCENDANT_SCAN_S):
-                    returncode = await asyncio.shield(self._proc.wait())
+                    returncode = await asyncio.shield(self._exited())
                 break
             except TimeoutError:
                 continue
@@ -192,14 +161,111 @@ class ServiceProcess:
             await asyncio.shield(self._stop_task)
         elif not self._gone():
             await self._escalate([(signal.SIGTERM, 0.0), (signal.SIGKILL, ORPHAN_GRACE_S)])
-        try:
-            async with asyncio.timeout(1.0):
-                await asyncio.shield(self._pump)
-        except TimeoutError:
-            self._pump.cancel()
+        await self._output_done()
         return returncode
 
     async def kill_now(self) -> None:
         """SIGKILL the group at once (second Ctrl-C, or a supervisor that must not wait)."""
         self.remember_descendants()
         self._signal_all(signal.SIGKILL)
+
+
+class ServiceProcess(GroupProcess):
+    """A child of the supervisor, started with :meth:`spawn`; its output is pumped line by line."""
+
+    def __init__(self, proc: asyncio.subprocess.Process, on_line: Callable[[str], None]) -> None:
+        super().__init__(proc.pid)
+        self._proc = proc
+        self._pump = asyncio.ensure_future(self._pump_output(on_line))
+
+    @classmethod
+    async def spawn(
+        cls,
+        argv: Sequence[str],
+        *,
+        cwd: Path,
+        env: Mapping[str, str],
+        on_line: Callable[[str], None],
+        standby: bool = False,
+        pass_fds: Sequence[int] = (),
+    ) -> ServiceProcess:
+        """Start ``argv`` in a new session; stdout and stderr are merged (ordering kept) into ``on_line``.
+
+        A ``standby`` (:mod:`deploy.standby`) gets a pipe for standard input (:meth:`write`); anything else
+        reads /dev/null. ``pass_fds`` stay open in the child.
+        """
+        proc = await asyncio.create_subprocess_exec(
+            *argv,
+            cwd=str(cwd),
+            env=dict(env),
+            stdin=asyncio.subprocess.PIPE if standby else asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.STDOUT,
+            start_new_session=True,
+            pass_fds=tuple(pass_fds),
+        )
+        return cls(proc, on_line)
+
+    @property
+    def returncode(self) -> int | None:
+        return self._proc.returncode
+
+    async def _exited(self) -> int:
+        return await self._proc.wait()
+
+    async def _output_done(self) -> None:
+        try:
+            async with asyncio.timeout(1.0):
+                await asyncio.shield(self._pump)
+        except TimeoutError:
+            self._pump.cancel()
+
+    def close_input(self) -> None:
+        """End a standby's input: it exits, and forks nothing more."""
+        if self._proc.stdin is not None and not self._proc.stdin.is_closing():
+            self._proc.stdin.close()
+
+    async def write(self, data: bytes) -> bool:
+        """Write to a standby's input; False when it can no longer read it (it has exited)."""
+        stdin = self._proc.stdin
+        if stdin is None or stdin.is_closing() or self._proc.returncode is not None:
+            return False
+        try:
+            stdin.write(data)
+            await stdin.drain()
+        except (BrokenPipeError, ConnectionResetError):
+            return False
+        return True
+
+    async def _pump_output(self, on_line: Callable[[str], None]) -> None:
+        assert self._proc.stdout is not None
+        pending = b""
+        while True:
+            chunk = await self._proc.stdout.read(_READ_CHUNK)
+            if not chunk:
+                break
+            pending += chunk
+            *lines, pending = pending.split(b"\n")
+            while len(pending) > _MAX_LINE:
+                lines.append(pending[:_MAX_LINE])
+                pending = pending[_MAX_LINE:]
+            for raw in lines:
+                on_line(raw.decode("utf-8", errors="replace").rstrip("\r"))
+        if pending:
+            on_line(pending.decode("utf-8", errors="replace").rstrip("\r"))
+
+
+class ForkedChild(GroupProcess):
+    """A service forked by its warm standby (:mod:`deploy.launcher.zygote`): the standby is its parent, so
+    its exit comes from the standby's report; its output comes through the standby's own pipe."""
+
+    def __init__(self, pid: int, exit_code: asyncio.Future[int]) -> None:
+        super().__init__(pid)
+        self._exit_code = exit_code
+
+    @property
+    def returncode(self) -> int | None:
+        return self._exit_code.result() if self._exit_code.done() else None
+
+    async def _exited(self) -> int:
+        return await self._exit_code

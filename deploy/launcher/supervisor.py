@@ -19,10 +19,11 @@ from deploy.launcher.graph import dependency_order, with_dependencies
 from deploy.launcher.health import LivelinessWatcher, run_check
 from deploy.launcher.logs import EVENT_PREFIX, RotatingLog, failure_line
 from deploy.launcher.plan import LaunchPlan, ServicePlan
-from deploy.launcher.process import ServiceProcess
+from deploy.launcher.process import GroupProcess, ServiceProcess
 from deploy.launcher.restart import FINAL_EXITS, Backoff
 from deploy.launcher.robot_template import service_for
 from deploy.launcher.status import Phase, ServiceStatus, public_state
+from deploy.launcher.zygote import STANDBY_GRACE_S, Zygote
 
 WATCHER_CLOSE_S = 5.0
 
@@ -59,7 +60,7 @@ class ServiceRunner:
         self.name = plan.name
         self._sup = supervisor
         self.phase = Phase.STOPPED
-        self.process: ServiceProcess | None = None
+        self.process: GroupProcess | None = None
         self.restarts = 0
         self.starts = 0
         self.exit_code: int | None = None
@@ -83,6 +84,9 @@ class ServiceRunner:
         self._checks_stopped = False
         self._timers: list[asyncio.TimerHandle] = []
         self._log = RotatingLog(supervisor.log_dir / f"{plan.name}.log") if supervisor.log_dir else None
+        #: The warm standby (:mod:`deploy.standby`) the next restart starts from, when the supervisor keeps one.
+        self._standby: Zygote | None = None
+        self._standby_task: asyncio.Task[None] | None = None
 
     # -- output -------------------------------------------------------------------------------------
     def output(self, text: str) -> None:
@@ -166,6 +170,7 @@ class ServiceRunner:
         health = self._compute_health()
         if health == "healthy":
             self._healthy_this_run = True
+            self._keep_standby()
         if health != self._health:
             previous, self._health = self._health, health
             reportable = (
@@ -178,7 +183,7 @@ class ServiceRunner:
             if notify:
                 self._sup.notify()
 
-    async def _exec_checks(self, process: ServiceProcess) -> None:
+    async def _exec_checks(self, process: GroupProcess) -> None:
         check = self.plan.health
         assert check is not None and check.test_argv is not None
         failures = 0
@@ -200,7 +205,7 @@ class ServiceRunner:
             self.refresh_health()
             await asyncio.sleep(check.interval_s)
 
-    def _start_health(self, process: ServiceProcess) -> None:
+    def _start_health(self, process: GroupProcess) -> None:
         check = self.plan.health
         self._token_seen = False
         self._exec_health = "starting"
@@ -223,6 +228,63 @@ class ServiceRunner:
         for task in tasks:
             with contextlib.suppress(asyncio.CancelledError):
                 await task
+
+    # -- warm standby ---------------------------------------------------------------------------------
+    @property
+    def _wants_standby(self) -> bool:
+        return (
+            self._sup.plan.standby
+            and self.plan.standby_argv is not None
+            and self.plan.restart.mode != "no"
+            and not self._stopping
+        )
+
+    def _keep_standby(self) -> None:
+        """Start a standby unless one is there or on its way: beside the service's first start (a standby
+        still importing when the service dies makes that restart wait for the rest of its imports), and
+        again when the service is healthy if the standby has died since."""
+        if not self._wants_standby or self._standby_task is not None and not self._standby_task.done():
+            return
+        if self._standby is not None and self._standby.alive:
+            return
+        self._standby_task = asyncio.ensure_future(self._spawn_standby())
+
+    async def _spawn_standby(self) -> None:
+        assert self.plan.standby_argv is not None
+        if self._standby is not None:  # one that has died since: let it go first
+            gone, self._standby = self._standby, None
+            self.event(f"warm standby gone ({_describe_exit(await gone.close())}): starting another")
+        try:
+            standby = await Zygote.spawn(
+                self.plan.standby_argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output
+            )
+        except OSError as exc:
+            self.event(f"no warm standby: {exc.strerror or exc}")
+            return
+        self._standby = standby
+        if self._stopping:  # stopped while it spawned: the lifecycle's end waits for it to go
+            standby.process.stop(STANDBY_GRACE_S)
+
+    async def _take_standby(self) -> GroupProcess | None:
+        """The service, forked by the standby; None when there is no standby able to (a cold start then)."""
+        if self._standby_task is not None:
+            await asyncio.shield(self._standby_task)  # a spawn under way: its process is nearly there
+        standby = self._standby
+        if standby is None:
+            return None
+        child = await standby.fork()
+        if child is None:
+            self._standby = None
+            self.event(f"warm standby gone ({_describe_exit(await standby.close())}): starting afresh")
+        return child
+
+    async def _drop_standby(self) -> None:
+        """End the standby, if any, and wait until it is gone (it exits at once: it holds no session)."""
+        if self._standby_task is not None and not self._standby_task.done():
+            await asyncio.shield(self._standby_task)
+        standby, self._standby = self._standby, None
+        if standby is not None:
+            await standby.close()
 
     # -- lifecycle ------------------------------------------------------------------------------------
     def start(self) -> None:
@@ -255,6 +317,8 @@ class ServiceRunner:
     async def kill_now(self) -> None:
         if self.process is not None:
             await self.process.kill_now()
+        if self._standby is not None:
+            await self._standby.kill_now()
 
     async def _lifecycle(self) -> None:
         try:
@@ -270,6 +334,7 @@ class ServiceRunner:
         finally:
             await self._stop_health()
             self.process = None
+            await self._drop_standby()
 
     async def _run_until_done(self) -> None:
         backoff = self._sup.backoff
@@ -320,21 +385,25 @@ class ServiceRunner:
         self.event("stopped")
 
     async def _run_once(self, launched_at: float) -> int:
-        try:
-            process = await ServiceProcess.spawn(
-                self.plan.argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output
-            )
-        except OSError as exc:
-            self.event(
-                f"cannot start {self.plan.argv[0]}: {exc.strerror or exc}{missing_program_hint(self.plan.argv[0])}"
-            )
-            return SPAWN_FAILED_EXIT
+        process: GroupProcess | None = await self._take_standby() if self.starts else None
+        how = "from its warm standby" if process is not None else ""
+        if process is None:
+            try:
+                process = await ServiceProcess.spawn(
+                    self.plan.argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output
+                )
+            except OSError as exc:
+                self.event(
+                    f"cannot start {self.plan.argv[0]}: {exc.strerror or exc}{missing_program_hint(self.plan.argv[0])}"
+                )
+                return SPAWN_FAILED_EXIT
         process.started_at = launched_at
         self._healthy_this_run = False
         self.process = process
         self.starts += 1
         self.exit_code = None
-        self.event(f"started (pid {process.pid})")
+        self.event(f"started (pid {process.pid}{', ' + how if how else ''})")
+        self._keep_standby()
         self._start_health(process)
         self._set_phase(Phase.RUNNING, "")
         if self._stopping:

@@ -199,7 +199,11 @@ def run_trials(
         + "".join(f", {r.name} replaced by `{r.command}`" for r in options.replacements)
     )
     with Launcher(
-        stack, project_dir=run_dir / "stack", working_dir=REPO_ROOT, project_name="trials"
+        stack,
+        project_dir=run_dir / "stack",
+        working_dir=REPO_ROOT,
+        project_name="trials",
+        standby=options.standby,
     ) as launcher:
         launcher.wait_healthy(timeout_s=120.0)
         log(f"stack healthy after {time.monotonic() - wall_start:.0f} s; docking")

@@ -73,6 +73,8 @@ class TrialOptions:
     #: Fault injection: every ``chaos_period_s`` wall seconds on average, kill -9 a random robot service
     #: (battery, pose, planner or docking; never the simulator) and let the launcher restart it. 0: off.
     chaos_period_s: float = 0.0
+    #: A warm standby of each robot service (``--standby``, :mod:`deploy.standby`): restarts start from it.
+    standby: bool = False
     #: Each robot's services in one process (``zendock container``): ``all`` of them, or only the ``light``
     #: ones (battery and pose), the planner, perception and docking each keeping a process; "" for none.
     compose: str = ""

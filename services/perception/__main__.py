@@ -6,4 +6,5 @@ keep_openssl_out()  # before any import of pydantic, which loads hashlib
 
 from services.perception.node import main  # noqa: E402
 
-sys.exit(main())
+if __name__ == "__main__":
+    sys.exit(main())

@@ -125,5 +125,27 @@ def test_the_detached_supervisor_gets_the_plan_up_made_unchanged(tmp_path: Path)
     )
     plan = plan_launch(stack, working_dir=tmp_path, namespace="r7", connect=["tcp/127.0.0.1:7001"])
     assert plan_from_json(plan_to_json(plan)) == plan
+    with_standby = plan_launch(stack, working_dir=tmp_path, standby=True)
+    assert with_standby.standby and plan_from_json(plan_to_json(with_standby)) == with_standby
     with pytest.raises(ValueError, match="not a launch plan"):
         plan_from_json('{"project": "x"}')
+
+
+def test_a_standby_is_planned_only_for_zendocks_services_on_this_interpreter(tmp_path: Path) -> None:
+    path = tmp_path / "stack.yaml"
+    path.write_text(
+        textwrap.dedent(
+            """\
+            services:
+              battery: {command: [python, -u, -m, services.battery, --log-level, debug]}
+              dds: {command: [.venv-ros2/bin/python, -m, services.ros2_dds]}
+              robot: {command: [zendock, container, battery, +, pose]}
+              own: {command: [python, my_battery.py]}
+            """
+        )
+    )
+    plan = plan_launch(load_stack(path, env={}, project_dir=tmp_path), working_dir=tmp_path)
+    assert plan.services["battery"].standby_argv == (
+        sys.executable, "-u", "-m", "deploy.standby", "services.battery", "--log-level", "debug",
+    )  # fmt: skip
+    assert [name for name, s in plan.services.items() if s.standby_argv is None] == ["dds", "robot", "own"]
