@@ -9,7 +9,7 @@ The child opens its Zenoh session after the fork; the standby never opens one.
 
 The standby is the children's parent, so it reports on the file descriptor named by
 ``ZENDOCK_STANDBY_STATUS_FD``, one line each: ``started PID`` after a fork, ``exited PID CODE`` once a child
-has exited (CODE negative: killed by that signal). At the end of its input it exits: the supervisor has
+has exited (CODE negative: killed by that signal), and ``ready`` once, when its imports are done. At the end of its input it exits: the supervisor has
 stopped it, or has gone. The children share the standby's standard output and error.
 
 It imports the service's ``__main__`` module, which holds nothing but the service's start-up imports (and
@@ -120,6 +120,7 @@ def main(argv: list[str]) -> int:
     sys.stdout.flush()
     sys.stderr.flush()
     try:
+        _report(int(status), "ready")
         return serve(module, flags, int(status))
     except BrokenPipeError:  # nobody reads the reports: the supervisor has gone
         return 0

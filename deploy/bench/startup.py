@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -19,7 +20,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import psutil
 
@@ -61,18 +62,12 @@ def _import_s(module: str) -> float:
     return float(done.stdout.strip().splitlines()[-1])
 
 
-def _wait_idle(proc: subprocess.Popen[bytes], timeout_s: float = 60.0) -> None:
-    """Until a standby has done its imports: its CPU time stands still for three looks 0.1 s apart."""
-    watched = psutil.Process(proc.pid)
-    deadline = time.monotonic() + timeout_s
-    still, last = 0, -1.0
-    while still < 3:
-        if proc.poll() is not None or time.monotonic() > deadline:
-            raise RuntimeError(f"the standby did not settle (exit {proc.poll()})")
-        cpu = sum(watched.cpu_times()[:2])
-        still = still + 1 if cpu == last else 0
-        last = cpu
-        time.sleep(0.1)
+def _report(reports: BinaryIO, timeout_s: float = 60.0) -> list[bytes]:
+    """The standby's next report (``ready``, ``started PID``), waiting at most ``timeout_s``."""
+    ready, _, _ = select.select([reports], [], [], timeout_s)
+    if not ready:
+        raise RuntimeError(f"the standby said nothing for {timeout_s:g} s")
+    return reports.readline().split()
 
 
 def _stop_group(pgid: int, proc: subprocess.Popen[bytes] | None = None) -> None:
@@ -135,15 +130,16 @@ def _to_token(
         )
         os.close(status_w)
         service_pgid = proc.pid
+        reports = os.fdopen(status_r, "rb", buffering=0)
         try:
             if standby:
                 assert proc.stdin is not None
-                _wait_idle(proc)
+                if _report(reports) != [b"ready"]:
+                    raise RuntimeError(f"the {service} standby did not get ready")
                 start = time.perf_counter()
                 proc.stdin.write(GO)
                 proc.stdin.flush()
-                with os.fdopen(os.dup(status_r), "rb") as reports:
-                    words = reports.readline().split()
+                words = _report(reports)
                 if words[:1] != [b"started"]:
                     raise RuntimeError(f"the {service} standby did not fork: {words!r}")
                 service_pgid = int(words[1])
@@ -156,8 +152,8 @@ def _to_token(
                 assert proc.stdin is not None
                 proc.stdin.close()
             _stop_group(proc.pid, proc)
+            reports.close()
     finally:
-        os.close(status_r)
         watcher.undeclare()
 
 

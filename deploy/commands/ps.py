@@ -68,6 +68,8 @@ def ps_table(statuses: list[ServiceStatus]) -> Table:
             )
             if s.last_exit and s.last_exit not in detail:  # running again: why it stopped last time
                 detail = f"{detail} (last: {s.last_exit})".strip()
+            if s.standby:  # what a restart would start from
+                detail = f"{detail}, warm standby {s.standby}".strip(", ")
             if s.members:  # one process: its services start, crash and restart together
                 detail = f"{detail}  [group: {', '.join(s.members)}]".strip()
             name = f"  {s.name}" if nested else s.name

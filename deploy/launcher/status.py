@@ -51,6 +51,8 @@ class ServiceStatus:
     namespace: str = ""
     #: After a restart, why the run before ended: "exited with code 3: <the line that says why>".
     last_exit: str = ""
+    #: The warm standby a restart would fork (``--standby``): "ready", "importing", or "" for none.
+    standby: str = ""
 
     def ps_json(self) -> dict[str, Any]:
         """Exactly the keys ``zendock ps --json`` promises, as ``docker compose ps --format json`` users

@@ -132,6 +132,7 @@ class ServiceRunner:
             pid_create_time=process.create_time if process else None,
             members=list(self.plan.members),
             namespace=self.plan.namespace,
+            standby=self._standby_state(),
             last_exit=self.last_exit
             if self.restarts and self.phase in (Phase.RUNNING, Phase.RESTARTING)
             else "",
@@ -239,6 +240,12 @@ class ServiceRunner:
             and not self._stopping
         )
 
+    def _standby_state(self) -> str:
+        standby = self._standby
+        if standby is None or not standby.alive:
+            return ""
+        return "ready" if standby.ready else "importing"
+
     def _keep_standby(self) -> None:
         """Start a standby unless one is there or on its way: beside the service's first start (a standby
         still importing when the service dies makes that restart wait for the rest of its imports), and
@@ -256,12 +263,17 @@ class ServiceRunner:
             self.event(f"warm standby gone ({_describe_exit(await gone.close())}): starting another")
         try:
             standby = await Zygote.spawn(
-                self.plan.standby_argv, cwd=self.plan.cwd, env=self.plan.env, on_line=self.output
+                self.plan.standby_argv,
+                cwd=self.plan.cwd,
+                env=self.plan.env,
+                on_line=self.output,
+                on_ready=self._sup.notify,
             )
         except OSError as exc:
             self.event(f"no warm standby: {exc.strerror or exc}")
             return
         self._standby = standby
+        self._sup.notify()
         if self._stopping:  # stopped while it spawned: the lifecycle's end waits for it to go
             standby.process.stop(STANDBY_GRACE_S)
 

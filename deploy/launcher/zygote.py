@@ -32,21 +32,31 @@ EXIT_UNKNOWN = 255
 class Zygote:
     """A running standby. Create with :meth:`spawn`; :meth:`fork` starts its service, :meth:`close` ends it."""
 
-    def __init__(self, process: ServiceProcess) -> None:
+    def __init__(self, process: ServiceProcess, on_ready: Callable[[], None] | None = None) -> None:
         self.process = process
+        self._on_ready = on_ready
         self._waiting: deque[asyncio.Future[int | None]] = deque()
         #: Each forked service's exit, from its fork's report until both the exit is known and the service
         #: has been handed out (either may come first).
         self._exits: dict[int, asyncio.Future[int]] = {}
         self._handed_out: set[int] = set()
         self._reader: asyncio.Task[None] | None = None
+        #: Its imports are done: a fork now starts the service at once.
+        self.ready = False
 
     @classmethod
     async def spawn(
-        cls, argv: Sequence[str], *, cwd: Path, env: Mapping[str, str], on_line: Callable[[str], None]
+        cls,
+        argv: Sequence[str],
+        *,
+        cwd: Path,
+        env: Mapping[str, str],
+        on_line: Callable[[str], None],
+        on_ready: Callable[[], None] | None = None,
     ) -> Zygote:
         """Start ``argv`` (``python -m deploy.standby services.<name> FLAGS``); its output and its
-        services' go to ``on_line``. Raises :class:`OSError` when it cannot start."""
+        services' go to ``on_line``; ``on_ready`` is called once its imports are done. Raises
+        :class:`OSError` when it cannot start."""
         read_fd, write_fd = os.pipe()
         try:
             process = await ServiceProcess.spawn(
@@ -62,7 +72,7 @@ class Zygote:
             raise
         finally:
             os.close(write_fd)
-        zygote = cls(process)
+        zygote = cls(process, on_ready)
         reader = asyncio.StreamReader()
         loop = asyncio.get_running_loop()
         await loop.connect_read_pipe(
@@ -81,7 +91,11 @@ class Zygote:
     async def _read(self, reader: asyncio.StreamReader) -> None:
         while line := await reader.readline():
             words = line.decode("utf-8", errors="replace").split()
-            if len(words) == 2 and words[0] == "started" and words[1].isdigit():
+            if words == ["ready"]:
+                self.ready = True
+                if self._on_ready is not None:
+                    self._on_ready()
+            elif len(words) == 2 and words[0] == "started" and words[1].isdigit():
                 pid = int(words[1])
                 self._exit_of(pid)
                 if self._waiting:

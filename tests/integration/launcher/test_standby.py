@@ -10,6 +10,7 @@ from pathlib import Path
 
 import psutil
 
+from deploy.commands.ps import format_table
 from deploy.launcher.plan import ZENDOCK_ROOT
 from deploy.launcher.zygote import Zygote
 from tests.integration.launcher.conftest import marked_processes, wait_for
@@ -35,8 +36,10 @@ def test_a_killed_service_is_forked_again_by_its_warm_standby(launch, mark: str)
         standby=True,
     )
     before = stack.wait_healthy(timeout_s=40)
-    first = wait_for(lambda: _standbys(mark), 30, "a warm standby once the battery is healthy")
+    stack.wait_until(lambda st: st["battery"].standby == "ready", 30, "the warm standby ready")
+    first = _standbys(mark)
     assert len(first) == 1 and first[0].pid != before["battery"].pid
+    assert "warm standby ready" in format_table(stack.ps())
     os.kill(before["battery"].pid, signal.SIGKILL)
     after = stack.wait_until(
         lambda st: st["battery"].restarts == 1 and st["battery"].health == "healthy",
@@ -70,7 +73,7 @@ def test_without_the_option_no_standby_runs(launch, mark: str) -> None:  # type:
         """
     )
     stack.wait_healthy(timeout_s=40)
-    assert not _standbys(mark)
+    assert not _standbys(mark) and stack.status("battery").standby == ""
 
 
 def test_a_forked_service_that_exits_at_once_is_waited_for_with_its_code(tmp_path: Path) -> None:

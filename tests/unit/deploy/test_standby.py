@@ -63,6 +63,7 @@ def test_a_child_that_exits_is_reported_with_its_code() -> None:
         proc.stdin.write(b"go\n")
         proc.stdin.flush()
         with os.fdopen(read_fd, "rb") as reports:
+            assert reports.readline() == b"ready\n"  # its imports done, before any fork
             started = reports.readline().decode().split()
             exited = reports.readline().decode().split()
         assert started[0] == "started" and exited == ["exited", started[1], "2"]
@@ -74,7 +75,7 @@ def test_a_child_that_exits_is_reported_with_its_code() -> None:
 
 def test_at_end_of_input_it_exits_quietly_without_running_its_service() -> None:
     done, reports = _run(["services.battery", "--help"], b"")
-    assert (done.returncode, done.stdout, done.stderr, reports) == (0, b"", b"", [])
+    assert (done.returncode, done.stdout, done.stderr, reports) == (0, b"", b"", ["ready"])
 
 
 @pytest.mark.parametrize("args", [[], ["shared.node"]])
