@@ -207,14 +207,17 @@ class GracefulDockParams:
     contact_speed_mps: float | None = 0.08
     #: The cap slows to the contact speed this far before the contacts' reach: the robot's and the dock's
     #: poses are a few millimetres off along the axis, and a plate nearer than believed would be met above
-    #: the contact speed (docs/measurements, measurement 78). The cap counts on the next tick coming a
-    #: control period later; a late tick near the plate eats into the margin and into the base's 1 m/s**2
-    #: of braking above the cap's.
+    #: the contact speed (docs/measurements, measurement 78). A tick later than the cap counts on
+    #: (``arrival_hold_periods``) eats into the margin and into the base's 1 m/s**2 of braking above the cap's.
     arrival_margin_m: float = 0.005
     #: Deceleration the arrival speed cap plans with (keep it under the robot's braking limit, 2.5 m/s**2
     #: on the simulated base). With the control period and the margin, 1.5 slows the robot from 0.5 m/s
     #: only in the last 0.11 m before the contacts' reach; 0.5 took the last 0.24 m.
     approach_decel_mps2: float = 1.5
+    #: How many control periods the cap counts a command to hold for before the next one takes over: two,
+    #: because at high speed-ups a tick can come up to a period late in simulated time (the world waits only
+    #: for a command more than ``lockstep_factor`` periods late; measurement 88).
+    arrival_hold_periods: float = 2.0
     #: Stop (zero command) once within this distance of the dock pose; None leaves stopping to the caller.
     stop_distance_m: float | None = None
     #: Smooth and latency-compensate the robot pose before the law sees it; None uses raw poses.
@@ -418,7 +421,7 @@ class GracefulDockController:
         to_contact_m = max(0.0, -along_m - p.contact_reach_m - p.arrival_margin_m)
         # a command holds for a control period: the speed must still brake in time from where it ends,
         # v**2 <= contact**2 + 2 * a * (d - v * period), solved for v
-        a_dt = p.approach_decel_mps2 * p.control_period_s
+        a_dt = p.approach_decel_mps2 * p.control_period_s * p.arrival_hold_periods
         cap = max(
             contact_speed_mps,
             -a_dt + math.sqrt(a_dt**2 + contact_speed_mps**2 + 2.0 * p.approach_decel_mps2 * to_contact_m),

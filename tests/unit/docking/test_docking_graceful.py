@@ -284,7 +284,8 @@ def test_commands_on_their_way_are_predicted_through() -> None:
 def test_the_arrival_cap_is_the_fastest_speed_that_can_still_brake_after_a_held_command() -> None:
     p = ZENDOCK_PARAMS
     controller = GracefulDockController(DOCK)
-    a, period, contact = p.approach_decel_mps2, p.control_period_s, p.contact_speed_mps
+    a, contact = p.approach_decel_mps2, p.contact_speed_mps
+    period = p.control_period_s * p.arrival_hold_periods  # a command may hold for two ticks
     assert contact is not None
     reach = p.contact_reach_m + p.arrival_margin_m
     for to_contact in np.linspace(0.0, 0.3, 31):
