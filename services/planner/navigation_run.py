@@ -357,6 +357,10 @@ class NavigationRun:
             # and judge again once stopped; an overshoot out of tolerance is then turned back.
             orders.cmd = (0.0, 0.0)
             return
+        if command.status is FollowStatus.GOAL_REACHED and not self.follower.confirm_goal(pose):
+            log.info("stopped past the goal at (%.3f, %.3f): turning back", pose.x, pose.y)
+            orders.cmd = (0.0, 0.0)
+            return
         if command.status is FollowStatus.GOAL_REACHED:
             log.info(
                 "goal reached at (%.3f, %.3f, %.3f) after %.1f s",

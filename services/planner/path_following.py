@@ -68,6 +68,8 @@ class FollowPath:
         if command.status is FollowStatus.GOAL_REACHED:
             if abs(velocity[0]) > lim.trans_stopped_mps or abs(velocity[1]) > lim.rot_stopped_radps:
                 return Step((0.0, 0.0), Outcome.RUNNING, to_goal)  # arrived once stopped there
+            if not self.follower.confirm_goal(pose):
+                return Step((0.0, 0.0), Outcome.RUNNING, to_goal)  # braked past it: the next step turns back
             return Step((0.0, 0.0), Outcome.SUCCEEDED, to_goal)
         if command.status is FollowStatus.COLLISION_AHEAD:
             if self._blocked_since_s is None:

@@ -177,6 +177,20 @@ def test_reaches_the_goal_then_turns_to_its_yaw_and_stops() -> None:
     assert follower.compute_velocity_command(Pose2D(1.06, 0.0, math.pi / 2), (0, 0), DT).status is (
         FollowStatus.GOAL_REACHED
     )
+    assert follower.confirm_goal(Pose2D(1.06, 0.0, math.pi / 2))  # ... and stopped there it has arrived
+
+
+def test_stopped_well_past_the_goal_it_has_not_arrived_and_turns_back() -> None:
+    """Braking from inside the tolerance can carry a robot past it under load: once stopped, it is judged
+    again, and the follower drives back instead of reporting arrival."""
+    follower = _follower(_straight(1.0))
+    arrived = follower.compute_velocity_command(Pose2D(0.97, 0.0, 0.0), (0.05, 0.0), DT)
+    assert arrived.status is FollowStatus.GOAL_REACHED  # inside 0.05 m: the tolerance latches
+    past = Pose2D(1.1, 0.0, 0.0)
+    assert follower.compute_velocity_command(past, (0.0, 0.0), DT).status is FollowStatus.GOAL_REACHED
+    assert not follower.confirm_goal(past) and not follower.xy_goal_reached
+    back = follower.compute_velocity_command(past, (0.0, 0.0), DT)
+    assert back.status is not FollowStatus.GOAL_REACHED and back.angular_radps != 0.0  # turning round
 
 
 def test_follows_a_curved_path_to_the_end() -> None:
