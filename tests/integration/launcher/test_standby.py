@@ -15,6 +15,15 @@ from deploy.launcher.plan import ZENDOCK_ROOT
 from deploy.launcher.zygote import Zygote
 from tests.integration.launcher.conftest import marked_processes, wait_for
 
+#: One restartable zendock service with a liveliness healthcheck.
+BATTERY = """\
+services:
+  battery:
+    command: [python, -m, services.battery]
+    restart: on-failure
+    healthcheck: {liveliness: true, timeout: 30s}
+"""
+
 
 def _standbys(mark: str) -> list[psutil.Process]:
     """The standbys: processes of ``deploy.standby`` whose parent is not one (the services it forked share
@@ -25,16 +34,7 @@ def _standbys(mark: str) -> list[psutil.Process]:
 
 
 def test_a_killed_service_is_forked_again_by_its_warm_standby(launch, mark: str) -> None:  # type: ignore[no-untyped-def]
-    stack = launch(
-        """\
-        services:
-          battery:
-            command: [python, -m, services.battery]
-            restart: on-failure
-            healthcheck: {liveliness: true, timeout: 30s}
-        """,
-        standby=True,
-    )
+    stack = launch(BATTERY, standby=True)
     before = stack.wait_healthy(timeout_s=40)
     stack.wait_until(lambda st: st["battery"].standby == "ready", 30, "the warm standby ready")
     first = _standbys(mark)
@@ -63,15 +63,7 @@ def test_a_killed_service_is_forked_again_by_its_warm_standby(launch, mark: str)
 
 
 def test_without_the_option_no_standby_runs(launch, mark: str) -> None:  # type: ignore[no-untyped-def]
-    stack = launch(
-        """\
-        services:
-          battery:
-            command: [python, -m, services.battery]
-            restart: on-failure
-            healthcheck: {liveliness: true, timeout: 30s}
-        """
-    )
+    stack = launch(BATTERY)
     stack.wait_healthy(timeout_s=40)
     assert not _standbys(mark) and stack.status("battery").standby == ""
 
@@ -98,16 +90,7 @@ def test_a_forked_service_that_exits_at_once_is_waited_for_with_its_code(tmp_pat
 
 
 def test_when_the_standby_has_died_the_restart_starts_cold(launch, mark: str) -> None:  # type: ignore[no-untyped-def]
-    stack = launch(
-        """\
-        services:
-          battery:
-            command: [python, -m, services.battery]
-            restart: on-failure
-            healthcheck: {liveliness: true, timeout: 30s}
-        """,
-        standby=True,
-    )
+    stack = launch(BATTERY, standby=True)
     before = stack.wait_healthy(timeout_s=40)
     standby = wait_for(lambda: _standbys(mark), 30, "a warm standby once the battery is healthy")[0]
     standby.kill()  # the supervisor reaps it (a wait here would take its exit status away)
