@@ -17,13 +17,12 @@ from deploy.trials.starts import lower_bounds
 from shared.geometry import Pose2D
 from shared.starts import random_starts
 from shared.world import load_world
-from shared.world_gen import KINDS, generate_world, room_problems
+from shared.world_gen import generate_world, room_problems
 
 #: Give up on a seed after this many drawn rooms (none has come close in 200 seeds of either kind).
 MAX_ATTEMPTS = 20
 #: Of the random starts checked, at least this share must reach the dock (trials draw their starts so).
 REACHABLE_SHARE = 0.75
-GENERATED_PREFIX = "generated:"
 
 
 def generate_room(kind: str, seed: int, directory: Path) -> Path:
@@ -57,13 +56,3 @@ def generate_room(kind: str, seed: int, directory: Path) -> Path:
 def generate_rooms(kind: str, first_seed: int, count: int, directory: Path) -> list[Path]:
     """``count`` rooms of ``kind``, seeds ``first_seed`` on, in ``directory``."""
     return [generate_room(kind, seed, directory) for seed in range(first_seed, first_seed + count)]
-
-
-def generated_kind(text: str) -> str | None:
-    """The kind a ``--world generated:KIND`` names (None: not a generated world); unknown kinds refused."""
-    if not text.startswith(GENERATED_PREFIX):
-        return None
-    kind = text.removeprefix(GENERATED_PREFIX)
-    if kind not in KINDS:
-        raise ValueError(f"--world {text}: no kind of generated world {kind!r} (kinds: {', '.join(KINDS)})")
-    return kind

@@ -56,6 +56,16 @@ def add_runs_dir_option(parser: _Adds, what: str = "the run directory goes") -> 
     )
 
 
+def add_standby_option(parser: _Adds) -> None:
+    """``--standby``: the supervisor keeps a warm standby per restartable service (:mod:`deploy.standby`)."""
+    parser.add_argument(
+        "--standby",
+        action="store_true",
+        help="keep a warm standby of each restartable zendock service, its imports done: a killed service "
+        "is back in a fraction of the cold start, for a second process's memory per service",
+    )
+
+
 def add_controller_option(parser: _Adds) -> None:
     """``--controller NAME``: the docking controller, one of :data:`shared.controllers.CONTROLLERS`."""
     parser.add_argument(

@@ -58,13 +58,22 @@ def world_argument(text: str) -> str:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+#: ``--world generated:KIND``: rooms drawn from the campaign's seed.
+GENERATED_PREFIX = "generated:"
+
+
+def generated_kind(text: str) -> str | None:
+    """The KIND of a ``generated:KIND`` world argument; None for any other."""
+    return text.removeprefix(GENERATED_PREFIX) if text.startswith(GENERATED_PREFIX) else None
+
+
 def campaign_world(text: str) -> str:
     """``zendock trials --world``'s type: as :func:`world_argument`, ``all`` for every shipped world, and
     ``generated:KIND`` for rooms drawn from the campaign's seed (:mod:`deploy.generated_worlds`)."""
     if text == "all":
         return text
-    if text.startswith("generated:"):
-        kind = text.removeprefix("generated:")
+    kind = generated_kind(text)
+    if kind is not None:
         from shared.world_gen import KINDS  # noqa: PLC0415 - only a generated campaign needs it
 
         if kind not in KINDS:

@@ -22,9 +22,9 @@ import time
 from pathlib import Path
 from typing import Any, BinaryIO
 
-import psutil
-
 from deploy.bench.processes import free_port
+from deploy.launcher.launch import STANDBY_MODULE
+from deploy.launcher.process import live_group_members
 from deploy.paths import REPO_ROOT
 from deploy.percentiles import median
 from deploy.standby import GO, STATUS_FD_ENV
@@ -76,32 +76,13 @@ def _stop_group(pgid: int, proc: subprocess.Popen[bytes] | None = None) -> None:
         os.killpg(pgid, signal.SIGINT)
     deadline = time.monotonic() + 10.0
     while time.monotonic() < deadline:
-        if proc is not None and proc.poll() is not None or proc is None and not _group_alive(pgid):
+        if proc is not None and proc.poll() is not None or proc is None and not live_group_members(pgid):
             return
         time.sleep(0.02)
     with contextlib.suppress(ProcessLookupError):
         os.killpg(pgid, signal.SIGKILL)
     if proc is not None:
         proc.wait()
-
-
-def _group_alive(pgid: int) -> bool:
-    try:
-        os.killpg(pgid, 0)
-    except ProcessLookupError:
-        return False
-    return any(
-        p.info["status"] != psutil.STATUS_ZOMBIE
-        for p in psutil.process_iter(["status"])
-        if _pgid(p.pid) == pgid
-    )
-
-
-def _pgid(pid: int) -> int | None:
-    try:
-        return os.getpgid(pid)
-    except ProcessLookupError:
-        return None
 
 
 def _to_token(
@@ -117,7 +98,7 @@ def _to_token(
     try:
         start = time.perf_counter()
         proc = subprocess.Popen(
-            [sys.executable, "-m", "deploy.standby", f"services.{service}", *flags]
+            [sys.executable, "-m", STANDBY_MODULE, f"services.{service}", *flags]
             if standby
             else [sys.executable, "-m", f"services.{service}", *flags],
             cwd=REPO_ROOT,

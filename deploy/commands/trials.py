@@ -22,9 +22,9 @@ from rich.table import Table
 
 from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
-from deploy.options import add_controller_option, add_detector_option, add_runs_dir_option
+from deploy.options import add_controller_option, add_detector_option, add_runs_dir_option, add_standby_option
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
-from deploy.world_names import campaign_world
+from deploy.world_names import campaign_world, generated_kind
 from shared.config_errors import ConfigError
 from shared.controllers import CONTROLLERS
 from shared.world import world_files
@@ -69,8 +69,8 @@ def _worlds(args: argparse.Namespace) -> list[tuple[Path, int]]:
         return [(world.resolve(), args.n) for world in sorted(SHIPPED_WORLDS.glob("*.yaml"))]
     out: list[tuple[Path, int]] = []
     for name in names:
-        if name.startswith("generated:"):  # the kind was checked by campaign_world
-            kind = name.removeprefix("generated:")
+        kind = generated_kind(name)  # checked by campaign_world
+        if kind is not None:
             out += [(room.resolve(), 1) for room in _generated_rooms(args, kind)]
             continue
         worlds = world_files([name])  # a directory stands for every world file in it (deploy/worlds/unseen)
@@ -294,12 +294,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="kill -9 a random robot service (with --compose: a robot's group process) every "
         "PERIOD_S wall seconds on average (0: off)",
     )
-    parser.add_argument(
-        "--standby",
-        action="store_true",
-        help="keep a warm standby of each restartable zendock service, its imports done: a killed service "
-        "is back in a fraction of the cold start, for a second process's memory per service",
-    )
+    add_standby_option(parser)
     parser.add_argument(
         "--compose",
         nargs="?",

@@ -29,6 +29,7 @@ from deploy.launcher.project import (
 from deploy.launcher.runtime import ControlError, RuntimePaths, request, supervisor_info
 from deploy.launcher.stack_file import Stack
 from deploy.launcher.status import ServiceStatus
+from deploy.options import add_standby_option
 from shared.config_errors import ConfigError
 
 DAEMON_START_TIMEOUT_S = 20.0
@@ -281,12 +282,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "-d", "--detach", action="store_true", help="run in the background; return once started"
     )
     parser.add_argument("--wait", action="store_true", help="detach and return once every service is healthy")
-    parser.add_argument(
-        "--standby",
-        action="store_true",
-        help="keep a warm standby of each restartable zendock service, its imports done: a killed service "
-        "is back in a fraction of the cold start, for a second process's memory per service",
-    )
+    add_standby_option(parser)
     parser.add_argument("--wait-timeout", type=float, default=120.0, metavar="SECONDS", help="(default 120)")
     parser.add_argument("services", nargs="*", metavar="SERVICE", help="only these (and their dependencies)")
     parser.set_defaults(func=main)

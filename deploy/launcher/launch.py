@@ -145,7 +145,7 @@ def _read_group(words: Sequence[str]) -> GroupRun | None:
 def run_words(run: Run) -> list[str]:
     """The words that start ``run`` (``python`` and ``zendock`` are resolved where the process starts)."""
     if isinstance(run, ModuleRun):
-        return [run.python, *run.python_options, "-m", f"{SERVICES_PACKAGE}.{run.service}", *run.flags]
+        return _module_words(run, f"{SERVICES_PACKAGE}.{run.service}")
     if isinstance(run, GroupRun):
         words = [run.program, "container", *run.options]
         for i, member in enumerate(run.members):
@@ -164,14 +164,12 @@ def standby_words(run: Run) -> list[str] | None:
     another interpreter (the DDS face)."""
     if not isinstance(run, ModuleRun) or run.python != "python":
         return None
-    return [
-        run.python,
-        *run.python_options,
-        "-m",
-        STANDBY_MODULE,
-        f"{SERVICES_PACKAGE}.{run.service}",
-        *run.flags,
-    ]
+    return _module_words(run, STANDBY_MODULE, f"{SERVICES_PACKAGE}.{run.service}")
+
+
+def _module_words(run: ModuleRun, *module: str) -> list[str]:
+    """``python [OPTIONS] -m MODULE... FLAGS``: the service itself, or a standby naming it."""
+    return [run.python, *run.python_options, "-m", *module, *run.flags]
 
 
 def as_text(value: object) -> str:

@@ -160,6 +160,7 @@ def plan_launch(
     base = dict(os.environ if base_environment is None else base_environment)
     services = {}
     for name, spec in stack.services.items():
+        standby_run = standby_words(spec.run)
         service_namespace = join_namespace(stack_namespace, spec.namespace)
         cwd = (root / spec.working_dir).resolve() if spec.working_dir else root
         services[name] = ServicePlan(
@@ -180,7 +181,7 @@ def plan_launch(
             stop_grace_s=spec.stop_grace_period,
             depends_on={dep: d.condition for dep, d in spec.depends_on.items()},
             members=spec.members,
-            standby_argv=_optional_tuple(resolve_argv(words) if (words := standby_words(spec.run)) else None),
+            standby_argv=tuple(resolve_argv(standby_run)) if standby_run else None,
         )
     zenoh_config = str((root / stack.zenoh_config).resolve()) if stack.zenoh_config else None
     return LaunchPlan(
@@ -240,7 +241,7 @@ def plan_from_json(text: str) -> LaunchPlan:
                 stop_grace_s=float(s["stop_grace_s"]),
                 depends_on=dict(s["depends_on"]),
                 members=tuple(s["members"]),
-                standby_argv=_optional_tuple(s.get("standby_argv")),
+                standby_argv=_optional_tuple(s["standby_argv"]),
             )
             for s in data["services"]
         }
@@ -250,7 +251,7 @@ def plan_from_json(text: str) -> LaunchPlan:
             connect=tuple(data["connect"]),
             services=services,
             zenoh_config=data["zenoh_config"],
-            standby=bool(data.get("standby", False)),
+            standby=bool(data["standby"]),
         )
     except (ValueError, KeyError, TypeError) as exc:
         raise ValueError(f"not a launch plan: {exc}") from None

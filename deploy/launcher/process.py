@@ -12,6 +12,7 @@ import contextlib
 import os
 import signal
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
@@ -60,7 +61,7 @@ def is_alive(proc: psutil.Process) -> bool:
         return False
 
 
-class GroupProcess:
+class GroupProcess(ABC):
     """A process that leads its own session and group: :meth:`wait` returns the exit code once the main
     process has exited and its group is gone; :meth:`stop` escalates signals until then. How the exit is
     learnt is the subclass's: :class:`ServiceProcess` is the supervisor's own child, :class:`ForkedChild` a
@@ -78,13 +79,15 @@ class GroupProcess:
         self._stop_task: asyncio.Task[None] | None = None
 
     @property
+    @abstractmethod
     def returncode(self) -> int | None:
-        raise NotImplementedError
+        """The main process's exit code; None while it runs."""
 
+    @abstractmethod
     async def _exited(self) -> int:
         """The main process's exit code, once it has exited."""
-        raise NotImplementedError
 
+    @abstractmethod
     async def _output_done(self) -> None:
         """Once the process has exited: until its last output has been passed on."""
 
@@ -269,3 +272,7 @@ class ForkedChild(GroupProcess):
 
     async def _exited(self) -> int:
         return await self._exit_code
+
+    async def _output_done(self) -> None:
+        """Its output comes through the standby's pipe, which outlives it: nothing to wait for here."""
+        return None

@@ -350,18 +350,19 @@ class NavigationRun:
         # does in open loop: measured odometry lags the base, and ramping from it would slow every start.
         reference = snap.last_cmd if p.open_loop_acceleration else velocity
         command = self.follower.compute_velocity_command(pose, reference, dt, snap.grid, snap.speed_limit_mps)
-        if command.status is FollowStatus.GOAL_REACHED and (
-            abs(velocity[0]) > p.trans_stopped_velocity_mps or abs(velocity[1]) > p.rot_stopped_velocity_radps
-        ):
-            # nav2's StoppedGoalChecker: inside the tolerances while still turning is not arrived. Brake
-            # and judge again once stopped; an overshoot out of tolerance is then turned back.
-            orders.cmd = (0.0, 0.0)
-            return
-        if command.status is FollowStatus.GOAL_REACHED and not self.follower.confirm_goal(pose):
-            log.info("stopped past the goal at (%.3f, %.3f): turning back", pose.x, pose.y)
-            orders.cmd = (0.0, 0.0)
-            return
         if command.status is FollowStatus.GOAL_REACHED:
+            if (
+                abs(velocity[0]) > p.trans_stopped_velocity_mps
+                or abs(velocity[1]) > p.rot_stopped_velocity_radps
+            ):
+                # nav2's StoppedGoalChecker: inside the tolerances while still turning is not arrived. Brake
+                # and judge again once stopped; an overshoot out of tolerance is then turned back.
+                orders.cmd = (0.0, 0.0)
+                return
+            if not self.follower.confirm_goal(pose):
+                log.info("stopped past the goal at (%.3f, %.3f): turning back", pose.x, pose.y)
+                orders.cmd = (0.0, 0.0)
+                return
             log.info(
                 "goal reached at (%.3f, %.3f, %.3f) after %.1f s",
                 pose.x,

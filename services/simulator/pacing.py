@@ -17,6 +17,7 @@ pose falls further behind and sim-time deadlines (staging, recoveries) expire wi
 from __future__ import annotations
 
 import math
+import statistics
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -89,8 +90,7 @@ class CommandCadence:
         """The controller's period, once three intervals say it; else None."""
         if len(self._intervals) < 3:
             return None
-        ordered = sorted(self._intervals)
-        return ordered[len(ordered) // 2]
+        return statistics.median_high(self._intervals)
 
     def gap_s(self, params: PacingParams, step_s: float) -> float | None:
         """How old its last command may grow while it moves: ``lockstep_factor`` periods, at least two
