@@ -22,6 +22,7 @@ import zenoh
 from shared.encoding import (
     ENCODING_PREFIX,
     MAX_PAYLOAD_BYTES,
+    answered_tick_s,
     encoding_for,
     publisher_gid,
     schema_of,
@@ -98,7 +99,9 @@ class Publisher(Generic[M]):
         self._token = node.declare_endpoint("pub", msg_type.TYPE_NAME, self.key)
         self._matching_listeners: list[Any] = []
 
-    def publish(self, msg: M) -> None:
+    def publish(self, msg: M, *, answers_s: float | None = None) -> None:
+        """Put ``msg``; ``answers_s``: the sim time of the control tick a command was computed on, carried in
+        the attachment so the simulator's lockstep holds the world for the command of each step."""
         if type(msg) is not self.msg_type and not isinstance(msg, self.msg_type):
             raise MessageError(
                 f"publisher expects {self.msg_type.TYPE_NAME}, got {type(msg).__name__}", key=self.key
@@ -107,9 +110,9 @@ class Publisher(Generic[M]):
             payload = msg.encode()
         except MessageError as exc:
             raise exc.at(key=self.key) from None
-        self.publish_encoded(payload)
+        self.publish_encoded(payload, answers_s=answers_s)
 
-    def publish_encoded(self, payload: bytes) -> None:
+    def publish_encoded(self, payload: bytes, *, answers_s: float | None = None) -> None:
         """Put an already validated payload (replay, relays).
 
         Every sample's attachment carries its sequence number and the publisher's id
@@ -117,7 +120,7 @@ class Publisher(Generic[M]):
         encoding was declared once with the publisher, so no put passes (or builds) it.
         """
         with self._lock:  # the put order is the sequence order, whichever threads publish
-            self._put(payload, attachment=sequence_attachment(next(self._seq), self._gid))
+            self._put(payload, attachment=sequence_attachment(next(self._seq), self._gid, answers_s))
             self._published[self.key] = self._published.get(self.key, 0) + 1
 
     def has_subscribers(self) -> bool:
@@ -191,7 +194,9 @@ SHARED_DECODES = SharedDecodes()
 class Subscription(Generic[M]):
     """Receives one message type on one key (wildcards allowed) and hands valid messages to a callback.
 
-    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``. Messages
+    The callback gets the decoded message; with ``with_key=True`` it gets ``(key, message)``; with
+    ``with_answered=True`` the message is followed by the sim time of the control tick it answers (from
+    its attachment, :func:`~shared.encoding.answered_tick_s`; ``None`` when the publisher did not say). Messages
     reach the callback in arrival order: one runs at once only while none of this subscription's is
     queued, and the queue keeps the last ``qos.depth`` (older ones are dropped and counted).
 
@@ -211,11 +216,18 @@ class Subscription(Generic[M]):
         with_key: bool,
         absolute: bool = False,
         undecoded: bool = False,
+        with_answered: bool = False,
     ) -> None:
         self._node = node
         self.msg_type = msg_type
         self.key = topic if absolute else node.key(topic)
+        if with_answered:  # the queue carries (message, answered) pairs: the callback gets them spread
+            if with_key:
+                callback = functools.partial(_spread_after_key, callback)
+            else:
+                callback = functools.partial(_spread, callback)
         self._callback = callback
+        self._with_answered = with_answered
         self._inline = inline
         self._with_key = with_key
         self._queue: deque[tuple[str, M]] = deque(maxlen=max(1, qos.depth))
@@ -262,6 +274,8 @@ class Subscription(Generic[M]):
             if size > MAX_PAYLOAD_BYTES:
                 raise MessageError(f"payload of {size} bytes exceeds {MAX_PAYLOAD_BYTES}", key=key)
             msg = self._decode(key, payload.to_bytes())
+            if self._with_answered:
+                msg = (msg, answered_tick_s(sample.attachment))
         except MessageError as exc:
             self._node.reject(key, exc.at(key=key))
             return
@@ -312,6 +326,14 @@ class Subscription(Generic[M]):
         """Stop receiving, as the node closes (it undeclares the endpoint tokens itself)."""
         self._receiving = False
         self._subscriber.undeclare()
+
+
+def _spread(callback: Callable[..., Any], pair: tuple[Any, float | None]) -> Any:
+    return callback(*pair)
+
+
+def _spread_after_key(callback: Callable[..., Any], key: str, pair: tuple[Any, float | None]) -> Any:
+    return callback(key, *pair)
 
 
 class Deferred(Generic[Res]):

@@ -30,9 +30,11 @@ from typing import Any, TypeVar
 import zenoh
 
 from shared.encoding import (
+    ANSWERING_ATTACHMENT_SIZE,
     ATTACHMENT_SIZE,
     ENCODING_PREFIX,
     MAX_PAYLOAD_BYTES,
+    answered_tick_s,
     encoding_for,
     publisher_gid,
     publisher_id,
@@ -62,6 +64,7 @@ from shared.ratelimit import RateLimitedLogger
 from shared.schema import Message, MessageError
 
 __all__ = [
+    "ANSWERING_ATTACHMENT_SIZE",
     "ATTACHMENT_SIZE",
     "BLOCKING",
     "ENCODING_PREFIX",
@@ -79,6 +82,7 @@ __all__ = [
     "ServiceUnavailable",
     "Subscription",
     "Timer",
+    "answered_tick_s",
     "call_service",
     "encoding_for",
     "publisher_gid",
@@ -186,10 +190,14 @@ class Node:
         with_key: bool = False,
         absolute: bool = False,
         undecoded: bool = False,
+        with_answered: bool = False,
     ) -> Subscription[M]:
         """Subscribe to ``topic`` in the node's namespace (``absolute=True``: ``topic`` is a full key;
-        ``undecoded=True``: the callback gets the payload's bytes, see :class:`Subscription`)."""
-        sub = Subscription(self, msg_type, topic, callback, qos, inline, with_key, absolute, undecoded)
+        ``undecoded=True``: the callback gets the payload's bytes; ``with_answered=True``: it gets the
+        control tick a command answers too; see :class:`Subscription`)."""
+        sub = Subscription(
+            self, msg_type, topic, callback, qos, inline, with_key, absolute, undecoded, with_answered
+        )
         self._entities.append(sub)
         return sub
 

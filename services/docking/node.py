@@ -169,9 +169,10 @@ class DockingService:
     # --- in --------------------------------------------------------------------------------------------
 
     def _on_battery(self, msg: BatteryState) -> None:
-        self.inputs.battery(msg, self.node.now())
+        now = self.node.now()
+        self.inputs.battery(msg, now)
         self._carry_out(
-            self.executive.battery_reading(msg.percentage, msg.power_supply_status in CHARGING_STATUSES)
+            self.executive.battery_reading(msg.percentage, msg.power_supply_status in CHARGING_STATUSES), now
         )
 
     def _heard(self, now_s: float, *, tick: bool = False, clock_reset: bool = False) -> Heard:
@@ -184,7 +185,8 @@ class DockingService:
         return self.inputs.heard(now_s, nav, peers, own_plan, clock_reset)
 
     def _event(self, event: Event) -> None:
-        self._carry_out(self.executive.handle(event, self._heard(self.node.now())))
+        now = self.node.now()
+        self._carry_out(self.executive.handle(event, self._heard(now)), now)
 
     def _on_tick(self) -> None:
         """The control tick; also run as soon as a planner goal ends, so that the approach taking over from
@@ -194,7 +196,7 @@ class DockingService:
         if reset:
             self.inputs.forget_poses()
         self._last_now_s = now
-        self._carry_out(self.executive.step(self._heard(now, tick=True, clock_reset=reset)))
+        self._carry_out(self.executive.step(self._heard(now, tick=True, clock_reset=reset)), now)
 
     # --- actions ---------------------------------------------------------------------------------------
 
@@ -235,7 +237,9 @@ class DockingService:
 
     # --- out -------------------------------------------------------------------------------------------
 
-    def _carry_out(self, effects: Effects) -> None:
+    def _carry_out(self, effects: Effects, now_s: float) -> None:
+        """Do what the executive decided at ``now_s`` (a command says it answers that tick)."""
+        answers_s = now_s if self.node.use_sim_time else None
         for effect in effects:
             match effect:
                 case Drive(orders):
@@ -246,7 +250,8 @@ class DockingService:
                             # The arbiter never allows this; a stop is still better than nothing if it happens.
                             self._say.error("overlap", "publishing cmd_vel while the planner holds a goal")
                         self.cmd_vel.publish(
-                            Twist.planar(orders.publish.linear_x_mps, orders.publish.angular_z_radps)
+                            Twist.planar(orders.publish.linear_x_mps, orders.publish.angular_z_radps),
+                            answers_s=answers_s,
                         )
                     if orders.send_goal is not None:
                         self.nav.go_to_pose(orders.send_goal, on_done=self._on_tick)

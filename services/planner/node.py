@@ -170,6 +170,8 @@ class PlannerService:
         self._last_costmap_update_s = -math.inf
 
         self._cmd_pub = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        #: The sim time of the last snapshot: the tick the next command answers.
+        self._snapshot_s = -math.inf
         self._plan_pub = node.create_publisher(Path, topics.PLAN, RELIABLE)
         self._costmap_pub = node.create_publisher(OccupancyGrid, COSTMAP_TOPIC, QoS(reliable=False, depth=1))
         node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_pose, QoS(depth=1))
@@ -431,6 +433,7 @@ class PlannerService:
 
     def _snapshot(self, now: float | None = None) -> NavSnapshot:
         now = self._node.now() if now is None else now
+        self._snapshot_s = now
         timeout_s = self._params.pose_timeout_s
         tracker = self._tracker
         pose = tracker.current_pose(now, timeout_s)
@@ -485,8 +488,10 @@ class PlannerService:
                 handle.abort(result)
 
     def _publish_cmd(self, linear_mps: float, angular_radps: float) -> None:
+        """Publish a command, saying which tick it answers: the time of the snapshot it was computed from."""
         self._last_cmd = (linear_mps, angular_radps)
-        self._cmd_pub.publish(Twist.planar(linear_mps, angular_radps))
+        answers_s = self._snapshot_s if self._node.use_sim_time else None
+        self._cmd_pub.publish(Twist.planar(linear_mps, angular_radps), answers_s=answers_s)
 
     def _trust_turning_circle(self, now: float) -> None:
         """A goal starts where the robot stands still: let it turn there (see

@@ -65,7 +65,11 @@ class SimRobot:
     pubs: dict[str, Publisher[Any]] = field(default_factory=dict)
     cmd_v: float = 0.0
     cmd_w: float = 0.0
+    #: Sim time the last command arrived (the cmd_vel watchdog's clock).
     last_cmd_s: float = -math.inf
+    #: Sim time of the control tick the last command answers (from its attachment), else its arrival: how
+    #: far behind the world the robot's driver is, which lockstep holds the world to.
+    answered_s: float = -math.inf
     #: The cadence of its commands: its controller's period, which lockstep holds the world to.
     cadence: CommandCadence = field(default_factory=CommandCadence)
     #: Sim time of the last map_to_base_link_pose2d (the localisation the controllers steer on).

@@ -45,6 +45,7 @@ from shared.interfaces.simulator import (
 from shared.messages import CollisionEvent, Float64MultiArray, Header, Pose, Time, Twist
 from shared.names import normalise_namespace
 from shared.node import BLOCKING, Node, QoS, ServiceError
+from shared.ratelimit import RateLimitedLogger
 from shared.runtime import ServiceSpec
 from shared.world import load_world
 
@@ -57,6 +58,7 @@ class SimulatorService:
         self.node = node
         self.params = params
         self._log = node.log
+        self._say = RateLimitedLogger(node.log, interval_s=5.0)
         self.world = load_world(params.world)
         self.robots: dict[str, SimRobot] = {}
         self.channels = Channels(channel_table(params))
@@ -117,7 +119,11 @@ class SimulatorService:
         self.channels.declare(node, robot)
         robot.pubs[topics.COLLISIONS] = node.create_publisher(CollisionEvent, t(topics.COLLISIONS), BLOCKING)
         node.create_subscription(
-            Twist, t(topics.CMD_VEL), lambda msg, r=robot: self._on_cmd_vel(r, msg), QoS(depth=1)
+            Twist,
+            t(topics.CMD_VEL),
+            lambda msg, answered, r=robot: self._on_cmd_vel(r, msg, answered),
+            QoS(depth=1),
+            with_answered=True,
         )
         if self.params.pacing.to_drivers and self.params.pacing.to_pose:
             # Only the arrival time is kept: one float store, safe on Zenoh's thread (no executor hand-off).
@@ -129,11 +135,16 @@ class SimulatorService:
                 inline=True,
             )
 
-    def _on_cmd_vel(self, robot: SimRobot, msg: Twist) -> None:
+    def _on_cmd_vel(self, robot: SimRobot, msg: Twist, answered_s: float | None) -> None:
+        """A command; ``answered_s`` is the control tick it was computed on, when its publisher says (never
+        later than now: a stamp from the future, say a controller still on a restarted simulator's clock,
+        counts as arriving now)."""
+        now = self.time_s
         robot.cmd_v = msg.linear.x
         robot.cmd_w = msg.angular.z
-        robot.last_cmd_s = self.time_s
-        robot.cadence.heard(self.time_s, self.dt_s)
+        robot.last_cmd_s = now
+        robot.answered_s = now if answered_s is None else min(now, answered_s)
+        robot.cadence.heard(robot.answered_s, self.dt_s)
         robot.watchdog_tripped = False
 
     def _on_pose(self, robot: SimRobot) -> None:
@@ -205,9 +216,13 @@ class SimulatorService:
         :class:`~services.simulator.pacing.StepPacer` says when (and holds for late drivers)."""
         pacer = StepPacer(self.dt_s, self.params.rtf, self._pacer, time.monotonic())
         reported_at = (time.monotonic(), self.time_s)
+        gave_up = 0
         while self._running:
             now = time.monotonic()
             tick = pacer.tick(now, self.time_s, self._drivers)
+            if self._pacer is not None and self._pacer.gave_up != gave_up:
+                gave_up = self._pacer.gave_up
+                self._log_gave_up(self._pacer)
             if tick.hold_ended:
                 assert self._pacer is not None
                 self.node.stats.extra = pacing_stats(self._pacer, self.time_s)  # one assignment: read whole
@@ -225,12 +240,23 @@ class SimulatorService:
                 )
                 reported_at = (now, self.time_s)
 
+    def _log_gave_up(self, pacer: DriverPacer) -> None:
+        late = ", ".join(f"{name} ({late_s:.2f} s late)" for name, late_s in pacer.gave_up_on)
+        self._say.warning(
+            "gave up",
+            "stepping on at %.2f s without %s: waited %g s (wall) for it (%d times so far)",
+            self.time_s,
+            late,
+            self.params.pacing.driver_wait_max_s,
+            pacer.gave_up,
+        )
+
     def _drivers(self) -> list[Driver]:
         drivers = []
         for ns, robot in self.robots.items():
             moving = not robot.watchdog_tripped and (robot.cmd_v != 0.0 or robot.cmd_w != 0.0)
             drivers.append(
-                Driver(ns, robot.last_cmd_s, moving, robot.cadence.gap_s(self.params.pacing, self.dt_s))
+                Driver(ns, robot.answered_s, moving, robot.cadence.gap_s(self.params.pacing, self.dt_s))
             )
             if robot.last_pose_s > -math.inf:
                 drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, self.params.pacing.pose_gap_s))

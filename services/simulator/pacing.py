@@ -132,6 +132,11 @@ class DriverPacer:
         #: Wall seconds held, by the kind of input awaited ("cmd_vel" or "pose"; both when both were late).
         self.held_by_kind: dict[str, float] = {}
         self._last_late: tuple[tuple[str, float], ...] = ()
+        #: How many waits ran out of budget, the world stepping on without the late input, and what the
+        #: last of them waited for (names and how late, sim seconds).
+        self.gave_up = 0
+        self.gave_up_on: tuple[tuple[str, float], ...] = ()
+        self._gave_up_current = False
 
     def hold(self, sim_now_s: float, wall_now_s: float, drivers: Iterable[Driver]) -> bool:
         """True: do not step yet. Call again (after a short sleep) until it says False."""
@@ -148,9 +153,14 @@ class DriverPacer:
             self._awaited = late
             self._last_late = late
             self._since_wall_s = wall_now_s
+            self._gave_up_current = False
             self.holds += 1
         waited = wall_now_s - self._since_wall_s
         if waited >= self.params.driver_wait_max_s:
+            if not self._gave_up_current:
+                self._gave_up_current = True
+                self.gave_up += 1
+                self.gave_up_on = tuple((name, sim_now_s - last_s) for name, last_s in late)
             return False  # budget spent on these commands: step on until a new command arrives
         return True
 
@@ -220,7 +230,12 @@ class StepPacer:
 
 def pacing_stats(pacer: DriverPacer, sim_s: float) -> dict[str, float]:
     """The waits for late drivers as the node's extra counters (``@zendock/stats``)."""
-    extra = {"pacing_holds": float(pacer.holds), "pacing_held_s": pacer.held_s, "sim_s": sim_s}
+    extra = {
+        "pacing_holds": float(pacer.holds),
+        "pacing_held_s": pacer.held_s,
+        "pacing_gave_up": float(pacer.gave_up),
+        "sim_s": sim_s,
+    }
     extra.update({f"pacing_held_s_{kind}": s for kind, s in pacer.held_by_kind.items()})
     return extra
 

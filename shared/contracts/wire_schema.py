@@ -15,7 +15,7 @@ from typing import Annotated, Any
 
 import numpy as np
 
-from shared.encoding import ATTACHMENT_SIZE, ENCODING_PREFIX, MAX_PAYLOAD_BYTES
+from shared.encoding import ANSWERING_ATTACHMENT_SIZE, ATTACHMENT_SIZE, ENCODING_PREFIX, MAX_PAYLOAD_BYTES
 from shared.schema import Message, Range, _AllowNonFinite, _ArraySpec
 
 JSON_SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -27,7 +27,10 @@ WIRE_RULES: tuple[str, ...] = (
     f"Its attachment is {ATTACHMENT_SIZE} bytes: the publisher's sequence number (u64 little-endian, from 1), then "
     "the publisher's 16-byte session id and 4-byte entity id (little-endian). The session id is Zenoh's id of "
     "the publishing session (`str(session.zid())`, hexadecimal) read as a number and written as 16 bytes "
-    "little-endian; the entity id is the publisher's own. Receivers accept a sample without an attachment.",
+    "little-endian; the entity id is the publisher's own. Receivers accept a sample without an attachment. "
+    f"A command computed on a control tick may add 8 bytes ({ANSWERING_ATTACHMENT_SIZE} in all): the tick's sim "
+    "time in nanoseconds (i64 little-endian), so the simulator's lockstep knows which step the command answers; "
+    "a command without them counts as computed when it arrives.",
     "Every field is present and no other: a map with a missing or an unknown field is refused (counted, logged once).",
     "Numbers: floats are msgpack float 64 (an integer is accepted where a float is expected); they must be finite "
     "unless the schema says NaN is allowed (then NaN means 'unknown', as ROS 2 uses it). Integers are range-checked.",

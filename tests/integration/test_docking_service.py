@@ -39,7 +39,7 @@ from shared.interfaces.simulator import (
 )
 from shared.messages import BatteryState, Clock, String, Twist
 from shared.names import topic_key
-from shared.node import Node, ServiceError, call_service
+from shared.node import Node, ServiceError, answered_tick_s, call_service
 from shared.schema import Message
 from shared.session import SessionSpec, open_session
 from shared.world import load_world
@@ -270,9 +270,19 @@ def test_seed_docks_when_the_battery_crosses_the_threshold(stack) -> None:  # ty
 
     s.wait_state("CONTROLLING", timeout_s=20.0)
     first_cmd, started_s = s.cmd_vel.count, s.sim_time()
+    ticks: list[float | None] = []  # the control tick each command says it answers (its attachment)
+    raw = s.bus.declare_subscriber(
+        s.key(topics.CMD_VEL), lambda sample: ticks.append(answered_tick_s(sample.attachment))
+    )
     s.wait_charging(timeout_s=60.0)
+    raw.undeclare()
     took_s = s.sim_time() - started_s
     truth = s.docked_cleanly()
+    assert ticks and None not in ticks, ticks[:10]
+    stamps = [t for t in ticks if t is not None]
+    assert stamps == sorted(stamps) and started_s - 1.0 <= stamps[0] and stamps[-1] <= s.sim_time(), stamps[
+        :10
+    ]
 
     staging = s.navigator.goals_sent()[0]  # the line approach's staging goal for this dock
     assert staging.distance_to(Pose2D(0.0, 2.0, 0.0)) < 1e-6 and abs(staging.yaw) < 1e-6, staging

@@ -89,6 +89,27 @@ def test_sequence_numbers_attached(node_pair: tuple[Node, Node], bus: zenoh.Sess
     assert seqs == [1, 2, 3]
 
 
+def test_a_command_carries_the_control_tick_it_answers(node_pair: tuple[Node, Node]) -> None:
+    """What the simulator's lockstep reads: the tick a command was computed on, or None when not said."""
+    talker, listener = node_pair
+    got: list[tuple[float, float | None]] = []
+    done = threading.Event()
+
+    def on_twist(msg: Twist, answered: float | None) -> None:
+        got.append((msg.linear.x, answered))
+        if len(got) == 2:
+            done.set()
+
+    sub = listener.create_subscription(Twist, "drive", on_twist, RELIABLE, with_answered=True)
+    pub = talker.create_publisher(Twist, "drive")
+    wait_until(pub.has_subscribers, 5.0, "the publisher never matched the subscriber")
+    pub.publish(Twist.planar(0.3, 0.0), answers_s=12.35)
+    pub.publish(Twist.planar(0.0, 0.0))
+    _wait(done, "two twists")
+    sub.undeclare()
+    assert got == [(0.3, pytest.approx(12.35)), (0.0, None)]
+
+
 def test_a_publisher_hears_of_subscribers_coming_and_going(node_pair: tuple[Node, Node]) -> None:
     talker, listener = node_pair
     changes: list[bool] = []

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 
@@ -21,7 +22,8 @@ from shared.messages import (
     TFMessage,
     Twist,
 )
-from shared.node import call_service
+from shared.node import Node, call_service
+from shared.session import SessionSpec, open_session
 from shared.world import load_world
 from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, wait_until
@@ -178,3 +180,27 @@ def test_a_fleet_world_puts_its_robots_in_one_room(
     )
     assert r2.collisions == 1 and r2.pose.position.x > 0.5
     cmd.undeclare()
+
+
+def test_lockstep_counts_a_command_as_late_as_the_tick_it_answers(
+    spawn, bus: zenoh.Session, router_endpoint: str, namespace: str
+) -> None:  # type: ignore[no-untyped-def]
+    """A command computed on a tick half a second old keeps the world waiting, however fresh its arrival:
+    the wait runs out (a dead controller must not freeze the world) and the log says how late it was."""
+    clock = KeyRecorder(bus, f"{namespace}/clock", Clock)
+    sim = spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=4")
+    clock.wait_for(timeout_s=20.0)
+    with open_session(SessionSpec(connect=(router_endpoint,))) as session:
+        driver = Node("stale_driver", session, namespace)
+        cmd = driver.create_publisher(Twist, "cmd_vel")
+
+        def gave_up() -> bool:
+            now = clock.latest().clock.to_sec()  # type: ignore[union-attr]
+            cmd.publish(Twist.planar(0.1, 0.0), answers_s=now - 0.5)
+            return "stepping on at" in sim.output()
+
+        wait_until(gave_up, 20.0, lambda: f"the world never waited for the stale command:\n{sim.output()}")
+        cmd.publish(Twist.planar(0.0, 0.0))
+        driver.close()
+    late = [float(s) for s in re.findall(r"\(([0-9.]+) s late\)", sim.output())]
+    assert late and max(late) >= 0.4, sim.output()

@@ -16,7 +16,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="battery",
     summary="A simulated battery: drains with motion, charges while the robot is mated with a dock.",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(
             topics.BATTERY_STATUS,

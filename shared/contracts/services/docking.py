@@ -29,7 +29,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="docking",
     summary="Docking: on low battery or a dock_robot goal, navigate to the staging pose, approach, charge.",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(
             topics.CMD_VEL,
@@ -37,7 +37,7 @@ CONTRACT = Contract(
             RELIABLE,
             max_rate_hz=20.0,
             when="while approaching or undocking",
-            about="one command per control tick",
+            about="one command per control tick; its attachment carries the tick's sim time",
         ),
         Topic(DOCKING_STATE, String, RELIABLE, max_rate_hz=10.0, about="the phase in words, at each change"),
     ),

@@ -10,7 +10,7 @@ from shared.interfaces.fleet import RELEASE_DOCK, RESERVE_DOCK, FleetDocks, Flee
 CONTRACT = Contract(
     service="fleet",
     summary="Shares docks between robots: reservations with leases, a queue, the docks' occupancy.",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(topics.FLEET_DOCKS, FleetDocks, BLOCKING, rate_hz=1.0, about="every dock's occupancy"),
         Topic(topics.FLEET_QUEUE, FleetQueue, BLOCKING, rate_hz=1.0, about="robots waiting for a dock"),

@@ -19,7 +19,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="perception",
     summary="The dock from pixels: ArUco markers in camera images become detected_dock_pose.",
-    version="1.1",
+    version="1.2",
     publishes=(
         Topic(
             topics.DETECTED_DOCK_POSE,

@@ -45,7 +45,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="planner",
     summary="Navigation (Nav2's role): the map, a costmap with glass from the sonar, A*, a path follower.",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(
             topics.CMD_VEL,
@@ -53,7 +53,8 @@ CONTRACT = Contract(
             RELIABLE,
             max_rate_hz=20.0,
             when="while navigating",
-            about="drives toward the goal, one command per control tick",
+            about="drives toward the goal, one command per control tick; its attachment carries the "
+            "tick's sim time",
         ),
         Topic(
             topics.PLAN,

@@ -15,7 +15,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="pose",
     summary="The robot's 2-D pose in the map, [x, y, yaw], from the tf tree (map -> odom -> base_link).",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(
             topics.POSE2D,

@@ -16,7 +16,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="ros2_bridge",
     summary="zendock seen from ROS 2 (rmw_zenoh): nodes, topics, actions, forwarded only while wanted.",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(topics.CMD_VEL, Twist, RELIABLE, about="from ROS 2's /cmd_vel (Twist or TwistStamped)"),
     ),

@@ -11,7 +11,7 @@ from shared.contracts.services.ros2_bridge import CONTRACT as ROS2_BRIDGE_CONTRA
 CONTRACT = replace(
     ROS2_BRIDGE_CONTRACT,
     service="ros2_dds",
-    version="1.0",
+    version="1.1",
     summary="zendock seen from ROS 2 on DDS (real rclpy, Fast DDS): nodes, topics, actions, forwarded only while wanted.",
     flags=(Flag("domain_id", "the ROS_DOMAIN_ID of its rclpy (DDS) face", needed=True),),
     behaviour=("shows zendock to ROS 2 on DDS: an rclpy node for each zendock service that is up",),

@@ -26,7 +26,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="simulator",
     summary="The world (pymunk): a differential-drive robot, its sensors, the docks' contacts, the clock.",
-    version="1.0",
+    version="1.1",
     publishes=(
         Topic(topics.CLOCK, Clock, CLOCK_QOS, rate_hz=20.0, about="sim time: every other service's clock"),
         Topic(
@@ -120,7 +120,14 @@ CONTRACT = Contract(
         ),
     ),
     subscribes=(
-        Topic(topics.CMD_VEL, Twist, QoS(depth=1), about="the wheels' command; stops when it goes silent"),
+        Topic(
+            topics.CMD_VEL,
+            Twist,
+            QoS(depth=1),
+            about="the wheels' command; stops when it goes silent; while the robot moves, the world "
+            "waits (briefly) for the command of each of its controller's ticks, known by the tick in the "
+            "attachment, or by its arrival",
+        ),
         Topic(
             topics.POSE2D,
             Float64MultiArray,

@@ -24,7 +24,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="viz",
     summary="A Foxglove WebSocket view of the robot(s): map, costmap, scans, sonar, plan, battery, poses.",
-    version="1.0",
+    version="1.1",
     subscribes=(
         Topic(topics.BATTERY_STATUS, BatteryState, QoS(depth=5)),
         Topic(topics.COLLISIONS, CollisionEvent, QoS(depth=5)),

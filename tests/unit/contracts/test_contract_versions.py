@@ -36,16 +36,19 @@ def test_a_contract_changed_under_its_recorded_version_is_refused_with_the_fix(t
 
 
 def test_a_new_version_takes_the_change_and_needs_its_changelog_entry(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    bumped = replace(CONTRACTS["battery"], version="1.1", summary="A battery that says more.")
+    current = CONTRACTS["battery"].version
+    major, minor = current.split(".")
+    new = f"{major}.{int(minor) + 1}"
+    bumped = replace(CONTRACTS["battery"], version=new, summary="A battery that says more.")
     monkeypatch.setitem(CONTRACTS, "battery", bumped)
-    _records(tmp_path)  # recorded at 1.0, with the old fingerprint
+    _records(tmp_path)  # recorded at the current version, with the old fingerprint
     assert versions.unversioned_changes(tmp_path) == []
     assert json.loads(versions.versions_json(tmp_path))["battery"] == {
-        "version": "1.1",
+        "version": new,
         "fingerprint": versions.fingerprint(bumped),
     }
-    (tmp_path / versions.CHANGELOG_FILE).write_text("## battery 1.0\n", encoding="utf-8")
-    assert "battery 1.1" in versions.missing_from_changelog(tmp_path)
+    (tmp_path / versions.CHANGELOG_FILE).write_text(f"## battery {current}\n", encoding="utf-8")
+    assert f"battery {new}" in versions.missing_from_changelog(tmp_path)
 
 
 def test_the_version_is_in_the_contract_document_but_not_in_its_fingerprint() -> None:

@@ -7,6 +7,7 @@ import shared.node
 
 def test_node_exports_its_public_names() -> None:
     assert set(shared.node.__all__) == {
+        "ANSWERING_ATTACHMENT_SIZE",
         "ATTACHMENT_SIZE",
         "BLOCKING",
         "ENCODING_PREFIX",
@@ -24,6 +25,7 @@ def test_node_exports_its_public_names() -> None:
         "ServiceUnavailable",
         "Subscription",
         "Timer",
+        "answered_tick_s",
         "call_service",
         "encoding_for",
         "publisher_gid",

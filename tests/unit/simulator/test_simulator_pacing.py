@@ -12,6 +12,7 @@ from services.simulator.pacing import (
     DriverPacer,
     PacingParams,
     StepPacer,
+    pacing_stats,
     rate_report,
 )
 
@@ -38,6 +39,16 @@ def test_waits_for_a_late_command_until_the_budget_is_spent_then_steps_on() -> N
     again = [Driver("r0", 1.3, moving=True), Driver("r1", 1.3, moving=True)]
     assert pacer.hold(1.5, 10.20, again)  # a new late command: a new budget
     assert pacer.holds == 2
+
+
+def test_a_wait_that_runs_out_is_counted_once_with_what_it_waited_for() -> None:
+    pacer = DriverPacer(PARAMS)
+    late = [Driver("r0", 1.0, moving=True)]
+    assert pacer.hold(1.2, 10.0, late)
+    assert not pacer.hold(1.2, 10.11, late) and not pacer.hold(1.21, 10.12, late)
+    assert pacer.gave_up == 1
+    assert pacer.gave_up_on == (("r0", pytest.approx(0.2)),)
+    assert pacing_stats(pacer, 1.21)["pacing_gave_up"] == 1.0
 
 
 def test_a_late_pose_holds_the_world_on_its_own_gap_even_with_the_robot_still() -> None:
