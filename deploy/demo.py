@@ -96,6 +96,8 @@ class DemoReport:
     wall_s: float = 0.0
     sim_s: float = 0.0
     trigger_s: float = 0.0
+    #: Ground-truth speed as the contacts mated; above the contact speed limit the robot has not docked.
+    arrival_speed_mps: float = math.nan
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
     #: Each replaced service and the command that ran in its place (``--service``).
     replaced_services: dict[str, str] = field(default_factory=dict)
@@ -174,6 +176,7 @@ def build_report(
         wall_s=wall_s,
         sim_s=record.sim_time_s,
         trigger_s=outcome.trigger_s,
+        arrival_speed_mps=record.arrival_speed_mps,
     )
 
 

@@ -41,6 +41,10 @@ MATED_AFTER_CHARGING_S = 0.5
 #: three samples at 20 Hz): a robot still braking there reads a little faster than it touched.
 ARRIVAL_SPEED_WINDOW_S = 0.1
 
+#: The plate's contact speed limit: a robot that meets its dock faster has not docked, charging or not (a
+#: real base bounces off the plate or breaks its contacts). The approach meets it at 0.08 m/s.
+ARRIVAL_SPEED_LIMIT_MPS = 0.10
+
 #: Ground truth that moves further than this between two samples was teleported: at 20 Hz a drive at
 #: 0.5 m/s moves 2.5 cm a sample, so even a dozen lost samples stay under it.
 TELEPORT_JUMP_M = 0.3
@@ -50,9 +54,11 @@ TELEPORT_JUMP_M = 0.3
 class DockingOutcome:
     """One docking's figures as every report gives them (the demo's and each trial's), from a record."""
 
-    #: Charging with the contacts mated.
+    #: Charging with the contacts mated, having met the plate no faster than its contact speed limit.
     docked: bool
     charging: bool
+    #: Charging after meeting the plate faster than :data:`ARRIVAL_SPEED_LIMIT_MPS`: not docked.
+    too_fast: bool
     #: Sim seconds from the low-battery trigger to charging (NaN: it never charged, or never triggered).
     dock_time_s: float
     #: How far off the dock's axis and heading the contacts mated (absolute; NaN without a contact).
@@ -99,9 +105,12 @@ class RunRecord:
         """The docking's figures (the one mapping from a record to what reports say of it)."""
         contact = self.contact_at_charging
         trigger = self.trigger_s if self.trigger_s is not None else math.nan
+        mated = bool(self.charging and contact is not None and contact.mated)
+        too_fast = mated and self.arrival_speed_mps > ARRIVAL_SPEED_LIMIT_MPS  # False for NaN (no track)
         return DockingOutcome(
-            docked=bool(self.charging and contact is not None and contact.mated),
+            docked=mated and not too_fast,
             charging=self.charging,
+            too_fast=too_fast,
             dock_time_s=(self.charging_s - trigger) if self.charging_s is not None else math.nan,
             lateral_error_m=abs(contact.lateral_error_m) if contact is not None else math.nan,
             yaw_error_rad=abs(contact.yaw_error_rad) if contact is not None else math.nan,

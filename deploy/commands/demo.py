@@ -38,6 +38,7 @@ def _print_report(report: dict, console: Console) -> None:
         ("yaw error at contact", _measure(report["final_yaw_error_rad"], 180.0 / math.pi, "{:.2f} deg")),
         ("collisions", str(report["collisions"])),
         ("path driven", _measure(report["path_length_m"], 1.0, "{:.2f} m")),
+        ("speed meeting the plate", _measure(report.get("arrival_speed_mps"), 1.0, "{:.3f} m/s")),
         ("false glass cells (>10 cm from a pane)", _measure(report.get("false_glass_cells"), 1.0, "{:.0f}")),
         ("glass length found", _measure(report.get("glass_coverage"), 100.0, "{:.0f} %")),
         ("wall time", _measure(report["wall_s"], 1.0, "{:.1f} s")),

@@ -224,7 +224,13 @@ def _run_world(console: Console, options, run_trials):
         task = bar.add_task("trials", total=total, last="", docked=0)
 
         def advance(result) -> None:
-            status = "docked" if result.docked else "FAILED"
+            status = (
+                "docked"
+                if result.docked
+                else "FAILED (met the plate too fast)"
+                if result.too_fast
+                else "FAILED"
+            )
             with lock:
                 tally["docked"] += bool(result.docked)
                 bar.update(

@@ -133,6 +133,7 @@ def _run_one(
         sim_s=record.sim_time_s - outcome.trigger_s,
         phase_s=record.phase_durations(),
         arrival_speed_mps=record.arrival_speed_mps,
+        too_fast=outcome.too_fast,
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)

@@ -106,6 +106,8 @@ class TrialResult:
     phase_s: dict[str, float] = field(default_factory=dict)
     #: The robot's ground-truth speed as its contacts mated (see ``RunRecord.arrival_speed_mps``).
     arrival_speed_mps: float = math.nan
+    #: It charged, but met the plate faster than its contact speed limit: a failed trial.
+    too_fast: bool = False
 
 
 #: A campaign's figures as its JSON line and its summary table give them, in order.
@@ -162,7 +164,8 @@ class TrialsSummary:
     #: Where the time to dock goes: per docking state, the median over docked trials of its sim seconds
     #: (0 for a trial that never entered it); the medians need not add up to the median dock time.
     median_phase_s: dict[str, float] = field(default_factory=dict)
-    #: How fast the docked robots met their docks: median and fastest ground-truth speed as the contacts mated.
+    #: How fast the robots met their docks: median and fastest ground-truth speed as the contacts mated, over
+    #: every mating (a trial that met the plate too fast counts here, and as a failure).
     median_arrival_speed_mps: float = math.nan
     max_arrival_speed_mps: float = math.nan
 

@@ -27,7 +27,8 @@ def summarise_results(
     false_glass = [r.false_glass_cells for r in results if math.isfinite(r.false_glass_cells)]
     coverage = [r.glass_coverage for r in results if math.isfinite(r.glass_coverage)]
     bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
-    arrivals = [r.arrival_speed_mps for r in ok if math.isfinite(r.arrival_speed_mps)]
+    # every mating counts, the ones too fast to be a docking above all
+    arrivals = [r.arrival_speed_mps for r in results if math.isfinite(r.arrival_speed_mps)]
     return TrialsSummary(
         n=len(results),
         successes=len(ok),
@@ -94,7 +95,7 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "success_rate": "no trials",
         "achieved_rtf": "the simulator's clock did not answer",
         "lower_bound_s": "no lower bound for this trial's start (see errors in trials.json)",
-        "dock_time_s": "the trial did not dock",
+        "dock_time_s": "the trial did not charge",
         "lateral_error_m": "the contacts never touched",
         "yaw_error_rad": "the contacts never touched",
         "sim_s": "the trial never triggered docking",

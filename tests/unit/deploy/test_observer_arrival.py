@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from deploy.observer import RunObserver, RunRecord
+from deploy.observer import ARRIVAL_SPEED_LIMIT_MPS, RunObserver, RunRecord
 from shared import topics
 from shared.geometry import Pose2D
 from shared.messages import BatteryState, DockContact, Header, Pose, PoseStamped, Time
@@ -29,6 +29,22 @@ def test_the_arrival_speed_is_the_ground_truth_speed_just_before_mating() -> Non
     assert record.speed_at(1.0) == pytest.approx(0.4)
     assert math.isnan(RunRecord(driven=driven).arrival_speed_mps)  # never mated
     assert math.isnan(RunRecord(mated_s=1.0).arrival_speed_mps)  # no track
+
+
+def _charged(arrival_mps: float) -> RunRecord:
+    """A record that charged on a mated contact, the robot at ``arrival_mps`` for the last second."""
+    driven = [(0.05 * i, arrival_mps * 0.05 * i, 0.0, 0.0) for i in range(21)]
+    contact = DockContact(Header(Time.from_sec(1.0), topics.MAP_FRAME), "home", True, True, 0.0, 0.0, 0.0)
+    return RunRecord(trigger_s=0.0, charging_s=1.0, contact_at_charging=contact, driven=driven, mated_s=1.0)
+
+
+def test_meeting_the_plate_faster_than_its_contact_speed_limit_is_no_docking() -> None:
+    gentle, hard = _charged(0.08).outcome(), _charged(0.3).outcome()
+    assert gentle.docked and not gentle.too_fast
+    assert hard.charging and hard.too_fast and not hard.docked
+    assert not _charged(ARRIVAL_SPEED_LIMIT_MPS * 1.5).outcome().docked
+    no_track = RunRecord(trigger_s=0.0, charging_s=1.0, contact_at_charging=_charged(0.3).contact_at_charging)
+    assert no_track.outcome().docked  # no ground truth then: nothing says it was too fast
 
 
 def test_the_observer_takes_the_first_reading_of_the_mating_that_started_charging() -> None:

@@ -97,18 +97,20 @@ def _result(i: int, docked: bool, time_s: float, lateral_m: float, collisions: i
 
 
 def test_summary_counts_only_docked_runs_in_the_medians() -> None:
+    too_fast = _result(3, False, 12.0, 0.002)
+    too_fast.charging, too_fast.too_fast, too_fast.arrival_speed_mps = True, True, 0.3
     results = [
         _result(0, True, 10.0, 0.001),
         _result(1, True, 20.0, 0.003),
-        _result(2, False, math.nan, math.nan, 1),
+        _result(2, False, math.nan, math.nan, 1),  # never mated: no arrival speed
+        too_fast,  # charged, but met the plate too fast: a failure whose speed still counts
     ]
     results[0].arrival_speed_mps, results[1].arrival_speed_mps = 0.08, 0.12
-    results[2].arrival_speed_mps = 0.3  # never mated for good: not an arrival
     summary = summarise(
         results, wall_s=5.0, options=TrialOptions(world=WORLDS[0]), world=load_world(WORLDS[0])
     )
-    assert (summary.n, summary.successes, summary.collisions) == (3, 2, 1)
-    assert summary.success_rate == pytest.approx(2 / 3)
+    assert (summary.n, summary.successes, summary.collisions) == (4, 2, 1)
+    assert summary.success_rate == pytest.approx(2 / 4)
     assert summary.median_dock_time_s == pytest.approx(15.0)
     assert summary.p95_lateral_error_m == pytest.approx(0.003)
     assert set(summary.headline()) == {
@@ -132,7 +134,7 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
         "median_glass_coverage",
     }
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
-    assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.10, 0.12))
+    assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.12, 0.3))
 
 
 def test_time_ratio_is_each_trials_own_ratio_and_skips_missing_bounds() -> None:
