@@ -1,4 +1,4 @@
-"""Peak resident memory of each service of a running stack, sampled in the background."""
+"""Peak resident memory and CPU time of each service of a running stack, sampled in the background."""
 
 from __future__ import annotations
 
@@ -9,12 +9,15 @@ import psutil
 
 
 class PeakRssSampler:
-    """Polls ``pids()`` (service name -> pid) and keeps each service's highest RSS, children included."""
+    """Polls ``pids()`` (service name -> pid) and keeps each service's highest RSS, children included, and
+    the CPU time its processes have used (every process it ran: a restarted service's earlier ones count)."""
 
     def __init__(self, pids: Callable[[], Iterable[tuple[str, int | None]]], period_s: float = 0.5) -> None:
         self._pids = pids
         self._period_s = period_s
         self.peak_mb: dict[str, float] = {}
+        #: The latest CPU seconds (user + system) read of each process, and the service it belongs to.
+        self._cpu_s_by_pid: dict[int, tuple[str, float]] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="rss-sampler", daemon=True)
 
@@ -37,12 +40,23 @@ class PeakRssSampler:
         for proc in psutil.process_iter(["ppid"]):
             children.setdefault(proc.info["ppid"], []).append(proc.pid)
         for name, pid in roots:
-            rss = _tree_rss(pid, children)
-            if rss is None:
+            tree = _tree_usage(pid, children)
+            if tree is None:
                 continue
+            rss, cpu_s_by_pid = tree
             mb = rss / 1e6
             if mb > self.peak_mb.get(name, 0.0):
                 self.peak_mb[name] = round(mb, 1)
+            for process, cpu_s in cpu_s_by_pid.items():
+                self._cpu_s_by_pid[process] = (name, cpu_s)
+
+    @property
+    def cpu_s(self) -> dict[str, float]:
+        """CPU seconds each service has used as of the last sample (at most a sampling period short)."""
+        totals: dict[str, float] = {}
+        for name, seconds in self._cpu_s_by_pid.values():
+            totals[name] = totals.get(name, 0.0) + seconds
+        return totals
 
     def _run(self) -> None:
         while not self._stop.wait(self._period_s):
@@ -52,11 +66,12 @@ class PeakRssSampler:
                 continue
 
 
-def _tree_rss(root: int, children: dict[int, list[int]]) -> int | None:
-    """Resident bytes of ``root`` and its descendants (``children``: pid -> child pids); None once ``root``
-    is gone. A descendant that exits while being read is left out."""
+def _tree_usage(root: int, children: dict[int, list[int]]) -> tuple[int, dict[int, float]] | None:
+    """Resident bytes of ``root`` and its descendants (``children``: pid -> child pids), and each one's CPU
+    seconds; None once ``root`` is gone. A descendant that exits while being read is left out."""
+    usage: dict[int, float] = {}
     try:
-        total = psutil.Process(root).memory_info().rss
+        total = _read(psutil.Process(root), root, usage)
     except psutil.Error:
         return None
     pending = list(children.get(root, ()))
@@ -64,7 +79,15 @@ def _tree_rss(root: int, children: dict[int, list[int]]) -> int | None:
         pid = pending.pop()
         pending.extend(children.get(pid, ()))
         try:
-            total += psutil.Process(pid).memory_info().rss
+            total += _read(psutil.Process(pid), pid, usage)
         except psutil.Error:
             continue
-    return total
+    return total, usage
+
+
+def _read(process: psutil.Process, pid: int, usage: dict[int, float]) -> int:
+    """One process's resident bytes; its CPU seconds go into ``usage``."""
+    with process.oneshot():
+        times = process.cpu_times()
+        usage[pid] = times.user + times.system
+        return int(process.memory_info().rss)

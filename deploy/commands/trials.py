@@ -58,6 +58,8 @@ def _summary_table(summary: dict) -> Table:
         table.add_row(f"median s in {name}", f"{seconds:.1f}")
     for name, mb in sorted(summary.get("peak_rss_mb", {}).items()):
         table.add_row(f"peak RSS {name}", f"{mb:.0f} MB")
+    for name, seconds in sorted(summary.get("cpu_s_per_sim_s", {}).items()):
+        table.add_row(f"CPU {name}", f"{1000 * seconds:.0f} ms per sim s")
     return table
 
 
@@ -249,6 +251,7 @@ def _print_summary(console: Console, summary) -> None:
         "controller": summary.controller,
         "world": summary.world,
         "peak_rss_mb": summary.peak_rss_mb,
+        "cpu_s_per_sim_s": summary.cpu_s_per_sim_s,
     }
     console.print(_summary_table(data))
     if summary.chaos:

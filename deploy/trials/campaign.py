@@ -230,6 +230,8 @@ def run_trials(
         ):
             clock_start = _sim_clock(session, robots[0])
             wall_clock_start = time.monotonic()
+            sampler.sample()
+            cpu_start = sampler.cpu_s
 
             def worker(robot: str) -> None:
                 while True:
@@ -261,6 +263,11 @@ def run_trials(
                 t.join()
             clock_end = _sim_clock(session, robots[0])
             achieved_rtf = (clock_end - clock_start) / max(time.monotonic() - wall_clock_start, 1e-9)
+            sampler.sample()
+            cpu_per_sim_s = {
+                name: round((seconds - cpu_start.get(name, 0.0)) / max(clock_end - clock_start, 1e-9), 4)
+                for name, seconds in sorted(sampler.cpu_s.items())
+            }
         for status in launcher.ps():
             (run_dir / f"{status.name}.log").write_text("\n".join(launcher.logs(status.name)) + "\n")
     wall_s = time.monotonic() - wall_start
@@ -281,6 +288,7 @@ def run_trials(
     summary = summarise(results, wall_s, options, world)
     summary.achieved_rtf = round(achieved_rtf, 2)
     summary.peak_rss_mb = dict(sampler.peak_mb)
+    summary.cpu_s_per_sim_s = cpu_per_sim_s
     if chaos is not None:
         summary.chaos = chaos.report.summary()
     report = {

@@ -154,6 +154,9 @@ class TrialsSummary:
     #: stack sustained, waits for late drivers included; NaN when not measured).
     achieved_rtf: float = math.nan
     peak_rss_mb: dict[str, float] = field(default_factory=dict)
+    #: CPU seconds each service used per simulated second while the trials ran (the stack's start-up left
+    #: out): where a faster-than-real-time run goes.
+    cpu_s_per_sim_s: dict[str, float] = field(default_factory=dict)
     chaos: dict[str, Any] = field(default_factory=dict)
     #: Glass memory against the world's panes, over every trial (see :mod:`deploy.glass_report`).
     median_false_glass_cells: float = math.nan

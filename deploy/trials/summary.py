@@ -70,12 +70,24 @@ def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller
     for s, _ in per_world:
         for name, mb in s.peak_rss_mb.items():
             summary.peak_rss_mb[name] = max(mb, summary.peak_rss_mb.get(name, 0.0))
+    summary.cpu_s_per_sim_s = _weighted_by_sim_time([(s.cpu_s_per_sim_s, s.sim_s) for s, _ in per_world])
     for s, _ in per_world:  # the same options for every world of a campaign
         summary.replaced_services.update(s.replaced_services)
     chaos = [s.chaos for s, _ in per_world if s.chaos]
     if chaos:
         summary.chaos = combine_chaos(chaos)
     return summary
+
+
+def _weighted_by_sim_time(rates: list[tuple[dict[str, float], float]]) -> dict[str, float]:
+    """Each service's CPU per simulated second over several runs: their rates weighted by sim seconds."""
+    totals: dict[str, float] = {}
+    sim_s: dict[str, float] = {}
+    for per_service, seconds in rates:
+        for name, rate in per_service.items():
+            totals[name] = totals.get(name, 0.0) + rate * seconds
+            sim_s[name] = sim_s.get(name, 0.0) + seconds
+    return {name: round(totals[name] / sim_s[name], 4) for name in sorted(totals) if sim_s[name] > 0}
 
 
 def summary_reasons(summary: TrialsSummary) -> dict[str, str]:

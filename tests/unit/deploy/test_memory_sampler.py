@@ -48,3 +48,35 @@ def test_a_services_peak_includes_its_descendants_and_a_gone_pid_is_skipped() ->
         _, alive = psutil.wait_procs(tree, timeout=10)
         parent.wait(timeout=10)
         assert not alive, f"left behind: {alive}"
+
+
+_BURNER = (
+    "import time\n"
+    "start = time.process_time()\n"
+    "while time.process_time() - start < 0.3:\n"
+    "    pass\n"
+    "print('burnt', flush=True)\n"
+    "time.sleep(60)\n"
+)
+
+
+def test_a_services_cpu_time_counts_each_process_it_ran() -> None:
+    """A service restarted under a new pid keeps the CPU its earlier process used."""
+    first = subprocess.Popen([sys.executable, "-c", _BURNER], stdout=subprocess.PIPE, text=True)
+    second = subprocess.Popen([sys.executable, "-c", _BURNER], stdout=subprocess.PIPE, text=True)
+    running = [first.pid]
+    try:
+        for proc in (first, second):
+            assert proc.stdout is not None and proc.stdout.readline().strip() == "burnt"
+        sampler = PeakRssSampler(lambda: [("svc", running[0])])
+        sampler.sample()
+        assert 0.3 <= sampler.cpu_s["svc"] < 5.0, sampler.cpu_s
+        first.kill()
+        first.wait(timeout=10)
+        running[0] = second.pid  # the restart
+        sampler.sample()
+        assert sampler.cpu_s["svc"] >= 0.6, f"the first process's CPU was lost: {sampler.cpu_s}"
+    finally:
+        for proc in (first, second):
+            proc.kill()
+            proc.wait(timeout=10)

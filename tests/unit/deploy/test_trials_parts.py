@@ -155,12 +155,16 @@ def test_a_campaign_combines_every_trial_not_the_medians() -> None:
     sa = summarise_results(a, 3.0, "graceful", "a")
     sb = summarise_results(b, 4.0, "graceful", "b")
     sa.peak_rss_mb, sb.peak_rss_mb = {"planner_r0": 70.0}, {"planner_r0": 75.0, "simulator": 60.0}
+    sa.sim_s, sb.sim_s = 10.0, 30.0
+    sa.cpu_s_per_sim_s, sb.cpu_s_per_sim_s = {"simulator": 0.1}, {"simulator": 0.3, "planner_r0": 0.2}
     sa.chaos = {"kills": 2, "recovered": 2, "killed": ["pose_r0", "docking_r0"], "recovery_s": [1.0, 3.0]}
     both = combine([(sa, a), (sb, b)], "graceful")
     assert (both.n, both.successes, both.collisions) == (5, 4, 2)
     assert both.median_dock_time_s == pytest.approx(11.5)  # median of 10, 11, 12, 40
     assert both.wall_s == pytest.approx(7.0) and both.world == "a, b"
     assert both.peak_rss_mb == {"planner_r0": 75.0, "simulator": 60.0}
+    # CPU per sim second over the whole campaign: each world's weighted by its sim seconds
+    assert both.cpu_s_per_sim_s == pytest.approx({"simulator": 0.25, "planner_r0": 0.2})
     assert both.chaos["kills"] == 2 and both.chaos["median_recovery_s"] == pytest.approx(2.0)
     assert both.chaos["p95_recovery_s"] == pytest.approx(3.0) and both.chaos[
         "max_recovery_s"
