@@ -14,13 +14,15 @@ orders, fleet requests, action feedback and results, the state to publish). Each
 4. steps the running task with a :class:`~services.docking.task_io.TickInputs` snapshot and turns its
    intent into drive orders through the :class:`~services.docking.drive_arbiter.DriveArbiter`, so the
    service and the planner never drive at once;
-5. reports: dock_robot feedback on change (and every ``feedback_period_s``), the result when the task ends
-   (an action's goal is answered; a replaced task's goal is cancelled), ``docking/state`` on change and
-   every second.
+5. reports (:class:`~services.docking.reporting.Reporter`): dock_robot feedback on change (and every
+   ``feedback_period_s``), ``docking/state`` on change and every second.
 
-Tasks answer one protocol (:class:`~services.docking.task_io.Task`), so nothing here asks which kind runs;
-the two tasks the executive itself starts for a reason of its own (waiting for a dock, giving way) are
-kept by name. Action goals are opaque here: :class:`Goal` carries the node's handle and which action it is.
+Which task runs, what replacing and ending it answer, and the two tasks the executive starts for reasons of
+its own (waiting for a dock, giving way) are the task-life policy's
+(:class:`~services.docking.task_life.TaskLife`); the executive acts on how a task ended (resume after a
+give-way, tell the mission, let go of the dock claim). Tasks answer one protocol
+(:class:`~services.docking.task_io.Task`), so nothing here asks which kind runs. Action goals are opaque
+here: :class:`Goal` carries the node's handle and which action it is.
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ from services.docking.reporting import Reporter, result_message
 from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams
 from services.docking.task_io import Intent, Navigate, NavStatus, Outcome, Task, TickInputs, Velocity
+from services.docking.task_life import TaskLife
 from services.docking.traffic import GiveWay
 from services.docking.traffic_policy import TrafficPolicy
 from services.docking.undocking_run import UndockingRun
@@ -91,15 +94,14 @@ class Executive:
         self._room_paths = RoomPaths(room.bounds, self.walls) if self.walls and room is not None else None
         self.traffic = TrafficPolicy(namespace, self.walls)
         self.reporter = Reporter(params.feedback_period_s)
+        self.life = TaskLife(self.mission)
         self._approach = params.approach_controller()
-        self.task: Task | None = None
-        self.task_kind: TaskKind | None = None
-        self.goal: Goal | None = None
-        #: The running task when it is one the executive started for its own reasons.
-        self._awaiting: AwaitDock | None = None
-        self._giving_way: GiveWay | None = None
         self._applied_correction: Pose2D | None = None
-        self._holding = ""
+
+    @property
+    def task(self) -> Task | None:
+        """The running task, if any."""
+        return self.life.task
 
     @property
     def watches_traffic(self) -> bool:
@@ -131,7 +133,7 @@ class Executive:
             case UndockGoal(goal, max_time_s, dock_type):
                 self._start(self._undocking_run(max_time_s, dock_type), TaskKind.UNDOCK, goal, out)
             case CancelGoal(goal):
-                if goal.same(self.goal) and self.task is not None:
+                if goal.same(self.life.goal) and self.task is not None:
                     out.append(Log.info("%s: cancel requested", type(self.task).__name__))
                     self.task.cancel()
                 else:
@@ -172,10 +174,7 @@ class Executive:
             self._follow_correction(heard.map_to_odom)
             inputs = self._task_inputs(task, heard)
             intent = task.step(inputs)
-            if task.holding and task.holding != self._holding:
-                out.append(
-                    Log.now_and_then(logging.INFO, f"hold:{task.holding}", "holding still: %s", task.holding)
-                )
+            self.life.holds(task, out)
             if task.holding and self.debug:
                 out.append(
                     Log(
@@ -184,9 +183,8 @@ class Executive:
                         (now, task.holding, heard.localisation_age_s, heard.odometry_age_s),
                     )
                 )
-            self._holding = task.holding
             out.append(Drive(self._orders(intent, inputs)))
-            self.reporter.feedback(task, self.goal, now, out)
+            self.reporter.feedback(task, self.life.goal, now, out)
             if task.done:
                 self._end_task(heard, out)
         self.reporter.state(self.state_name(heard.charging), now, out)
@@ -231,7 +229,7 @@ class Executive:
         self._applied_correction = correction
 
     def _follow_mission(self, heard: Heard, out: Effects) -> None:
-        order = self.mission.decide(heard.now_s, self.task_kind)
+        order = self.mission.decide(heard.now_s, self.life.kind)
         if order is MissionOrder.DOCK:
             request = DockRequest(
                 dock_id=self.params.dock_id, max_staging_time_s=self.params.max_staging_time_s
@@ -267,13 +265,12 @@ class Executive:
                 )
             )
             waiting = AwaitDock(request)
-            self._start(waiting, TaskKind.DOCK, goal, out)
-            self._awaiting = waiting
+            self._start(waiting, TaskKind.DOCK, goal, out, awaiting=waiting)
 
     def _follow_fleet(self, claim: DockClaim, heard: Heard, out: Effects) -> None:
         """Ask, renew and release as due; start docking once a dock is granted (or seen free, the fleet down)."""
         now = heard.now_s
-        waiting = self._awaiting
+        waiting = self.life.awaiting
         if waiting is not None:
             granted = claim.granted_dock
             if granted is not None:
@@ -281,7 +278,7 @@ class Executive:
                 self._start(
                     self._docking_run(replace(waiting.request, dock_id=granted), heard),
                     TaskKind.DOCK,
-                    self.goal,
+                    self.life.goal,
                     out,
                 )
             elif claim.fleet_down(now):
@@ -336,7 +333,7 @@ class Executive:
                 Log.now_and_then(logging.WARNING, "fleet-refused", "the fleet refused: %s", answer.reason)
             )
         claim.answered(now, answer)
-        if self._awaiting is not None and not answer.granted:
+        if self.life.awaiting is not None and not answer.granted:
             if answer.queue_position:
                 out.append(
                     Log.now_and_then(
@@ -347,7 +344,7 @@ class Executive:
                         answer.reason,
                     )
                 )
-            self._awaiting.hold_at(answer.holding_pose)
+            self.life.awaiting.hold_at(answer.holding_pose)
 
     def _released(self, dock_id: str | None, error: Exception | None, now: float, out: Effects) -> None:
         claim = self.claim
@@ -385,24 +382,26 @@ class Executive:
         )
         claim.holds(heard.now_s, free[0])
         self._start(
-            self._docking_run(replace(waiting.request, dock_id=free[0]), heard), TaskKind.DOCK, self.goal, out
+            self._docking_run(replace(waiting.request, dock_id=free[0]), heard),
+            TaskKind.DOCK,
+            self.life.goal,
+            out,
         )
 
     # --- traffic ---------------------------------------------------------------------------------------
 
     def _follow_traffic(self, heard: Heard, out: Effects) -> None:
         """Give way to a robot with priority met on the way (the traffic policy decides)."""
-        if self._giving_way is not None:
-            self.traffic.watch(self._giving_way, heard)
+        if self.life.giving_way is not None:
+            self.traffic.watch(self.life.giving_way, heard)
             return
         task = self.task
         if task is None or not task.under_way:
             return
         giving_way = self.traffic.meet(heard, task.dock_request, out)
         if giving_way is not None:
-            assert self.task_kind is not None
-            self._start(giving_way, self.task_kind, self.goal, out)
-            self._giving_way = giving_way
+            assert self.life.kind is not None
+            self._start(giving_way, self.life.kind, self.life.goal, out, giving_way=giving_way)
 
     # --- task life -------------------------------------------------------------------------------------
 
@@ -413,65 +412,39 @@ class Executive:
     def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
         return UndockingRun(self.database, max_time_s, dock_type, self.params.undock_config())
 
-    def _start(self, task: Task, kind: TaskKind, goal: Goal | None, out: Effects) -> None:
+    def _start(
+        self,
+        task: Task,
+        kind: TaskKind,
+        goal: Goal | None,
+        out: Effects,
+        *,
+        awaiting: AwaitDock | None = None,
+        giving_way: GiveWay | None = None,
+    ) -> None:
         """Run ``task`` from the next tick on, replacing whatever runs (its action, if any, is cancelled)."""
-        old, old_goal = self.task, self.goal
-        if old is not None and old.waypoint_index is not None:
-            self.mission.next_waypoint = old.waypoint_index
-        if old_goal is not None and not old_goal.same(goal):
-            out.append(GoalEnded(old_goal, Outcome.CANCELED, result_message(old_goal.action, None)))
-        if old is not None and old is self._awaiting and kind is not TaskKind.DOCK and self.claim is not None:
+        replaced_waiting = self.life.start(task, kind, goal, out, awaiting=awaiting, giving_way=giving_way)
+        if replaced_waiting is not None and kind is not TaskKind.DOCK and self.claim is not None:
             self.claim.drop()  # no longer waiting for a dock
-        if old is not None:
-            out.append(Log.info("%s replaced by %s", type(old).__name__, type(task).__name__))
-        self.task, self.task_kind, self.goal = task, kind, goal
-        self._awaiting = self._giving_way = None
         self.reporter.new_task()
 
     def _end_task(self, heard: Heard, out: Effects) -> None:
-        task, kind, goal = self.task, self.task_kind, self.goal
-        assert task is not None and task.result is not None and kind is not None
-        result = task.result
-        giving_way = self._giving_way if task is self._giving_way else None
-        self.task, self.task_kind, self.goal = None, None, None
-        self._awaiting = self._giving_way = None
-        self._holding = ""
         out.append(Drive(self.arbiter.release()))
-        if task.waypoint_index is not None:
-            self.mission.next_waypoint = task.waypoint_index
-        if giving_way is not None and result.success:
-            self.traffic.gave_way(giving_way, heard.now_s, out)
-            if isinstance(giving_way.resume, DockRequest):
-                self._begin_docking(
-                    giving_way.resume, goal, heard, out
-                )  # carry on docking (a patrol: the mission)
+        ended = self.life.end(heard.now_s, out)
+        if ended.gave_way is not None and ended.result.success:
+            self.traffic.gave_way(ended.gave_way, heard.now_s, out)
+            if isinstance(ended.gave_way.resume, DockRequest):
+                # carry on docking (a patrol: the mission)
+                self._begin_docking(ended.gave_way.resume, ended.goal, heard, out)
             return
         # A give-way cancelled (its dock_robot goal, or a clock reset) ends what it interrupted: the goal is
-        # answered as cancelled below, not resumed.
-        self.mission.finished(kind, result.success, goal is not None, heard.now_s)
+        # answered as cancelled, not resumed.
+        kind, result = ended.kind, ended.result
+        self.mission.finished(kind, result.success, ended.goal is not None, heard.now_s)
         if self.claim is not None and (
             (kind is TaskKind.DOCK and not result.success) or (kind is TaskKind.UNDOCK and result.success)
         ):
             self.claim.drop()  # out of the dock (or never got in): the dock is free for others
-        level = logging.INFO if result.outcome is not Outcome.FAILED else logging.WARNING
-        feedback = task.dock_feedback(heard.now_s)
-        took = f" after {feedback.docking_time_s:.1f} s" if feedback is not None else ""
-        out.append(
-            Log(
-                level,
-                "%s %s%s (code %d, %d retries)%s",
-                (
-                    kind.value,
-                    result.outcome.value,
-                    took,
-                    int(result.error_code),
-                    result.num_retries,
-                    f": {result.message}" if result.message else "",
-                ),
-            )
-        )
-        if goal is not None:
-            out.append(GoalEnded(goal, result.outcome, result_message(goal.action, task)))
 
     # --- reports ---------------------------------------------------------------------------------------
 

@@ -89,7 +89,7 @@ def test_a_low_battery_starts_a_docking_run_that_asks_for_detections_from_the_st
     dock = next(iter(ex.database)).pose2d
     staging = dock.compose(Pose2D(-0.7, 0.0, 0.0))  # at the staging pose, facing the marker
     effects = ex.step(_heard(0.0, staging, battery=0.2))
-    assert ex.task is not None and ex.task_kind is TaskKind.DOCK and ex.goal is None
+    assert ex.task is not None and ex.life.kind is TaskKind.DOCK and ex.life.goal is None
     assert _of(effects, WantDetections) == [WantDetections(False)], "no dock chosen before its first step"
     for t in (0.05, 0.1, 0.15):
         wanted = _of(ex.step(_heard(t, staging, battery=0.2)), WantDetections)
@@ -107,7 +107,7 @@ def test_a_goal_that_replaces_another_cancels_it_and_a_foreign_cancel_is_answere
     effects = ex.handle(UndockGoal(undock_goal, 30.0), _heard(0.1))
     assert _acts(effects) == [GoalEnded(dock_goal, Outcome.CANCELED, DockRobotResult(success=False))]
     assert _said(effects) == ["DockingRun replaced by UndockingRun"]
-    assert ex.task is not None and ex.task.state_name() == "UNDOCKING" and ex.goal is undock_goal
+    assert ex.task is not None and ex.task.state_name() == "UNDOCKING" and ex.life.goal is undock_goal
     stray = Goal(object(), TaskKind.DOCK)
     assert ex.handle(CancelGoal(stray), _heard(0.2)) == [
         GoalEnded(stray, Outcome.CANCELED, DockRobotResult(success=False))
@@ -173,7 +173,9 @@ def test_with_a_fleet_it_waits_for_a_dock_asks_with_path_lengths_and_docks_once_
     ex.handle(FleetReserved(FleetAnswer(True, dock_id)), _heard(1.3, here))
     effects = ex.step(_heard(1.35, here, battery=0.5))
     assert ex.task is not None and ex.task.dock_request.dock_id == dock_id
-    assert ex.goal is goal and not _of(effects, GoalEnded), "the same goal carries on into the docking run"
+    assert ex.life.goal is goal and not _of(effects, GoalEnded), (
+        "the same goal carries on into the docking run"
+    )
 
 
 def test_with_the_fleet_down_it_docks_at_a_dock_seen_free_and_releases_after_undocking() -> None:
@@ -243,7 +245,7 @@ def test_a_dock_goal_cancelled_while_giving_way_ends_cancelled_and_is_not_resume
     ex.task.enter(ex.task.phase.__class__.NAV_TO_STAGING, 0.0)  # on its way to the staging pose
     other = Peer("r2", Pose2D(6.0, 3.0, math.pi), 0.4, True)
     ex.step(_heard(0.05, me, battery=0.8, peers=(other,)))
-    assert ex.task is not None and ex.task.state_name() == "GIVING_WAY" and ex.goal is goal
+    assert ex.task is not None and ex.task.state_name() == "GIVING_WAY" and ex.life.goal is goal
     ex.handle(CancelGoal(goal), _heard(0.1, me))
     effects = ex.step(_heard(0.15, me, battery=0.8, peers=(other,)))
     assert _of(effects, GoalEnded) == [GoalEnded(goal, Outcome.CANCELED, DockRobotResult(success=False))]

@@ -29,6 +29,9 @@ PURE_MODULES = [
 ]
 ALGORITHM_MODULES = [
     "services.docking.executive",
+    "services.docking.task_life",
+    "services.docking.reporting",
+    "services.docking.traffic_policy",
     "services.docking.controllers",
     "services.docking.params",
     "services.docking.graceful",
