@@ -59,7 +59,6 @@ from services.docking.room_paths import RoomPaths
 from services.docking.safety import ObstacleParams
 from services.docking.task_io import Intent, Navigate, NavStatus, Outcome, Task, TickInputs, Velocity
 from services.docking.task_life import TaskLife
-from services.docking.traffic import GiveWay
 from services.docking.traffic_policy import TrafficPolicy
 from services.docking.undocking_run import UndockingRun
 from shared.fleet_answer import FleetAnswer
@@ -265,7 +264,7 @@ class Executive:
                 )
             )
             waiting = AwaitDock(request)
-            self._start(waiting, TaskKind.DOCK, goal, out, awaiting=waiting)
+            self._start(waiting, TaskKind.DOCK, goal, out)
 
     def _follow_fleet(self, claim: DockClaim, heard: Heard, out: Effects) -> None:
         """Ask, renew and release as due; start docking once a dock is granted (or seen free, the fleet down)."""
@@ -401,7 +400,7 @@ class Executive:
         giving_way = self.traffic.meet(heard, task.dock_request, out)
         if giving_way is not None:
             assert self.life.kind is not None
-            self._start(giving_way, self.life.kind, self.life.goal, out, giving_way=giving_way)
+            self._start(giving_way, self.life.kind, self.life.goal, out)
 
     # --- task life -------------------------------------------------------------------------------------
 
@@ -412,18 +411,9 @@ class Executive:
     def _undocking_run(self, max_time_s: float, dock_type: str) -> UndockingRun:
         return UndockingRun(self.database, max_time_s, dock_type, self.params.undock_config())
 
-    def _start(
-        self,
-        task: Task,
-        kind: TaskKind,
-        goal: Goal | None,
-        out: Effects,
-        *,
-        awaiting: AwaitDock | None = None,
-        giving_way: GiveWay | None = None,
-    ) -> None:
+    def _start(self, task: Task, kind: TaskKind, goal: Goal | None, out: Effects) -> None:
         """Run ``task`` from the next tick on, replacing whatever runs (its action, if any, is cancelled)."""
-        replaced_waiting = self.life.start(task, kind, goal, out, awaiting=awaiting, giving_way=giving_way)
+        replaced_waiting = self.life.start(task, kind, goal, out)
         if replaced_waiting is not None and kind is not TaskKind.DOCK and self.claim is not None:
             self.claim.drop()  # no longer waiting for a dock
         self.reporter.new_task()

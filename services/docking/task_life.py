@@ -48,18 +48,10 @@ class TaskLife:
         #: What the running task last said it holds still for ("" when it drives).
         self._holding = ""
 
-    def start(
-        self,
-        task: Task,
-        kind: TaskKind,
-        goal: Goal | None,
-        out: Effects,
-        *,
-        awaiting: AwaitDock | None = None,
-        giving_way: GiveWay | None = None,
-    ) -> Task | None:
+    def start(self, task: Task, kind: TaskKind, goal: Goal | None, out: Effects) -> Task | None:
         """Run ``task`` from the next tick on; returns the task it replaced when that one was waiting for a
-        dock (the executive then lets go of its claim unless the new task docks)."""
+        dock (the executive then lets go of its claim unless the new task docks). An :class:`AwaitDock` or
+        a :class:`GiveWay` is one of the executive's own, and is kept by name."""
         old, old_goal = self.task, self.goal
         if old is not None and old.waypoint_index is not None:
             self.mission.next_waypoint = old.waypoint_index
@@ -69,7 +61,8 @@ class TaskLife:
             out.append(Log.info("%s replaced by %s", type(old).__name__, type(task).__name__))
         was_awaiting = old if old is not None and old is self.awaiting else None
         self.task, self.kind, self.goal = task, kind, goal
-        self.awaiting, self.giving_way = awaiting, giving_way
+        self.awaiting = task if isinstance(task, AwaitDock) else None
+        self.giving_way = task if isinstance(task, GiveWay) else None
         return was_awaiting
 
     def holds(self, task: Task, out: Effects) -> None:

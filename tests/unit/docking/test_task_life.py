@@ -30,7 +30,7 @@ def test_a_task_started_over_another_cancels_its_goal_and_keeps_the_patrol_where
     assert out == [] and life.task is patrol and life.kind is TaskKind.PATROL
     goal = Goal(object(), TaskKind.DOCK)
     waiting = AwaitDock(DockRequest())
-    assert life.start(waiting, TaskKind.DOCK, goal, out, awaiting=waiting) is None
+    assert life.start(waiting, TaskKind.DOCK, goal, out) is None
     assert mission.next_waypoint == 2, "the patrol picks up at the waypoint it was going to"
     assert [e.text() for e in out if isinstance(e, Log)] == ["Patrol replaced by AwaitDock"]
     assert life.awaiting is waiting and life.goal is goal
@@ -74,7 +74,7 @@ def test_a_give_way_that_cleared_ends_quietly_for_the_executive_to_resume() -> N
     goal = Goal(object(), TaskKind.DOCK)
     request = DockRequest(dock_id="home")
     giving_way = _give_way(request)
-    life.start(giving_way, TaskKind.DOCK, goal, [], giving_way=giving_way)
+    life.start(giving_way, TaskKind.DOCK, goal, [])
     giving_way.result = TaskResult(Outcome.SUCCEEDED)
     out: Effects = []
     ended = life.end(1.0, out)
@@ -82,7 +82,7 @@ def test_a_give_way_that_cleared_ends_quietly_for_the_executive_to_resume() -> N
     assert out == [], "the goal carries on with the resumed docking: nothing is answered or logged"
     # cancelled instead: it ends what it interrupted, answered like any other task
     again = _give_way(request)
-    life.start(again, TaskKind.DOCK, goal, [], giving_way=again)
+    life.start(again, TaskKind.DOCK, goal, [])
     again.result = TaskResult(Outcome.CANCELED)
     out.clear()
     assert life.end(2.0, out).gave_way is again
