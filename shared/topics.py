@@ -71,3 +71,7 @@ LIDAR_FRAME = "lidar_link"
 ULTRASONIC_FRAME = "ultrasonic_link"
 CAMERA_FRAME = "camera_link"
 CAMERA_OPTICAL_FRAME = "camera_optical_frame"
+
+# Counters a node adds to its stats (``@zendock/stats/<ns>/<node>``, under ``extra``)
+#: The planner's sim seconds driven under a glass speed limit (all goals so far): time lost to suspected glass.
+GLASS_SLOWED_STAT = "glass_slowed_s"

@@ -56,6 +56,9 @@ def _summary_table(summary: dict) -> Table:
         table.add_row(key, text)
     for name, seconds in summary.get("median_phase_s", {}).items():
         table.add_row(f"median s in {name}", f"{seconds:.1f}")
+    slowed = summary.get("median_glass_slowed_s")
+    if isinstance(slowed, float) and math.isfinite(slowed):
+        table.add_row("median s slowed for glass (navigating)", f"{slowed:.1f}")
     for name, mb in sorted(summary.get("peak_rss_mb", {}).items()):
         table.add_row(f"peak RSS {name}", f"{mb:.0f} MB")
     for name, seconds in sorted(summary.get("cpu_s_per_sim_s", {}).items()):
@@ -252,6 +255,7 @@ def _print_summary(console: Console, summary) -> None:
         "world": summary.world,
         "peak_rss_mb": summary.peak_rss_mb,
         "cpu_s_per_sim_s": summary.cpu_s_per_sim_s,
+        "median_glass_slowed_s": summary.median_glass_slowed_s,
     }
     console.print(_summary_table(data))
     if summary.chaos:

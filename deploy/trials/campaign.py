@@ -10,6 +10,7 @@ map->odom localisation error are on, as on a real robot.
 
 from __future__ import annotations
 
+import json
 import math
 import queue
 import subprocess
@@ -22,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+import zenoh
 
 from deploy import strict_json
 from deploy.glass_report import read_glass_marks
@@ -34,10 +36,11 @@ from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
 from deploy.trials.starts import beacon_starts, lower_bounds, reachable_starts
 from deploy.trials.summary import summarise, summary_reasons
+from shared import topics
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
-from shared.names import topic_key
+from shared.names import stats_key, topic_key
 from shared.node import ServiceError, ServiceUnavailable, call_service
 from shared.session import SessionSpec, open_session
 from shared.world import World, load_world
@@ -68,6 +71,19 @@ def _sim_clock(session: Any, robot: str) -> float:
     return state.stamp.to_sec()
 
 
+def _node_stat(session: Any, namespace: str, node: str, name: str) -> float:
+    """One counter a node adds to its stats (``extra``), NaN when it does not answer or has none (a service
+    replaced by one that does not count it)."""
+    try:
+        for reply in session.get(stats_key(namespace, node), timeout=2.0):
+            if reply.ok is not None:
+                value = json.loads(reply.ok.payload.to_bytes()).get("extra", {}).get(name)
+                return float(value) if isinstance(value, (int, float)) else math.nan
+    except (zenoh.ZError, ValueError):
+        pass
+    return math.nan
+
+
 def _run_one(
     session: Any, robot: str, index: int, start: Pose2D, options: TrialOptions, world: World, state_dir: Path
 ) -> tuple[TrialResult, RunRecord]:
@@ -94,6 +110,7 @@ def _run_one(
                 f"trial {index}: the battery still reports charging after the robot left the dock"
             )
         observer.arm()
+        glass_slowed_before = _node_stat(session, robot, "planner", topics.GLASS_SLOWED_STAT)
         _call_until_answered(
             session,
             topic_key(robot, "battery/set_state"),
@@ -117,6 +134,7 @@ def _run_one(
         record = observer.snapshot()
     finally:
         observer.close()
+    glass_slowed_s = _node_stat(session, robot, "planner", topics.GLASS_SLOWED_STAT) - glass_slowed_before
     outcome = record.outcome()
     result = TrialResult(
         index=index,
@@ -134,6 +152,7 @@ def _run_one(
         phase_s=record.phase_durations(),
         arrival_speed_mps=record.arrival_speed_mps,
         too_fast=outcome.too_fast,
+        glass_slowed_s=round(glass_slowed_s, 3) if math.isfinite(glass_slowed_s) else math.nan,
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)

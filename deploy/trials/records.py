@@ -108,6 +108,8 @@ class TrialResult:
     arrival_speed_mps: float = math.nan
     #: It charged, but met the plate faster than its contact speed limit: a failed trial.
     too_fast: bool = False
+    #: Sim seconds the planner drove under a glass speed limit during the trial (NaN: not counted).
+    glass_slowed_s: float = math.nan
 
 
 #: A campaign's figures as its JSON line and its summary table give them, in order.
@@ -171,6 +173,8 @@ class TrialsSummary:
     #: every mating (a trial that met the plate too fast counts here, and as a failure).
     median_arrival_speed_mps: float = math.nan
     max_arrival_speed_mps: float = math.nan
+    #: Median over docked trials of the sim seconds driven under a glass speed limit (part of navigation).
+    median_glass_slowed_s: float = math.nan
 
     def headline(self) -> dict[str, Any]:
         keys = HEADLINE_KEYS

@@ -50,6 +50,7 @@ def summarise_results(
         median_phase_s=median_phases([r.phase_s for r in ok]),
         median_arrival_speed_mps=median(arrivals),
         max_arrival_speed_mps=max(arrivals) if arrivals else math.nan,
+        median_glass_slowed_s=median([r.glass_slowed_s for r in ok if math.isfinite(r.glass_slowed_s)]),
     )
 
 
@@ -111,6 +112,8 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "lateral_error_m": "the contacts never touched",
         "yaw_error_rad": "the contacts never touched",
         "sim_s": "the trial never triggered docking",
+        "median_glass_slowed_s": none_docked or "no planner counted its glass slowdowns",
+        "glass_slowed_s": "the planner does not count its glass slowdowns (replaced?)",
         "median_false_glass_cells": "no planner wrote its glass memory",
         "p95_false_glass_cells": "no planner wrote its glass memory",
         "false_glass_cells": "the planner had written no glass memory",

@@ -151,6 +151,9 @@ class PlannerService:
         #: The worker reads the track through this view; the executor adds samples holding its lock.
         self._shared_track = LockedPoseTrack(self._tracker)
         self._control_time = _Durations()
+        #: Control ticks' worth of sim seconds a goal was driven under a glass speed limit, all goals.
+        self._glass_slowed_s = 0.0
+        node.stats.extra = {**node.stats.extra, topics.GLASS_SLOWED_STAT: 0.0}
         self._costmap_time = _Durations()
         self._layers = CostmapUpdater(params, self._shared_track, node.log)
         self._costmap = CostmapThread(
@@ -426,7 +429,17 @@ class PlannerService:
             self._run = self._handle = None
             return
         t0 = time.thread_time()
-        self._carry_out(run.tick(self._snapshot()))
+        snapshot = self._snapshot()
+        limit = snapshot.speed_limit_mps
+        if limit is not None and limit < self._params.max_linear_vel_mps:
+            # sim seconds driven under a glass speed limit, for reports of where the time goes (a float
+            # store: the stats query's thread reads it whole)
+            self._glass_slowed_s += 1.0 / self._params.controller_rate_hz
+            self._node.stats.extra = {
+                **self._node.stats.extra,
+                topics.GLASS_SLOWED_STAT: self._glass_slowed_s,
+            }
+        self._carry_out(run.tick(snapshot))
         self._control_time.add(time.thread_time() - t0)
 
     # --- the run's snapshot and orders --------------------------------------------------------------

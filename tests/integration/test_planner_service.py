@@ -7,6 +7,7 @@ with a reason; ``zendock nav`` drives it from the command line.
 
 from __future__ import annotations
 
+import json
 import math
 import pathlib
 import subprocess
@@ -20,6 +21,7 @@ import zenoh
 
 from services.planner.occupancy_map import save_map
 from services.planner.rasterize import map_from_world
+from shared import topics
 from shared.action import ActionClient, spin_in_background
 from shared.geometry import Pose2D, wrap_angle
 from shared.interface_types import UUID, GoalStatusCode
@@ -60,6 +62,7 @@ from shared.messages import (
     PoseStamped,
     Twist,
 )
+from shared.names import stats_key
 from shared.navigation import NavigationClient, TaskResult
 from shared.node import Node, call_service
 from shared.topics import SIM_TELEPORT
@@ -303,6 +306,10 @@ def test_glass_absent_from_the_map_is_found_and_avoided(  # type: ignore[no-unty
     cells = occupancy.frame.world_to_cells(along)
     assert (occupancy.data[cells[:, 1], cells[:, 0]] == 0).all(), "the map should not show the glass"
     assert (costs[cells[:, 1], cells[:, 0]] >= 99).any(), "no glass cell was marked in the costmap"
+    # it slowed for the pane it heard, and counts how long (where a campaign's time goes)
+    (reply,) = list(bus.get(stats_key(namespace, "planner"), timeout=5.0))
+    extra = json.loads(reply.ok.payload.to_bytes())["extra"]
+    assert extra[topics.GLASS_SLOWED_STAT] > 0.0, extra
     _assert_no_errors(planner)
 
 

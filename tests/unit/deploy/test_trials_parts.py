@@ -106,6 +106,8 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
         too_fast,  # charged, but met the plate too fast: a failure whose speed still counts
     ]
     results[0].arrival_speed_mps, results[1].arrival_speed_mps = 0.08, 0.12
+    results[0].glass_slowed_s, results[1].glass_slowed_s = 1.0, 3.0
+    too_fast.glass_slowed_s = 9.0  # not docked: not in the median
     summary = summarise(
         results, wall_s=5.0, options=TrialOptions(world=WORLDS[0]), world=load_world(WORLDS[0])
     )
@@ -135,6 +137,7 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
     }
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
     assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.12, 0.3))
+    assert summary.median_glass_slowed_s == pytest.approx(2.0)
 
 
 def test_time_ratio_is_each_trials_own_ratio_and_skips_missing_bounds() -> None:
