@@ -118,6 +118,9 @@ class NavOrders:
 
     #: ``(linear, angular)`` to publish on cmd_vel.
     cmd: tuple[float, float] | None = None
+    #: The tick :attr:`cmd` answers, when not the snapshot's: a stop while the first plan is being made
+    #: answers the tick that asked for it, so the simulator's lockstep waits for the plan.
+    cmd_answers_s: float | None = None
     #: Submit a plan request from this pose (with the snapshot's grid and :attr:`NavigationRun.generation`).
     plan_from: Pose2D | None = None
     #: A new path to publish on ``plan`` (``(N, 3)`` poses).
@@ -273,6 +276,8 @@ class NavigationRun:
             self._recover(snap, pose, orders)
         else:
             orders.cmd = (0.0, 0.0)  # no path yet: hold still
+            if self.phase is Phase.PLANNING and (snap.planning_in_flight or orders.plan_from is not None):
+                orders.cmd_answers_s = self._last_plan_request_s
         if self.active:
             in_flight = snap.planning_in_flight or orders.plan_from is not None
             if self._replan_wanted and not in_flight and self.phase in (Phase.PLANNING, Phase.FOLLOWING):

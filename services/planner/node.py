@@ -417,7 +417,12 @@ class PlannerService:
         run, handle = self._run, self._handle
         if run is None or handle is None or not handle.active:
             return
+        first = run.plan is None
         self._carry_out(run.plan_outcome(outcome, self._snapshot()))
+        if first and run.plan is not None:
+            # The first path: drive on it now, not a control period later. The world may be holding for
+            # this goal's command (the stops before it answered the tick that asked for the plan).
+            self._on_control_tick()
 
     def _on_control_tick(self) -> None:
         if self._behaviors.active:
@@ -468,7 +473,7 @@ class PlannerService:
         run, handle = self._run, self._handle
         now = self._node.now()
         if orders.cmd is not None:
-            self._publish_cmd(*orders.cmd)
+            self._publish_cmd(*orders.cmd, answers_s=orders.cmd_answers_s)
         grid = self._costmap.grid
         if orders.plan_from is not None and run is not None and grid is not None:
             self._planning_in_flight = True
@@ -500,10 +505,14 @@ class PlannerService:
             else:
                 handle.abort(result)
 
-    def _publish_cmd(self, linear_mps: float, angular_radps: float) -> None:
-        """Publish a command, saying which tick it answers: the time of the snapshot it was computed from."""
+    def _publish_cmd(self, linear_mps: float, angular_radps: float, answers_s: float | None = None) -> None:
+        """Publish a command, saying which tick it answers: the time of the snapshot it was computed from,
+        unless ``answers_s`` says an earlier one (a stop while the first plan is being made)."""
         self._last_cmd = (linear_mps, angular_radps)
-        answers_s = self._snapshot_s if self._node.use_sim_time else None
+        if answers_s is None:
+            answers_s = self._snapshot_s
+        if not self._node.use_sim_time:
+            answers_s = None
         self._cmd_pub.publish(Twist.planar(linear_mps, angular_radps), answers_s=answers_s)
 
     def _trust_turning_circle(self, now: float) -> None:

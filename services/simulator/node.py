@@ -253,11 +253,16 @@ class SimulatorService:
 
     def _drivers(self) -> list[Driver]:
         drivers = []
+        pacing = self.params.pacing
         for ns, robot in self.robots.items():
-            moving = not robot.watchdog_tripped and (robot.cmd_v != 0.0 or robot.cmd_w != 0.0)
-            drivers.append(
-                Driver(ns, robot.answered_s, moving, robot.cadence.gap_s(self.params.pacing, self.dt_s))
-            )
+            gap = robot.cadence.gap_s(pacing, self.dt_s)
+            moving = robot.cmd_v != 0.0 or robot.cmd_w != 0.0
+            # A command that arrived already answering an old tick says its controller is still at work on
+            # that tick (a planner making its first plan holds its robot still with such stops): its robot
+            # is awaited though it stands.
+            thinking = robot.last_cmd_s - robot.answered_s > (pacing.driver_gap_s if gap is None else gap)
+            awaited = not robot.watchdog_tripped and (moving or thinking)
+            drivers.append(Driver(ns, robot.answered_s, awaited, gap))
             if robot.last_pose_s > -math.inf:
                 drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, self.params.pacing.pose_gap_s))
         return drivers

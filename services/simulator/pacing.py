@@ -109,8 +109,9 @@ CADENCE_BREAK_S = 0.5
 class Driver:
     """One input the world may wait for: its name, when it last arrived, whether it is awaited now.
 
-    A robot's command is awaited while the robot moves; its pose once one has arrived (a world with no
-    pose service is never held for one). ``gap_s`` overrides the pacer's ``driver_gap_s``.
+    A robot's command is awaited while the robot moves, or while its controller says it is still at work on
+    an old tick (its stop arrived answering a tick already late); its pose once one has arrived (a world
+    with no pose service is never held for one). ``gap_s`` overrides the pacer's ``driver_gap_s``.
     """
 
     name: str

@@ -129,3 +129,21 @@ def test_cancel_stops_the_robot_and_a_stale_plan_is_ignored() -> None:
     orders = run.cancel()
     assert orders.cmd == (0.0, 0.0) and orders.end is not None and orders.end.ending is Ending.CANCELED
     assert run.tick(world.snapshot()) == NavOrders()  # ended: silence on cmd_vel
+
+
+def test_while_the_first_plan_is_made_its_stops_answer_the_tick_that_asked_for_it() -> None:
+    """The simulator's lockstep then waits for the plan instead of running on while the robot stands."""
+    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0))
+    run = NavigationRun(Pose2D(4.2, 1.0, 0.5), world.params, 0.0, itertools.count(1).__next__)
+    world.now_s = 1.0
+    asked = run.start(world.snapshot())
+    assert asked.plan_from is not None  # the plan is asked for at 1.0 s, and not back yet
+    for now_s in (1.05, 1.10):
+        world.now_s = now_s
+        orders = run.tick(world.snapshot(planning_in_flight=True))
+        assert orders.cmd == (0.0, 0.0) and orders.cmd_answers_s == 1.0
+    # once following, a command answers its own tick (None: the snapshot's)
+    world.carry_out(run, run.start(world.snapshot()))
+    assert run.phase is Phase.FOLLOWING
+    world.now_s = 1.15
+    assert run.tick(world.snapshot()).cmd_answers_s is None
