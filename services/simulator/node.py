@@ -242,7 +242,8 @@ class SimulatorService:
 
     def _log_gave_up(self, pacer: DriverPacer) -> None:
         late = ", ".join(f"{name} ({late_s:.2f} s late)" for name, late_s in pacer.gave_up_on)
-        self._say.warning(
+        # Not a fault: a controller slower than the world's pace (a long first plan, a busy machine).
+        self._say.info(
             "gave up",
             "stepping on at %.2f s without %s: waited %g s (wall) for it (%d times so far)",
             self.time_s,
