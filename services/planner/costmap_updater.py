@@ -40,6 +40,9 @@ from shared.ratelimit import RateLimitedLogger
 #: Between costmap updates, sonar readings closer together than this are folded in only once (the newest).
 SONAR_MIN_TRAVEL_M = 0.05
 SONAR_MIN_TURN_RAD = 0.1
+#: A sonar reading newer than the newest odometry waits for it (sim seconds), so that odometry places it;
+#: a reading this far from the update's time either way is placed at once, by what the track holds.
+SONAR_WAIT_FOR_ODOM_S = 0.5
 #: Write the glass memory to its file (when it changed) at most this often (wall seconds).
 GLASS_SAVE_PERIOD_S = 1.0
 #: A scan this far in time from a sonar reading is too old to explain its echo.
@@ -239,6 +242,8 @@ class CostmapUpdater:
                 self._lidar_hits = (scan.header.stamp.to_sec(), endpoints[hits])
                 self._lidar_correction = track.map_to_odom
         while self._pending_ranges:
+            if self._awaits_odometry(track, self._pending_ranges[0], now):
+                break  # the next update places it, and the readings after it
             reading = self._pending_ranges.popleft()
             sensor = self._sensor_pose(track, reading.header)
             if sensor is None:
@@ -328,6 +333,19 @@ class CostmapUpdater:
         self.apply_glass()
 
     # --- internals ----------------------------------------------------------------------------------
+
+    @staticmethod
+    def _awaits_odometry(track: PoseTrack, reading: Range, now: float) -> bool:
+        """Whether a sonar reading is newer than the newest odometry, and should wait for it.
+
+        Placed now, its pose would be the last odometry carried on along its twist, or the last
+        localisation sample held: a robot starting to turn is not where either puts it. A reading taken
+        facing just past a pane's end (no echo) was placed 5 degrees back, facing the pane, and cleared the
+        floor behind the glass to 3 m; the planner then routed the robot's corner into the pane's end.
+        Without odometry, or for a reading far from ``now`` (a clock that went back), nothing waits."""
+        latest = track.latest_odom
+        stamp_s = reading.header.stamp.to_sec()
+        return latest is not None and latest.stamp_s < stamp_s and abs(now - stamp_s) < SONAR_WAIT_FOR_ODOM_S
 
     def _sensor_pose(self, track: PoseTrack, header: Header) -> Pose2D | None:
         robot = track.pose_now_at(header.stamp.to_sec())

@@ -58,8 +58,10 @@ def pane_runs(marks: np.ndarray, resolution_m: float) -> list[tuple[np.ndarray, 
             break
         rho = np.rint(points[:, :1] * cos + points[:, 1:] * sin).astype(np.int64)  # (N, angles)
         low = int(rho.min())
-        votes = np.zeros((len(ANGLES_RAD), int(rho.max()) - low + 1), dtype=np.int64)
-        np.add.at(votes, (np.broadcast_to(np.arange(len(ANGLES_RAD)), rho.shape), rho - low), 1)
+        span = int(rho.max()) - low + 1
+        # One bincount over (angle, offset) bins: np.add.at did the same 10 times slower.
+        flat = (np.arange(len(ANGLES_RAD)) * span + (rho - low)).ravel()
+        votes = np.bincount(flat, minlength=len(ANGLES_RAD) * span).reshape(len(ANGLES_RAD), span)
         best_angle, best_rho = np.unravel_index(int(votes.argmax()), votes.shape)
         if votes[best_angle, best_rho] < min_cells:
             break

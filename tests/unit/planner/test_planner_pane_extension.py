@@ -7,10 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from services.planner.costmap import CostmapParams
-from services.planner.glass_memory import GlassMemory
+from services.planner.costmap import LETHAL_OBSTACLE, CostmapParams
+from services.planner.glass_memory import HEARD_LINE_EXTENSION_M, GlassMemory
 from services.planner.grid_frame import GridFrame
 from services.planner.pane_extension import pane_extensions, pane_runs
+from services.planner.rasterize import map_from_world
+from shared.world import World
 
 RES = 0.05
 
@@ -141,3 +143,33 @@ def test_two_panes_extensions_leave_the_gap_between_their_ends_open() -> None:
             nearest = min(math.hypot(x - o, y - 52) for o in others.tolist())
             assert nearest * RES >= clearance - RES, (x, y)
     assert extended[32, 43], "the diagonal pane still goes on, short of the other"
+
+
+def test_suspicion_follows_a_heard_pane_along_its_line_past_the_last_cell_heard() -> None:
+    """A pane heard only from afar holds evidence too weak to mark, and none toward its end: the robot
+    rounding that end found suspicion stopping short of it. Unlooked-at floor along the heard run's line,
+    past its end, is suspect too; floor the sonar looked at is not, and neither is floor further on."""
+    world = World.model_validate(
+        {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
+    )
+    frame = map_from_world(world).frame
+    memories = {
+        extension: GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.3, pane_extension_m=extension)
+        for extension in (0.0, 1.5)
+    }
+    for memory in memories.values():
+        for x in np.arange(1.0, 2.05, 0.2):  # driving along x, the sonar facing a pane 2.6 m off to +y
+            memory.add_reading((float(x), 0.5, math.pi / 2), 2.6, 0.5, 0.02, 3.0)
+    with_line, without = memories[1.5], memories[0.0]
+    heard = with_line.heard_cells_xy()
+    assert len(heard) and not (with_line.sonar_layer == LETHAL_OBSTACLE).any(), "heard, not marked"
+    end_x, line_y = float(heard[:, 0].max()), float(np.median(heard[:, 1]))
+
+    def glass(memory: GlassMemory, x: float, y: float) -> bool:
+        ix, iy = frame.world_to_cell(x, y)
+        return bool(memory.glass_mask()[iy, ix])
+
+    beyond = (end_x + 0.6, line_y + 0.2)  # behind the pane's line, where the sonar never looked
+    assert glass(with_line, *beyond) and not glass(without, *beyond)
+    assert not glass(with_line, end_x + 0.6, line_y - 0.5)  # the side the sonar looked through
+    assert not glass(with_line, end_x + HEARD_LINE_EXTENSION_M + 0.5, line_y + 0.2)  # no further

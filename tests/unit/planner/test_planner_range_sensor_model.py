@@ -262,3 +262,45 @@ def test_far_echoes_at_the_cone_edge_mark_no_floor_and_the_pane_is_found_up_clos
     assert _false_marks(memory, pane) <= 2
     marked_y = _marked_xy(memory)[:, 1]
     assert marked_y.min() <= 2.85 and marked_y.max() >= 3.15, "the part of the pane faced up close is marked"
+
+
+def test_a_sonar_reading_newer_than_odometry_waits_to_be_placed_by_it() -> None:
+    """Placed before odometry reached it, a reading taken while the robot turned was put where the robot
+    had faced: a reading facing just past a pane's end (no echo) cleared the floor behind the glass. It
+    waits for the update that has the odometry of its time."""
+    import logging
+
+    from services.planner.costmap_updater import CostmapUpdater
+    from services.planner.occupancy_map import OCC_FREE, OccupancyMap
+    from services.planner.params import Params
+    from shared import topics
+    from shared.geometry import Pose2D
+    from shared.messages import Header, Range, Time
+    from shared.pose_tracking import OdometrySample, PoseTrack
+
+    track = PoseTrack()
+    layers = CostmapUpdater(Params(), track, logging.getLogger("test"))
+    layers.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    assert layers.glass is not None
+    track.add_odom(OdometrySample(1.0, Pose2D(1.0, 2.0, 0.0), 0.0, 1.0))  # turning left at 1 rad/s
+    track.add_pose(1.0, Pose2D(1.0, 2.0, 0.0))
+    header = Header(stamp=Time.from_sec(1.3), frame_id=topics.ULTRASONIC_FRAME)
+    layers.add_range(Range(header=header, field_of_view=0.5, min_range=0.02, max_range=3.0, range=1.0))
+    layers.update(1.3)
+    assert len(layers.glass.heard_cells_xy()) == 0, "placed before odometry reached it"
+    track.add_odom(OdometrySample(1.35, Pose2D(1.0, 2.0, 0.35), 0.0, 1.0))
+    layers.update(1.35)
+    heard = layers.glass.heard_cells_xy()
+    assert len(heard) > 0
+    sensor_x, sensor_y = 1.0 + 0.2 * math.cos(0.3), 2.0 + 0.2 * math.sin(0.3)  # the mount, facing 0.3 rad
+    bearing = math.atan2(float(np.mean(heard[:, 1])) - sensor_y, float(np.mean(heard[:, 0])) - sensor_x)
+    assert bearing == pytest.approx(0.3, abs=0.05)
+    # With no odometry at all (a robot reporting only its map pose) nothing waits.
+    bare = PoseTrack()
+    alone = CostmapUpdater(Params(), bare, logging.getLogger("test"))
+    alone.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    assert alone.glass is not None
+    bare.add_pose(1.3, Pose2D(1.0, 2.0, 0.0))
+    alone.add_range(Range(header=header, field_of_view=0.5, min_range=0.02, max_range=3.0, range=1.0))
+    alone.update(1.3)
+    assert len(alone.glass.heard_cells_xy()) > 0
