@@ -339,19 +339,19 @@ class GlassMemory:
         cached = self._extension_cache
         if cached is not None and np.array_equal(cached[0], marks) and np.array_equal(cached[1], self._seen):
             return cached[2]
+        extension = self._extend(marks, self._seen, self.pane_extension_m)
+        self._extension_cache = (marks, self._seen.copy(), extension)
+        return extension
+
+    def _extend(self, cells: np.ndarray, looked_at: np.ndarray, reach_m: float) -> np.ndarray:
+        """Runs of ``cells`` along lines carried on for ``reach_m`` through floor not ``looked_at``, stopping
+        short of walls, of other panes and of floor a recovery cleared (see :func:`pane_extensions`)."""
         stops = self._cleared_by_recovery
         if self._extension_stops is not None:
             stops = stops | self._extension_stops
-        extension = pane_extensions(
-            marks,
-            self._seen,
-            self.frame.resolution_m,
-            self.pane_extension_m,
-            blocked=stops,
-            clearance_m=self._robot_gap_m(),
+        return pane_extensions(
+            cells, looked_at, self.frame.resolution_m, reach_m, blocked=stops, clearance_m=self._robot_gap_m()
         )
-        self._extension_cache = (marks, self._seen.copy(), extension)
-        return extension
 
     def heard_line_mask(self, heard: np.ndarray) -> np.ndarray:
         """Boolean ``(height, width)``: where runs of ``heard`` cells along a line would go on, for up to
@@ -364,17 +364,7 @@ class GlassMemory:
             HEARD_LINE_REUSE_CELLS, HEARD_LINE_REUSE_SHARE * np.count_nonzero(heard)
         ):
             return cached[1]
-        stops = self._cleared_by_recovery
-        if self._extension_stops is not None:
-            stops = stops | self._extension_stops
-        line = pane_extensions(
-            heard,
-            np.zeros_like(heard),
-            self.frame.resolution_m,
-            reach_m,
-            blocked=stops,
-            clearance_m=self._robot_gap_m(),
-        )
+        line = self._extend(heard, np.zeros_like(heard), reach_m)
         self._heard_line_cache = (heard.copy(), line)
         return line
 
