@@ -33,8 +33,8 @@ middle). Suspicion round such heard cells stopped 0.4-0.75 m short of the glass 
 every reading placed by its own odometry the robot still rounded the end with 6-14 cm to spare in 4 of 40
 runs on a loaded machine (at least 20 cm with this). So a run of heard cells along a line is carried on
 along it for up to ``HEARD_LINE_EXTENSION_M``, and unlooked-at floor within the suspicion radius of that
-line is suspected too. The line itself may cross floor the sonar has
-looked at (it runs a few centimetres off the pane); only the floor nobody looked at is suspected.
+line is suspected too. The line itself may cross floor the sonar has looked at (it runs a few centimetres
+off the pane); only the floor nobody looked at is suspected.
 
 The node folds the glass into the costmap's static layer (it is as good as a wall until cleared), so
 the lidar's clearing never erases it; a recovery or a clear request forgets it.
@@ -359,6 +359,8 @@ class GlassMemory:
         the sonar looked there, stopping a robot's width short of walls and of other panes. It only seeds
         suspicion (see the module doc): on its own it is not glass."""
         reach_m = min(self.pane_extension_m, HEARD_LINE_EXTENSION_M)
+        if reach_m <= 0:
+            return np.zeros_like(heard)
         cached = self._heard_line_cache
         if cached is not None and np.count_nonzero(cached[0] ^ heard) <= max(
             HEARD_LINE_REUSE_CELLS, HEARD_LINE_REUSE_SHARE * np.count_nonzero(heard)
@@ -383,7 +385,7 @@ class GlassMemory:
         heard = self._log_odds > SUSPECTED_LOG_ODDS
         if self.suspicion_radius_m > 0 and heard.any():
             radius_cells = self.suspicion_radius_m / self.frame.resolution_m
-            seeds = heard | self.heard_line_mask(heard) if self.pane_extension_m > 0 else heard
+            seeds = heard | self.heard_line_mask(heard)
             near = squared_distance_to_marks(seeds, radius_cells) <= radius_cells * radius_cells
             glass = marks | (near & ~self._seen)
         if self.pane_extension_m > 0:

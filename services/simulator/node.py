@@ -265,7 +265,7 @@ class SimulatorService:
             awaited = not robot.watchdog_tripped and (moving or thinking)
             drivers.append(Driver(ns, robot.answered_s, awaited, gap))
             if robot.last_pose_s > -math.inf:
-                drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, self.params.pacing.pose_gap_s))
+                drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, pacing.pose_gap_s))
         return drivers
 
     def _step_once(self) -> None:
