@@ -77,6 +77,8 @@ class GroupProcess(ABC):
             self.create_time = None
         self._descendants: dict[int, psutil.Process] = {}
         self._stop_task: asyncio.Task[None] | None = None
+        #: The one task that learns the exit code (:meth:`wait`'s scans all wait on it).
+        self._exit_task: asyncio.Task[int] | None = None
 
     @property
     @abstractmethod
@@ -152,11 +154,16 @@ class GroupProcess(ABC):
 
     async def wait(self) -> int:
         """The exit code (negative: killed by that signal) once the main process and its group are gone."""
+        if self._exit_task is None:
+            # One task for the life of the process. A fresh ``_exited()`` per scan left a task and an exit
+            # waiter behind at every timeout: one every 2 s per service, which grew zendock's own process
+            # by tens of MB over a fleet hour.
+            self._exit_task = asyncio.ensure_future(self._exited())
         while True:
             self.remember_descendants()
             try:
                 async with asyncio.timeout(DESCENDANT_SCAN_S):
-                    returncode = await asyncio.shield(self._exited())
+                    returncode = await asyncio.shield(self._exit_task)
                 break
             except TimeoutError:
                 continue
