@@ -15,8 +15,6 @@ import re
 from pathlib import Path
 from typing import Any
 
-from rosbags.typesys import get_types_from_msg
-
 #: Field definitions as rosbags keeps them: type name -> (constants, fields).
 TypeDefs = dict[str, tuple[list[Any], list[Any]]]
 
@@ -226,6 +224,10 @@ def service_definitions(service: str, request: str, response: str) -> TypeDefs:
 
 
 def _messages(text: str, name: str) -> TypeDefs:
+    # rosbags' parser (4.5 MB and 10 ms to import) only when definitions are read: the DDS face needs the
+    # names above, never the definitions (its rclpy has the types built in).
+    from rosbags.typesys import get_types_from_msg  # noqa: PLC0415
+
     has_fields = any(line.split("#", 1)[0].strip() for line in text.splitlines())
     parsed = get_types_from_msg(text if has_fields else _EMPTY, name)
     return {
