@@ -156,8 +156,8 @@ class GroupProcess(ABC):
         """The exit code (negative: killed by that signal) once the main process and its group are gone."""
         if self._exit_task is None:
             # One task for the life of the process. A fresh ``_exited()`` per scan left a task and an exit
-            # waiter behind at every timeout: one every 2 s per service, which grew zendock's own process
-            # by tens of MB over a fleet hour.
+            # waiter behind at every timeout, one every 2 s per service: zendock's own process grew for
+            # as long as its stack ran.
             self._exit_task = asyncio.ensure_future(self._exited())
         while True:
             self.remember_descendants()

@@ -224,8 +224,8 @@ def service_definitions(service: str, request: str, response: str) -> TypeDefs:
 
 
 def _messages(text: str, name: str) -> TypeDefs:
-    # rosbags' parser (4.5 MB and 10 ms to import) only when definitions are read: the DDS face needs the
-    # names above, never the definitions (its rclpy has the types built in).
+    # rosbags' parser only when definitions are read: the DDS face needs the names above, never the
+    # definitions (its rclpy has the types built in), and starts lighter without it.
     from rosbags.typesys import get_types_from_msg  # noqa: PLC0415
 
     has_fields = any(line.split("#", 1)[0].strip() for line in text.splitlines())
