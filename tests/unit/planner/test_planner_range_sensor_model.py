@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
 import pytest
 
 from services.planner.costmap import CostmapParams
+from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
 from services.planner.glass_memory import GlassMemory
 from services.planner.grid_frame import GridFrame
+from services.planner.occupancy_map import OCC_FREE, OccupancyMap
+from services.planner.params import Params
 from services.planner.range_sensor_model import (
     RangeSensorModel,
     angular_weight,
@@ -17,9 +21,21 @@ from services.planner.range_sensor_model import (
     range_weight,
     reading_evidence,
 )
+from shared import topics
+from shared.geometry import Pose2D
+from shared.messages import Header, Range, Time
+from shared.pose_tracking import OdometrySample, PoseTrack
 
 MODEL = RangeSensorModel()
 HALF_FOV = 0.25
+
+
+def _updater_on_open_floor(track: PoseTrack, params: Params | None = None) -> CostmapUpdater:
+    """A costmap updater over a 6 x 4 m map of open floor, with its glass memory."""
+    layers = CostmapUpdater(params or Params(), track, logging.getLogger("test"))
+    layers.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    assert layers.glass is not None
+    return layers
 
 
 def test_occupied_evidence_falls_off_with_the_angle_from_the_axis() -> None:
@@ -133,17 +149,8 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
 
 
 def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
-    import logging
-
-    from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
-    from services.planner.occupancy_map import OCC_FREE, OccupancyMap
-    from services.planner.params import Params
-    from shared.geometry import Pose2D
-    from shared.pose_tracking import PoseTrack
-
     params = Params.model_validate({"glass_slowdown_radius_m": 0.8, "glass_slowdown_min_speed_mps": 0.1})
-    layers = CostmapUpdater(params, PoseTrack(), logging.getLogger("test"))
-    layers.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    layers = _updater_on_open_floor(PoseTrack(), params)
     assert layers.glass is not None
     assert layers.glass_speed_limit_mps(Pose2D(2.0, 2.0, 0.0)) is None  # nothing heard yet
     # An echo at 1 m: the arc's middle is marked, its flanks (weaker evidence) are only suspected.
@@ -268,19 +275,8 @@ def test_a_sonar_reading_newer_than_odometry_waits_to_be_placed_by_it() -> None:
     """Placed before odometry reached it, a reading taken while the robot turned was put where the robot
     had faced: a reading facing just past a pane's end (no echo) cleared the floor behind the glass. It
     waits for the update that has the odometry of its time."""
-    import logging
-
-    from services.planner.costmap_updater import CostmapUpdater
-    from services.planner.occupancy_map import OCC_FREE, OccupancyMap
-    from services.planner.params import Params
-    from shared import topics
-    from shared.geometry import Pose2D
-    from shared.messages import Header, Range, Time
-    from shared.pose_tracking import OdometrySample, PoseTrack
-
     track = PoseTrack()
-    layers = CostmapUpdater(Params(), track, logging.getLogger("test"))
-    layers.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    layers = _updater_on_open_floor(track)
     assert layers.glass is not None
     track.add_odom(OdometrySample(1.0, Pose2D(1.0, 2.0, 0.0), 0.0, 1.0))  # turning left at 1 rad/s
     track.add_pose(1.0, Pose2D(1.0, 2.0, 0.0))
@@ -297,8 +293,7 @@ def test_a_sonar_reading_newer_than_odometry_waits_to_be_placed_by_it() -> None:
     assert bearing == pytest.approx(0.3, abs=0.05)
     # With no odometry at all (a robot reporting only its map pose) nothing waits.
     bare = PoseTrack()
-    alone = CostmapUpdater(Params(), bare, logging.getLogger("test"))
-    alone.set_map(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.full((80, 120), OCC_FREE, dtype=np.int8)))
+    alone = _updater_on_open_floor(bare)
     assert alone.glass is not None
     bare.add_pose(1.3, Pose2D(1.0, 2.0, 0.0))
     alone.add_range(Range(header=header, field_of_view=0.5, min_range=0.02, max_range=3.0, range=1.0))
