@@ -1,20 +1,27 @@
-"""How true the planner's glass memory is: cells marked away from every real pane, and pane length found.
+"""How true the planner's glass memory is: cells marked away from every real pane, and panes found.
 
 After a trial (or a demo) the planner's glass memory file (``glass_memory_file``: the sonar layer and its
 grid's geometry) is compared with the world's panes: a cell marked as glass more than
 ``tolerance_m`` from every pane is false glass (it may box a robot in); a point of a pane within
 ``tolerance_m`` of a mark is found. Reads the file as data; no planner code is imported.
+
+A robot heading for its dock points its sonar at a few of a room's panes only, so the share of all pane
+length found says as much about the route as about the mapping. The sonar echoes the trial recorded tell
+which panes the sonar actually heard (the nearest surface in the ping's cone was the pane): of those, the
+share with a mark on them is what the mapping made of what it was given.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from shared.geometry import distances_to_segment
+from shared.models.raycast import SegmentSet, distances_in_cone
 from shared.world import World
 
 #: The sonar layer's value for a cell marked as glass.
@@ -23,6 +30,12 @@ GLASS_MARK = 254
 TOLERANCE_M = 0.1
 #: Points per metre of pane when measuring how much of it was found.
 SAMPLES_PER_M = 50
+#: An echo is a pane's when its range is within this of the pane's nearest point in the ping's cone (the
+#: range's noise is 5 mm; the rest allows for the recorded pose lagging the ping).
+ECHO_MATCH_M = 0.05
+
+#: One recorded sonar echo: ``(sensor_x, sensor_y, sensor_yaw, range_m, field_of_view_rad)``.
+Echo = tuple[float, float, float, float, float]
 
 
 @dataclass(frozen=True, slots=True)
@@ -31,6 +44,10 @@ class GlassReport:
     #: Fraction of the world's pane length within the tolerance of a mark (NaN: the world has no glass).
     glass_coverage: float
     marked_cells: int
+    #: Panes that returned at least one of the trial's echoes, and how many of those carry a mark (0 and 0
+    #: when no echoes were given).
+    panes_heard: int = 0
+    panes_found: int = 0
 
 
 @dataclass(frozen=True)
@@ -52,12 +69,19 @@ class GlassMarks:
     def false_xy(self) -> np.ndarray:
         return self.xy[self.false]
 
-    def report(self) -> GlassReport:
+    def report(self, echoes: Sequence[Echo] = ()) -> GlassReport:
+        """The report; ``echoes`` (the trial's sonar echoes) add the panes heard and found among them."""
         marks = self.xy
         panes = [(np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in self.world.glass]
         false_cells = int(np.count_nonzero(self.false))
         if not panes:
             return GlassReport(false_cells, math.nan, len(marks))
+        heard = panes_heard(echoes, self.world)
+        found_heard = sum(
+            1
+            for i in heard
+            if len(marks) and distances_to_segment(marks, panes[i][0], panes[i][1]).min() <= self.tolerance_m
+        )
         found = total = 0
         for a, b in panes:
             samples = max(2, math.ceil(float(np.hypot(*(b - a))) * SAMPLES_PER_M))
@@ -69,7 +93,26 @@ class GlassMarks:
                     axis=1,
                 )
                 found += int(np.count_nonzero(gaps <= self.tolerance_m))
-        return GlassReport(false_cells, found / total, len(marks))
+        return GlassReport(false_cells, found / total, len(marks), len(heard), found_heard)
+
+
+def panes_heard(echoes: Sequence[Echo], world: World) -> set[int]:
+    """Indices (into ``world.glass``) of the panes that returned at least one of ``echoes``.
+
+    A ping's echo comes from the nearest surface in its cone (as the simulator's ranger has it): the echo
+    is a pane's when that surface is a pane and lies at the echo's range, give or take ``ECHO_MATCH_M``.
+    """
+    if not echoes or not world.glass:
+        return set()
+    opaque = world.opaque_segments()
+    segments = SegmentSet(opaque + list(world.glass))
+    heard: set[int] = set()
+    for x, y, yaw, range_m, fov in echoes:
+        distance = distances_in_cone((x, y), yaw, 0.5 * fov, segments)
+        nearest = int(np.argmin(distance))
+        if nearest >= len(opaque) and abs(float(distance[nearest]) - range_m) <= ECHO_MATCH_M:
+            heard.add(nearest - len(opaque))
+    return heard
 
 
 def glass_marks(

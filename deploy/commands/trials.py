@@ -45,6 +45,7 @@ def _summary_table(summary: dict) -> Table:
         "median_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
         "max_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
         "median_glass_coverage": lambda v: f"{100 * v:.0f} %",
+        "heard_panes_found": lambda v: f"{100 * v:.0f} %",
     }
     from deploy.trials.records import HEADLINE_KEYS  # noqa: PLC0415 - the package loads the campaign
 

@@ -157,11 +157,12 @@ def _run_one(
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)
     if glass is not None:
-        counted = glass.report()
+        counted = glass.report(record.sonar_echoes)
         result.false_glass_cells, result.glass_coverage = (
             float(counted.false_glass_cells),
             counted.glass_coverage,
         )
+        result.panes_heard, result.panes_found = counted.panes_heard, counted.panes_found
     return result, record
 
 

@@ -102,6 +102,9 @@ class TrialResult:
     #: The planner's glass memory after the trial (see :mod:`deploy.glass_report`; NaN: none written yet).
     false_glass_cells: float = math.nan
     glass_coverage: float = math.nan
+    #: Panes the sonar heard during the trial (an echo came from them), and how many of those carry a mark.
+    panes_heard: int = 0
+    panes_found: int = 0
     #: Sim seconds from the trigger to charging in each docking state (see ``RunRecord.phase_durations``).
     phase_s: dict[str, float] = field(default_factory=dict)
     #: The robot's ground-truth speed as its contacts mated (see ``RunRecord.arrival_speed_mps``).
@@ -132,6 +135,7 @@ HEADLINE_KEYS = (
     "median_false_glass_cells",
     "p95_false_glass_cells",
     "median_glass_coverage",
+    "heard_panes_found",
 )
 
 
@@ -164,6 +168,8 @@ class TrialsSummary:
     median_false_glass_cells: float = math.nan
     p95_false_glass_cells: float = math.nan
     median_glass_coverage: float = math.nan
+    #: Of the panes the sonar heard, over every trial, the share the glass memory marked (NaN: none heard).
+    heard_panes_found: float = math.nan
     #: Each replaced service and the command that ran in its place (``--service``): whose figures these are.
     replaced_services: dict[str, str] = field(default_factory=dict)
     #: Where the time to dock goes: per docking state, the median over docked trials of its sim seconds

@@ -47,11 +47,16 @@ def summarise_results(
         median_false_glass_cells=median(false_glass),
         p95_false_glass_cells=percentile(false_glass, 0.95),
         median_glass_coverage=median(coverage),
+        heard_panes_found=_share(sum(r.panes_found for r in results), sum(r.panes_heard for r in results)),
         median_phase_s=median_phases([r.phase_s for r in ok]),
         median_arrival_speed_mps=median(arrivals),
         max_arrival_speed_mps=max(arrivals) if arrivals else math.nan,
         median_glass_slowed_s=median([r.glass_slowed_s for r in ok if math.isfinite(r.glass_slowed_s)]),
     )
+
+
+def _share(part: int, whole: int) -> float:
+    return part / whole if whole else math.nan
 
 
 def median_phases(per_trial: list[dict[str, float]]) -> dict[str, float]:
@@ -119,4 +124,5 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "false_glass_cells": "the planner had written no glass memory",
         "median_glass_coverage": "the world has no glass, or no planner wrote its glass memory",
         "glass_coverage": "the world has no glass, or the planner had written no glass memory",
+        "heard_panes_found": "the sonar heard no pane, or no planner wrote its glass memory",
     }

@@ -93,6 +93,17 @@ def nearest_in_cone(
 ) -> float:
     """Distance from ``origin_xy`` to the nearest point of any segment inside the cone; ``inf`` if none.
 
+    See :func:`distances_in_cone`, which gives each segment's distance.
+    """
+    distance = distances_in_cone(origin_xy, yaw_rad, half_angle_rad, segments)
+    return float(distance.min()) if len(distance) else math.inf
+
+
+def distances_in_cone(
+    origin_xy: tuple[float, float], yaw_rad: float, half_angle_rad: float, segments: SegmentSet
+) -> np.ndarray:
+    """Each segment's distance from ``origin_xy`` inside the cone, ``(M,)``: ``inf`` wholly outside it.
+
     An ultrasonic ping fills its whole cone, and the first echo back comes from the nearest surface
     anywhere in it. A fan of rays misses what lies between them: a pane seen end-on, 8 cm wide at 1 m
     between seven rays across 0.5 rad, is open floor to such a fan until the robot is upon it. Here each
@@ -100,8 +111,6 @@ def nearest_in_cone(
     half-planes through the apex, so the clip is Liang-Barsky's on two edges), then the clipped part's
     point nearest the apex is taken.
     """
-    if len(segments) == 0:
-        return math.inf
     if not 0.0 < half_angle_rad < 0.5 * math.pi:
         raise ValueError(f"a cone's half angle must lie in (0, pi/2), got {half_angle_rad}")
     ax = segments.start[:, 0] - origin_xy[0]  # (M,), apex at the origin
@@ -121,11 +130,9 @@ def nearest_in_cone(
         outside = (rate == 0.0) & (at_start < 0.0)  # parallel to the edge and on its far side
         hi = np.where(outside, -1.0, hi)
     inside = lo <= hi
-    if not inside.any():
-        return math.inf
     length_sq = dx * dx + dy * dy
     with np.errstate(divide="ignore", invalid="ignore"):
         closest = np.where(length_sq > 0.0, -(ax * dx + ay * dy) / length_sq, 0.0)
     t = np.clip(closest, lo, hi)
     distance = np.hypot(ax + t * dx, ay + t * dy)
-    return float(distance[inside].min())
+    return np.where(inside, distance, np.inf)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from deploy.glass_report import GLASS_MARK, glass_report
+from deploy.glass_report import GLASS_MARK, glass_marks, glass_report, panes_heard
 from shared.world import World
 
 
@@ -39,3 +39,21 @@ def test_a_world_without_glass_has_no_coverage_and_every_mark_is_false() -> None
     layer[5, 5] = GLASS_MARK
     report = glass_report(layer, 0.05, (0.0, 0.0), _world([]))
     assert report.false_glass_cells == 1 and math.isnan(report.glass_coverage)
+
+
+def test_panes_heard_are_those_an_echo_came_from_and_found_are_those_marked() -> None:
+    # Two panes along x = 2 and x = 3.5 (the second behind the first as seen from the left), one at y = 2.5.
+    world = _world([[[2.0, 0.5], [2.0, 1.5]], [[3.5, 0.5], [3.5, 1.5]], [[1.0, 2.5], [3.0, 2.5]]])
+    fov = 0.5
+    echoes = [
+        (1.0, 1.0, 0.0, 1.0, fov),  # the near pane, 1 m ahead: heard
+        (1.0, 1.0, 0.0, 2.5, fov),  # a range the geometry does not give (the pane behind): not a pane's
+        (2.0, 2.0, math.pi / 2, 0.5, fov),  # the pane along y = 2.5, 0.5 m ahead: heard
+        (1.0, 1.0, math.pi, 1.0, fov),  # the boundary wall at x = 0: not a pane
+    ]
+    layer = np.full((60, 80), 255, dtype=np.uint8)
+    layer[20, 40] = GLASS_MARK  # (2.025, 1.025): on the near pane
+    report = glass_marks(layer, 0.05, (0.0, 0.0), world).report(echoes)
+    assert (report.panes_heard, report.panes_found) == (2, 1)
+    assert panes_heard(echoes, world) == {0, 2}
+    assert panes_heard([], world) == set()

@@ -134,6 +134,7 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
         "median_false_glass_cells",
         "p95_false_glass_cells",
         "median_glass_coverage",
+        "heard_panes_found",
     }
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
     assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.12, 0.3))
