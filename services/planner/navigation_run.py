@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from services.planner.behaviors import DriveStraight, Outcome
+from services.planner.behaviors import DriveStraight, Outcome, Spin
 from services.planner.costmap import CostGrid
 from services.planner.params import Params
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
@@ -60,6 +60,7 @@ class Phase(enum.Enum):
     FOLLOWING = "following"
     BACKING_UP = "backing_up"
     CLEARING = "clearing"
+    LOOKING = "looking"
 
 
 class Ending(enum.Enum):
@@ -153,6 +154,9 @@ class NavigationRun:
         self.ended: NavEnd | None = None
         self.follower = RegulatedPurePursuit(params.follower_params())
         self._backup: DriveStraight = params.recovery_backup()
+        #: After a recovery that forgot glass the sonar had heard: a turn in place, so the sonar hears
+        #: again what is still there before the planner plans through it.
+        self._look: Spin | None = None
         self._progress = ProgressChecker(
             params.required_movement_m, params.required_rotation_rad, params.progress_timeout_s
         )
@@ -272,7 +276,7 @@ class NavigationRun:
             return orders
         if self.phase is Phase.FOLLOWING and self.plan is not None:
             self._follow(snap, pose, dt, orders)
-        elif self.phase in (Phase.BACKING_UP, Phase.CLEARING):
+        elif self.phase in (Phase.BACKING_UP, Phase.CLEARING, Phase.LOOKING):
             self._recover(snap, pose, orders)
         else:
             orders.cmd = (0.0, 0.0)  # no path yet: hold still
@@ -437,11 +441,25 @@ class NavigationRun:
             orders.cmd = (0.0, 0.0)
             orders.clear = glass_clearing(self.recoveries, self.recovering_from_planning)
             orders.clear_around = pose
+            forgets_heard_glass = orders.clear in (GlassClearing.AROUND_ROBOT, GlassClearing.ALL)
+            self._look = self.params.recovery_look_around() if forgets_heard_glass else None
             self.phase = Phase.CLEARING
             self._wait_until_s = self.clock_s + self.params.recovery_wait_s
             return
+        if self.phase is Phase.LOOKING:
+            assert self._look is not None
+            step = self._look.step(pose, self.clock_s, snap.grid)
+            if step.outcome is Outcome.RUNNING:
+                orders.cmd = step.cmd
+                return
+            self._look = None
+            self.phase = Phase.CLEARING  # plans at once: the wait is over
         orders.cmd = (0.0, 0.0)
         if self.clock_s >= self._wait_until_s:
+            if self._look is not None:
+                log.info("looking round before replanning: the recovery forgot glass the sonar had heard")
+                self.phase = Phase.LOOKING
+                return
             self.phase = Phase.PLANNING
             self._request_plan(snap, orders)
 

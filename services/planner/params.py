@@ -13,7 +13,7 @@ import math
 from pydantic import Field, field_validator, model_validator
 
 from services.planner.astar import AStarParams
-from services.planner.behaviors import BehaviorParams, DriveStraight
+from services.planner.behaviors import BehaviorParams, DriveStraight, Spin
 from services.planner.costmap import CostmapParams, inflation_cost
 from services.planner.global_planner import GlobalPlannerParams
 from services.planner.goal_heading import GoalHeadingParams
@@ -303,6 +303,12 @@ class Params(ServiceParams):
             rot_stopped_radps=self.rot_stopped_velocity_radps,
             open_loop_acceleration=self.open_loop_acceleration,
         )
+
+    def recovery_look_around(self) -> Spin:
+        """A recovery's look round after it forgot heard glass: one turn in place, given four times the
+        time it needs at full speed (a turn that would put a corner on an obstacle stops short)."""
+        turn = 2.0 * math.pi
+        return Spin(turn, 4.0 * turn / self.max_angular_vel_radps, self.behavior_params())
 
     def recovery_backup(self) -> DriveStraight:
         """A recovery's back-up: ``backup_distance_m`` in reverse, given four times the time it needs."""

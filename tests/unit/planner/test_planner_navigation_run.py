@@ -4,6 +4,7 @@ fails with the right code when it cannot get there."""
 from __future__ import annotations
 
 import itertools
+import math
 
 from services.planner.astar import PlanningError
 from services.planner.global_planner import GlobalPlanner
@@ -147,3 +148,31 @@ def test_while_the_first_plan_is_made_its_stops_answer_the_tick_that_asked_for_i
     assert run.phase is Phase.FOLLOWING
     world.now_s = 1.15
     assert run.tick(world.snapshot()).cmd_answers_s is None
+
+
+def test_a_recovery_that_forgets_heard_glass_turns_once_in_place_before_it_plans_again() -> None:
+    """Forgotten glass is planned through at once otherwise: robots drove into panes they had heard."""
+    wall = [[[2.5, 0.0], [2.5, 3.0]]]  # no path: every recovery fails, so each kind of clearing comes
+    params = Params.model_validate({"max_recoveries": 4, "recovery_wait_s": 0.2})
+    world = KinematicWorld(_grid(wall), Pose2D(0.8, 1.5, 0.0), params)
+    run = _run(world, Pose2D(4.0, 1.5, 0.0))
+    looks: list[float] = []  # rad turned in each look round
+    previous = run.phase
+    while run.active and world.now_s < 120.0:
+        if run.phase is Phase.LOOKING:  # the command the last tick gave is the one the next step carries out
+            assert world.cmd[0] == 0.0, "the look round is a turn in place"
+            if previous is not Phase.LOOKING:
+                looks.append(0.0)
+            looks[-1] += abs(world.cmd[1]) * DT_S
+        previous = run.phase
+        world.drive(run, world.now_s + DT_S)
+    assert world.clears == [
+        GlassClearing.KEEP,
+        GlassClearing.AROUND_ROBOT,
+        GlassClearing.KEEP,
+        GlassClearing.ALL,
+    ]
+    assert len(looks) == 2, "one look round for each clearing that forgot heard glass"
+    for turned in looks:
+        assert abs(turned - 2.0 * math.pi) < 0.15, f"turned {turned:.2f} rad, not once round"
+    assert [end.ending for end in world.ends] == [Ending.ABORTED]
