@@ -108,6 +108,8 @@ def panes_heard(echoes: Sequence[Echo], world: World) -> set[int]:
     segments = SegmentSet(opaque + list(world.glass))
     heard: set[int] = set()
     for x, y, yaw, range_m, fov in echoes:
+        if not 0.0 < fov < math.pi:  # a ranger that says it has no cone, or one wider than a half-plane
+            continue
         distance = distances_in_cone((x, y), yaw, 0.5 * fov, segments)
         nearest = int(np.argmin(distance))
         if nearest >= len(opaque) and abs(float(distance[nearest]) - range_m) <= ECHO_MATCH_M:

@@ -57,3 +57,4 @@ def test_panes_heard_are_those_an_echo_came_from_and_found_are_those_marked() ->
     assert (report.panes_heard, report.panes_found) == (2, 1)
     assert panes_heard(echoes, world) == {0, 2}
     assert panes_heard([], world) == set()
+    assert panes_heard([(1.0, 1.0, 0.0, 1.0, 0.0), (1.0, 1.0, 0.0, 1.0, math.nan)], world) == set()
