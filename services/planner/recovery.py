@@ -4,8 +4,8 @@ A recovery backs up (:class:`services.planner.behaviors.DriveStraight` in revers
 behaviour's motion), then clears the costmap round the robot and replans. When the clearing forgot glass
 the sonar had heard, the robot first turns once in place
 (:meth:`~services.planner.params.Params.recovery_look_around`): the sonar looks forward only, and without
-the turn robots replanned at once through the panes they had just forgotten and drove into them (3 of 100
-generated glass rooms).
+the turn robots replanned at once through the panes they had just forgotten and drove into them (see the
+generated glass rooms in docs/measurements).
 """
 
 from __future__ import annotations
