@@ -452,16 +452,16 @@ class NavigationRun:
             if step.outcome is Outcome.RUNNING:
                 orders.cmd = step.cmd
                 return
-            self._look = None
-            self.phase = Phase.CLEARING  # plans at once: the wait is over
+            self._look = None  # looked round (the wait before it is long over): plan
         orders.cmd = (0.0, 0.0)
-        if self.clock_s >= self._wait_until_s:
-            if self._look is not None:
-                log.info("looking round before replanning: the recovery forgot glass the sonar had heard")
-                self.phase = Phase.LOOKING
-                return
-            self.phase = Phase.PLANNING
-            self._request_plan(snap, orders)
+        if self.clock_s < self._wait_until_s:
+            return
+        if self._look is not None:
+            log.info("looking round before replanning: the recovery forgot glass the sonar had heard")
+            self.phase = Phase.LOOKING
+            return
+        self.phase = Phase.PLANNING
+        self._request_plan(snap, orders)
 
     def _feedback(self, snap: NavSnapshot, pose: Pose2D, orders: NavOrders) -> None:
         if snap.now_s - self._last_feedback_s < 1.0 / self.params.feedback_rate_hz - 1e-6:
