@@ -13,12 +13,13 @@ has exited (CODE negative: killed by that signal), and ``ready`` once, when its 
 stopped it, or has gone. The children share the standby's standard output and error.
 
 It imports the service's ``__main__`` module, which holds nothing but the service's start-up imports (and
-``keep_openssl_out``, which must come before them). This module is deliberately bare: it is the first thing
+``keep_openssl_out``, which must come before them), then does once what each child would otherwise redo (:func:`_prepare_for_forks`). This module is deliberately bare: it is the first thing
 a standby imports.
 """
 
 from __future__ import annotations
 
+import gc
 import importlib
 import os
 import runpy
@@ -104,6 +105,19 @@ def serve(module: str, flags: list[str], status_fd: int) -> int:
                 _report(status_fd, f"started {pid}")
 
 
+def _prepare_for_forks() -> None:
+    """Finish, once and before any fork, the work each child would otherwise redo on its way to ready.
+
+    Every message class the service's imports defined becomes a dataclass with its codec compiled (a service
+    started directly does that for each class on first use). Then what the imports made is frozen out of
+    the garbage collector: a child's collections would otherwise walk it and copy every page they touch."""
+    schema = sys.modules.get("shared.schema")
+    if schema is not None:
+        schema.compile_all()
+    gc.collect()
+    gc.freeze()
+
+
 def main(argv: list[str]) -> int:
     status = os.environ.pop(STATUS_FD_ENV, "")
     if not argv or not argv[0].startswith("services.") or not status.isdigit():
@@ -114,6 +128,7 @@ def main(argv: list[str]) -> int:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     try:
         importlib.import_module(f"{module}.__main__")  # its ``__name__`` guard keeps the service's main out
+        _prepare_for_forks()
     except Exception as exc:
         print(f"warm standby: cannot import {module}: {exc!r}", file=sys.stderr)
         return 1

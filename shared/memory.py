@@ -1,6 +1,7 @@
-"""Keep a service's resident memory near what it uses.
+"""Keep a service's process lean: its resident memory near what it uses, its start free of work it never needs.
 
-:func:`keep_openssl_out` spares every service OpenSSL, which none of them uses.
+:func:`keep_openssl_out` spares every service OpenSSL, which none of them uses;
+:func:`skip_pydantic_plugin_scan` spares it pydantic's search of every installed package for plugins.
 
 Image-sized temporaries (a camera frame's working arrays, made and dropped fifteen times a second) are
 left to glibc's own rule: after the first one is freed they come from the heap and are reused. Returning
@@ -10,7 +11,11 @@ peak, and its page faults made a rendered frame cost 35 % more CPU (measurement 
 
 from __future__ import annotations
 
+import os
 import sys
+
+#: pydantic's switch for its plugins: ``__all__`` turns them all off (an empty value turns them back on).
+PYDANTIC_PLUGINS_ENV = "PYDANTIC_DISABLE_PLUGINS"
 
 
 def keep_openssl_out() -> bool:
@@ -28,4 +33,15 @@ def keep_openssl_out() -> bool:
     return True
 
 
-__all__ = ["keep_openssl_out"]
+def skip_pydantic_plugin_scan() -> None:
+    """Turn pydantic's plugins off unless the environment says otherwise; call it before the first model.
+
+    The first pydantic model a process defines makes pydantic read the entry points of every installed
+    distribution, looking for plugins: 10-15 ms of a service's start in the development environment, which
+    holds a few hundred distributions. zendock uses no pydantic plugin. Setting the variable (to an empty
+    value, say) keeps whatever the user chose.
+    """
+    os.environ.setdefault(PYDANTIC_PLUGINS_ENV, "__all__")
+
+
+__all__ = ["PYDANTIC_PLUGINS_ENV", "keep_openssl_out", "skip_pydantic_plugin_scan"]

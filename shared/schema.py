@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import struct
+import threading
 import typing
 from collections.abc import Callable
 from typing import Annotated, Any, ClassVar, TypeVar, dataclass_transform
@@ -206,10 +207,11 @@ def message(type_name: str) -> Callable[[type[M]], type[M]]:
     def wrap(cls: type[M]) -> type[M]:
         if not issubclass(cls, Message):
             raise TypeError(f"{cls.__name__} must subclass shared.schema.Message")
-        own_init = "__init__" in cls.__dict__
-        cls = dataclasses.dataclass(cls)
-        if not own_init:
+        if "__init__" in cls.__dict__:
+            cls = dataclasses.dataclass(cls)
+        else:
             _GENERATED_INIT.add(cls)
+            _defer_dataclass(cls)
         cls.TYPE_NAME = type_name
         for attribute in ("_FIELDS", "_FIXED"):
             setattr(cls, attribute, _CompiledOnFirstRead(cls, attribute))
@@ -219,6 +221,58 @@ def message(type_name: str) -> Callable[[type[M]], type[M]]:
         return cls
 
     return wrap
+
+
+#: The dataclass methods a deferred message class gets on first use (see :func:`_defer_dataclass`).
+_DATACLASS_METHODS = ("__init__", "__repr__", "__eq__")
+_DEFERRED: set[type] = set()
+_DEFERRED_LOCK = threading.RLock()
+
+
+def _defer_dataclass(cls: type[Message]) -> None:
+    """Make ``cls`` a dataclass on first use instead of now.
+
+    ``dataclasses.dataclass`` writes and compiles ``__init__``, ``__repr__`` and ``__eq__`` for each class,
+    about a third of a millisecond apiece; a service defines a few hundred message classes (every interface
+    its contracts name) and makes a dozen of them. Until then the class carries stand-ins: the three
+    methods, and ``__dataclass_fields__`` (which :func:`dataclasses.fields`, ``is_dataclass`` and
+    ``asdict`` read). Any of them turns the class into the dataclass it would have been, then answers.
+    """
+    for name in _DATACLASS_METHODS:
+        setattr(cls, name, _stand_in_method(cls, name))
+    cls.__dataclass_fields__ = _FieldsOnFirstRead(cls)  # type: ignore[attr-defined]
+    _DEFERRED.add(cls)
+
+
+def _stand_in_method(cls: type[Message], name: str) -> Callable[..., Any]:
+    def stand_in(self: Any, *args: Any, **kwargs: Any) -> Any:
+        _make_dataclass(cls)
+        return getattr(cls, name)(self, *args, **kwargs)
+
+    stand_in.__name__ = stand_in.__qualname__ = name
+    return stand_in
+
+
+class _FieldsOnFirstRead:
+    """``__dataclass_fields__`` of a deferred message class: reading it makes the class a dataclass."""
+
+    def __init__(self, cls: type[Message]) -> None:
+        self._cls = cls
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        _make_dataclass(self._cls)
+        return self._cls.__dict__["__dataclass_fields__"]
+
+
+def _make_dataclass(cls: type[Message]) -> None:
+    """Turn a deferred class into its dataclass, once (a base class first, when it is deferred too)."""
+    with _DEFERRED_LOCK:
+        if cls not in _DEFERRED:
+            return
+        for name in (*_DATACLASS_METHODS, "__dataclass_fields__"):
+            delattr(cls, name)
+        dataclasses.dataclass(cls)
+        _DEFERRED.discard(cls)
 
 
 class _CompiledOnFirstRead:

@@ -1,8 +1,9 @@
 import sys
 
-from shared.memory import keep_openssl_out
+from shared.memory import keep_openssl_out, skip_pydantic_plugin_scan
 
 keep_openssl_out()  # before any import of pydantic, which loads hashlib
+skip_pydantic_plugin_scan()  # before the first pydantic model
 
 from services.ros2_bridge.node import main  # noqa: E402
 

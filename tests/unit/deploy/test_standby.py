@@ -113,3 +113,24 @@ def _main_is_guarded(path: Path) -> bool:
 def test_every_services_entry_runs_main_only_as_the_main_module(entry: Path) -> None:
     """A standby imports ``services.<name>.__main__`` ahead of time: its main must wait for ``go``."""
     assert _main_is_guarded(entry), f"{entry}: call main() only under if __name__ == '__main__'"
+
+
+def test_before_any_fork_the_service_s_messages_are_compiled_and_its_objects_frozen() -> None:
+    """What a child would redo on its way to ready is done once: classes made dataclasses, codecs compiled,
+    and the import's objects kept out of the children's collections."""
+    code = (
+        "import gc, importlib\n"
+        "import deploy.standby as standby\n"
+        "importlib.import_module('services.battery.__main__')\n"
+        "from shared import schema\n"
+        "assert schema._DEFERRED, 'the battery defines no deferred message class'\n"
+        "standby._prepare_for_forks()\n"
+        "types = schema.registered_types().values()\n"
+        "print(len(schema._DEFERRED), all(isinstance(c.__dict__['_FIELDS'], tuple) for c in types))\n"
+        "print(gc.get_freeze_count() > 10_000)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ZENDOCK_ROOT, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["0", "True", "True"]

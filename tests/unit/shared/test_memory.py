@@ -1,5 +1,5 @@
-"""What keeps the services' resident memory down: no OpenSSL in a service, no other command's code in the
-router, one read-noise bank for a simulator's cameras."""
+"""What keeps the services lean: no OpenSSL and no search for pydantic plugins in a service, no other
+command's code in the router, one read-noise bank for a simulator's cameras."""
 
 from __future__ import annotations
 
@@ -30,6 +30,11 @@ def _run(code: str) -> str:
 def _openssl_loaded() -> str:
     """Code that prints whether hashlib reached OpenSSL (``_hashlib`` imported, not kept out)."""
     return "print(sys.modules.get('_hashlib') is not None)\n"
+
+
+def _plugins_searched() -> str:
+    """Code that prints whether pydantic has read the installed packages' entry points for plugins."""
+    return "from pydantic.plugin import _loader\nprint(_loader._plugins is not None)\n"
 
 
 def test_without_openssl_the_hashes_are_python_s_own_and_the_same() -> None:
@@ -63,9 +68,11 @@ def test_a_service_starts_without_openssl(service: str) -> None:
         "    try:\n"
         f"        runpy.run_module('services.{service}', run_name='__main__', alter_sys=True)\n"
         "    except SystemExit:\n        pass\n"
-        "print('pydantic' in sys.modules)\n" + _openssl_loaded()
+        "print('pydantic' in sys.modules)\n" + _openssl_loaded() + _plugins_searched()
     )
-    assert out.split() == ["True", "False"], f"services.{service}: expected pydantic loaded and OpenSSL not"
+    assert out.split() == ["True", "False", "False"], (
+        f"services.{service}: expected pydantic loaded, OpenSSL not, and no search for pydantic plugins"
+    )
 
 
 @pytest.mark.parametrize("command", ["router", "container"])

@@ -1,9 +1,14 @@
-"""A message class compiles its codec on first use, and the result is the one compiled at once."""
+"""A message class becomes a dataclass and compiles its codec on first use, and the result is the one
+made at once."""
 
 from __future__ import annotations
 
+import concurrent.futures
+import dataclasses
 import importlib
 import pkgutil
+import threading
+from collections.abc import Callable
 
 import pytest
 
@@ -57,3 +62,62 @@ def test_every_shipped_message_compiles() -> None:
     compile_all()
     for name, cls in registered_types().items():
         assert isinstance(cls.__dict__["_FIELDS"], tuple), name
+
+
+def test_a_class_becomes_a_dataclass_on_first_use() -> None:
+    cls = _fresh_class("zendock_test/msg/LazyDataclass")
+    assert "__dataclass_params__" not in cls.__dict__
+    made = cls(1.0, label="a")
+    assert "__dataclass_params__" in cls.__dict__
+    assert made == cls(1.0, "a") and made != cls(2.0, "a")
+    assert repr(made).endswith("Sample(x=1.0, label='a')")
+    assert cls.__hash__ is None  # as any dataclass with eq and without frozen
+
+
+@pytest.mark.parametrize(
+    "first_use",
+    [
+        lambda cls: [f.name for f in dataclasses.fields(cls)],
+        lambda cls: dataclasses.is_dataclass(cls) and [f.name for f in dataclasses.fields(cls)],
+        lambda cls: list(dataclasses.asdict(cls(3.0, "c"))),
+    ],
+    ids=["fields", "is_dataclass", "asdict"],
+)
+def test_reading_the_fields_first_gives_the_dataclass_too(
+    first_use: Callable[[type[Message]], object],
+) -> None:
+    cls = _fresh_class("zendock_test/msg/LazyFields")
+    assert first_use(cls) == ["x", "label"]
+    assert cls(3.0) == cls(x=3.0, label="")
+
+
+def test_an_instance_made_without_init_still_compares_and_prints() -> None:
+    cls = _fresh_class("zendock_test/msg/LazyNew")
+    bare = cls.__new__(cls)  # as pickle and copy make one
+    bare.x, bare.label = 1.0, "n"
+    assert bare == cls(1.0, "n")
+    assert repr(bare).endswith("Sample(x=1.0, label='n')")
+
+
+def test_a_subclass_of_a_deferred_class_keeps_the_base_fields() -> None:
+    base = _fresh_class("zendock_test/msg/LazyBase")
+
+    @message("zendock_test/msg/LazyDerived")
+    class Derived(base):  # type: ignore[valid-type,misc]
+        extra: int = 0
+
+    assert Derived(1.0, "d", 5) == Derived(x=1.0, label="d", extra=5)
+    assert [f.name for f in dataclasses.fields(base)] == ["x", "label"]
+
+
+def test_threads_that_first_use_a_class_at_once_all_get_one_dataclass() -> None:
+    cls = _fresh_class("zendock_test/msg/LazyThreads")
+    barrier = threading.Barrier(8)
+
+    def make(i: int) -> Message:
+        barrier.wait()
+        return cls(float(i), "t")
+
+    with concurrent.futures.ThreadPoolExecutor(8) as pool:
+        made = list(pool.map(make, range(8)))
+    assert made == [cls(float(i), "t") for i in range(8)]
