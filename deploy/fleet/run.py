@@ -186,16 +186,16 @@ def _watch(
 ) -> tuple[float, float, float]:
     """Wait until the sim clock has run ``duration_s``; (sim start, sim end, wall seconds)."""
     deadline = time.monotonic() + 60.0
-    while not math.isfinite(monitor.snapshot()[0]):
+    while not math.isfinite(monitor.sim_time()):
         if time.monotonic() > deadline:
             raise ServiceError("no clock from the simulator within 60 s")
         time.sleep(0.2)
-    sim_start = monitor.snapshot()[0]
+    sim_start = monitor.sim_time()
     wall_start = time.monotonic()
     last_progress = -math.inf
     last_clock, last_clock_wall = sim_start, wall_start
     while True:
-        sim_now, tallies, _, _ = monitor.snapshot()
+        sim_now = monitor.sim_time()
         if sim_now - sim_start >= duration_s:
             return sim_start, sim_now, time.monotonic() - wall_start
         if sim_now != last_clock:
@@ -204,6 +204,7 @@ def _watch(
             raise ServiceError(f"the simulator's clock stopped at {sim_now:.1f} s")
         if progress is not None and time.monotonic() - last_progress >= progress_period_s:
             last_progress = time.monotonic()
+            sim_now, tallies, _, _ = monitor.snapshot()
             progress(sim_now - sim_start, tallies)
         time.sleep(0.5)
 
