@@ -269,10 +269,10 @@ def _make_dataclass(cls: type[Message]) -> None:
     with _DEFERRED_LOCK:
         if cls not in _DEFERRED:
             return
+        _DEFERRED.discard(cls)  # once: a class whose fields are wrong says so at its first use, not each
         for name in (*_DATACLASS_METHODS, "__dataclass_fields__"):
             delattr(cls, name)
         dataclasses.dataclass(cls)
-        _DEFERRED.discard(cls)
 
 
 class _CompiledOnFirstRead:

@@ -121,3 +121,16 @@ def test_threads_that_first_use_a_class_at_once_all_get_one_dataclass() -> None:
     with concurrent.futures.ThreadPoolExecutor(8) as pool:
         made = list(pool.map(make, range(8)))
     assert made == [cls(float(i), "t") for i in range(8)]
+
+
+def test_a_class_whose_fields_cannot_make_a_dataclass_says_so_at_first_use() -> None:
+    @message("zendock_test/msg/LazyBadOrder")
+    class BadOrder(Message):
+        first: float = 0.0
+        second: float  # a field without a default after one with a default
+
+    try:
+        with pytest.raises(TypeError, match="second"):
+            BadOrder(1.0, 2.0)
+    finally:
+        del schema._REGISTRY[BadOrder.TYPE_NAME]  # a broken class must not stay for compile_all
