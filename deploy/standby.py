@@ -13,8 +13,8 @@ has exited (CODE negative: killed by that signal), and ``ready`` once, when its 
 stopped it, or has gone. The children share the standby's standard output and error.
 
 It imports the service's ``__main__`` module, which holds nothing but the service's start-up imports (and
-``keep_openssl_out``, which must come before them), then does once what each child would otherwise redo (:func:`_prepare_for_forks`). This module is deliberately bare: it is the first thing
-a standby imports.
+``keep_openssl_out``, which must come before them), then does once what each child would otherwise redo
+(:func:`_prepare_for_forks`). This module is deliberately bare: it is the first thing a standby imports.
 """
 
 from __future__ import annotations
