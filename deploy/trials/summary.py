@@ -32,7 +32,7 @@ def summarise_results(
     return TrialsSummary(
         n=len(results),
         successes=len(ok),
-        success_rate=len(ok) / len(results) if results else math.nan,
+        success_rate=_share(len(ok), len(results)),
         median_dock_time_s=median([r.dock_time_s for r in ok]),
         median_lower_bound_s=median([r.lower_bound_s for r in bounded]),
         median_time_ratio=median([r.dock_time_s / r.lower_bound_s for r in bounded]),
@@ -56,6 +56,7 @@ def summarise_results(
 
 
 def _share(part: int, whole: int) -> float:
+    """``part / whole``, NaN when there is no whole."""
     return part / whole if whole else math.nan
 
 
