@@ -408,6 +408,26 @@ class CollisionEvent(Message):
     other_robot: str = ""
 
 
+@message("zendock_msgs/msg/PacingHold")
+class PacingHold(Message):
+    """A handoff of the robot between controllers, for a simulator that paces itself by its drivers.
+
+    While a robot moves, the world waits for the command of each of its controller's ticks; a robot
+    standing still is waited for by nobody. Between two drivers it stands: the docking service has sent
+    the planner a goal, or has cancelled the planner's goal and waits for it to end before it drives. A
+    hold (``hold`` true) says: from ``header.stamp`` (the sim time of the tick the ``holder`` decided on),
+    do not run the world on until the holder lets go (``hold`` false) or, with ``until_driven``, until a
+    command that moves the robot answers that tick or a later one (the next driver has taken over; a hold
+    arriving after such a command is stale and ignored). The simulator waits as it waits for a late
+    command, never longer than its budget for one late input.
+    """
+
+    header: Header = field(default_factory=Header)
+    holder: str = ""
+    hold: bool = True
+    until_driven: bool = True
+
+
 @message("zendock_msgs/msg/DockDetection")
 class DockDetection(Message):
     """A dock found by its marker: its pose (the docked base_link pose) in ``header.frame_id``, and how well.
@@ -466,6 +486,7 @@ __all__ = [
     "MultiArrayLayout",
     "OccupancyGrid",
     "Odometry",
+    "PacingHold",
     "Path",
     "Point",
     "Pose",

@@ -16,6 +16,8 @@ POSE2D = "map_to_base_link_pose2d"
 AMCL_POSE = "amcl_pose"
 DOCK_CONTACT = "dock_contact"
 COLLISIONS = "collisions"
+#: A handoff between two drivers of the robot: the world waits until it is driven again (see PacingHold).
+PACING_HOLD = "pacing_hold"
 GROUND_TRUTH_POSE = "ground_truth_pose"
 DETECTED_DOCK_POSE = "detected_dock_pose"
 DOCK_DETECTIONS = "dock_detections"

@@ -19,6 +19,7 @@ from typing import Any
 
 from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockRequest
+from services.docking.drive_arbiter import Hold
 from services.docking.events import (
     CancelGoal,
     DockGoal,
@@ -61,8 +62,10 @@ from shared.messages import (
     BatteryState,
     DockInfraRed,
     Float64MultiArray,
+    Header,
     LaserScan,
     Odometry,
+    PacingHold,
     Range,
     String,
     TFMessage,
@@ -107,6 +110,7 @@ class DockingService:
         self._last_now_s = float("-inf")
 
         self.cmd_vel = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        self.pacing_hold = node.create_publisher(PacingHold, topics.PACING_HOLD, RELIABLE)
         self.state_pub = node.create_publisher(String, DOCKING_STATE, RELIABLE)
         self.nav = NavigationClient(node)
         #: Robots sharing docks ask the fleet service one namespace up (``r1`` asks ``fleet/...``).
@@ -237,12 +241,25 @@ class DockingService:
 
     # --- out -------------------------------------------------------------------------------------------
 
+    def _hold(self, tick_s: float, hold: Hold) -> None:
+        """Hold the world through a handoff from ``tick_s`` on, or let go (see the drive arbiter)."""
+        self.pacing_hold.publish(
+            PacingHold(
+                Header.at(tick_s, ""),
+                holder="docking",
+                hold=hold is not Hold.LET_GO,
+                until_driven=hold is Hold.UNTIL_DRIVEN,
+            )
+        )
+
     def _carry_out(self, effects: Effects, now_s: float) -> None:
         """Do what the executive decided at ``now_s`` (a command says it answers that tick)."""
         answers_s = now_s if self.node.use_sim_time else None
         for effect in effects:
             match effect:
                 case Drive(orders):
+                    if orders.hold not in (None, Hold.LET_GO) and answers_s is not None:
+                        self._hold(answers_s, orders.hold)
                     if orders.cancel_nav:
                         self.nav.cancel_task()
                     if orders.publish is not None:
@@ -253,6 +270,8 @@ class DockingService:
                             Twist.planar(orders.publish.linear_x_mps, orders.publish.angular_z_radps),
                             answers_s=answers_s,
                         )
+                    if orders.hold is Hold.LET_GO and answers_s is not None:
+                        self._hold(answers_s, orders.hold)
                     if orders.send_goal is not None:
                         self.nav.go_to_pose(orders.send_goal, on_done=self._on_tick)
                 case WantDetections(wanted):

@@ -23,7 +23,7 @@ import numpy as np
 
 from services.simulator.camera import CameraRenderer, Motion
 from services.simulator.camera_frames import camera_info, camera_mount_transforms
-from services.simulator.pacing import CommandCadence
+from services.simulator.pacing import CommandCadence, HandoffHold
 from services.simulator.params import Params
 from services.simulator.physics import Robot
 from shared import topics
@@ -72,6 +72,8 @@ class SimRobot:
     answered_s: float = -math.inf
     #: The cadence of its commands: its controller's period, which lockstep holds the world to.
     cadence: CommandCadence = field(default_factory=CommandCadence)
+    #: A handoff between its drivers the world waits through (see PacingHold).
+    handoff: HandoffHold = field(default_factory=HandoffHold)
     #: Sim time of the last map_to_base_link_pose2d (the localisation the controllers steer on).
     last_pose_s: float = -math.inf
     watchdog_tripped: bool = True

@@ -42,7 +42,7 @@ from shared.interfaces.simulator import (
     TeleportRequest,
     TeleportResponse,
 )
-from shared.messages import CollisionEvent, Float64MultiArray, Header, Pose, Time, Twist
+from shared.messages import CollisionEvent, Float64MultiArray, Header, PacingHold, Pose, Time, Twist
 from shared.names import normalise_namespace
 from shared.node import BLOCKING, Node, QoS, ServiceError
 from shared.ratelimit import RateLimitedLogger
@@ -125,6 +125,13 @@ class SimulatorService:
             QoS(depth=1),
             with_answered=True,
         )
+        if self.params.pacing.to_drivers:
+            node.create_subscription(
+                PacingHold,
+                t(topics.PACING_HOLD),
+                lambda msg, r=robot: self._on_hold(r, msg),
+                QoS(depth=4),
+            )
         if self.params.pacing.to_drivers and self.params.pacing.to_pose:
             # Only the arrival time is kept: one float store, safe on Zenoh's thread (no executor hand-off).
             node.create_subscription(
@@ -145,7 +152,11 @@ class SimulatorService:
         robot.last_cmd_s = now
         robot.answered_s = now if answered_s is None else min(now, answered_s)
         robot.cadence.heard(robot.answered_s, self.dt_s)
+        robot.handoff.driven(robot.answered_s, moving=robot.cmd_v != 0.0 or robot.cmd_w != 0.0)
         robot.watchdog_tripped = False
+
+    def _on_hold(self, robot: SimRobot, msg: PacingHold) -> None:
+        robot.handoff.heard(msg.header.stamp.to_sec(), msg.holder, msg.hold, self.time_s, msg.until_driven)
 
     def _on_pose(self, robot: SimRobot) -> None:
         robot.last_pose_s = self.time_s
@@ -264,6 +275,9 @@ class SimulatorService:
             thinking = robot.last_cmd_s - robot.answered_s > (pacing.driver_gap_s if gap is None else gap)
             awaited = not robot.watchdog_tripped and (moving or thinking)
             drivers.append(Driver(ns, robot.answered_s, awaited, gap))
+            if robot.handoff.tick_s is not None:
+                # Between two drivers: wait as for a late command until the next one drives.
+                drivers.append(Driver(f"{ns}:hold", robot.handoff.tick_s, True, gap))
             if robot.last_pose_s > -math.inf:
                 drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, pacing.pose_gap_s))
         return drivers

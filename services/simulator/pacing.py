@@ -105,6 +105,43 @@ class CommandCadence:
 CADENCE_BREAK_S = 0.5
 
 
+class HandoffHold:
+    """A robot handed from one driver to another (see :class:`shared.messages.PacingHold`): the tick the
+    world should not run far past until the robot is driven again, or None.
+
+    A hold is let go by its holder (``hold`` false), by a newer hold, or, ``until_driven``, by a command
+    that moves the robot and answers its tick or a later one (the next driver has taken over); such a
+    hold that arrives after the robot was already driven on a later tick is stale and ignored. A hold not
+    ``until_driven`` is for a holder that drives next itself: the old driver's last commands, still on
+    their way, must not end it."""
+
+    def __init__(self) -> None:
+        self.tick_s: float | None = None
+        self.holder = ""
+        self.until_driven = True
+        #: Sim time of the last tick a moving command answered.
+        self._driven_s = -math.inf
+
+    def heard(self, tick_s: float, holder: str, hold: bool, now_s: float, until_driven: bool = True) -> None:
+        """A hold (or a let-go) from ``holder``; a tick from the future counts as now."""
+        if not hold:
+            if holder == self.holder:
+                self.tick_s = None
+            return
+        tick_s = min(tick_s, now_s)
+        if not math.isfinite(tick_s) or (until_driven and tick_s <= self._driven_s):
+            return
+        self.tick_s, self.holder, self.until_driven = tick_s, holder, until_driven
+
+    def driven(self, answered_s: float, moving: bool) -> None:
+        """A command answering ``answered_s`` arrived; one that moves the robot ends a hold it answers."""
+        if not moving:
+            return
+        self._driven_s = max(self._driven_s, answered_s)
+        if self.tick_s is not None and self.until_driven and answered_s >= self.tick_s:
+            self.tick_s = None
+
+
 @dataclass(frozen=True)
 class Driver:
     """One input the world may wait for: its name, when it last arrived, whether it is awaited now.
@@ -169,11 +206,15 @@ class DriverPacer:
         seconds = max(0.0, seconds)
         self.held_s += seconds
         # what the wait that just ended was for (``hold`` has already forgotten it: nothing is late now)
-        kinds = sorted({"pose" if name.endswith(":pose") else "cmd_vel" for name, _ in self._last_late}) or [
-            "?"
-        ]
+        kinds = sorted({_input_kind(name) for name, _ in self._last_late}) or ["?"]
         kind = "+".join(kinds)
         self.held_by_kind[kind] = self.held_by_kind.get(kind, 0.0) + seconds
+
+
+def _input_kind(name: str) -> str:
+    """What a driver's name says it is: a robot's pose, a handoff hold, or its commands."""
+    suffix = name.rpartition(":")[2] if ":" in name else ""
+    return suffix if suffix in ("pose", "hold") else "cmd_vel"
 
 
 @dataclass(frozen=True)

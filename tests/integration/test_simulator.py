@@ -15,8 +15,10 @@ from shared.messages import (
     Clock,
     CollisionEvent,
     DockContact,
+    Header,
     LaserScan,
     Odometry,
+    PacingHold,
     PoseStamped,
     Range,
     TFMessage,
@@ -215,4 +217,63 @@ def test_lockstep_counts_a_command_as_late_as_the_tick_it_answers(
         wait_until(
             waited_for_the_stop, 20.0, lambda: f"a thinking controller was not awaited:\n{sim.output()}"
         )
+        driver.close()
+
+
+def test_a_handoff_holds_the_world_until_the_next_driver_moves_the_robot_or_its_holder_lets_go(
+    spawn, bus: zenoh.Session, router_endpoint: str, namespace: str
+) -> None:  # type: ignore[no-untyped-def]
+    """Flat out, the world stops a driver's gap after a hold's tick, and runs on once a command that moves
+    the robot answers that tick, or once the holder lets go. (The wait's budget is raised so that the
+    test does not race it.)"""
+    spawn("simulator", "--world", GLASS_ROOM, "-p", "rtf=max", "-p", "pacing.driver_wait_max_s=60")
+    # The newest clock only (a recorder keeping every message falls behind a world running flat out).
+    newest: list[float] = []
+
+    def now() -> float:
+        return newest[-1]
+
+    def held_at() -> float:
+        """The sim time the world stands at: the clock unchanged for half a second of wall time."""
+        seen: list[float] = []
+
+        def quiet() -> bool:
+            seen.append(now())
+            return len(seen) > 5 and seen[-1] == seen[-6]
+
+        wait_until(quiet, 20.0, lambda: f"the world never stopped; clock at {now():.2f} s", interval_s=0.1)
+        return now()
+
+    with open_session(SessionSpec(connect=(router_endpoint,))) as session:
+        driver = Node("handoff_driver", session, namespace)
+        driver.create_subscription(Clock, "clock", lambda m: newest.append(m.clock.to_sec()))
+        wait_until(lambda: bool(newest), 20.0, "no clock from the simulator")
+        hold = driver.create_publisher(PacingHold, "pacing_hold")
+        cmd = driver.create_publisher(Twist, "cmd_vel")
+        tick = now()
+        hold.publish(PacingHold(Header.at(tick, ""), holder="docking", hold=True))
+        stood = held_at()
+        # It stops a gap past the tick, or at once if the hold arrives later than that (flat out, the
+        # clock a client has read is already some steps old).
+        assert tick <= stood <= tick + 5.0, f"held at {stood:.2f} s for a hold at {tick:.2f} s"
+        cmd.publish(Twist.planar(0.0, 0.0), answers_s=stood)  # a stop: the next driver is still planning
+        cmd.publish(Twist.planar(0.1, 0.0), answers_s=tick - 1.0)  # moving, but from before the handoff
+        assert held_at() == stood
+
+        def driven_on() -> bool:  # the next driver drives, a command every tick (the world waits for each)
+            cmd.publish(Twist.planar(0.1, 0.0), answers_s=max(now(), stood))
+            return now() > stood + 2.0
+
+        wait_until(driven_on, 20.0, lambda: f"still held at {now():.2f} s", interval_s=0.01)
+        cmd.publish(Twist.planar(0.0, 0.0), answers_s=now())
+
+        # A holder that drives next itself: only its let-go ends the hold.
+        tick = now()
+        hold.publish(PacingHold(Header.at(tick, ""), holder="docking", hold=True, until_driven=False))
+        stood = held_at()
+        cmd.publish(Twist.planar(0.1, 0.0), answers_s=stood)  # the old driver's last command
+        cmd.publish(Twist.planar(0.0, 0.0), answers_s=stood)
+        assert held_at() == stood
+        hold.publish(PacingHold(Header.at(stood, ""), holder="docking", hold=False))
+        wait_until(lambda: now() > stood + 2.0, 20.0, lambda: f"still held at {now():.2f} s after letting go")
         driver.close()

@@ -18,6 +18,7 @@ from shared.messages import (
     Float64MultiArray,
     LaserScan,
     Odometry,
+    PacingHold,
     Path,
     PoseStamped,
     Range,
@@ -29,7 +30,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="docking",
     summary="Docking: on low battery or a dock_robot goal, navigate to the staging pose, approach, charge.",
-    version="1.1",
+    version="1.2",
     publishes=(
         Topic(
             topics.CMD_VEL,
@@ -40,6 +41,13 @@ CONTRACT = Contract(
             about="one command per control tick; its attachment carries the tick's sim time",
         ),
         Topic(DOCKING_STATE, String, RELIABLE, max_rate_hz=10.0, about="the phase in words, at each change"),
+        Topic(
+            topics.PACING_HOLD,
+            PacingHold,
+            RELIABLE,
+            when="on sim time, at each handoff between it and the planner",
+            about="hold the world from this tick until the next driver moves the robot; hold false lets go",
+        ),
     ),
     subscribes=(
         Topic(

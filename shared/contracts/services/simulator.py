@@ -17,6 +17,7 @@ from shared.messages import (
     Image,
     LaserScan,
     Odometry,
+    PacingHold,
     PoseStamped,
     Range,
     TFMessage,
@@ -26,7 +27,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="simulator",
     summary="The world (pymunk): a differential-drive robot, its sensors, the docks' contacts, the clock.",
-    version="1.1",
+    version="1.2",
     publishes=(
         Topic(topics.CLOCK, Clock, CLOCK_QOS, rate_hz=20.0, about="sim time: every other service's clock"),
         Topic(
@@ -127,6 +128,14 @@ CONTRACT = Contract(
             about="the wheels' command; stops when it goes silent; while the robot moves, the world "
             "waits (briefly) for the command of each of its controller's ticks, known by the tick in the "
             "attachment, or by its arrival",
+        ),
+        Topic(
+            topics.PACING_HOLD,
+            PacingHold,
+            QoS(depth=4),
+            when="optional: pacing",
+            about="a handoff between drivers: the world waits (briefly) until a command that moves the "
+            "robot answers the hold's tick or a later one, or its holder lets go",
         ),
         Topic(
             topics.POSE2D,

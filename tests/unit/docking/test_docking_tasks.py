@@ -6,7 +6,7 @@ import pytest
 
 from services.docking.approach import dock_frame_error
 from services.docking.dock_db import DockDatabase
-from services.docking.drive_arbiter import DriveArbiter, DriveOrders
+from services.docking.drive_arbiter import DriveArbiter, DriveOrders, Hold
 from services.docking.errors import DockingErrorCode
 from services.docking.mission import Mission, MissionMode, MissionOrder, TaskKind
 from services.docking.patrol import Patrol
@@ -203,17 +203,35 @@ def test_resume_at_must_be_above_the_threshold() -> None:
 def test_no_command_while_the_planner_drives() -> None:
     arbiter = DriveArbiter(cancel_retry_s=1.0)
     assert arbiter.navigate(Navigate(Pose2D(1.0, 2.0, 0.0), "a")) == DriveOrders(
-        send_goal=Pose2D(1.0, 2.0, 0.0)
+        send_goal=Pose2D(1.0, 2.0, 0.0), hold=Hold.UNTIL_DRIVEN
     )
     assert (
         arbiter.navigate(Navigate(Pose2D(1.0, 2.0, 0.0), "a")) == DriveOrders()
     )  # same request: sent already
-    assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=0.0) == DriveOrders(cancel_nav=True)
+    assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=0.0) == DriveOrders(
+        cancel_nav=True, hold=Hold.UNTIL_LET_GO
+    )
     assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=0.5) == DriveOrders()
     assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=True, now_s=1.1) == DriveOrders(cancel_nav=True)
     assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=False, now_s=1.2) == DriveOrders(
-        publish=Velocity(0.1, 0.0)
+        publish=Velocity(0.1, 0.0), hold=Hold.LET_GO
     )
+    assert arbiter.velocity(Velocity(0.1, 0.0), nav_busy=False, now_s=1.25) == DriveOrders(
+        publish=Velocity(0.1, 0.0)
+    )  # let go once
+
+
+def test_each_handoff_holds_the_world_until_the_service_drives_or_leaves_off() -> None:
+    """A goal sent, or a goal cancelled to drive: the robot stands between two drivers, and the world
+    is held from that tick (see the module docstring); the service lets go when it publishes or ends."""
+    arbiter = DriveArbiter()
+    assert arbiter.navigate(Navigate(Pose2D(), "a")).hold is Hold.UNTIL_DRIVEN
+    assert arbiter.release() == DriveOrders(hold=Hold.LET_GO)  # the task ended: nobody drives
+    assert arbiter.release() == DriveOrders()
+    arbiter.velocity(Velocity(0.2, 0.0), nav_busy=False, now_s=0.0)
+    orders = arbiter.navigate(Navigate(Pose2D(), "b"))
+    assert (orders.publish, orders.hold) == (STOP, Hold.UNTIL_DRIVEN)
+    assert arbiter.release() == DriveOrders(hold=Hold.LET_GO)
 
 
 def test_one_zero_command_before_the_planner_takes_over() -> None:
@@ -221,7 +239,7 @@ def test_one_zero_command_before_the_planner_takes_over() -> None:
     arbiter.velocity(Velocity(0.2, 0.3), nav_busy=False, now_s=0.0)
     orders = arbiter.navigate(Navigate(Pose2D(), "b"))
     assert orders.publish == STOP and orders.send_goal == Pose2D()
-    assert arbiter.release() == DriveOrders()  # stopped already
+    assert arbiter.release() == DriveOrders(hold=Hold.LET_GO)  # stopped already; the goal's hold let go
     arbiter.velocity(STOP, nav_busy=False, now_s=1.0)
     assert arbiter.navigate(Navigate(Pose2D(), "c")).publish is None  # the last command was a zero
 

@@ -10,6 +10,7 @@ from services.simulator.pacing import (
     CommandCadence,
     Driver,
     DriverPacer,
+    HandoffHold,
     PacingParams,
     StepPacer,
     pacing_stats,
@@ -80,6 +81,58 @@ def test_lockstep_holds_a_moving_robot_to_its_own_controllers_period() -> None:
     assert fast.gap_s(PacingParams(lockstep_factor=0.0), step) is None  # lockstep off: the default gap
     fast.heard(3.0, step)  # after a pause: a new stream, its period unknown again
     assert fast.period_s() is None
+
+
+def test_a_handoff_holds_the_world_from_its_tick_until_a_command_that_moves_answers_it() -> None:
+    handoff = HandoffHold()
+    handoff.heard(10.0, "docking", hold=True, now_s=10.02)
+    assert handoff.tick_s == 10.0
+    pacer = DriverPacer(PARAMS)
+    assert not pacer.hold(10.1, 0.0, [Driver("r0:hold", handoff.tick_s, True)])  # within the gap
+    assert pacer.hold(10.2, 0.0, [Driver("r0:hold", handoff.tick_s, True)])  # past it: wait
+    handoff.driven(10.05, moving=False)  # a stop (the planner still planning) does not end it
+    assert handoff.tick_s == 10.0
+    handoff.driven(9.9, moving=True)  # a moving command from before the handoff does not either
+    assert handoff.tick_s == 10.0
+    handoff.driven(10.15, moving=True)  # the next driver drives
+    assert handoff.tick_s is None
+
+
+def test_a_handoff_is_let_go_by_its_holder_and_a_stale_one_is_ignored() -> None:
+    handoff = HandoffHold()
+    handoff.heard(5.0, "docking", hold=True, now_s=5.0)
+    handoff.heard(5.1, "someone else", hold=False, now_s=5.1)  # not theirs to let go
+    assert handoff.tick_s == 5.0
+    handoff.heard(5.2, "docking", hold=False, now_s=5.2)
+    assert handoff.tick_s is None
+    handoff.driven(6.0, moving=True)
+    handoff.heard(5.9, "docking", hold=True, now_s=6.1)  # arrived after the robot was driven on a later tick
+    assert handoff.tick_s is None
+    handoff.heard(99.0, "docking", hold=True, now_s=7.0)  # a tick from the future counts as now
+    assert handoff.tick_s == 7.0
+
+
+def test_a_hold_for_a_holder_that_drives_next_is_ended_only_by_its_let_go() -> None:
+    """The docking service cancels the planner's goal to drive itself: the planner's last moving commands,
+    still on their way and answering later ticks, must not end the hold."""
+    handoff = HandoffHold()
+    handoff.driven(8.0, moving=True)
+    handoff.heard(
+        8.0, "docking", hold=True, now_s=8.0, until_driven=False
+    )  # not stale: it does not wait for one
+    assert handoff.tick_s == 8.0
+    handoff.driven(8.05, moving=True)
+    assert handoff.tick_s == 8.0
+    handoff.heard(8.1, "docking", hold=False, now_s=8.1)
+    assert handoff.tick_s is None
+
+
+def test_time_held_for_a_handoff_is_counted_apart() -> None:
+    pacer = DriverPacer(PARAMS)
+    assert pacer.hold(2.0, 0.0, [Driver("r0:hold", 1.0, True)])
+    assert not pacer.hold(2.0, 0.05, [])
+    pacer.note_held(0.05)
+    assert pacer.held_by_kind == {"hold": 0.05}
 
 
 def test_held_time_is_counted_by_what_was_late() -> None:
