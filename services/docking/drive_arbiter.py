@@ -7,11 +7,12 @@ publishing, after one zero command if the last command it published moved the ro
 the arbiter for :class:`DriveOrders` and carries them out in order: cancel, publish, send.
 
 Between the two drivers the robot stands, and a simulator paced by its drivers waits for nobody: flat
-out, the world ran on 0.1-0.65 s while a goal reached the planner, and up to 1.2 s while a cancelled goal
-ended before the approach drove. So each handoff holds the world (a :class:`~shared.messages.PacingHold`
-at the tick it was decided on): a goal sent, until the planner moves the robot; a goal cancelled for the
-service to drive, until the service lets go, which it does once it publishes again or leaves the robot to
-nobody (the planner's last commands, still on their way, must not end that hold).
+out, the world ran on while a goal reached the planner and while a cancelled goal ended before the
+approach drove, and a docking took longer the faster the world ran. So each handoff holds the world (a
+:class:`~shared.messages.PacingHold` at the tick it was decided on): a goal sent, until the planner moves
+the robot; a goal cancelled for the service to drive, until the service lets go, which it does once it
+publishes again or leaves the robot to nobody (the planner's last commands, still on their way, must not
+end that hold).
 """
 
 from __future__ import annotations

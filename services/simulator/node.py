@@ -275,9 +275,10 @@ class SimulatorService:
             thinking = robot.last_cmd_s - robot.answered_s > (pacing.driver_gap_s if gap is None else gap)
             awaited = not robot.watchdog_tripped and (moving or thinking)
             drivers.append(Driver(ns, robot.answered_s, awaited, gap))
-            if robot.handoff.tick_s is not None:
+            handoff_s = robot.handoff.current(self.time_s)
+            if handoff_s is not None:
                 # Between two drivers: wait as for a late command until the next one drives.
-                drivers.append(Driver(f"{ns}:hold", robot.handoff.tick_s, True, gap))
+                drivers.append(Driver(f"{ns}:hold", handoff_s, True, gap))
             if robot.last_pose_s > -math.inf:
                 drivers.append(Driver(f"{ns}:pose", robot.last_pose_s, True, pacing.pose_gap_s))
         return drivers

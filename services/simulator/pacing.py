@@ -105,6 +105,12 @@ class CommandCadence:
 CADENCE_BREAK_S = 0.5
 
 
+#: A handoff's hold lapses once the world has run this far past its tick, or past its arrival if it came
+#: later (sim seconds): further than any wait lets it run (a driver's gap), so only after the wait ran out
+#: of budget.
+HOLD_LAPSE_S = 0.5
+
+
 class HandoffHold:
     """A robot handed from one driver to another (see :class:`shared.messages.PacingHold`): the tick the
     world should not run far past until the robot is driven again, or None.
@@ -119,6 +125,8 @@ class HandoffHold:
         self.tick_s: float | None = None
         self.holder = ""
         self.until_driven = True
+        #: Sim time the hold arrived (flat out, one decided on an earlier tick arrives some steps late).
+        self._heard_s = -math.inf
         #: Sim time of the last tick a moving command answered.
         self._driven_s = -math.inf
 
@@ -132,6 +140,15 @@ class HandoffHold:
         if not math.isfinite(tick_s) or (until_driven and tick_s <= self._driven_s):
             return
         self.tick_s, self.holder, self.until_driven = tick_s, holder, until_driven
+        self._heard_s = now_s
+
+    def current(self, now_s: float) -> float | None:
+        """The hold's tick, or None; a hold the world has run :data:`HOLD_LAPSE_S` on since (its wait ran out of
+        budget, or nobody will let go: a holder that died) lapses, so that it is waited for once, not again
+        each time another input comes late beside it."""
+        if self.tick_s is not None and now_s - max(self.tick_s, self._heard_s) > HOLD_LAPSE_S:
+            self.tick_s = None
+        return self.tick_s
 
     def driven(self, answered_s: float, moving: bool) -> None:
         """A command answering ``answered_s`` arrived; one that moves the robot ends a hold it answers."""

@@ -7,6 +7,7 @@ import pytest
 from services.simulator.pacing import (
     CATCH_UP_FACTOR,
     CATCH_UP_LIMIT_S,
+    HOLD_LAPSE_S,
     CommandCadence,
     Driver,
     DriverPacer,
@@ -125,6 +126,19 @@ def test_a_hold_for_a_holder_that_drives_next_is_ended_only_by_its_let_go() -> N
     assert handoff.tick_s == 8.0
     handoff.heard(8.1, "docking", hold=False, now_s=8.1)
     assert handoff.tick_s is None
+
+
+def test_a_hold_lapses_once_the_world_has_run_well_past_it() -> None:
+    """A wait that ran out of budget, or a holder that died: the hold is waited for once, not again each
+    time another input comes late beside it."""
+    handoff = HandoffHold()
+    handoff.heard(3.0, "docking", hold=True, now_s=3.0, until_driven=False)
+    assert handoff.current(3.0 + HOLD_LAPSE_S) == 3.0
+    assert handoff.current(3.01 + HOLD_LAPSE_S) is None
+    assert handoff.tick_s is None
+    handoff.heard(4.0, "docking", hold=True, now_s=4.6, until_driven=False)  # arrived 0.6 s late
+    assert handoff.current(4.6) == 4.0  # counted from its arrival
+    assert handoff.current(4.61 + HOLD_LAPSE_S) is None
 
 
 def test_time_held_for_a_handoff_is_counted_apart() -> None:
