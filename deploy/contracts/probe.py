@@ -51,14 +51,16 @@ class Samples:
     latest: Any = None
     #: ``(header.frame_id, child_frame_id)`` of the decoded messages that have a header, leading ``/`` dropped.
     frames: Counter[tuple[str, str]] = field(default_factory=Counter)
-    #: Arrival times (sim or wall) of every decoded message, kept when asked (event topics: few messages).
+    #: When each decoded message happened, kept when asked (event topics: few messages): on sim time, its
+    #: header's stamp where it has one (a burst that arrives together after the world was held for a late
+    #: input happened over the sim time it was stamped with); otherwise its arrival (sim or wall).
     times: list[float] | None = None
     #: Every decoded message, kept when asked.
     messages: list[Any] | None = None
 
     def peak_per_s(self) -> int:
-        """The most messages that arrived within any one second (of the clock they were timed on)."""
-        times, most, first = self.times or [], 0, 0
+        """The most messages within any one second (of the clock they were timed on)."""
+        times, most, first = sorted(self.times or []), 0, 0
         for last, t in enumerate(times):
             while t - times[first] >= 1.0:
                 first += 1
@@ -183,7 +185,8 @@ class Probe:
                     tally.first_s = now
                 tally.last_s = now
                 if tally.times is not None:
-                    tally.times.append(now)
+                    stamp = header.stamp.to_sec() if sim and header is not None else 0.0
+                    tally.times.append(stamp if stamp > 0.0 else now)
                 if tally.messages is not None:
                     tally.messages.append(msg)
 
