@@ -143,10 +143,27 @@ class RunRecord:
         counts once, summed.
         Empty unless the run both triggered and charged.
         """
-        if self.trigger_s is None or self.charging_s is None:
-            return {}
-        begin, end = self.trigger_s, self.charging_s
         durations: dict[str, float] = {}
+        for name, since, until in self._phase_windows():
+            durations[name] = durations.get(name, 0.0) + (until - since)
+        return {name: round(seconds, 3) for name, seconds in durations.items()}
+
+    def phase_lengths_m(self) -> dict[str, float]:
+        """Ground-truth metres driven in each docking state from the trigger to charging (the states of
+        :meth:`phase_durations`; a step that spans a change of state counts in neither)."""
+        lengths: dict[str, float] = {}
+        for name, since, until in self._phase_windows():
+            points = [(x, y) for t, x, y, _ in self.driven if since <= t <= until]
+            metres = sum(math.dist(a, b) for a, b in zip(points, points[1:]))
+            lengths[name] = lengths.get(name, 0.0) + metres
+        return {name: round(metres, 4) for name, metres in lengths.items()}
+
+    def _phase_windows(self) -> list[tuple[str, float, float]]:
+        """``(state, from, until)`` in sim seconds, from the trigger to charging (empty unless both)."""
+        if self.trigger_s is None or self.charging_s is None:
+            return []
+        begin, end = self.trigger_s, self.charging_s
+        windows: list[tuple[str, float, float]] = []
         current, since = "TRIGGER", begin
         for t, name in self.phases:
             if t <= begin:
@@ -156,10 +173,10 @@ class RunRecord:
                 continue
             if t >= end:
                 break
-            durations[current] = durations.get(current, 0.0) + (t - since)
+            windows.append((current, since, t))
             current, since = name, t
-        durations[current] = durations.get(current, 0.0) + (end - since)
-        return {name: round(seconds, 3) for name, seconds in durations.items()}
+        windows.append((current, since, end))
+        return windows
 
     def speed_at(self, t_s: float, window_s: float = ARRIVAL_SPEED_WINDOW_S) -> float:
         """The ground-truth speed (m/s) over the ``window_s`` before ``t_s``: NaN without track there."""

@@ -57,6 +57,8 @@ def _summary_table(summary: dict) -> Table:
         table.add_row(key, text)
     for name, seconds in summary.get("median_phase_s", {}).items():
         table.add_row(f"median s in {name}", f"{seconds:.1f}")
+    for part, seconds in summary.get("median_over_bound_s", {}).items():
+        table.add_row(f"median s over the bound: {part}", f"{seconds:.2f}")
     slowed = summary.get("median_glass_slowed_s")
     if isinstance(slowed, float) and math.isfinite(slowed):
         table.add_row("median s slowed for glass (navigating)", f"{slowed:.1f}")

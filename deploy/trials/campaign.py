@@ -34,8 +34,9 @@ from deploy.paths import REPO_ROOT
 from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
-from deploy.trials.starts import beacon_starts, lower_bounds, reachable_starts
+from deploy.trials.starts import beacon_starts, lower_bound_parts, reachable_starts
 from deploy.trials.summary import summarise, summary_reasons
+from deploy.trials.time_over_bound import time_over_bound
 from shared import topics
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
@@ -300,8 +301,11 @@ def run_trials(
         )
         pairs.append((pose or Pose2D(*r.start), world.docks[0].pose2d))
     try:
-        for r, bound in zip(results, lower_bounds(options.world, pairs)):
-            r.lower_bound_s = bound
+        for r, bound in zip(results, lower_bound_parts(options.world, pairs)):
+            r.lower_bound_s = bound.seconds
+            record = records.get(r.index)
+            if record is not None and r.charging:
+                r.over_bound_s = time_over_bound(record.phase_durations(), record.phase_lengths_m(), bound)
     except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
         errors.append(f"lower bounds not computed: {exc}")
         log(errors[-1])

@@ -113,6 +113,9 @@ class TrialResult:
     too_fast: bool = False
     #: Sim seconds the planner drove under a glass speed limit during the trial (NaN: not counted).
     glass_slowed_s: float = math.nan
+    #: Where the dock time over the lower bound went, in sim seconds (see
+    #: :mod:`deploy.trials.time_over_bound`; empty without a bound or a charge).
+    over_bound_s: dict[str, float] = field(default_factory=dict)
 
 
 #: A campaign's figures as its JSON line and its summary table give them, in order.
@@ -181,12 +184,17 @@ class TrialsSummary:
     max_arrival_speed_mps: float = math.nan
     #: Median over docked trials of the sim seconds driven under a glass speed limit (part of navigation).
     median_glass_slowed_s: float = math.nan
+    #: Where the time over the lower bound goes: per part, the median over docked trials with a bound
+    #: (see :mod:`deploy.trials.time_over_bound`); the medians need not add up.
+    median_over_bound_s: dict[str, float] = field(default_factory=dict)
 
     def headline(self) -> dict[str, Any]:
         keys = HEADLINE_KEYS
         line = {k: getattr(self, k) for k in keys}
         if self.median_phase_s:
             line["median_phase_s"] = dict(self.median_phase_s)
+        if self.median_over_bound_s:
+            line["median_over_bound_s"] = dict(self.median_over_bound_s)
         if self.replaced_services:
             line["replaced_services"] = dict(self.replaced_services)
         return line

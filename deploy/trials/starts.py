@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from deploy.service_tools import run_tool
+from deploy.trials.time_over_bound import BOUND_MAX_ANGULAR_RADPS, BOUND_MAX_LINEAR_MPS, LowerBound
 from shared.geometry import Pose2D
 from shared.starts import (  # noqa: F401 - the trials' starts
     BEACON_BEARING_RAD,
@@ -40,11 +41,26 @@ def reachable_starts(world_path: Path, world: World, n: int, seed: int) -> list[
 def lower_bounds(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[float]:
     """Shortest collision-free times for ``(start, goal)`` pairs, from the planner's own tool (one process);
     NaN where a pair is not connected."""
+    return [bound.seconds for bound in lower_bound_parts(world_path, pairs)]
+
+
+def lower_bound_parts(world_path: Path, pairs: list[tuple[Pose2D, Pose2D]]) -> list[LowerBound]:
+    """:func:`lower_bounds` with what each is made of (path length, turns); NaN where not connected."""
     if not pairs:
         return []
     lines = "\n".join(json.dumps({"start": list(s.as_tuple()), "goal": list(g.as_tuple())}) for s, g in pairs)
-    done = run_tool("services.planner.lower_bound", ["--world", str(world_path), "--batch"], input_text=lines)
+    speeds = ["--max-linear", str(BOUND_MAX_LINEAR_MPS), "--max-angular", str(BOUND_MAX_ANGULAR_RADPS)]
+    done = run_tool(
+        "services.planner.lower_bound", ["--world", str(world_path), "--batch", *speeds], input_text=lines
+    )
     if done.returncode != 0:
         raise RuntimeError(f"lower bounds failed: {done.stderr.strip()[-300:]}")
-    bounds = [json.loads(line).get("lower_bound_s") for line in done.stdout.strip().splitlines()]
-    return [math.nan if bound is None else float(bound) for bound in bounds]
+    return [_bound(json.loads(line)) for line in done.stdout.strip().splitlines()]
+
+
+def _bound(answer: dict[str, float | None]) -> LowerBound:
+    def number(key: str) -> float:
+        value = answer.get(key)
+        return math.nan if value is None else float(value)
+
+    return LowerBound(number("lower_bound_s"), number("path_length_m"), number("turn_rad"))

@@ -8,6 +8,7 @@ from deploy.percentiles import median, percentile
 from deploy.replacements import replacements_report
 from deploy.trials.chaos import combine_chaos
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
+from deploy.trials.time_over_bound import PARTS
 from shared.world import World
 
 
@@ -52,6 +53,7 @@ def summarise_results(
         median_arrival_speed_mps=median(arrivals),
         max_arrival_speed_mps=max(arrivals) if arrivals else math.nan,
         median_glass_slowed_s=median([r.glass_slowed_s for r in ok if math.isfinite(r.glass_slowed_s)]),
+        median_over_bound_s=median_over_bound([r.over_bound_s for r in ok if r.over_bound_s]),
     )
 
 
@@ -64,6 +66,13 @@ def median_phases(per_trial: list[dict[str, float]]) -> dict[str, float]:
     """Each docking state's median sim seconds over the trials, in the order the states first came."""
     names = list(dict.fromkeys(name for phases in per_trial for name in phases))
     return {name: round(median([phases.get(name, 0.0) for phases in per_trial]), 2) for name in names}
+
+
+def median_over_bound(per_trial: list[dict[str, float]]) -> dict[str, float]:
+    """Each part's median sim seconds over the trials, in the parts' own order."""
+    if not per_trial:
+        return {}
+    return {part: round(median([parts.get(part, 0.0) for parts in per_trial]), 2) for part in PARTS}
 
 
 def combine(per_world: list[tuple[TrialsSummary, list[TrialResult]]], controller: str) -> TrialsSummary:

@@ -58,3 +58,17 @@ def test_a_state_the_trigger_found_under_way_counts_from_the_trigger() -> None:
         trigger_s=10.0, charging_s=14.0, phases=[(9.0, "CONTROLLING"), (12.0, "WAIT_FOR_CHARGE")]
     )
     assert record.phase_durations() == {"CONTROLLING": 2.0, "WAIT_FOR_CHARGE": 2.0}
+
+
+def test_the_distance_driven_is_split_by_the_docking_state_it_was_driven_in() -> None:
+    record = RunRecord(
+        trigger_s=10.0,
+        charging_s=14.0,
+        phases=[(9.0, "IDLE"), (10.5, "NAV_TO_STAGING_POSE"), (12.0, "CONTROLLING")],
+        driven=[(10.0 + 0.5 * i, 0.1 * i, 0.0, 0.0) for i in range(9)],  # 0.2 m/s from the trigger on
+    )
+    lengths = record.phase_lengths_m()
+    assert lengths["TRIGGER"] == pytest.approx(0.1)  # 10.0-10.5
+    assert lengths["NAV_TO_STAGING_POSE"] == pytest.approx(0.3)  # 10.5-12.0
+    assert lengths["CONTROLLING"] == pytest.approx(0.4)  # 12.0-14.0
+    assert RunRecord(trigger_s=10.0, phases=[(11.0, "NAV_TO_STAGING_POSE")]).phase_lengths_m() == {}

@@ -1,0 +1,50 @@
+"""A docking's time over its lower bound, split into the reaction, navigation, detours and the approach."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from deploy.trials.time_over_bound import (
+    BOUND_MAX_ANGULAR_RADPS,
+    BOUND_MAX_LINEAR_MPS,
+    LowerBound,
+    time_over_bound,
+)
+
+PHASES = {"TRIGGER": 0.2, "NAV_TO_STAGING_POSE": 8.0, "INITIAL_PERCEPTION": 0.1, "CONTROLLING": 2.9}
+LENGTHS = {"TRIGGER": 0.0, "NAV_TO_STAGING_POSE": 3.0, "INITIAL_PERCEPTION": 0.0, "CONTROLLING": 0.45}
+
+
+def test_the_parts_add_up_to_the_time_over_the_bound() -> None:
+    bound = LowerBound(
+        seconds=3.2 / BOUND_MAX_LINEAR_MPS + 1.5 / BOUND_MAX_ANGULAR_RADPS, path_length_m=3.2, turn_rad=1.5
+    )
+    parts = time_over_bound(PHASES, LENGTHS, bound)
+    assert sum(parts.values()) == pytest.approx(sum(PHASES.values()) - bound.seconds, abs=1e-3)
+
+
+def test_each_part_is_what_its_states_took_beyond_full_speed() -> None:
+    bound = LowerBound(seconds=8.0, path_length_m=3.2, turn_rad=1.5)
+    parts = time_over_bound(PHASES, LENGTHS, bound)
+    assert parts["trigger"] == pytest.approx(0.2)  # the bound has no reaction time
+    # 3 m at 0.5 m/s is 6 s: 2 s over
+    assert parts["navigation"] == pytest.approx(8.0 - 3.0 / BOUND_MAX_LINEAR_MPS)
+    # 3.45 m driven against the bound's 3.2 m
+    assert parts["detour"] == pytest.approx(0.25 / BOUND_MAX_LINEAR_MPS)
+    # the bound turns 1.5 rad in place at 1.5 rad/s; the robot turned while it drove
+    assert parts["turns"] == pytest.approx(-1.0)
+    assert parts["approach"] == pytest.approx(3.0 - 0.45 / BOUND_MAX_LINEAR_MPS)
+    assert parts["other"] == 0.0
+
+
+def test_a_retry_counts_as_other() -> None:
+    phases = {**PHASES, "RETRY": 1.5}
+    lengths = {**LENGTHS, "RETRY": 0.25}
+    parts = time_over_bound(phases, lengths, LowerBound(seconds=8.0, path_length_m=3.2, turn_rad=1.5))
+    assert parts["other"] == pytest.approx(1.5 - 0.25 / BOUND_MAX_LINEAR_MPS)
+
+
+def test_no_bound_no_parts() -> None:
+    assert time_over_bound(PHASES, LENGTHS, LowerBound(math.nan, math.nan, math.nan)) == {}
