@@ -20,6 +20,7 @@ from pathlib import Path
 from deploy.bench.processes import ServiceGroup, free_port
 from deploy.paths import REPO_ROOT
 from deploy.service_tools import run_tool
+from deploy.trials.time_over_bound import BOUND_MAX_LINEAR_MPS
 from shared.action import spin_in_background
 from shared.geometry import Pose2D
 from shared.interfaces.simulator import SIM_STATE, SimStateRequest, SimStateResponse
@@ -34,7 +35,6 @@ ROUTES: dict[str, tuple[tuple[float, float, float], ...]] = {
     "deploy/worlds/seed_room.yaml": ((2.2, 2.5, 0.0), (0.0, 2.0, -math.pi / 2)),
     "deploy/worlds/glass_room.yaml": ((0.5, 1.5, 0.0),),
 }
-MAX_LINEAR_MPS = 0.5
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class RouteResult:
 
     @property
     def lower_bound_s(self) -> float:
-        return self.shortest_m / MAX_LINEAR_MPS
+        return self.shortest_m / BOUND_MAX_LINEAR_MPS
 
     def as_dict(self) -> dict[str, float | str]:
         return {
