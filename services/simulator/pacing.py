@@ -139,8 +139,10 @@ class HandoffHold:
         tick_s = min(tick_s, now_s)
         if not math.isfinite(tick_s) or (until_driven and tick_s <= self._driven_s):
             return
-        self.tick_s, self.holder, self.until_driven = tick_s, holder, until_driven
+        # the arrival first: the stepping thread reads the tick (and lapses it) without a lock
         self._heard_s = now_s
+        self.holder, self.until_driven = holder, until_driven
+        self.tick_s = tick_s
 
     def current(self, now_s: float) -> float | None:
         """The hold's tick, or None; a hold the world has run :data:`HOLD_LAPSE_S` on since (its wait ran out of
