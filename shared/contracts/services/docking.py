@@ -46,7 +46,8 @@ CONTRACT = Contract(
             PacingHold,
             RELIABLE,
             when="on sim time, at each handoff between it and the planner",
-            about="hold the world from this tick until the next driver moves the robot; hold false lets go",
+            about="hold the world from this tick until the planner moves the robot (until_driven) or the "
+            "service lets go (hold false)",
         ),
     ),
     subscribes=(

@@ -134,8 +134,8 @@ CONTRACT = Contract(
             PacingHold,
             QoS(depth=4),
             when="optional: pacing",
-            about="a handoff between drivers: the world waits (briefly) until a command that moves the "
-            "robot answers the hold's tick or a later one, or its holder lets go",
+            about="a handoff between drivers: the world waits (briefly) until its holder lets go or, "
+            "until_driven, a command that moves the robot answers the hold's tick or a later one",
         ),
         Topic(
             topics.POSE2D,
