@@ -305,7 +305,7 @@ def run_trials(
             r.lower_bound_s = bound.seconds
             record = records.get(r.index)
             if record is not None and r.charging:
-                r.over_bound_s = time_over_bound(record.phase_durations(), record.phase_lengths_m(), bound)
+                r.over_bound_s = time_over_bound(r.phase_s, record.phase_lengths_m(), bound)
     except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
         errors.append(f"lower bounds not computed: {exc}")
         log(errors[-1])

@@ -65,7 +65,7 @@ class DriveArbiter:
         """A task wants to publish ``command`` (clock time ``now_s``)."""
         if nav_busy:
             first = self._cancel_sent_s is None
-            due = first or now_s - self._cancel_sent_s >= self.cancel_retry_s  # type: ignore[operator]
+            due = self._cancel_sent_s is None or now_s - self._cancel_sent_s >= self.cancel_retry_s
             if due:
                 self._cancel_sent_s = now_s
             if first:
@@ -73,9 +73,7 @@ class DriveArbiter:
             return DriveOrders(cancel_nav=due, hold=Hold.UNTIL_LET_GO if first else None)
         self._cancel_sent_s = None
         self.moving = not command.is_zero
-        let_go = self.holding
-        self.holding = False
-        return DriveOrders(publish=command, hold=Hold.LET_GO if let_go else None)
+        return DriveOrders(publish=command, hold=self._let_go())
 
     def navigate(self, request: Navigate) -> DriveOrders:
         """A task wants the planner to take the robot somewhere (a new key sends a new goal)."""
@@ -90,9 +88,14 @@ class DriveArbiter:
 
     def release(self) -> DriveOrders:
         """Nobody drives now (a task ended): leave the robot stopped, and the world to run on."""
-        let_go = Hold.LET_GO if self.holding else None
-        self.holding = False
+        let_go = self._let_go()
         if self.moving:
             self.moving = False
             return DriveOrders(publish=ZERO, hold=let_go)
         return DriveOrders(hold=let_go)
+
+    def _let_go(self) -> Hold | None:
+        """The let-go of a hold that may still stand, once."""
+        let_go = Hold.LET_GO if self.holding else None
+        self.holding = False
+        return let_go
