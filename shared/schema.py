@@ -128,6 +128,18 @@ class Message:
     #: The generated ``(decode, encode)`` of a message made only of floats (``None`` for the others); see below.
     _FIXED: ClassVar[tuple[Callable[..., Any], Callable[..., bytes]] | None] = None
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        """Reached only while another thread turns this deferred class into its dataclass (between the
+        stand-ins' removal and the dataclass's own ``__init__``, see :func:`_make_dataclass`): wait for
+        that, then make the message as the dataclass does. Without it, the first two messages of a class
+        made at once on two threads could find no ``__init__`` but ``object``'s."""
+        cls = type(self)
+        _make_dataclass(cls)
+        init = cls.__init__
+        if init is Message.__init__:
+            raise TypeError(f"{cls.__qualname__} is not a message dataclass")
+        init(self, *args, **kwargs)
+
     def to_dict(self) -> dict[str, Any]:
         """The msgpack-ready map, validated (raises :class:`MessageError`)."""
         try:

@@ -134,3 +134,21 @@ def test_a_class_whose_fields_cannot_make_a_dataclass_says_so_at_first_use() -> 
             BadOrder(1.0, 2.0)
     finally:
         del schema._REGISTRY[BadOrder.TYPE_NAME]  # a broken class must not stay for compile_all
+
+
+def test_a_message_made_while_another_thread_makes_its_class_a_dataclass_waits_for_it() -> None:
+    """The window between the stand-ins' removal and the dataclass's own methods: a second thread
+    making a message there waits for the first instead of finding no ``__init__``."""
+    cls = _fresh_class("zendock_test/msg/LazyWindow")
+    made: list[Message] = []
+    with schema._DEFERRED_LOCK:  # this thread is the one converting the class
+        schema._DEFERRED.discard(cls)
+        for name in (*schema._DATACLASS_METHODS, "__dataclass_fields__"):
+            delattr(cls, name)
+        other = threading.Thread(target=lambda: made.append(cls(3.0, "c")))
+        other.start()
+        other.join(timeout=0.2)
+        assert other.is_alive(), "the message was made before its class was a dataclass"
+        dataclasses.dataclass(cls)
+    other.join(timeout=5.0)
+    assert made == [cls(3.0, "c")]
