@@ -21,7 +21,9 @@ seen through are cleared. One more rule, where this model goes past Nav2's: an e
 one surface, so the arc cells already known to be free (seen through from elsewhere) get no occupied
 evidence from it, and the rest of the arc gets it as if it were the whole arc: the echo came from there.
 At an oblique pane the first looks mark cells in front of it, later looks see through them, and the
-echoes that follow are pinned on the pane itself even when it lies at the cone's edge.
+echoes that follow are pinned on the pane itself even when it lies at the cone's edge. Which part of the
+arc an echo may have come from is also told by the echoes before it (:mod:`services.planner.echo_pairing`);
+the glass memory passes that on as ``candidates`` too.
 
 Pure numpy: no grid, no bus. :mod:`services.planner.glass_memory` applies it to the glass memory.
 """
@@ -66,6 +68,10 @@ class RangeSensorModel:
     #: heard from afar is still held for ``echo_hold_s`` (see :mod:`services.planner.glass_memory`), and
     #: echoes that agree from look to look still add up.
     trusted_range_m: float = 2.0
+    #: The share of its occupied evidence an echo gives its arc while no other echo can tell where on the
+    #: arc it came from (:mod:`services.planner.echo_pairing`); the rest follows, where the two agree, once
+    #: one can. A near echo still marks on its own: glass heard close ahead must stop the robot.
+    unplaced_echo_share: float = 0.5
 
     def __post_init__(self) -> None:
         for name in ("hit_probability", "miss_probability", "mark_threshold", "clear_threshold"):
@@ -78,6 +84,10 @@ class RangeSensorModel:
             raise ValueError("RangeSensorModel needs clear_threshold < 0.5 < mark_threshold")
         if not (self.range_band_m > 0.0 and self.max_log_odds > 0.0):
             raise ValueError("RangeSensorModel.range_band_m and max_log_odds must be positive")
+        if not (0.0 < self.unplaced_echo_share <= 1.0):
+            raise ValueError(
+                f"RangeSensorModel.unplaced_echo_share must lie in (0, 1], got {self.unplaced_echo_share!r}"
+            )
         if not (math.isfinite(self.trusted_range_m) and self.trusted_range_m > 0.0):
             raise ValueError(
                 f"RangeSensorModel.trusted_range_m must be positive, got {self.trusted_range_m!r}"
