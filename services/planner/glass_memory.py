@@ -14,10 +14,10 @@ footprint has covered are known to be free.
 Where on its arc an echo came from is told by the echoes before it (:mod:`services.planner.echo_pairing`):
 an earlier echo of the same surface, heard from elsewhere, agrees with it only where one straight surface
 would touch both arcs or cross both cones' edges, so the occupied evidence goes there, and not to the rest
-of the arc, which lies on open floor in front of an oblique pane or beside a pane's end. On 100 generated
-glass rooms that cut the false glass from a median of 23 cells a trial to 9 (measurement 102). An echo no
-earlier one can place gives its arc ``unplaced_echo_share`` of its evidence (a near one still marks) and
-waits; the first later echo that can place it gives it the rest where the two agree.
+of the arc, which lies on open floor in front of an oblique pane or beside a pane's end (what that did to
+the false glass of generated rooms is measurement 102). An echo no earlier one can place gives its arc
+``unplaced_echo_share`` of its evidence (a near one still marks) and waits; the first later echo that can
+place it gives it the rest where the two agree.
 
 The evidence model weighs an echo less toward the cone's edge, because an echo says only that the
 nearest surface lies somewhere on the arc; that keeps false glass out of the memory, but a pane's end

@@ -102,10 +102,10 @@ def _false_marks(memory: GlassMemory, pane: tuple[tuple[float, float], tuple[flo
 
 def test_driving_past_an_oblique_pane_marks_the_pane_and_not_the_floor_in_front_of_it() -> None:
     """A robot drives along +x, 10 cm every look, its heading swaying round 0.3 rad as it follows its path,
-    past a pane at 40 degrees: each echo comes from the cone's right edge. Marking every echo's arc (before
-    the pairing) left 8 cells more than 10 cm in front of the pane, the arcs' middles; the pairing leaves
-    none, and the pane is marked all the same. (Driving dead straight at one heading, an edge crossing
-    and a line touching the arc give the same ranges, and the pairing keeps both: 27 cells, 37 before.)"""
+    past a pane at 40 degrees: each echo comes from the cone's right edge, and the middle of its arc lies on
+    the floor in front of the pane. The pairing leaves no more than a cell there, and the pane is marked
+    all the same. (Driving dead straight at one heading, an edge crossing and a line touching the arc give
+    the same ranges, and the pairing keeps both; only the change of heading tells them apart.)"""
     pane = ((1.8, -0.5), (4.5, 1.77))
     frame = GridFrame(0.05, (0.0, -1.0, 0.0), 120, 90)
     memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0)
