@@ -222,11 +222,33 @@ class GlassMemory:
         reach = self.frame.resolution_m * math.sqrt(0.5)
         return np.arcsin(np.clip(reach / np.maximum(distance, 1e-9), 0.0, 1.0))
 
+    def _evidence(
+        self,
+        distance: np.ndarray,
+        bearing: np.ndarray,
+        reach_m: float,
+        half_fov: float,
+        echo: bool,
+        candidates: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One reading's ``(free, occupied)`` evidence for the cells of its cone (:func:`reading_evidence` on
+        this grid: the echo's band a cell wide, a cell reaching half its diagonal and the pose margin)."""
+        res = self.frame.resolution_m
+        return reading_evidence(
+            distance,
+            bearing,
+            reach_m,
+            half_fov,
+            echo,
+            self.model,
+            res,  # the arc crosses cells whose centres lie up to half a cell off it
+            candidates=candidates,
+            cell_reach_m=res * math.sqrt(0.5) + SENSOR_POSE_MARGIN_M,
+        )
+
     def _apply(
         self, sensor_pose: tuple[float, float, float], reach_m: float, fov_rad: float, echo: bool
     ) -> None:
-        res = self.frame.resolution_m
-        band_m = res  # the arc crosses cells whose centres lie up to half a cell off it
         sx, sy, syaw = sensor_pose
         half_fov = 0.5 * fov_rad
         cone = self._cone(sensor_pose, reach_m, half_fov)
@@ -252,23 +274,12 @@ class GlassMemory:
             self._resolve_earlier(heard)
             self._pairing.keep(heard, resolved=where is not None)
             current = self._log_odds[iy, ix]
-        free, occupied = reading_evidence(
-            distance,
-            bearing,
-            reach_m,
-            half_fov,
-            echo,
-            self.model,
-            band_m,
-            candidates=candidates,
-            cell_reach_m=res * math.sqrt(0.5) + SENSOR_POSE_MARGIN_M,
-        )
+        free, occupied = self._evidence(distance, bearing, reach_m, half_fov, echo, candidates)
         if share < 1.0:
             # Part of the evidence for now, though never so little that the arc no longer counts as heard:
-            # what a far echo makes suspect (and slows the robot near) is as before.
-            occupied = np.where(
-                occupied > 0.0, np.maximum(occupied * share, np.minimum(occupied, HEARD_FLOOR_LOG_ODDS)), 0.0
-            )
+            # what a far echo makes suspect (and slows the robot near) is as before. (Occupied evidence is
+            # never negative.)
+            occupied = np.maximum(occupied * share, np.minimum(occupied, HEARD_FLOOR_LOG_ODDS))
         # Looked at: every cell whose centre the cone covered, out to the echo. Suspicion ("a pane probably
         # goes on") stays off them, as before the free evidence was limited to cells covered whole: with
         # the cells the cone only grazed counted as never looked at, suspicion round a pane's marks closed
@@ -284,7 +295,6 @@ class GlassMemory:
     def _resolve_earlier(self, newer: Echo) -> None:
         """Earlier echoes no echo could place yet, placed by ``newer``: the rest of their evidence, where
         the two agree they came from."""
-        res = self.frame.resolution_m
         for older in self._pairing.unresolved_near(newer):
             cone = self._cone((older.x, older.y, older.yaw), older.range_m, older.half_fov_rad)
             if cone is None:
@@ -298,16 +308,8 @@ class GlassMemory:
             candidates = (current > self.model.clear_log_odds) & (
                 where | (np.abs(bearing) >= older.half_fov_rad)
             )
-            _, occupied = reading_evidence(
-                distance,
-                bearing,
-                older.range_m,
-                older.half_fov_rad,
-                True,
-                self.model,
-                res,
-                candidates=candidates,
-                cell_reach_m=res * math.sqrt(0.5) + SENSOR_POSE_MARGIN_M,
+            _, occupied = self._evidence(
+                distance, bearing, older.range_m, older.half_fov_rad, True, candidates
             )
             limit = self.model.max_log_odds
             self._log_odds[iy, ix] = np.clip(
