@@ -21,6 +21,9 @@ loopback only (``discovery_range``):
 * Nav2's lifecycle, costmap and map services (:data:`shared.ros2.bridge_routes.SERVICES`), relayed;
 * each node's parameters are its zendock service's (``ros2 param``; :mod:`.parameters`).
 
+Each of the face's few hundred readers and writers starts with one sample of history, not Fast DDS's
+hundred (``fastdds_profiles.xml``, unless ``FASTRTPS_DEFAULT_PROFILES_FILE`` names another file).
+
 Messages convert by field name (:mod:`.convert`). Anything that does not convert is refused, counted and
 logged at most once per interval per kind; nothing from ROS 2 stops the face.
 
@@ -37,6 +40,7 @@ import time
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal
 
 import zenoh
@@ -69,6 +73,8 @@ from shared.ros2.wire import Durability, QosProfile, Reliability
 from shared.runtime import ServiceSpec
 
 STATS_PERIOD_S = 30.0
+#: Fast DDS defaults for the face's readers and writers (see the file), unless the user names their own.
+FAST_DDS_PROFILES = Path(__file__).with_name("fastdds_profiles.xml")
 FACE_NODE = "ros2_dds"
 #: How long a ROS 2 goal waits for zendock's server to accept or reject it.
 ACCEPT_WAIT_S = 10.0
@@ -166,6 +172,7 @@ class Ros2Dds:
 
         # --- rclpy: a context (one DDS participant); a second one carries /cmd_vel as TwistStamped if asked
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = params.discovery_range
+        os.environ.setdefault("FASTRTPS_DEFAULT_PROFILES_FILE", str(FAST_DDS_PROFILES))
         os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy: it would only warn
         import rclpy  # noqa: PLC0415 - only in .venv-ros2; imported when the service starts
         from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415
