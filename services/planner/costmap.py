@@ -245,17 +245,28 @@ class LayeredCostmap:
 
     def set_static_map(self, static_map: OccupancyMap) -> None:
         """Adopt a (new) map. Dynamic layers survive if the grid geometry is unchanged."""
+        same_grid = getattr(self, "_frame", None) == static_map.frame
+        self._frame = static_map.frame
+        self._static = self._static_layer_of(static_map)
+        if not same_grid:
+            self._obstacle = np.full(static_map.data.shape, NO_INFORMATION, dtype=np.uint8)
+            self._inflated_from = None
+        self._cached = None
+
+    def grid_over(self, static_map: OccupancyMap) -> CostGrid:
+        """The inflated grid this costmap would give over another static map of the same grid, its sensor
+        layers as they are; the costmap itself is left as it was (a what-if, inflated whole)."""
+        if static_map.frame != self._frame:
+            raise ValueError("grid_over needs a static map on the costmap's own grid")
+        master = self._merged(self._static_layer_of(static_map))
+        return _snapshot(self._frame, inflate(master, self._frame.resolution_m, self.params))
+
+    def _static_layer_of(self, static_map: OccupancyMap) -> np.ndarray:
         data = static_map.data
         static = np.full(data.shape, FREE_SPACE, dtype=np.uint8)
         static[data >= self.params.lethal_threshold] = LETHAL_OBSTACLE
         static[data == OCC_UNKNOWN] = NO_INFORMATION
-        same_grid = getattr(self, "_frame", None) == static_map.frame
-        self._frame = static_map.frame
-        self._static = static
-        if not same_grid:
-            self._obstacle = np.full(data.shape, NO_INFORMATION, dtype=np.uint8)
-            self._inflated_from = None
-        self._cached = None
+        return static
 
     def set_params(self, params: CostmapParams) -> None:
         """New settings (a runtime parameter change): the layers stay, the next :meth:`grid` inflates anew."""
@@ -319,7 +330,10 @@ class LayeredCostmap:
 
     def combined_costs(self) -> np.ndarray:
         """Layers merged by maximum, before inflation (unknown in a layer defers to the others)."""
-        master = self._static.copy()
+        return self._merged(self._static)
+
+    def _merged(self, static: np.ndarray) -> np.ndarray:
+        master = static.copy()
         layer = self._obstacle
         known = layer != NO_INFORMATION
         take = known & ((master == NO_INFORMATION) | (master < layer))

@@ -23,13 +23,15 @@ from typing import Protocol
 import numpy as np
 
 from services.planner.costmap import LETHAL_OBSTACLE, CostGrid, LayeredCostmap, laser_scan_points
-from services.planner.glass_memory import GlassMemory
+from services.planner.glass_memory import EXCUSED_RADIUS_SHARE, GlassMemory
 from services.planner.glass_store import GlassStore
+from services.planner.global_planner import GlobalPlanner
 from services.planner.occupancy_map import OCC_OCCUPIED, OccupancyMap
 from services.planner.params import Params
 from services.planner.range_sensor_model import RangeSensorModel
 from services.planner.recovery import GlassClearing
 from services.planner.sonar_fusion import echo_explained_by_lidar
+from services.planner.suspicion_way import reachable, way_through_suspicion
 from shared import topics
 from shared.frames import SensorMounts
 from shared.geometry import Pose2D, wrap_angle
@@ -280,12 +282,40 @@ class CostmapUpdater:
         if self._applied_glass is not None and np.array_equal(glass, self._applied_glass):
             return
         self._applied_glass = glass
+        self.costmap.set_static_map(self._map_with(glass))
+
+    def _map_with(self, glass: np.ndarray) -> OccupancyMap:
+        """The static map with ``glass`` (boolean grid) as walls."""
         base = self._base_map
-        if glass.any():
-            data = base.data.copy()
-            data[glass] = OCC_OCCUPIED
-            base = OccupancyMap(base.resolution_m, base.origin, data)
-        self.costmap.set_static_map(base)
+        assert base is not None
+        if not glass.any():
+            return base
+        data = base.data.copy()
+        data[glass] = OCC_OCCUPIED
+        return OccupancyMap(base.resolution_m, base.origin, data)
+
+    def open_way_through_suspicion(self, start: Pose2D, goal: Pose2D, planner: GlobalPlanner) -> int:
+        """If the outer part of suspected glass alone closes every way from ``start`` to ``goal``, excuse the
+        suspected cells along a way without it (:mod:`services.planner.suspicion_way`); how many cells."""
+        if self.costmap is None or self._base_map is None or self.glass is None:
+            return 0
+        suspicion = self.glass.suspicion_mask()
+        if not suspicion.any() or reachable(planner, self.costmap.grid(), start, goal):
+            return 0
+        without = self.costmap.grid_over(self._map_with(self.glass.glass_mask(EXCUSED_RADIUS_SHARE)))
+        reach_m = self.costmap.params.circumscribed_radius_m + self.costmap.frame.resolution_m
+        cells = way_through_suspicion(planner, without, suspicion, start, goal, reach_m)
+        if cells is None:
+            return 0
+        excused = self.glass.excuse_suspicion(cells)
+        if excused:
+            self.apply_glass()
+            self._log.info(
+                "suspected glass closed every way to the goal: %d unlooked-at cells on a way through it "
+                "are suspected no more (the inner half of the radius still is); the sonar looks there",
+                excused,
+            )
+        return excused
 
     def clear(self, glass: GlassClearing, robot: Pose2D | None = None) -> None:
         """Forget what the lidar saw (the next scan, all round, refills it) and as much of the glass

@@ -67,6 +67,10 @@ SUSPECTED_LOG_ODDS = 0.2
 #: An echo no other echo has placed yet (see :mod:`services.planner.echo_pairing`) gives its arc only part of
 #: its evidence, but never less than this where it gave any: enough to count as heard.
 HEARD_FLOOR_LOG_ODDS = SUSPECTED_LOG_ODDS + 0.01
+#: Where suspicion alone closed every way and was excused (:meth:`GlassMemory.excuse_suspicion`), the floor
+#: this share of the suspicion radius from heard glass is still suspected: a heard pane's end keeps a
+#: margin the robot's corners do not cross.
+EXCUSED_RADIUS_SHARE = 0.5
 #: How far the sensor's pose (and so any cell as the sonar sees it) may be off: a reading clears only
 #: cells that lie whole inside its cone by this margin.
 SENSOR_POSE_MARGIN_M = 0.01
@@ -125,6 +129,9 @@ class GlassMemory:
         self._seen = np.zeros(frame.shape, dtype=bool)
         #: The latest unexplained echoes, to tell where on its arc each new one came from.
         self._pairing = EchoPairing()
+        #: Suspected cells the planner let the robot pass because suspicion alone closed every way to its
+        #: goal (:meth:`excuse_suspicion`): suspected only within :data:`EXCUSED_RADIUS_SHARE` of the radius.
+        self._excused = np.zeros(frame.shape, dtype=bool)
 
     @property
     def sonar_layer(self) -> np.ndarray:
@@ -342,6 +349,7 @@ class GlassMemory:
     def clear(self) -> None:
         self._log_odds[...] = 0.0
         self._seen[...] = False
+        self._excused[...] = False
         self._cleared_by_recovery[...] = False
         self._extension_cache = None
         self._heard_line_cache = None
@@ -358,6 +366,7 @@ class GlassMemory:
             return
         self._log_odds[inside[:, 1], inside[:, 0]] = 0.0
         self._seen[inside[:, 1], inside[:, 0]] = False
+        self._excused[inside[:, 1], inside[:, 0]] = False
         self._cleared_by_recovery[inside[:, 1], inside[:, 0]] = True
         self._extension_cache = None
         self._heard_line_cache = None
@@ -371,6 +380,7 @@ class GlassMemory:
         marked = layer == LETHAL_OBSTACLE
         self._seen[...] = layer != NO_INFORMATION
         self._log_odds[...] = 0.0
+        self._excused[...] = False
         self._log_odds[marked] = min(self.model.mark_log_odds + 0.5, self.model.max_log_odds)
 
     def suspected_cells_xy(self) -> np.ndarray:
@@ -458,24 +468,47 @@ class GlassMemory:
         self._heard_line_cache = (heard.copy(), line)
         return line
 
-    def glass_mask(self) -> np.ndarray:
-        """Boolean ``(height, width)``: marked by the sonar, unlooked-at within the suspicion radius of a
-        cell the sonar heard glass in (marked or suspected), a marked pane's unseen continuation (see
-        :meth:`pane_extension_mask`), or on a held arc.
+    def suspicion_mask(self, radius_share: float = 1.0) -> np.ndarray:
+        """Boolean ``(height, width)``: the floor suspected of glass, unlooked-at and within the suspicion
+        radius (times ``radius_share``) of a cell the sonar heard glass in or of a heard run's line (see
+        :meth:`glass_mask`). Where :meth:`excuse_suspicion` let the robot pass, only the inner
+        :data:`EXCUSED_RADIUS_SHARE` of the radius is suspected."""
+        heard = self._log_odds > SUSPECTED_LOG_ODDS
+        if self.suspicion_radius_m <= 0 or radius_share <= 0 or not heard.any():
+            return np.zeros(self.frame.shape, dtype=bool)
+        radius_cells = radius_share * self.suspicion_radius_m / self.frame.resolution_m
+        seeds = heard | self.heard_line_mask(heard)
+        squared = squared_distance_to_marks(seeds, radius_cells)
+        near = squared <= radius_cells * radius_cells
+        if self._excused.any():
+            inner = EXCUSED_RADIUS_SHARE * self.suspicion_radius_m / self.frame.resolution_m
+            near &= ~self._excused | (squared <= inner * inner)
+        return near & ~self._seen
+
+    def excuse_suspicion(self, cells: np.ndarray) -> int:
+        """Suspect ``cells`` (boolean ``(height, width)``) only within :data:`EXCUSED_RADIUS_SHARE` of the
+        suspicion radius from heard glass; how many cells that took out of suspicion.
+
+        For the planner, when suspicion alone closes every way to its goal (see
+        :mod:`services.planner.suspicion_way`): the robot may then drive where it was only guessed, and
+        its sonar looks there on the way. The cells stay glass if marked, held or on a pane's extension,
+        and become glass again when the sonar marks them; only the outer part of the guess is dropped,
+        until the memory forgets them (:meth:`clear`, :meth:`clear_cells`)."""
+        before = self.suspicion_mask()
+        self._excused |= np.asarray(cells, dtype=bool) & before
+        return int(np.count_nonzero(before & ~self.suspicion_mask()))
+
+    def glass_mask(self, suspicion_share: float = 1.0) -> np.ndarray:
+        """Boolean ``(height, width)``: marked by the sonar, unlooked-at within the suspicion radius (times
+        ``suspicion_share``) of a cell the sonar heard glass in (marked or suspected), a marked pane's
+        unseen continuation (see :meth:`pane_extension_mask`), or on a held arc.
 
         Suspicion grows from every heard cell, not only from marks: rounding a pane's end seen obliquely,
         the last marks lay 0.3 m short of the end and the cells between held only echoes from the cone's
         edge, too weak to mark. Suspicion from the marks alone stopped short of the end, and the robot's
         front corner clipped it in 11 of 35 runs of the glass room's planner test. It grows from where a
         heard run's line goes on, too (:meth:`heard_line_mask`)."""
-        marks = self._log_odds >= self.model.mark_log_odds
-        glass = marks
-        heard = self._log_odds > SUSPECTED_LOG_ODDS
-        if self.suspicion_radius_m > 0 and heard.any():
-            radius_cells = self.suspicion_radius_m / self.frame.resolution_m
-            seeds = heard | self.heard_line_mask(heard)
-            near = squared_distance_to_marks(seeds, radius_cells) <= radius_cells * radius_cells
-            glass = marks | (near & ~self._seen)
+        glass = (self._log_odds >= self.model.mark_log_odds) | self.suspicion_mask(suspicion_share)
         if self.pane_extension_m > 0:
             glass = glass | self.pane_extension_mask()
         if self._held:

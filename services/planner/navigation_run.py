@@ -6,11 +6,14 @@ ahead) -> SUCCEEDED inside the goal tolerances, once stopped. A collision ahead 
 ``blocked_timeout_s``, no progress for ``progress_timeout_s``, or a failed plan starts a recovery:
 BACKING_UP (only over free cells), then CLEARING (the lidar layer is cleared; every second recovery also
 forgets glass round the robot, or all glass once planning has failed past the fourth; the layers refill
-for ``recovery_wait_s``), then PLANNING again. After ``max_recoveries`` the goal is ABORTED with the
-error code of the last failure. These timeouts run on the control loop's own clock (sim time, each tick
-counting at most four periods), so a machine too busy to run the loop on time does not make the robot
-look stuck. A stale pose holds the robot still (a map pose carried forward by fresh odometry is stale
-only after ``carried_pose_timeout_s``); NO_POSE after ``no_pose_timeout_s``.
+for ``recovery_wait_s``), then PLANNING again. A failed plan first asks once for a way through
+suspected glass and plans again at once (suspicion alone may close every way: see
+:mod:`services.planner.suspicion_way`); so does the plan that ends a recovery a failed plan began. After
+``max_recoveries`` the goal is ABORTED with the error code of the last failure. These timeouts run on
+the control loop's own clock (sim time, each tick counting at most four periods), so a machine too busy
+to run the loop on time does not make the robot look stuck. A stale pose holds the robot still (a map
+pose carried forward by fresh odometry is stale only after ``carried_pose_timeout_s``); NO_POSE after
+``no_pose_timeout_s``.
 
 The run reads nothing from the bus and writes nothing to it: the planner's node gives it a
 :class:`NavSnapshot` (the pose, the measured twist, the cost grid, the clocks) and carries out the
@@ -122,6 +125,9 @@ class NavOrders:
     #: The tick :attr:`cmd` answers, when not the snapshot's: a stop while the first plan is being made
     #: answers the tick that asked for it, so the simulator's lockstep waits for the plan.
     cmd_answers_s: float | None = None
+    #: Before the plan request: if suspected glass alone closes every way from this pose to the goal, let
+    #: the robot pass where it is only suspected (:mod:`services.planner.suspicion_way`).
+    open_way_from: Pose2D | None = None
     #: Submit a plan request from this pose (with the snapshot's grid and :attr:`NavigationRun.generation`).
     plan_from: Pose2D | None = None
     #: A new path to publish on ``plan`` (``(N, 3)`` poses).
@@ -151,6 +157,8 @@ class NavigationRun:
         self.recoveries = 0
         #: The current recovery began because no path was found (not because following failed).
         self.recovering_from_planning = False
+        #: A failed plan has already asked for a way through suspected glass since the last path found.
+        self._opened_way_since_last_plan = False
         self.ended: NavEnd | None = None
         self.follower = RegulatedPurePursuit(params.follower_params())
         self._backup: DriveStraight = params.recovery_backup()
@@ -211,8 +219,17 @@ class NavigationRun:
             if snap.pose is None:
                 self._replan_wanted = True
                 return orders
+            if not self._opened_way_since_last_plan:
+                # Suspected glass may be all that closes the way: the robot may pass where it is only
+                # suspected, and plans again at once; a recovery follows if that finds no path either.
+                self._opened_way_since_last_plan = True
+                orders.open_way_from = snap.pose
+                self._request_plan(snap, orders)
+                if orders.plan_from is not None:
+                    return orders
             self._start_recovery(snap.pose, code, outcome.error, orders)
             return orders
+        self._opened_way_since_last_plan = False
         path = outcome.path
         self.plan = ActivePlan.from_poses(path.poses, outcome.request.grid, snap.now_s)
         self.follower.set_path(path.poses)
@@ -461,6 +478,8 @@ class NavigationRun:
             self.phase = Phase.LOOKING
             return
         self.phase = Phase.PLANNING
+        if self.recovering_from_planning:
+            orders.open_way_from = pose
         self._request_plan(snap, orders)
 
     def _feedback(self, snap: NavSnapshot, pose: Pose2D, orders: NavOrders) -> None:

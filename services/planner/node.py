@@ -35,6 +35,7 @@ from typing import Any
 from services.planner.behavior_server import BehaviorServer
 from services.planner.costmap_thread import CostmapThread, LockedPoseTrack
 from services.planner.costmap_updater import CostmapUpdater, glass_speed_limit
+from services.planner.global_planner import GlobalPlanner
 from services.planner.goal_check import check_goal_on_grid, goal_pose
 from services.planner.map_messages import costmap_message, nav2_costmap_message, path_message
 from services.planner.map_server import MapServer
@@ -165,6 +166,8 @@ class PlannerService:
         self._worker = PlanningWorker(
             params.planner_params(), lambda outcome: node.post(self._on_plan_outcome, outcome)
         )
+        #: The search behind a way through suspected glass (on the control thread, after a failed plan).
+        self._way_planner = GlobalPlanner(params.planner_params())
         self._planning_in_flight = False
         self._generations = itertools.count(1)
         self._run: NavigationRun | None = None
@@ -469,11 +472,16 @@ class PlannerService:
         )
 
     def _carry_out(self, orders: NavOrders) -> None:
-        """Do what the run says, in order: command, plan request, path, clearing, feedback, the end."""
+        """Do what the run says, in order: command, a way through suspicion, plan request, path, clearing,
+        feedback, the end."""
         run, handle = self._run, self._handle
         now = self._node.now()
         if orders.cmd is not None:
             self._publish_cmd(*orders.cmd, answers_s=orders.cmd_answers_s)
+        if orders.open_way_from is not None and run is not None:
+            self._costmap.change(
+                self._layers.open_way_through_suspicion, orders.open_way_from, run.goal, self._way_planner
+            )
         grid = self._costmap.grid
         if orders.plan_from is not None and run is not None and grid is not None:
             self._planning_in_flight = True

@@ -38,6 +38,8 @@ class KinematicWorld:
         self.feedback: list = []
         self.clears: list[GlassClearing] = []
         self.plans = 0
+        #: (pose, how many plans had been asked for before it) of each way-through-suspicion order.
+        self.open_ways: list[tuple[Pose2D, int]] = []
 
     def snapshot(self, **overrides: object) -> NavSnapshot:
         values = {
@@ -62,6 +64,8 @@ class KinematicWorld:
             self.feedback.append(orders.feedback)
         if orders.end is not None:
             self.ends.append(orders.end)
+        if orders.open_way_from is not None:
+            self.open_ways.append((orders.open_way_from, self.plans))
         if orders.plan_from is not None:
             self.plans += 1
             request = PlanRequest(run.generation, self.grid, orders.plan_from, run.goal)
@@ -108,6 +112,10 @@ def test_an_unreachable_goal_recovers_then_aborts_with_the_planning_error() -> N
     assert len(world.ends) == 1 and world.ends[0].ending is Ending.ABORTED
     assert world.ends[0].code is NavigateErrorCode.NO_VALID_PATH
     assert run.recoveries == 2 and len(world.clears) == 2 and world.cmd == (0.0, 0.0)
+    # The first failed plan asks at once for a way through suspected glass and plans again; each recovery
+    # a failed plan began asks again just before its own plan.
+    assert [plans_before for _, plans_before in world.open_ways] == [1, 2, 3]
+    assert world.plans == 4
 
 
 def test_a_stale_pose_holds_the_robot_then_aborts_with_no_pose() -> None:
