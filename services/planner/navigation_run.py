@@ -125,8 +125,8 @@ class NavOrders:
     #: The tick :attr:`cmd` answers, when not the snapshot's: a stop while the first plan is being made
     #: answers the tick that asked for it, so the simulator's lockstep waits for the plan.
     cmd_answers_s: float | None = None
-    #: Before the plan request: if suspected glass alone closes every way from this pose to the goal, let
-    #: the robot pass where it is only suspected (:mod:`services.planner.suspicion_way`).
+    #: Before the plan request: if suspected glass alone closes every way from this pose to the goal, lift
+    #: the outer half of its radius along one way (:mod:`services.planner.suspicion_way`).
     open_way_from: Pose2D | None = None
     #: Submit a plan request from this pose (with the snapshot's grid and :attr:`NavigationRun.generation`).
     plan_from: Pose2D | None = None
@@ -220,8 +220,8 @@ class NavigationRun:
                 self._replan_wanted = True
                 return orders
             if not self._opened_way_since_last_plan:
-                # Suspected glass may be all that closes the way: the robot may pass where it is only
-                # suspected, and plans again at once; a recovery follows if that finds no path either.
+                # Suspected glass may be all that closes the way: lift part of it along one way and plan
+                # again at once; a recovery follows if that finds no path either.
                 self._opened_way_since_last_plan = True
                 orders.open_way_from = snap.pose
                 self._request_plan(snap, orders)

@@ -5,7 +5,7 @@ is a guess: floor the sonar never looked at, near glass it heard, may hold more 
 0.3 m of both sides of a glass doorway, or of a pane's end and a box, the guesses can close the only way
 to the goal, and the robot, which looks only where it drives, never faces the floor that would clear
 them. Recovery after recovery the planner found no path; forgetting the glass and looking round heard
-the panes again and closed the way again (measurement 103 has the generated rooms where it did).
+the panes again and closed the way again (measurement 104 has the generated rooms where it did).
 
 So when no path is found, the planner asks this module for a way on the costmap with suspicion cut to
 the inner half of its radius (marks, held arcs and a pane's extension count in full). The suspected cells
