@@ -49,7 +49,11 @@ class DockingController:
 
 def _graceful_approach(params: Params) -> ApproachController:
     law = graceful_params_with_speed(params.max_approach_speed_mps)
-    law = replace(law, command_delay_s=params.command_delay_s)
+    law = replace(
+        law,
+        command_delay_s=params.command_delay_s,
+        last_command_hold_s=params.base_cmd_vel_timeout_s or None,
+    )
     if law.pose_estimator is not None:
         # The pose comes carried by odometry, smooth and fresh: trust it, only compensate its age.
         estimator = replace(law.pose_estimator, correction_gain=params.pose_correction_gain)

@@ -42,6 +42,18 @@ from shared.geometry import Pose2D, wrap_angle
 MIN_TARGET_DISTANCE_M = 1e-6
 
 
+def speed_to_brake_in_time(
+    distance_m: float, end_speed_mps: float, decel_mps2: float, hold_s: float
+) -> float:
+    """The top speed that, held ``hold_s`` and then braked at ``decel_mps2``, is down to ``end_speed_mps``
+    within ``distance_m``: ``v**2 <= end**2 + 2 * a * (d - v * hold)`` solved for ``v`` (never below ``end``)."""
+    a_hold = decel_mps2 * hold_s
+    return max(
+        end_speed_mps,
+        -a_hold + math.sqrt(a_hold**2 + end_speed_mps**2 + 2.0 * decel_mps2 * max(0.0, distance_m)),
+    )
+
+
 @dataclass(frozen=True, slots=True)
 class GracefulGains:
     """Gains and speed limits of the smooth control law (names follow Nav2's ``controller.*`` parameters)."""
@@ -218,6 +230,15 @@ class GracefulDockParams:
     #: because at high speed-ups a tick can come up to a period late in simulated time (the world waits only
     #: for a command more than ``lockstep_factor`` periods late; measurement 88).
     arrival_hold_periods: float = 2.0
+    #: How long the base drives on a command that turns out to be the last before its ``cmd_vel`` watchdog
+    #: stops it (the simulated base's ``drive.cmd_vel_timeout_s``): the docking service killed mid-approach,
+    #: the link stalled. The cap also keeps each command one the robot could end on: held this long, then
+    #: braked at ``last_command_decel_mps2``, it still meets the plate at no more than the contact speed.
+    #: Without it a docking service killed 0.1-0.2 m from the plate let the robot meet it at 0.23-0.39 m/s
+    #: (docs/measurements, measurement 105). None: count on the next command coming.
+    last_command_hold_s: float | None = 0.3
+    #: The braking the watchdog's stop is counted on for: under the simulated base's 2.5 m/s**2.
+    last_command_decel_mps2: float = 2.0
     #: Stop (zero command) once within this distance of the dock pose; None leaves stopping to the caller.
     stop_distance_m: float | None = None
     #: Smooth and latency-compensate the robot pose before the law sees it; None uses raw poses.
@@ -419,13 +440,21 @@ class GracefulDockController:
         p = self.params
         along_m = dock_frame_error(robot_pose, self.dock_pose).along_m
         to_contact_m = max(0.0, -along_m - p.contact_reach_m - p.arrival_margin_m)
-        # a command holds for a control period: the speed must still brake in time from where it ends,
-        # v**2 <= contact**2 + 2 * a * (d - v * period), solved for v
-        a_dt = p.approach_decel_mps2 * p.control_period_s * p.arrival_hold_periods
-        cap = max(
+        # a command holds until the next one (a tick may come late): the robot must still brake in time
+        cap = speed_to_brake_in_time(
+            to_contact_m,
             contact_speed_mps,
-            -a_dt + math.sqrt(a_dt**2 + contact_speed_mps**2 + 2.0 * p.approach_decel_mps2 * to_contact_m),
+            p.approach_decel_mps2,
+            p.control_period_s * p.arrival_hold_periods,
         )
+        if p.last_command_hold_s is not None:
+            # ... and if no next one comes, the base's watchdog stops it later, and harder
+            cap = min(
+                cap,
+                speed_to_brake_in_time(
+                    to_contact_m, contact_speed_mps, p.last_command_decel_mps2, p.last_command_hold_s
+                ),
+            )
         speed = abs(command.linear_x_mps)
         if speed <= cap:
             return command

@@ -109,6 +109,15 @@ class Params(ServiceParams):
         "through with the commands still on their way",
         json_schema_extra=runtime_settable(NEXT_RUN),
     )
+    base_cmd_vel_timeout_s: float = Field(
+        0.3,
+        ge=0.0,
+        le=2.0,
+        description="graceful: how long the base drives on its last command before its cmd_vel "
+        "watchdog stops it; near the plate the approach only sends commands that would still meet it "
+        "gently if they were the last (0: count on the next command)",
+        json_schema_extra=runtime_settable(NEXT_RUN),
+    )
     pose_correction_gain: float = Field(
         1.0,
         gt=0.0,
