@@ -3,7 +3,9 @@
 PLANNING (held still until the first path) -> FOLLOWING (regulated pure pursuit; replan every
 ``replan_period_s``, and at once when the costmap blocks the path or the follower sees a collision
 ahead) -> SUCCEEDED inside the goal tolerances, once stopped. A collision ahead that lasts
-``blocked_timeout_s``, no progress for ``progress_timeout_s``, or a failed plan starts a recovery:
+``blocked_timeout_s`` (or ``blocked_stops_max`` stops for one within ``blocked_stops_window_s`` and
+``blocked_stops_radius_m``: a robot going back and forth at the same obstacle), no progress for ``progress_timeout_s``, or a failed plan
+starts a recovery:
 BACKING_UP (only over free cells), then CLEARING (the lidar layer is cleared; every second recovery also
 forgets glass round the robot, or all glass once planning has failed past the fourth; the layers refill
 for ``recovery_wait_s``), then PLANNING again. A failed plan first asks once for a way through
@@ -26,6 +28,7 @@ from __future__ import annotations
 import enum
 import logging
 import math
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -171,6 +174,8 @@ class NavigationRun:
         self._last_plan_request_s = -math.inf
         self._replan_wanted = False
         self._blocked_since_s: float | None = None
+        #: ``(control time, x, y)`` of the follower's recent stops for a collision ahead (``blocked_stops_max``).
+        self._blocked_stops: deque[tuple[float, float, float]] = deque()
         self._pose_lost_since_s: float | None = None
         self._pose_lost_since_wall_s = 0.0
         self._wait_until_s = 0.0
@@ -402,7 +407,18 @@ class NavigationRun:
             orders.cmd = (0.0, 0.0)
             if self._blocked_since_s is None:
                 self._blocked_since_s = self.clock_s
-                log.info("collision ahead: stopped, replanning")
+                log.info(
+                    "collision ahead at (%.2f, %.2f, %.2f): stopped, replanning", pose.x, pose.y, pose.yaw
+                )
+                if self._stopped_too_often(pose):
+                    self._start_recovery(
+                        pose,
+                        NavigateErrorCode.STUCK,
+                        f"stopped for a collision ahead {p.blocked_stops_max} times within "
+                        f"{p.blocked_stops_radius_m:g} m in {p.blocked_stops_window_s:g} s",
+                        orders,
+                    )
+                    return
             if self.clock_s - self._blocked_since_s > p.blocked_timeout_s:
                 self._start_recovery(
                     pose,
@@ -427,6 +443,20 @@ class NavigationRun:
         ):
             self._request_plan(snap, orders)
 
+    def _stopped_too_often(self, pose: Pose2D) -> bool:
+        """Count a new stop for a collision ahead: whether ``blocked_stops_max`` of them fell within the window
+        and the radius (stops spread along the way are a robot getting on, not one going back and forth)."""
+        p = self.params
+        self._blocked_stops.append((self.clock_s, pose.x, pose.y))
+        while self._blocked_stops and self._blocked_stops[0][0] < self.clock_s - p.blocked_stops_window_s:
+            self._blocked_stops.popleft()
+        near = [
+            s
+            for s in self._blocked_stops
+            if math.hypot(s[1] - pose.x, s[2] - pose.y) <= p.blocked_stops_radius_m
+        ]
+        return len(near) >= p.blocked_stops_max
+
     def _start_recovery(self, pose: Pose2D, code: NavigateErrorCode, reason: str, orders: NavOrders) -> None:
         p = self.params
         if self.recoveries >= p.max_recoveries:
@@ -444,6 +474,7 @@ class NavigationRun:
         self.plan = None
         self._replan_wanted = False
         self._blocked_since_s = None
+        self._blocked_stops.clear()
         self.follower.reset()
         self.phase = Phase.BACKING_UP
         self._backup = self.params.recovery_backup()

@@ -181,6 +181,20 @@ class Params(ServiceParams):
     required_movement_m: float = Field(0.25, gt=0.0, description="progress: move this far ...")
     required_rotation_rad: float = Field(0.5, gt=0.0, description="... or turn this much")
     blocked_timeout_s: float = Field(2.0, gt=0.0, description="a collision ahead this long starts a recovery")
+    #: A robot that stops for a collision ahead, replans, drives a little and stops again never stays
+    #: blocked for blocked_timeout_s, and its moves count as progress: in the shipped glass room it went
+    #: back and forth beside the pane for 150 s, its battery running out (docs/measurements, measurement 106).
+    blocked_stops_max: int = Field(
+        5,
+        ge=1,
+        description="this many stops for a collision ahead within blocked_stops_window_s start a recovery",
+    )
+    blocked_stops_window_s: float = Field(
+        20.0, gt=0.0, description="the window blocked_stops_max counts in (sim seconds of control)"
+    )
+    blocked_stops_radius_m: float = Field(
+        0.5, gt=0.0, description="blocked_stops_max counts the stops within this distance of the latest"
+    )
     max_recoveries: int = Field(6, ge=0)
     backup_distance_m: float = Field(0.15, gt=0.0)
     backup_speed_mps: float = Field(0.1, gt=0.0)

@@ -6,11 +6,14 @@ from __future__ import annotations
 import itertools
 import math
 
+import pytest
+
 from services.planner.astar import PlanningError
 from services.planner.global_planner import GlobalPlanner
 from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
 from services.planner.params import Params
 from services.planner.planning_worker import PlanOutcome, PlanRequest, blocked_end_of
+from services.planner.pure_pursuit import FollowStatus, VelocityCommand
 from services.planner.recovery import GlassClearing
 from shared.geometry import Pose2D
 from shared.interfaces.navigation import NavigateErrorCode
@@ -184,3 +187,73 @@ def test_a_recovery_that_forgets_heard_glass_turns_once_in_place_before_it_plans
     for turned in looks:
         assert abs(turned - 2.0 * math.pi) < 0.15, f"turned {turned:.2f} rad, not once round"
     assert [end.ending for end in world.ends] == [Ending.ABORTED]
+
+
+def _drive_past_flickers(params: Params) -> tuple[KinematicWorld, NavigationRun]:
+    """Every 1.5 s a short wall shows up for 0.5 s, 0.45 m ahead of the robot wherever it is (a sensor's
+    phantom): each time the follower stops, for less than ``blocked_timeout_s``."""
+    clear = _grid()
+    world = KinematicWorld(clear, Pose2D(0.6, 1.5, 0.0), params)
+    run = _run(world, Pose2D(4.4, 1.5, 0.0))
+    shown_at = None
+    while run.active and world.now_s < 30.0 and run.recoveries == 0:
+        world.now_s += DT_S
+        world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
+        if world.now_s % 1.5 < DT_S and world.now_s > 1.0:
+            pose = world.pose
+            cx, cy = pose.x + 0.45 * math.cos(pose.yaw), pose.y + 0.45 * math.sin(pose.yaw)
+            dx, dy = -0.25 * math.sin(pose.yaw), 0.25 * math.cos(pose.yaw)
+            wall = [[[cx - dx, cy - dy], [cx + dx, cy + dy]]]
+            world.grid, shown_at = room_grid(5.0, wall, start=(0.6, 1.5, 0.0)), world.now_s
+        elif shown_at is not None and world.now_s - shown_at >= 0.5:
+            world.grid, shown_at = clear, None
+        world.carry_out(run, run.tick(world.snapshot()))
+    return world, run
+
+
+class _BackAndForth:
+    """A follower that drives 0.3 m forward, is stopped by a collision ahead, drives back, is stopped
+    again, ...: never blocked for ``blocked_timeout_s`` at a time, always moving in between, going nowhere
+    (what the robot did for 150 s beside a glass pane, measurement 106)."""
+
+    def __init__(self, follower) -> None:  # type: ignore[no-untyped-def]
+        self._follower = follower
+        self._ticks = 0
+
+    def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
+        return getattr(self._follower, name)
+
+    def compute_velocity_command(self, *args, **kwargs) -> VelocityCommand:  # type: ignore[no-untyped-def]
+        self._ticks += 1
+        cycle, tick = divmod(self._ticks, 30)
+        if tick >= 20:  # 0.5 s stopped, shorter than blocked_timeout_s
+            return VelocityCommand(0.0, 0.0, FollowStatus.COLLISION_AHEAD)
+        return VelocityCommand(0.3 if cycle % 2 == 0 else -0.3, 0.0, FollowStatus.FOLLOWING)
+
+
+def _back_and_forth(params: Params) -> tuple[KinematicWorld, NavigationRun]:
+    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0), params)
+    run = _run(world, Pose2D(4.4, 1.5, 0.0))
+    run.follower = _BackAndForth(run.follower)  # type: ignore[assignment]
+    while run.active and world.now_s < 60.0 and run.recoveries == 0:
+        world.now_s += DT_S
+        world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
+        world.carry_out(run, run.tick(world.snapshot()))
+    return world, run
+
+
+def test_stopping_again_and_again_at_the_same_place_starts_a_recovery() -> None:
+    world, run = _back_and_forth(Params())
+    assert run.recoveries == 1 and run.active, f"no recovery after {world.now_s:.1f} s"
+    stops = Params().blocked_stops_max
+    assert world.now_s == pytest.approx(1.5 * stops, abs=0.6)  # at the fifth stop
+    assert not run._blocked_stops  # a recovery starts the count afresh
+    # Counting only how long each stop lasts, nothing ends it: no recovery in a minute.
+    world, run = _back_and_forth(Params.model_validate({"blocked_stops_max": 100}))
+    assert run.recoveries == 0 and run.active and world.now_s >= 60.0
+
+
+def test_stops_spread_along_the_way_are_progress_not_a_reason_to_recover() -> None:
+    world, run = _drive_past_flickers(Params())
+    assert run.recoveries == 0, f"a recovery after {world.now_s:.1f} s at {world.pose}"
+    assert world.pose.x > 3.0  # it got on, stopping every few steps
