@@ -48,6 +48,10 @@ from shared.interfaces.navigation import NavigateErrorCode
 
 log = logging.getLogger(__name__)
 
+#: A stop for a collision ahead counts towards ``blocked_stops_max`` once the robot has driven this far from
+#: the stop before it.
+DROVE_AWAY_M = 0.15
+
 #: The path ahead this close to the robot is the follower's business, not a reason to replan.
 BLOCKED_CHECK_SKIP_M = 0.15
 #: No periodic replanning this close to the goal (a new path would reset the follower's goal latch).
@@ -174,8 +178,11 @@ class NavigationRun:
         self._last_plan_request_s = -math.inf
         self._replan_wanted = False
         self._blocked_since_s: float | None = None
-        #: ``(control time, x, y)`` of the follower's recent stops for a collision ahead (``blocked_stops_max``).
+        #: ``(control time, x, y)`` of the follower's recent stops for a collision ahead (``blocked_stops_max``)
+        #: that came after driving away from the one before; where the last stop was, and whether it has since.
         self._blocked_stops: deque[tuple[float, float, float]] = deque()
+        self._last_stop_xy: tuple[float, float] | None = None
+        self._drove_since_stop = False
         self._pose_lost_since_s: float | None = None
         self._pose_lost_since_wall_s = 0.0
         self._wait_until_s = 0.0
@@ -430,6 +437,9 @@ class NavigationRun:
                 self._request_plan(snap, orders, urgent=True)
             return
         self._blocked_since_s = None
+        if self._last_stop_xy is not None and not self._drove_since_stop:
+            away_m = math.hypot(pose.x - self._last_stop_xy[0], pose.y - self._last_stop_xy[1])
+            self._drove_since_stop = away_m >= DROVE_AWAY_M
         orders.cmd = (command.linear_mps, command.angular_radps)
         if not self._progress.check(pose, self.clock_s):
             self._start_recovery(
@@ -445,15 +455,21 @@ class NavigationRun:
 
     def _stopped_too_often(self, pose: Pose2D) -> bool:
         """Count a new stop for a collision ahead: whether ``blocked_stops_max`` of them fell within the window
-        and the radius (stops spread along the way are a robot getting on, not one going back and forth)."""
+        and the radius. Only a stop after the robot drove away from the last counts (one that turns in place,
+        stopping every other tick, is blocked; ``blocked_timeout_s`` is for it), and stops spread along the
+        way are a robot getting on, not one going back and forth."""
         p = self.params
+        counts = self._last_stop_xy is None or self._drove_since_stop
+        self._last_stop_xy, self._drove_since_stop = (pose.x, pose.y), False
+        if not counts:
+            return False
         self._blocked_stops.append((self.clock_s, pose.x, pose.y))
         while self._blocked_stops and self._blocked_stops[0][0] < self.clock_s - p.blocked_stops_window_s:
             self._blocked_stops.popleft()
         near = [
-            s
-            for s in self._blocked_stops
-            if math.hypot(s[1] - pose.x, s[2] - pose.y) <= p.blocked_stops_radius_m
+            stop
+            for stop in self._blocked_stops
+            if math.hypot(stop[1] - pose.x, stop[2] - pose.y) <= p.blocked_stops_radius_m
         ]
         return len(near) >= p.blocked_stops_max
 
@@ -475,6 +491,7 @@ class NavigationRun:
         self._replan_wanted = False
         self._blocked_since_s = None
         self._blocked_stops.clear()
+        self._last_stop_xy = None
         self.follower.reset()
         self.phase = Phase.BACKING_UP
         self._backup = self.params.recovery_backup()

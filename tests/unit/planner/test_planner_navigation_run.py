@@ -231,10 +231,20 @@ class _BackAndForth:
         return VelocityCommand(0.3 if cycle % 2 == 0 else -0.3, 0.0, FollowStatus.FOLLOWING)
 
 
-def _back_and_forth(params: Params) -> tuple[KinematicWorld, NavigationRun]:
+class _TurningAtTheObstacle(_BackAndForth):
+    """A follower turning in place towards its path, stopped by the collision check every other tick."""
+
+    def compute_velocity_command(self, *args, **kwargs) -> VelocityCommand:  # type: ignore[no-untyped-def]
+        self._ticks += 1
+        if self._ticks % 2:
+            return VelocityCommand(0.0, 0.0, FollowStatus.COLLISION_AHEAD)
+        return VelocityCommand(0.0, 0.4, FollowStatus.ROTATING_TO_PATH)
+
+
+def _back_and_forth(params: Params, follower=_BackAndForth) -> tuple[KinematicWorld, NavigationRun]:  # type: ignore[no-untyped-def]
     world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0), params)
     run = _run(world, Pose2D(4.4, 1.5, 0.0))
-    run.follower = _BackAndForth(run.follower)  # type: ignore[assignment]
+    run.follower = follower(run.follower)
     while run.active and world.now_s < 60.0 and run.recoveries == 0:
         world.now_s += DT_S
         world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
@@ -257,3 +267,12 @@ def test_stops_spread_along_the_way_are_progress_not_a_reason_to_recover() -> No
     world, run = _drive_past_flickers(Params())
     assert run.recoveries == 0, f"a recovery after {world.now_s:.1f} s at {world.pose}"
     assert world.pose.x > 3.0  # it got on, stopping every few steps
+
+
+def test_stops_while_turning_in_place_are_one_stop() -> None:
+    # Stopped every other tick while it turns towards the path: one stop until the robot drives away.
+    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0), Params())
+    run = _run(world, Pose2D(4.4, 1.5, 0.0))
+    run.follower = _TurningAtTheObstacle(run.follower)  # type: ignore[assignment]
+    world.drive(run, until_s=10.0)
+    assert run.recoveries == 0 and len(run._blocked_stops) == 1
