@@ -3,8 +3,8 @@
 PLANNING (held still until the first path) -> FOLLOWING (regulated pure pursuit; replan every
 ``replan_period_s``, and at once when the costmap blocks the path or the follower sees a collision
 ahead) -> SUCCEEDED inside the goal tolerances, once stopped. A collision ahead that lasts
-``blocked_timeout_s`` (or ``blocked_stops_max`` stops for one within ``blocked_stops_window_s`` and
-``blocked_stops_radius_m``: a robot going back and forth at the same obstacle), no progress for ``progress_timeout_s``, or a failed plan
+``blocked_timeout_s`` (or as long in all, on and off, within ``blocked_window_s`` and ``blocked_radius_m``:
+a robot stopped again and again at the same obstacle), no progress for ``progress_timeout_s``, or a failed plan
 starts a recovery:
 BACKING_UP (only over free cells), then CLEARING (the lidar layer is cleared; every second recovery also
 forgets glass round the robot, or all glass once planning has failed past the fourth; the layers refill
@@ -48,9 +48,6 @@ from shared.interfaces.navigation import NavigateErrorCode
 
 log = logging.getLogger(__name__)
 
-#: A stop for a collision ahead counts towards ``blocked_stops_max`` once the robot has driven this far from
-#: the stop before it.
-DROVE_AWAY_M = 0.15
 
 #: The path ahead this close to the robot is the follower's business, not a reason to replan.
 BLOCKED_CHECK_SKIP_M = 0.15
@@ -178,11 +175,9 @@ class NavigationRun:
         self._last_plan_request_s = -math.inf
         self._replan_wanted = False
         self._blocked_since_s: float | None = None
-        #: ``(control time, x, y)`` of the follower's recent stops for a collision ahead (``blocked_stops_max``)
-        #: that came after driving away from the one before; where the last stop was, and whether it has since.
-        self._blocked_stops: deque[tuple[float, float, float]] = deque()
-        self._last_stop_xy: tuple[float, float] | None = None
-        self._drove_since_stop = False
+        #: ``(control time, seconds, x, y)`` of each control tick the follower stopped for a collision ahead,
+        #: over the last ``blocked_window_s``: the time blocked on and off at one place adds up.
+        self._blocked_ticks: deque[tuple[float, float, float, float]] = deque()
         self._pose_lost_since_s: float | None = None
         self._pose_lost_since_wall_s = 0.0
         self._wait_until_s = 0.0
@@ -417,15 +412,7 @@ class NavigationRun:
                 log.info(
                     "collision ahead at (%.2f, %.2f, %.2f): stopped, replanning", pose.x, pose.y, pose.yaw
                 )
-                if self._stopped_too_often(pose):
-                    self._start_recovery(
-                        pose,
-                        NavigateErrorCode.STUCK,
-                        f"stopped for a collision ahead {p.blocked_stops_max} times within "
-                        f"{p.blocked_stops_radius_m:g} m in {p.blocked_stops_window_s:g} s",
-                        orders,
-                    )
-                    return
+            blocked_here_s = self._blocked_here_s(pose, dt)
             if self.clock_s - self._blocked_since_s > p.blocked_timeout_s:
                 self._start_recovery(
                     pose,
@@ -433,13 +420,18 @@ class NavigationRun:
                     f"an obstacle blocked the way for {p.blocked_timeout_s:g} s",
                     orders,
                 )
+            elif blocked_here_s > p.blocked_timeout_s:
+                self._start_recovery(
+                    pose,
+                    NavigateErrorCode.STUCK,
+                    f"an obstacle blocked the way for {blocked_here_s:.1f} s on and off within "
+                    f"{p.blocked_radius_m:g} m in {p.blocked_window_s:g} s",
+                    orders,
+                )
             elif not self.follower.xy_goal_reached:
                 self._request_plan(snap, orders, urgent=True)
             return
         self._blocked_since_s = None
-        if self._last_stop_xy is not None and not self._drove_since_stop:
-            away_m = math.hypot(pose.x - self._last_stop_xy[0], pose.y - self._last_stop_xy[1])
-            self._drove_since_stop = away_m >= DROVE_AWAY_M
         orders.cmd = (command.linear_mps, command.angular_radps)
         if not self._progress.check(pose, self.clock_s):
             self._start_recovery(
@@ -453,25 +445,17 @@ class NavigationRun:
         ):
             self._request_plan(snap, orders)
 
-    def _stopped_too_often(self, pose: Pose2D) -> bool:
-        """Count a new stop for a collision ahead: whether ``blocked_stops_max`` of them fell within the window
-        and the radius. Only a stop after the robot drove away from the last counts (one that turns in place,
-        stopping every other tick, is blocked; ``blocked_timeout_s`` is for it), and stops spread along the
-        way are a robot getting on, not one going back and forth."""
+    def _blocked_here_s(self, pose: Pose2D, dt: float) -> float:
+        """Count this tick as blocked; the seconds blocked within ``blocked_window_s``, near ``pose``."""
         p = self.params
-        counts = self._last_stop_xy is None or self._drove_since_stop
-        self._last_stop_xy, self._drove_since_stop = (pose.x, pose.y), False
-        if not counts:
-            return False
-        self._blocked_stops.append((self.clock_s, pose.x, pose.y))
-        while self._blocked_stops and self._blocked_stops[0][0] < self.clock_s - p.blocked_stops_window_s:
-            self._blocked_stops.popleft()
-        near = [
-            stop
-            for stop in self._blocked_stops
-            if math.hypot(stop[1] - pose.x, stop[2] - pose.y) <= p.blocked_stops_radius_m
-        ]
-        return len(near) >= p.blocked_stops_max
+        self._blocked_ticks.append((self.clock_s, dt, pose.x, pose.y))
+        while self._blocked_ticks and self._blocked_ticks[0][0] < self.clock_s - p.blocked_window_s:
+            self._blocked_ticks.popleft()
+        return sum(
+            seconds
+            for _, seconds, x, y in self._blocked_ticks
+            if math.hypot(x - pose.x, y - pose.y) <= p.blocked_radius_m
+        )
 
     def _start_recovery(self, pose: Pose2D, code: NavigateErrorCode, reason: str, orders: NavOrders) -> None:
         p = self.params
@@ -490,8 +474,7 @@ class NavigationRun:
         self.plan = None
         self._replan_wanted = False
         self._blocked_since_s = None
-        self._blocked_stops.clear()
-        self._last_stop_xy = None
+        self._blocked_ticks.clear()
         self.follower.reset()
         self.phase = Phase.BACKING_UP
         self._backup = self.params.recovery_backup()

@@ -252,14 +252,15 @@ def _back_and_forth(params: Params, follower=_BackAndForth) -> tuple[KinematicWo
     return world, run
 
 
-def test_stopping_again_and_again_at_the_same_place_starts_a_recovery() -> None:
+def test_blocked_again_and_again_at_the_same_place_starts_a_recovery() -> None:
+    # Never blocked for blocked_timeout_s at a time, and moving in between: 0.5 s blocked each 1.5 s adds up
+    # to the 2 s at the end of the fourth stop.
     world, run = _back_and_forth(Params())
     assert run.recoveries == 1 and run.active, f"no recovery after {world.now_s:.1f} s"
-    stops = Params().blocked_stops_max
-    assert world.now_s == pytest.approx(1.5 * stops, abs=0.6)  # at the fifth stop
-    assert not run._blocked_stops  # a recovery starts the count afresh
+    assert world.now_s == pytest.approx(1.5 * 3 + 1.5, abs=0.2)
+    assert not run._blocked_ticks  # a recovery starts the sum afresh
     # Counting only how long each stop lasts, nothing ends it: no recovery in a minute.
-    world, run = _back_and_forth(Params.model_validate({"blocked_stops_max": 100}))
+    world, run = _back_and_forth(Params.model_validate({"blocked_window_s": 0.6}))
     assert run.recoveries == 0 and run.active and world.now_s >= 60.0
 
 
@@ -269,10 +270,13 @@ def test_stops_spread_along_the_way_are_progress_not_a_reason_to_recover() -> No
     assert world.pose.x > 3.0  # it got on, stopping every few steps
 
 
-def test_stops_while_turning_in_place_are_one_stop() -> None:
-    # Stopped every other tick while it turns towards the path: one stop until the robot drives away.
+def test_turning_in_place_blocked_every_other_tick_is_blocked_half_the_time() -> None:
     world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0), Params())
     run = _run(world, Pose2D(4.4, 1.5, 0.0))
     run.follower = _TurningAtTheObstacle(run.follower)  # type: ignore[assignment]
-    world.drive(run, until_s=10.0)
-    assert run.recoveries == 0 and len(run._blocked_stops) == 1
+    while run.active and world.now_s < 10.0 and run.recoveries == 0:
+        world.now_s += DT_S
+        world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
+        world.carry_out(run, run.tick(world.snapshot()))
+    assert run.recoveries == 1
+    assert world.now_s == pytest.approx(2 * Params().blocked_timeout_s, abs=0.2)
