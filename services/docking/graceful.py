@@ -233,8 +233,7 @@ class GracefulDockParams:
     #: How long the base drives on a command that turns out to be the last before its ``cmd_vel`` watchdog
     #: stops it (the simulated base's ``drive.cmd_vel_timeout_s``): the docking service killed mid-approach,
     #: the link stalled. The cap also keeps each command one the robot could end on: held this long, then
-    #: braked at ``last_command_decel_mps2``, it still meets the plate at no more than the contact speed.
-    #: Without it a docking service killed 0.1-0.2 m from the plate let the robot meet it at 0.23-0.39 m/s
+    #: braked at ``last_command_decel_mps2``, it still meets the plate at no more than the contact speed
     #: (docs/measurements, measurement 105). None: count on the next command coming.
     last_command_hold_s: float | None = 0.3
     #: The braking the watchdog's stop is counted on for: under the simulated base's 2.5 m/s**2.

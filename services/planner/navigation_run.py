@@ -3,9 +3,9 @@
 PLANNING (held still until the first path) -> FOLLOWING (regulated pure pursuit; replan every
 ``replan_period_s``, and at once when the costmap blocks the path or the follower sees a collision
 ahead) -> SUCCEEDED inside the goal tolerances, once stopped. A collision ahead that lasts
-``blocked_timeout_s`` (or as long in all, on and off, within ``blocked_window_s`` and ``blocked_radius_m``:
-a robot stopped again and again at the same obstacle), no progress for ``progress_timeout_s``, or a failed plan
-starts a recovery:
+``blocked_timeout_s`` (or as long in all, on and off, within ``blocked_window_s`` and
+``blocked_radius_m``: a robot stopped again and again at the same obstacle), no progress for
+``progress_timeout_s``, or a failed plan starts a recovery:
 BACKING_UP (only over free cells), then CLEARING (the lidar layer is cleared; every second recovery also
 forgets glass round the robot, or all glass once planning has failed past the fourth; the layers refill
 for ``recovery_wait_s``), then PLANNING again. A failed plan first asks once for a way through
@@ -47,7 +47,6 @@ from shared.geometry import Pose2D
 from shared.interfaces.navigation import NavigateErrorCode
 
 log = logging.getLogger(__name__)
-
 
 #: The path ahead this close to the robot is the follower's business, not a reason to replan.
 BLOCKED_CHECK_SKIP_M = 0.15

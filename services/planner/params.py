@@ -182,9 +182,9 @@ class Params(ServiceParams):
     required_rotation_rad: float = Field(0.5, gt=0.0, description="... or turn this much")
     blocked_timeout_s: float = Field(2.0, gt=0.0, description="a collision ahead this long starts a recovery")
     #: A robot stopped for a collision ahead, turning or creeping a little and stopped again is never blocked
-    #: for blocked_timeout_s at a time, and its moves count as progress: in the shipped glass room it went on
-    #: so beside the pane for 120-150 s (docs/measurements, measurement 106). So the time blocked is summed
-    #: as well: blocked_timeout_s of it in all, within blocked_window_s and blocked_radius_m, is blocked too.
+    #: for blocked_timeout_s at a time, and its moves count as progress (beside a glass pane, measurement 106).
+    #: So the time blocked is summed as well: blocked_timeout_s of it in all, within blocked_window_s and
+    #: blocked_radius_m, is blocked too.
     blocked_window_s: float = Field(
         20.0, gt=0.0, description="blocked_timeout_s in all within this long (sim) starts a recovery too ..."
     )
