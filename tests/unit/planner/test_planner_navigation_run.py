@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 
 import pytest
 
@@ -80,10 +81,21 @@ class KinematicWorld:
                 outcome = PlanOutcome(request, None, str(exc), blocked_end_of(exc))
             self.carry_out(run, run.plan_outcome(outcome, self.snapshot()))
 
-    def drive(self, run: NavigationRun, until_s: float) -> None:
-        while run.active and self.now_s < until_s:
+    def drive(
+        self,
+        run: NavigationRun,
+        until_s: float,
+        *,
+        until_recovery: bool = False,
+        before_tick: Callable[[], None] | None = None,
+    ) -> None:
+        """Step the robot and the run until ``until_s`` (or the run's end, or its first recovery);
+        ``before_tick`` changes the world between the robot's step and the run's tick."""
+        while run.active and self.now_s < until_s and not (until_recovery and run.recoveries):
             self.now_s += DT_S
             self.pose = self.pose.advance(self.cmd[0], self.cmd[1], DT_S)
+            if before_tick is not None:
+                before_tick()
             self.carry_out(run, run.tick(self.snapshot()))
 
 
@@ -195,10 +207,10 @@ def _drive_past_flickers(params: Params) -> tuple[KinematicWorld, NavigationRun]
     clear = _grid()
     world = KinematicWorld(clear, Pose2D(0.6, 1.5, 0.0), params)
     run = _run(world, Pose2D(4.4, 1.5, 0.0))
-    shown_at = None
-    while run.active and world.now_s < 30.0 and run.recoveries == 0:
-        world.now_s += DT_S
-        world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
+    shown_at: float | None = None
+
+    def flicker() -> None:
+        nonlocal shown_at
         if world.now_s % 1.5 < DT_S and world.now_s > 1.0:
             pose = world.pose
             cx, cy = pose.x + 0.45 * math.cos(pose.yaw), pose.y + 0.45 * math.sin(pose.yaw)
@@ -207,7 +219,8 @@ def _drive_past_flickers(params: Params) -> tuple[KinematicWorld, NavigationRun]
             world.grid, shown_at = room_grid(5.0, wall, start=(0.6, 1.5, 0.0)), world.now_s
         elif shown_at is not None and world.now_s - shown_at >= 0.5:
             world.grid, shown_at = clear, None
-        world.carry_out(run, run.tick(world.snapshot()))
+
+    world.drive(run, 30.0, until_recovery=True, before_tick=flicker)
     return world, run
 
 
@@ -245,10 +258,7 @@ def _back_and_forth(params: Params, follower=_BackAndForth) -> tuple[KinematicWo
     world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0), params)
     run = _run(world, Pose2D(4.4, 1.5, 0.0))
     run.follower = follower(run.follower)
-    while run.active and world.now_s < 60.0 and run.recoveries == 0:
-        world.now_s += DT_S
-        world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
-        world.carry_out(run, run.tick(world.snapshot()))
+    world.drive(run, 60.0, until_recovery=True)
     return world, run
 
 
@@ -271,12 +281,6 @@ def test_stops_spread_along_the_way_are_progress_not_a_reason_to_recover() -> No
 
 
 def test_turning_in_place_blocked_every_other_tick_is_blocked_half_the_time() -> None:
-    world = KinematicWorld(_grid(), Pose2D(0.6, 1.5, 0.0), Params())
-    run = _run(world, Pose2D(4.4, 1.5, 0.0))
-    run.follower = _TurningAtTheObstacle(run.follower)  # type: ignore[assignment]
-    while run.active and world.now_s < 10.0 and run.recoveries == 0:
-        world.now_s += DT_S
-        world.pose = world.pose.advance(world.cmd[0], world.cmd[1], DT_S)
-        world.carry_out(run, run.tick(world.snapshot()))
+    world, run = _back_and_forth(Params(), follower=_TurningAtTheObstacle)
     assert run.recoveries == 1
     assert world.now_s == pytest.approx(2 * Params().blocked_timeout_s, abs=0.2)
