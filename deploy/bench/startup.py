@@ -52,14 +52,20 @@ def _timed(argv: list[str]) -> float:
     return time.perf_counter() - start
 
 
-def _import_s(module: str) -> float:
+def _import_s(module: str) -> tuple[float, int, int]:
     """Seconds the import itself takes, timed inside the interpreter (its exit, which unloads Zenoh and
-    numpy, is not part of a service's start)."""
-    code = f"import time; t = time.perf_counter(); import {module}; print(time.perf_counter() - t)"
+    numpy, is not part of a service's start); then how many zendock modules it imported, and how many of
+    those it compiled from source for want of a fresh bytecode cache (:mod:`deploy.bench.bytecode`)."""
+    code = (
+        f"import time; t = time.perf_counter(); import {module}; took = time.perf_counter() - t; "
+        "from pathlib import Path; from deploy.bench.bytecode import compiled_from_source; "
+        f"print(took, *compiled_from_source(Path({str(REPO_ROOT)!r})))"
+    )
     done = subprocess.run(
         [sys.executable, "-c", code], cwd=REPO_ROOT, check=True, capture_output=True, text=True, timeout=120
     )
-    return float(done.stdout.strip().splitlines()[-1])
+    took, modules, compiled = done.stdout.strip().splitlines()[-1].split()
+    return float(took), int(modules), int(compiled)
 
 
 def _report(reports: BinaryIO, timeout_s: float = 60.0) -> list[bytes]:
@@ -196,7 +202,8 @@ def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> di
             report["interpreter_ms"] = round(1000 * interpreter, 1)
             for service in wanted:
                 module = f"services.{service}.node"
-                imports = median(_import_s(module) for _ in range(repeats))
+                samples = [_import_s(module) for _ in range(repeats)]
+                imports = median(took for took, _, _ in samples)
                 ready = [
                     _to_token(service, commands[service], endpoint, f"startup{i}", session)
                     for i in range(repeats)
@@ -208,6 +215,9 @@ def run_startup_bench(repeats: int = 5, services: list[str] | None = None) -> di
                 report["services"][service] = {
                     "interpreter_ms": round(1000 * interpreter, 1),
                     "imports_ms": round(1000 * imports, 1),
+                    # zendock's own modules the import loaded, and how many it compiled from source
+                    "own_modules": samples[-1][1],
+                    "compiled_from_source": max(compiled for _, _, compiled in samples),
                     # parameters, the session, the node's declarations, the token's trip to the router
                     "session_and_ready_ms": round(1000 * (median(ready) - interpreter - imports), 1),
                     "to_token_ms": round(1000 * median(ready), 1),

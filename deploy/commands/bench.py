@@ -423,6 +423,18 @@ def _bench_startup(args: argparse.Namespace) -> int:
     for name, row in report["services"].items():
         heavy = ", ".join(f"{module} {ms:.0f} ms" for module, ms in row["top_imports_ms"].items())
         print(f"{name}: heaviest imports {heavy}")
+    compiled = {name: row["compiled_from_source"] for name, row in report["services"].items()}
+    if any(compiled.values()):
+        counts = ", ".join(
+            f"{name} {n} of {report['services'][name]['own_modules']}" for name, n in compiled.items() if n
+        )
+        print(
+            f"modules compiled from source on import (no fresh bytecode cache): {counts}; these imports "
+            "include compiling them: `make` (or `python -m compileall -q shared services deploy`) writes "
+            "the cache, which PYTHONDONTWRITEBYTECODE stops Python from writing itself"
+        )
+    else:
+        print("every zendock module came from its bytecode cache")
     return 0
 
 
