@@ -27,8 +27,8 @@ $(TEST_STAMP): $(STAMP)
 	touch $(TEST_STAMP)
 
 # zendock's own bytecode. Python writes a module's cache on its first import unless PYTHONDONTWRITEBYTECODE
-# is set; with it set and no cache, every service start compiles all it imports, about half of its
-# imports' time (docs/measurements, 107). compileall writes only what is missing or older than its source.
+# is set; with it set and no cache, every service start compiles all it imports (what that costs:
+# docs/measurements, 107). compileall writes only what is missing or older than its source.
 bytecode: $(STAMP)
 	$(BIN)/python -m compileall -q -j 0 shared services deploy
 

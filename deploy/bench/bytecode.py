@@ -3,9 +3,9 @@
 Python compiles a module's source each time it imports it unless a ``__pycache__`` file as new as the
 source exists; it writes that file on the first import unless ``PYTHONDONTWRITEBYTECODE`` is set. With
 it set and no cache (a fresh clone on a machine that sets it), every service start compiles every zendock
-module it imports, about half of its imports' time (measurement 107). ``make`` writes the cache
-(``compileall``), and ``zendock bench startup`` says how many modules a service compiled, so a start-up
-figure is never read without knowing which of the two it measured.
+module it imports (what that costs: measurement 107). ``make`` writes the cache (``compileall``), and
+``zendock bench startup`` says how many modules a service compiled, so a start-up figure is never read
+without knowing which of the two it measured.
 """
 
 from __future__ import annotations
