@@ -303,6 +303,7 @@ def run_trials(
     try:
         for r, bound in zip(results, lower_bound_parts(options.world, pairs)):
             r.lower_bound_s = bound.seconds
+            r.way_width_m = bound.way_width_m
             record = records.get(r.index)
             if record is not None and r.charging:
                 r.over_bound_s = time_over_bound(r.phase_s, record.phase_lengths_m(), bound)

@@ -97,6 +97,9 @@ class TrialResult:
     collisions: int
     path_length_m: float
     lower_bound_s: float = math.nan
+    #: The widest way's narrowest gap from where docking began to the dock, glass solid (the lower-bound
+    #: tool's, :mod:`services.planner.way_width`; NaN: no bound computed).
+    way_width_m: float = math.nan
     wall_s: float = 0.0
     sim_s: float = 0.0
     #: The planner's glass memory after the trial (see :mod:`deploy.glass_report`; NaN: none written yet).

@@ -63,4 +63,6 @@ def _bound(answer: dict[str, float | None]) -> LowerBound:
         value = answer.get(key)
         return math.nan if value is None else float(value)
 
-    return LowerBound(number("lower_bound_s"), number("path_length_m"), number("turn_rad"))
+    return LowerBound(
+        number("lower_bound_s"), number("path_length_m"), number("turn_rad"), number("way_width_m")
+    )

@@ -123,6 +123,7 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "success_rate": "no trials",
         "achieved_rtf": "the simulator's clock did not answer",
         "lower_bound_s": "no lower bound for this trial's start (see errors in trials.json)",
+        "way_width_m": "no lower bound for this trial's start (see errors in trials.json)",
         "dock_time_s": "the trial did not charge",
         "lateral_error_m": "the contacts never touched",
         "yaw_error_rad": "the contacts never touched",

@@ -42,6 +42,8 @@ class LowerBound:
     seconds: float
     path_length_m: float
     turn_rad: float
+    #: The widest way's narrowest gap (NaN: not given).
+    way_width_m: float = math.nan
 
     @property
     def turn_s(self) -> float:

@@ -3,7 +3,9 @@
 ``lower_bound_s = L / v_max + turns / w_max``: ``L`` is the shortest collision-free path length for
 the robot's inscribed circle with glass as solid as any wall (:mod:`services.planner.shortest_path`),
 ``turns`` the heading changes that path forces (from the start heading onto the first leg, at each
-corner, and onto the goal heading). Run it as a process so tools stay apart from the planner's code::
+corner, and onto the goal heading). Each answer also gives ``way_width_m``, the widest way's narrowest
+gap, glass solid (:mod:`services.planner.way_width`): how tight the way is that the bound assumes the
+robot can take. Run it as a process so tools stay apart from the planner's code::
 
     python -m services.planner.lower_bound --world W --start X Y YAW --goal X Y YAW
     python -m services.planner.lower_bound --world W --batch   # JSON lines {"start": [...], "goal": [...]} on stdin
@@ -20,8 +22,9 @@ import numpy as np
 
 from services.planner.astar import PlanningError
 from services.planner.costmap import CostGrid
-from services.planner.shortest_path import shortest_path, solid_grid
+from services.planner.shortest_path import shortest_path, solid_grid, solid_map
 from services.planner.smoothing import path_length_m
+from services.planner.way_width import WayWidths
 from shared.config_errors import ConfigError
 from shared.geometry import Pose2D, wrap_angle
 from shared.world import load_world
@@ -72,10 +75,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not args.batch and (args.start is None or args.goal is None):
         parser.error("give --start and --goal, or --batch")
     try:
-        grid = solid_grid(load_world(args.world))
+        world = load_world(args.world)
     except ConfigError as exc:
         print(f"{parser.prog}: {exc}", file=sys.stderr)
         return 2
+    occupancy = solid_map(world)
+    grid = solid_grid(world, occupancy=occupancy)
+    ways: dict[tuple[float, float], WayWidths] = {}  # one search per goal, every start it is asked from
     queries = (
         [{"start": args.start, "goal": args.goal}]
         if not args.batch
@@ -84,9 +90,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     failed = 0
     for query in queries:
         try:
-            result = lower_bound(
-                grid, Pose2D(*query["start"]), Pose2D(*query["goal"]), args.max_linear, args.max_angular
-            )
+            start, goal = Pose2D(*query["start"]), Pose2D(*query["goal"])
+            result = lower_bound(grid, start, goal, args.max_linear, args.max_angular)
+            if (goal.x, goal.y) not in ways:
+                ways[(goal.x, goal.y)] = WayWidths(occupancy, (goal.x, goal.y))
+            result["way_width_m"] = round(ways[(goal.x, goal.y)].width_m((start.x, start.y)), 3)
         except (PlanningError, KeyError, TypeError, ValueError) as exc:
             failed += 1
             result = {"error": str(exc), "lower_bound_s": None}

@@ -13,9 +13,16 @@ import numpy as np
 
 from services.planner.astar import AStarParams, AStarPlanner
 from services.planner.costmap import CostGrid, CostmapParams, LayeredCostmap
+from services.planner.occupancy_map import OccupancyMap
 from services.planner.rasterize import map_from_world
 from services.planner.smoothing import SmoothingParams, path_length_m, shortcut_path
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, World
+
+
+def solid_map(world: World, resolution_m: float = 0.05) -> OccupancyMap:
+    """Every surface the robot can touch, glass too, rasterised."""
+    solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
+    return map_from_world(solid, resolution_m=resolution_m)
 
 
 def solid_grid(
@@ -23,10 +30,12 @@ def solid_grid(
     resolution_m: float = 0.05,
     robot_length_m: float = ROBOT_LENGTH_M,
     robot_width_m: float = ROBOT_WIDTH_M,
+    occupancy: OccupancyMap | None = None,
 ) -> CostGrid:
-    """Every surface the robot can touch (glass too), inflated to the inscribed radius only."""
-    solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
-    occupancy = map_from_world(solid, resolution_m=resolution_m)
+    """Every surface the robot can touch (glass too, or ``occupancy`` already drawn by :func:`solid_map`),
+    inflated to the inscribed radius only."""
+    if occupancy is None:
+        occupancy = solid_map(world, resolution_m)
     inscribed_radius_m = 0.5 * min(robot_length_m, robot_width_m)
     params = CostmapParams(
         robot_length_m=robot_length_m, robot_width_m=robot_width_m, inflation_radius_m=inscribed_radius_m

@@ -61,3 +61,6 @@ def test_a_campaign_over_fresh_glass_rooms_docks_in_each(tmp_path: Path) -> None
     assert set(summary["worlds"]) == {"generated-glass-1", "generated-glass-2-2"}, summary["worlds"]
     assert all(w["n"] == 1 for w in summary["worlds"].values())
     assert summary["max_arrival_speed_mps"] <= ARRIVAL_SPEED_LIMIT_MPS, summary
+    # Each trial says how wide its way to the dock is at its narrowest (a robot is 0.3 m wide).
+    trials = [json.loads(p.read_text())["trials"][0] for p in sorted(tmp_path.glob("trials-*/trials.json"))]
+    assert len(trials) == 2 and all(0.3 < t["way_width_m"] <= 3.0 for t in trials), trials
