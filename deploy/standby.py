@@ -1,11 +1,11 @@
 """A warm standby for one of zendock's services: ``python -m deploy.standby services.<name> FLAGS``.
 
-A restarted service spends most of its recovery importing (numpy, pydantic, Zenoh, its own modules: 0.4-0.6 s
-of CPU on the development machine, several seconds of wall time on a loaded one), then a tenth of that
-opening its session. A standby pays the imports once, ahead of time, and then forks the service on demand,
-as a zygote does: each ``go`` line on its standard input forks a child that becomes the service, with the
-standby's flags and environment, in a session of its own, while the standby stays ready for the next one.
-The child opens its Zenoh session after the fork; the standby never opens one.
+A restarted service spends most of its recovery importing (numpy, pydantic, Zenoh, its own modules; far longer
+on a loaded machine), then much less opening its session (measurements 28 and 107). A standby pays the imports
+once, ahead of time, and then forks the service on demand, as a zygote does: each ``go`` line on its standard
+input forks a child that becomes the service, with the standby's flags and environment, in a session of its
+own, while the standby stays ready for the next one. The child opens its Zenoh session after the fork; the
+standby never opens one.
 
 The standby is the children's parent, so it reports on the file descriptor named by
 ``ZENDOCK_STANDBY_STATUS_FD``, one line each: ``started PID`` after a fork, ``exited PID CODE`` once a child

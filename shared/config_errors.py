@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:  # pydantic costs 15 MB of RSS; the router and other lean processes never load it
+if TYPE_CHECKING:  # pydantic is heavy (measurement 61); the router and other lean processes never load it
     from pydantic import ValidationError
 
 #: The exit code of a process stopped by a :class:`ConfigError` (a service, a ``zendock`` command), as

@@ -5,8 +5,8 @@
 
 Image-sized temporaries (a camera frame's working arrays, made and dropped fifteen times a second) are
 left to glibc's own rule: after the first one is freed they come from the heap and are reused. Returning
-each to the system (a fixed ``mmap`` threshold) kept the simulator's steady RSS 5 MB lower but not its
-peak, and its page faults made a rendered frame cost 35 % more CPU (measurement 61).
+each to the system (a fixed ``mmap`` threshold) kept the simulator's steady RSS lower but not its peak,
+and its page faults made every rendered frame dearer (measurement 61).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ def keep_openssl_out() -> bool:
     """Make ``hashlib`` and ``hmac`` use the interpreter's own hashes instead of OpenSSL's; call it first thing.
 
     pydantic imports ``secrets``, hence ``hmac`` and ``hashlib``, whose ``_hashlib`` maps OpenSSL's
-    libcrypto: 3.5 MB of RSS in each service, none of which hashes more than a few kB (the glass memory's
-    digest). Without ``_hashlib`` both modules fall back to the built-in md5, sha1, sha2, sha3 and blake2;
+    libcrypto into every service's memory (measurement 61), and none of them hashes more than a few kB (the
+    glass memory's digest). Without ``_hashlib`` both modules fall back to the built-in md5, sha1, sha2, sha3 and blake2;
     what only OpenSSL has (``pbkdf2_hmac``, ``scrypt``) is then missing. True when it took effect: False
     once something has imported ``_hashlib`` already.
     """
@@ -37,8 +37,8 @@ def skip_pydantic_plugin_scan() -> None:
     """Turn pydantic's plugins off unless the environment says otherwise; call it before the first model.
 
     The first pydantic model a process defines makes pydantic read the entry points of every installed
-    distribution, looking for plugins: 10-15 ms of a service's start in the development environment, which
-    holds a few hundred distributions. zendock uses no pydantic plugin. Setting the variable (to an empty
+    distribution, looking for plugins, a cost that grows with what is installed (measurement 97). zendock
+    uses no pydantic plugin. Setting the variable (to an empty
     value, say) keeps whatever the user chose.
     """
     os.environ.setdefault(PYDANTIC_PLUGINS_ENV, "__all__")

@@ -128,7 +128,7 @@ def parse_parameter_value(text: str) -> Any:
     plain = _plain_scalar(text)
     if plain is not _NOT_PLAIN:
         return plain
-    import yaml  # noqa: PLC0415 - most services are given only plain scalars, and yaml costs 20 ms to import
+    import yaml  # noqa: PLC0415 - most services are given only plain scalars, and yaml is slow to import
 
     try:
         return yaml.safe_load(text) if text.strip() else ""

@@ -17,8 +17,8 @@ DEFAULT_ROUTER_ENDPOINT = "tcp/127.0.0.1:7447"
 #: Batches a link may queue at the data priority, where every zendock message goes (Zenoh's default: 2).
 #: A simulator step puts several express samples at once (clock, odometry, tf, ranges, the dock's contact),
 #: each its own batch, and a camera frame is five; with two slots, whatever finds the queue full for 1 ms
-#: is dropped. On a busy machine the sending thread is often that late, so recording everything while the
-#: camera streamed lost about one sample in fifty. Sixteen 64 kB batches hold a step and a frame.
+#: is dropped. On a busy machine the sending thread is often that late, and recording everything while the
+#: camera streamed lost samples (measurement 59). Sixteen 64 kB batches hold a step and a frame.
 TX_QUEUE_BATCHES = 16
 
 

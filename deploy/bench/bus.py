@@ -10,8 +10,8 @@ subscriber callbacks; the payloads are the same 84-byte Twist; the messages (typ
 (raw) are built before the clock starts, as the raw payload always was (making a message is the
 application's work, not the bus's). Both echoes run for the whole bench and the pinger alternates
 between them round by round, in ABBA order: machine load on a shared host drifts over seconds, and
-with blocks of rounds a drift would land on one path more than the other (ratios of the same build
-ranged 1.10 to 1.27 that way); round by round both paths see the same machine.
+with blocks of rounds a drift would land on one path more than the other; round by round both paths
+see the same machine.
 """
 
 from __future__ import annotations

@@ -67,9 +67,8 @@ class Backoff:
 
     A run that lasted ``reset_after_s`` or longer, or passed its healthcheck, ends the streak, so a service
     killed now and then restarts quickly while one that crashes at start-up settles at one attempt every
-    ``max_s``. The first
-    delay is 0.1 s, as Docker's restart policy starts: a service starts in 0.2-0.3 s on a quiet machine,
-    so a longer first wait would be most of a recovery.
+    ``max_s``. The first delay is 0.1 s, as Docker's restart policy starts: a longer first wait would be
+    most of a recovery (how long a start takes: measurement 107).
 
     A service that was healthy and then died (killed, or a fault long after start) is restarted at once
     the first time within ``reset_after_s``: the wait guards against crash loops, and one death after a

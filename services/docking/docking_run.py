@@ -100,8 +100,7 @@ class DockingConfig:
     handover_distance_m: float | None = None
     handover_min_back_m: float = 0.45
     #: A robot coming side-on (up to 1.6 rad off the dock's heading) is taken over while it can still curve
-    #: onto the axis at speed, rather than stopped at the staging pose to turn on the spot (an angled dock's
-    #: room start, seed 31: 13.8 s to charging handed over up to 1 rad, 12.8 s up to 1.6 rad).
+    #: onto the axis at speed, rather than stopped at the staging pose to turn on the spot (measurement 77).
     handover_yaw_rad: float = 1.6
     handover_bearing_rad: float = 1.2
     #: This close to the staging pose any heading will do: the approach turns on the spot, as navigation
@@ -136,10 +135,9 @@ class DockingConfig:
 
 #: Where a dock's marker could be in a forward camera's view: its range, its bearing from the robot's
 #: heading within the camera's 70 degree field of view less the marker's own width, and the marker seen at
-#: most this far off its normal (it faces back along the dock's axis, towards the staging pose; rendered
-#: frames of the shipped dock show it found up to 80 degrees off at 1.5 m, not from behind the dock). Past
-#: 30 degrees of bearing the marker is rarely found, most often while the robot turns onto the dock at the
-#: staging pose with its camera side-on (the frame counts are in commit 6de8902's message).
+#: most this far off its normal (it faces back along the dock's axis, towards the staging pose, and is not
+#: seen from behind the dock). Past this bearing the marker is rarely found, mostly while the robot turns
+#: onto the dock at the staging pose with its camera side-on (measurement 66).
 DETECTION_VIEW_RANGE_M = 3.5
 DETECTION_VIEW_BEARING_RAD = math.radians(30.0)
 DETECTION_VIEW_OFF_NORMAL_RAD = math.radians(80.0)
@@ -284,9 +282,9 @@ class DockingRun(Task[RunPhase]):
         only while the marker is within ``DETECTION_VIEW_RANGE_M`` and ``DETECTION_VIEW_BEARING_RAD`` of
         the robot's heading, the robot in front of it (not while it turns onto the dock at the staging
         pose), until the camera is too close to hold the marker (``DETECTION_BLIND_M``). Without a pose
-        yet it looks anyway. Not on the way: in 203 camera dockings, frames taken on the way were two
-        thirds of all frames, and dockings without them took the same time to the same precision (far
-        detections are the least precise, and the approach refines the dock pose from the staging pose).
+        yet it looks anyway. Not on the way: frames taken there were most of all frames, and dockings
+        without them were as quick and as precise (measurement 66; far detections are the least precise,
+        and the approach refines the dock pose from the staging pose).
         """
         if not self.config.use_detection or self.done or self.phase not in _SEEKS_DETECTIONS:
             return False

@@ -223,8 +223,8 @@ class GracefulDockParams:
     #: (``arrival_hold_periods``) eats into the margin and into the base's 1 m/s**2 of braking above the cap's.
     arrival_margin_m: float = 0.005
     #: Deceleration the arrival speed cap plans with (keep it under the robot's braking limit, 2.5 m/s**2
-    #: on the simulated base). With the control period and the margin, 1.5 slows the robot from 0.5 m/s
-    #: only in the last 0.11 m before the contacts' reach; 0.5 took the last 0.24 m.
+    #: on the simulated base). Braking harder starts the slowdown later, so less of the approach is driven
+    #: slowly (measurement 78).
     approach_decel_mps2: float = 1.5
     #: How many control periods the cap counts a command to hold for before the next one takes over: two,
     #: because at high speed-ups a tick can come up to a period late in simulated time (the world waits only

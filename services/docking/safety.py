@@ -69,8 +69,8 @@ class LidarReturns:
     """One scan's finite returns in base_link, worked out when first asked for and then kept.
 
     The docking service hears every scan but looks at one only on an approach that watches for obstacles
-    and when it picks a dock with the fleet down; turning every scan into points as it arrived took 3.5 %
-    of a composed fleet robot's busy time in a profile, for points it almost never looked at.
+    and when it picks a dock with the fleet down; turning every scan into points as it arrived cost CPU
+    for points it almost never looked at (measurement 71).
     """
 
     __slots__ = ("_scan", "_points")

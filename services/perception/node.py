@@ -75,8 +75,8 @@ class Params(ServiceParams):
     opencv_threads: int = Field(
         1,
         ge=0,
-        description="threads OpenCV may use (0: one per core); one costs "
-        "20 % less CPU a frame where the cores are busy",
+        description="threads OpenCV may use (0: one per core); one is cheaper where the cores are "
+        "busy (measurement 62)",
     )
 
 
@@ -111,8 +111,8 @@ class PerceptionService:
         node.create_subscription(Float64MultiArray, topics.POSE2D, self._on_robot_pose, QoS(depth=1))
         #: Images are read only while someone wants what comes of them (Zenoh's matching status on this
         #: service's outputs), so the simulator renders no frame that nobody uses. The demand is followed
-        #: as Zenoh reports each change: flat out, a poll even every 0.2 s of wall time let a dozen frames
-        #: through after the docking service had let go of its detections.
+        #: as Zenoh reports each change: a poll, however often, let frames through after the docking
+        #: service had let go of its detections (measurement 66).
         self._image_sub: Subscription[Image] | None = None
         if DETECTORS[params.dock_detector].camera:
             for pub in (self.detected_pub, self.detections_pub, self.debug_pub):

@@ -1,7 +1,7 @@
 """Costmap updates off the control thread: one worker thread folds the sensors in and re-inflates.
 
-An update (the scan, the sonar, inflation) takes a few milliseconds of CPU, and 50-120 ms of wall time
-when six robots share two cores. On the node's one executor it held the 20 Hz control tick behind it;
+An update (the scan, the sonar, inflation) takes a few milliseconds of CPU, and far more wall time when
+robots share a busy machine. On the node's one executor it held the 20 Hz control tick behind it;
 the simulator, which waits for a robot whose command is late, then held the whole world (measurement 74).
 Here updates run on a thread of their own, as A* already does (:mod:`services.planner.planning_worker`):
 the control tick waits at most for the interpreter, not for a whole update.

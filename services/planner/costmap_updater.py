@@ -202,7 +202,8 @@ class CostmapUpdater:
     def heard_glass_xy(self) -> np.ndarray:
         """Centres ``(N, 2)`` of the cells the sonar heard glass in round the robot as of the last update:
         within :data:`HEARD_GLASS_MARGIN_M` past the slowdown radius, what the next control ticks need
-        (the whole grid took 0.4 ms, ten times a second). None heard, no pose yet, or no slowdown: empty."""
+        (the whole grid at every update would be wasted work: measurement 75). None heard, no pose yet, or
+        no slowdown: empty."""
         radius = self._params.glass_slowdown_radius_m
         pose = self.last_pose
         if self.glass is None or radius <= 0 or pose is None:

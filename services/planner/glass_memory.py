@@ -29,19 +29,18 @@ held arcs never enter the memory kept on file and never count in the yardstick; 
 
 A pane goes on in its own direction, too: a run of marks along a straight line, long enough to be a pane,
 is carried on along that line past both ends, through floor the sonar has never looked at, for
-``pane_extension_m`` (:mod:`services.planner.pane_extension`). Rounding the far end of a pane it had heard
-only from afar, the robot found the last marks 0.6-1.3 m short of the end, past the suspicion radius, and
-its corner clipped the end in 5 of 30 composed glass-room runs. No extension comes back into floor a
-recovery has just cleared round the robot.
+``pane_extension_m`` (:mod:`services.planner.pane_extension`). Rounding the far end of a pane heard only
+from afar, the last marks can lie short of the end by more than the suspicion radius, and the robot's corner
+clipped the end (measurement 81). No extension comes back into floor a recovery has just cleared round the
+robot.
 
 Suspicion follows a heard pane's line as well (:meth:`GlassMemory.heard_line_mask`). A pane heard only from
 afar and at a slant is often never marked: its far echoes give too little evidence, and the evidence lands
 a few centimetres off the pane (the nearest echo comes from the cone's edge, the evidence goes mostly to its
-middle). Suspicion round such heard cells stopped 0.4-0.75 m short of the glass room's pane end, and with
-every reading placed by its own odometry the robot still rounded the end with 6-14 cm to spare in 4 of 40
-runs on a loaded machine (at least 20 cm with this). So a run of heard cells along a line is carried on
-along it for up to ``HEARD_LINE_EXTENSION_M``, and unlooked-at floor within the suspicion radius of that
-line is suspected too. The line itself may cross floor the sonar has looked at (it runs a few centimetres
+middle). Suspicion round such heard cells stopped short of the pane's end, and even with every reading
+placed by its own odometry the robot rounded the end with too little to spare (measurement 92). So a run of
+heard cells along a line is carried on along it for up to ``HEARD_LINE_EXTENSION_M``, and unlooked-at floor
+within the suspicion radius of that line is suspected too. The line itself may cross floor the sonar has looked at (it runs a few centimetres
 off the pane); only the floor nobody looked at is suspected.
 
 The node folds the glass into the costmap's static layer (it is as good as a wall until cleared), so
@@ -75,11 +74,11 @@ EXCUSED_RADIUS_SHARE = 0.5
 #: cells that lie whole inside its cone by this margin.
 SENSOR_POSE_MARGIN_M = 0.01
 #: A run of heard cells along a line seeds suspicion this far past its ends (at most the pane extension):
-#: enough to reach the glass room's pane end from the last cell heard from afar (0.75 m short of it).
+#: enough to reach a pane's end from the last cell heard from afar (measurement 92).
 HEARD_LINE_EXTENSION_M = 0.8
 #: The heard lines are drawn again only when this many heard cells (or this share of them) changed since
-#: they were last drawn: each echo changes a few, and finding the lines through a hall's 2,400 heard cells
-#: took 30-60 ms, at every costmap update.
+#: they were last drawn: each echo changes a few, and finding the lines through a large hall's heard cells
+#: is too dear for every costmap update (measurement 92).
 HEARD_LINE_REUSE_CELLS = 8
 HEARD_LINE_REUSE_SHARE = 0.03
 
@@ -401,8 +400,8 @@ class GlassMemory:
         while replanning several times a second).
 
         With ``near_xy``, only the cells in the box bounding the circle of ``radius_m`` round it (some of
-        them farther than ``radius_m``, at the box's corners): the slowdown asks ten times a second, and
-        searching the whole grid each time took 2.7 % of a composed fleet robot's busy time in a profile."""
+        them farther than ``radius_m``, at the box's corners): the slowdown asks at every control tick, and
+        searching the whole grid each time is wasted work (measurement 71)."""
         if near_xy is None or not math.isfinite(radius_m):
             rows, cols = slice(0, self.frame.height), slice(0, self.frame.width)
         else:
@@ -411,7 +410,8 @@ class GlassMemory:
         if self._held:
             heard = heard | self.held_mask()[rows, cols]
         if self.pane_extension_m > 0:
-            # Where a pane probably goes on unheard, too: the robot rounded such ends at 0.45 m/s.
+            # Where a pane probably goes on unheard, too: otherwise the robot rounds such ends at full speed
+            # (measurement 81).
             heard = heard | self.pane_extension_mask()[rows, cols]
         iy, ix = np.nonzero(heard)
         return self.frame.cells_to_world(np.stack([ix + cols.start, iy + rows.start], axis=1))
@@ -504,10 +504,10 @@ class GlassMemory:
         unseen continuation (see :meth:`pane_extension_mask`), or on a held arc.
 
         Suspicion grows from every heard cell, not only from marks: rounding a pane's end seen obliquely,
-        the last marks lay 0.3 m short of the end and the cells between held only echoes from the cone's
-        edge, too weak to mark. Suspicion from the marks alone stopped short of the end, and the robot's
-        front corner clipped it in 11 of 35 runs of the glass room's planner test. It grows from where a
-        heard run's line goes on, too (:meth:`heard_line_mask`)."""
+        the last marks lay short of the end and the cells between held only echoes from the cone's edge,
+        too weak to mark. Suspicion from the marks alone stopped short of the end, and the robot's front
+        corner clipped it (measurement 68). It grows from where a heard run's line goes on, too
+        (:meth:`heard_line_mask`)."""
         glass = (self._log_odds >= self.model.mark_log_odds) | self.suspicion_mask(suspicion_share)
         if self.pane_extension_m > 0:
             glass = glass | self.pane_extension_mask()

@@ -1,8 +1,8 @@
 """Where a pane the sonar has only partly seen probably goes on: along its own line, past its last mark.
 
 The sonar looks forward through a narrow cone, so a pane is marked only where the robot faced it. Rounding
-the pane's far end, the robot faces away from it: the last marks can lie 0.6-1.3 m short of the real end
-(the glass room, heard from the north-west), the floor between is open on every layer, and the planner's
+the pane's far end, the robot faces away from it: the last marks can lie well short of the real end
+(measurement 81), the floor between is open on every layer, and the planner's
 path grazes the unseen end. Suspicion round the heard cells (:mod:`services.planner.glass_memory`) reaches
 only ``suspicion_radius_m`` in every direction; a pane goes on in one direction, its own.
 
@@ -46,7 +46,7 @@ def pane_runs(marks: np.ndarray, resolution_m: float) -> list[tuple[np.ndarray, 
     Lines are found by a Hough vote over every mark, strongest first, each line's marks taken out before the
     next vote; on each line the marks are cut into runs at gaps of more than :data:`MAX_GAP_CELLS`. Fitting a
     line to each connected group of marks instead tilted short, thick groups (a pane's marks with false glass
-    beside them) by up to 55 degrees, and their extensions cut across the floor.
+    beside them) far off the pane's line, and their extensions cut across the floor (measurement 81).
     """
     iy, ix = np.nonzero(marks)
     points = np.stack([ix, iy], axis=1).astype(float) + 0.5
@@ -59,7 +59,7 @@ def pane_runs(marks: np.ndarray, resolution_m: float) -> list[tuple[np.ndarray, 
         rho = np.rint(points[:, :1] * cos + points[:, 1:] * sin).astype(np.int64)  # (N, angles)
         low = int(rho.min())
         span = int(rho.max()) - low + 1
-        # One bincount over (angle, offset) bins: np.add.at did the same 8 times slower (2,400 cells).
+        # One bincount over (angle, offset) bins: far cheaper than np.add.at (measurement 92).
         flat = (np.arange(len(ANGLES_RAD)) * span + (rho - low)).ravel()
         votes = np.bincount(flat, minlength=len(ANGLES_RAD) * span).reshape(len(ANGLES_RAD), span)
         best_angle, best_rho = np.unravel_index(int(votes.argmax()), votes.shape)

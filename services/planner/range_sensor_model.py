@@ -60,8 +60,7 @@ class RangeSensorModel:
     #: Log-odds are clamped to +-this: evidence never so sure that new readings cannot overturn it.
     max_log_odds: float = 4.0
     #: The range at which an echo's occupied evidence has fallen to half (Nav2's ``phi_v``; its default is
-    #: 1.2 m, which left far glass unmarked until the robot came near: in the 14 x 10 m warehouse_hall the
-    #: memory found less than half the pane length it found without). One echo from 1.5 m still marks (0.88 of a near
+    #: 1.2 m, which left far glass unmarked until the robot came near). One echo from 1.5 m still marks (0.88 of a near
     #: one's evidence), one from 2.5 m gives an eighth and one from 3 m a fiftieth. An echo's arc is
     #: ``fov * r`` wide and the surface that made it lies on one cell of it: at 3 m the arc is 1.5 m, and an
     #: oblique pane or a pane's end put up to 0.75 m of it in front of the glass, out on the floor. Glass
@@ -149,7 +148,8 @@ def reading_evidence(
     cell the cone covers only in part gets no free evidence, for glass may stand in its other part. This
     is what keeps a pane's end from becoming "known free": the cone's edge sweeps past the end's cell
     look after look, and with its centre inside the cone it would pile up free evidence and, known free,
-    never be credited with an echo again (a robot hit pane ends that way after ninety trials).
+    never be credited with an echo again (a robot hit pane ends that way late in a long campaign:
+    measurement 20).
     """
     distance = np.asarray(distance_m, dtype=float)
     bearing = np.abs(np.asarray(bearing_rad, dtype=float))

@@ -43,8 +43,8 @@ _OPENCV: list[ModuleType] = []
 
 
 def opencv(threads: int = 0) -> ModuleType:
-    """OpenCV, imported with the first rendered frame rather than at start-up: it costs a third of the
-    simulator's imports, and a run that nobody watches through the camera (the synthetic detector's)
+    """OpenCV, imported with the first rendered frame rather than at start-up: it is the heaviest of the
+    simulator's imports (measurement 82), and a run that nobody watches through the camera (the synthetic detector's)
     never renders a frame. ``threads`` (0: OpenCV's default) is set on that first import."""
     if not _OPENCV:
         import cv2  # noqa: PLC0415
@@ -80,7 +80,7 @@ class CameraParams(ComponentParams):
         1,
         ge=0,
         description="threads OpenCV may use for the simulator's process (0: one "
-        "per core); one costs 10-20 % less CPU a frame where the cores are busy",
+        "per core); one is cheaper where the cores are busy (measurement 62)",
     )
 
     @property

@@ -128,8 +128,8 @@ def _sinc(x: float) -> float:
 class _RobotEdges:
     """The footprint edges of every robot in one room, as the sensors of each see the others.
 
-    Six robots' sensors ask for them about 270 times a simulated second; building them once per move
-    (a step or a teleport) instead of once per reading was a quarter of a six-robot simulator's time.
+    Every sensor reading of every robot asks for them, so they are built once per move (a step or a
+    teleport), not once per reading (measurement 67).
     """
 
     __slots__ = ("_edges", "_sets")

@@ -5,8 +5,8 @@ The services declare what they declare; their nodes are held to these tables whi
 ``zendock conform NAME -- COMMAND`` checks a program against them. Rates are of sim time at the defaults.
 
 One module a service (``shared.contracts.services.battery``, ...), each with its ``CONTRACT``: a running
-service loads only its own, and with it only the interfaces it names, not every service's (a third of
-a small service's import time). :data:`CONTRACTS` loads them all, for the CLI, the docs and the kit.
+service loads only its own, and with it only the interfaces it names, not every service's (measurement
+82). :data:`CONTRACTS` loads them all, for the CLI, the docs and the kit.
 """
 
 from __future__ import annotations
