@@ -21,11 +21,11 @@ PYDANTIC_PLUGINS_ENV = "PYDANTIC_DISABLE_PLUGINS"
 def keep_openssl_out() -> bool:
     """Make ``hashlib`` and ``hmac`` use the interpreter's own hashes instead of OpenSSL's; call it first thing.
 
-    pydantic imports ``secrets``, hence ``hmac`` and ``hashlib``, whose ``_hashlib`` maps OpenSSL's
-    libcrypto into every service's memory (measurement 61), and none of them hashes more than a few kB (the
-    glass memory's digest). Without ``_hashlib`` both modules fall back to the built-in md5, sha1, sha2, sha3 and blake2;
-    what only OpenSSL has (``pbkdf2_hmac``, ``scrypt``) is then missing. True when it took effect: False
-    once something has imported ``_hashlib`` already.
+    pydantic imports ``secrets``, hence ``hmac`` and ``hashlib``, whose ``_hashlib`` maps OpenSSL's libcrypto
+    into every service's memory (measurement 61), and none of them hashes more than a few kB (the glass
+    memory's digest). Without ``_hashlib`` both modules fall back to the built-in md5, sha1, sha2, sha3 and
+    blake2; what only OpenSSL has (``pbkdf2_hmac``, ``scrypt``) is then missing. True when it took effect:
+    False once something has imported ``_hashlib`` already.
     """
     if "_hashlib" in sys.modules:
         return sys.modules["_hashlib"] is None

@@ -35,13 +35,13 @@ clipped the end (measurement 81). No extension comes back into floor a recovery 
 robot.
 
 Suspicion follows a heard pane's line as well (:meth:`GlassMemory.heard_line_mask`). A pane heard only from
-afar and at a slant is often never marked: its far echoes give too little evidence, and the evidence lands
-a few centimetres off the pane (the nearest echo comes from the cone's edge, the evidence goes mostly to its
-middle). Suspicion round such heard cells stopped short of the pane's end, and even with every reading
-placed by its own odometry the robot rounded the end with too little to spare (measurement 92). So a run of
-heard cells along a line is carried on along it for up to ``HEARD_LINE_EXTENSION_M``, and unlooked-at floor
-within the suspicion radius of that line is suspected too. The line itself may cross floor the sonar has looked at (it runs a few centimetres
-off the pane); only the floor nobody looked at is suspected.
+afar and at a slant is often never marked: its far echoes give too little evidence, and the evidence lands a
+few centimetres off the pane (the nearest echo comes from the cone's edge, the evidence goes mostly to its
+middle). Suspicion round such heard cells stopped short of the pane's end, and even with every reading placed
+by its own odometry the robot rounded the end with too little to spare (measurement 92). So a run of heard
+cells along a line is carried on along it for up to ``HEARD_LINE_EXTENSION_M``, and unlooked-at floor within
+the suspicion radius of that line is suspected too. The line itself may cross floor the sonar has looked at
+(it runs a few centimetres off the pane); only the floor nobody looked at is suspected.
 
 The node folds the glass into the costmap's static layer (it is as good as a wall until cleared), so
 the lidar's clearing never erases it; a recovery or a clear request forgets it.

@@ -1,9 +1,9 @@
 """Global planning off the control thread: one worker thread, one request at a time.
 
-A* can take longer than a control period, which would stall a 20 Hz control loop, so plans are computed here on a read-only
-:class:`~services.planner.costmap.CostGrid` snapshot and handed back through ``deliver`` (the node passes
-its ``post``, so the outcome is handled on its executor, never concurrently with its callbacks). The
-worker owns its :class:`GlobalPlanner` (search arrays are reused between plans on the same snapshot).
+A* can take longer than a control period, which would stall a 20 Hz control loop, so plans are computed here
+on a read-only :class:`~services.planner.costmap.CostGrid` snapshot and handed back through ``deliver`` (the
+node passes its ``post``, so the outcome is handled on its executor, never concurrently with its callbacks).
+The worker owns its :class:`GlobalPlanner` (search arrays are reused between plans on the same snapshot).
 """
 
 from __future__ import annotations

@@ -190,9 +190,9 @@ class RegulatedPurePursuit:
         """Judged once the robot has stopped inside the tolerances: is it still near enough the goal?
 
         The xy tolerance, once met, holds while the robot turns to the goal's heading (Nav2's stateful goal
-        checker). A robot that met it still moving brakes first, and under load (late poses, late
-        commands) braking can carry it well past the tolerance. Stopped further than :data:`OVERSHOOT_SLACK` tolerances from the goal, it has not arrived:
-        the tolerance is let go, and the next command turns back.
+        checker). A robot that met it still moving brakes first, and under load (late poses, late commands)
+        braking can carry it well past the tolerance. Stopped further than :data:`OVERSHOOT_SLACK` tolerances
+        from the goal, it has not arrived: the tolerance is let go, and the next command turns back.
         """
         if len(self._path) == 0:
             return False

@@ -60,8 +60,8 @@ class RangeSensorModel:
     #: Log-odds are clamped to +-this: evidence never so sure that new readings cannot overturn it.
     max_log_odds: float = 4.0
     #: The range at which an echo's occupied evidence has fallen to half (Nav2's ``phi_v``; its default is
-    #: 1.2 m, which left far glass unmarked until the robot came near). One echo from 1.5 m still marks (0.88 of a near
-    #: one's evidence), one from 2.5 m gives an eighth and one from 3 m a fiftieth. An echo's arc is
+    #: 1.2 m, which left far glass unmarked until the robot came near). One echo from 1.5 m still marks (0.88
+    #: of a near one's evidence), one from 2.5 m gives an eighth and one from 3 m a fiftieth. An echo's arc is
     #: ``fov * r`` wide and the surface that made it lies on one cell of it: at 3 m the arc is 1.5 m, and an
     #: oblique pane or a pane's end put up to 0.75 m of it in front of the glass, out on the floor. Glass
     #: heard from afar is still held for ``echo_hold_s`` (see :mod:`services.planner.glass_memory`), and

@@ -9,8 +9,9 @@ The way's width is a widest-path search ("maximin") from the goal over the free 
 world, glass as solid as any wall: each cell keeps the best clearance any way from the goal can keep to
 reach it, the clearance of a cell being the distance between its centre and the nearest solid cell's.
 The width of a way is twice the clearance of its tightest cell: a gap between two segments of the world
-(which have no thickness) comes out within a cell of its true width. Each end is given ``end_radius_m`` of free play: a docking pose
-stands closer to the dock than any gap on the way, and a start may stand near a wall it drives away from.
+(which have no thickness) comes out within a cell of its true width. Each end is given ``end_radius_m`` of
+free play: a docking pose stands closer to the dock than any gap on the way, and a start may stand near a
+wall it drives away from.
 
 Pure numpy and ``heapq``: no bus, no thread.
 """

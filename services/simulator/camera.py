@@ -44,8 +44,8 @@ _OPENCV: list[ModuleType] = []
 
 def opencv(threads: int = 0) -> ModuleType:
     """OpenCV, imported with the first rendered frame rather than at start-up: it is the heaviest of the
-    simulator's imports (measurement 82), and a run that nobody watches through the camera (the synthetic detector's)
-    never renders a frame. ``threads`` (0: OpenCV's default) is set on that first import."""
+    simulator's imports (measurement 82), and a run that nobody watches through the camera (the synthetic
+    detector's) never renders a frame. ``threads`` (0: OpenCV's default) is set on that first import."""
     if not _OPENCV:
         import cv2  # noqa: PLC0415
 
