@@ -190,9 +190,11 @@ class Ros2Dds:
 
         # --- zendock side
         self._commands = RosCommands(node, self._refuse, self._navigate)
-        self.clients: dict[str, ActionClient[Any, Any, Any]] = {
-            a.name: ActionClient(node, a.zendock, a.name) for a in ACTIONS
-        }
+        #: zendock's action clients, each made when its action is first used: a client subscribes to its
+        #: action's feedback and status, a thread of zenoh-python's apiece, and most of the actions a face
+        #: offers are never asked for (measurement 111).
+        self._clients: dict[str, ActionClient[Any, Any, Any]] = {}
+        self._clients_lock = threading.Lock()
         self.outlets = [_Outlet(route, ros_class(route.ros_type)) for route in TOPICS]
         for outlet in self.outlets:
             if outlet.route.latched:
@@ -214,6 +216,15 @@ class Ros2Dds:
             len(INBOUND),
             len(ACTIONS),
         )
+
+    def client(self, action_name: str) -> ActionClient[Any, Any, Any]:
+        """zendock's client of ``action_name``, made on first use (any thread may ask)."""
+        with self._clients_lock:
+            client = self._clients.get(action_name)
+            if client is None:
+                action = next(a for a in ACTIONS if a.name == action_name)
+                client = self._clients[action_name] = ActionClient(self.node, action.zendock, action.name)
+            return client
 
     def _participant(self, threads: int) -> int:
         """A new rclpy context (a DDS participant) with its executor spinning on a thread; its index."""
@@ -474,7 +485,7 @@ class Ros2Dds:
         return answer
 
     def _navigate(self, goal: PoseStamped) -> None:
-        self.clients[topics.NAVIGATE_TO_POSE].send_goal(NavigateToPoseGoal(pose=goal))
+        self.client(topics.NAVIGATE_TO_POSE).send_goal(NavigateToPoseGoal(pose=goal))
 
     # --- actions: rclpy ActionServers relaying to zendock's ------------------------------------------
 
@@ -486,7 +497,7 @@ class Ros2Dds:
             self._refuse(f"goal-{action.name}", "refused a %s goal: %s", action.name, exc)
             return False
         relay = _Relay(action)
-        client = self.clients[action.name]
+        client = self.client(action.name)
         sent = threading.Event()
 
         def send() -> None:
@@ -558,7 +569,7 @@ class Ros2Dds:
         relay = next((r for r in list(self._active) if r.ros_handle is ros_handle), None)
         if relay is None or relay.zendock_goal is None:
             return False
-        self.node.post(self.clients[action.name].cancel_goal, relay.zendock_goal)
+        self.node.post(self.client(action.name).cancel_goal, relay.zendock_goal)
         self._count(f"cancel {action.name}")
         return True
 
@@ -581,9 +592,10 @@ class Ros2Dds:
                 if self._closing:
                     break
             goal = relay.zendock_goal
-            with self.clients[action.name].lock:
+            client = self.client(action.name)
+            with client.lock:
                 status, result, error = goal.status, goal.result, goal.error
-            self.clients[action.name].forget(goal)
+            client.forget(goal)
             try:
                 ros_result = to_ros(result, result_class) if result is not None else result_class()
             except ConversionError as exc:
