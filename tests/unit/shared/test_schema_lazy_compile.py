@@ -152,3 +152,30 @@ def test_a_message_made_while_another_thread_makes_its_class_a_dataclass_waits_f
         dataclasses.dataclass(cls)
     other.join(timeout=5.0)
     assert made == [cls(3.0, "c")]
+
+
+def test_a_codec_compiled_while_another_thread_makes_its_class_a_dataclass_waits_for_it() -> None:
+    """The same window for the codec: a second thread decoding the class's first message there (reading
+    ``_FIELDS``) waits for the dataclass instead of finding no ``__dataclass_fields__``."""
+    cls = _fresh_class("zendock_test/msg/LazyCodecWindow")
+    payload = {"x": 4.0, "label": "d"}
+    decoded: list[Message] = []
+    failed: list[BaseException] = []
+
+    def decode() -> None:
+        try:
+            decoded.append(cls.from_dict(payload))
+        except BaseException as exc:  # the test reports whatever the thread met
+            failed.append(exc)
+
+    with schema._DEFERRED_LOCK:  # this thread is the one converting the class
+        schema._DEFERRED.discard(cls)
+        for name in (*schema._DATACLASS_METHODS, "__dataclass_fields__"):
+            delattr(cls, name)
+        other = threading.Thread(target=decode)
+        other.start()
+        other.join(timeout=0.2)
+        assert other.is_alive() and not failed, f"the codec was compiled too early: {failed}"
+        dataclasses.dataclass(cls)
+    other.join(timeout=5.0)
+    assert not failed and decoded == [cls(4.0, "d")]
