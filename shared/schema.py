@@ -203,6 +203,26 @@ def unpack(payload: bytes, type_name: str = "") -> Any:
         raise MessageError(f"payload is not valid msgpack ({detail})", type_name=type_name) from None
 
 
+class _FieldsOnceMade:
+    """``Message.__dataclass_fields__``: reached only while another thread turns a deferred class into its
+    dataclass (between the stand-ins' removal and the dataclass's own fields, see :func:`_make_dataclass`),
+    or for a class that is no dataclass. It waits for the conversion and answers the dataclass's fields,
+    so :func:`dataclasses.fields`, ``is_dataclass`` and ``asdict`` never catch a class half made; a class
+    that is no dataclass has none (``AttributeError``, as ``getattr`` with a default expects)."""
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        cls = owner if instance is None else type(instance)
+        if cls is not None and cls is not Message:
+            _make_dataclass(cls)
+            fields = cls.__dict__.get("__dataclass_fields__")
+            if fields is not None and not isinstance(fields, (_FieldsOnceMade, _FieldsOnFirstRead)):
+                return fields
+        raise AttributeError("__dataclass_fields__")
+
+
+Message.__dataclass_fields__ = _FieldsOnceMade()  # type: ignore[attr-defined]
+
+
 def message_type(type_name: str) -> type[Message]:
     """The message class registered under a ROS type name (``KeyError`` if unknown)."""
     return _REGISTRY[type_name]

@@ -179,3 +179,23 @@ def test_a_codec_compiled_while_another_thread_makes_its_class_a_dataclass_waits
         dataclasses.dataclass(cls)
     other.join(timeout=5.0)
     assert not failed and decoded == [cls(4.0, "d")]
+
+
+def test_the_fields_read_while_another_thread_makes_the_class_a_dataclass_wait_for_it() -> None:
+    """The same window for anyone reading the fields (``dataclasses.fields``, ``is_dataclass``, ``asdict``:
+    the ROS 2 conversions, the Foxglove view): they wait for the dataclass, and a class that is no
+    dataclass still has no fields."""
+    cls = _fresh_class("zendock_test/msg/LazyFieldsWindow")
+    names: list[list[str]] = []
+    with schema._DEFERRED_LOCK:  # this thread is the one converting the class
+        schema._DEFERRED.discard(cls)
+        for name in (*schema._DATACLASS_METHODS, "__dataclass_fields__"):
+            delattr(cls, name)
+        other = threading.Thread(target=lambda: names.append([f.name for f in dataclasses.fields(cls)]))
+        other.start()
+        other.join(timeout=0.2)
+        assert other.is_alive(), "the fields were read before the class was a dataclass"
+        dataclasses.dataclass(cls)
+    other.join(timeout=5.0)
+    assert names == [["x", "label"]]
+    assert not dataclasses.is_dataclass(Message) and dataclasses.is_dataclass(cls)
