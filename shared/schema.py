@@ -327,13 +327,8 @@ class _CompiledOnFirstRead:
 
 
 def _compile_message(cls: type[Message]) -> None:
-    """Give ``cls`` its field validators, fast paths and, for all-float messages, the fixed codec.
-
-    First the class is made a dataclass, or, if another thread is making it one, that is waited for: in
-    between the stand-ins' removal and the dataclass's own fields (:func:`_make_dataclass`) the class has
-    no ``__dataclass_fields__``, and the first two messages of a class read at once on two threads found
-    none (a service's fuzz test caught it)."""
-    _make_dataclass(cls)
+    """Give ``cls`` its field validators, fast paths and, for all-float messages, the fixed codec (its fields
+    read while another thread makes it a dataclass wait for that: :class:`_FieldsOnceMade`)."""
     hints = typing.get_type_hints(cls, include_extras=True)
     fields = tuple(
         (f.name, *_compile(hints[f.name], f.name))

@@ -50,31 +50,20 @@ class WayWidths:
         self._end_radius_m = end_radius_m
         self._max_width_m = 2.0 * max_clearance_m
         solid = occupancy.data != OCC_FREE  # occupied, and unknown (outside the room)
-        self._solid = solid
         max_cells = max_clearance_m / frame.resolution_m
         clearance = np.sqrt(squared_distance_to_marks(solid, max_cells)) * frame.resolution_m
         clearance = np.minimum(clearance, max_clearance_m)
-        clearance[self._within(goal_xy, end_radius_m) & ~solid] = math.inf
+        goal_play = frame.cells_within(goal_xy, end_radius_m)
+        clearance[goal_play[:, 1], goal_play[:, 0]] = math.inf  # solid cells among them stay unvisited
         self._best = _widest_from(clearance, solid, frame.world_to_cell(*goal_xy))
 
     def width_m(self, start_xy: tuple[float, float]) -> float:
         """The width of the widest way from ``start_xy`` to the goal at its narrowest (m); 0.0 when no way
-        joins them; at most twice :data:`MAX_CLEARANCE_M`, however open the room."""
-        reachable = self._best[self._within(start_xy, self._end_radius_m) & ~self._solid]
-        if reachable.size == 0 or reachable.max() <= 0.0:
-            return 0.0
-        clearance = float(reachable.max())
-        if math.isinf(clearance):  # the start stands within the goal's free play
-            return self._max_width_m
-        return min(self._max_width_m, 2.0 * clearance)
-
-    def _within(self, xy: tuple[float, float], radius_m: float) -> np.ndarray:
-        """Boolean ``(height, width)``: the cells whose centres lie within ``radius_m`` of ``xy``."""
-        frame = self._frame
-        inside = np.zeros(frame.shape, dtype=bool)
-        cells = frame.cells_within(xy, radius_m)
-        inside[cells[:, 1], cells[:, 0]] = True
-        return inside
+        joins them; at most twice :data:`MAX_CLEARANCE_M`, however open the room (or when the start stands
+        within the goal's free play)."""
+        play = self._frame.cells_within(start_xy, self._end_radius_m)
+        best = float(self._best[play[:, 1], play[:, 0]].max(initial=-1.0))  # -1: solid or no way
+        return 0.0 if best <= 0.0 else min(self._max_width_m, 2.0 * best)
 
 
 def way_widths(
