@@ -63,9 +63,9 @@ def _show_defaults(parser: argparse.ArgumentParser) -> None:
                 _show_defaults(sub)
 
 
-#: Commands that run as long-lived processes of a stack (the router, a container of composed services) and
-#: need no other command's code: for these only their own module is loaded, and OpenSSL not at all (as in
-#: the services), so the process holds only what it uses (what that saves the router: measurement 61).
+#: Commands that run as long-lived processes of a stack (the router, a container of composed services): like
+#: every command they load only their own module (:func:`command_module`), and OpenSSL not at all (as in the
+#: services), so the process holds only what it uses (what that saves the router: measurement 61).
 LEAN_COMMANDS = frozenset({"container", "router"})
 
 
@@ -93,12 +93,23 @@ def _terminate_like_interrupt(signum: int, _frame: object) -> None:
     raise KeyboardInterrupt(f"signal {signum}")
 
 
+def command_module(argv: Sequence[str]) -> str | None:
+    """The command module ``argv`` names, when its first word is one (``fleet``, ``keys``), else None.
+
+    A command module registers its own command under its own name, so that module alone parses the line:
+    a run holds only the code of the command it runs. Anything else (``--help``, ``undock``, a misspelled
+    command) is parsed by every command's parser, so the usage and the "did you mean" see them all."""
+    if not argv or argv[0].startswith("-"):
+        return None
+    names = {info.name for info in pkgutil.iter_modules(commands.__path__)}
+    return argv[0] if argv[0] in names else None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    lean = argv[0] if argv[:1] and argv[0] in LEAN_COMMANDS else None
-    if lean is not None:
+    if argv[:1] and argv[0] in LEAN_COMMANDS:
         keep_openssl_out()
-    parser = build_parser(only=lean)
+    parser = build_parser(only=command_module(argv))
     args, extra = parser.parse_known_args(argv)
     # A command that runs another program (``conform SERVICE -- COMMAND ...``) takes everything after ``--``.
     if extra and getattr(args, "takes_command", False) and extra[0] == "--":
