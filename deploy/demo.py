@@ -90,6 +90,8 @@ class DemoReport:
     recoveries: int = 0
     #: Why there is no lower bound ("" when there is one).
     lower_bound_s_reason: str = ""
+    #: The narrowest gap on the widest way to the dock, glass solid (the lower-bound tool's; NaN: no bound).
+    way_width_m: float = math.nan
     #: The planner's glass memory at the end, against the world's panes (see :mod:`deploy.glass_report`).
     false_glass_cells: float = math.nan
     glass_coverage: float = math.nan
@@ -323,16 +325,19 @@ def run_demo(
     wall_s = time.monotonic() - wall_start
     start_pose = record.pose_at(record.trigger_s) if record.trigger_s is not None else None
     bound_s, bound_reason = math.nan, "the run never triggered docking" if start_pose is None else "no dock"
+    way_width_m = math.nan
     if start_pose is not None and world.docks:
         try:
             answer = lower_bound(options.world, start_pose, world.docks[0].pose2d)
             bound_s = float(answer["lower_bound_s"]) if answer.get("lower_bound_s") is not None else math.nan
             bound_reason = str(answer.get("error", ""))
+            way_width_m = float(answer.get("way_width_m", math.nan))
         except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
             bound_reason = f"lower bound not computed: {exc}"
             log(bound_reason)
     report = build_report(record, options, world, wall_s, bound_s)
     report.lower_bound_s_reason = "" if math.isfinite(bound_s) else bound_reason
+    report.way_width_m = way_width_m
     glass = read_glass_marks(run_dir / "glass_memory.npz", world)
     if glass is not None:
         counted = glass.report()

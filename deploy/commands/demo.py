@@ -34,6 +34,7 @@ def _print_report(report: dict, console: Console) -> None:
         ("docked and charging", "yes" if report["docked"] and report["charging"] else "NO"),
         ("dock time (trigger to CHARGING)", _measure(report["dock_time_s"], 1.0, "{:.1f} s sim")),
         ("lower bound", _measure(report["lower_bound_s"], 1.0, "{:.1f} s sim")),
+        ("narrowest gap on the way (glass solid)", _measure(report.get("way_width_m"), 1.0, "{:.2f} m")),
         ("lateral error at contact", _measure(report["final_lateral_error_m"], 1000.0, "{:.1f} mm")),
         ("yaw error at contact", _measure(report["final_yaw_error_rad"], 180.0 / math.pi, "{:.2f} deg")),
         ("collisions", str(report["collisions"])),

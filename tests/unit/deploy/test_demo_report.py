@@ -40,13 +40,14 @@ def _table(report: DemoReport) -> str:
 
 
 def test_counts_are_integers_and_an_empty_reason_is_left_out() -> None:
-    report = _report(false_glass_cells=0.0, glass_coverage=0.8)
+    report = _report(false_glass_cells=0.0, glass_coverage=0.8, way_width_m=0.912)
     written = json.loads(strict_json.dumps(report.as_dict()))
     assert written["false_glass_cells"] == 0 and isinstance(written["false_glass_cells"], int)
     assert "lower_bound_s_reason" not in written
     table = _table(report)
     assert "0.0" not in table.split("false glass cells")[1].splitlines()[0]
     assert "80 %" in table and "why no lower bound" not in table
+    assert table.split("narrowest gap")[1].splitlines()[0].rstrip(" │").endswith("0.91 m")
 
 
 def test_missing_measures_read_n_a_with_their_reason() -> None:
@@ -62,6 +63,13 @@ def test_missing_measures_read_n_a_with_their_reason() -> None:
     assert written["lower_bound_s_reason"] == "no path to the dock"
     table = _table(report)
     assert "nan" not in table.lower() and "None" not in table
-    for row in ("glass length found", "false glass cells", "lower bound", "dock time", "lateral error"):
+    for row in (
+        "glass length found",
+        "false glass cells",
+        "lower bound",
+        "dock time",
+        "lateral error",
+        "narrowest gap",
+    ):
         assert table.split(row)[1].splitlines()[0].rstrip(" │").endswith("n/a"), row
     assert "no path to the dock" in table
