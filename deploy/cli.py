@@ -105,11 +105,23 @@ def command_module(argv: Sequence[str]) -> str | None:
     return argv[0] if argv[0] in names else None
 
 
+def _command_names(parser: argparse.ArgumentParser) -> set[str]:
+    return {
+        name
+        for action in parser._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for name in action.choices
+    }
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] and argv[0] in LEAN_COMMANDS:
         keep_openssl_out()
-    parser = build_parser(only=command_module(argv))
+    module = command_module(argv)
+    parser = build_parser(only=module)
+    if module is not None and module not in _command_names(parser):
+        parser = build_parser()  # a module that registers other names (``lifecycle``): not a command
     args, extra = parser.parse_known_args(argv)
     # A command that runs another program (``conform SERVICE -- COMMAND ...``) takes everything after ``--``.
     if extra and getattr(args, "takes_command", False) and extra[0] == "--":

@@ -57,3 +57,18 @@ def test_a_command_registered_by_another_module_is_still_found() -> None:
     """``undock`` lives in the ``dock`` module: the whole parser is built and finds it."""
     loaded = _loaded("undock", "--help")
     assert "usage: zendock undock" in str(loaded["usage"])
+
+
+def test_a_module_name_that_is_no_command_is_refused_among_every_command() -> None:
+    """``lifecycle`` is a module (it registers start, stop, restart, kill), not a command: the error lists
+    every command, as for any other word that is none."""
+    done = subprocess.run(
+        [sys.executable, "-m", "deploy.cli", "lifecycle"],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2
+    assert "invalid choice: 'lifecycle'" in done.stderr
+    assert "'trials'" in done.stderr and "'start'" in done.stderr
