@@ -98,7 +98,8 @@ def command_module(argv: Sequence[str]) -> str | None:
 
     A command module registers its own command under its own name, so that module alone parses the line:
     a run holds only the code of the command it runs. Anything else (``--help``, ``undock``, a misspelled
-    command) is parsed by every command's parser, so the usage and the "did you mean" see them all."""
+    command, and ``lifecycle``, a module whose commands have other names: :func:`main` checks) is parsed by
+    every command's parser, so the usage and the "did you mean" see them all."""
     if not argv or argv[0].startswith("-"):
         return None
     names = {info.name for info in pkgutil.iter_modules(commands.__path__)}

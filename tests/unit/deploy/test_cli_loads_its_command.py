@@ -34,8 +34,8 @@ def _loaded(*argv: str) -> dict[str, object]:
         capture_output=True,
         text=True,
         timeout=60,
-        check=True,
     )
+    assert done.returncode == 0, f"zendock {' '.join(argv)} in a fresh interpreter failed:\n{done.stderr}"
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
