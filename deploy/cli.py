@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from typing import Any, cast
 
 from deploy import commands
-from deploy.parser import ZendockParser, error_in_command
+from deploy.parser import ZendockParser, command_parser, error_in_command
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
 from shared.memory import keep_openssl_out
 
@@ -106,22 +106,13 @@ def command_module(argv: Sequence[str]) -> str | None:
     return argv[0] if argv[0] in names else None
 
 
-def _command_names(parser: argparse.ArgumentParser) -> set[str]:
-    return {
-        name
-        for action in parser._actions
-        if isinstance(action, argparse._SubParsersAction)
-        for name in action.choices
-    }
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] and argv[0] in LEAN_COMMANDS:
         keep_openssl_out()
     module = command_module(argv)
     parser = build_parser(only=module)
-    if module is not None and module not in _command_names(parser):
+    if module is not None and command_parser(parser, [module]) is parser:
         parser = build_parser()  # a module that registers other names (``lifecycle``): not a command
     args, extra = parser.parse_known_args(argv)
     # A command that runs another program (``conform SERVICE -- COMMAND ...``) takes everything after ``--``.
