@@ -40,8 +40,10 @@ few centimetres off the pane (the nearest echo comes from the cone's edge, the e
 middle). Suspicion round such heard cells stopped short of the pane's end, and even with every reading placed
 by its own odometry the robot rounded the end with too little to spare (measurement 92). So a run of heard
 cells along a line is carried on along it for up to ``HEARD_LINE_EXTENSION_M``, and unlooked-at floor within
-the suspicion radius of that line is suspected too. The line itself may cross floor the sonar has looked at
-(it runs a few centimetres off the pane); only the floor nobody looked at is suspected.
+the suspicion radius of that line is suspected too. Such a pane is heard in patches, so heard cells up to
+``HEARD_LINE_MAX_GAP_M`` apart along the line make one run, carried on past the last patch (measurement
+115). The line itself may cross floor the sonar has looked at (it runs a few centimetres off the pane); only
+the floor nobody looked at is suspected.
 
 The node folds the glass into the costmap's static layer (it is as good as a wall until cleared), so
 the lidar's clearing never erases it; a recovery or a clear request forgets it.
@@ -58,7 +60,7 @@ from services.planner.costmap import FREE_SPACE, LETHAL_OBSTACLE, NO_INFORMATION
 from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.echo_pairing import Echo, EchoPairing, placed_by
 from services.planner.grid_frame import GridFrame
-from services.planner.pane_extension import pane_extensions
+from services.planner.pane_extension import MAX_GAP_CELLS, pane_extensions
 from services.planner.range_sensor_model import RangeSensorModel, reading_evidence
 
 #: Evidence above this (log-odds; P = 0.55) and below the mark threshold is suspected glass.
@@ -76,6 +78,11 @@ SENSOR_POSE_MARGIN_M = 0.01
 #: A run of heard cells along a line seeds suspicion this far past its ends (at most the pane extension):
 #: enough to reach a pane's end from the last cell heard from afar (measurement 92).
 HEARD_LINE_EXTENSION_M = 0.8
+#: Heard cells along a line this far apart still make one run. A pane heard only at a slant is heard in
+#: patches (an echo is placed where it and an earlier one agree, see :mod:`services.planner.echo_pairing`):
+#: cut at the marks' gap of a few cells, the last patches made no run long enough to be a pane and the line
+#: stopped short of the pane's end (measurement 115).
+HEARD_LINE_MAX_GAP_M = 0.6
 #: The heard lines are drawn again only when this many heard cells (or this share of them) changed since
 #: they were last drawn: each echo changes a few, and finding the lines through a large hall's heard cells
 #: is too dear for every costmap update (measurement 92).
@@ -441,14 +448,24 @@ class GlassMemory:
         self._extension_cache = (marks, self._seen.copy(), extension)
         return extension
 
-    def _extend(self, cells: np.ndarray, looked_at: np.ndarray, reach_m: float) -> np.ndarray:
+    def _extend(
+        self, cells: np.ndarray, looked_at: np.ndarray, reach_m: float, max_gap_m: float | None = None
+    ) -> np.ndarray:
         """Runs of ``cells`` along lines carried on for ``reach_m`` through floor not ``looked_at``, stopping
-        short of walls, of other panes and of floor a recovery cleared (see :func:`pane_extensions`)."""
+        short of walls, of other panes and of floor a recovery cleared (see :func:`pane_extensions`); a run
+        goes on across gaps of up to ``max_gap_m`` (None: the marks' own few cells)."""
         stops = self._cleared_by_recovery
         if self._extension_stops is not None:
             stops = stops | self._extension_stops
+        res = self.frame.resolution_m
         return pane_extensions(
-            cells, looked_at, self.frame.resolution_m, reach_m, blocked=stops, clearance_m=self._robot_gap_m()
+            cells,
+            looked_at,
+            res,
+            reach_m,
+            blocked=stops,
+            clearance_m=self._robot_gap_m(),
+            max_gap_cells=MAX_GAP_CELLS if max_gap_m is None else max_gap_m / res,
         )
 
     def heard_line_mask(self, heard: np.ndarray) -> np.ndarray:
@@ -464,7 +481,7 @@ class GlassMemory:
             HEARD_LINE_REUSE_CELLS, HEARD_LINE_REUSE_SHARE * np.count_nonzero(heard)
         ):
             return cached[1]
-        line = self._extend(heard, np.zeros_like(heard), reach_m)
+        line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_m=HEARD_LINE_MAX_GAP_M)
         self._heard_line_cache = (heard.copy(), line)
         return line
 

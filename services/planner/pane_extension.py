@@ -38,13 +38,15 @@ CROSSING_SIN = math.sin(math.radians(20.0))
 MAX_LINES = 16
 
 
-def pane_runs(marks: np.ndarray, resolution_m: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+def pane_runs(
+    marks: np.ndarray, resolution_m: float, max_gap_cells: float = MAX_GAP_CELLS
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Runs of marks along straight lines, long enough to be panes: ``(end, outward unit direction, the
     line's marks)`` for each end of each run, in cell units (cell ``(ix, iy)`` spans ``[ix, ix + 1) x
     [iy, iy + 1)``; the marks as ``(N, 2)`` cell centres).
 
     Lines are found by a Hough vote over every mark, strongest first, each line's marks taken out before the
-    next vote; on each line the marks are cut into runs at gaps of more than :data:`MAX_GAP_CELLS`. Fitting a
+    next vote; on each line the marks are cut into runs at gaps of more than ``max_gap_cells``. Fitting a
     line to each connected group of marks instead tilted short, thick groups (a pane's marks with false glass
     beside them) far off the pane's line, and their extensions cut across the floor (measurement 81).
     """
@@ -77,7 +79,7 @@ def pane_runs(marks: np.ndarray, resolution_m: float) -> list[tuple[np.ndarray, 
         normal = np.array([-direction[1], direction[0]])
         offset = float(centre @ normal)
         along = np.sort(line_points @ direction)
-        breaks = np.nonzero(np.diff(along) > MAX_GAP_CELLS)[0]
+        breaks = np.nonzero(np.diff(along) > max_gap_cells)[0]
         for run in np.split(along, breaks + 1):
             if run[-1] - run[0] + 1.0 < min_cells:
                 continue
@@ -93,11 +95,13 @@ def pane_extensions(
     extension_m: float,
     blocked: np.ndarray | None = None,
     clearance_m: float = 0.0,
+    max_gap_cells: float = MAX_GAP_CELLS,
 ) -> np.ndarray:
     """Boolean grid: each run of ``marks`` along a line (:func:`pane_runs`) carried on past both ends through
     cells not ``looked_at`` and not ``blocked`` (walls, and the margin a robot needs beside them), for up to
     ``extension_m``, and never closer than ``clearance_m`` to another line's marks: two panes' extensions
-    closed the gap between their ends, the way to the dock in oblique_glass, before the sonar had looked."""
+    closed the gap between their ends, the way to the dock in oblique_glass, before the sonar had looked.
+    ``max_gap_cells``: the longest gap along a line within one run (see :func:`pane_runs`)."""
     extended = np.zeros(marks.shape, dtype=bool)
     if extension_m <= 0 or not marks.any():
         return extended
@@ -105,7 +109,7 @@ def pane_extensions(
     steps = max(1, math.ceil(2.0 * extension_m / resolution_m))  # half-cell steps: no cell skipped
     reach_cells = extension_m / resolution_m
     clearance_cells = clearance_m / resolution_m
-    runs = pane_runs(marks, resolution_m)
+    runs = pane_runs(marks, resolution_m, max_gap_cells)
     for end, direction, own in runs:
         path = end + direction * (np.arange(1, steps + 1)[:, None] * (reach_cells / steps))
         if clearance_cells > 0:

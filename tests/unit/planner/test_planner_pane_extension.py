@@ -173,3 +173,28 @@ def test_suspicion_follows_a_heard_pane_along_its_line_past_the_last_cell_heard(
     assert glass(with_line, *beyond) and not glass(without, *beyond)
     assert not glass(with_line, end_x + 0.6, line_y - 0.5)  # the side the sonar looked through
     assert not glass(with_line, end_x + HEARD_LINE_EXTENSION_M + 0.5, line_y + 0.2)  # no further
+
+
+def test_a_pane_heard_in_patches_goes_on_past_its_last_patch() -> None:
+    """A pane heard only at a slant is heard in patches, a few tenths of a metre apart. Cut into runs at the
+    marks' gap of a few cells, the patches past the first made no run long enough to be a pane, and the
+    heard line stopped short of the last cell heard, a metre short of the pane's end (the glass room's
+    robot passed that end with a few centimetres to spare)."""
+    world = World.model_validate(
+        {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
+    )
+    frame = map_from_world(world).frame
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.3, pane_extension_m=1.5)
+    heard = np.zeros(frame.shape, dtype=bool)
+    row = frame.world_to_cell(1.0, 2.6)[1]
+    patches_m = [(1.0, 2.2), (2.65, 2.95), (3.25, 3.4)]  # gaps of 0.45 and 0.3 m
+    for start, stop in patches_m:
+        first, last = frame.world_to_cell(start, 2.6)[0], frame.world_to_cell(stop, 2.6)[0]
+        heard[row, first : last + 1] = True
+    line = memory.heard_line_mask(heard)
+    ix_last = frame.world_to_cell(3.4, 2.6)[0]
+    beyond = np.nonzero(line[row - 1 : row + 2, ix_last + 1 :].any(axis=0))[0] + ix_last + 1
+    assert len(beyond), "the heard line stops at the last patch"
+    reach_m = (beyond.max() - ix_last) * frame.resolution_m
+    assert HEARD_LINE_EXTENSION_M - 0.1 <= reach_m <= HEARD_LINE_EXTENSION_M + 0.05, reach_m
+    assert not line[heard].any(), "the heard cells stay heard cells"
