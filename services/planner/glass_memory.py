@@ -449,23 +449,22 @@ class GlassMemory:
         return extension
 
     def _extend(
-        self, cells: np.ndarray, looked_at: np.ndarray, reach_m: float, max_gap_m: float | None = None
+        self, cells: np.ndarray, looked_at: np.ndarray, reach_m: float, max_gap_cells: float = MAX_GAP_CELLS
     ) -> np.ndarray:
-        """Runs of ``cells`` along lines carried on for ``reach_m`` through floor not ``looked_at``, stopping
-        short of walls, of other panes and of floor a recovery cleared (see :func:`pane_extensions`); a run
-        goes on across gaps of up to ``max_gap_m`` (None: the marks' own few cells)."""
+        """Runs of ``cells`` along lines (gaps of up to ``max_gap_cells`` within a run) carried on for
+        ``reach_m`` through floor not ``looked_at``, stopping short of walls, of other panes and of floor a
+        recovery cleared (see :func:`pane_extensions`)."""
         stops = self._cleared_by_recovery
         if self._extension_stops is not None:
             stops = stops | self._extension_stops
-        res = self.frame.resolution_m
         return pane_extensions(
             cells,
             looked_at,
-            res,
+            self.frame.resolution_m,
             reach_m,
             blocked=stops,
             clearance_m=self._robot_gap_m(),
-            max_gap_cells=MAX_GAP_CELLS if max_gap_m is None else max_gap_m / res,
+            max_gap_cells=max_gap_cells,
         )
 
     def heard_line_mask(self, heard: np.ndarray) -> np.ndarray:
@@ -481,7 +480,8 @@ class GlassMemory:
             HEARD_LINE_REUSE_CELLS, HEARD_LINE_REUSE_SHARE * np.count_nonzero(heard)
         ):
             return cached[1]
-        line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_m=HEARD_LINE_MAX_GAP_M)
+        gap_cells = HEARD_LINE_MAX_GAP_M / self.frame.resolution_m
+        line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells)
         self._heard_line_cache = (heard.copy(), line)
         return line
 

@@ -178,8 +178,8 @@ def test_suspicion_follows_a_heard_pane_along_its_line_past_the_last_cell_heard(
 def test_a_pane_heard_in_patches_goes_on_past_its_last_patch() -> None:
     """A pane heard only at a slant is heard in patches, a few tenths of a metre apart. Cut into runs at the
     marks' gap of a few cells, the patches past the first made no run long enough to be a pane, and the
-    heard line stopped short of the last cell heard, a metre short of the pane's end (the glass room's
-    robot passed that end with a few centimetres to spare)."""
+    heard line stopped short of the last cell heard, a metre short of the pane's end: the glass room's
+    robot now and then met that end (measurement 115)."""
     world = World.model_validate(
         {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
     )
