@@ -10,6 +10,8 @@ import sys
 import numpy as np
 import zenoh
 
+from services.simulator.pacing import PacingParams
+from services.simulator.params import ClockParams
 from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
 from shared.messages import (
     Clock,
@@ -31,6 +33,9 @@ from tests.support.bus import KeyRecorder
 from tests.support.processes import REPO_ROOT, wait_until
 
 GLASS_ROOM = str(REPO_ROOT / "deploy/worlds/glass_room.yaml")
+#: How far past a handoff hold's tick the clock a held world last sent is at least: a driver's gap, less
+#: one period of the clock.
+HELD_PAST_TICK_S = PacingParams().driver_gap_s - 1.0 / ClockParams().rate_hz
 
 
 def _state(bus: zenoh.Session, ns: str):  # type: ignore[no-untyped-def]
@@ -235,13 +240,16 @@ def test_a_handoff_holds_the_world_until_the_next_driver_moves_the_robot_or_its_
 
     def held_at(tick: float) -> float:
         """The sim time the world stands at, held for a hold at ``tick``: the clock a driver's gap (0.15 s)
-        or more past the tick, and unchanged for half a second of wall time (a busy machine may stall the
-        world short of that for a moment; a hold never does)."""
+        past the tick, less one period of the clock, and unchanged for half a second of wall time (a busy
+        machine may stall the world short of that for a moment; a hold never does). The world stands on the
+        first step past the gap, and the last clock it sent may be a period (20 Hz) older: a tick off the
+        clock's grid (the first clock, 0.01 s) or a tick plus the gap just short of it (3.80 + 0.15) stood
+        the world past the gap with its last clock short of it, and the test waited in vain."""
         seen: list[float] = []
 
         def quiet() -> bool:
             seen.append(now())
-            return len(seen) > 5 and seen[-1] == seen[-6] and seen[-1] >= tick + 0.15 - 1e-6
+            return len(seen) > 5 and seen[-1] == seen[-6] and seen[-1] >= tick + HELD_PAST_TICK_S - 1e-6
 
         wait_until(quiet, 20.0, lambda: f"the world never stopped; clock at {now():.2f} s", interval_s=0.1)
         return now()
