@@ -145,14 +145,19 @@ def test_two_panes_extensions_leave_the_gap_between_their_ends_open() -> None:
     assert extended[32, 43], "the diagonal pane still goes on, short of the other"
 
 
+def _hall_frame() -> GridFrame:
+    """The grid of an empty 8 x 5 m hall."""
+    world = World.model_validate(
+        {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
+    )
+    return map_from_world(world).frame
+
+
 def test_suspicion_follows_a_heard_pane_along_its_line_past_the_last_cell_heard() -> None:
     """A pane heard only from afar holds evidence too weak to mark, and none toward its end: the robot
     rounding that end found suspicion stopping short of it. Unlooked-at floor along the heard run's line,
     past its end, is suspect too; floor the sonar looked at is not, and neither is floor further on."""
-    world = World.model_validate(
-        {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
-    )
-    frame = map_from_world(world).frame
+    frame = _hall_frame()
     memories = {
         extension: GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.3, pane_extension_m=extension)
         for extension in (0.0, 1.5)
@@ -180,10 +185,7 @@ def test_a_pane_heard_in_patches_goes_on_past_its_last_patch() -> None:
     marks' gap of a few cells, the patches past the first made no run long enough to be a pane, and the
     heard line stopped short of the last cell heard, a metre short of the pane's end: the glass room's
     robot now and then met that end (measurement 115)."""
-    world = World.model_validate(
-        {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
-    )
-    frame = map_from_world(world).frame
+    frame = _hall_frame()
     memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.3, pane_extension_m=1.5)
     heard = np.zeros(frame.shape, dtype=bool)
     row = frame.world_to_cell(1.0, 2.6)[1]
