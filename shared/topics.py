@@ -75,5 +75,8 @@ CAMERA_FRAME = "camera_link"
 CAMERA_OPTICAL_FRAME = "camera_optical_frame"
 
 # Counters a node adds to its stats (``@zendock/stats/<ns>/<node>``, under ``extra``)
-#: The planner's sim seconds driven under a glass speed limit (all goals so far): time lost to suspected glass.
+#: The planner's sim seconds driven under a glass speed limit (all goals so far).
 GLASS_SLOWED_STAT = "glass_slowed_s"
+#: The metres the planner drove in those seconds (its pose track's speed): with the seconds, the time the
+#: glass limit cost against driving them at full speed.
+GLASS_SLOWED_M_STAT = "glass_slowed_m"

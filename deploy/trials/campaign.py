@@ -36,7 +36,7 @@ from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
 from deploy.trials.starts import beacon_starts, lower_bound_parts, reachable_starts
 from deploy.trials.summary import summarise, summary_reasons
-from deploy.trials.time_over_bound import time_over_bound
+from deploy.trials.time_over_bound import GlassSlowing, time_over_bound
 from shared import topics
 from shared.geometry import Pose2D
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
@@ -72,17 +72,26 @@ def _sim_clock(session: Any, robot: str) -> float:
     return state.stamp.to_sec()
 
 
-def _node_stat(session: Any, namespace: str, node: str, name: str) -> float:
-    """One counter a node adds to its stats (``extra``), NaN when it does not answer or has none (a service
-    replaced by one that does not count it)."""
+def _node_stats(session: Any, namespace: str, node: str, names: tuple[str, ...]) -> tuple[float, ...]:
+    """Counters a node adds to its stats (``extra``), each NaN when the node does not answer or has not that
+    one (a service replaced by one that does not count it)."""
     try:
         for reply in session.get(stats_key(namespace, node), timeout=2.0):
             if reply.ok is not None:
-                value = json.loads(reply.ok.payload.to_bytes()).get("extra", {}).get(name)
-                return float(value) if isinstance(value, (int, float)) else math.nan
+                extra = json.loads(reply.ok.payload.to_bytes()).get("extra", {})
+                values = [extra.get(name) if isinstance(extra, dict) else None for name in names]
+                return tuple(float(v) if isinstance(v, (int, float)) else math.nan for v in values)
     except (zenoh.ZError, ValueError):
         pass
-    return math.nan
+    return tuple(math.nan for _ in names)
+
+
+def _glass_slowing(session: Any, namespace: str) -> GlassSlowing:
+    """The planner's count of its driving under a glass speed limit so far (NaN where it does not count)."""
+    seconds, metres = _node_stats(
+        session, namespace, "planner", (topics.GLASS_SLOWED_STAT, topics.GLASS_SLOWED_M_STAT)
+    )
+    return GlassSlowing(seconds, metres)
 
 
 def _run_one(
@@ -111,7 +120,7 @@ def _run_one(
                 f"trial {index}: the battery still reports charging after the robot left the dock"
             )
         observer.arm()
-        glass_slowed_before = _node_stat(session, robot, "planner", topics.GLASS_SLOWED_STAT)
+        glass_before = _glass_slowing(session, robot)
         _call_until_answered(
             session,
             topic_key(robot, "battery/set_state"),
@@ -135,7 +144,9 @@ def _run_one(
         record = observer.snapshot()
     finally:
         observer.close()
-    glass_slowed_s = _node_stat(session, robot, "planner", topics.GLASS_SLOWED_STAT) - glass_slowed_before
+    glass_after = _glass_slowing(session, robot)
+    glass_slowed_s = glass_after.seconds - glass_before.seconds
+    glass_slowed_m = glass_after.metres - glass_before.metres
     outcome = record.outcome()
     result = TrialResult(
         index=index,
@@ -154,6 +165,7 @@ def _run_one(
         arrival_speed_mps=record.arrival_speed_mps,
         too_fast=outcome.too_fast,
         glass_slowed_s=round(glass_slowed_s, 3) if math.isfinite(glass_slowed_s) else math.nan,
+        glass_slowed_m=round(glass_slowed_m, 3) if math.isfinite(glass_slowed_m) else math.nan,
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)
@@ -306,7 +318,8 @@ def run_trials(
             r.way_width_m = bound.way_width_m
             record = records.get(r.index)
             if record is not None and r.charging:
-                r.over_bound_s = time_over_bound(r.phase_s, record.phase_lengths_m(), bound)
+                glass = GlassSlowing(r.glass_slowed_s, r.glass_slowed_m)
+                r.over_bound_s = time_over_bound(r.phase_s, record.phase_lengths_m(), bound, glass)
     except (RuntimeError, subprocess.TimeoutExpired, ValueError) as exc:
         errors.append(f"lower bounds not computed: {exc}")
         log(errors[-1])

@@ -114,8 +114,10 @@ class TrialResult:
     arrival_speed_mps: float = math.nan
     #: It charged, but met the plate faster than its contact speed limit: a failed trial.
     too_fast: bool = False
-    #: Sim seconds the planner drove under a glass speed limit during the trial (NaN: not counted).
+    #: Sim seconds the planner drove under a glass speed limit during the trial, and the metres it drove in
+    #: them (NaN: not counted).
     glass_slowed_s: float = math.nan
+    glass_slowed_m: float = math.nan
     #: Where the dock time over the lower bound went, in sim seconds (see
     #: :mod:`deploy.trials.time_over_bound`; empty without a bound or a charge).
     over_bound_s: dict[str, float] = field(default_factory=dict)

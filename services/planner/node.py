@@ -152,9 +152,15 @@ class PlannerService:
         #: The worker reads the track through this view; the executor adds samples holding its lock.
         self._shared_track = LockedPoseTrack(self._tracker)
         self._control_time = _Durations()
-        #: Control ticks' worth of sim seconds a goal was driven under a glass speed limit, all goals.
+        #: Control ticks' worth of sim seconds a goal was driven under a glass speed limit, all goals, and
+        #: the metres driven in them.
         self._glass_slowed_s = 0.0
-        node.stats.extra = {**node.stats.extra, topics.GLASS_SLOWED_STAT: 0.0}
+        self._glass_slowed_m = 0.0
+        node.stats.extra = {
+            **node.stats.extra,
+            topics.GLASS_SLOWED_STAT: 0.0,
+            topics.GLASS_SLOWED_M_STAT: 0.0,
+        }
         self._costmap_time = _Durations()
         self._layers = CostmapUpdater(params, self._shared_track, node.log)
         self._costmap = CostmapThread(
@@ -440,12 +446,16 @@ class PlannerService:
         snapshot = self._snapshot()
         limit = snapshot.speed_limit_mps
         if limit is not None and limit < self._params.max_linear_vel_mps:
-            # sim seconds driven under a glass speed limit, for reports of where the time goes (a float
-            # store: the stats query's thread reads it whole)
-            self._glass_slowed_s += 1.0 / self._params.controller_rate_hz
+            # sim seconds and metres driven under a glass speed limit, for reports of where the time goes
+            # (the dict is replaced whole: the stats query's thread reads it whole)
+            period_s = 1.0 / self._params.controller_rate_hz
+            self._glass_slowed_s += period_s
+            if snapshot.velocity is not None:
+                self._glass_slowed_m += abs(snapshot.velocity[0]) * period_s
             self._node.stats.extra = {
                 **self._node.stats.extra,
                 topics.GLASS_SLOWED_STAT: self._glass_slowed_s,
+                topics.GLASS_SLOWED_M_STAT: self._glass_slowed_m,
             }
         self._carry_out(run.tick(snapshot))
         self._control_time.add(time.thread_time() - t0)

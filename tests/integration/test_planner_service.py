@@ -20,6 +20,7 @@ import pytest
 import zenoh
 
 from services.planner.occupancy_map import save_map
+from services.planner.params import Params as PlannerParams
 from services.planner.rasterize import map_from_world
 from shared import topics
 from shared.action import ActionClient, spin_in_background
@@ -311,6 +312,9 @@ def test_glass_absent_from_the_map_is_found_and_avoided(  # type: ignore[no-unty
     (reply,) = list(bus.get(stats_key(namespace, "planner"), timeout=5.0))
     extra = json.loads(reply.ok.payload.to_bytes())["extra"]
     assert extra[topics.GLASS_SLOWED_STAT] > 0.0, extra
+    # and how far it drove meanwhile: more than nothing, less than those seconds at full speed
+    slowed_m, slowed_s = extra[topics.GLASS_SLOWED_M_STAT], extra[topics.GLASS_SLOWED_STAT]
+    assert 0.0 < slowed_m < slowed_s * PlannerParams().max_linear_vel_mps, extra
     _assert_no_errors(planner)
 
 
