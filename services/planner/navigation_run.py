@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from services.planner.behaviors import DriveStraight, Outcome, Spin
-from services.planner.costmap import CostGrid
+from services.planner.costmap import LETHAL_OBSTACLE, CostGrid
 from services.planner.params import Params
 from services.planner.plan_monitor import ActivePlan, ProgressChecker
 from services.planner.planning_worker import PlanOutcome
@@ -142,6 +142,20 @@ class NavOrders:
     end: NavEnd | None = None
 
 
+def with_lethal_of(grid: CostGrid, before: CostGrid | None) -> CostGrid:
+    """``grid`` with every cell lethal in ``before`` lethal too (the same frame; otherwise ``grid``).
+
+    A recovery's look round turns in place right after the clearing forgot the glass round the robot: with
+    only the cleared grid, the turn put a corner on a pane the robot was standing beside (a glass stub by a
+    door, 0.21 m from the robot's centre; its corners reach 0.25 m) and met it at 0.37 m/s, again after each
+    such recovery. What was lethal a moment ago still stops the turn; what the turn hears is added anyway.
+    """
+    if before is None or before.frame != grid.frame or before.costs.shape != grid.costs.shape:
+        return grid
+    lethal_before = before.costs == LETHAL_OBSTACLE
+    return CostGrid(grid.frame, np.where(lethal_before, np.uint8(LETHAL_OBSTACLE), grid.costs))
+
+
 class NavigationRun:
     """One goal, from acceptance to its end; see the module docstring."""
 
@@ -168,6 +182,8 @@ class NavigationRun:
         #: After a recovery that forgot glass the sonar had heard: a turn in place, so the sonar hears
         #: again what is still there before the planner plans through it.
         self._look: Spin | None = None
+        #: The grid as it was before that clearing: the turn keeps its corners off what it forgot.
+        self._look_guard: CostGrid | None = None
         self._progress = ProgressChecker(
             params.required_movement_m, params.required_rotation_rad, params.progress_timeout_s
         )
@@ -490,16 +506,17 @@ class NavigationRun:
             orders.clear_around = pose
             forgets_heard_glass = orders.clear in (GlassClearing.AROUND_ROBOT, GlassClearing.ALL)
             self._look = self.params.recovery_look_around() if forgets_heard_glass else None
+            self._look_guard = snap.grid if forgets_heard_glass else None
             self.phase = Phase.CLEARING
             self._wait_until_s = self.clock_s + self.params.recovery_wait_s
             return
         if self.phase is Phase.LOOKING:
             assert self._look is not None
-            step = self._look.step(pose, self.clock_s, snap.grid)
+            step = self._look.step(pose, self.clock_s, with_lethal_of(snap.grid, self._look_guard))
             if step.outcome is Outcome.RUNNING:
                 orders.cmd = step.cmd
                 return
-            self._look = None  # looked round (the wait before it is long over): plan
+            self._look = self._look_guard = None  # looked round (the wait before it is long over): plan
         orders.cmd = (0.0, 0.0)
         if self.clock_s < self._wait_until_s:
             return

@@ -7,9 +7,11 @@ import itertools
 import math
 from collections.abc import Callable
 
+import numpy as np
 import pytest
 
 from services.planner.astar import PlanningError
+from services.planner.costmap import LETHAL_OBSTACLE
 from services.planner.global_planner import GlobalPlanner
 from services.planner.navigation_run import Ending, NavigationRun, NavOrders, NavSnapshot, Phase
 from services.planner.params import Params
@@ -21,6 +23,7 @@ from shared.interfaces.navigation import NavigateErrorCode
 from tests.unit.planner.rooms import room_grid
 
 DT_S = 0.05
+AROUND_ROBOT_OR_ALL = {GlassClearing.AROUND_ROBOT, GlassClearing.ALL}
 
 
 def _grid(walls: list | None = None):  # type: ignore[no-untyped-def]
@@ -199,6 +202,29 @@ def test_a_recovery_that_forgets_heard_glass_turns_once_in_place_before_it_plans
     for turned in looks:
         assert abs(turned - 2.0 * math.pi) < 0.15, f"turned {turned:.2f} rad, not once round"
     assert [end.ending for end in world.ends] == [Ending.ABORTED]
+
+
+def test_a_look_round_keeps_its_corners_off_the_glass_the_clearing_just_forgot() -> None:
+    """A recovery forgets the glass round the robot and turns in place to hear it again: beside a pane, a
+    turn checked against the cleared grid alone swept a corner into it (a stub by a door, at 0.37 m/s)."""
+    split = [[2.5, 0.0], [2.5, 3.0]]  # no path: recoveries follow one another
+    beside = [[0.2, 1.71], [1.4, 1.71]]  # a pane along the robot's left side: its corners reach 0.25 m
+    heard, forgotten = _grid([split, beside]), _grid([split])
+    params = Params.model_validate({"max_recoveries": 2, "recovery_wait_s": 0.2})
+    world = KinematicWorld(heard, Pose2D(0.8, 1.5, 0.0), params)
+    footprint = (params.robot_length_m, params.robot_width_m)
+    run = _run(world, Pose2D(4.0, 1.5, 0.0))
+    looked_ticks = 0
+    while run.active and world.now_s < 60.0:
+        if AROUND_ROBOT_OR_ALL & set(world.clears):
+            world.grid = forgotten  # the clearing forgot the pane; it is still there
+        if run.phase is Phase.LOOKING:
+            looked_ticks += 1
+        world.drive(run, world.now_s + DT_S)
+        pose = np.array([world.pose.as_tuple()])
+        costs = heard.footprint_costs(pose, *footprint)
+        assert costs[0] < LETHAL_OBSTACLE, f"a corner met the pane at {world.pose} in {run.phase}"
+    assert GlassClearing.AROUND_ROBOT in world.clears and looked_ticks > 0, "no look round was tried"
 
 
 def _drive_past_flickers(params: Params) -> tuple[KinematicWorld, NavigationRun]:
