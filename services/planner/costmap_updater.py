@@ -320,8 +320,8 @@ class CostmapUpdater:
 
     def clear(self, glass: GlassClearing, robot: Pose2D | None = None) -> None:
         """Forget what the lidar saw (the next scan, all round, refills it) and as much of the glass
-        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot``,
-        or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
+        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot``
+        (but not within its turning reach), or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
         if self.costmap is None:
             return
         self.costmap.clear()
@@ -331,9 +331,11 @@ class CostmapUpdater:
                 self.glass.clear()
                 what = "lidar and glass memory"
             else:
-                radius = self._params.recovery_glass_clear_radius_m
-                self.glass.clear_around((robot.x, robot.y), radius)
-                what = f"lidar, and glass memory within {radius:g} m"
+                # Glass within the robot's turning reach stays: forgotten there, it is what a stuck robot
+                # met next, turning to look round or driving off on the new plan.
+                radius, reach = self._params.recovery_glass_clear_radius_m, self.glass.turning_reach_m
+                self.glass.clear_around((robot.x, robot.y), radius, keep_within_m=reach)
+                what = f"lidar, and glass memory from {reach:.2f} to {radius:g} m"
             self.apply_glass()
         self._log.info("costmap cleared (%s)", what)
 

@@ -348,9 +348,14 @@ class GlassMemory:
         still, and never while driving: suspicion keeps a moving robot off the unseen end of a pane.
         """
         x, y, _ = pose
-        reach = self.params.circumscribed_radius_m + 1.5 * self.frame.resolution_m
-        inside = self.frame.cells_within((x, y), reach)
+        inside = self.frame.cells_within((x, y), self.turning_reach_m)
         self._seen[inside[:, 1], inside[:, 0]] = True
+
+    @property
+    def turning_reach_m(self) -> float:
+        """How far from its centre the robot's corners sweep when it turns in place, with a cell and a half
+        to spare (the footprint's outline is checked half a cell outside it)."""
+        return self.params.circumscribed_radius_m + 1.5 * self.frame.resolution_m
 
     def clear(self) -> None:
         self._log_odds[...] = 0.0
@@ -362,9 +367,14 @@ class GlassMemory:
         self._held.clear()
         self._pairing.clear()
 
-    def clear_around(self, xy: tuple[float, float], radius_m: float) -> None:
-        """Forget evidence and looks within ``radius_m`` of a point; glass found farther away stays known."""
-        self.clear_cells(self.frame.cells_within(xy, radius_m))
+    def clear_around(self, xy: tuple[float, float], radius_m: float, keep_within_m: float = 0.0) -> None:
+        """Forget evidence and looks within ``radius_m`` of a point but not within ``keep_within_m`` of it;
+        glass found farther away stays known."""
+        cells = self.frame.cells_within(xy, radius_m)
+        if keep_within_m > 0.0 and len(cells):
+            centres = self.frame.cells_to_world(cells)
+            cells = cells[np.hypot(centres[:, 0] - xy[0], centres[:, 1] - xy[1]) > keep_within_m]
+        self.clear_cells(cells)
 
     def clear_cells(self, inside: np.ndarray) -> None:
         """Forget evidence and looks in ``inside`` (cells ``(N, 2)``); glass found elsewhere stays known."""

@@ -516,6 +516,8 @@ class NavigationRun:
             if step.outcome is Outcome.RUNNING:
                 orders.cmd = step.cmd
                 return
+            if step.outcome is not Outcome.SUCCEEDED:
+                log.info("the look round stopped after %.2f rad: %s", step.progress, step.reason)
             self._look = self._look_guard = None  # looked round (the wait before it is long over): plan
         orders.cmd = (0.0, 0.0)
         if self.clock_s < self._wait_until_s:

@@ -27,7 +27,8 @@ def glass_clearing(recovery: int, planning_failed: bool) -> GlassClearing:
     Glass is known only from the forward-looking sonar and cannot be seen again from beside it, so odd
     recoveries keep it; even ones forget it round the robot, in case a spurious echo is what blocks the way
     (glass farther off stays: forgetting a pane's end the sonar saw once, a robot replanned past it and
-    drove into it). When the planner still finds no path after that, from the fourth recovery on, the
+    drove into it; so does glass within the robot's turning reach, which a stuck robot beside a pane
+    otherwise met next). When the planner still finds no path after that, from the fourth recovery on, the
     glass that blocks it may lie anywhere: all of it is forgotten, as Nav2 clears its whole global
     costmap when computing a path fails.
     """

@@ -401,6 +401,19 @@ def test_clearing_glass_round_the_robot_keeps_a_pane_seen_farther_away() -> None
     assert _is_glass(memory, 2.6, 1.0)
 
 
+def test_clearing_round_the_robot_keeps_the_glass_within_its_turning_reach() -> None:
+    """A robot stuck 0.21 m beside a glass stub (generated room 168-2): forgotten, the stub was what it met
+    next, turning to look round or driving off on a plan through it."""
+    memory = _glass_memory(suspicion_m=0.0)
+    memory.add_reading((1.0, 1.5, math.pi / 2), 0.21, 0.5, 0.02, 3.0)  # the stub, beside the robot
+    memory.add_reading((1.0, 1.5, 0.0), 0.6, 0.5, 0.02, 3.0)  # an echo 0.6 m ahead
+    assert _is_glass(memory, 1.0, 1.71) and _is_glass(memory, 1.6, 1.5)
+    assert 0.21 < memory.turning_reach_m < 0.6
+    memory.clear_around((1.0, 1.5), 1.0, keep_within_m=memory.turning_reach_m)
+    assert _is_glass(memory, 1.0, 1.71), "the stub within the corners' reach was forgotten"
+    assert not _is_glass(memory, 1.6, 1.5), "the echo beyond the reach should be forgotten"
+
+
 def test_recoveries_forget_glass_round_the_robot_and_all_of_it_only_when_no_path_is_found_again() -> None:
     kept, around, everything = GlassClearing.KEEP, GlassClearing.AROUND_ROBOT, GlassClearing.ALL
     # following failed (blocked, stuck): a pane's end seen once stays known however often it fails
