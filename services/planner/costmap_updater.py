@@ -320,8 +320,8 @@ class CostmapUpdater:
 
     def clear(self, glass: GlassClearing, robot: Pose2D | None = None) -> None:
         """Forget what the lidar saw (the next scan, all round, refills it) and as much of the glass
-        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot``
-        (but not within its turning reach), or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
+        memory as ``glass`` says: none, what lies within ``recovery_glass_clear_radius_m`` of ``robot`` but
+        not within its turning reach, or all of it (see :func:`services.planner.recovery.glass_clearing`)."""
         if self.costmap is None:
             return
         self.costmap.clear()

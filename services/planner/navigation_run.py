@@ -145,10 +145,9 @@ class NavOrders:
 def with_lethal_of(grid: CostGrid, before: CostGrid | None) -> CostGrid:
     """``grid`` with every cell lethal in ``before`` lethal too (the same frame; otherwise ``grid``).
 
-    A recovery's look round turns in place right after the clearing forgot the glass round the robot: with
-    only the cleared grid, the turn put a corner on a pane the robot was standing beside (a glass stub by a
-    door, 0.21 m from the robot's centre; its corners reach 0.25 m) and met it at 0.37 m/s, again after each
-    such recovery. What was lethal a moment ago still stops the turn; what the turn hears is added anyway.
+    A recovery's look round turns in place right after the clearing forgot glass: checked against the
+    cleared grid alone, the turn put a corner on a pane the robot stood beside, after each such recovery
+    (measurement 116). What was lethal a moment ago still stops the turn; what the turn hears is added.
     """
     if before is None or before.frame != grid.frame or before.costs.shape != grid.costs.shape:
         return grid
