@@ -397,14 +397,22 @@ class User:
         pub = self.node.create_publisher(msg_type, "/cmd_vel", 10)
         matched = self.spin_until(lambda: bool(odom) and pub.get_subscription_count() > 0, 10.0)
         start = odom[-1].pose.pose.position if odom else None
-        end_at = time.monotonic() + seconds
-        while time.monotonic() < end_at:
+
+        def moved_m() -> float:
+            end = odom[-1].pose.pose.position if odom else None
+            return math.hypot(end.x - start.x, end.y - start.y) if start and end else 0.0
+
+        # ``seconds`` of driving, and on a busy machine up to three times that until the robot has moved
+        # (the face may take a moment to start forwarding from a publisher it has just discovered)
+        began = time.monotonic()
+        while time.monotonic() < began + seconds or (
+            moved_m() <= 0.1 and time.monotonic() < began + 3 * seconds
+        ):
             pub.publish(forward)
             self.spin_until(lambda: False, 0.05)
         pub.publish(msg_type())
         self.spin_until(lambda: False, 0.3)
-        end = odom[-1].pose.pose.position if odom else None
-        moved = math.hypot(end.x - start.x, end.y - start.y) if start and end else 0.0
+        moved = moved_m()
         self.node.destroy_publisher(pub)
         self.node.destroy_subscription(sub)
         report(step, moved > 0.1, matched=matched, moved_m=round(moved, 3), odom_messages=len(odom))
