@@ -88,6 +88,11 @@ HEARD_LINE_MAX_GAP_M = 0.6
 #: is too dear for every costmap update (measurement 92).
 HEARD_LINE_REUSE_CELLS = 8
 HEARD_LINE_REUSE_SHARE = 0.03
+#: ... or when one newly heard cell lies this close (cells) to where a heard line goes on: it lengthens the
+#: run, and the line must start again from the run's new end. A robot driving along a pane hears its end a
+#: few cells at a time; counted against the threshold alone, a metre of new cells went unseen and the line
+#: went on from where the run had ended long before (the glass room's pane end, measurement 117).
+HEARD_LINE_NEAR_CELLS = 3.0
 
 
 class GlassMemory:
@@ -117,7 +122,7 @@ class GlassMemory:
         #: The last extension and the marks it was drawn from (most updates change no mark).
         self._extension_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         #: The last heard line's extension and the heard cells it was drawn from.
-        self._heard_line_cache: tuple[np.ndarray, np.ndarray] | None = None
+        self._heard_line_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         if not (math.isfinite(echo_hold_s) and echo_hold_s >= 0):
             raise ValueError(f"echo_hold_s must be a non-negative number, got {echo_hold_s}")
         self.echo_hold_s = echo_hold_s
@@ -486,13 +491,19 @@ class GlassMemory:
         if reach_m <= 0:
             return np.zeros_like(heard)
         cached = self._heard_line_cache
-        if cached is not None and np.count_nonzero(cached[0] ^ heard) <= max(
-            HEARD_LINE_REUSE_CELLS, HEARD_LINE_REUSE_SHARE * np.count_nonzero(heard)
-        ):
-            return cached[1]
+        if cached is not None:
+            before, line, near_line = cached
+            changed = before ^ heard
+            if (
+                np.count_nonzero(changed)
+                <= max(HEARD_LINE_REUSE_CELLS, HEARD_LINE_REUSE_SHARE * np.count_nonzero(heard))
+                and not (changed & heard & near_line).any()
+            ):
+                return line
         gap_cells = HEARD_LINE_MAX_GAP_M / self.frame.resolution_m
         line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells)
-        self._heard_line_cache = (heard.copy(), line)
+        near_line = squared_distance_to_marks(line, HEARD_LINE_NEAR_CELLS) <= HEARD_LINE_NEAR_CELLS**2
+        self._heard_line_cache = (heard.copy(), line, near_line)
         return line
 
     def suspicion_mask(self, radius_share: float = 1.0) -> np.ndarray:

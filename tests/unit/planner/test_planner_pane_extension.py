@@ -200,3 +200,28 @@ def test_a_pane_heard_in_patches_goes_on_past_its_last_patch() -> None:
     reach_m = (beyond.max() - ix_last) * frame.resolution_m
     assert HEARD_LINE_EXTENSION_M - 0.1 <= reach_m <= HEARD_LINE_EXTENSION_M + 0.05, reach_m
     assert not line[heard].any(), "the heard cells stay heard cells"
+
+
+def test_a_heard_run_lengthened_by_a_few_cells_draws_its_line_again_from_the_new_end() -> None:
+    """The heard lines are reused while few heard cells change, but a robot driving along a pane hears its
+    end a few cells at a time: the run grew by a metre in five cells, and the line still went on from the
+    old end, leaving the last 0.3 m of the glass room's pane unsuspected (measurement 117)."""
+    frame = _hall_frame()
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.3, pane_extension_m=1.5)
+    heard = np.zeros(frame.shape, dtype=bool)
+    row = frame.world_to_cell(1.0, 2.6)[1]
+    heard[row, frame.world_to_cell(1.0, 2.6)[0] : frame.world_to_cell(2.2, 2.6)[0] + 1] = True
+    memory.heard_line_mask(heard)
+    grown = heard.copy()
+    for x in (2.5, 2.8, 3.1, 3.4, 3.7):  # patches 0.3 m apart: one run, a metre and a half longer
+        grown[row, frame.world_to_cell(x, 2.6)[0]] = True
+    line = memory.heard_line_mask(grown)
+    ix_last = frame.world_to_cell(3.7, 2.6)[0]
+    beyond = np.nonzero(line[row - 1 : row + 2, ix_last + 1 :].any(axis=0))[0]
+    assert len(beyond), "the line still goes on from the run's old end"
+    reach_m = (beyond.max() + 1) * frame.resolution_m
+    assert HEARD_LINE_EXTENSION_M - 0.1 <= reach_m <= HEARD_LINE_EXTENSION_M + 0.05, reach_m
+    # a few cells heard away from any line change nothing: the lines drawn are reused
+    aside = grown.copy()
+    aside[frame.world_to_cell(5.0, 4.0)[1], frame.world_to_cell(5.0, 4.0)[0]] = True
+    assert memory.heard_line_mask(aside) is line
