@@ -115,6 +115,8 @@ class GlassMemory:
         #: Cells a pane's extension stops at: a wall of the static map, or too near one to leave the robot a
         #: way between (see :meth:`set_walls`).
         self._extension_stops: np.ndarray | None = None
+        #: The same for a heard line, which stops farther off (see :meth:`_heard_line_gap_m`).
+        self._heard_line_stops: np.ndarray | None = None
         #: Cells a recovery cleared (:meth:`clear_around`): no pane's extension comes back into them. It
         #: would refill at once the floor the recovery had just forgotten to let the robot out, and the
         #: robot would be blocked again, recovery after recovery.
@@ -444,14 +446,24 @@ class GlassMemory:
         the pane's end before the sonar has looked, and the planner would find no way round."""
         if walls.shape != self.frame.shape:
             raise ValueError(f"walls of shape {walls.shape} do not fit the grid {self.frame.shape}")
-        reach_cells = self._robot_gap_m() / self.frame.resolution_m
-        self._extension_stops = squared_distance_to_marks(walls, reach_cells) <= reach_cells * reach_cells
+        gap_cells = self._robot_gap_m() / self.frame.resolution_m
+        line_gap_cells = self._heard_line_gap_m() / self.frame.resolution_m
+        squared = squared_distance_to_marks(walls, max(gap_cells, line_gap_cells))
+        self._extension_stops = squared <= gap_cells * gap_cells
+        self._heard_line_stops = squared <= line_gap_cells * line_gap_cells
         self._extension_cache = None
         self._heard_line_cache = None
 
     def _robot_gap_m(self) -> float:
         """The gap a pane's extension leaves before a wall or another pane: the robot's width and a margin."""
         return 2.0 * self.params.circumscribed_radius_m + 0.1
+
+    def _heard_line_gap_m(self) -> float:
+        """The gap a heard line leaves before a wall or another pane: the robot's gap and the suspicion
+        radius, which the line's cells grow by as they seed suspicion. A line stopped only the robot's gap
+        short of a wall left its suspicion 0.3 m from the wall, and the robot squeezed past the glass room's
+        pane between the two, stopping for "collision ahead" (measurement 117)."""
+        return self._robot_gap_m() + self.suspicion_radius_m
 
     def pane_extension_mask(self) -> np.ndarray:
         """Boolean ``(height, width)``: where the marked panes probably go on, unseen (see the module doc)."""
@@ -464,29 +476,37 @@ class GlassMemory:
         return extension
 
     def _extend(
-        self, cells: np.ndarray, looked_at: np.ndarray, reach_m: float, max_gap_cells: float = MAX_GAP_CELLS
+        self,
+        cells: np.ndarray,
+        looked_at: np.ndarray,
+        reach_m: float,
+        max_gap_cells: float = MAX_GAP_CELLS,
+        heard_line: bool = False,
     ) -> np.ndarray:
         """Runs of ``cells`` along lines (gaps of up to ``max_gap_cells`` within a run) carried on for
         ``reach_m`` through floor not ``looked_at``, stopping short of walls, of other panes and of floor a
-        recovery cleared (see :func:`pane_extensions`)."""
+        recovery cleared (see :func:`pane_extensions`): a pane's extension :meth:`_robot_gap_m` short, a
+        ``heard_line`` :meth:`_heard_line_gap_m` short."""
         stops = self._cleared_by_recovery
-        if self._extension_stops is not None:
-            stops = stops | self._extension_stops
+        wall_stops = self._heard_line_stops if heard_line else self._extension_stops
+        if wall_stops is not None:
+            stops = stops | wall_stops
         return pane_extensions(
             cells,
             looked_at,
             self.frame.resolution_m,
             reach_m,
             blocked=stops,
-            clearance_m=self._robot_gap_m(),
+            clearance_m=self._heard_line_gap_m() if heard_line else self._robot_gap_m(),
             max_gap_cells=max_gap_cells,
         )
 
     def heard_line_mask(self, heard: np.ndarray) -> np.ndarray:
         """Boolean ``(height, width)``: where runs of ``heard`` cells along a line would go on, for up to
         :data:`HEARD_LINE_EXTENSION_M` past their ends (never past :attr:`pane_extension_m`), whether or not
-        the sonar looked there, stopping a robot's width short of walls and of other panes. It only seeds
-        suspicion (see the module doc): on its own it is not glass."""
+        the sonar looked there, stopping short of walls and of other panes by a robot's width and the
+        suspicion radius (:meth:`_heard_line_gap_m`). It only seeds suspicion (see the module doc): on its
+        own it is not glass."""
         reach_m = min(self.pane_extension_m, HEARD_LINE_EXTENSION_M)
         if reach_m <= 0:
             return np.zeros_like(heard)
@@ -501,7 +521,7 @@ class GlassMemory:
             ):
                 return line
         gap_cells = HEARD_LINE_MAX_GAP_M / self.frame.resolution_m
-        line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells)
+        line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells, heard_line=True)
         near_line = squared_distance_to_marks(line, HEARD_LINE_NEAR_CELLS) <= HEARD_LINE_NEAR_CELLS**2
         self._heard_line_cache = (heard.copy(), line, near_line)
         return line

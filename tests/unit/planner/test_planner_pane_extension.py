@@ -225,3 +225,26 @@ def test_a_heard_run_lengthened_by_a_few_cells_draws_its_line_again_from_the_new
     aside = grown.copy()
     aside[frame.world_to_cell(5.0, 4.0)[1], frame.world_to_cell(5.0, 4.0)[0]] = True
     assert memory.heard_line_mask(aside) is line
+
+
+def test_suspicion_from_a_heard_line_leaves_the_robot_its_gap_before_a_wall() -> None:
+    """A heard line stopped a robot's gap short of a wall, and then seeded suspicion that grew by its radius
+    toward the wall: 0.3 m was left between the two, and the glass room's robot squeezed through it,
+    stopping for "collision ahead" again and again (measurement 117). The suspected floor now ends the
+    robot's gap short of the wall, as a marked pane's extension does."""
+    frame = _hall_frame()
+    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.3, pane_extension_m=1.5)
+    walls = np.zeros(frame.shape, dtype=bool)
+    wall_col = frame.world_to_cell(3.0, 2.6)[0]
+    walls[:, wall_col] = True
+    memory.set_walls(walls)
+    heard = np.zeros(frame.shape, dtype=bool)
+    row = frame.world_to_cell(1.0, 2.6)[1]
+    heard[row, frame.world_to_cell(0.2, 2.6)[0] : frame.world_to_cell(1.4, 2.6)[0] + 1] = True
+    line = memory.heard_line_mask(heard)
+    assert line[row, frame.world_to_cell(1.6, 2.6)[0]], "the line still goes on past the run's end"
+    last = int(np.nonzero(line[row - 2 : row + 3, :wall_col].any(axis=0))[0].max())
+    # what the line's suspicion leaves before the wall: the cells between, less the suspicion radius
+    gap_m = (wall_col - last - 1) * frame.resolution_m - memory.suspicion_radius_m
+    robot_gap_m = 2.0 * CostmapParams().circumscribed_radius_m + 0.1
+    assert gap_m >= robot_gap_m - frame.resolution_m, f"{gap_m:.2f} m left between suspicion and wall"
