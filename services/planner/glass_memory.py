@@ -462,7 +462,9 @@ class GlassMemory:
         """The gap a heard line leaves before a wall or another pane: the robot's gap and the suspicion
         radius, which the line's cells grow by as they seed suspicion. A line stopped only the robot's gap
         short of a wall left its suspicion 0.3 m from the wall, and the robot squeezed past the glass room's
-        pane between the two, stopping for "collision ahead" (measurement 117)."""
+        pane between the two, stopping for "collision ahead" (measurement 117). Beside a wall the robot's
+        gap is left whole; beside another pane, whose heard cells seed suspicion of their own, up to the
+        radius less."""
         return self._robot_gap_m() + self.suspicion_radius_m
 
     def pane_extension_mask(self) -> np.ndarray:
