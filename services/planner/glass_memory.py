@@ -112,11 +112,9 @@ class GlassMemory:
         if not (math.isfinite(pane_extension_m) and pane_extension_m >= 0):
             raise ValueError(f"pane_extension_m must be a non-negative number, got {pane_extension_m}")
         self.pane_extension_m = pane_extension_m
-        #: Cells a pane's extension stops at: a wall of the static map, or too near one to leave the robot a
-        #: way between (see :meth:`set_walls`).
-        self._extension_stops: np.ndarray | None = None
-        #: The same for a heard line, which stops farther off (see :meth:`_heard_line_gap_m`).
-        self._heard_line_stops: np.ndarray | None = None
+        #: Squared distance (cells) to the static map's walls, exact out to the farthest a line stops short
+        #: of them (see :meth:`set_walls`); None until the walls are known.
+        self._wall_squared: np.ndarray | None = None
         #: Cells a recovery cleared (:meth:`clear_around`): no pane's extension comes back into them. It
         #: would refill at once the floor the recovery had just forgotten to let the robot out, and the
         #: robot would be blocked again, recovery after recovery.
@@ -446,11 +444,8 @@ class GlassMemory:
         the pane's end before the sonar has looked, and the planner would find no way round."""
         if walls.shape != self.frame.shape:
             raise ValueError(f"walls of shape {walls.shape} do not fit the grid {self.frame.shape}")
-        gap_cells = self._robot_gap_m() / self.frame.resolution_m
-        line_gap_cells = self._heard_line_gap_m() / self.frame.resolution_m
-        squared = squared_distance_to_marks(walls, max(gap_cells, line_gap_cells))
-        self._extension_stops = squared <= gap_cells * gap_cells
-        self._heard_line_stops = squared <= line_gap_cells * line_gap_cells
+        farthest_m = max(self._robot_gap_m(), self._heard_line_gap_m())
+        self._wall_squared = squared_distance_to_marks(walls, farthest_m / self.frame.resolution_m)
         self._extension_cache = None
         self._heard_line_cache = None
 
@@ -483,23 +478,24 @@ class GlassMemory:
         looked_at: np.ndarray,
         reach_m: float,
         max_gap_cells: float = MAX_GAP_CELLS,
-        heard_line: bool = False,
+        gap_m: float | None = None,
     ) -> np.ndarray:
         """Runs of ``cells`` along lines (gaps of up to ``max_gap_cells`` within a run) carried on for
-        ``reach_m`` through floor not ``looked_at``, stopping short of walls, of other panes and of floor a
-        recovery cleared (see :func:`pane_extensions`): a pane's extension :meth:`_robot_gap_m` short, a
-        ``heard_line`` :meth:`_heard_line_gap_m` short."""
+        ``reach_m`` through floor not ``looked_at``, stopping ``gap_m`` short of walls and of other panes
+        (a pane's extension: :meth:`_robot_gap_m`, the default) and at floor a recovery cleared (see
+        :func:`pane_extensions`)."""
+        gap_m = self._robot_gap_m() if gap_m is None else gap_m
         stops = self._cleared_by_recovery
-        wall_stops = self._heard_line_stops if heard_line else self._extension_stops
-        if wall_stops is not None:
-            stops = stops | wall_stops
+        if self._wall_squared is not None:
+            gap_cells = gap_m / self.frame.resolution_m
+            stops = stops | (self._wall_squared <= gap_cells * gap_cells)
         return pane_extensions(
             cells,
             looked_at,
             self.frame.resolution_m,
             reach_m,
             blocked=stops,
-            clearance_m=self._heard_line_gap_m() if heard_line else self._robot_gap_m(),
+            clearance_m=gap_m,
             max_gap_cells=max_gap_cells,
         )
 
@@ -523,7 +519,9 @@ class GlassMemory:
             ):
                 return line
         gap_cells = HEARD_LINE_MAX_GAP_M / self.frame.resolution_m
-        line = self._extend(heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells, heard_line=True)
+        line = self._extend(
+            heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells, gap_m=self._heard_line_gap_m()
+        )
         near_line = squared_distance_to_marks(line, HEARD_LINE_NEAR_CELLS) <= HEARD_LINE_NEAR_CELLS**2
         self._heard_line_cache = (heard.copy(), line, near_line)
         return line
