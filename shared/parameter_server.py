@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 from typing import Any, Protocol, runtime_checkable
 
-from pydantic import BaseModel
+import msgspec
 
 from shared.interfaces.parameters import (
     GET_PARAMETER,
@@ -89,7 +89,7 @@ class ParameterServer:
         self._servers.clear()
 
 
-def attach_parameters(node: Node, params: BaseModel, service: object) -> ParameterServer:
+def attach_parameters(node: Node, params: msgspec.Struct, service: object) -> ParameterServer:
     """Serve ``params`` on ``node``; a ``service`` with ``on_parameter_set`` hears every accepted change."""
     table = ParameterTable(params)
     if isinstance(service, ParameterListener) and table.settable_names():

@@ -1,14 +1,13 @@
 """Runtime parameters: which of a service's parameters may change while it runs, and changing them.
 
-A service's parameters are one pydantic model (:class:`shared.runtime.ServiceParams`), validated at
-start-up. A field marked with :func:`runtime_settable` may also change while the service runs
+A service's parameters are one record (:class:`ServiceParams`, a msgspec ``Struct``), validated at
+start-up (:func:`shared.structs.validate`). A field marked with :func:`runtime_settable` may also change while the service runs
 (``zendock param set``); every other field is read once, at start-up, and a change to it is refused.
 :class:`ParameterTable` is the contract, pure (no bus, no clock):
 
 - names are the start-up names: ``field``, or ``group.field`` for a nested group (``-p`` spells them so);
-- a new value is validated by the same model as at start-up (``validate_assignment``: the field's bounds
-  and the model's cross-field checks), on a copy; a refused value changes nothing and the reason names
-  the parameter;
+- a new value is validated by the same record type as at start-up (the field's bounds and the record's
+  cross-field checks), on a copy; a refused value changes nothing and the reason names the parameter;
 - an accepted value is written into the live model the service was built with, so code that reads its
   parameters when it starts something (a docking run, a navigation goal) picks it up then; then the
   listeners run (:meth:`ParameterTable.on_set`), to apply it at once where that is wanted. A listener
@@ -25,26 +24,26 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, ValidationError
-from pydantic_core import to_jsonable_python
+import msgspec
 
-#: The ``json_schema_extra`` key that marks a field settable at runtime.
+from shared import structs
+
+#: The ``Meta(extra=...)`` key that marks a field settable at runtime.
 DYNAMIC_KEY = "dynamic"
 #: The key of the text that says when a change takes effect.
 APPLIES_KEY = "applies"
 AT_ONCE = "at once"
 
 
-class ServiceParams(BaseModel):
+class ServiceParams(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     """Base of every service's parameters: strict (unknown names are errors). Pure, so a service's
     parameter model (and the logic built from it) loads without the bus."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
     use_sim_time: bool = False
 
 
 def runtime_settable(applies: str = AT_ONCE) -> dict[str, Any]:
-    """``json_schema_extra`` for a field ``zendock param set`` may change while the service runs.
+    """``Meta(extra=...)`` for a field ``zendock param set`` may change while the service runs.
 
     ``applies`` says when a change takes effect, in the user's words: "at once", "next docking run"."""
     return {DYNAMIC_KEY: True, APPLIES_KEY: applies}
@@ -73,37 +72,30 @@ class ParameterInfo:
 Listener = Callable[[str, Any], None]
 
 
-def _group_model(model: type[BaseModel], name: str) -> type[BaseModel] | None:
-    annotation = model.model_fields[name].annotation
-    return annotation if isinstance(annotation, type) and issubclass(annotation, BaseModel) else None
-
-
-def _leaves(model: type[BaseModel], prefix: str = "") -> Iterator[tuple[str, str, bool, str]]:
+def _leaves(model: type[msgspec.Struct], prefix: str = "") -> Iterator[tuple[str, str, bool, str]]:
     """``(dotted name, description, settable, applies)`` of every leaf parameter, groups flattened."""
-    for name, info in model.model_fields.items():
-        group = _group_model(model, name)
-        if group is not None:
-            yield from _leaves(group, f"{prefix}{name}.")
+    for spec in structs.fields(model):
+        if spec.group is not None:
+            yield from _leaves(spec.group, f"{prefix}{spec.name}.")
             continue
-        extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
-        settable = bool(extra.get(DYNAMIC_KEY, False))
-        applies = str(extra.get(APPLIES_KEY, AT_ONCE)) if settable else ""
-        yield f"{prefix}{name}", info.description or "", settable, applies
+        settable = bool(spec.extra.get(DYNAMIC_KEY, False))
+        applies = str(spec.extra.get(APPLIES_KEY, AT_ONCE)) if settable else ""
+        yield f"{prefix}{spec.name}", spec.description, settable, applies
 
 
-def _reason(name: str, value: Any, error: ValidationError) -> str:
-    """``name: reason (got value)``, one problem per line; a cross-field check's error is named by ``name``."""
-    lines = []
-    for item in error.errors():
-        reason = str(item["msg"]).removeprefix("Value error, ")
-        lines.append(f"{name}: {reason} (got {value!r})")
-    return "\n".join(lines)
+def _reason(name: str, value: Any, error: msgspec.ValidationError, record: type) -> str:
+    """``name: reason (got value)``; a cross-field check that names another field says which."""
+    where, reason = structs.explain(error, record)
+    leaf = name.rpartition(".")[2]
+    if where and where != leaf:
+        reason = f"{where}: {reason}"
+    return f"{name}: {reason} (got {value!r})"
 
 
 class ParameterTable:
     """A service's live parameters, read and changed by name (see the module docstring)."""
 
-    def __init__(self, params: BaseModel) -> None:
+    def __init__(self, params: msgspec.Struct) -> None:
         self._params = params
         self._fields = {
             name: (description, settable, applies)
@@ -112,7 +104,7 @@ class ParameterTable:
         self._listeners: list[tuple[frozenset[str], Listener]] = []
 
     @property
-    def params(self) -> BaseModel:
+    def params(self) -> msgspec.Struct:
         return self._params
 
     def settable_names(self) -> list[str]:
@@ -144,14 +136,11 @@ class ParameterTable:
             )
         parent_path, _, leaf = name.rpartition(".")
         live_parent = self._walk(self._params, parent_path)
-        candidate = live_parent.model_copy()
+        values = {**msgspec.structs.asdict(live_parent), leaf: value}
         try:
-            if candidate.model_config.get("validate_assignment"):
-                setattr(candidate, leaf, value)
-            else:
-                candidate = type(live_parent).model_validate({**live_parent.model_dump(), leaf: value})
-        except ValidationError as exc:
-            raise ParameterRefused(_reason(name, value, exc)) from None
+            candidate = msgspec.convert(values, type(live_parent), strict=False)
+        except msgspec.ValidationError as exc:
+            raise ParameterRefused(_reason(name, value, exc, type(live_parent))) from None
         new_value, old_value = getattr(candidate, leaf), getattr(live_parent, leaf)
         if isinstance(new_value, float) and not math.isfinite(new_value):
             raise ParameterRefused(f"{name}: must be a finite number (got {value!r})")
@@ -177,14 +166,14 @@ class ParameterTable:
             )
 
     @staticmethod
-    def _walk(model: BaseModel, dotted: str) -> BaseModel:
+    def _walk(model: msgspec.Struct, dotted: str) -> msgspec.Struct:
         for part in dotted.split(".") if dotted else ():
             model = getattr(model, part)
         return model
 
     def _value(self, name: str) -> Any:
         parent_path, _, leaf = name.rpartition(".")
-        return to_jsonable_python(getattr(self._walk(self._params, parent_path), leaf))
+        return structs.plain(getattr(self._walk(self._params, parent_path), leaf))
 
     def _info(self, name: str) -> ParameterInfo:
         description, settable, applies = self._fields[name]

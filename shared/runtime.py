@@ -11,7 +11,7 @@ Every ``python -m services.<name>`` takes the same flags::
     --node-name NAME        default: the service's name
     --log-level LEVEL
 
-Parameters are a pydantic model per service (unknown names and bad values are errors). A service with
+Parameters are a record (a msgspec ``Struct``) per service (unknown names and bad values are errors). A service with
 several parts nests a model per part, as Nav2 names ``controller.k_phi``; a dotted NAME sets one field
 of a part and leaves its other fields as they were::
 
@@ -42,11 +42,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
+import msgspec
 import zenoh
-from pydantic import BaseModel, ValidationError
 
+from shared import structs
 from shared.bus_env import connect_from_env
-from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError, format_validation_error
+from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
 from shared.contracts.enforce import hold_to_contract
 from shared.lifecycle_states import serve_lifecycle_states
 from shared.names import normalise_namespace
@@ -165,15 +166,15 @@ def _parse_override(text: str) -> tuple[str, Any]:
     return name, parse_parameter_value(raw)
 
 
-def _group_model(model: type[BaseModel], name: str) -> type[BaseModel] | None:
-    """The model of ``model``'s field ``name`` when that field is a nested group of parameters, else None."""
-    annotation = model.model_fields[name].annotation
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    return None
+def _group_model(model: type[msgspec.Struct], name: str) -> type[msgspec.Struct] | None:
+    """The record of ``model``'s field ``name`` when that field is a nested group of parameters, else None."""
+    spec = structs.field_spec(model, name)
+    return spec.group if spec is not None else None
 
 
-def set_dotted(values: dict[str, Any], name: str, value: Any, model: type[BaseModel], source: str) -> None:
+def set_dotted(
+    values: dict[str, Any], name: str, value: Any, model: type[msgspec.Struct], source: str
+) -> None:
     """Set parameter ``name`` (``field`` or ``group.field``, any depth) to ``value`` in ``values``.
 
     Each part before the last must name a nested group of ``model``; the last part and the value are left
@@ -185,8 +186,8 @@ def set_dotted(values: dict[str, Any], name: str, value: Any, model: type[BaseMo
     target, here = values, model
     for depth, part in enumerate(parts[:-1]):
         where = ".".join(parts[: depth + 1])
-        if part not in here.model_fields:
-            known = ", ".join(n for n in here.model_fields if _group_model(here, n)) or "none"
+        if part not in structs.field_names(here):
+            known = ", ".join(n for n in structs.field_names(here) if _group_model(here, n)) or "none"
             raise ConfigError(f"{source}: {name}: unknown group {where!r} (groups: {known})")
         group = _group_model(here, part)
         if group is None:
@@ -196,7 +197,7 @@ def set_dotted(values: dict[str, Any], name: str, value: Any, model: type[BaseMo
             child = target[part] = {}
         target, here = child, group
     last = parts[-1]
-    group = _group_model(here, last) if last in here.model_fields else None
+    group = _group_model(here, last)
     if group is not None and isinstance(value, dict) and isinstance(target.get(last), dict):
         for key, item in value.items():  # a map for a group merges into what an earlier source set
             set_dotted(target[last], str(key), item, group, source)
@@ -295,10 +296,7 @@ def load_params(model: type[P], options: ServiceOptions) -> P:
             set_dotted(values, str(name), value, model, source)
     for name, value in options.overrides.items():
         set_dotted(values, name, value, model, "parameters")
-    try:
-        return model.model_validate(values)
-    except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, source)) from None
+    return structs.validate(model, values, source)
 
 
 def configure_logging(options: ServiceOptions) -> logging.Logger:

@@ -32,13 +32,15 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
+import msgspec
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from msgspec import Meta
 
-from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
+from shared.config_errors import ConfigError, read_yaml_file
 from shared.geometry import Pose2D, distances_to_segment
+from shared.structs import validate
 
 #: Robot footprint (length along x, width along y) and where base_link sits: at its centre.
 ROBOT_LENGTH_M = 0.40
@@ -53,35 +55,27 @@ Point = tuple[float, float]
 Segment = tuple[Point, Point]
 
 
-def _finite(values: tuple[float, ...], what: str) -> tuple[float, ...]:
-    for v in values:
-        if not math.isfinite(v):
-            raise ValueError(f"{what} must be finite numbers, got {list(values)}")
-    return values
+def _finite(values: Iterable[float], what: str) -> None:
+    values = list(values)
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"{what}: must be finite numbers, got {values}")
 
 
-class _Strict(BaseModel):
-    """Every key is validated; an unknown key is an error (``<file>: robot.strat: unknown key``)."""
+class _Strict(msgspec.Struct, forbid_unknown_fields=True, frozen=True, kw_only=True):
+    """Every key is validated; an unknown key is an error (``<file>: robot.strat: unknown key``).
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    Checks run in ``__post_init__``; a message starts with the field it blames (``pose: ...``)."""
 
 
-class Box(_Strict):
+class Box(_Strict, frozen=True):
     pose: tuple[float, float, float]
     size: tuple[float, float]
 
-    @field_validator("pose")
-    @classmethod
-    def _pose_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
-        return _finite(v, "pose")  # type: ignore[return-value]
-
-    @field_validator("size")
-    @classmethod
-    def _size_positive(cls, v: tuple[float, float]) -> tuple[float, float]:
-        _finite(v, "size")
-        if v[0] <= 0 or v[1] <= 0:
-            raise ValueError(f"size must be two positive lengths [w, d], got {list(v)}")
-        return v
+    def __post_init__(self) -> None:
+        _finite(self.pose, "pose")
+        _finite(self.size, "size")
+        if self.size[0] <= 0 or self.size[1] <= 0:
+            raise ValueError(f"size: must be two positive lengths [w, d], got {list(self.size)}")
 
     def corners(self) -> list[Point]:
         """The four corners in the world frame, counter-clockwise; ``w`` along the box's x axis."""
@@ -91,18 +85,16 @@ class Box(_Strict):
         return [frame.transform_point(px, py) for px, py in local]
 
 
-class Dock(_Strict):
-    id: str = Field(min_length=1)
+class Dock(_Strict, frozen=True):
+    id: Annotated[str, Meta(min_length=1)]
     pose: tuple[float, float, float]
     type: str = "charger"
     #: The ArUco marker on the dock's face: its id in the world's dictionary (None: the dock's index).
-    marker_id: int | None = Field(None, ge=0, le=999)
-    marker_size_m: float = Field(0.12, gt=0.02, le=0.30)
+    marker_id: Annotated[int, Meta(ge=0, le=999)] | None = None
+    marker_size_m: Annotated[float, Meta(gt=0.02, le=0.30)] = 0.12
 
-    @field_validator("pose")
-    @classmethod
-    def _pose_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
-        return _finite(v, "pose")  # type: ignore[return-value]
+    def __post_init__(self) -> None:
+        _finite(self.pose, "pose")
 
     @property
     def pose2d(self) -> Pose2D:
@@ -113,34 +105,27 @@ class Dock(_Strict):
 ROBOT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 
 
-class RobotSpec(_Strict):
+class RobotSpec(_Strict, frozen=True):
     #: The robot's namespace (required in ``robots``; the single ``robot`` has none).
     name: str = ""
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
     #: The robot's own patrol waypoints ``[x, y, yaw]`` (a fleet generates some when this is empty).
-    patrol: list[tuple[float, float, float]] = Field(default_factory=list)
+    patrol: list[tuple[float, float, float]] = msgspec.field(default_factory=list)
 
-    @field_validator("start")
-    @classmethod
-    def _start_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
-        return _finite(v, "start")  # type: ignore[return-value]
-
-    @field_validator("patrol")
-    @classmethod
-    def _patrol_finite(cls, v: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
-        for i, waypoint in enumerate(v):
+    def __post_init__(self) -> None:
+        _finite(self.start, "start")
+        for i, waypoint in enumerate(self.patrol):
             _finite(waypoint, f"patrol.{i}")
-        return v
 
 
-class DockGeometry(BaseModel):
+@dataclass(frozen=True)
+class DockGeometry:
     """Where a dock's physical parts stand, in the dock pose's frame (x ahead of the docked robot).
 
     The charging plate's face is at ``x = ROBOT_FRONT_M``: the robot's front touches it when its
     base_link is at the dock pose. The body is a box behind the plate.
     """
 
-    model_config = ConfigDict(frozen=True)
     body_depth_m: float = 0.20
     body_width_m: float = 0.40
     #: The marker (ARTag) is on the body's face, centred, facing the robot, its centre this high (at least).
@@ -159,105 +144,85 @@ class DockGeometry(BaseModel):
 DOCK_GEOMETRY = DockGeometry()
 
 
-class World(_Strict):
-    name: str = Field(min_length=1)
+class World(_Strict, frozen=True):
+    name: Annotated[str, Meta(min_length=1)]
     bounds: tuple[float, float, float, float]
-    walls: list[Segment] = Field(default_factory=list)
-    glass: list[Segment] = Field(default_factory=list)
-    boxes: list[Box] = Field(default_factory=list)
-    docks: list[Dock] = Field(default_factory=list)
-    robot: RobotSpec = Field(default_factory=RobotSpec)
-    robots: list[RobotSpec] = Field(default_factory=list)
+    walls: list[Segment] = msgspec.field(default_factory=list)
+    glass: list[Segment] = msgspec.field(default_factory=list)
+    boxes: list[Box] = msgspec.field(default_factory=list)
+    docks: list[Dock] = msgspec.field(default_factory=list)
+    #: The single robot; a world that lists ``robots`` and leaves this at its default gets the first of them.
+    robot: RobotSpec = msgspec.field(default_factory=RobotSpec)
+    robots: list[RobotSpec] = msgspec.field(default_factory=list)
     #: Where robots waiting for a dock stand (``[x, y, yaw]``), out of the docks' approach corridors.
-    holding: list[tuple[float, float, float]] = Field(default_factory=list)
+    holding: list[tuple[float, float, float]] = msgspec.field(default_factory=list)
     aruco_dictionary: str = "DICT_4X4_50"
 
-    @model_validator(mode="before")
-    @classmethod
-    def _first_of_fleet_is_robot(cls, data: Any) -> Any:
-        if (
-            isinstance(data, dict)
-            and "robot" not in data
-            and isinstance(data.get("robots"), list)
-            and data["robots"]
-        ):
-            first = data["robots"][0]
-            if isinstance(first, dict) and "start" in first:
-                return {**data, "robot": {"start": first["start"]}}
-        return data
+    def __post_init__(self) -> None:
+        _finite(self.bounds, "bounds")
+        xmin, ymin, xmax, ymax = self.bounds
+        if not (xmax > xmin and ymax > ymin):
+            raise ValueError(
+                "bounds: must be [xmin, ymin, xmax, ymax] with xmax > xmin and ymax > ymin, "
+                f"got {list(self.bounds)}"
+            )
+        for kind in ("walls", "glass"):
+            for i, (a, b) in enumerate(getattr(self, kind)):
+                _finite((*a, *b), f"{kind}.{i}")
+                if math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-6:
+                    raise ValueError(f"{kind}.{i}: has zero length: {[list(a), list(b)]}")
+        if not re.fullmatch(r"DICT_(4X4|5X5|6X6|7X7)_(50|100|250|1000)", self.aruco_dictionary):
+            raise ValueError(
+                "aruco_dictionary: must be one of DICT_4X4_50 ... DICT_7X7_1000, "
+                f"got {self.aruco_dictionary!r}"
+            )
+        if self.robots and self.robot == RobotSpec():
+            msgspec.structs.force_setattr(self, "robot", RobotSpec(start=self.robots[0].start))
+        self._check_fleet()
+        self._check_docks()
 
-    @model_validator(mode="after")
-    def _fleet_names_and_places(self) -> World:
+    def _check_fleet(self) -> None:
         seen: set[str] = set()
         for i, robot in enumerate(self.robots):
             if not ROBOT_NAME.fullmatch(robot.name):
                 raise ValueError(
-                    f"robots.{i}.name must be a namespace (a letter, then letters, digits or _), "
+                    f"robots.{i}.name: must be a namespace (a letter, then letters, digits or _), "
                     f"got {robot.name!r}"
                 )
             if robot.name in seen:
-                raise ValueError(f"robot name {robot.name!r} appears twice in robots")
+                raise ValueError(f"robots.{i}.name: {robot.name!r} appears twice in robots")
             seen.add(robot.name)
             if not self.contains(robot.start[0], robot.start[1]):
                 raise ValueError(
-                    f"robots.{i} ({robot.name}) start {list(robot.start[:2])} is outside bounds "
+                    f"robots.{i}.start: ({robot.name}) {list(robot.start[:2])} is outside bounds "
                     f"{list(self.bounds)}"
                 )
             for j, waypoint in enumerate(robot.patrol):
                 if not self.contains(waypoint[0], waypoint[1]):
                     raise ValueError(
-                        f"robots.{i} ({robot.name}) patrol.{j} {list(waypoint[:2])} is outside bounds "
+                        f"robots.{i}.patrol.{j}: ({robot.name}) {list(waypoint[:2])} is outside bounds "
                         f"{list(self.bounds)}"
                     )
         for i, pose in enumerate(self.holding):
             _finite(pose, f"holding.{i}")
             if not self.contains(pose[0], pose[1]):
-                raise ValueError(f"holding.{i} {list(pose[:2])} is outside bounds {list(self.bounds)}")
-        return self
+                raise ValueError(f"holding.{i}: {list(pose[:2])} is outside bounds {list(self.bounds)}")
 
-    @field_validator("aruco_dictionary")
-    @classmethod
-    def _dictionary_name(cls, v: str) -> str:
-        if not re.fullmatch(r"DICT_(4X4|5X5|6X6|7X7)_(50|100|250|1000)", v):
-            raise ValueError(f"aruco_dictionary must be one of DICT_4X4_50 ... DICT_7X7_1000, got {v!r}")
-        return v
-
-    @field_validator("bounds")
-    @classmethod
-    def _bounds_ordered(cls, v: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
-        _finite(v, "bounds")
-        xmin, ymin, xmax, ymax = v
-        if not (xmax > xmin and ymax > ymin):
-            raise ValueError(
-                f"bounds must be [xmin, ymin, xmax, ymax] with xmax > xmin and ymax > ymin, got {list(v)}"
-            )
-        return v
-
-    @field_validator("walls", "glass")
-    @classmethod
-    def _segments_nonzero(cls, v: list[Segment]) -> list[Segment]:
-        for i, (a, b) in enumerate(v):
-            _finite((*a, *b), f"segment {i}")
-            if math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-6:
-                raise ValueError(f"segment {i} has zero length: {[list(a), list(b)]}")
-        return v
-
-    @model_validator(mode="after")
-    def _docks_unique_and_inside(self) -> World:
+    def _check_docks(self) -> None:
         seen: set[str] = set()
-        for dock in self.docks:
+        for i, dock in enumerate(self.docks):
             if dock.id in seen:
-                raise ValueError(f"dock id {dock.id!r} appears twice")
+                raise ValueError(f"docks.{i}.id: dock id {dock.id!r} appears twice")
             seen.add(dock.id)
             if not self.contains(dock.pose[0], dock.pose[1]):
                 raise ValueError(
-                    f"dock {dock.id!r} at {list(dock.pose[:2])} is outside bounds {list(self.bounds)}"
+                    f"docks.{i}.pose: dock {dock.id!r} at {list(dock.pose[:2])} is outside bounds "
+                    f"{list(self.bounds)}"
                 )
         if not self.contains(self.robot.start[0], self.robot.start[1]):
             raise ValueError(
-                f"robot.start {list(self.robot.start[:2])} is outside bounds {list(self.bounds)}"
+                f"robot.start: {list(self.robot.start[:2])} is outside bounds {list(self.bounds)}"
             )
-        return self
 
     def contains(self, x: float, y: float) -> bool:
         xmin, ymin, xmax, ymax = self.bounds
@@ -362,11 +327,7 @@ def parse_world(data: Any, source: str | Path = "<world>") -> World:
         raise ConfigError(
             f"{source}: a world file must be a mapping with name, bounds, walls, ...; got {type(data).__name__}"
         )
-    try:
-        world = World.model_validate(data)
-    except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, source)) from None
-    return world
+    return validate(World, data, source)
 
 
 def world_files(names: Iterable[str | Path]) -> list[Path]:

@@ -19,6 +19,7 @@ import yaml
 from deploy.trials.starts import lower_bounds, random_starts
 from shared.config_errors import ConfigError, read_yaml_file
 from shared.geometry import Pose2D
+from shared.structs import plain
 from shared.world import World, load_world, parse_world
 
 #: Patrol waypoints generated per robot.
@@ -35,7 +36,7 @@ def fleet_world(world_path: Path, robots: int | None, seed: int, out: Path) -> t
     world = parse_world(data, world_path)
     if not world.docks:
         raise ConfigError(f"{world_path}: a fleet needs docks to share, and this world has none")
-    listed = [r.model_dump() for r in world.robots] or [{"name": "r1", "start": list(world.robot.start)}]
+    listed = [plain(r) for r in world.robots] or [{"name": "r1", "start": list(world.robot.start)}]
     n = len(listed) if robots is None else robots
     rng = random.Random(seed)
     chosen = listed[:n]

@@ -2,10 +2,9 @@
 
 import sys
 
-from shared.memory import keep_openssl_out, skip_pydantic_plugin_scan
+from shared.memory import keep_openssl_out
 
-keep_openssl_out()  # before any import of pydantic, which loads hashlib
-skip_pydantic_plugin_scan()  # before the first pydantic model
+keep_openssl_out()  # before anything that imports hashlib (the glass memory's digest, foxglove)
 
 from services.battery.node import main  # noqa: E402
 

@@ -14,8 +14,9 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
+from typing import Annotated
 
-from pydantic import Field, model_validator
+from msgspec import Meta
 
 from services.battery.model import BatteryModel, BatteryParams
 from services.battery.state_file import StoredCharge, load_charge, save_charge
@@ -36,61 +37,75 @@ STATE_SAVE_PERIOD_S = 0.5
 class Params(ServiceParams):
     """Parameters of ``python -m services.battery`` (``-p name=value`` or a YAML file)."""
 
-    capacity_ah: float = Field(2.0, gt=0.0, description="capacity in ampere-hours")
-    initial_percentage: float = Field(1.0, ge=0.0, le=1.0, description="state of charge at start, 0..1")
-    base_current_a: float = Field(0.4, ge=0.0, description="drain off the dock while standing still, A")
-    linear_current_a_per_mps: float = Field(2.0, ge=0.0, description="extra drain per m/s of linear speed, A")
-    angular_current_a_per_radps: float = Field(
-        0.5, ge=0.0, description="extra drain per rad/s of turn rate, A"
+    capacity_ah: Annotated[float, Meta(gt=0.0, description="capacity in ampere-hours")] = 2.0
+    initial_percentage: Annotated[
+        float, Meta(ge=0.0, le=1.0, description="state of charge at start, 0..1")
+    ] = 1.0
+    base_current_a: Annotated[
+        float, Meta(ge=0.0, description="drain off the dock while standing still, A")
+    ] = 0.4
+    linear_current_a_per_mps: Annotated[
+        float, Meta(ge=0.0, description="extra drain per m/s of linear speed, A")
+    ] = 2.0
+    angular_current_a_per_radps: Annotated[
+        float, Meta(ge=0.0, description="extra drain per rad/s of turn rate, A")
+    ] = 0.5
+    charge_rate_c: Annotated[
+        float, Meta(gt=0.0, description="constant charging current as a multiple of capacity")
+    ] = 0.5
+    taper_start_fraction: Annotated[
+        float, Meta(gt=0.0, lt=1.0, description="charge above which the current tapers")
+    ] = 0.8
+    empty_voltage_v: Annotated[float, Meta(ge=0.0, description="open-circuit voltage when empty")] = 9.0
+    nominal_voltage_v: Annotated[float, Meta(gt=0.0, description="open-circuit voltage at half charge")] = (
+        11.1
     )
-    charge_rate_c: float = Field(
-        0.5, gt=0.0, description="constant charging current as a multiple of capacity"
+    full_voltage_v: Annotated[float, Meta(gt=0.0, description="open-circuit voltage when full")] = 12.6
+    internal_resistance_ohm: Annotated[
+        float, Meta(ge=0.0, description="series resistance: voltage sag under load")
+    ] = 0.05
+    drain_scale: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="demo knob: the charge drains this many times faster",
+            extra=runtime_settable(),
+        ),
+    ] = 1.0
+    charge_scale: Annotated[
+        float,
+        Meta(
+            ge=0.0, description="demo knob: the charge fills this many times faster", extra=runtime_settable()
+        ),
+    ] = 1.0
+    frozen: Annotated[
+        bool,
+        Meta(description="hold the charge where it is (neither drains nor fills)", extra=runtime_settable()),
+    ] = False
+    state_file: Annotated[
+        str,
+        Meta(description="keep the charge in this file across restarts (empty: start from the parameters)"),
+    ] = ""
+    publish_rate_hz: Annotated[
+        float, Meta(ge=1.0, le=100.0, description="battery_status rate on the node's clock")
+    ] = 10.0
+    dock_contact_timeout_s: Annotated[
+        float, Meta(gt=0.0, description="older dock_contact counts as not mated")
+    ] = 1.0
+    odom_timeout_s: Annotated[float, Meta(gt=0.0, description="older odometry counts as standing still")] = (
+        1.0
     )
-    taper_start_fraction: float = Field(
-        0.8, gt=0.0, lt=1.0, description="charge above which the current tapers"
-    )
-    empty_voltage_v: float = Field(9.0, ge=0.0, description="open-circuit voltage when empty")
-    nominal_voltage_v: float = Field(11.1, gt=0.0, description="open-circuit voltage at half charge")
-    full_voltage_v: float = Field(12.6, gt=0.0, description="open-circuit voltage when full")
-    internal_resistance_ohm: float = Field(
-        0.05, ge=0.0, description="series resistance: voltage sag under load"
-    )
-    drain_scale: float = Field(
-        1.0,
-        ge=0.0,
-        description="demo knob: the charge drains this many times faster",
-        json_schema_extra=runtime_settable(),
-    )
-    charge_scale: float = Field(
-        1.0,
-        ge=0.0,
-        description="demo knob: the charge fills this many times faster",
-        json_schema_extra=runtime_settable(),
-    )
-    frozen: bool = Field(
-        False,
-        description="hold the charge where it is (neither drains nor fills)",
-        json_schema_extra=runtime_settable(),
-    )
-    state_file: str = Field(
-        "", description="keep the charge in this file across restarts (empty: start from the parameters)"
-    )
-    publish_rate_hz: float = Field(
-        10.0, ge=1.0, le=100.0, description="battery_status rate on the node's clock"
-    )
-    dock_contact_timeout_s: float = Field(1.0, gt=0.0, description="older dock_contact counts as not mated")
-    odom_timeout_s: float = Field(1.0, gt=0.0, description="older odometry counts as standing still")
-    max_step_s: float = Field(2.0, gt=0.0, description="clock steps longer than this are skipped (a leap)")
-    frame_id: str = Field("base_link", description="header.frame_id of battery_status")
+    max_step_s: Annotated[
+        float, Meta(gt=0.0, description="clock steps longer than this are skipped (a leap)")
+    ] = 2.0
+    frame_id: Annotated[str, Meta(description="header.frame_id of battery_status")] = "base_link"
 
-    @model_validator(mode="after")
-    def _consistent(self) -> Params:
+    def __post_init__(self) -> None:
         self.battery_params()  # raises ValueError naming the field
         if self.max_step_s <= 1.0 / self.publish_rate_hz:
             raise ValueError(
                 f"max_step_s ({self.max_step_s}) must exceed the publication period ({1.0 / self.publish_rate_hz:g} s)"
             )
-        return self
 
     def battery_params(self) -> BatteryParams:
         return BatteryParams(

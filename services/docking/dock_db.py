@@ -12,11 +12,10 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-from pydantic import ValidationError
-
 from services.docking.errors import DockingError, DockingErrorCode
-from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
+from shared.config_errors import ConfigError, read_yaml_file
 from shared.geometry import Pose2D
+from shared.structs import validate
 from shared.world import Dock, World
 
 log = logging.getLogger(__name__)
@@ -111,13 +110,7 @@ def parse_dock_db(data: Any, source: str | Path = "<docks>") -> DockDatabase:
             raise ConfigError(
                 f"{source}: docks.{i}: must be a mapping {{id, pose, type}}, got {type(entry).__name__}"
             )
-        try:
-            dock = Dock.model_validate(entry)
-        except ValidationError as exc:
-            raise ConfigError(format_validation_error(exc, source, root=f"docks.{i}")) from None
-        for key in dock.model_extra or {}:
-            log.warning("%s: unknown key %r ignored", source, f"docks.{i}.{key}")
-        docks.append(dock)
+        docks.append(validate(Dock, entry, source, root=f"docks.{i}"))
     return DockDatabase(docks, source)
 
 

@@ -7,7 +7,10 @@ approach does none of these): that choice is made here once, not tested again at
 
 from __future__ import annotations
 
-from pydantic import Field, field_validator, model_validator
+from typing import Annotated
+
+import msgspec
+from msgspec import Meta
 
 from services.docking.approach import GRACEFUL_STAGING_OFFSET_M
 from services.docking.approach_control import ApproachController, back_off_gains
@@ -25,135 +28,155 @@ NEXT_RUN = "at the next docking or undocking run"
 class Params(ServiceParams):
     """Parameters of ``python -m services.docking`` (``-p name=value`` or a YAML file)."""
 
-    dock_database: str = Field(
-        description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is",
+    dock_database: Annotated[
+        str,
+        Meta(
+            description="dock database YAML (docks: [{id, pose: [x, y, yaw], type}]); a world file is accepted as is"
+        ),
+    ]
+    controller: Annotated[
+        ControllerName, Meta(description="final approach controller: " + choices_help(CONTROLLERS))
+    ] = DEFAULT_CONTROLLER
+    dock_id: Annotated[str, Meta(description="dock for the battery trigger ('' : the nearest)")] = ""
+    auto_dock: Annotated[
+        bool,
+        Meta(
+            description="dock when the battery crosses below low_battery_threshold (off: a program of "
+            "the user's own docks, and this service does not react to the same low battery)",
+            extra=runtime_settable("at once"),
+        ),
+    ] = True
+    low_battery_threshold: Annotated[float, Meta(gt=0.0, le=1.0)] = 0.25
+    resume_at: Annotated[
+        float, Meta(gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
+    ] = 0.95
+    patrol: Annotated[
+        list[tuple[float, float, float]],
+        Meta(
+            description="patrol waypoints [x, y, yaw] (empty: "
+            "those a fleet world in dock_database gives this robot)"
+        ),
+    ] = msgspec.field(default_factory=list)
+    max_retries: Annotated[int, Meta(ge=0, extra=runtime_settable(NEXT_RUN))] = 3
+    use_detection: Annotated[bool, Meta(description="refine the dock pose from detected_dock_pose")] = True
+    allow_blind_docking: Annotated[
+        bool, Meta(description="dock on the database pose when no detection comes")
+    ] = True
+    min_detections: Annotated[int, Meta(ge=1)] = 3
+    initial_perception_timeout_s: Annotated[float, Meta(gt=0.0)] = 2.0
+    detection_filter_coef: Annotated[float, Meta(gt=0.0, le=1.0)] = 0.1
+    max_detection_offset_m: Annotated[
+        float, Meta(gt=0.0, description="detections farther from the database pose are ignored")
+    ] = 0.5
+    max_staging_time_s: Annotated[
+        float, Meta(gt=0.0, description="staging time limit of battery-triggered runs")
+    ] = 120.0
+    approach_timeout_s: Annotated[float, Meta(gt=0.0, extra=runtime_settable(NEXT_RUN))] = 120.0
+    obstacle_timeout_s: Annotated[
+        float, Meta(gt=0.0, description="held by an obstacle this long, the attempt fails")
+    ] = 20.0
+    wait_charge_timeout_s: Annotated[float, Meta(gt=0.0)] = 5.0
+    max_docking_time_s: Annotated[float, Meta(gt=0.0)] = 600.0
+    staging_offset_m: Annotated[float, Meta(gt=0.2)] = GRACEFUL_STAGING_OFFSET_M
+    handover_distance_m: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="graceful: the approach takes over from navigation this close to the staging "
+            "pose, with the dock in view (0: navigation always stops at the staging pose first)",
+            extra=runtime_settable(NEXT_RUN),
+        ),
+    ] = 0.45
+    max_approach_speed_mps: Annotated[
+        float,
+        Meta(gt=0.0, le=0.5, description="graceful approach top speed", extra=runtime_settable(NEXT_RUN)),
+    ] = 0.5
+    undock_speed_mps: Annotated[
+        float, Meta(gt=0.0, le=0.5, description="backing off the dock, m/s", extra=runtime_settable(NEXT_RUN))
+    ] = 0.2
+    max_pose_age_s: Annotated[float, Meta(gt=0.0, description="older localisation is stale: hold still")] = (
+        0.5
     )
-    controller: ControllerName = Field(
-        DEFAULT_CONTROLLER, description="final approach controller: " + choices_help(CONTROLLERS)
-    )
-    dock_id: str = Field("", description="dock for the battery trigger ('' : the nearest)")
-    auto_dock: bool = Field(
-        True,
-        description="dock when the battery crosses below low_battery_threshold (off: a program of "
-        "the user's own docks, and this service does not react to the same low battery)",
-        json_schema_extra=runtime_settable("at once"),
-    )
-    low_battery_threshold: float = Field(0.25, gt=0.0, le=1.0)
-    resume_at: float = Field(0.95, gt=0.0, le=1.0, description="charge at which a patrol resumes (undocking)")
-    patrol: list[tuple[float, float, float]] = Field(
-        default_factory=list,
-        description="patrol waypoints [x, y, yaw] (empty: "
-        "those a fleet world in dock_database gives this robot)",
-    )
-    max_retries: int = Field(3, ge=0, json_schema_extra=runtime_settable(NEXT_RUN))
-    use_detection: bool = Field(True, description="refine the dock pose from detected_dock_pose")
-    allow_blind_docking: bool = Field(True, description="dock on the database pose when no detection comes")
-    min_detections: int = Field(3, ge=1)
-    initial_perception_timeout_s: float = Field(2.0, gt=0.0)
-    detection_filter_coef: float = Field(0.1, gt=0.0, le=1.0)
-    max_detection_offset_m: float = Field(
-        0.5, gt=0.0, description="detections farther from the database pose are ignored"
-    )
-    max_staging_time_s: float = Field(
-        120.0, gt=0.0, description="staging time limit of battery-triggered runs"
-    )
-    approach_timeout_s: float = Field(120.0, gt=0.0, json_schema_extra=runtime_settable(NEXT_RUN))
-    obstacle_timeout_s: float = Field(
-        20.0, gt=0.0, description="held by an obstacle this long, the attempt fails"
-    )
-    wait_charge_timeout_s: float = Field(5.0, gt=0.0)
-    max_docking_time_s: float = Field(600.0, gt=0.0)
-    staging_offset_m: float = Field(GRACEFUL_STAGING_OFFSET_M, gt=0.2)
-    handover_distance_m: float = Field(
-        0.45,
-        ge=0.0,
-        description="graceful: the approach takes over from navigation this close to the staging "
-        "pose, with the dock in view (0: navigation always stops at the staging pose first)",
-        json_schema_extra=runtime_settable(NEXT_RUN),
-    )
-    max_approach_speed_mps: float = Field(
-        0.5,
-        gt=0.0,
-        le=0.5,
-        description="graceful approach top speed",
-        json_schema_extra=runtime_settable(NEXT_RUN),
-    )
-    undock_speed_mps: float = Field(
-        0.2,
-        gt=0.0,
-        le=0.5,
-        description="backing off the dock, m/s",
-        json_schema_extra=runtime_settable(NEXT_RUN),
-    )
-    max_pose_age_s: float = Field(0.5, gt=0.0, description="older localisation is stale: hold still")
-    max_localisation_age_s: float = Field(
-        2.0,
-        gt=0.0,
-        description="... unless odometry no older than max_pose_age_s carries a pose this old forward",
-    )
-    pose_latency_s: float = Field(
-        0.01, ge=0.0, description="how old map_to_base_link_pose2d is when it arrives"
-    )
-    max_control_pose_age_s: float = Field(
-        0.25, gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)"
-    )
+    max_localisation_age_s: Annotated[
+        float,
+        Meta(
+            gt=0.0,
+            description="... unless odometry no older than max_pose_age_s carries a pose this old forward",
+        ),
+    ] = 2.0
+    pose_latency_s: Annotated[
+        float, Meta(ge=0.0, description="how old map_to_base_link_pose2d is when it arrives")
+    ] = 0.01
+    max_control_pose_age_s: Annotated[
+        float,
+        Meta(gt=0.0, description="graceful: an older pose holds the approach still (the tick came late)"),
+    ] = 0.25
     #: The simulated base answers a command within a physics step or two of its arrival, and the pose the
     #: approach steers from is already brought up to its tick, so little is left to predict: a longer dead
     #: time makes the robot believe itself ahead of where it is, brake early and steer off the axis. 0.05 s
     #: leaves room for the bus's latency at higher speed-ups (the sweep: docs/measurements, measurement 78).
-    command_delay_s: float = Field(
-        0.05,
-        ge=0.0,
-        le=1.0,
-        description="graceful: dead time from cmd_vel to the base's response, predicted "
-        "through with the commands still on their way",
-        json_schema_extra=runtime_settable(NEXT_RUN),
-    )
-    base_cmd_vel_timeout_s: float = Field(
-        0.3,
-        ge=0.0,
-        le=2.0,
-        description="graceful: how long the base drives on its last command before its cmd_vel "
-        "watchdog stops it; near the plate the approach only sends commands that would still meet it "
-        "gently if they were the last (0: count on the next command)",
-        json_schema_extra=runtime_settable(NEXT_RUN),
-    )
-    pose_correction_gain: float = Field(
-        1.0,
-        gt=0.0,
-        le=1.0,
-        description="graceful: how far each pose moves the approach's pose estimate "
-        "(1: the odometry-carried pose as it is, compensated for its age)",
-        json_schema_extra=runtime_settable(NEXT_RUN),
-    )
-    battery_timeout_s: float = Field(2.0, gt=0.0, description="older battery_status counts as not charging")
-    obstacle_stop_distance_m: float = Field(0.3, ge=0.0)
+    command_delay_s: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            le=1.0,
+            description="graceful: dead time from cmd_vel to the base's response, predicted "
+            "through with the commands still on their way",
+            extra=runtime_settable(NEXT_RUN),
+        ),
+    ] = 0.05
+    base_cmd_vel_timeout_s: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            le=2.0,
+            description="graceful: how long the base drives on its last command before its cmd_vel "
+            "watchdog stops it; near the plate the approach only sends commands that would still meet it "
+            "gently if they were the last (0: count on the next command)",
+            extra=runtime_settable(NEXT_RUN),
+        ),
+    ] = 0.3
+    pose_correction_gain: Annotated[
+        float,
+        Meta(
+            gt=0.0,
+            le=1.0,
+            description="graceful: how far each pose moves the approach's pose estimate "
+            "(1: the odometry-carried pose as it is, compensated for its age)",
+            extra=runtime_settable(NEXT_RUN),
+        ),
+    ] = 1.0
+    battery_timeout_s: Annotated[
+        float, Meta(gt=0.0, description="older battery_status counts as not charging")
+    ] = 2.0
+    obstacle_stop_distance_m: Annotated[float, Meta(ge=0.0)] = 0.3
     use_lidar: bool = True
     use_sonar: bool = True
-    feedback_period_s: float = Field(0.5, gt=0.0)
-    fleet: bool = Field(
-        False,
-        description="robots share docks: ask the fleet service (fleet/reserve_dock, one "
-        "namespace up) for a dock before driving to one, and release it after undocking",
-    )
-    fleet_patience_s: float = Field(
-        5.0, gt=0.0, description="fleet: no answer for this long, the fleet is down: dock at a dock seen free"
-    )
+    feedback_period_s: Annotated[float, Meta(gt=0.0)] = 0.5
+    fleet: Annotated[
+        bool,
+        Meta(
+            description="robots share docks: ask the fleet service (fleet/reserve_dock, one "
+            "namespace up) for a dock before driving to one, and release it after undocking"
+        ),
+    ] = False
+    fleet_patience_s: Annotated[
+        float,
+        Meta(
+            gt=0.0, description="fleet: no answer for this long, the fleet is down: dock at a dock seen free"
+        ),
+    ] = 5.0
 
-    @field_validator("dock_database")
-    @classmethod
-    def _database_loads(cls, value: str) -> str:
-        load_dock_db(value)  # a ConfigError names the file and the field
-        return value
-
-    @model_validator(mode="after")
-    def _consistent(self) -> Params:
+    def __post_init__(self) -> None:
+        try:
+            load_dock_db(self.dock_database)  # a ConfigError names the file and the entry
+        except ValueError as exc:
+            raise ValueError(f"dock_database: {exc}") from None
         if self.resume_at <= self.low_battery_threshold:
             raise ValueError(
-                f"resume_at ({self.resume_at}) must be above low_battery_threshold "
+                f"resume_at: {self.resume_at} must be above low_battery_threshold "
                 f"({self.low_battery_threshold})"
             )
-        return self
 
     @property
     def docking_controller(self) -> DockingController:

@@ -9,9 +9,11 @@ its claim's lease runs from the last moment it was seen alive, so a killed robot
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
 import zenoh
-from pydantic import Field, field_validator, model_validator
+from msgspec import Meta
 
 from services.fleet.dock_book import DockBook
 from shared import topics
@@ -42,33 +44,34 @@ DOCKING_TOKENS = f"{GRAPH_PREFIX}/node/*/docking"
 class Params(ServiceParams):
     """Parameters of ``python -m services.fleet`` (``-p name=value`` or a YAML file)."""
 
-    world: str = Field(..., description="world file whose docks the fleet shares out")
-    lease_s: float = Field(10.0, gt=0.0, description="a robot not seen alive for this long loses its dock")
-    critical_battery: float = Field(
-        0.10,
-        ge=0.0,
-        le=1.0,
-        description="at or below this a waiting robot may ask a charged one to leave its dock",
-    )
-    charged_enough: float = Field(
-        0.60, gt=0.0, le=1.0, description="a robot charged to this may be asked to leave"
-    )
-    publish_period_s: float = Field(
-        1.0, gt=0.0, description="fleet/docks and fleet/queue at least this often"
-    )
+    world: Annotated[str, Meta(description="world file whose docks the fleet shares out")]
+    lease_s: Annotated[
+        float, Meta(gt=0.0, description="a robot not seen alive for this long loses its dock")
+    ] = 10.0
+    critical_battery: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            le=1.0,
+            description="at or below this a waiting robot may ask a charged one to leave its dock",
+        ),
+    ] = 0.10
+    charged_enough: Annotated[
+        float, Meta(gt=0.0, le=1.0, description="a robot charged to this may be asked to leave")
+    ] = 0.60
+    publish_period_s: Annotated[
+        float, Meta(gt=0.0, description="fleet/docks and fleet/queue at least this often")
+    ] = 1.0
 
-    @field_validator("world")
-    @classmethod
-    def _world_has_docks(cls, value: str) -> str:
-        if not load_world(value).docks:
-            raise ValueError(f"{value} has no docks to share")
-        return value
-
-    @model_validator(mode="after")
-    def _thresholds(self) -> Params:
+    def __post_init__(self) -> None:
+        try:
+            docks = load_world(self.world).docks
+        except ValueError as exc:
+            raise ValueError(f"world: {exc}") from None
+        if not docks:
+            raise ValueError(f"world: {self.world} has no docks to share")
         if self.critical_battery >= self.charged_enough:
             raise ValueError("critical_battery must be below charged_enough")
-        return self
 
 
 class FleetService:

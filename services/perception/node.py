@@ -21,10 +21,11 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
+from typing import Annotated
 
 import cv2
 import numpy as np
-from pydantic import Field
+from msgspec import Meta
 
 from services.perception.images import ImageError, grey_pixels
 from services.perception.markers import DockSighting, MarkerFinder, MarkerSighting, locate_dock
@@ -64,20 +65,25 @@ _MARKER_ON_DOCK = Pose2D(ROBOT_FRONT_M, 0.0, math.pi)
 class Params(ServiceParams):
     """Parameters of ``python -m services.perception``."""
 
-    dock_database: str = Field(
-        description="dock database or world file: docks with their marker ids and sizes"
-    )
-    max_range_m: float = Field(3.5, gt=0, description="markers farther than this are not reported")
-    max_reprojection_error_px: float = Field(2.0, gt=0, description="fits worse than this are refused")
-    dock_detector: DetectorName = Field(
-        "aruco", description="synthetic: the simulator reports docks itself and this service stays idle"
-    )
-    opencv_threads: int = Field(
-        1,
-        ge=0,
-        description="threads OpenCV may use (0: one per core); one is cheaper where the cores are "
-        "busy (measurement 62)",
-    )
+    dock_database: Annotated[
+        str, Meta(description="dock database or world file: docks with their marker ids and sizes")
+    ]
+    max_range_m: Annotated[float, Meta(gt=0, description="markers farther than this are not reported")] = 3.5
+    max_reprojection_error_px: Annotated[
+        float, Meta(gt=0, description="fits worse than this are refused")
+    ] = 2.0
+    dock_detector: Annotated[
+        DetectorName,
+        Meta(description="synthetic: the simulator reports docks itself and this service stays idle"),
+    ] = "aruco"
+    opencv_threads: Annotated[
+        int,
+        Meta(
+            ge=0,
+            description="threads OpenCV may use (0: one per core); one is cheaper where the cores are "
+            "busy (measurement 62)",
+        ),
+    ] = 1
 
 
 class PerceptionService:

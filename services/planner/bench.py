@@ -18,6 +18,7 @@ from services.planner.astar import AStarParams, AStarPlanner
 from services.planner.costmap import CostmapParams, LayeredCostmap
 from services.planner.global_planner import GlobalPlanner, GlobalPlannerParams
 from services.planner.rasterize import map_from_world
+from shared.structs import validate
 from shared.world import World
 
 #: Start/goal pairs (map frame) that cross the room and need the doorway or go around boxes.
@@ -40,7 +41,8 @@ def bench_world() -> World:
         {"pose": [-5.0, 6.0, 0.0], "size": [1.5, 1.5]},
         {"pose": [6.5, 4.0, math.pi / 6], "size": [1.0, 2.0]},
     ]
-    return World.model_validate(
+    return validate(
+        World,
         {
             "name": "bench_room",
             "bounds": [-10.0, -10.0, 10.0, 10.0],
@@ -53,7 +55,8 @@ def bench_world() -> World:
             "boxes": boxes,
             "docks": [{"id": "home", "pose": [8.0, -9.2, -math.pi / 2]}],
             "robot": {"start": [-9.0, -9.0, 0.0]},
-        }
+        },
+        "bench_room",
     )
 
 

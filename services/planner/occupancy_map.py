@@ -18,11 +18,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+import msgspec
 import numpy as np
-from pydantic import BaseModel, ConfigDict, ValidationError, field_validator, model_validator
 
 from services.planner.grid_frame import GridFrame
-from shared.config_errors import ConfigError, format_validation_error, read_yaml_file
+from shared.config_errors import ConfigError, read_yaml_file
+from shared.structs import field_names, validate
 
 log = logging.getLogger(__name__)
 
@@ -90,10 +91,9 @@ class OccupancyMap:
         return int(self.data[iy, ix]) if self.in_bounds(ix, iy) else OCC_UNKNOWN
 
 
-class _MapYaml(BaseModel):
-    """The map_server YAML fields. Unknown keys are kept and reported as warnings."""
+class _MapYaml(msgspec.Struct, frozen=True, kw_only=True):
+    """The map_server YAML fields. Unknown keys are ignored, with a warning (:func:`load_map`)."""
 
-    model_config = ConfigDict(extra="allow", frozen=True)
     image: str
     resolution: float
     origin: tuple[float, float, float]
@@ -102,41 +102,22 @@ class _MapYaml(BaseModel):
     free_thresh: float
     mode: Literal["trinary", "scale", "raw"] = "trinary"
 
-    @field_validator("image")
-    @classmethod
-    def _image_named(cls, v: str) -> str:
-        if not v.strip():
-            raise ValueError("image must name the map's image file")
-        return v
-
-    @field_validator("resolution")
-    @classmethod
-    def _resolution_positive(cls, v: float) -> float:
-        if not (math.isfinite(v) and v > 0):
-            raise ValueError(f"resolution must be a positive number of metres per cell, got {v}")
-        return v
-
-    @field_validator("origin")
-    @classmethod
-    def _origin_finite(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
-        if not all(math.isfinite(c) for c in v):
-            raise ValueError(f"origin must be three finite numbers [x, y, yaw], got {list(v)}")
-        return v
-
-    @field_validator("occupied_thresh", "free_thresh")
-    @classmethod
-    def _probability(cls, v: float) -> float:
-        if not (0.0 <= v <= 1.0):
-            raise ValueError(f"must be a probability between 0 and 1, got {v}")
-        return v
-
-    @model_validator(mode="after")
-    def _thresholds_ordered(self) -> _MapYaml:
+    def __post_init__(self) -> None:
+        if not self.image.strip():
+            raise ValueError("image: must name the map's image file")
+        if not (math.isfinite(self.resolution) and self.resolution > 0):
+            raise ValueError(
+                f"resolution: must be a positive number of metres per cell, got {self.resolution}"
+            )
+        if not all(math.isfinite(c) for c in self.origin):
+            raise ValueError(f"origin: must be three finite numbers [x, y, yaw], got {list(self.origin)}")
+        for name in ("occupied_thresh", "free_thresh"):
+            if not (0.0 <= getattr(self, name) <= 1.0):
+                raise ValueError(f"{name}: must be a probability between 0 and 1, got {getattr(self, name)}")
         if self.free_thresh > self.occupied_thresh:
             raise ValueError(
                 f"free_thresh ({self.free_thresh}) must not exceed occupied_thresh ({self.occupied_thresh})"
             )
-        return self
 
 
 _PGM_COMMENT = re.compile(rb"#[^\n\r]*")
@@ -228,11 +209,8 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
             f"{yaml_path}: a map file must be a mapping with image, resolution, origin, "
             f"occupied_thresh, free_thresh; got {type(doc).__name__}"
         )
-    try:
-        spec = _MapYaml.model_validate(doc)
-    except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, yaml_path)) from None
-    for key in spec.model_extra or {}:
+    spec = validate(_MapYaml, doc, yaml_path)
+    for key in sorted(set(map(str, doc)) - set(field_names(_MapYaml))):
         log.warning("%s: unknown key %r ignored", yaml_path, key)
     image_path = Path(spec.image)
     if not image_path.is_absolute():

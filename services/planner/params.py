@@ -9,8 +9,9 @@ smoother share ``cost_weight`` and ``allow_unknown``. Defaults suit the robot: f
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
-from pydantic import Field, field_validator, model_validator
+from msgspec import Meta
 
 from services.planner.astar import AStarParams
 from services.planner.behaviors import BehaviorParams, DriveStraight, Spin
@@ -33,200 +34,250 @@ class Params(ServiceParams):
     """Parameters of ``python -m services.planner`` (``-p name=value`` or a YAML file)."""
 
     # map
-    map_yaml: str = Field("", description="map_server YAML loaded at start (wins over world)")
-    world: str = Field("", description="world file rasterised into the map when no map_yaml is given")
-    map_resolution_m: float = Field(0.05, gt=0.0, description="cell size when rasterising the world")
-    map_publish_period_s: float = Field(5.0, gt=0.0, description="republish the map this often (wall clock)")
-    costmap_publish_period_s: float = Field(
-        1.0, ge=0.0, description="publish the costmap this often (0: never)"
+    map_yaml: Annotated[str, Meta(description="map_server YAML loaded at start (wins over world)")] = ""
+    world: Annotated[
+        str, Meta(description="world file rasterised into the map when no map_yaml is given")
+    ] = ""
+    map_resolution_m: Annotated[float, Meta(gt=0.0, description="cell size when rasterising the world")] = (
+        0.05
     )
-    local_costmap_size_m: float = Field(
-        3.0, gt=0.0, description="side of the square local_costmap/get_costmap answers, round the robot"
-    )
+    map_publish_period_s: Annotated[
+        float, Meta(gt=0.0, description="republish the map this often (wall clock)")
+    ] = 5.0
+    costmap_publish_period_s: Annotated[
+        float, Meta(ge=0.0, description="publish the costmap this often (0: never)")
+    ] = 1.0
+    local_costmap_size_m: Annotated[
+        float,
+        Meta(gt=0.0, description="side of the square local_costmap/get_costmap answers, round the robot"),
+    ] = 3.0
     # robot and goal
-    robot_length_m: float = Field(ROBOT_LENGTH_M, gt=0.0, description="footprint length along x")
-    robot_width_m: float = Field(ROBOT_WIDTH_M, gt=0.0, description="footprint width along y")
-    max_linear_vel_mps: float = Field(
-        0.5, gt=0.0, description="top speed", json_schema_extra=runtime_settable(NEXT_GOAL)
-    )
-    max_angular_vel_radps: float = Field(
-        1.5, gt=0.0, description="top turn rate", json_schema_extra=runtime_settable(NEXT_GOAL)
-    )
-    max_linear_accel_mps2: float = Field(1.0, gt=0.0)
-    max_linear_decel_mps2: float = Field(1.5, gt=0.0)
-    max_angular_accel_radps2: float = Field(3.0, gt=0.0)
-    regulated_linear_scaling_min_radius_m: float = Field(
-        0.6, gt=0.0, description="curves tighter than this radius are taken proportionally slower"
-    )
-    cost_scaling_dist_m: float = Field(
-        0.4,
-        gt=0.0,
-        description="closer than this to an obstacle the speed falls in proportion to the distance",
-    )
-    approach_velocity_scaling_dist_m: float = Field(
-        0.3,
-        gt=0.0,
-        description="over this last stretch of the path the speed falls in proportion to what is left",
-    )
-    open_loop_acceleration: bool = Field(
-        True, description="ramp from the last command (true) or from the measured twist, which lags (false)"
-    )
-    xy_goal_tolerance_m: float = Field(0.05, gt=0.0)
-    yaw_goal_tolerance_rad: float = Field(0.05, gt=0.0)
-    trans_stopped_velocity_mps: float = Field(
-        0.05, gt=0.0, description="the goal counts as reached only when moving slower than this ..."
-    )
-    rot_stopped_velocity_radps: float = Field(0.1, gt=0.0, description="... and turning slower than this")
-    # costmap
-    inflation_radius_m: float = Field(
-        0.55,
-        ge=0.0,
-        description="obstacles cost this far out",
-        json_schema_extra=runtime_settable(
-            "at once: the costmap is inflated again and the next plan uses it"
+    robot_length_m: Annotated[float, Meta(gt=0.0, description="footprint length along x")] = ROBOT_LENGTH_M
+    robot_width_m: Annotated[float, Meta(gt=0.0, description="footprint width along y")] = ROBOT_WIDTH_M
+    max_linear_vel_mps: Annotated[
+        float, Meta(gt=0.0, description="top speed", extra=runtime_settable(NEXT_GOAL))
+    ] = 0.5
+    max_angular_vel_radps: Annotated[
+        float, Meta(gt=0.0, description="top turn rate", extra=runtime_settable(NEXT_GOAL))
+    ] = 1.5
+    max_linear_accel_mps2: Annotated[float, Meta(gt=0.0)] = 1.0
+    max_linear_decel_mps2: Annotated[float, Meta(gt=0.0)] = 1.5
+    max_angular_accel_radps2: Annotated[float, Meta(gt=0.0)] = 3.0
+    regulated_linear_scaling_min_radius_m: Annotated[
+        float, Meta(gt=0.0, description="curves tighter than this radius are taken proportionally slower")
+    ] = 0.6
+    cost_scaling_dist_m: Annotated[
+        float,
+        Meta(
+            gt=0.0,
+            description="closer than this to an obstacle the speed falls in proportion to the distance",
         ),
+    ] = 0.4
+    approach_velocity_scaling_dist_m: Annotated[
+        float,
+        Meta(
+            gt=0.0,
+            description="over this last stretch of the path the speed falls in proportion to what is left",
+        ),
+    ] = 0.3
+    open_loop_acceleration: Annotated[
+        bool,
+        Meta(description="ramp from the last command (true) or from the measured twist, which lags (false)"),
+    ] = True
+    xy_goal_tolerance_m: Annotated[float, Meta(gt=0.0)] = 0.05
+    yaw_goal_tolerance_rad: Annotated[float, Meta(gt=0.0)] = 0.05
+    trans_stopped_velocity_mps: Annotated[
+        float, Meta(gt=0.0, description="the goal counts as reached only when moving slower than this ...")
+    ] = 0.05
+    rot_stopped_velocity_radps: Annotated[
+        float, Meta(gt=0.0, description="... and turning slower than this")
+    ] = 0.1
+    # costmap
+    inflation_radius_m: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="obstacles cost this far out",
+            extra=runtime_settable("at once: the costmap is inflated again and the next plan uses it"),
+        ),
+    ] = 0.55
+    cost_scaling_factor: Annotated[float, Meta(gt=0.0)] = 3.0
+    obstacle_max_range_m: Annotated[
+        float, Meta(ge=0.0, description="lidar hits further than this do not mark")
+    ] = 2.5
+    raytrace_max_range_m: Annotated[float, Meta(ge=0.0, description="lidar beams clear up to this far")] = 3.0
+    costmap_update_rate_hz: Annotated[
+        float, Meta(gt=0.0, description="sensor data folded in this often (sim time)")
+    ] = 5.0
+    scan_beam_stride: Annotated[
+        int, Meta(ge=1, description="use every n-th lidar beam (2 halves the lidar's cost)")
+    ] = 1
+    idle_costmap_update_rate_hz: Annotated[
+        float, Meta(gt=0.0, description="the same without an active goal")
+    ] = 1.0
+    use_range_layer: Annotated[
+        bool,
+        Meta(
+            description="fold the ultrasonic range into the costmap (off: glass is invisible, for experiments)"
+        ),
+    ] = True
+    glass_memory_file: Annotated[
+        str,
+        Meta(description="keep the sonar's glass in this file across restarts (empty: forget it on exit)"),
+    ] = ""
+    glass_suspicion_radius_m: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="unlooked-at floor this close to glass the sonar heard counts as glass (0: off)",
+        ),
+    ] = 0.3
+    glass_echo_hold_s: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="each unexplained sonar echo's whole arc counts as glass this long (sim "
+            "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)",
+        ),
+    ] = 2.0
+    glass_pane_extension_m: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="a marked pane counts as going on along its own line this far past its ends, through "
+            "floor the sonar has never looked at and never closer to a wall than a robot's width: its unseen "
+            "end (0: off)",
+        ),
+    ] = 1.5
+    glass_trusted_range_m: Annotated[
+        float,
+        Meta(
+            gt=0.0,
+            description="a sonar echo from this far gives the glass memory half the evidence of a near "
+            "one, from 0.5 m farther an eighth (Nav2's phi): a far echo's arc is wide and mostly open floor; far "
+            "glass is still held for glass_echo_hold_s",
+        ),
+    ] = 2.0
+    glass_slowdown_radius_m: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="closer than this to glass the sonar has heard ahead, the speed falls in "
+            "proportion to the distance (0: off)",
+        ),
+    ] = 0.8
+    glass_slowdown_min_speed_mps: Annotated[float, Meta(gt=0.0, description="... but never below this")] = (
+        0.15
     )
-    cost_scaling_factor: float = Field(3.0, gt=0.0)
-    obstacle_max_range_m: float = Field(2.5, ge=0.0, description="lidar hits further than this do not mark")
-    raytrace_max_range_m: float = Field(3.0, ge=0.0, description="lidar beams clear up to this far")
-    costmap_update_rate_hz: float = Field(
-        5.0, gt=0.0, description="sensor data folded in this often (sim time)"
-    )
-    scan_beam_stride: int = Field(
-        1, ge=1, description="use every n-th lidar beam (2 halves the lidar's cost)"
-    )
-    idle_costmap_update_rate_hz: float = Field(1.0, gt=0.0, description="the same without an active goal")
-    use_range_layer: bool = Field(
-        True,
-        description="fold the ultrasonic range into the costmap (off: glass is invisible, for experiments)",
-    )
-    glass_memory_file: str = Field(
-        "", description="keep the sonar's glass in this file across restarts (empty: forget it on exit)"
-    )
-    glass_suspicion_radius_m: float = Field(
-        0.3,
-        ge=0.0,
-        description="unlooked-at floor this close to glass the sonar heard counts as glass (0: off)",
-    )
-    glass_echo_hold_s: float = Field(
-        2.0,
-        ge=0.0,
-        description="each unexplained sonar echo's whole arc counts as glass this long (sim "
-        "seconds), whatever the evidence model makes of it: a pane's end heard at the cone's edge (0: off)",
-    )
-    glass_pane_extension_m: float = Field(
-        1.5,
-        ge=0.0,
-        description="a marked pane counts as going on along its own line this far past its ends, through "
-        "floor the sonar has never looked at and never closer to a wall than a robot's width: its unseen "
-        "end (0: off)",
-    )
-    glass_trusted_range_m: float = Field(
-        2.0,
-        gt=0.0,
-        description="a sonar echo from this far gives the glass memory half the evidence of a near "
-        "one, from 0.5 m farther an eighth (Nav2's phi): a far echo's arc is wide and mostly open floor; far "
-        "glass is still held for glass_echo_hold_s",
-    )
-    glass_slowdown_radius_m: float = Field(
-        0.8,
-        ge=0.0,
-        description="closer than this to glass the sonar has heard ahead, the speed falls in "
-        "proportion to the distance (0: off)",
-    )
-    glass_slowdown_min_speed_mps: float = Field(0.15, gt=0.0, description="... but never below this")
-    lidar_mount: tuple[float, float, float] = Field(
-        (0.10, 0.0, 0.0), description="base_link -> lidar_link until tf_static says otherwise"
-    )
-    ultrasonic_mount: tuple[float, float, float] = Field(
-        (0.20, 0.0, 0.0), description="base_link -> ultrasonic_link until tf_static says otherwise"
-    )
+    lidar_mount: Annotated[
+        tuple[float, float, float], Meta(description="base_link -> lidar_link until tf_static says otherwise")
+    ] = (0.10, 0.0, 0.0)
+    ultrasonic_mount: Annotated[
+        tuple[float, float, float],
+        Meta(description="base_link -> ultrasonic_link until tf_static says otherwise"),
+    ] = (0.20, 0.0, 0.0)
     # planning
-    cost_weight: float = Field(3.0, ge=0.0, description="how strongly inflation cost lengthens a step")
+    cost_weight: Annotated[
+        float, Meta(ge=0.0, description="how strongly inflation cost lengthens a step")
+    ] = 3.0
     allow_unknown: bool = False
-    arrive_along_goal_heading: bool = Field(
-        True,
-        description="a path that would arrive more than 1.6 rad off the goal's heading ends along it where "
-        "there is room, instead of turning on the spot at the goal",
-    )
-    prefer_room_to_turn: bool = Field(
-        True,
-        description="avoid gaps only the inscribed circle fits through when a path with room to turn exists",
-    )
-    snap_radius_m: float = Field(0.3, ge=0.0, description="a blocked start or goal snaps this far at most")
-    waypoint_stop_on_failure: bool = Field(
-        False,
-        description="follow_waypoints ends at a waypoint it cannot reach (else records it as missed and goes on)",
-        json_schema_extra=runtime_settable("at the next waypoint that fails"),
-    )
-    replan_period_s: float = Field(1.0, gt=0.0, description="replan this often while following (sim time)")
-    min_replan_interval_s: float = Field(0.2, ge=0.0, description="urgent replans no more often than this")
+    arrive_along_goal_heading: Annotated[
+        bool,
+        Meta(
+            description="a path that would arrive more than 1.6 rad off the goal's heading ends along it where "
+            "there is room, instead of turning on the spot at the goal"
+        ),
+    ] = True
+    prefer_room_to_turn: Annotated[
+        bool,
+        Meta(
+            description="avoid gaps only the inscribed circle fits through when a path with room to turn exists"
+        ),
+    ] = True
+    snap_radius_m: Annotated[
+        float, Meta(ge=0.0, description="a blocked start or goal snaps this far at most")
+    ] = 0.3
+    waypoint_stop_on_failure: Annotated[
+        bool,
+        Meta(
+            description="follow_waypoints ends at a waypoint it cannot reach (else records it as missed and goes on)",
+            extra=runtime_settable("at the next waypoint that fails"),
+        ),
+    ] = False
+    replan_period_s: Annotated[
+        float, Meta(gt=0.0, description="replan this often while following (sim time)")
+    ] = 1.0
+    min_replan_interval_s: Annotated[
+        float, Meta(ge=0.0, description="urgent replans no more often than this")
+    ] = 0.2
     # control and action
-    controller_rate_hz: float = Field(20.0, gt=0.0)
-    feedback_rate_hz: float = Field(5.0, gt=0.0)
-    pose_timeout_s: float = Field(0.5, gt=0.0, description="an older pose holds the robot still ...")
-    carried_pose_timeout_s: float = Field(
-        2.0,
-        gt=0.0,
-        description="... unless fresh odometry carries it forward: then only a map pose older than this",
+    controller_rate_hz: Annotated[float, Meta(gt=0.0)] = 20.0
+    feedback_rate_hz: Annotated[float, Meta(gt=0.0)] = 5.0
+    pose_timeout_s: Annotated[float, Meta(gt=0.0, description="an older pose holds the robot still ...")] = (
+        0.5
     )
-    no_pose_timeout_s: float = Field(
-        5.0, gt=0.0, description="abort with NO_POSE after this long without one (sim and wall time)"
-    )
-    navigation_timeout_s: float = Field(
-        0.0, ge=0.0, description="abort with TIMEOUT after this long (0: never)"
-    )
+    carried_pose_timeout_s: Annotated[
+        float,
+        Meta(
+            gt=0.0,
+            description="... unless fresh odometry carries it forward: then only a map pose older than this",
+        ),
+    ] = 2.0
+    no_pose_timeout_s: Annotated[
+        float, Meta(gt=0.0, description="abort with NO_POSE after this long without one (sim and wall time)")
+    ] = 5.0
+    navigation_timeout_s: Annotated[
+        float, Meta(ge=0.0, description="abort with TIMEOUT after this long (0: never)")
+    ] = 0.0
     # recovery
-    progress_timeout_s: float = Field(10.0, gt=0.0, description="stuck if no progress for this long")
-    required_movement_m: float = Field(0.25, gt=0.0, description="progress: move this far ...")
-    required_rotation_rad: float = Field(0.5, gt=0.0, description="... or turn this much")
-    blocked_timeout_s: float = Field(2.0, gt=0.0, description="a collision ahead this long starts a recovery")
+    progress_timeout_s: Annotated[float, Meta(gt=0.0, description="stuck if no progress for this long")] = (
+        10.0
+    )
+    required_movement_m: Annotated[float, Meta(gt=0.0, description="progress: move this far ...")] = 0.25
+    required_rotation_rad: Annotated[float, Meta(gt=0.0, description="... or turn this much")] = 0.5
+    blocked_timeout_s: Annotated[
+        float, Meta(gt=0.0, description="a collision ahead this long starts a recovery")
+    ] = 2.0
     #: A robot stopped for a collision ahead, turning or creeping a little and stopped again is never blocked
     #: for blocked_timeout_s at a time, and its moves count as progress (beside a glass pane, measurement 106).
     #: So the time blocked is summed as well: blocked_timeout_s of it in all, within blocked_window_s and
     #: blocked_radius_m, is blocked too.
-    blocked_window_s: float = Field(
-        20.0, gt=0.0, description="blocked_timeout_s in all within this long (sim) starts a recovery too ..."
+    blocked_window_s: Annotated[
+        float,
+        Meta(gt=0.0, description="blocked_timeout_s in all within this long (sim) starts a recovery too ..."),
+    ] = 20.0
+    blocked_radius_m: Annotated[
+        float,
+        Meta(gt=0.0, description="... counting the time blocked within this distance of where the robot is"),
+    ] = 0.5
+    max_recoveries: Annotated[int, Meta(ge=0)] = 6
+    backup_distance_m: Annotated[float, Meta(gt=0.0)] = 0.15
+    backup_speed_mps: Annotated[float, Meta(gt=0.0)] = 0.1
+    recovery_wait_s: Annotated[float, Meta(ge=0.0, description="after clearing, let the sensors refill")] = (
+        0.5
     )
-    blocked_radius_m: float = Field(
-        0.5, gt=0.0, description="... counting the time blocked within this distance of where the robot is"
-    )
-    max_recoveries: int = Field(6, ge=0)
-    backup_distance_m: float = Field(0.15, gt=0.0)
-    backup_speed_mps: float = Field(0.1, gt=0.0)
-    recovery_wait_s: float = Field(0.5, ge=0.0, description="after clearing, let the sensors refill")
-    recovery_glass_clear_radius_m: float = Field(
-        1.0, gt=0.0, description="recoveries that clear glass memory forget it only this close to the robot"
-    )
+    recovery_glass_clear_radius_m: Annotated[
+        float,
+        Meta(gt=0.0, description="recoveries that clear glass memory forget it only this close to the robot"),
+    ] = 1.0
 
-    @field_validator("map_yaml")
-    @classmethod
-    def _map_loads(cls, value: str) -> str:
-        if value:
-            load_map(value)  # a ConfigError (a ValueError) names the file and the problem, before connecting
-        return value
-
-    @field_validator("world")
-    @classmethod
-    def _world_loads(cls, value: str) -> str:
-        if value:
-            load_world(value)
-        return value
-
-    @field_validator("lidar_mount", "ultrasonic_mount")
-    @classmethod
-    def _finite_mount(cls, value: tuple[float, float, float]) -> tuple[float, float, float]:
-        if not all(math.isfinite(v) for v in value):
-            raise ValueError(f"a mount is three finite numbers [x, y, yaw], got {list(value)}")
-        return value
-
-    @model_validator(mode="after")
-    def _consistent(self) -> Params:
+    def __post_init__(self) -> None:
+        for name, load in (("map_yaml", load_map), ("world", load_world)):
+            try:
+                if getattr(self, name):
+                    load(
+                        getattr(self, name)
+                    )  # a ConfigError names the file and the problem, before connecting
+            except ValueError as exc:
+                raise ValueError(f"{name}: {exc}") from None
+        for name in ("lidar_mount", "ultrasonic_mount"):
+            mount = getattr(self, name)
+            if not all(math.isfinite(v) for v in mount):
+                raise ValueError(f"{name}: a mount is three finite numbers [x, y, yaw], got {list(mount)}")
         self.costmap_params()
         self.follower_params()
         self.planner_params()
         self.recovery_backup()
-        return self
 
     def costmap_params(self) -> CostmapParams:
         return CostmapParams(

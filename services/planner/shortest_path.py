@@ -9,6 +9,7 @@ path it can drive; divided by the speed limit it bounds the time to goal from be
 
 from __future__ import annotations
 
+import msgspec
 import numpy as np
 
 from services.planner.astar import AStarParams, AStarPlanner
@@ -21,7 +22,7 @@ from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, World
 
 def solid_map(world: World, resolution_m: float = 0.05) -> OccupancyMap:
     """Every surface the robot can touch, glass too, rasterised."""
-    solid = world.model_copy(update={"walls": [*world.walls, *world.glass], "glass": []})
+    solid = msgspec.structs.replace(world, walls=[*world.walls, *world.glass], glass=[])
     return map_from_world(solid, resolution_m=resolution_m)
 
 

@@ -17,8 +17,10 @@ stand-in does not estimate its uncertainty.
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
-from pydantic import Field, field_validator
+from msgspec import Meta
 
 from shared import topics
 from shared.frames import CLOCK_RESET_S, clock_went_back
@@ -51,28 +53,38 @@ LOG_INTERVAL_S = 2.0
 class Params(ServiceParams):
     """Parameters of ``python -m services.pose`` (``-p name=value`` or a YAML file)."""
 
-    target_frame: str = Field("base_link", description="frame whose pose is published (e.g. lidar_link)")
-    reference_frame: str = Field("map", description="frame the pose is expressed in")
-    publish_rate_hz: float = Field(10.0, gt=0.0, le=100.0, description="publication rate on the node's clock")
-    cache_time_s: float = Field(10.0, gt=0.0, description="how much tf history is kept for interpolation")
-    max_transform_age_s: float = Field(
-        1.0, ge=0.0, description="publish nothing when the newest transform is older than this (0: no limit)"
+    target_frame: Annotated[str, Meta(description="frame whose pose is published (e.g. lidar_link)")] = (
+        "base_link"
     )
-    amcl_pose_period_s: float = Field(1.0, gt=0.0, description="amcl_pose at least this often (node's clock)")
-    amcl_update_min_d_m: float = Field(
-        0.25, gt=0.0, description="amcl_pose when moved this far since the last"
-    )
-    amcl_update_min_a_rad: float = Field(
-        0.2, gt=0.0, description="amcl_pose when turned this far since the last"
-    )
+    reference_frame: Annotated[str, Meta(description="frame the pose is expressed in")] = "map"
+    publish_rate_hz: Annotated[
+        float, Meta(gt=0.0, le=100.0, description="publication rate on the node's clock")
+    ] = 10.0
+    cache_time_s: Annotated[
+        float, Meta(gt=0.0, description="how much tf history is kept for interpolation")
+    ] = 10.0
+    max_transform_age_s: Annotated[
+        float,
+        Meta(
+            ge=0.0, description="publish nothing when the newest transform is older than this (0: no limit)"
+        ),
+    ] = 1.0
+    amcl_pose_period_s: Annotated[
+        float, Meta(gt=0.0, description="amcl_pose at least this often (node's clock)")
+    ] = 1.0
+    amcl_update_min_d_m: Annotated[
+        float, Meta(gt=0.0, description="amcl_pose when moved this far since the last")
+    ] = 0.25
+    amcl_update_min_a_rad: Annotated[
+        float, Meta(gt=0.0, description="amcl_pose when turned this far since the last")
+    ] = 0.2
 
-    @field_validator("target_frame", "reference_frame")
-    @classmethod
-    def _frame_name(cls, value: str) -> str:
-        name = value.strip().lstrip("/")
-        if not name:
-            raise ValueError("a frame name must not be empty")
-        return name
+    def __post_init__(self) -> None:
+        for field_name in ("target_frame", "reference_frame"):
+            frame = getattr(self, field_name).strip().lstrip("/")
+            if not frame:
+                raise ValueError(f"{field_name}: a frame name must not be empty")
+            setattr(self, field_name, frame)
 
 
 def amcl_pose_message(transform: StampedTransform, frame_id: str) -> PoseWithCovarianceStamped:

@@ -30,11 +30,12 @@ from __future__ import annotations
 import time
 from collections import Counter
 from dataclasses import dataclass
-from typing import Any
+from typing import Annotated, Any
 
+import msgspec
 import zenoh
 import zenoh.ext
-from pydantic import Field, field_validator
+from msgspec import Meta
 
 from services.ros2_bridge.actions import ACTIONS, SERVICES, ActionRelay, QueryRelay
 from services.ros2_bridge.demand import PeerSubscriptions
@@ -87,25 +88,21 @@ FIRST_SEQUENCE_NUMBER = 1
 class Params(ServiceParams):
     """Parameters of ``python -m services.ros2_bridge``."""
 
-    domain_id: int = Field(
-        default_factory=default_domain_id,
-        ge=0,
-        le=232,
-        description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)",
-    )
-    ros_namespace: str = Field(
-        "/",
-        description="ROS 2 namespace the zendock robot's topics and nodes appear "
-        "in, in rcl's canonical form (/ or /robot)",
-    )
+    domain_id: Annotated[
+        int, Meta(ge=0, le=232, description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
+    ] = msgspec.field(default_factory=default_domain_id)
+    ros_namespace: Annotated[
+        str,
+        Meta(
+            description="ROS 2 namespace the zendock robot's topics and nodes appear "
+            "in, in rcl's canonical form (/ or /robot)"
+        ),
+    ] = "/"
 
-    @field_validator("ros_namespace")
-    @classmethod
-    def _canonical(cls, namespace: str) -> str:
-        error = namespace_error(namespace)
+    def __post_init__(self) -> None:
+        error = namespace_error(self.ros_namespace)
         if error is not None:
-            raise ValueError(f"not a canonical ROS namespace: {error}")
-        return namespace
+            raise ValueError(f"ros_namespace: not a canonical ROS namespace: {error}")
 
 
 @dataclass

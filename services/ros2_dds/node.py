@@ -41,10 +41,11 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
+import msgspec
 import zenoh
-from pydantic import Field
+from msgspec import Meta
 
 from services.ros2_dds.convert import ConversionError, from_ros, ros_class, to_ros
 from shared import topics
@@ -93,18 +94,17 @@ OWNERS: tuple[str, ...] = tuple(
 class Params(ServiceParams):
     """Parameters of ``python -m services.ros2_dds``."""
 
-    domain_id: int = Field(
-        default_factory=default_domain_id,
-        ge=0,
-        le=232,
-        description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)",
-    )
-    discovery_range: Literal["LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT"] = Field(
-        "LOCALHOST", description="ROS_AUTOMATIC_DISCOVERY_RANGE of the rclpy context (default: loopback only)"
-    )
-    demand_poll_s: float = Field(
-        0.2, gt=0.0, le=5.0, description="how often the ROS 2 subscription count of each topic is read"
-    )
+    domain_id: Annotated[
+        int, Meta(ge=0, le=232, description="ROS 2 domain (default: ROS_DOMAIN_ID, else 0)")
+    ] = msgspec.field(default_factory=default_domain_id)
+    discovery_range: Annotated[
+        Literal["LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT"],
+        Meta(description="ROS_AUTOMATIC_DISCOVERY_RANGE of the rclpy context (default: loopback only)"),
+    ] = "LOCALHOST"
+    demand_poll_s: Annotated[
+        float,
+        Meta(gt=0.0, le=5.0, description="how often the ROS 2 subscription count of each topic is read"),
+    ] = 0.2
 
 
 def rclpy_qos(profile: QosProfile) -> Any:

@@ -24,9 +24,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from types import ModuleType
+from typing import Annotated
 
 import numpy as np
-from pydantic import Field
+from msgspec import Meta
 
 from services.simulator.sensors import CAMERA_MOUNT_X_M
 from shared.geometry import Pose2D
@@ -54,7 +55,7 @@ def opencv(threads: int = 0) -> ModuleType:
     return _OPENCV[0]
 
 
-class CameraParams(ComponentParams):
+class CameraParams(ComponentParams, frozen=True):
     """A pinhole camera on ``camera_link``, ``mount_x_m`` ahead of base_link and ``mount_z_m`` above the floor.
 
     ``pitch_rad`` tilts it down (REP 103: a positive rotation about camera_link's y axis). ``noise_sigma``
@@ -62,26 +63,28 @@ class CameraParams(ComponentParams):
     simulator renders frames only while someone subscribes (``enabled: false``: no camera at all).
     """
 
-    enabled: bool = Field(
-        True, description="render camera/image_raw and camera/camera_info (while subscribed)"
-    )
-    width: int = Field(640, ge=16, le=4096)
-    height: int = Field(480, ge=16, le=4096)
-    horizontal_fov_rad: float = Field(math.radians(70.0), gt=0.1, lt=2.6)
-    rate_hz: float = Field(15.0, gt=0)
+    enabled: Annotated[
+        bool, Meta(description="render camera/image_raw and camera/camera_info (while subscribed)")
+    ] = True
+    width: Annotated[int, Meta(ge=16, le=4096)] = 640
+    height: Annotated[int, Meta(ge=16, le=4096)] = 480
+    horizontal_fov_rad: Annotated[float, Meta(gt=0.1, lt=2.6)] = math.radians(70.0)
+    rate_hz: Annotated[float, Meta(gt=0)] = 15.0
     mount_x_m: float = CAMERA_MOUNT_X_M
-    mount_z_m: float = Field(0.10, gt=0)
-    pitch_rad: float = Field(0.0, gt=-1.04, lt=1.04)
-    noise_sigma: float = Field(2.0, ge=0, description="read noise, grey levels (sigma)")
-    exposure_s: float = Field(0.008, ge=0, description="exposure time: sets motion blur")
-    gain: float = Field(1.0, gt=0)
+    mount_z_m: Annotated[float, Meta(gt=0)] = 0.10
+    pitch_rad: Annotated[float, Meta(gt=-1.04, lt=1.04)] = 0.0
+    noise_sigma: Annotated[float, Meta(ge=0, description="read noise, grey levels (sigma)")] = 2.0
+    exposure_s: Annotated[float, Meta(ge=0, description="exposure time: sets motion blur")] = 0.008
+    gain: Annotated[float, Meta(gt=0)] = 1.0
     near_m: float = 0.01
-    opencv_threads: int = Field(
-        1,
-        ge=0,
-        description="threads OpenCV may use for the simulator's process (0: one "
-        "per core); one is cheaper where the cores are busy (measurement 62)",
-    )
+    opencv_threads: Annotated[
+        int,
+        Meta(
+            ge=0,
+            description="threads OpenCV may use for the simulator's process (0: one "
+            "per core); one is cheaper where the cores are busy (measurement 62)",
+        ),
+    ] = 1
 
     @property
     def focal_px(self) -> float:

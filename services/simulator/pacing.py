@@ -20,8 +20,9 @@ import math
 import statistics
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Annotated
 
-from pydantic import Field
+from msgspec import Meta
 
 from shared.models.component import ComponentParams
 
@@ -38,32 +39,36 @@ HOLD_SLEEP_S = 0.0005
 MAX_SLEEP_S = 0.05
 
 
-class PacingParams(ComponentParams):
+class PacingParams(ComponentParams, frozen=True):
     """``pacing.*``: whether and how long the world waits for late drivers and poses."""
 
-    to_drivers: bool = Field(
-        True, description="wait (briefly) for a moving robot's late command instead of driving it blind"
-    )
-    to_pose: bool = Field(
-        True, description="with to_drivers: also wait (briefly) for a robot's late map_to_base_link_pose2d"
-    )
+    to_drivers: Annotated[
+        bool, Meta(description="wait (briefly) for a moving robot's late command instead of driving it blind")
+    ] = True
+    to_pose: Annotated[
+        bool,
+        Meta(description="with to_drivers: also wait (briefly) for a robot's late map_to_base_link_pose2d"),
+    ] = True
     #: A moving robot's driver is late once its last command is this old (sim seconds): three periods
     #: of a 20 Hz controller.
-    driver_gap_s: float = Field(
-        0.15, gt=0, description="a moving robot's command older than this (sim) is late"
-    )
+    driver_gap_s: Annotated[
+        float, Meta(gt=0, description="a moving robot's command older than this (sim) is late")
+    ] = 0.15
     #: The longest wait for one late command (wall seconds).
-    driver_wait_max_s: float = Field(
-        0.1, ge=0, description="wait at most this long (wall) for one late command"
-    )
+    driver_wait_max_s: Annotated[
+        float, Meta(ge=0, description="wait at most this long (wall) for one late command")
+    ] = 0.1
     #: A robot's pose is late once this old (sim seconds): three periods of the 10 Hz pose.
-    pose_gap_s: float = Field(0.3, gt=0, description="a robot's pose older than this (sim) is late")
+    pose_gap_s: Annotated[float, Meta(gt=0, description="a robot's pose older than this (sim) is late")] = 0.3
     #: Lockstep: a moving robot's command is late once its own controller's period (from the cadence of its
     #: recent commands) has passed by this factor, rather than after ``driver_gap_s``: the world does not
     #: run on past the step a command answers, whatever the speed-up (0: ``driver_gap_s`` alone).
-    lockstep_factor: float = Field(
-        1.2, ge=0, description="a moving robot's command is late after this many of its own periods (0: off)"
-    )
+    lockstep_factor: Annotated[
+        float,
+        Meta(
+            ge=0, description="a moving robot's command is late after this many of its own periods (0: off)"
+        ),
+    ] = 1.2
 
 
 class CommandCadence:

@@ -10,8 +10,10 @@ Names follow Nav2's ``component.parameter`` style; the dotted form is described 
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
-from pydantic import Field, field_validator
+import msgspec
+from msgspec import Meta
 
 from services.simulator.camera import CameraParams
 from services.simulator.pacing import PacingParams
@@ -28,80 +30,102 @@ from shared.parameters import ServiceParams
 from shared.world import load_world
 
 
-class ClockParams(ComponentParams):
-    rate_hz: float = Field(
-        20.0,
-        gt=0,
-        description="sim-time clock rate: the stack's fastest sim-time timer "
-        "(planner and docking control, 20 Hz); every sim-time node receives every tick",
-    )
+class ClockParams(ComponentParams, frozen=True):
+    rate_hz: Annotated[
+        float,
+        Meta(
+            gt=0,
+            description="sim-time clock rate: the stack's fastest sim-time timer "
+            "(planner and docking control, 20 Hz); every sim-time node receives every tick",
+        ),
+    ] = 20.0
 
 
-class OdomParams(ComponentParams):
-    rate_hz: float = Field(
-        20.0, gt=0, description="odometry rate: the control timers' 20 Hz (they read the latest)"
-    )
-    noise: float = Field(0.0, ge=0, description="relative std dev of each wheel's travel per step (0: exact)")
+class OdomParams(ComponentParams, frozen=True):
+    rate_hz: Annotated[
+        float, Meta(gt=0, description="odometry rate: the control timers' 20 Hz (they read the latest)")
+    ] = 20.0
+    noise: Annotated[
+        float, Meta(ge=0, description="relative std dev of each wheel's travel per step (0: exact)")
+    ] = 0.0
 
 
-class TfParams(ComponentParams):
-    rate_hz: float = Field(
-        20.0, gt=0, description="tf rate: twice the pose service's 10 Hz, on the clock's ticks"
-    )
-    static_rate_hz: float = Field(1.0, gt=0, description="tf_static (sensor mounts) rate")
+class TfParams(ComponentParams, frozen=True):
+    rate_hz: Annotated[
+        float, Meta(gt=0, description="tf rate: twice the pose service's 10 Hz, on the clock's ticks")
+    ] = 20.0
+    static_rate_hz: Annotated[float, Meta(gt=0, description="tf_static (sensor mounts) rate")] = 1.0
 
 
-class GroundTruthParams(ComponentParams):
-    rate_hz: float = Field(20.0, gt=0)
+class GroundTruthParams(ComponentParams, frozen=True):
+    rate_hz: Annotated[float, Meta(gt=0)] = 20.0
 
 
-class LocalisationParams(ComponentParams):
+class LocalisationParams(ComponentParams, frozen=True):
     #: map->odom is off by this much (in base_link at the start), like a drifting localiser.
-    error: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="x_m, y_m, yaw_rad")
+    error: Annotated[tuple[float, float, float], Meta(description="x_m, y_m, yaw_rad")] = (0.0, 0.0, 0.0)
     #: An initial pose (set_localisation, ROS 2's /initialpose) is refused when fewer of the lidar's beams
     #: agree with the map seen from it (0: take any): a localiser would not converge there.
-    initial_pose_min_agreement: float = Field(
-        0.25,
-        ge=0.0,
-        le=1.0,
-        description="refuse an initial pose on which fewer lidar beams agree with the map (0: take any)",
-    )
+    initial_pose_min_agreement: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            le=1.0,
+            description="refuse an initial pose on which fewer lidar beams agree with the map (0: take any)",
+        ),
+    ] = 0.25
 
 
-class DriveParams(DiffDriveParams):
+class DriveParams(DiffDriveParams, frozen=True):
     """The drive's geometry and limits (Gazebo diff_drive / ros2_control names) and its command watchdog."""
 
-    cmd_vel_timeout_s: float = Field(
-        0.3,
-        gt=0,
-        description="watchdog: brake when no command for this long (standing still 0.5 s after the last)",
-    )
+    cmd_vel_timeout_s: Annotated[
+        float,
+        Meta(
+            gt=0,
+            description="watchdog: brake when no command for this long (standing still 0.5 s after the last)",
+        ),
+    ] = 0.3
 
 
-class DetectionParams(FiducialCameraParams):
+class DetectionParams(FiducialCameraParams, frozen=True):
     """The dock detector's camera model, and who publishes detected_dock_pose."""
 
     #: ``aruco`` leaves it to the perception service (which reads camera/image_raw); ``synthetic`` publishes
     #: detected_dock_pose from the true pose plus noise.
     source: DetectorName = "synthetic"
     #: The synthetic detector sees the marker down to 2 cm (the camera is 5 cm from it when docked).
-    range_min_m: float = Field(0.02, ge=0)
-    rate_hz: float = Field(15.0, gt=0, description="synthetic detections per second (sim time)")
-    latency_s: float = Field(
-        0.05, ge=0, description="a synthetic detection is published this long after capture"
-    )
+    range_min_m: Annotated[float, Meta(ge=0)] = 0.02
+    rate_hz: Annotated[float, Meta(gt=0, description="synthetic detections per second (sim time)")] = 15.0
+    latency_s: Annotated[
+        float, Meta(ge=0, description="a synthetic detection is published this long after capture")
+    ] = 0.05
+
+
+def _rtf(value: float | str) -> float | str:
+    """A positive finite real-time factor, or ``"max"`` (flat out)."""
+    if isinstance(value, str):
+        if value.strip().lower() == "max":
+            return "max"
+        try:
+            value = float(value)
+        except ValueError:
+            raise ValueError(f"rtf: must be a positive number or 'max', got {value!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise ValueError(f"rtf: must be a positive number or 'max', got {value}")
+    return value
 
 
 class Params(ServiceParams):
     """Simulator parameters (``-p name=value``, ``-p component.name=value``)."""
 
-    world: str = Field(description="world file (deploy/worlds/*.yaml)")
-    rtf: float | str = Field(1.0, description="real-time factor: a positive number, or 'max'")
-    robots: list[str] = Field(
-        default_factory=list, description="robot namespaces served (empty: the node's own)"
+    world: Annotated[str, Meta(description="world file (deploy/worlds/*.yaml)")]
+    rtf: Annotated[float | str, Meta(description="real-time factor: a positive number, or 'max'")] = 1.0
+    robots: Annotated[list[str], Meta(description="robot namespaces served (empty: the node's own)")] = (
+        msgspec.field(default_factory=list)
     )
     seed: int = 0
-    dt_s: float = Field(0.01, gt=0, le=0.05)
+    dt_s: Annotated[float, Meta(gt=0, le=0.05)] = 0.01
     clock: ClockParams = ClockParams()
     odom: OdomParams = OdomParams()
     tf: TfParams = TfParams()
@@ -116,33 +140,16 @@ class Params(ServiceParams):
     ir: InfraredParams = InfraredParams()
     contact: DockContactParams = DockContactParams()
 
-    @field_validator("rtf")
-    @classmethod
-    def _rtf(cls, value: float | str) -> float | str:
-        if isinstance(value, str):
-            if value.strip().lower() == "max":
-                return "max"
-            try:
-                value = float(value)
-            except ValueError:
-                raise ValueError(f"rtf must be a positive number or 'max', got {value!r}") from None
-        if not (value > 0 and math.isfinite(value)):
-            raise ValueError(f"rtf must be a positive number or 'max', got {value}")
-        return value
-
-    @field_validator("world")
-    @classmethod
-    def _world_loads(cls, value: str) -> str:
-        load_world(value)  # a ConfigError (a ValueError) names the file and the problem
-        return value
-
-    @field_validator("robots")
-    @classmethod
-    def _robots(cls, value: list[str]) -> list[str]:
-        names = [normalise_namespace(v) for v in value]
+    def __post_init__(self) -> None:
+        self.rtf = _rtf(self.rtf)
+        try:
+            load_world(self.world)  # a ConfigError (a ValueError) names the file and the problem
+        except ValueError as exc:
+            raise ValueError(f"world: {exc}") from None
+        names = [normalise_namespace(v) for v in self.robots]
         if any(not n for n in names) or len(set(names)) != len(names):
-            raise ValueError("robots must be distinct, non-empty namespaces")
-        return names
+            raise ValueError("robots: must be distinct, non-empty namespaces")
+        self.robots = names
 
     def sim_params(self, robot_index: int = 0) -> SimParams:
         """The physics' settings for the ``robot_index``-th robot (each draws from its own seed)."""

@@ -10,29 +10,30 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Annotated
 
-from pydantic import Field
+from msgspec import Meta
 
 from shared.models.component import ComponentParams
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M
 
 
-class DiffDriveParams(ComponentParams):
+class DiffDriveParams(ComponentParams, frozen=True):
     """Geometry and limits of the differential drive (values of a small indoor base)."""
 
-    wheel_separation_m: float = Field(0.26, gt=0)
-    wheel_radius_m: float = Field(0.033, gt=0)
-    max_linear_mps: float = Field(0.5, gt=0)
-    max_angular_radps: float = Field(1.5, gt=0)
-    max_linear_accel: float = Field(1.0, gt=0, description="m/s^2")
-    max_angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
+    wheel_separation_m: Annotated[float, Meta(gt=0)] = 0.26
+    wheel_radius_m: Annotated[float, Meta(gt=0)] = 0.033
+    max_linear_mps: Annotated[float, Meta(gt=0)] = 0.5
+    max_angular_radps: Annotated[float, Meta(gt=0)] = 1.5
+    max_linear_accel: Annotated[float, Meta(gt=0, description="m/s^2")] = 1.0
+    max_angular_accel: Annotated[float, Meta(gt=0, description="rad/s^2")] = 3.0
     #: Braking is harder than speeding up (diff_drive_controller's max_deceleration): the watchdog's stop
     #: from full speed takes 0.2 s.
-    max_linear_decel: float = Field(2.5, gt=0, description="m/s^2")
-    max_angular_decel: float = Field(6.0, gt=0, description="rad/s^2")
-    footprint_length_m: float = Field(ROBOT_LENGTH_M, gt=0)
-    footprint_width_m: float = Field(ROBOT_WIDTH_M, gt=0)
-    mass_kg: float = Field(5.0, gt=0)
+    max_linear_decel: Annotated[float, Meta(gt=0, description="m/s^2")] = 2.5
+    max_angular_decel: Annotated[float, Meta(gt=0, description="rad/s^2")] = 6.0
+    footprint_length_m: Annotated[float, Meta(gt=0)] = ROBOT_LENGTH_M
+    footprint_width_m: Annotated[float, Meta(gt=0)] = ROBOT_WIDTH_M
+    mass_kg: Annotated[float, Meta(gt=0)] = 5.0
 
     @property
     def max_wheel_speed_radps(self) -> float:

@@ -11,9 +11,10 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
-from pydantic import BaseModel, Field, model_validator
+from msgspec import Meta
 
 from shared.geometry import Pose2D, wrap_angle
 from shared.models.component import ComponentParams
@@ -24,10 +25,10 @@ from shared.world import DOCK_GEOMETRY, Dock
 CAMERA_MOUNT_X_M = 0.15
 
 
-def _check_range(owner: BaseModel) -> None:
+def _check_range(owner: ComponentParams) -> None:
     low, high = owner.range_min_m, owner.range_max_m  # type: ignore[attr-defined]
     if high <= low:
-        raise ValueError(f"{type(owner).__name__}: range_max_m {high} must exceed range_min_m {low}")
+        raise ValueError(f"range_max_m: {high} must exceed range_min_m {low} ({type(owner).__name__})")
 
 
 @functools.lru_cache(maxsize=8)
@@ -37,21 +38,20 @@ def _beam_angles(num_rays: int) -> np.ndarray:
     return angles
 
 
-class LidarParams(ComponentParams):
+class LidarParams(ComponentParams, frozen=True):
     """A 360-degree planar lidar on lidar_link (``mount_x_m`` ahead of base_link, same heading)."""
 
-    rate_hz: float = Field(10.0, gt=0, description="scans per second (sim time)")
-    num_rays: int = Field(360, ge=1)
-    range_min_m: float = Field(0.12, gt=0)
-    range_max_m: float = Field(8.0, gt=0)
-    noise_m: float = Field(0.01, ge=0, description="range noise (sigma)")
+    rate_hz: Annotated[float, Meta(gt=0, description="scans per second (sim time)")] = 10.0
+    num_rays: Annotated[int, Meta(ge=1)] = 360
+    range_min_m: Annotated[float, Meta(gt=0)] = 0.12
+    range_max_m: Annotated[float, Meta(gt=0)] = 8.0
+    noise_m: Annotated[float, Meta(ge=0, description="range noise (sigma)")] = 0.01
     mount_x_m: float = 0.10
     mount_y_m: float = 0.0
 
-    @model_validator(mode="after")
-    def _ranges(self) -> LidarParams:
+    def __post_init__(self) -> None:
+        super().__post_init__()
         _check_range(self)
-        return self
 
     @property
     def angle_min_rad(self) -> float:
@@ -86,20 +86,19 @@ class LidarScan:
     ranges_m: np.ndarray
 
 
-class UltrasonicParams(ComponentParams):
+class UltrasonicParams(ComponentParams, frozen=True):
     """A single ultrasonic ranger on ultrasonic_link, at the front centre, facing forward."""
 
-    rate_hz: float = Field(20.0, gt=0, description="pings per second (sim time)")
-    field_of_view_rad: float = Field(0.5, gt=0, lt=math.pi)
-    range_min_m: float = Field(0.02, gt=0)
-    range_max_m: float = Field(3.0, gt=0)
-    noise_m: float = Field(0.005, ge=0, description="range noise (sigma)")
+    rate_hz: Annotated[float, Meta(gt=0, description="pings per second (sim time)")] = 20.0
+    field_of_view_rad: Annotated[float, Meta(gt=0, lt=math.pi)] = 0.5
+    range_min_m: Annotated[float, Meta(gt=0)] = 0.02
+    range_max_m: Annotated[float, Meta(gt=0)] = 3.0
+    noise_m: Annotated[float, Meta(ge=0, description="range noise (sigma)")] = 0.005
     mount_x_m: float = 0.20
 
-    @model_validator(mode="after")
-    def _ranges(self) -> UltrasonicParams:
+    def __post_init__(self) -> None:
+        super().__post_init__()
         _check_range(self)
-        return self
 
     @property
     def mount(self) -> Pose2D:
@@ -107,17 +106,17 @@ class UltrasonicParams(ComponentParams):
         return Pose2D(self.mount_x_m, 0.0, 0.0)
 
 
-class FiducialCameraParams(ComponentParams):
+class FiducialCameraParams(ComponentParams, frozen=True):
     """The forward camera that finds the dock's marker (mounted ``mount_x_m`` ahead of base_link)."""
 
     mount_x_m: float = CAMERA_MOUNT_X_M
-    horizontal_fov_rad: float = Field(1.2, gt=0, lt=math.pi)
-    range_min_m: float = Field(0.1, gt=0)
-    range_max_m: float = Field(2.5, gt=0)
+    horizontal_fov_rad: Annotated[float, Meta(gt=0, lt=math.pi)] = 1.2
+    range_min_m: Annotated[float, Meta(gt=0)] = 0.1
+    range_max_m: Annotated[float, Meta(gt=0)] = 2.5
     #: The marker is readable while the angle between its normal and the line of sight is below this.
-    max_view_angle_rad: float = Field(math.radians(70.0), gt=0)
-    position_sigma_m: float = Field(0.003, ge=0)
-    yaw_sigma_rad: float = Field(0.01, ge=0)
+    max_view_angle_rad: Annotated[float, Meta(gt=0)] = math.radians(70.0)
+    position_sigma_m: Annotated[float, Meta(ge=0)] = 0.003
+    yaw_sigma_rad: Annotated[float, Meta(ge=0)] = 0.01
 
     @property
     def mount(self) -> Pose2D:

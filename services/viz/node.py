@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
-from pydantic import Field, field_validator
+import msgspec
+from msgspec import Meta
 
 from services.viz.live_view import LiveView
 from shared.config_errors import ConfigError
@@ -57,33 +58,36 @@ MAP_VIEW = next(v for v in VIEWS if v.topic == MAP and v.msg_type is OccupancyGr
 class Params(ServiceParams):
     """Parameters of ``python -m services.viz`` (``-p name=value``)."""
 
-    use_sim_time: bool = Field(True, description="stamp and broadcast on the simulator's clock")
-    host: str = Field(
-        "127.0.0.1", description="address to serve on (loopback: only this machine can connect)"
+    use_sim_time: Annotated[bool, Meta(description="stamp and broadcast on the simulator's clock")] = True
+    host: Annotated[
+        str, Meta(description="address to serve on (loopback: only this machine can connect)")
+    ] = "127.0.0.1"
+    port: Annotated[int, Meta(ge=0, le=65535, description="WebSocket port (0: any free port)")] = 8765
+    world: Annotated[
+        str | None, Meta(description="world file to draw walls, glass, boxes, docks and staging poses")
+    ] = None
+    staging_offset_m: Annotated[float, Meta(ge=0.0, description="staging pose behind each dock")] = (
+        DEFAULT_STAGING_OFFSET_M
     )
-    port: int = Field(8765, ge=0, le=65535, description="WebSocket port (0: any free port)")
-    world: str | None = Field(
-        None, description="world file to draw walls, glass, boxes, docks and staging poses"
-    )
-    staging_offset_m: float = Field(
-        DEFAULT_STAGING_OFFSET_M, ge=0.0, description="staging pose behind each dock"
-    )
-    time_broadcast_hz: float = Field(
-        10.0, gt=0.0, le=100.0, description="how often viewers are told the time"
-    )
-    robots: list[str] = Field(
-        default_factory=list,
-        description="a fleet's robots (namespaces under the node's) "
-        "shown side by side, each one's frames under its name (r1/base_link) below the "
-        "shared map; empty: the node's own namespace, one robot",
-    )
+    time_broadcast_hz: Annotated[
+        float, Meta(gt=0.0, le=100.0, description="how often viewers are told the time")
+    ] = 10.0
+    robots: Annotated[
+        list[str],
+        Meta(
+            description="a fleet's robots (namespaces under the node's) "
+            "shown side by side, each one's frames under its name (r1/base_link) below the "
+            "shared map; empty: the node's own namespace, one robot"
+        ),
+    ] = msgspec.field(default_factory=list)
 
-    @field_validator("world")
-    @classmethod
-    def _world_loads(cls, value: str | None) -> str | None:
-        if value:
-            load_world(value)  # a ConfigError names the file and the problem
-        return value or None
+    def __post_init__(self) -> None:
+        if self.world:
+            try:
+                load_world(self.world)  # a ConfigError names the file and the problem
+            except ValueError as exc:
+                raise ValueError(f"world: {exc}") from None
+        self.world = self.world or None
 
 
 class VizService:

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Annotated, NamedTuple
 
 import numpy as np
-from pydantic import Field
+from msgspec import Meta
 
 from shared.geometry import Pose2D, wrap_angle
 from shared.models.component import ComponentParams
@@ -20,17 +20,17 @@ from shared.models.footprint import footprint_corners, polygon_distance
 from shared.world import DOCK_GEOMETRY, Dock
 
 
-class DockContactParams(ComponentParams):
-    rate_hz: float = Field(20.0, gt=0, description="dock_contact messages per second (sim time)")
-    contact_reach_m: float = Field(0.05, ge=0)
+class DockContactParams(ComponentParams, frozen=True):
+    rate_hz: Annotated[float, Meta(gt=0, description="dock_contact messages per second (sim time)")] = 20.0
+    contact_reach_m: Annotated[float, Meta(ge=0)] = 0.05
     #: How far past the dock pose base_link may be and still count (the body stops it anyway).
-    overshoot_slack_m: float = Field(0.01, ge=0)
-    max_lateral_error_m: float = Field(0.04, ge=0)
-    max_yaw_error_rad: float = Field(0.1, ge=0)
+    overshoot_slack_m: Annotated[float, Meta(ge=0)] = 0.01
+    max_lateral_error_m: Annotated[float, Meta(ge=0)] = 0.04
+    max_yaw_error_rad: Annotated[float, Meta(ge=0)] = 0.1
     #: Footprint and dock body closer than this are touching.
-    touch_tolerance_m: float = Field(0.005, ge=0)
+    touch_tolerance_m: Annotated[float, Meta(ge=0)] = 0.005
     #: Docks farther than this from base_link are not reported.
-    search_radius_m: float = Field(1.0, ge=0)
+    search_radius_m: Annotated[float, Meta(ge=0)] = 1.0
 
 
 class DockContact(NamedTuple):

@@ -23,9 +23,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
-from pydantic import Field, model_validator
+from msgspec import Meta
 
 from shared.geometry import Pose2D, wrap_angle
 from shared.messages import DockInfraRed
@@ -52,11 +53,11 @@ class Receiver:
         return Pose2D(self.x_m, self.y_m, self.yaw_rad)
 
 
-class InfraredParams(ComponentParams):
-    rate_hz: float = Field(
-        20.0, gt=0, description="the receivers' readings (ir_dock) per second, while subscribed"
-    )
-    near_range_m: float = Field(0.6, gt=0)
+class InfraredParams(ComponentParams, frozen=True):
+    rate_hz: Annotated[
+        float, Meta(gt=0, description="the receivers' readings (ir_dock) per second, while subscribed")
+    ] = 20.0
+    near_range_m: Annotated[float, Meta(gt=0)] = 0.6
     far_range_m: float = 2.5
     centre_half_angle_rad: float = math.radians(5.0)
     centre_min_half_width_m: float = 0.012
@@ -68,15 +69,14 @@ class InfraredParams(ComponentParams):
         Receiver(0.13, 0.0, 0.0, math.radians(25.0)),
         Receiver(0.10, 0.10, math.radians(60.0), math.radians(55.0)),
     )
-    dropout: float = Field(
-        0.03, ge=0.0, lt=1.0, description="probability a bit a receiver should see drops out"
-    )
+    dropout: Annotated[
+        float, Meta(ge=0.0, lt=1.0, description="probability a bit a receiver should see drops out")
+    ] = 0.03
 
-    @model_validator(mode="after")
-    def _ranges(self) -> InfraredParams:
+    def __post_init__(self) -> None:
+        super().__post_init__()
         if not self.near_range_m < self.far_range_m:
             raise ValueError("infrared ranges must satisfy 0 < near_range_m < far_range_m")
-        return self
 
 
 def fields_at(x: float, y: float, params: InfraredParams) -> int:

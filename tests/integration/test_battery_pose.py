@@ -258,7 +258,7 @@ def test_battery_refuses_bad_parameters(spawn) -> None:  # type: ignore[no-untyp
     unknown = spawn("battery", "-p", "drain_rate=3")
     assert out_of_range.proc.wait(20) == 2
     assert unknown.proc.wait(20) == 2
-    assert "initial_percentage: Input should be less than or equal to 1" in out_of_range.output()
+    assert "initial_percentage: must be at most 1.0" in out_of_range.output()
     assert "drain_rate: unknown key" in unknown.output()
 
 
@@ -342,5 +342,5 @@ def test_pose_refuses_bad_parameters(spawn) -> None:  # type: ignore[no-untyped-
     unknown = spawn("pose", "-p", "frame=lidar_link")
     assert not_a_string.proc.wait(20) == 2
     assert unknown.proc.wait(20) == 2
-    assert "target_frame: Input should be a valid string" in not_a_string.output()
+    assert "target_frame: expected text, got int" in not_a_string.output()
     assert "frame: unknown key" in unknown.output()

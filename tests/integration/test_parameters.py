@@ -98,7 +98,7 @@ def test_param_list_get_set_on_a_running_battery(
     code, out, err = zendock("param", "set", "battery", "drain_scale", "-1")
     assert (code, out) == (2, "")
     assert err == (
-        f"zendock param set: {node}: drain_scale: Input should be greater than or equal to 0 (got -1)\n"
+        f"zendock param set: {node}: drain_scale: must be at least 0.0 (got -1)\n"
     )
     code, _, err = zendock("param", "set", "battery", "capacity_ah", "3")
     assert code == 2 and err.startswith(f"zendock param set: {node}: capacity_ah: read at start-up only")

@@ -63,7 +63,7 @@ def test_demo_rejects_a_misspelt_world_key_before_starting(
     world = tmp_path / "room.yaml"
     world.write_text("name: room\nbounds: [0, 0, 4, 3]\nwals: [[[1, 0], [1, 1]]]\n")
     assert _exit_code(["demo", "--world", str(world)]) == 2
-    assert _one_error_line(capsys) == f"zendock demo: {world}: wals: unknown key"
+    assert _one_error_line(capsys) == f"zendock demo: {world}: wals: unknown key (did you mean walls?)"
 
 
 @pytest.mark.parametrize(

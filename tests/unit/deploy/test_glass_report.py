@@ -7,11 +7,11 @@ import math
 import numpy as np
 
 from deploy.glass_report import GLASS_MARK, glass_marks, glass_report, panes_heard
-from shared.world import World
+from shared.world import World, parse_world
 
 
 def _world(glass: list) -> World:  # type: ignore[type-arg]
-    return World.model_validate(
+    return parse_world(
         {
             "name": "w",
             "bounds": [0.0, 0.0, 4.0, 3.0],

@@ -5,13 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from pydantic import ValidationError
 
 from services.docking.controllers import REGISTRY
 from services.docking.dock_db import load_dock_db
 from services.docking.docking_run import DockingRun, DockRequest
 from services.docking.ir_run import IrDockingRun
 from services.docking.params import Params
+from shared import structs
+from shared.config_errors import ConfigError
 from shared.controllers import CONTROLLER_NAMES, CONTROLLERS, DETECTOR_NAMES, DETECTORS, controller, detector
 
 SEED_ROOM = str(Path(__file__).resolve().parents[3] / "deploy" / "worlds" / "seed_room.yaml")
@@ -31,13 +32,13 @@ def test_an_unknown_name_is_refused_with_the_known_ones() -> None:
         controller("gracefull")
     with pytest.raises(ValueError, match="one of: aruco, synthetic"):
         detector("april")
-    with pytest.raises(ValidationError, match="controller"):
-        Params.model_validate({"dock_database": SEED_ROOM, "controller": "gracefull"})
+    with pytest.raises(ConfigError, match="controller: invalid enum value 'gracefull'"):
+        structs.validate(Params, {"dock_database": SEED_ROOM, "controller": "gracefull"}, "params")
 
 
 @pytest.mark.parametrize("name", CONTROLLER_NAMES)
 def test_each_controller_builds_its_own_docking_run(name: str) -> None:
-    params = Params.model_validate({"dock_database": SEED_ROOM, "controller": name})
+    params = structs.validate(Params, {"dock_database": SEED_ROOM, "controller": name}, "params")
     database = load_dock_db(SEED_ROOM)
     run = params.docking_controller.docking_run(params, DockRequest(), database, None)
     assert isinstance(run, IrDockingRun if CONTROLLERS[name].infrared else DockingRun)

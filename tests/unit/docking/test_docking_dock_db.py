@@ -70,7 +70,7 @@ def test_choose_by_id_or_nearest() -> None:
         ({"docks": [{"pose": [0, 0, 0]}]}, "docks.0.id"),
         ({"docks": [{"id": "a", "pose": [0, 0]}]}, "docks.0.pose"),
         ({"docks": [{"id": "a", "pose": [0, "x", 0]}]}, "docks.0.pose.1"),
-        ({"docks": [{"id": "a", "pose": [0, float("nan"), 0]}]}, "docks.0.pose: pose must be finite"),
+        ({"docks": [{"id": "a", "pose": [0, float("nan"), 0]}]}, "docks.0.pose: must be finite"),
         (
             {"docks": [{"id": "a", "pose": [0, 0, 0]}, {"id": "a", "pose": [1, 0, 0]}]},
             "docks.1.id: dock id 'a' appears twice",

@@ -6,12 +6,13 @@ from pathlib import Path
 
 from services.docking.approach_control import GracefulApproach, SeedApproach
 from services.docking.params import Params
+from shared import structs
 
 SEED_ROOM = str(Path(__file__).resolve().parents[3] / "deploy" / "worlds" / "seed_room.yaml")
 
 
 def test_graceful_waits_for_detection_and_hands_over_from_navigation() -> None:
-    params = Params.model_validate({"dock_database": SEED_ROOM, "handover_distance_m": 0.4})
+    params = structs.validate(Params, {"dock_database": SEED_ROOM, "handover_distance_m": 0.4}, "params")
     config = params.docking_config()
     assert params.docking_controller.perceives_while_driving and isinstance(
         params.approach_controller(), GracefulApproach
@@ -23,7 +24,7 @@ def test_graceful_waits_for_detection_and_hands_over_from_navigation() -> None:
 
 
 def test_the_line_approach_neither_waits_nor_hands_over() -> None:
-    params = Params.model_validate({"dock_database": SEED_ROOM, "controller": "seed"})
+    params = structs.validate(Params, {"dock_database": SEED_ROOM, "controller": "seed"}, "params")
     config = params.docking_config()
     assert not params.docking_controller.perceives_while_driving and isinstance(
         params.approach_controller(), SeedApproach
@@ -33,5 +34,6 @@ def test_the_line_approach_neither_waits_nor_hands_over() -> None:
 
 
 def test_zero_handover_distance_means_navigation_always_stages_first() -> None:
-    config = Params.model_validate({"dock_database": SEED_ROOM, "handover_distance_m": 0}).docking_config()
+    params = structs.validate(Params, {"dock_database": SEED_ROOM, "handover_distance_m": 0}, "params")
+    config = params.docking_config()
     assert config.handover_distance_m is None

@@ -22,7 +22,8 @@ from services.simulator.sensors import LidarParams, UltrasonicParams, lidar_scan
 from shared.geometry import Pose2D
 from shared.models.raycast import SegmentSet
 from shared.pose_tracking import OdometrySample, PoseTrack
-from shared.world import World, load_world
+from shared.structs import plain
+from shared.world import World, load_world, parse_world
 from tests.support.processes import REPO_ROOT
 from tests.unit.docking.harness import SEED_DOCK
 
@@ -139,9 +140,7 @@ def seed_room() -> World:
 
 def sense(world: World, pose: Pose2D, extra_boxes: list[dict] | None = None) -> tuple[np.ndarray, float]:  # type: ignore[type-arg]
     if extra_boxes:
-        world = World.model_validate(
-            world.model_dump() | {"boxes": [*world.model_dump()["boxes"], *extra_boxes]}
-        )
+        world = parse_world(plain(world) | {"boxes": [*plain(world)["boxes"], *extra_boxes]})
     segments = SegmentSet(world.opaque_segments())
     rng = np.random.default_rng(0)
     lidar = LidarParams(noise_m=0.0)

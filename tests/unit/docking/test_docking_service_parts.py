@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import pytest
-from pydantic import ValidationError
 
 from deploy.commands.dock import ERROR_NAMES, STATE_NAMES, describe_dock_feedback
 from services.docking.approach import dock_frame_error, graceful_staging_pose, line_approach, offset_along
@@ -20,6 +19,8 @@ from services.docking.errors import DockingErrorCode, DockingState
 from services.docking.kinematics import DiffDriveModel
 from services.docking.params import Params
 from services.docking.task_io import Velocity
+from shared import structs
+from shared.config_errors import ConfigError
 from shared.interfaces.docking import DockRobotFeedback
 from shared.messages import Duration
 from tests.support.processes import REPO_ROOT
@@ -102,10 +103,10 @@ def test_backing_off_reverses_to_staging() -> None:
 
 
 def test_params_take_a_world_file_as_the_dock_database() -> None:
-    params = Params.model_validate({"dock_database": SEED_ROOM})
+    params = structs.validate(Params, {"dock_database": SEED_ROOM}, "params")
     assert (params.controller, params.low_battery_threshold, params.max_retries) == ("graceful", 0.25, 3)
-    patrol = Params.model_validate(
-        {"dock_database": SEED_ROOM, "patrol": [[1, 2, 0.5]], "controller": "seed"}
+    patrol = structs.validate(
+        Params, {"dock_database": SEED_ROOM, "patrol": [[1, 2, 0.5]], "controller": "seed"}, "params"
     )
     assert patrol.patrol == [(1.0, 2.0, 0.5)]
 
@@ -122,8 +123,8 @@ def test_params_take_a_world_file_as_the_dock_database() -> None:
     ],
 )
 def test_params_refuse_bad_values(bad: dict, field: str) -> None:  # type: ignore[type-arg]
-    with pytest.raises(ValidationError, match=field):
-        Params.model_validate({"dock_database": SEED_ROOM} | bad)
+    with pytest.raises(ConfigError, match=rf"^params: {field}\b"):
+        structs.validate(Params, {"dock_database": SEED_ROOM} | bad, "params")
 
 
 # --- zendock dock -------------------------------------------------------------------------------------

@@ -11,7 +11,7 @@ import pytest
 from services.planner.lower_bound import lower_bound, turns_rad
 from services.planner.shortest_path import solid_grid
 from shared.geometry import Pose2D
-from shared.world import load_world
+from shared.world import load_world, parse_world
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
 
@@ -33,9 +33,8 @@ def test_glass_counts_as_solid_for_the_bound() -> None:
 
 
 def _room_with_dock(x: float, y: float, yaw: float):  # type: ignore[no-untyped-def]
-    from shared.world import World
 
-    return World.model_validate(
+    return parse_world(
         {
             "name": "room",
             "bounds": [0.0, 0.0, 16.0, 12.0],

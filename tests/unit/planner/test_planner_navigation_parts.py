@@ -28,9 +28,11 @@ from services.planner.rasterize import map_from_world
 from services.planner.recovery import GlassClearing, glass_clearing
 from services.planner.shortest_path import shortest_path_length_m
 from services.planner.sonar_fusion import echo_explained_by_lidar
+from shared import structs
+from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
 from shared.messages import Header, OccupancyGrid, Path, Point, Pose, PoseStamped, Quaternion
-from shared.world import World, load_world
+from shared.world import World, load_world, parse_world
 from tests.support.processes import REPO_ROOT
 
 SEED_ROOM = REPO_ROOT / "deploy/worlds/seed_room.yaml"
@@ -38,7 +40,7 @@ GLASS_ROOM = REPO_ROOT / "deploy/worlds/glass_room.yaml"
 
 
 def _room(walls: list | None = None) -> World:
-    return World.model_validate(
+    return parse_world(
         {
             "name": "room",
             "bounds": [0.0, 0.0, 4.0, 3.0],
@@ -252,10 +254,10 @@ def test_parameters_keep_costmap_follower_and_planner_in_agreement() -> None:
 def test_bad_parameters_are_refused() -> None:
     with pytest.raises(ValueError, match="lidar_mount"):
         Params(lidar_mount=(0.1, math.nan, 0.0))
-    with pytest.raises(ValueError, match="max_linear_vel_mps"):
-        Params(max_linear_vel_mps=0.0)
-    with pytest.raises(ValueError, match="no_such_parameter"):
-        Params.model_validate({"no_such_parameter": 1})
+    with pytest.raises(ConfigError, match="^params: max_linear_vel_mps: must be greater than 0.0$"):
+        structs.validate(Params, {"max_linear_vel_mps": 0.0}, "params")
+    with pytest.raises(ConfigError, match="^params: no_such_parameter: unknown key"):
+        structs.validate(Params, {"no_such_parameter": 1}, "params")
     with pytest.raises(ValueError, match="(?s)map_yaml.*cannot read map file"):
         Params(map_yaml="/nonexistent/map.yaml")
     with pytest.raises(ValueError, match="(?s)world.*cannot read world file"):

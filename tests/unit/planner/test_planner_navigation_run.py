@@ -18,6 +18,7 @@ from services.planner.params import Params
 from services.planner.planning_worker import PlanOutcome, PlanRequest, blocked_end_of
 from services.planner.pure_pursuit import FollowStatus, VelocityCommand
 from services.planner.recovery import GlassClearing
+from shared import structs
 from shared.geometry import Pose2D
 from shared.interfaces.navigation import NavigateErrorCode
 from tests.unit.planner.rooms import room_grid
@@ -123,7 +124,7 @@ def test_the_robot_follows_the_plan_to_the_goal_and_stops_there() -> None:
 
 def test_an_unreachable_goal_recovers_then_aborts_with_the_planning_error() -> None:
     wall = [[[2.5, 0.0], [2.5, 3.0]]]  # splits the room in two
-    params = Params.model_validate({"max_recoveries": 2, "recovery_wait_s": 0.2})
+    params = structs.validate(Params, {"max_recoveries": 2, "recovery_wait_s": 0.2}, "params")
     world = KinematicWorld(_grid(wall), Pose2D(0.8, 1.5, 0.0), params)
     run = _run(world, Pose2D(4.0, 1.5, 0.0))
     world.drive(run, until_s=60.0)
@@ -179,7 +180,7 @@ def test_while_the_first_plan_is_made_its_stops_answer_the_tick_that_asked_for_i
 def test_a_recovery_that_forgets_heard_glass_turns_once_in_place_before_it_plans_again() -> None:
     """Forgotten glass is planned through at once otherwise: robots drove into panes they had heard."""
     wall = [[[2.5, 0.0], [2.5, 3.0]]]  # no path: every recovery fails, so each kind of clearing comes
-    params = Params.model_validate({"max_recoveries": 4, "recovery_wait_s": 0.2})
+    params = structs.validate(Params, {"max_recoveries": 4, "recovery_wait_s": 0.2}, "params")
     world = KinematicWorld(_grid(wall), Pose2D(0.8, 1.5, 0.0), params)
     run = _run(world, Pose2D(4.0, 1.5, 0.0))
     looks: list[float] = []  # rad turned in each look round
@@ -210,7 +211,7 @@ def test_a_look_round_keeps_its_corners_off_the_glass_the_clearing_just_forgot()
     split = [[2.5, 0.0], [2.5, 3.0]]  # no path: recoveries follow one another
     beside = [[0.2, 1.71], [1.4, 1.71]]  # a pane along the robot's left side: its corners reach 0.25 m
     heard, forgotten = _grid([split, beside]), _grid([split])
-    params = Params.model_validate({"max_recoveries": 2, "recovery_wait_s": 0.2})
+    params = structs.validate(Params, {"max_recoveries": 2, "recovery_wait_s": 0.2}, "params")
     world = KinematicWorld(heard, Pose2D(0.8, 1.5, 0.0), params)
     footprint = (params.robot_length_m, params.robot_width_m)
     run = _run(world, Pose2D(4.0, 1.5, 0.0))
@@ -296,7 +297,7 @@ def test_blocked_again_and_again_at_the_same_place_starts_a_recovery() -> None:
     assert world.now_s == pytest.approx(1.5 * 3 + 1.5, abs=0.2)
     assert not run._blocked_ticks  # a recovery starts the sum afresh
     # Counting only how long each stop lasts, nothing ends it: no recovery in a minute.
-    world, run = _back_and_forth(Params.model_validate({"blocked_window_s": 0.6}))
+    world, run = _back_and_forth(structs.validate(Params, {"blocked_window_s": 0.6}, "params"))
     assert run.recoveries == 0 and run.active and world.now_s >= 60.0
 
 

@@ -12,7 +12,7 @@ from services.planner.glass_memory import HEARD_LINE_EXTENSION_M, GlassMemory
 from services.planner.grid_frame import GridFrame
 from services.planner.pane_extension import pane_extensions, pane_runs
 from services.planner.rasterize import map_from_world
-from shared.world import World
+from shared.world import parse_world
 
 RES = 0.05
 
@@ -147,7 +147,7 @@ def test_two_panes_extensions_leave_the_gap_between_their_ends_open() -> None:
 
 def _hall_frame() -> GridFrame:
     """The grid of an empty 8 x 5 m hall."""
-    world = World.model_validate(
+    world = parse_world(
         {"name": "hall", "bounds": [0.0, 0.0, 8.0, 5.0], "walls": [], "robot": {"start": [1.0, 1.0, 0.0]}}
     )
     return map_from_world(world).frame

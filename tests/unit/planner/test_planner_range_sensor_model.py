@@ -21,7 +21,7 @@ from services.planner.range_sensor_model import (
     range_weight,
     reading_evidence,
 )
-from shared import topics
+from shared import structs, topics
 from shared.geometry import Pose2D
 from shared.messages import Header, Range, Time
 from shared.pose_tracking import OdometrySample, PoseTrack
@@ -149,7 +149,9 @@ def test_an_oblique_pane_converges_as_the_robot_looks_from_several_poses() -> No
 
 
 def test_glass_heard_ahead_slows_the_robot_near_it() -> None:
-    params = Params.model_validate({"glass_slowdown_radius_m": 0.8, "glass_slowdown_min_speed_mps": 0.1})
+    params = structs.validate(
+        Params, {"glass_slowdown_radius_m": 0.8, "glass_slowdown_min_speed_mps": 0.1}, "params"
+    )
     layers = _updater_on_open_floor(PoseTrack(), params)
     assert layers.glass is not None
     assert layers.glass_speed_limit_mps(Pose2D(2.0, 2.0, 0.0)) is None  # nothing heard yet

@@ -12,7 +12,7 @@ import pytest
 from deploy.commands import map as map_command
 from services.planner.occupancy_map import OCC_FREE, OCC_OCCUPIED, OCC_UNKNOWN, load_map
 from services.planner.rasterize import map_from_world
-from shared.world import DOCK_GEOMETRY, World, load_world
+from shared.world import DOCK_GEOMETRY, World, load_world, parse_world
 
 WORLDS = Path(__file__).resolve().parents[3] / "deploy" / "worlds"
 
@@ -20,7 +20,7 @@ WORLDS = Path(__file__).resolve().parents[3] / "deploy" / "worlds"
 def _world(**fields: object) -> World:
     doc: dict = {"name": "test_room", "bounds": [0.0, 0.0, 4.0, 3.0], "robot": {"start": [0.5, 0.5, 0.0]}}
     doc.update(fields)
-    return World.model_validate(doc)
+    return parse_world(doc)
 
 
 def _eight_connected_reach(free: np.ndarray, seed: tuple[int, int]) -> np.ndarray:

@@ -13,6 +13,7 @@ import yaml
 
 from services.planner.shortest_path import solid_map
 from services.planner.way_width import MAX_CLEARANCE_M, WayWidths, way_widths
+from shared.structs import plain
 from shared.world import World, parse_world
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -64,7 +65,7 @@ def test_no_way_is_width_zero_and_an_open_room_is_capped() -> None:
 
 def test_the_lower_bound_tool_answers_each_start_with_its_way_width(tmp_path: Path) -> None:
     world = tmp_path / "two_rooms.yaml"
-    doc = _two_rooms(0.8).model_dump(mode="json")
+    doc = plain(_two_rooms(0.8))
     world.write_text(yaml.safe_dump(doc), encoding="utf-8")
     queries = [
         {"start": [1.0, 2.0, 0.0], "goal": [5.0, 2.0, 0.0]},  # through the door

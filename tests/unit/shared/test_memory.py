@@ -1,5 +1,5 @@
-"""What keeps the services lean: no OpenSSL and no search for pydantic plugins in a service, no other
-command's code in the router, one read-noise bank for a simulator's cameras."""
+"""What keeps the services lean: no OpenSSL and no pydantic in a service, no other command's code in the
+router, one read-noise bank for a simulator's cameras."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import msgspec
 import numpy as np
 import pytest
 
@@ -32,18 +33,12 @@ def _openssl_loaded() -> str:
     return "print(sys.modules.get('_hashlib') is not None)\n"
 
 
-def _plugins_searched() -> str:
-    """Code that prints whether pydantic has read the installed packages' entry points for plugins."""
-    return "from pydantic.plugin import _loader\nprint(_loader._plugins is not None)\n"
-
-
 def test_without_openssl_the_hashes_are_python_s_own_and_the_same() -> None:
     out = _run(
         "import sys\n"
         "from shared.memory import keep_openssl_out\n"
         "assert keep_openssl_out()\n"
-        "import pydantic, hashlib, hmac\n"
-        "class M(pydantic.BaseModel):\n    x: int = 1\n"
+        "import hashlib, hmac, secrets\n"
         "print(hashlib.sha256(b'abc').hexdigest(), hmac.new(b'k', b'm', 'sha256').hexdigest())\n"
         + _openssl_loaded()
     )
@@ -59,8 +54,8 @@ def test_once_hashlib_has_openssl_it_keeps_it() -> None:
 
 @pytest.mark.parametrize("service", SERVICES)
 def test_a_service_starts_without_openssl(service: str) -> None:
-    """``python -m services.NAME`` keeps OpenSSL out before its first import of pydantic (``--help`` comes
-    after every import of the service)."""
+    """``python -m services.NAME`` keeps OpenSSL out, and loads no pydantic: its parameters and worlds are
+    msgspec records (``--help`` comes after every import of the service)."""
     out = _run(
         "import contextlib, io, runpy, sys\n"
         f"sys.argv = ['services.{service}', '--help']\n"
@@ -68,10 +63,10 @@ def test_a_service_starts_without_openssl(service: str) -> None:
         "    try:\n"
         f"        runpy.run_module('services.{service}', run_name='__main__', alter_sys=True)\n"
         "    except SystemExit:\n        pass\n"
-        "print('pydantic' in sys.modules)\n" + _openssl_loaded() + _plugins_searched()
+        "print('pydantic' in sys.modules)\n" + _openssl_loaded()
     )
-    assert out.split() == ["True", "False", "False"], (
-        f"services.{service}: expected pydantic loaded, OpenSSL not, and no search for pydantic plugins"
+    assert out.split() == ["False", "False"], (
+        f"services.{service}: expected neither pydantic nor OpenSSL loaded"
     )
 
 
@@ -116,7 +111,7 @@ def test_a_simulator_s_cameras_share_one_noise_bank_and_draw_their_own_windows()
     a, b = first.render(pose), second.render(pose)
     assert first.noise is second.noise
     assert np.abs(a.astype(int) - b.astype(int)).mean() > 1.0  # independent noise, same scene
-    noiseless = CameraRenderer(scene, params.model_copy(update={"noise_sigma": 0.0})).render(pose)
+    noiseless = CameraRenderer(scene, msgspec.structs.replace(params, noise_sigma=0.0)).render(pose)
     residual = a.astype(float) - noiseless
     assert abs(residual[(noiseless > 10) & (noiseless < 245)].std() - params.noise_sigma) < 0.3
     again = CameraRenderer(

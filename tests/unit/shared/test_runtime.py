@@ -8,10 +8,12 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
+from typing import Annotated
 
+import msgspec
 import pytest
 import yaml
-from pydantic import BaseModel, ConfigDict, Field
+from msgspec import Meta
 
 from shared.config_errors import ConfigError
 from shared.parameters import ServiceParams
@@ -31,17 +33,16 @@ class DemoParams(ServiceParams):
     target_frame: str = "base_link"
 
 
-class LidarPart(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-    rate_hz: float = Field(10.0, gt=0)
-    noise_m: float = Field(0.01, ge=0)
+class LidarPart(msgspec.Struct, forbid_unknown_fields=True, frozen=True, kw_only=True):
+    rate_hz: Annotated[float, Meta(gt=0)] = 10.0
+    noise_m: Annotated[float, Meta(ge=0)] = 0.01
 
 
 class NestedParams(ServiceParams):
     """A service with a part, as the simulator nests ``lidar``."""
 
     world: str = "room.yaml"
-    lidar: LidarPart = LidarPart()
+    lidar: LidarPart = msgspec.field(default_factory=LidarPart)
 
 
 def _options(*argv: str) -> ServiceOptions:
@@ -130,8 +131,8 @@ def test_dotted_overrides_merge_with_a_nested_config_file(tmp_path: Path) -> Non
     [
         ("lidr.noise_m=0.02", "lidr.noise_m: unknown group 'lidr' (groups: lidar)"),
         ("lidar.noise=0.02", "lidar.noise: unknown key"),
-        ("lidar.noise_m=-1", "lidar.noise_m: Input should be greater than or equal to 0"),
-        ("lidar.noise_m=loud", "lidar.noise_m: Input should be a valid number"),
+        ("lidar.noise_m=-1", "lidar.noise_m: must be at least 0"),
+        ("lidar.noise_m=loud", "lidar.noise_m: expected float, got text"),
         ("world.name=x", "world.name: 'world' is a single parameter, not a group"),
         ("lidar..noise_m=1", "lidar..noise_m: not a parameter name"),
     ],

@@ -5,11 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from pydantic import BaseModel, ValidationError
 
 from services.simulator.channels import channel_table
 from services.simulator.params import Params
-from shared import topics
+from shared import structs, topics
 from shared.config_errors import ConfigError
 from shared.runtime import ServiceOptions, load_params
 
@@ -25,11 +24,7 @@ def _params(**overrides: object) -> Params:
 
 def test_components_are_strict_and_frozen() -> None:
     params = _params()
-    groups = [
-        name
-        for name, info in Params.model_fields.items()
-        if isinstance(info.annotation, type) and issubclass(info.annotation, BaseModel)
-    ]
+    groups = [spec.name for spec in structs.fields(Params) if spec.group is not None]
     assert set(groups) == {
         "clock",
         "odom",
@@ -46,8 +41,8 @@ def test_components_are_strict_and_frozen() -> None:
         "contact",
     }
     for name in groups:
-        part = getattr(params, name)
-        assert part.model_config.get("extra") == "forbid" and part.model_config.get("frozen") is True, name
+        config = type(getattr(params, name)).__struct_config__
+        assert config.forbid_unknown_fields and config.frozen, name
 
 
 def test_dotted_overrides_reach_the_physics() -> None:
@@ -63,7 +58,7 @@ def test_dotted_overrides_reach_the_physics() -> None:
 def test_one_check_per_value_also_for_direct_use() -> None:
     from services.simulator.sensors import UltrasonicParams
 
-    with pytest.raises(ValidationError, match="range_max_m"):
+    with pytest.raises(ValueError, match="^range_max_m: 0.5 must exceed range_min_m 1.0"):
         UltrasonicParams(range_min_m=1.0, range_max_m=0.5)
 
 

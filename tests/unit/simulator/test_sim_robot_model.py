@@ -16,6 +16,8 @@ from services.simulator.robot_model import (
     twist_from_wheel_speeds,
     wheel_speeds_from_twist,
 )
+from shared import structs
+from shared.config_errors import ConfigError
 from shared.geometry import Pose2D
 
 PARAMS = DiffDriveParams()
@@ -69,8 +71,8 @@ def test_non_finite_command_stops() -> None:
 
 
 def test_bad_params_rejected() -> None:
-    with pytest.raises(ValueError, match="wheel_radius_m"):
-        DiffDriveParams(wheel_radius_m=0.0)
+    with pytest.raises(ConfigError, match="^drive: wheel_radius_m: must be greater than 0"):
+        structs.validate(DiffDriveParams, {"wheel_radius_m": 0.0}, "drive")
 
 
 def test_integrate_arc_quarter_circle() -> None:
