@@ -35,6 +35,7 @@ _UNKNOWN = re.compile(r"^Object contains unknown field `(?P<name>[^`]*)`$")
 _MISSING = re.compile(r"^Object missing required field `(?P<name>[^`]*)`$")
 _BOUND = re.compile(r"^Expected `(?P<type>[^`]*)` (?P<op>>=|<=|>|<) (?P<bound>\S+)$")
 _LENGTH = re.compile(r"^Expected `(?P<type>[^`]*)` of length (?P<op>>=|<=) (?P<bound>\d+)$")
+_EXACT = re.compile(r"^Expected `(?P<type>[^`]*)` of length (?P<want>\d+), got (?P<got>\d+)$")
 _TYPE = re.compile(r"^Expected `(?P<want>[^`]*)`, got `(?P<got>[^`]*)`$")
 _ENUM = re.compile(r"^Invalid enum value (?P<value>.*)$")
 _NAMED = re.compile(r"^(?P<name>[A-Za-z_][\w.]*): (?P<reason>.*)$", re.DOTALL)
@@ -181,7 +182,13 @@ def _plain_reason(message: str, kind: Any) -> str:
         return f"must be {_BOUND_WORDS[bound.group('op')]} {bound.group('bound')}"
     length = _LENGTH.match(message)
     if length:
-        return f"must have {_LENGTH_WORDS[length.group('op')]} {length.group('bound')} items"
+        if length.group("op") == ">=" and length.group("bound") == "1":
+            return "must not be empty"
+        unit = "characters" if length.group("type") == "str" else "items"
+        return f"must have {_LENGTH_WORDS[length.group('op')]} {length.group('bound')} {unit}"
+    exact = _EXACT.match(message)
+    if exact:
+        return f"must have {exact.group('want')} items, got {exact.group('got')}"
     wrong = _TYPE.match(message)
     if wrong:
         return f"expected {_type_words(wrong.group('want'))}, got {_type_words(wrong.group('got'))}"

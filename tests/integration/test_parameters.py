@@ -97,9 +97,7 @@ def test_param_list_get_set_on_a_running_battery(
     # A bad value, a read-only parameter and an unknown name are refused with the reason, exit 2.
     code, out, err = zendock("param", "set", "battery", "drain_scale", "-1")
     assert (code, out) == (2, "")
-    assert err == (
-        f"zendock param set: {node}: drain_scale: must be at least 0.0 (got -1)\n"
-    )
+    assert err == (f"zendock param set: {node}: drain_scale: must be at least 0.0 (got -1)\n")
     code, _, err = zendock("param", "set", "battery", "capacity_ah", "3")
     assert code == 2 and err.startswith(f"zendock param set: {node}: capacity_ah: read at start-up only")
     code, _, err = zendock("param", "set", "battery", "drain", "3")

@@ -1,0 +1,107 @@
+"""Validating user-written values into records: each mistake is one line naming the source, the field's
+dotted place and the reason in plain words."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import msgspec
+import pytest
+from msgspec import Meta
+
+from shared.config_errors import ConfigError
+from shared.structs import field_spec, fields, non_finite, plain, validate
+
+
+class Lidar(msgspec.Struct, forbid_unknown_fields=True, frozen=True, kw_only=True):
+    noise_m: Annotated[float, Meta(ge=0.0, description="range noise")] = 0.01
+    rate_hz: Annotated[float, Meta(gt=0.0, le=50.0)] = 10.0
+    mount: tuple[float, float, float] = (0.1, 0.0, 0.0)
+
+
+class Pane(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    ends: tuple[tuple[float, float], tuple[float, float]]
+    name: Annotated[str, Meta(min_length=1)] = "pane"
+
+
+class Settings(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    world: str
+    mode: Literal["fast", "careful"] = "careful"
+    lidar: Lidar = msgspec.field(default_factory=Lidar)
+    panes: list[Pane] = msgspec.field(default_factory=list)
+    low: float = 0.2
+    high: Annotated[float, Meta(extra={"dynamic": True})] = 0.9
+
+    def __post_init__(self) -> None:
+        if self.high <= self.low:
+            raise ValueError(f"high: {self.high} must be above low ({self.low})")
+
+
+def _message(data: dict) -> str:
+    with pytest.raises(ConfigError) as info:
+        validate(Settings, {"world": "w.yaml", **data}, "s.yaml")
+    return str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("data", "expected"),
+    [
+        ({"lidar": {"noise_m": -1}}, "s.yaml: lidar.noise_m: must be at least 0.0"),
+        ({"lidar": {"rate_hz": 0}}, "s.yaml: lidar.rate_hz: must be greater than 0.0"),
+        ({"lidar": {"rate_hz": 80}}, "s.yaml: lidar.rate_hz: must be at most 50.0"),
+        ({"lidar": {"noise_m": "loud"}}, "s.yaml: lidar.noise_m: expected float, got text"),
+        ({"lidar": {"mount": [1, 2]}}, "s.yaml: lidar.mount: must have 3 items, got 2"),
+        ({"lidar": {"noies_m": 0.1}}, "s.yaml: lidar.noies_m: unknown key (did you mean noise_m?)"),
+        ({"wrold": "x"}, "s.yaml: wrold: unknown key (did you mean world?)"),
+        ({"colour": "red"}, "s.yaml: colour: unknown key"),
+        (
+            {"panes": [{"ends": [[0, 0], [1, 0]]}, {"ends": [[0, 0], [1, 0]], "name": ""}]},
+            "s.yaml: panes.1.name: must not be empty",
+        ),
+        ({"panes": [{"name": "p"}]}, "s.yaml: panes.0.ends: missing (required)"),
+        ({"mode": "reckless"}, "s.yaml: mode: invalid enum value 'reckless' (choose from 'fast', 'careful')"),
+        ({"high": 0.1}, "s.yaml: high: 0.1 must be above low (0.2)"),
+    ],
+)
+def test_each_mistake_names_its_place_and_reason(data: dict, expected: str) -> None:
+    assert _message(data) == expected
+
+
+def test_a_missing_top_level_field_is_named() -> None:
+    with pytest.raises(ConfigError, match=r"^s.yaml: world: missing \(required\)$"):
+        validate(Settings, {}, "s.yaml")
+
+
+def test_the_root_prefixes_the_place() -> None:
+    with pytest.raises(ConfigError, match=r"^docks.yaml: docks.3.lidar.noise_m: must be at least 0.0$"):
+        validate(Settings, {"world": "w", "lidar": {"noise_m": -1}}, "docks.yaml", root="docks.3")
+
+
+def test_values_a_user_writes_are_accepted_as_meant() -> None:
+    settings = validate(Settings, {"world": "w", "lidar": {"rate_hz": "5", "noise_m": 0}, "high": 1}, "s")
+    assert settings.lidar.rate_hz == 5.0 and isinstance(settings.lidar.noise_m, float)
+    assert settings.high == 1.0 and settings.lidar.mount == (0.1, 0.0, 0.0)
+
+
+def test_fields_read_the_meta_and_find_groups() -> None:
+    names = [spec.name for spec in fields(Settings)]
+    assert names == ["world", "mode", "lidar", "panes", "low", "high"]
+    assert field_spec(Settings, "lidar") is not None and field_spec(Settings, "lidar").group is Lidar
+    assert field_spec(Settings, "panes").group is None
+    assert field_spec(Lidar, "noise_m").description == "range noise"
+    assert field_spec(Settings, "high").extra == {"dynamic": True}
+    assert field_spec(Settings, "nope") is None
+
+
+def test_plain_gives_json_ready_values() -> None:
+    settings = validate(Settings, {"world": "w", "panes": [{"ends": [[0, 0], [1, 0]]}]}, "s")
+    assert plain(settings)["lidar"]["mount"] == [0.1, 0.0, 0.0]
+    assert plain(settings)["panes"] == [{"ends": [[0.0, 0.0], [1.0, 0.0]], "name": "pane"}]
+
+
+def test_non_finite_names_the_fields() -> None:
+    assert list(non_finite(Lidar(noise_m=float("nan"), mount=(0.0, float("inf"), 0.0)))) == [
+        "noise_m",
+        "mount",
+    ]
+    assert list(non_finite(Lidar())) == []
