@@ -1,6 +1,6 @@
 """A warm standby for one of zendock's services: ``python -m deploy.standby services.<name> FLAGS``.
 
-A restarted service spends most of its recovery importing (numpy, pydantic, Zenoh, its own modules; far longer
+A restarted service spends most of its recovery importing (numpy, Zenoh, its own modules; far longer
 on a loaded machine), then much less opening its session (measurements 28 and 107). A standby pays the imports
 once, ahead of time, and then forks the service on demand, as a zygote does: each ``go`` line on its standard
 input forks a child that becomes the service, with the standby's flags and environment, in a session of its

@@ -3,10 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:  # pydantic is heavy (measurement 61); the router and other lean processes never load it
-    from pydantic import ValidationError
+from typing import Any
 
 #: The exit code of a process stopped by a :class:`ConfigError` (a service, a ``zendock`` command), as
 #: argparse exits on a bad flag. Restarting cannot fix one, so the launcher never restarts a service for it.
@@ -15,22 +12,6 @@ CONFIG_ERROR_EXIT = 2
 
 class ConfigError(ValueError):
     """A user-written file or value is malformed. The message names the file, the field and the reason."""
-
-
-def format_validation_error(error: ValidationError, source: str | Path, root: str = "") -> str:
-    """Render a pydantic error as ``source: field.path: reason`` lines, one per problem."""
-    lines = []
-    for item in error.errors():
-        parts = [root] if root else []
-        parts += [str(p) for p in item["loc"] if p != "__root__"]
-        where = ".".join(parts) or "(top level)"
-        reason = item["msg"]
-        if reason.startswith("Value error, "):
-            reason = reason[len("Value error, ") :]
-        if item["type"] == "extra_forbidden":
-            reason = "unknown key"
-        lines.append(f"{source}: {where}: {reason}")
-    return "\n".join(lines)
 
 
 def read_yaml_file(path: str | Path, what: str) -> Any:

@@ -16,7 +16,7 @@ import sys
 def keep_openssl_out() -> bool:
     """Make ``hashlib`` and ``hmac`` use the interpreter's own hashes instead of OpenSSL's; call it first thing.
 
-    ``hashlib`` (the glass memory's digest, foxglove, the CLI's pydantic through ``secrets``) loads
+    ``hashlib`` (the glass memory's digest, foxglove, ``secrets``) loads
     ``_hashlib``, which maps OpenSSL's libcrypto into the process (measurement 61), and no service hashes
     more than a few kB. Without ``_hashlib`` both modules fall back to the built-in md5, sha1, sha2, sha3 and
     blake2; what only OpenSSL has (``pbkdf2_hmac``, ``scrypt``) is then missing. True when it took effect:

@@ -38,6 +38,7 @@ _LENGTH = re.compile(r"^Expected `(?P<type>[^`]*)` of length (?P<op>>=|<=) (?P<b
 _EXACT = re.compile(r"^Expected `(?P<type>[^`]*)` of length (?P<want>\d+), got (?P<got>\d+)$")
 _TYPE = re.compile(r"^Expected `(?P<want>[^`]*)`, got `(?P<got>[^`]*)`$")
 _ENUM = re.compile(r"^Invalid enum value (?P<value>.*)$")
+_STEP = re.compile(r"\.(?P<field>[^.\[]+)|\[(?P<item>\d+|\.\.\.)\]")
 _NAMED = re.compile(r"^(?P<name>[A-Za-z_][\w.]*): (?P<reason>.*)$", re.DOTALL)
 _BOUND_WORDS = {">=": "at least", ">": "greater than", "<=": "at most", "<": "less than"}
 _LENGTH_WORDS = {">=": "at least", "<=": "at most"}
@@ -101,21 +102,26 @@ def validate(record: type[T], data: Any, source: str | Path, root: str = "") -> 
     try:
         return msgspec.convert(data, record, strict=False)
     except msgspec.ValidationError as exc:
-        raise ConfigError(describe_error(exc, record, source, root)) from None
+        raise ConfigError(describe_error(exc, record, source, root, data)) from None
 
 
-def describe_error(error: msgspec.ValidationError, record: type, source: str | Path, root: str = "") -> str:
-    """``source: field.path: reason`` for a validation error of ``record``."""
-    where, reason = explain(error, record)
+def describe_error(
+    error: msgspec.ValidationError, record: type, source: str | Path, root: str = "", data: Any = None
+) -> str:
+    """``source: field.path: reason`` for a validation error of ``record`` (``data``: the values that were
+    validated, to name a mapping's key)."""
+    where, reason = explain(error, record, data)
     place = ".".join(part for part in (root, where) if part)
     return f"{source}: {place}: {reason}" if place else f"{source}: {reason}"
 
 
-def explain(error: msgspec.ValidationError, record: type) -> tuple[str, str]:
-    """The dotted place (``lidar.noise_m``, ``walls.0``) and the reason in plain words."""
+def explain(error: msgspec.ValidationError, record: type, data: Any = None) -> tuple[str, str]:
+    """The dotted place (``lidar.noise_m``, ``walls.0``, ``services.planner.restart``) and the reason in
+    plain words. msgspec does not say which key of a mapping was at fault: it is found in ``data`` (the values
+    that were validated), else written ``[...]``."""
     match = _AT.match(str(error))
     message = match.group("message") if match else str(error)
-    parts = _path_parts(match.group("path") if match and match.group("path") else "")
+    parts = _path_parts(match.group("path") if match and match.group("path") else "", record, data)
     for pattern, words in (
         (_UNKNOWN, "unknown key"),
         (_MISSING, "missing (required)"),
@@ -133,9 +139,40 @@ def explain(error: msgspec.ValidationError, record: type) -> tuple[str, str]:
     return ".".join(parts), _plain_reason(message, _type_at(record, parts))
 
 
-def _path_parts(path: str) -> list[str]:
-    """``.walls[0].pose`` -> ``["walls", "0", "pose"]``."""
-    return [part for part in re.split(r"[.\[\]]+", path) if part]
+def _path_parts(path: str, record: Any = None, data: Any = None) -> list[str]:
+    """``.walls[0].pose`` -> ``["walls", "0", "pose"]``; ``.services[...].restart`` -> ``["services",
+    "planner", "restart"]``, the key found in ``data`` as the first whose value ``record`` refuses there."""
+    parts: list[str] = []
+    value = data
+    for step in _STEP.finditer(path):
+        part = step.group("field") or step.group("item")
+        if part == "...":
+            part, value = _refused_key(_type_at(record, parts), value)
+        else:
+            value = _child(value, part)
+        parts.append(part)
+    return parts
+
+
+def _child(value: Any, part: str) -> Any:
+    if isinstance(value, dict):
+        return value.get(part)
+    if isinstance(value, (list, tuple)) and part.isdigit() and int(part) < len(value):
+        return value[int(part)]
+    return None
+
+
+def _refused_key(kind: Any, mapping: Any) -> tuple[str, Any]:
+    """The first key of ``mapping`` (a ``dict[K, V]`` value) whose value is not a valid ``V``, and that value;
+    msgspec stops at the first, as this does."""
+    if get_origin(kind) is dict and isinstance(mapping, dict):
+        item_type = get_args(kind)[-1]
+        for key, item in mapping.items():
+            try:
+                msgspec.convert(item, item_type, strict=False)
+            except msgspec.ValidationError:
+                return str(key), item
+    return "[...]", None
 
 
 def _type_at(record: Any, parts: list[str]) -> Any:
@@ -201,7 +238,9 @@ def _plain_reason(message: str, kind: Any) -> str:
 
 
 def _type_words(name: str) -> str:
-    return {"array": "a list", "object": "a mapping", "str": "text", "null": "nothing"}.get(name, name)
+    """msgspec's name of a type in plain words; ``str | null`` is ``text or nothing``."""
+    words = {"array": "a list", "object": "a mapping", "str": "text", "null": "nothing"}
+    return " or ".join(words.get(part, part) for part in name.split(" | "))
 
 
 def plain(value: Any) -> Any:

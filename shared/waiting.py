@@ -1,7 +1,7 @@
 """Waiting on an event in a main thread that must still run its signal handlers.
 
 A module of its own, importing nothing heavy, so lean processes (the router) can wait without loading the
-services' runtime (pydantic and the contracts; what that weighs: measurement 61).
+services' runtime (the contracts and what they import; what that weighs: measurement 61).
 """
 
 from __future__ import annotations

@@ -19,11 +19,10 @@ import json
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+import msgspec
 
-from deploy.launcher.durations import parse_duration
 from deploy.launcher.restart import RestartPolicy
 
 #: Dependency conditions, as in Compose.
@@ -31,7 +30,9 @@ Condition = Literal["service_started", "service_healthy", "service_completed_suc
 #: A service's, a project's or a node's name.
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 DEFAULT_STOP_GRACE_S = 5.0
-Duration = Annotated[float, BeforeValidator(parse_duration)]
+#: Seconds. A stack file writes ``5s`` or ``500ms``: :mod:`deploy.launcher.stack_file` reads that text
+#: (:func:`~deploy.launcher.durations.parse_duration`) before it validates the file.
+Duration = Annotated[float, msgspec.Meta(ge=0)]
 
 #: The package zendock's services live in: ``python -m services.<name>``.
 SERVICES_PACKAGE = "services"
@@ -181,17 +182,19 @@ def as_text(value: object) -> str:
     raise ValueError(f"expected text or a number, got {value!r}")
 
 
-class Strict(BaseModel):
-    """A stack file's section: unknown keys are errors, values are frozen."""
+class Strict(msgspec.Struct, forbid_unknown_fields=True, frozen=True, kw_only=True):
+    """A stack file's section: unknown keys are errors, values are frozen.
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    Checked where a stack file comes in (:func:`deploy.launcher.stack_file.validate_stack_file`); one built in
+    Python by its constructor (the runners' stacks) runs only its ``__post_init__``, as a dataclass would.
+    """
 
 
-class Dependency(Strict):
+class Dependency(Strict, frozen=True):
     condition: Condition = "service_started"
 
 
-class Healthcheck(Strict):
+class Healthcheck(Strict, frozen=True):
     """Healthy when the service's liveliness token is up and/or an exec test passes.
 
     ``liveliness: true`` watches the token of the node named like the service (a string names the node);
@@ -203,24 +206,15 @@ class Healthcheck(Strict):
     test: list[str] | str | None = None
     interval: Duration = 2.0
     timeout: Duration | None = None
-    retries: int = Field(default=3, ge=1)
+    retries: Annotated[int, msgspec.Meta(ge=1)] = 3
     start_period: Duration = 0.0
     disable: bool = False
 
-    @field_validator("test", mode="before")
-    @classmethod
-    def _test_words(cls, value: Any) -> Any:
-        if isinstance(value, list):
-            return [as_text(word) for word in value]
-        return value
-
-    @model_validator(mode="after")
-    def _has_a_check(self) -> Healthcheck:
+    def __post_init__(self) -> None:
         if not self.disable and not self.liveliness and not self.test:
             raise ValueError("give liveliness: true or a test command (or disable: true)")
         if isinstance(self.liveliness, str) and not NAME_RE.match(self.liveliness):
             raise ValueError(f"liveliness: {self.liveliness!r} is not a node name")
-        return self
 
     @property
     def enabled(self) -> bool:

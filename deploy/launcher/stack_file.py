@@ -3,6 +3,10 @@
 Validation happens once, here: unknown keys and bad values are :class:`ConfigError`\\ s whose lines read
 ``FILE: services.planner.restart: reason``. Keys starting with ``x-`` are extensions and are ignored,
 at the top level and in a service, as in Compose.
+
+Compose's short forms (a command as one string, ``environment`` and ``depends_on`` as lists, durations as
+``5s``, ``restart: on-failure:3``) are read into the records' own forms first, by one small function per key
+(:func:`validate_stack_file`); the records (msgspec ``Struct``\\ s) then check types, bounds and unknown keys.
 """
 
 from __future__ import annotations
@@ -10,16 +14,16 @@ from __future__ import annotations
 import os
 import re
 import shlex
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Annotated, Any
 
+import msgspec
 import yaml
-from pydantic import BeforeValidator, Field, ValidationError, field_validator, model_validator
 
 from deploy.launcher.composition import CompositionError, compose_groups
-from deploy.launcher.durations import format_duration
+from deploy.launcher.durations import format_duration, parse_duration
 from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
 from deploy.launcher.interpolation import InterpolationError, interpolate_tree, parse_env_file
 from deploy.launcher.launch import (
@@ -35,25 +39,17 @@ from deploy.launcher.launch import (
 )
 from deploy.launcher.restart import RestartPolicy, parse_restart_policy
 from deploy.launcher.robot_template import RobotTemplateError, expand_robots
-from shared.config_errors import ConfigError, format_validation_error
+from shared.config_errors import ConfigError
 from shared.names import normalise_namespace
 from shared.session import DEFAULT_ROUTER_ENDPOINT
+from shared.structs import validate
 
 DEFAULT_CONNECT = f"${{ZENOH_CONNECT:-{DEFAULT_ROUTER_ENDPOINT}}}"
 DEFAULT_LIVELINESS_TIMEOUT_S = 30.0
 DEFAULT_CHECK_TIMEOUT_S = 5.0
-Restart = Annotated[RestartPolicy, BeforeValidator(parse_restart_policy)]
 
 
-def _drop_extensions(data: Any) -> Any:
-    if isinstance(data, dict):
-        return {
-            key: value for key, value in data.items() if not (isinstance(key, str) and key.startswith("x-"))
-        }
-    return data
-
-
-class ServiceSpec(Strict):
+class ServiceSpec(Strict, frozen=True):
     """One service as the stack file writes it; keys and meanings follow the Compose specification.
 
     Read into a :class:`~deploy.launcher.launch.ServiceLaunch` (:meth:`launch`) once validated: its command
@@ -62,58 +58,19 @@ class ServiceSpec(Strict):
 
     command: list[str]
     working_dir: str | None = None
-    environment: dict[str, str | None] = Field(default_factory=dict)
-    depends_on: dict[str, Dependency] = Field(default_factory=dict)
-    restart: Restart = RestartPolicy("no")
+    environment: dict[str, str | None] = msgspec.field(default_factory=dict)
+    depends_on: dict[str, Dependency] = msgspec.field(default_factory=dict)
+    restart: RestartPolicy = RestartPolicy("no")
     healthcheck: Healthcheck | None = None
-    profiles: list[str] = Field(default_factory=list)
+    profiles: list[str] = msgspec.field(default_factory=list)
     stop_grace_period: Duration = DEFAULT_STOP_GRACE_S
     namespace: str | None = None
 
-    @model_validator(mode="before")
-    @classmethod
-    def _strip_extensions(cls, data: Any) -> Any:
-        return _drop_extensions(data)
-
-    @field_validator("command", mode="before")
-    @classmethod
-    def _command_words(cls, value: Any) -> Any:
-        if isinstance(value, str):
-            value = shlex.split(value)
-        if isinstance(value, list):
-            if not value:
-                raise ValueError("command is empty")
-            return [as_text(word) for word in value]
-        return value
-
-    @field_validator("environment", mode="before")
-    @classmethod
-    def _environment_map(cls, value: Any) -> Any:
-        if isinstance(value, list):
-            pairs: dict[str, str | None] = {}
-            for item in value:
-                key, sep, text = as_text(item).partition("=")
-                pairs[key] = text if sep else None
-            return pairs
-        if isinstance(value, dict):
-            return {str(key): None if text is None else as_text(text) for key, text in value.items()}
-        return value
-
-    @field_validator("depends_on", mode="before")
-    @classmethod
-    def _depends_on_map(cls, value: Any) -> Any:
-        if isinstance(value, list):
-            return {as_text(name): {} for name in value}
-        if isinstance(value, dict):
-            return {name: {} if spec is None else spec for name, spec in value.items()}
-        return value
-
-    @field_validator("namespace")
-    @classmethod
-    def _namespace_chars(cls, value: str | None) -> str | None:
-        if value is not None:
-            normalise_namespace(value)
-        return value
+    def __post_init__(self) -> None:
+        if not self.command:
+            raise ValueError("command: must not be empty")
+        if self.namespace is not None:
+            _check_namespace(self.namespace)
 
     def launch(self) -> ServiceLaunch:
         return ServiceLaunch(
@@ -129,47 +86,152 @@ class ServiceSpec(Strict):
         )
 
 
-class ZenohSettings(Strict):
+class ZenohSettings(Strict, frozen=True):
     """Where services and the launcher's health checker connect (``ZENDOCK_CONNECT`` of every service).
 
+    ``connect``: endpoints, each item possibly several separated by commas (``${ZENOH_CONNECT}``).
     ``config``: a Zenoh json5 file for the launcher's own session (the health checker), e.g. the
     credentials a secured router asks for; relative to the directory services run in.
     """
 
-    connect: list[str] = Field(default_factory=lambda: [DEFAULT_ROUTER_ENDPOINT])
+    connect: list[str] = msgspec.field(default_factory=lambda: [DEFAULT_ROUTER_ENDPOINT])
     config: str | None = None
 
-    @field_validator("connect")
-    @classmethod
-    def _split_endpoints(cls, value: list[str]) -> list[str]:
-        endpoints = [part.strip() for item in value for part in item.split(",") if part.strip()]
+    def __post_init__(self) -> None:
+        endpoints = [part.strip() for item in self.connect for part in item.split(",") if part.strip()]
         if not endpoints:
-            raise ValueError("give at least one endpoint, e.g. tcp/127.0.0.1:7447")
-        return endpoints
+            raise ValueError("connect: give at least one endpoint, e.g. tcp/127.0.0.1:7447")
+        msgspec.structs.force_setattr(self, "connect", endpoints)
 
 
-class StackFile(Strict):
+class StackFile(Strict, frozen=True, kw_only=True):
     name: str | None = None
     namespace: str = ""
-    zenoh: ZenohSettings = Field(default_factory=ZenohSettings)
-    services: dict[str, ServiceSpec] = Field(min_length=1)
+    zenoh: ZenohSettings = msgspec.field(default_factory=ZenohSettings)
+    services: Annotated[dict[str, ServiceSpec], msgspec.Meta(min_length=1)]
 
-    @model_validator(mode="before")
-    @classmethod
-    def _strip_extensions(cls, data: Any) -> Any:
-        return _drop_extensions(data)
+    def __post_init__(self) -> None:
+        if self.name is not None and not NAME_RE.match(self.name):
+            raise ValueError("name: use letters, digits, '_', '-' and '.', starting with a letter or digit")
+        msgspec.structs.force_setattr(self, "namespace", _check_namespace(self.namespace))
 
-    @field_validator("name")
-    @classmethod
-    def _project_name(cls, value: str | None) -> str | None:
-        if value is not None and not NAME_RE.match(value):
-            raise ValueError("use letters, digits, '_', '-' and '.', starting with a letter or digit")
-        return value
 
-    @field_validator("namespace")
-    @classmethod
-    def _namespace_chars(cls, value: str) -> str:
-        return normalise_namespace(value)
+def _check_namespace(namespace: str) -> str:
+    """``namespace`` normalised, or a ``ValueError`` that names the field."""
+    try:
+        return normalise_namespace(namespace)
+    except ValueError as exc:
+        raise ValueError(f"namespace: {exc}") from None
+
+
+# Compose's short forms, read into the records' forms before validation. Each reader takes the value as YAML
+# gives it and returns it as the record's field takes it, or raises ValueError saying what is wrong; a value
+# it does not know (a number for a list) passes unchanged, for validation to name.
+
+
+def _command_words(value: Any) -> Any:
+    """``command: python -m x`` is split as a shell would; each word of a list is text (``3``, ``true``)."""
+    if isinstance(value, str):
+        value = shlex.split(value)
+    if isinstance(value, list):
+        return [as_text(word) for word in value]
+    return value
+
+
+def _environment_map(value: Any) -> Any:
+    """``[KEY=value, KEY]`` or ``{KEY: value}``: values as text, a bare ``KEY`` (or ``KEY: null``) passed through
+    from the launcher's environment."""
+    if isinstance(value, list):
+        pairs: dict[str, str | None] = {}
+        for item in value:
+            key, sep, text = as_text(item).partition("=")
+            pairs[key] = text if sep else None
+        return pairs
+    if isinstance(value, dict):
+        return {str(key): None if text is None else as_text(text) for key, text in value.items()}
+    return value
+
+
+def _depends_on_map(value: Any) -> Any:
+    """``[router, map]`` or ``{router: {condition: ...}}``; a name with no settings waits for the start."""
+    if isinstance(value, list):
+        return {as_text(name): {} for name in value}
+    if isinstance(value, dict):
+        return {name: {} if spec is None else spec for name, spec in value.items()}
+    return value
+
+
+def _test_words(value: Any) -> Any:
+    """A healthcheck's ``test`` as one string (run by a shell) or a list of words, each as text."""
+    if isinstance(value, list):
+        return [as_text(word) for word in value]
+    return value
+
+
+def _optional_duration(value: Any) -> float | None:
+    return None if value is None else parse_duration(value)
+
+
+#: A key's reader, or the readers of a mapping's keys (a healthcheck's).
+_Readers = Mapping[str, "Callable[[Any], Any] | _Readers"]
+
+_HEALTHCHECK_FORMS: _Readers = {
+    "test": _test_words,
+    "interval": parse_duration,
+    "timeout": _optional_duration,
+    "start_period": parse_duration,
+}
+#: In the fields' order, so that problems are listed as the record declares them.
+_SERVICE_FORMS: _Readers = {
+    "command": _command_words,
+    "environment": _environment_map,
+    "depends_on": _depends_on_map,
+    "restart": parse_restart_policy,
+    "healthcheck": _HEALTHCHECK_FORMS,
+    "stop_grace_period": parse_duration,
+}
+
+
+def _without_extensions(data: dict[Any, Any]) -> dict[Any, Any]:
+    """``data`` less its ``x-`` keys (Compose's extensions: anchors to merge, the launcher's ``x-compose``)."""
+    return {key: value for key, value in data.items() if not (isinstance(key, str) and key.startswith("x-"))}
+
+
+def _read_forms(data: dict[Any, Any], readers: _Readers, place: str, problems: list[str]) -> dict[Any, Any]:
+    """``data`` with each key ``readers`` names read; a value that cannot be read adds ``place.key: reason``
+    to ``problems`` and is left as written."""
+    out = dict(data)
+    for key, reader in readers.items():
+        if key not in out:
+            continue
+        if isinstance(reader, Mapping):
+            if isinstance(out[key], dict):
+                out[key] = _read_forms(out[key], reader, f"{place}.{key}", problems)
+            continue
+        try:
+            out[key] = reader(out[key])
+        except ValueError as exc:
+            problems.append(f"{place}.{key}: {exc}")
+    return out
+
+
+def validate_stack_file(document: Mapping[str, Any], source: str | Path) -> StackFile:
+    """A stack file's (interpolated) document as a :class:`StackFile`: extensions dropped, Compose's short
+    forms read, then validated. Raises :class:`ConfigError` naming every short form that cannot be read (all
+    services'), else the first problem validation finds, each as ``source: services.NAME.KEY: reason``."""
+    problems: list[str] = []
+    data = _without_extensions(dict(document))
+    services = data.get("services")
+    if isinstance(services, dict):
+        data["services"] = {
+            name: _read_forms(_without_extensions(spec), _SERVICE_FORMS, f"services.{name}", problems)
+            if isinstance(spec, dict)
+            else spec
+            for name, spec in services.items()
+        }
+    if problems:
+        raise ConfigError("\n".join(f"{source}: {problem}" for problem in problems))
+    return validate(StackFile, data, source)
 
 
 def join_namespace(stack_namespace: str, service_namespace: str | None) -> str:
@@ -349,10 +411,7 @@ def load_stack(
     declared = document.get("x-compose")
     if declared is not None and not isinstance(declared, dict):
         raise ConfigError(f"{source}: x-compose: expected a mapping of group names to lists of services")
-    try:
-        parsed = StackFile.model_validate(document)
-    except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, source)) from None
+    parsed = validate_stack_file(document, source)
     stack = Stack(
         source=source,
         project_name=project_name or parsed.name or project_name_from_dir(directory),

@@ -9,7 +9,7 @@ import pytest
 from deploy.launcher import load_stack
 from deploy.launcher.composition import CompositionError, compose_groups
 from deploy.launcher.launch import GroupRun, ModuleRun, ProgramRun, read_command, run_words
-from deploy.launcher.stack_file import StackFile
+from deploy.launcher.stack_file import validate_stack_file
 from shared.config_errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
@@ -17,7 +17,9 @@ REPO_ROOT = Path(__file__).resolve().parents[3]
 
 def _services(document: dict) -> dict:  # type: ignore[type-arg]
     """The document's services, validated and read as a stack file's are."""
-    return {name: spec.launch() for name, spec in StackFile.model_validate(document).services.items()}
+    return {
+        name: spec.launch() for name, spec in validate_stack_file(document, "stack.yaml").services.items()
+    }
 
 
 def _doc() -> dict:  # type: ignore[type-arg]

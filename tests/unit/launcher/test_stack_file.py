@@ -186,7 +186,7 @@ def test_long_and_short_forms_and_extensions(tmp_path: Path) -> None:
         ),
         (
             "depends_on: {router: {condition: service_ready}}",
-            "services.planner.depends_on.router.condition: Input should be",
+            "services.planner.depends_on.router.condition: invalid enum value 'service_ready'",
         ),
         (
             "depends_on: {router: {condition: service_healthy}}",
@@ -198,11 +198,11 @@ def test_long_and_short_forms_and_extensions(tmp_path: Path) -> None:
         ),
         (
             "healthcheck: {liveliness: true, retries: 0}",
-            "services.planner.healthcheck.retries: Input should be greater than or equal to 1",
+            "services.planner.healthcheck.retries: must be at least 1",
         ),
         ("namespace: 'a/*'", "services.planner.namespace: namespace 'a/*'"),
         ("command: []", "services.planner.command: command is empty"),
-        ("profiles: viz", "services.planner.profiles: Input should be a valid list"),
+        ("profiles: viz", "services.planner.profiles: expected a list, got text"),
     ],
 )
 def test_errors_name_the_file_and_the_key(tmp_path: Path, service_yaml: str, expected: str) -> None:
@@ -225,7 +225,7 @@ def test_top_level_errors(tmp_path: Path) -> None:
     assert "stack.yaml: servics: unknown key" in error_of(
         write(tmp_path, "servics: {}\nservices: {a: {command: [x]}}\n")
     )
-    assert "services: Field required" in error_of(write(tmp_path, "name: x\n"))
+    assert "services: missing (required)" in error_of(write(tmp_path, "name: x\n"))
     assert "zenoh.connect: give at least one endpoint" in error_of(
         write(tmp_path, "zenoh: {connect: ['']}\nservices: {a: {command: [x]}}\n")
     )

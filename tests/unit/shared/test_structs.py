@@ -77,6 +77,20 @@ def test_the_root_prefixes_the_place() -> None:
         validate(Settings, {"world": "w", "lidar": {"noise_m": -1}}, "docks.yaml", root="docks.3")
 
 
+class Fleet(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    lidars: dict[str, Lidar] = msgspec.field(default_factory=dict)
+
+
+def test_a_mapping_key_is_named() -> None:
+    """msgspec writes a mapping's key as ``[...]``; the place names the key whose value was refused."""
+    with pytest.raises(ConfigError, match=r"^f.yaml: lidars.rear.noise_m: must be at least 0.0$"):
+        validate(Fleet, {"lidars": {"front": {}, "rear": {"noise_m": -1}}}, "f.yaml")
+    with pytest.raises(
+        ConfigError, match=r"^f.yaml: lidars.rear.nois_m: unknown key \(did you mean noise_m\?\)$"
+    ):
+        validate(Fleet, {"lidars": {"front": {}, "rear": {"nois_m": 1}}}, "f.yaml")
+
+
 def test_values_a_user_writes_are_accepted_as_meant() -> None:
     settings = validate(Settings, {"world": "w", "lidar": {"rate_hz": "5", "noise_m": 0}, "high": 1}, "s")
     assert settings.lidar.rate_hz == 5.0 and isinstance(settings.lidar.noise_m, float)
