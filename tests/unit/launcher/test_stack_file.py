@@ -201,7 +201,7 @@ def test_long_and_short_forms_and_extensions(tmp_path: Path) -> None:
             "services.planner.healthcheck.retries: must be at least 1",
         ),
         ("namespace: 'a/*'", "services.planner.namespace: namespace 'a/*'"),
-        ("command: []", "services.planner.command: command is empty"),
+        ("command: []", "services.planner.command: must not be empty"),
         ("profiles: viz", "services.planner.profiles: expected a list, got text"),
     ],
 )
