@@ -14,6 +14,7 @@ A validator is a ``__post_init__`` that raises ``ValueError``. Its message start
 
 from __future__ import annotations
 
+import copy
 import difflib
 import functools
 import math
@@ -39,6 +40,8 @@ _EXACT = re.compile(r"^Expected `(?P<type>[^`]*)` of length (?P<want>\d+), got (
 _TYPE = re.compile(r"^Expected `(?P<want>[^`]*)`, got `(?P<got>[^`]*)`$")
 _ENUM = re.compile(r"^Invalid enum value (?P<value>.*)$")
 _STEP = re.compile(r"\.(?P<field>[^.\[]+)|\[(?P<item>\d+|\.\.\.)\]")
+#: How msgspec's own messages (types, bounds, keys) begin, as against a record's ``__post_init__`` checks.
+_OWN_MESSAGES = ("Expected ", "Object ", "Invalid ")
 _NAMED = re.compile(r"^(?P<name>[A-Za-z_][\w.]*): (?P<reason>.*)$", re.DOTALL)
 _BOUND_WORDS = {">=": "at least", ">": "greater than", "<=": "at most", "<": "less than"}
 _LENGTH_WORDS = {">=": "at least", "<=": "at most"}
@@ -95,14 +98,72 @@ def field_spec(record: type[msgspec.Struct], name: str) -> FieldSpec | None:
     return next((spec for spec in fields(record) if spec.name == name), None)
 
 
+#: At most this many problems are listed for one file; msgspec finds one at a time (see :func:`validate`).
+MAX_PROBLEMS = 20
+
+
 def validate(record: type[T], data: Any, source: str | Path, root: str = "") -> T:
     """``data`` (plain values: YAML, JSON, ``-p``) as a ``record``, or a :class:`ConfigError` naming
-    ``source``, the field and the reason. Numbers given as text and ints for floats are accepted, as a
-    user would expect; out-of-bounds, unknown and missing fields are not."""
+    ``source``, the field and the reason, one line per problem. Numbers given as text and ints for floats
+    are accepted, as a user would expect; out-of-bounds, unknown and missing fields are not.
+
+    msgspec stops at the first problem. So that a file with several mistakes is not mended one run at a
+    time, each blamed key is left out and the rest validated again, while the place is a key of a mapping
+    (not a list item, whose removal would renumber the rest) and what follows is not the key's own absence
+    nor a check of the record's own (``__post_init__``), which would judge a default in the left-out
+    value's place.
+    """
     try:
         return msgspec.convert(data, record, strict=False)
     except msgspec.ValidationError as exc:
-        raise ConfigError(describe_error(exc, record, source, root, data)) from None
+        lines = [
+            describe_error(error, record, source, root, values)
+            for error, values in _problems(exc, record, data)
+        ]
+        raise ConfigError("\n".join(lines)) from None
+
+
+def _problems(
+    error: msgspec.ValidationError, record: type, data: Any
+) -> Iterator[tuple[msgspec.ValidationError, Any]]:
+    """The first error, then those found with the keys already blamed left out (see :func:`validate`)."""
+    remaining = copy.deepcopy(data)
+    left_out: set[str] = set()
+    for _ in range(MAX_PROBLEMS):
+        yield error, remaining
+        where, _reason = explain(error, record, remaining)
+        if not _leave_out(remaining, where):
+            return
+        left_out.add(where)
+        try:
+            msgspec.convert(remaining, record, strict=False)
+            return
+        except msgspec.ValidationError as exc:
+            error = exc
+        message = _message_of(error)
+        if not message.startswith(_OWN_MESSAGES) or (
+            _MISSING.match(message) and explain(error, record, remaining)[0] in left_out
+        ):
+            return  # a check of the record's own would judge the defaults put in place of what was left out
+
+
+def _message_of(error: msgspec.ValidationError) -> str:
+    match = _AT.match(str(error))
+    return match.group("message") if match else str(error)
+
+
+def _leave_out(data: Any, where: str) -> bool:
+    """Remove the key at dotted ``where`` from nested mappings; False where that cannot be done cleanly."""
+    *parents, last = where.split(".") if where else [""]
+    here = data
+    for part in parents:
+        if not isinstance(here, dict) or part not in here:
+            return False
+        here = here[part]
+    if not isinstance(here, dict) or last not in here:
+        return False
+    del here[last]
+    return True
 
 
 def describe_error(

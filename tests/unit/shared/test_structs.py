@@ -119,3 +119,35 @@ def test_non_finite_names_the_fields() -> None:
         "mount",
     ]
     assert list(non_finite(Lidar())) == []
+
+
+def test_several_mistakes_are_listed_at_once_one_line_each() -> None:
+    message = _message({"wrold": "x", "lidar": {"noise_m": -1, "rate_hz": 0}, "mode": "reckless"})
+    assert message.splitlines() == [  # in the order the file gives them
+        "s.yaml: wrold: unknown key (did you mean world?)",
+        "s.yaml: lidar.noise_m: must be at least 0.0",
+        "s.yaml: lidar.rate_hz: must be greater than 0.0",
+        "s.yaml: mode: invalid enum value 'reckless' (choose from 'fast', 'careful')",
+    ]
+
+
+def test_listing_stops_at_a_list_item_and_never_blames_a_key_for_its_own_absence() -> None:
+    # a list item left out would renumber the rest: what follows it waits for the next run
+    panes = [{"ends": [[0, 0], [1, 0]], "name": ""}, {"ends": [[0, 0]]}]
+    assert _message({"colour": "red", "panes": panes, "mode": "x"}).splitlines() == [
+        "s.yaml: colour: unknown key",
+        "s.yaml: panes.0.name: must not be empty",
+    ]
+    # world is required: leaving out its bad value must not add "world: missing (required)"
+    with pytest.raises(ConfigError) as info:
+        validate(Settings, {"world": 3, "low": "x"}, "s.yaml")
+    assert str(info.value).splitlines() == [
+        "s.yaml: world: expected text, got int",
+        "s.yaml: low: expected float, got text",
+    ]
+
+
+def test_a_record_s_own_check_waits_until_the_keys_before_it_are_mended() -> None:
+    # high 0.1 would be refused (below low), but low is left out for its bad type: with its default (0.2)
+    # in its place, the check would blame a value the user never wrote
+    assert _message({"low": "x", "high": 0.1}).splitlines() == ["s.yaml: low: expected float, got text"]
