@@ -1,14 +1,15 @@
 """Runtime parameters: which of a service's parameters may change while it runs, and changing them.
 
 A service's parameters are one record (:class:`ServiceParams`, a msgspec ``Struct``), validated at
-start-up (:func:`shared.structs.validate`). A field marked with :func:`runtime_settable` may also change while the service runs
-(``zendock param set``); every other field is read once, at start-up, and a change to it is refused.
+start-up (:func:`shared.structs.validate`). A field marked with :func:`runtime_settable` may also change
+while the service runs (``zendock param set``); every other field is read once, at start-up, and a change
+to it is refused.
 :class:`ParameterTable` is the contract, pure (no bus, no clock):
 
 - names are the start-up names: ``field``, or ``group.field`` for a nested group (``-p`` spells them so);
 - a new value is validated by the same record type as at start-up (the field's bounds and the record's
   cross-field checks), on a copy; a refused value changes nothing and the reason names the parameter;
-- an accepted value is written into the live model the service was built with, so code that reads its
+- an accepted value is written into the live record the service was built with, so code that reads its
   parameters when it starts something (a docking run, a navigation goal) picks it up then; then the
   listeners run (:meth:`ParameterTable.on_set`), to apply it at once where that is wanted. A listener
   raising ``ValueError`` undoes the change and refuses it with its message.

@@ -218,7 +218,8 @@ def _read_forms(data: dict[Any, Any], readers: _Readers, place: str, problems: l
 def validate_stack_file(document: Mapping[str, Any], source: str | Path) -> StackFile:
     """A stack file's (interpolated) document as a :class:`StackFile`: extensions dropped, Compose's short
     forms read, then validated. Raises :class:`ConfigError` naming every short form that cannot be read (all
-    services'), else the first problem validation finds, each as ``source: services.NAME.KEY: reason``."""
+    services'), else the problems validation finds (:func:`shared.structs.validate`), each as
+    ``source: services.NAME.KEY: reason``."""
     problems: list[str] = []
     data = _without_extensions(dict(document))
     services = data.get("services")
