@@ -14,6 +14,7 @@ A validator is a ``__post_init__`` that raises ``ValueError``. Its message start
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import difflib
 import functools
@@ -116,22 +117,20 @@ def validate(record: type[T], data: Any, source: str | Path, root: str = "") -> 
     try:
         return msgspec.convert(data, record, strict=False)
     except msgspec.ValidationError as exc:
-        lines = [
-            describe_error(error, record, source, root, values)
-            for error, values in _problems(exc, record, data)
-        ]
+        lines = [_line(source, root, where, reason) for where, reason in _problems(exc, record, data)]
         raise ConfigError("\n".join(lines)) from None
 
 
-def _problems(
-    error: msgspec.ValidationError, record: type, data: Any
-) -> Iterator[tuple[msgspec.ValidationError, Any]]:
-    """The first error, then those found with the keys already blamed left out (see :func:`validate`)."""
+def _problems(error: msgspec.ValidationError, record: type, data: Any) -> Iterator[tuple[str, str]]:
+    """The first problem's place and reason, then those found with the keys already blamed left out (see
+    :func:`validate`)."""
     remaining = copy.deepcopy(data)
     left_out: set[str] = set()
     for _ in range(MAX_PROBLEMS):
-        yield error, remaining
-        where, _reason = explain(error, record, remaining)
+        where, reason = explain(error, record, remaining)
+        if _MISSING.match(_message_of(error)) and where in left_out:
+            return  # the key's own absence, not a mistake of the user's
+        yield where, reason
         if not _leave_out(remaining, where):
             return
         left_out.add(where)
@@ -140,10 +139,7 @@ def _problems(
             return
         except msgspec.ValidationError as exc:
             error = exc
-        message = _message_of(error)
-        if not message.startswith(_OWN_MESSAGES) or (
-            _MISSING.match(message) and explain(error, record, remaining)[0] in left_out
-        ):
+        if not _message_of(error).startswith(_OWN_MESSAGES):
             return  # a check of the record's own would judge the defaults put in place of what was left out
 
 
@@ -171,9 +167,22 @@ def describe_error(
 ) -> str:
     """``source: field.path: reason`` for a validation error of ``record`` (``data``: the values that were
     validated, to name a mapping's key)."""
-    where, reason = explain(error, record, data)
+    return _line(source, root, *explain(error, record, data))
+
+
+def _line(source: str | Path, root: str, where: str, reason: str) -> str:
     place = ".".join(part for part in (root, where) if part)
     return f"{source}: {place}: {reason}" if place else f"{source}: {reason}"
+
+
+@contextlib.contextmanager
+def blaming(field: str) -> Iterator[None]:
+    """In a ``__post_init__``: a ``ValueError`` raised inside (a file that does not load, a name that does
+    not normalise) is raised again with ``field`` first, so that :func:`validate` names the field."""
+    try:
+        yield
+    except ValueError as exc:
+        raise ValueError(f"{field}: {exc}") from None
 
 
 def explain(error: msgspec.ValidationError, record: type, data: Any = None) -> tuple[str, str]:
@@ -328,6 +337,7 @@ def non_finite(record: msgspec.Struct) -> Iterator[str]:
 
 __all__ = [
     "FieldSpec",
+    "blaming",
     "describe_error",
     "explain",
     "field_names",

@@ -42,7 +42,7 @@ from deploy.launcher.robot_template import RobotTemplateError, expand_robots
 from shared.config_errors import ConfigError
 from shared.names import normalise_namespace
 from shared.session import DEFAULT_ROUTER_ENDPOINT
-from shared.structs import validate
+from shared.structs import blaming, validate
 
 DEFAULT_CONNECT = f"${{ZENOH_CONNECT:-{DEFAULT_ROUTER_ENDPOINT}}}"
 DEFAULT_LIVELINESS_TIMEOUT_S = 30.0
@@ -118,10 +118,8 @@ class StackFile(Strict, frozen=True, kw_only=True):
 
 def _check_namespace(namespace: str) -> str:
     """``namespace`` normalised, or a ``ValueError`` that names the field."""
-    try:
+    with blaming("namespace"):
         return normalise_namespace(namespace)
-    except ValueError as exc:
-        raise ValueError(f"namespace: {exc}") from None
 
 
 # Compose's short forms, read into the records' forms before validation. Each reader takes the value as YAML

@@ -20,6 +20,7 @@ from services.docking.docking_run import DockingConfig
 from services.docking.undocking_run import UndockConfig
 from shared.controllers import CONTROLLERS, DEFAULT_CONTROLLER, ControllerName, choices_help
 from shared.parameters import ServiceParams, runtime_settable
+from shared.structs import blaming
 
 #: When a runtime change of a docking parameter takes effect: each run is built from the parameters.
 NEXT_RUN = "at the next docking or undocking run"
@@ -168,10 +169,8 @@ class Params(ServiceParams):
     ] = 5.0
 
     def __post_init__(self) -> None:
-        try:
+        with blaming("dock_database"):
             load_dock_db(self.dock_database)  # a ConfigError names the file and the entry
-        except ValueError as exc:
-            raise ValueError(f"dock_database: {exc}") from None
         if self.resume_at <= self.low_battery_threshold:
             raise ValueError(
                 f"resume_at: {self.resume_at} must be above low_battery_threshold "

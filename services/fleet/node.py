@@ -35,6 +35,7 @@ from shared.names import GRAPH_PREFIX, decode_chunk, normalise_namespace
 from shared.node import BLOCKING, Node
 from shared.parameters import ServiceParams
 from shared.runtime import ServiceSpec
+from shared.structs import blaming
 from shared.world import load_world
 
 #: The robots' docking nodes' liveliness tokens: ``@zendock/node/<namespace>/docking``.
@@ -64,10 +65,8 @@ class Params(ServiceParams):
     ] = 1.0
 
     def __post_init__(self) -> None:
-        try:
+        with blaming("world"):
             docks = load_world(self.world).docks
-        except ValueError as exc:
-            raise ValueError(f"world: {exc}") from None
         if not docks:
             raise ValueError(f"world: {self.world} has no docks to share")
         if self.critical_battery >= self.charged_enough:

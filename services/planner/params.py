@@ -24,6 +24,7 @@ from services.planner.pure_pursuit import PurePursuitParams
 from services.planner.rasterize import map_from_world
 from services.planner.smoothing import SmoothingParams
 from shared.parameters import ServiceParams, runtime_settable
+from shared.structs import blaming
 from shared.world import ROBOT_LENGTH_M, ROBOT_WIDTH_M, load_world
 
 #: When a runtime change of a follower setting takes effect: each goal builds its follower.
@@ -262,14 +263,13 @@ class Params(ServiceParams):
     ] = 1.0
 
     def __post_init__(self) -> None:
-        for name, load in (("map_yaml", load_map), ("world", load_world)):
-            try:
-                if getattr(self, name):
-                    load(
-                        getattr(self, name)
-                    )  # a ConfigError names the file and the problem, before connecting
-            except ValueError as exc:
-                raise ValueError(f"{name}: {exc}") from None
+        # a ConfigError names the file and the problem, before connecting
+        if self.map_yaml:
+            with blaming("map_yaml"):
+                load_map(self.map_yaml)
+        if self.world:
+            with blaming("world"):
+                load_world(self.world)
         for name in ("lidar_mount", "ultrasonic_mount"):
             mount = getattr(self, name)
             if not all(math.isfinite(v) for v in mount):

@@ -27,6 +27,7 @@ from shared.models.dock_contact import DockContactParams
 from shared.models.infrared import InfraredParams
 from shared.names import normalise_namespace
 from shared.parameters import ServiceParams
+from shared.structs import blaming
 from shared.world import load_world
 
 
@@ -142,10 +143,8 @@ class Params(ServiceParams):
 
     def __post_init__(self) -> None:
         self.rtf = _rtf(self.rtf)
-        try:
+        with blaming("world"):
             load_world(self.world)  # a ConfigError (a ValueError) names the file and the problem
-        except ValueError as exc:
-            raise ValueError(f"world: {exc}") from None
         names = [normalise_namespace(v) for v in self.robots]
         if any(not n for n in names) or len(set(names)) != len(names):
             raise ValueError("robots: must be distinct, non-empty namespaces")

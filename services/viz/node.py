@@ -40,6 +40,7 @@ from shared.node import SENSOR_DATA, Node, QoS, ServiceError, Subscription
 from shared.parameters import ServiceParams
 from shared.runtime import ServiceSpec
 from shared.schema import Message
+from shared.structs import blaming
 from shared.topics import BASE_FRAME, MAP
 from shared.world import World, load_world
 
@@ -83,10 +84,8 @@ class Params(ServiceParams):
 
     def __post_init__(self) -> None:
         if self.world:
-            try:
+            with blaming("world"):
                 load_world(self.world)  # a ConfigError names the file and the problem
-            except ValueError as exc:
-                raise ValueError(f"world: {exc}") from None
         self.world = self.world or None
 
 
