@@ -43,6 +43,9 @@ from shared.schema import MessageError
 
 #: How often :meth:`ActionClient.server_ready` asks again for a server that has not answered yet.
 SERVER_POLL_S = 0.05
+#: Finished goals an action server remembers (oldest forgotten first): a client may ask for a result, or
+#: cancel a goal and be told it has ended, for this many goals after it ended.
+KEPT_RESULTS = 64
 
 log = logging.getLogger(__name__)
 
@@ -118,7 +121,6 @@ class ActionServer(Generic[G, R, F]):
         on_accepted: Callable[[ServerGoalHandle[G, R, F]], None],
         on_cancel: Callable[[ServerGoalHandle[G, R, F]], None],
         preempt_result: Callable[[], R] | None = None,
-        result_timeout_s: float = 3600.0,
     ) -> None:
         self.node = node
         self.action = action
@@ -127,7 +129,6 @@ class ActionServer(Generic[G, R, F]):
         self._on_accepted = on_accepted
         self._on_cancel = on_cancel
         self._preempt_result = preempt_result or action.result
-        self._result_timeout_s = result_timeout_s
         self.active_goal: ServerGoalHandle[G, R, F] | None = None
         self._finished: dict[str, ServerGoalHandle[G, R, F]] = {}
         self._waiting: dict[str, list[zenoh.Query]] = {}
@@ -244,7 +245,7 @@ class ActionServer(Generic[G, R, F]):
         handle.status = status
         handle.result = result
         self._finished[handle.id_hex] = handle
-        if len(self._finished) > 64:
+        if len(self._finished) > KEPT_RESULTS:
             self._finished.pop(next(iter(self._finished)))
         self._publish_status()
         for query in self._waiting.pop(handle.id_hex, []):
@@ -303,7 +304,6 @@ class ActionClient(Generic[G, R, F]):
             action.feedback_message, action_key(name, "feedback"), self._on_feedback, RELIABLE
         )
         node.create_subscription(GoalStatusArray, action_key(name, "status"), self._on_status, RELIABLE)
-        self._server_key = node.key(action_key(name, "send_goal"))
 
     def server_ready(self, timeout_s: float = 1.0) -> bool:
         """Whether an action server answers (its send_goal queryable is declared) within ``timeout_s``.

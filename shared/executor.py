@@ -106,10 +106,6 @@ class Executor:
             self._stop = True
             self._cv.notify_all()
 
-    @property
-    def stopped(self) -> bool:
-        return self._stop
-
     def spin(self, until: Callable[[], bool] | None = None, timeout_s: float | None = None) -> bool:
         """Run until stopped, until ``until()`` is true, or until the wall timeout; returns ``until()``'s value."""
         deadline = None if timeout_s is None else time.monotonic() + timeout_s

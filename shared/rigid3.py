@@ -46,10 +46,6 @@ class Rigid3:
     translation: np.ndarray
 
     @classmethod
-    def identity(cls) -> Rigid3:
-        return cls(np.eye(3), np.zeros(3))
-
-    @classmethod
     def from_parts(
         cls, translation: tuple[float, float, float], quaternion: tuple[float, float, float, float]
     ) -> Rigid3:

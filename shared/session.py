@@ -7,7 +7,6 @@ it is given, so tests on free ports and several stacks on one machine never meet
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -74,7 +73,3 @@ def make_config(spec: SessionSpec) -> zenoh.Config:
 def open_session(spec: SessionSpec) -> zenoh.Session:
     """Open a session; use it as a context manager so it is always closed."""
     return zenoh.open(make_config(spec))
-
-
-def client_spec(connect: Sequence[str] = (DEFAULT_ROUTER_ENDPOINT,)) -> SessionSpec:
-    return SessionSpec(mode="client", connect=tuple(connect))

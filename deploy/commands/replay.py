@@ -32,7 +32,15 @@ def open_recording(path: str) -> Recording | Ros2BagRecording:
     """zendock's MCAP file, or a ROS 2 bag directory (its CDR turned back into zendock's messages)."""
     from deploy.recording.ros2_bag import Ros2BagRecording, is_ros2_bag  # noqa: PLC0415 - rosbags only for bags
 
-    return Ros2BagRecording(path) if is_ros2_bag(path) else Recording(path)
+    if not is_ros2_bag(path):
+        return Recording(path)
+    bag = Ros2BagRecording(path)
+    if bag.unknown_types:
+        print(
+            f"zendock replay: left out, no zendock message has the type: {', '.join(bag.unknown_types)}",
+            file=sys.stderr,
+        )
+    return bag
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -266,10 +266,6 @@ class FleetMonitor:
         with self._lock:
             return self.sim_s
 
-    def holders(self) -> dict[str, str]:
-        with self._lock:
-            return dict(self._holders)
-
     def close(self) -> None:
         for sub in self._subscribers:
             sub.undeclare()

@@ -21,11 +21,10 @@ import zenoh
 
 from deploy.keys.errors import EXIT_USAGE, KeysError
 from deploy.options import DEFAULT_CONNECT_TIMEOUT_S
-from shared.bus_env import CONNECT_VARIABLES, connect_from_env
+from shared.bus_env import connect_from_env
 from shared.names import normalise_namespace, topic_key
 from shared.session import DEFAULT_ROUTER_ENDPOINT, SessionSpec, open_session
 
-ENV_CONNECT = CONNECT_VARIABLES
 ENV_NAMESPACE = "ZENDOCK_NAMESPACE"
 
 

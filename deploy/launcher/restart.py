@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 from shared.config_errors import CONFIG_ERROR_EXIT
 
-RESTART_MODES = ("no", "always", "on-failure", "unless-stopped")
 #: Exits a restart would only repeat, and what each means: the same files, flags and programs give the same
 #: answer, so the service is left down and the run told at once instead of a crash loop.
 FINAL_EXITS = {

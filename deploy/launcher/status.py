@@ -23,12 +23,6 @@ class Phase(StrEnum):
     STOPPED = "stopped"
 
 
-#: ``ps --json`` states. A service waiting for its dependencies shows as ``stopped`` before its first
-#: start and as ``restarting`` when it waits between two runs; ``detail`` says which dependency it waits for.
-PUBLIC_STATES = ("running", "restarting", "exited", "stopped")
-HEALTH_VALUES = ("healthy", "starting", "unhealthy", "none")
-
-
 @dataclass(frozen=True)
 class ServiceStatus:
     name: str

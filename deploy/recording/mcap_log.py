@@ -82,7 +82,6 @@ class McapLog:
         self._last_log_time_ns = 0
         self.raw_messages = 0
         self.view_messages = 0
-        self.bytes_written = 0
         self._finished = False
 
     def _schema_id(self, name: str, encoding: str, data: bytes) -> int:
@@ -119,7 +118,6 @@ class McapLog:
             sequence=(sample.sequence or 0) & 0xFFFFFFFF,
         )
         self.raw_messages += 1
-        self.bytes_written += len(sample.payload)
 
     def write_view(self, message: ViewMessage, log_time_ns: int) -> None:
         """A Foxglove-schema message (converted from a sample that arrived at ``log_time_ns``)."""
@@ -134,7 +132,6 @@ class McapLog:
         log_time = self._log_time(log_time_ns)
         self._writer.add_message(channel_id, log_time=log_time, data=message.data, publish_time=log_time)
         self.view_messages += 1
-        self.bytes_written += len(message.data)
 
     def add_metadata(self, name: str, values: dict[str, Any]) -> None:
         self._writer.add_metadata(name, {k: str(v) for k, v in values.items()})

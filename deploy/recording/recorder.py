@@ -196,10 +196,6 @@ class BusRecorder:
 
     # --- control -------------------------------------------------------------------------------------
 
-    @property
-    def backlog(self) -> int:
-        return self._queue.qsize()
-
     def type_of(self, key: str) -> str:
         return self._types.get(key, "")
 

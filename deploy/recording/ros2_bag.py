@@ -65,7 +65,6 @@ class Ros2BagLog:
         self.skipped: Counter[str] = Counter()
         self.raw_messages = 0
         self.view_messages = 0
-        self.bytes_written = 0
         self._finished = False
 
     def write_sample(self, sample: RecordedSample) -> None:
@@ -86,7 +85,6 @@ class Ros2BagLog:
             self._connections[(topic, ros_type)] = connection
         self._writer.write(connection, sample.log_time_ns, payload)
         self.raw_messages += 1
-        self.bytes_written += len(payload)
 
     def write_view(self, message: ViewMessage, log_time_ns: int) -> None:
         """Foxglove views are for zendock's own format; a ROS 2 bag carries the ROS 2 messages only."""
