@@ -785,20 +785,39 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
             if why is not None:
                 problems.append(f"{where}: no room for the robot in this world ({why})")
                 continue
-            _wait_sim(ctx, 0.5)  # detections of frames from before the move are out of the way
-            samples = ctx.probe.collect(
-                ctx.key("detected_dock_pose"),
-                PoseStamped,
-                1.5,
-                ctx.sim,
-                wall_limit_s=10.0,
-                keep_messages=True,
-            )
+            moved_s = ctx.probe.sim_now() if ctx.sim else None
+            _wait_sim(ctx, 0.5)  # most detections of frames from before the move are out of the way
             looked += 1
             truth = dock.relative_to(robot)
-            errors = [_pose_error(m.pose.to_pose2d(), truth) for m in samples.messages or []]
+            # A loaded machine may deliver detections of frames taken before the move later still: on sim
+            # time a detection's stamp (its frame's) says which viewpoint it belongs to, and the check
+            # listens a little longer for detections of frames taken after it.
+            stale, errors = 0, []
+            for _ in range(ROUND_WINDOWS):
+                samples = ctx.probe.collect(
+                    ctx.key("detected_dock_pose"),
+                    PoseStamped,
+                    1.5,
+                    ctx.sim,
+                    wall_limit_s=10.0,
+                    keep_messages=True,
+                )
+                for m in samples.messages or []:
+                    if moved_s is not None and m.header.stamp.to_sec() < moved_s + STALE_MARGIN_S:
+                        stale += 1
+                    else:
+                        errors.append(_pose_error(m.pose.to_pose2d(), truth))
+                if errors or not stale:
+                    break
             if not errors:
-                problems.append(f"{where}: no detection in 1.5 s")
+                problems.append(
+                    f"{where}: no detection in 1.5 s"
+                    + (
+                        f" of a frame taken after the move ({stale} of frames from before it)"
+                        if stale
+                        else ""
+                    )
+                )
                 continue
             position_m, yaw_rad = median(e[0] for e in errors), median(e[1] for e in errors)
             flipped = sum(1 for e in errors if e[1] > FLIPPED_RAD)
@@ -849,6 +868,13 @@ ROUND_WITHIN_PER_M = 0.02
 #: ... and this much of the dock's heading; no single detection is turned further than ``FLIPPED_RAD``.
 ROUND_WITHIN_RAD = 0.1
 FLIPPED_RAD = 0.3
+
+
+#: A detection stamped less than this after the teleport's sim time may be of a frame from before it (the
+#: probe hears the sim clock a message late).
+STALE_MARGIN_S = 0.1
+#: How many 1.5 s windows the check listens through while only detections of earlier frames arrive.
+ROUND_WINDOWS = 3
 
 
 def viewpoint(marker: Pose2D, range_m: float, angle_rad: float) -> Pose2D:
