@@ -7,6 +7,9 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 #: The test and docs tools on top of the runtime: `make run` does not need them.
 TEST_STAMP := $(VENV)/.installed-test
+#: pytest's workers (pytest-xdist): one a core, at most two, each taking whole test files so a file's
+#: module fixtures start once. `make test TEST_WORKERS=0` runs the suite in one process.
+TEST_WORKERS ?= auto
 
 .PHONY: run test test-containers check lint docs docs-serve docs-check browser bytecode clean
 
@@ -41,7 +44,7 @@ check: $(TEST_STAMP)
 	$(BIN)/mypy shared services deploy
 
 test: $(TEST_STAMP) bytecode ros2 browser check docs
-	$(BIN)/python -m pytest -q --durations=25
+	$(BIN)/python -m pytest -q --durations=25 --numprocesses $(TEST_WORKERS) --maxprocesses 2 --dist loadfile
 
 # Debian's Chromium and its driver, for the docs site's search test in a real browser (tests/docs).
 browser:
