@@ -792,7 +792,7 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
             # A loaded machine may deliver detections of frames taken before the move later still: on sim
             # time a detection's stamp (its frame's) says which viewpoint it belongs to, and the check
             # listens a little longer for detections of frames taken after it.
-            stale, errors = 0, []
+            stale, errors, listened_s = 0, [], 0.0
             for _ in range(ROUND_WINDOWS):
                 samples = ctx.probe.collect(
                     ctx.key("detected_dock_pose"),
@@ -802,6 +802,7 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
                     wall_limit_s=10.0,
                     keep_messages=True,
                 )
+                listened_s += 1.5
                 for m in samples.messages or []:
                     if moved_s is not None and m.header.stamp.to_sec() < moved_s + STALE_MARGIN_S:
                         stale += 1
@@ -811,7 +812,7 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
                     break
             if not errors:
                 problems.append(
-                    f"{where}: no detection in 1.5 s"
+                    f"{where}: no detection in {listened_s:g} s"
                     + (
                         f" of a frame taken after the move ({stale} of frames from before it)"
                         if stale

@@ -79,6 +79,9 @@ class ServiceStatus:
 
 
 def public_state(phase: Phase, starts: int) -> str:
+    """The ``state`` of ``zendock ps --json``: running, restarting, exited or stopped. A service waiting for
+    its dependencies shows as ``stopped`` before its first start and as ``restarting`` between two runs; its
+    ``detail`` says which dependency it waits for."""
     if phase is Phase.WAITING:
         return "restarting" if starts else "stopped"
     return phase.value
