@@ -162,15 +162,8 @@ def _leave_out(data: Any, where: str) -> bool:
     return True
 
 
-def describe_error(
-    error: msgspec.ValidationError, record: type, source: str | Path, root: str = "", data: Any = None
-) -> str:
-    """``source: field.path: reason`` for a validation error of ``record`` (``data``: the values that were
-    validated, to name a mapping's key)."""
-    return _line(source, root, *explain(error, record, data))
-
-
 def _line(source: str | Path, root: str, where: str, reason: str) -> str:
+    """``source: field.path: reason`` (``root``: the place of the validated values in their file)."""
     place = ".".join(part for part in (root, where) if part)
     return f"{source}: {place}: {reason}" if place else f"{source}: {reason}"
 
@@ -338,7 +331,6 @@ def non_finite(record: msgspec.Struct) -> Iterator[str]:
 __all__ = [
     "FieldSpec",
     "blaming",
-    "describe_error",
     "explain",
     "field_names",
     "field_spec",
