@@ -139,6 +139,8 @@ def _run(args: argparse.Namespace) -> int:
             raise ConfigError(f"trials in {world}: {exc}") from None
         per_world.append((summary, results))
         _print_summary(console, summary)
+        for line in collision_lines(results, options):
+            console.print(line, highlight=False, soft_wrap=True)
         console.print(f"report and histograms in {run_dir}")
     return _report_campaign(console, per_world, args.controller, args.json)
 
@@ -249,6 +251,24 @@ def _run_world(console: Console, options, run_trials):
                 )
 
         return run_trials(options, log=log, progress=advance)
+
+
+def collision_lines(results: list, options) -> list[str]:
+    """One line per trial that touched something: what, where, and a command that starts it again from the
+    same pose (a world's starts are drawn from its seed in order, so its first ``index + 1`` end with this
+    one's)."""
+    lines = []
+    for r in results:
+        if not r.collided:
+            continue
+        touched = ", ".join(f"{c['kind']} at ({c['x']:.2f}, {c['y']:.2f})" for c in r.collided)
+        x, y, yaw = r.start
+        lines.append(
+            f"collision: {options.world.stem} trial {r.index} from ({x:.2f}, {y:.2f}, {yaw:.2f}) touched "
+            f"{touched}; again: zendock trials --world {options.world} --n {r.index + 1} --seed {options.seed} "
+            f"--controller {options.controller} --detector {options.detector} --rtf {options.rtf}"
+        )
+    return lines
 
 
 def _print_summary(console: Console, summary) -> None:

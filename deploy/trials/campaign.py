@@ -166,6 +166,10 @@ def _run_one(
         too_fast=outcome.too_fast,
         glass_slowed_s=round(glass_slowed_s, 3) if math.isfinite(glass_slowed_s) else math.nan,
         glass_slowed_m=round(glass_slowed_m, 3) if math.isfinite(glass_slowed_m) else math.nan,
+        collided=[
+            {"kind": kind, "x": round(x, 3), "y": round(y, 3)}
+            for kind, (x, y) in zip(record.collision_kinds, record.collision_points, strict=True)
+        ],
     )
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)

@@ -121,6 +121,9 @@ class TrialResult:
     #: Where the dock time over the lower bound went, in sim seconds (see
     #: :mod:`deploy.trials.time_over_bound`; empty without a bound or a charge).
     over_bound_s: dict[str, float] = field(default_factory=dict)
+    #: What each collision touched and where, in order: ``{"kind": "glass", "x": ..., "y": ...}`` (map frame,
+    #: metres; kind as the simulator's ``collisions`` key gives it).
+    collided: list[dict[str, Any]] = field(default_factory=list)
 
 
 #: A campaign's figures as its JSON line and its summary table give them, in order.

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+from dataclasses import asdict
 from pathlib import Path
 
 import pytest
 
+from deploy.commands.trials import collision_lines
 from deploy.trials import (
     START_CLEARANCE_M,
     TrialOptions,
@@ -18,6 +20,7 @@ from deploy.trials import (
     summarise_results,
     trials_stack,
 )
+from deploy.trials.merge import _trial
 from deploy.trials.starts import beacon_starts, distance_to_segment
 from services.docking.ir_run import within_beacon_reach
 from shared.world import load_world
@@ -226,3 +229,23 @@ def test_the_summary_gives_each_docking_states_median_with_a_missing_state_as_ze
         {"NAV_TO_STAGING_POSE": 12.0, "CONTROLLING": 4.0},
     ]
     assert median_phases(trials) == {"NAV_TO_STAGING_POSE": 10.0, "CONTROLLING": 4.0, "RETRY": 0.0}
+
+
+def test_a_trial_that_touched_something_says_what_where_and_how_to_start_it_again() -> None:
+    """A campaign's collisions were a count: finding what a trial had hit meant reading the simulator's log
+    of a run directory. Each trial now keeps what it touched and where, through a merge too, and the
+    command names it with the line that starts it again from the same pose."""
+    clean = _result(0, True, 10.0, 0.001)
+    hit = _result(1, True, 30.0, 0.002, collisions=2)
+    hit.start = (1.3687, 0.7163, -0.1117)
+    hit.collided = [{"kind": "glass", "x": 5.9, "y": 5.74}, {"kind": "wall", "x": 6.43, "y": 5.5}]
+    options = TrialOptions(
+        world=Path("/rooms/generated-glass-184-1.yaml"), seed=84100, detector="synthetic", rtf="5"
+    )
+    assert collision_lines([clean, hit], options) == [
+        "collision: generated-glass-184-1 trial 1 from (1.37, 0.72, -0.11) touched glass at (5.90, 5.74), "
+        "wall at (6.43, 5.50); again: zendock trials --world /rooms/generated-glass-184-1.yaml --n 2 "
+        "--seed 84100 --controller graceful --detector synthetic --rtf 5"
+    ]
+    assert _trial(asdict(hit)).collided == hit.collided
+    assert _trial({k: v for k, v in asdict(clean).items() if k != "collided"}).collided == []
