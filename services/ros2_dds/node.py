@@ -35,6 +35,7 @@ rclpy MultiThreadedExecutor spins on its own thread and hands what ROS 2 sends t
 from __future__ import annotations
 
 import os
+import sys
 import threading
 import time
 from collections import Counter
@@ -89,6 +90,25 @@ OWNERS: tuple[str, ...] = tuple(
         + [s.owner for s in SERVICES]
     )
 )
+
+
+#: rosidl_generator_py's code generator, which its ``__init__`` imports beside ``import_type_support``.
+ROSIDL_GENERATOR = "rosidl_generator_py.generate_py_impl"
+
+
+def keep_rosidl_generator_out() -> bool:
+    """Spare the face rosidl's code generator; call it before the first rclpy or message import.
+
+    Every generated message class imports ``rosidl_generator_py`` for ``import_type_support``, and that
+    package's ``__init__`` also imports ``generate_py`` (the build-time generator: rosidl_parser with lark,
+    empy, rosidl_pycommon; 45 modules, 3 MB of the face's RSS idle and busy in ``zendock bench nav2``)
+    unless that import fails, which it allows for: it logs at debug and goes on. Nothing at run time
+    generates code. True when it took effect: False once ``rosidl_generator_py`` has been imported.
+    """
+    if "rosidl_generator_py" in sys.modules:
+        return sys.modules.get(ROSIDL_GENERATOR, False) is None
+    sys.modules[ROSIDL_GENERATOR] = None  # type: ignore[assignment]  # its import raises ImportError
+    return True
 
 
 class Params(ServiceParams):
@@ -174,6 +194,7 @@ class Ros2Dds:
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = params.discovery_range
         os.environ.setdefault("FASTRTPS_DEFAULT_PROFILES_FILE", str(FAST_DDS_PROFILES))
         os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy: it would only warn
+        keep_rosidl_generator_out()
         import rclpy  # noqa: PLC0415 - only in .venv-ros2; imported when the service starts
         from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415
         from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415

@@ -186,3 +186,41 @@ def test_every_message_the_face_carries_converts_both_ways() -> None:
     assert len(cases) >= 40, done.stdout
     failed = [case for case in cases if not case["ok"]]
     assert not failed, failed
+
+
+def test_the_face_keeps_rosidls_code_generator_out_and_its_messages_still_work() -> None:
+    """Every generated message imports ``rosidl_generator_py``, whose ``__init__`` also loads the build-time
+    code generator (lark, empy: 45 modules, 3 MB of the face's RSS). The face keeps it out; messages still
+    import, get their type support and serialise; and once rosidl is in, the face says it came too late."""
+    code = (
+        "import sys\n"
+        "from services.ros2_dds.node import keep_rosidl_generator_out\n"
+        "assert keep_rosidl_generator_out()\n"
+        "from rclpy.serialization import deserialize_message, serialize_message\n"
+        "from nav_msgs.msg import Odometry\n"
+        "msg = Odometry()\n"
+        "msg.pose.pose.position.x = 1.5\n"
+        "back = deserialize_message(serialize_message(msg), Odometry)\n"
+        "print(back.pose.pose.position.x, 'lark' in sys.modules, 'em' in sys.modules)\n"
+    )
+    done = subprocess.run(
+        [str(ROS2_PYTHON), "-c", code], capture_output=True, text=True, cwd=REPO_ROOT, timeout=60, check=False
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == ["1.5", "False", "False"], done.stdout
+    late = subprocess.run(
+        [
+            str(ROS2_PYTHON),
+            "-c",
+            "import rosidl_generator_py\n"
+            "from services.ros2_dds.node import keep_rosidl_generator_out\n"
+            "print(keep_rosidl_generator_out())",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO_ROOT,
+        timeout=60,
+        check=False,
+    )
+    assert late.returncode == 0, late.stderr[-3000:]
+    assert late.stdout.strip() == "False"
