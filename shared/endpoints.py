@@ -14,9 +14,9 @@ import itertools
 import threading
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
+import msgspec
 import zenoh
 
 from shared.encoding import (
@@ -43,8 +43,7 @@ Res = TypeVar("Res", bound=Message)
 _PUT = zenoh.SampleKind.PUT
 
 
-@dataclass(frozen=True)
-class QoS:
+class QoS(msgspec.Struct, frozen=True):
     """Delivery policy mapped onto Zenoh.
 
     Publisher side: ``reliable`` (Zenoh reliability), ``block`` (congestion control BLOCK instead of DROP:

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import enum
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Annotated, Any, Generic, TypeVar
 
+import msgspec
 import numpy as np
 
 from shared.messages import Time
@@ -26,8 +27,7 @@ R = TypeVar("R", bound=Message)
 F = TypeVar("F", bound=Message)
 
 
-@dataclass(frozen=True)
-class ServiceType(Generic[Req, Res]):
+class ServiceType(msgspec.Struct, Generic[Req, Res], frozen=True):
     """A request/response interface, e.g. ``zendock_msgs/srv/Teleport``."""
 
     type_name: str

@@ -14,8 +14,9 @@ goes on regardless. zendock's services start active (Nav2's ``autostart``), so a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import IntEnum
+
+import msgspec
 
 
 class State(IntEnum):
@@ -96,8 +97,7 @@ class Command(IntEnum):
     CLEANUP = 6
 
 
-@dataclass(frozen=True)
-class Step:
+class Step(msgspec.Struct, frozen=True):
     """One pass over a manager's nodes: the transition each takes, in reverse order or not, and whether
     a refusal stops the command (a shutdown carries on)."""
 

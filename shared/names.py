@@ -17,7 +17,8 @@ an action (:func:`parameter_service`): ``<ns>/<node>/_param/list``, ``.../get`` 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+
+import msgspec
 
 GRAPH_PREFIX = "@zendock"
 ENDPOINT_KINDS = ("pub", "sub", "srv", "act")
@@ -80,8 +81,7 @@ def endpoint_token_key(kind: str, namespace: str, node_name: str, type_name: str
     )
 
 
-@dataclass(frozen=True, slots=True)
-class GraphEntry:
+class GraphEntry(msgspec.Struct, frozen=True):
     """One parsed liveliness token: a node, or one of its endpoints."""
 
     kind: str  # node | pub | sub | srv | act

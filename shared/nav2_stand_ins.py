@@ -14,7 +14,7 @@ the bus.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import msgspec
 
 from shared import topics
 
@@ -67,8 +67,7 @@ NAV2_WORK: dict[str, str] = {
 }
 
 
-@dataclass(frozen=True)
-class LifecycleManager:
+class LifecycleManager(msgspec.Struct, frozen=True):
     """One of Nav2's lifecycle managers: the zendock service that serves its ``manage_nodes``, and the
     nodes it manages in Nav2's bring-up order (those zendock stands in for)."""
 

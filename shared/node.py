@@ -24,9 +24,9 @@ import threading
 import time
 import traceback
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
+import msgspec
 import zenoh
 
 from shared.encoding import (
@@ -97,18 +97,17 @@ Req = TypeVar("Req", bound=Message)
 Res = TypeVar("Res", bound=Message)
 
 
-@dataclass
-class NodeStats:
+class NodeStats(msgspec.Struct):
     """Counters a test or a tool can read: what arrived, what was rejected, what failed."""
 
-    received: dict[str, int] = field(default_factory=dict)
+    received: dict[str, int] = msgspec.field(default_factory=dict)
     #: Samples put per key by this node's publishers.
-    published: dict[str, int] = field(default_factory=dict)
-    rejected: dict[str, int] = field(default_factory=dict)
-    dropped: dict[str, int] = field(default_factory=dict)
+    published: dict[str, int] = msgspec.field(default_factory=dict)
+    rejected: dict[str, int] = msgspec.field(default_factory=dict)
+    dropped: dict[str, int] = msgspec.field(default_factory=dict)
     callback_errors: int = 0
     #: A service's own measures, reported with the counters (the simulator's waits for late drivers).
-    extra: dict[str, float] = field(default_factory=dict)
+    extra: dict[str, float] = msgspec.field(default_factory=dict)
 
 
 class Node:

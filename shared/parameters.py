@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
 from typing import Any
 
 import msgspec
@@ -54,8 +53,7 @@ class ParameterRefused(ValueError):
     """A get or set the table refuses; the message names the parameter and the reason."""
 
 
-@dataclass(frozen=True)
-class ParameterInfo:
+class ParameterInfo(msgspec.Struct, frozen=True):
     """One parameter as ``param list`` shows it; ``value`` is JSON-ready (tuples are lists)."""
 
     name: str

@@ -38,7 +38,6 @@ import signal
 import sys
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
@@ -104,8 +103,7 @@ class Closeable(Protocol):
     def close(self) -> None: ...
 
 
-@dataclass(frozen=True)
-class ServiceOptions:
+class ServiceOptions(msgspec.Struct, frozen=True):
     """Everything a service needs to start, after flags and environment are read."""
 
     node_name: str
@@ -114,7 +112,7 @@ class ServiceOptions:
     listen: tuple[str, ...] = ()
     zenoh_config: str | None = None
     config_file: str | None = None
-    overrides: dict[str, Any] = field(default_factory=dict)
+    overrides: dict[str, Any] = msgspec.field(default_factory=dict)
     log_level: str = "INFO"
 
     def session_spec(self) -> SessionSpec:
@@ -364,8 +362,7 @@ def serve(
     return 0
 
 
-@dataclass(frozen=True)
-class ServiceSpec:
+class ServiceSpec(msgspec.Struct, frozen=True):
     """What makes a service, apart from running it: its name, parameters and how to build it on a node.
 
     ``python -m services.<name>`` runs one alone (:meth:`run`); ``zendock container`` runs several in one

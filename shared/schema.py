@@ -82,8 +82,7 @@ class _FieldError(Exception):
         return self
 
 
-@dataclasses.dataclass(frozen=True)
-class Range:
+class Range(msgspec.Struct, frozen=True):
     """Inclusive bounds for a numeric field."""
 
     lo: float

@@ -7,9 +7,9 @@ it is given, so tests on free ports and several stacks on one machine never meet
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
 from pathlib import Path
 
+import msgspec
 import zenoh
 
 DEFAULT_ROUTER_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -21,8 +21,7 @@ DEFAULT_ROUTER_ENDPOINT = "tcp/127.0.0.1:7447"
 TX_QUEUE_BATCHES = 16
 
 
-@dataclass(frozen=True)
-class SessionSpec:
+class SessionSpec(msgspec.Struct, frozen=True):
     """How a process joins the Zenoh network."""
 
     mode: str = "client"  # client | peer | router
@@ -30,7 +29,7 @@ class SessionSpec:
     listen: tuple[str, ...] = ()
     config_file: str | None = None
     #: Extra json5 settings as (path, json-value) pairs, applied last.
-    overrides: tuple[tuple[str, str], ...] = field(default_factory=tuple)
+    overrides: tuple[tuple[str, str], ...] = ()
 
 
 def make_config(spec: SessionSpec) -> zenoh.Config:

@@ -16,13 +16,11 @@ from __future__ import annotations
 
 import contextlib
 import copy
-import difflib
 import functools
 import math
 import re
 import typing
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, TypeVar, get_args, get_origin
 
@@ -48,8 +46,7 @@ _BOUND_WORDS = {">=": "at least", ">": "greater than", "<=": "at most", "<": "le
 _LENGTH_WORDS = {">=": "at least", "<=": "at most"}
 
 
-@dataclass(frozen=True)
-class FieldSpec:
+class FieldSpec(msgspec.Struct, frozen=True):
     """One field of a record: its name, its type without ``Annotated``, and what its ``Meta`` says."""
 
     name: str
@@ -272,6 +269,8 @@ def _names_at(record: Any, parts: list[str]) -> list[str]:
 
 
 def _did_you_mean(name: str, known: list[str]) -> str:
+    import difflib  # noqa: PLC0415 - only a refused name needs it, not a service's start
+
     close = difflib.get_close_matches(name, known, n=1)
     return f" (did you mean {close[0]}?)" if close else ""
 

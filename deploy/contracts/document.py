@@ -8,9 +8,10 @@ the JSON Schemas; a test fails when the committed ones differ from what the code
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
+
+from msgspec.structs import asdict
 
 from shared.contracts import CONTRACTS, Contract, Request, Topic
 from shared.contracts.model import ANNOUNCEMENTS, COMMON_FLAGS, DUTIES, ENVIRONMENT, FRAME_RULES, Action

@@ -9,7 +9,8 @@ executive writes no log itself, so it is tested by what it says).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+
+import msgspec
 
 from services.docking.docking_run import DockRequest
 from services.docking.drive_arbiter import DriveOrders
@@ -20,8 +21,7 @@ from shared.fleet_answer import FleetAnswer
 from shared.interfaces.docking import DockRobotFeedback, DockRobotResult, UndockRobotResult
 
 
-@dataclass(frozen=True, eq=False)
-class Goal:
+class Goal(msgspec.Struct, frozen=True, eq=False):
     """An action goal being served: the node's ``handle`` (opaque here: one per goal, compared by identity)
     and which action it belongs to."""
 
@@ -35,34 +35,29 @@ class Goal:
 # --- events: what happens ------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class DockGoal:
+class DockGoal(msgspec.Struct, frozen=True):
     goal: Goal
     request: DockRequest
 
 
-@dataclass(frozen=True)
-class UndockGoal:
+class UndockGoal(msgspec.Struct, frozen=True):
     goal: Goal
     max_time_s: float
     dock_type: str = ""
 
 
-@dataclass(frozen=True)
-class CancelGoal:
+class CancelGoal(msgspec.Struct, frozen=True):
     goal: Goal
 
 
-@dataclass(frozen=True)
-class FleetReserved:
+class FleetReserved(msgspec.Struct, frozen=True):
     """The fleet's answer to a reservation request (None and an error: it did not answer)."""
 
     answer: FleetAnswer | None
     error: Exception | None = None
 
 
-@dataclass(frozen=True)
-class FleetReleased:
+class FleetReleased(msgspec.Struct, frozen=True):
     """The fleet's answer to a release: the dock released ("" none), or None and an error."""
 
     dock_id: str | None
@@ -75,13 +70,11 @@ Event = DockGoal | UndockGoal | CancelGoal | FleetReserved | FleetReleased | Doc
 # --- effects: what the node does -----------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Drive:
+class Drive(msgspec.Struct, frozen=True):
     orders: DriveOrders
 
 
-@dataclass(frozen=True)
-class Reserve:
+class Reserve(msgspec.Struct, frozen=True):
     """Ask the fleet for ``dock_id`` ("" : the nearest free one by ``path_lengths``) at charge ``battery``."""
 
     battery: float
@@ -89,26 +82,22 @@ class Reserve:
     path_lengths: dict[str, float] | None
 
 
-@dataclass(frozen=True)
-class Release:
+class Release(msgspec.Struct, frozen=True):
     """Tell the fleet the robot's dock is free."""
 
 
-@dataclass(frozen=True)
-class WantDetections:
+class WantDetections(msgspec.Struct, frozen=True):
     """Whether the running task wants dock detections (the subscription follows at once)."""
 
     wanted: bool
 
 
-@dataclass(frozen=True)
-class GoalFeedback:
+class GoalFeedback(msgspec.Struct, frozen=True):
     goal: Goal
     feedback: DockRobotFeedback
 
 
-@dataclass(frozen=True)
-class GoalEnded:
+class GoalEnded(msgspec.Struct, frozen=True):
     """Answer ``goal`` (if its client still waits) with ``result``, as succeeded, canceled or aborted."""
 
     goal: Goal
@@ -116,13 +105,11 @@ class GoalEnded:
     result: DockRobotResult | UndockRobotResult
 
 
-@dataclass(frozen=True)
-class PublishState:
+class PublishState(msgspec.Struct, frozen=True):
     name: str
 
 
-@dataclass(frozen=True)
-class Log:
+class Log(msgspec.Struct, frozen=True):
     """A line for the service's log: ``fmt % args`` at ``level``; with a ``key``, at most one line per key
     every few seconds (a condition that lasts is said once, not at every tick)."""
 

@@ -10,7 +10,6 @@ world or another map is ignored rather than trusted.
 
 from __future__ import annotations
 
-import hashlib
 import io
 from pathlib import Path
 
@@ -22,6 +21,8 @@ from shared.files import write_atomically
 
 def map_fingerprint(occupancy: OccupancyMap) -> str:
     """Identifies a static map: its grid geometry and its cells."""
+    import hashlib  # noqa: PLC0415 - only a planner given a glass_memory_file hashes its map
+
     frame = occupancy.frame
     digest = hashlib.sha256(np.ascontiguousarray(occupancy.data).tobytes())
     digest.update(repr((frame.width, frame.height, frame.resolution_m, tuple(frame.origin))).encode())

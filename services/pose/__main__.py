@@ -2,9 +2,10 @@
 
 import sys
 
-from shared.memory import keep_openssl_out
+from shared.memory import keep_blas_single_threaded, keep_openssl_out
 
 keep_openssl_out()  # before anything that imports hashlib (the glass memory's digest, foxglove)
+keep_blas_single_threaded()  # before numpy: no OpenBLAS threads spinning at start
 
 from services.pose.node import main  # noqa: E402
 

@@ -17,7 +17,6 @@ pose falls further behind and sim-time deadlines (staging, recoveries) expire wi
 from __future__ import annotations
 
 import math
-import statistics
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Annotated
@@ -95,7 +94,8 @@ class CommandCadence:
         """The controller's period, once three intervals say it; else None."""
         if len(self._intervals) < 3:
             return None
-        return statistics.median_high(self._intervals)
+        # statistics.median_high without importing statistics (with fractions and random) at start-up
+        return sorted(self._intervals)[len(self._intervals) // 2]
 
     def gap_s(self, params: PacingParams, step_s: float) -> float | None:
         """How old its last command may grow while it moves: ``lockstep_factor`` periods, at least two

@@ -11,8 +11,9 @@ Keys are relative to the robot's namespace (``battery_status`` is ``robot1/batte
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
+
+import msgspec
 
 from shared.endpoints import QoS
 from shared.interface_types import ActionType, ServiceType
@@ -26,6 +27,7 @@ class ContractViolation(RuntimeError):
 class _Conditional:
     """Required (declared whenever the service runs) unless ``when`` says when it is declared."""
 
+    __slots__ = ()
     when: str
 
     @property
@@ -33,8 +35,7 @@ class _Conditional:
         return not self.when
 
 
-@dataclass(frozen=True)
-class Topic(_Conditional):
+class Topic(msgspec.Struct, _Conditional, frozen=True):
     """A key a service publishes or subscribes, with its message type and delivery."""
 
     name: str
@@ -61,8 +62,7 @@ class Topic(_Conditional):
         return "someone listens" in f"{self.when} {self.about}"
 
 
-@dataclass(frozen=True)
-class Request(_Conditional):
+class Request(msgspec.Struct, _Conditional, frozen=True):
     """A request/response service (a Zenoh queryable)."""
 
     name: str
@@ -71,8 +71,7 @@ class Request(_Conditional):
     about: str = ""
 
 
-@dataclass(frozen=True)
-class Action(_Conditional):
+class Action(msgspec.Struct, _Conditional, frozen=True):
     """An action (goal, feedback, result, cancel) over the keys ``<name>/_action/...``."""
 
     name: str
@@ -81,8 +80,7 @@ class Action(_Conditional):
     about: str = ""
 
 
-@dataclass(frozen=True)
-class Flag:
+class Flag(msgspec.Struct, frozen=True):
     """A ``-p name=value`` the launcher may hand the service; a replacement may ignore it unless ``needed``."""
 
     name: str
@@ -90,8 +88,7 @@ class Flag:
     needed: bool = False
 
 
-@dataclass(frozen=True)
-class Contract:
+class Contract(msgspec.Struct, frozen=True):
     """One service's whole promise. ``behaviour`` names the checks ``zendock conform`` runs on its reactions."""
 
     service: str
@@ -113,7 +110,7 @@ class Contract:
     needs: tuple[str, ...] = ()
     #: Subscribes on demand to keys a client asks for (the ROS 2 bridge forwards what a ROS 2 node wants).
     subscribes_on_demand: bool = False
-    notes: tuple[str, ...] = field(default=())
+    notes: tuple[str, ...] = ()
 
     # --- the endpoints it declares, as the graph shows them -----------------------------------------------
 

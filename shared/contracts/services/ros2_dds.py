@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from msgspec.structs import replace
 
 from shared.contracts.model import Flag
 from shared.contracts.services.ros2_bridge import CONTRACT as ROS2_BRIDGE_CONTRACT

@@ -4,10 +4,10 @@ has its changelog entry."""
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from msgspec.structs import replace
 
 from deploy.contracts import versions
 from deploy.contracts.document import CONTRACTS_DIR, contract_json

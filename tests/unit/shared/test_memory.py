@@ -57,17 +57,31 @@ def test_a_service_starts_without_openssl(service: str) -> None:
     """``python -m services.NAME`` keeps OpenSSL out, and loads no pydantic: its parameters and worlds are
     msgspec records (``--help`` comes after every import of the service)."""
     out = _run(
-        "import contextlib, io, runpy, sys\n"
+        "import contextlib, io, os, runpy, sys\n"
+        "os.environ.pop('OPENBLAS_NUM_THREADS', None)\n"
         f"sys.argv = ['services.{service}', '--help']\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    try:\n"
         f"        runpy.run_module('services.{service}', run_name='__main__', alter_sys=True)\n"
         "    except SystemExit:\n        pass\n"
-        "print('pydantic' in sys.modules)\n" + _openssl_loaded()
+        "print('pydantic' in sys.modules, os.environ.get('OPENBLAS_NUM_THREADS'))\n" + _openssl_loaded()
     )
-    assert out.split() == ["False", "False"], (
-        f"services.{service}: expected neither pydantic nor OpenSSL loaded"
+    assert out.split() == ["False", "1", "False"], (
+        f"services.{service}: expected neither pydantic nor OpenSSL loaded, and OpenBLAS on one thread"
     )
+
+
+def test_openblas_keeps_to_one_thread_unless_numpy_came_first_or_the_user_chose() -> None:
+    code = (
+        "import os, sys\n"
+        "from shared.memory import keep_blas_single_threaded\n"
+        "os.environ.pop('OPENBLAS_NUM_THREADS', None)\n"
+    )
+    assert _run(code + "print(keep_blas_single_threaded(), os.environ['OPENBLAS_NUM_THREADS'])") == "True 1"
+    assert _run(code + "import numpy\nprint(keep_blas_single_threaded())") == "False"
+    chosen = "os.environ['OPENBLAS_NUM_THREADS'] = '2'\n"
+    out = _run(code + chosen + "print(keep_blas_single_threaded(), os.environ['OPENBLAS_NUM_THREADS'])")
+    assert out == "False 2"
 
 
 @pytest.mark.parametrize("command", ["router", "container"])
