@@ -20,7 +20,7 @@ from typing import Any, cast
 from deploy import commands
 from deploy.parser import ZendockParser, command_parser, error_in_command
 from shared.config_errors import CONFIG_ERROR_EXIT, ConfigError
-from shared.memory import keep_openssl_out
+from shared.memory import keep_blas_single_threaded, keep_openssl_out
 
 
 def installed_version() -> str:
@@ -109,7 +109,9 @@ def command_module(argv: Sequence[str]) -> str | None:
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] and argv[0] in LEAN_COMMANDS:
+        # A container runs services in this process, so it starts them as their own ``__main__`` would.
         keep_openssl_out()
+        keep_blas_single_threaded()
     module = command_module(argv)
     parser = build_parser(only=module)
     if module is not None and command_parser(parser, [module]) is parser:

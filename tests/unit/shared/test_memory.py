@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -21,8 +22,9 @@ SERVICES = sorted(
 
 
 def _run(code: str) -> str:
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
     done = subprocess.run(
-        [sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, timeout=60
+        [sys.executable, "-c", code], cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=60
     )
     assert done.returncode == 0, done.stderr
     return done.stdout.strip()
@@ -94,9 +96,11 @@ def test_a_lean_command_loads_only_its_own_code(command: str) -> None:
         f"        main(['{command}', '--help'])\n"
         "    except SystemExit:\n        pass\n"
         "others = sorted(m for m in sys.modules if m.startswith('deploy.commands.'))\n"
-        "print(others, 'deploy.launcher' in sys.modules)\n" + _openssl_loaded()
+        "print(others, 'deploy.launcher' in sys.modules)\n"
+        + _openssl_loaded()
+        + "import os\nprint(os.environ.get('OPENBLAS_NUM_THREADS'))\n"
     )
-    assert out.split("\n") == [f"['deploy.commands.{command}'] False", "False"]
+    assert out.split("\n") == [f"['deploy.commands.{command}'] False", "False", "1"]
 
 
 def test_the_router_loads_no_pydantic() -> None:
