@@ -285,7 +285,10 @@ class User:
         zero.header.frame_id = "map"
         # A script publishes at once; here the test also checks the estimate is refused, so it must arrive.
         self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
+        # At least once: the latched /amcl_pose may have come while the publisher was being matched.
         deadline = time.monotonic() + 30.0
+        pub.publish(zero)
+        self.spin_until(lambda: bool(amcl_poses), 1.0)
         while not amcl_poses and time.monotonic() < deadline:
             pub.publish(zero)
             self.spin_until(lambda: bool(amcl_poses), 1.0)
