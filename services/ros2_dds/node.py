@@ -81,6 +81,8 @@ FACE_NODE = "ros2_dds"
 #: How long a ROS 2 goal waits for zendock's server to accept or reject it.
 ACCEPT_WAIT_S = 10.0
 EXECUTOR_THREADS = 8
+#: rclpy's parameter that starts a node's ``~/get_type_description`` service (true unless overridden).
+START_TYPE_DESCRIPTION_SERVICE = "start_type_description_service"
 #: The zendock services shown as ROS 2 nodes (every owner in the tables).
 OWNERS: tuple[str, ...] = tuple(
     dict.fromkeys(
@@ -206,7 +208,7 @@ class Ros2Dds:
         self.executors: list[Any] = []
         self._threads: list[threading.Thread] = []
         self._participant(EXECUTOR_THREADS)
-        self._own = rclpy.create_node(FACE_NODE, context=self.contexts[0])
+        self._own = self._create_node(FACE_NODE, self.contexts[0])
         self.executors[0].add_node(self._own)
 
         # --- zendock side
@@ -263,6 +265,20 @@ class Ros2Dds:
         thread.start()
         return len(self.contexts) - 1
 
+    def _create_node(self, name: str, context: Any, **options: Any) -> Any:
+        """An rclpy node of the face, without what rclpy adds to every node that the face has no use for.
+
+        No ``/rosout`` publisher: the face logs through zendock, never through rclpy's logger. No
+        ``~/get_type_description`` service: it answers with a topic's type description, which no ROS 2 tool
+        of Jazzy asks for (the types and their hashes travel in discovery). They were 21 of the face's DDS
+        endpoints (a writer, and a reader and a writer, on each of its seven nodes)."""
+        from rclpy.parameter import Parameter  # noqa: PLC0415
+
+        no_type_description = Parameter(START_TYPE_DESCRIPTION_SERVICE, value=False)
+        return self._rclpy.create_node(
+            name, context=context, enable_rosout=False, parameter_overrides=[no_type_description], **options
+        )
+
     def _spin(self, executor: Any) -> None:
         """rclpy's executor re-raises a callback's exception from ``spin()``: log it and spin on, so one bad
         callback never leaves the face announced but deaf (shutdown races end it with rclpy errors too)."""
@@ -305,7 +321,7 @@ class Ros2Dds:
 
         with self._lock:
             # Its parameters are the zendock service's (ParameterRelay), not rclpy's own.
-            rnode = self._rclpy.create_node(owner, context=self.contexts[0], start_parameter_services=False)
+            rnode = self._create_node(owner, self.contexts[0], start_parameter_services=False)
             face = _Face(owner, rnode)
             group = ReentrantCallbackGroup()
             face.services.extend(ParameterRelay(self.node, rnode, owner, group).services)
@@ -414,7 +430,7 @@ class Ros2Dds:
                     continue
                 if len(self.contexts) < 2:  # made the first time it is needed: a participant costs
                     self._participant(2)
-                extra = self._rclpy.create_node(f"{inbound.owner}_twist_stamped", context=self.contexts[1])
+                extra = self._create_node(f"{inbound.owner}_twist_stamped", self.contexts[1])
                 extra.create_subscription(
                     ros_class(inbound.ros_type),
                     inbound.ros_topic,

@@ -327,15 +327,28 @@ class User:
         wrong = {
             t: topics.get(t) for t, ros_type in EXPECTED_TYPES.items() if ros_type not in topics.get(t, [])
         }
+        # The face's nodes carry only what zendock serves: not rclpy's /rosout writer, not its type description
+        # service (each a DDS endpoint, memory the face keeps under its limit).
+        rclpy_extras = sorted(
+            f"/{node} {name}"
+            for node in ZENDOCK_NODES
+            if node in nodes
+            for name, _ in [
+                *self.node.get_publisher_names_and_types_by_node(node, "/"),
+                *self.node.get_service_names_and_types_by_node(node, "/"),
+            ]
+            if name == "/rosout" or name.endswith("/get_type_description")
+        )
         report(
             "graph",
-            set(ZENDOCK_NODES) <= set(nodes) and not wrong,
+            set(ZENDOCK_NODES) <= set(nodes) and not wrong and not rclpy_extras,
             nodes=nodes,
             topics={
                 t: topics[t] for t in sorted(topics) if not t.startswith(("/rosout", "/parameter_events"))
             },
             missing_nodes=sorted(set(ZENDOCK_NODES) - set(nodes)),
             wrong_topics=wrong,
+            rclpy_extras=rclpy_extras,
         )
 
     def battery(self) -> None:
