@@ -35,7 +35,9 @@ from wire import BadMessage, Msg, Node, get, header, parse_options, pose_msg, se
 MARKER_AHEAD_M = 0.20
 #: A solution whose face leans further than this from vertical is not a marker on a dock's face.
 MAX_LEAN_RAD = math.radians(25.0)
-#: The robot's pose settles the mirror ambiguity while it is at most this old (node clock, s).
+#: The robot's pose settles the mirror ambiguity for a frame taken at most this long after it came (s). Judged
+#: against the frame's stamp, not the clock: every callback holds the node's lock, so on a loaded machine a
+#: pose waits behind the images before it, and by the clock it looked stale while it was the frame's own.
 POSE_FRESH_S = 1.0
 
 
@@ -118,9 +120,11 @@ class Perception:
             raise BadMessage("map_to_base_link_pose2d: data is not [x, y, yaw]")
         self.robot = (float(data[0]), float(data[1]), float(data[2]), self.node.now())
 
-    def expected_heading(self, dock_id: str) -> float | None:
-        """The database's heading of the dock in base_link, from a fresh robot pose, or None."""
-        if self.robot is None or self.node.now() - self.robot[3] > POSE_FRESH_S:
+    def expected_heading(self, dock_id: str, frame_s: float) -> float | None:
+        """The database's heading of the dock in base_link, from a robot pose fresh for a frame taken at
+        ``frame_s``, or None."""
+        now = frame_s if self.node.use_sim_time else self.node.now()  # stamps are on the simulator's clock
+        if self.robot is None or now - self.robot[3] > POSE_FRESH_S:
             return None
         return wrap(self.docks.poses[dock_id][2] - self.robot[2])
 
@@ -157,19 +161,20 @@ class Perception:
         corners, ids, _rejected = self.detector.detectMarkers(pixels.reshape(height, width))
         if ids is None:
             return
+        frame_s = seconds_of(get(msg, "header.stamp", dict))
         found = []
         for marker_corners, marker_id in zip(corners, ids.ravel(), strict=True):
             dock = self.docks.by_marker.get(int(marker_id))
             if dock is None:
                 continue
             seen = self.dock_pose(
-                marker_corners.reshape(4, 2), dock[1], base_from_camera, self.expected_heading(dock[0])
+                marker_corners.reshape(4, 2), dock[1], base_from_camera, self.expected_heading(dock[0], frame_s)
             )
             if seen is not None:
                 found.append((dock[0], int(marker_id), *seen))
         if not found:
             return
-        stamp = header(seconds_of(get(msg, "header.stamp", dict)), "base_link")
+        stamp = header(frame_s, "base_link")
         found.sort(key=lambda f: f[4])  # nearest first
         dock_id, _marker, (x, y, yaw), _error, _range = found[0]
         self.detected.publish({"header": stamp, "pose": pose_msg(x, y, yaw)})
