@@ -170,17 +170,22 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     assert time.monotonic() - started < 150.0
 
 
-def test_every_message_the_face_carries_converts_both_ways() -> None:
-    """zendock -> rclpy -> zendock gives the same message for every route and action part; what does not fit
-    (a NaN, a uint16 out of range) is a ConversionError, never anything else."""
-    done = subprocess.run(
-        [str(ROS2_PYTHON), str(REPO_ROOT / "tests" / "support" / "ros2_convert_check.py")],
+def _in_ros2_python(*args: str, timeout_s: float = 60.0) -> subprocess.CompletedProcess[str]:
+    """``.venv-ros2``'s interpreter run with ``args`` in the repository; the caller judges how it ended."""
+    return subprocess.run(
+        [str(ROS2_PYTHON), *args],
         capture_output=True,
         text=True,
         cwd=REPO_ROOT,
-        timeout=120,
+        timeout=timeout_s,
         check=False,
     )
+
+
+def test_every_message_the_face_carries_converts_both_ways() -> None:
+    """zendock -> rclpy -> zendock gives the same message for every route and action part; what does not fit
+    (a NaN, a uint16 out of range) is a ConversionError, never anything else."""
+    done = _in_ros2_python(str(REPO_ROOT / "tests" / "support" / "ros2_convert_check.py"), timeout_s=120.0)
     assert done.returncode == 0, done.stderr[-3000:]
     cases = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     assert len(cases) >= 40, done.stdout
@@ -203,24 +208,14 @@ def test_the_face_keeps_rosidls_code_generator_out_and_its_messages_still_work()
         "back = deserialize_message(serialize_message(msg), Odometry)\n"
         "print(back.pose.pose.position.x, 'lark' in sys.modules, 'em' in sys.modules)\n"
     )
-    done = subprocess.run(
-        [str(ROS2_PYTHON), "-c", code], capture_output=True, text=True, cwd=REPO_ROOT, timeout=60, check=False
-    )
+    done = _in_ros2_python("-c", code)
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout.split() == ["1.5", "False", "False"], done.stdout
-    late = subprocess.run(
-        [
-            str(ROS2_PYTHON),
-            "-c",
-            "import rosidl_generator_py\n"
-            "from services.ros2_dds.node import keep_rosidl_generator_out\n"
-            "print(keep_rosidl_generator_out())",
-        ],
-        capture_output=True,
-        text=True,
-        cwd=REPO_ROOT,
-        timeout=60,
-        check=False,
+    late = _in_ros2_python(
+        "-c",
+        "import rosidl_generator_py\n"
+        "from services.ros2_dds.node import keep_rosidl_generator_out\n"
+        "print(keep_rosidl_generator_out())",
     )
     assert late.returncode == 0, late.stderr[-3000:]
     assert late.stdout.strip() == "False"
