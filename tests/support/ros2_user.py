@@ -287,11 +287,11 @@ class User:
         self.spin_until(lambda: pub.get_subscription_count() > 0, 10.0)
         # At least once: the latched /amcl_pose may have come while the publisher was being matched.
         deadline = time.monotonic() + 30.0
-        pub.publish(zero)
-        self.spin_until(lambda: bool(amcl_poses), 1.0)
-        while not amcl_poses and time.monotonic() < deadline:
+        while True:
             pub.publish(zero)
             self.spin_until(lambda: bool(amcl_poses), 1.0)
+            if amcl_poses or time.monotonic() >= deadline:
+                break
         navigator = self._lifecycle_state("bt_navigator", 30.0)
         active_s = time.monotonic() - started
         # The zero estimate is refused (the scans contradict it): the belief stays where the robot is.
