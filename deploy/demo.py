@@ -25,7 +25,7 @@ from deploy.launcher import Launcher, free_endpoint, load_stack
 from deploy.launcher.overrides import with_params
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
-from deploy.paths import REPO_ROOT, RUNS_DIR
+from deploy.paths import REPO_ROOT, RUNS_DIR, new_run_dir
 from deploy.progress import TERMINAL_PERIOD_S, Throttle, demo_line
 from deploy.replacements import Replacement, apply_replacements, replacements_report
 from deploy.service_tools import run_tool
@@ -222,8 +222,7 @@ def run_demo(
     every phase change and at most every ``status_period_s`` wall seconds otherwise.
     """
     world = load_world(options.world)
-    run_dir = options.runs_dir / time.strftime("%Y%m%d-%H%M%S")
-    run_dir.mkdir(parents=True, exist_ok=True)
+    run_dir = new_run_dir(options.runs_dir)
     # Until the report is written the run is marked incomplete: an interrupted or failed demo leaves no
     # directory that looks like a finished run.
     (run_dir / INCOMPLETE_MARK).write_text(

@@ -27,7 +27,7 @@ from deploy.fleet.stack import FleetOptions, fleet_stack
 from deploy.fleet.world_setup import fleet_world
 from deploy.launcher import Launcher, free_endpoint
 from deploy.memory import PeakRssSampler
-from deploy.paths import REPO_ROOT
+from deploy.paths import REPO_ROOT, new_run_dir
 from deploy.replacements import replacements_report
 from shared.interfaces.battery import SET_BATTERY_STATE, SetBatteryStateRequest
 from shared.names import topic_key
@@ -104,8 +104,7 @@ def run_fleet(
 
     ``progress(sim seconds so far, robots)`` is called every ``progress_period_s`` wall seconds.
     """
-    run_dir = options.runs_dir / f"fleet-{time.strftime('%Y%m%d-%H%M%S')}-{options.world.stem}"
-    run_dir.mkdir(parents=True, exist_ok=True)
+    run_dir = new_run_dir(options.runs_dir, "fleet-", f"-{options.world.stem}")
     world, world_file = fleet_world(options.world, options.robots, options.seed, run_dir / "world.yaml")
     robots = [r.name for r in world.robots]
     endpoint = free_endpoint()

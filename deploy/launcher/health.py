@@ -23,6 +23,8 @@ from shared.session import SessionSpec, open_session
 
 NODE_TOKENS = f"{GRAPH_PREFIX}/node/**"
 _OPEN_ATTEMPT_MS = 1000
+#: How long closing waits for Zenoh's callback thread to end (it ends within milliseconds of the close).
+_DISPATCH_END_S = 2.0
 
 
 class LivelinessWatcher:
@@ -55,6 +57,10 @@ class LivelinessWatcher:
         self._subscriber: zenoh.Subscriber[None] | None = None
         self.connected = threading.Event()
         self._thread = threading.Thread(target=self._connect, name="zendock-liveliness", daemon=True)
+        #: Zenoh runs the callbacks on a Python thread of its own, made by the thread that declares the
+        #: subscriber: a daemon here, so the interpreter's exit does not wait for it (see :meth:`close`).
+        self._dispatcher: threading.Thread | None = None
+        self._dispatch_ended = threading.Event()
 
     def start(self) -> None:
         self._thread.start()
@@ -75,10 +81,15 @@ class LivelinessWatcher:
                     return
                 self._session = session
                 self._subscriber = session.liveliness().declare_subscriber(
-                    NODE_TOKENS, self._on_sample, history=True
+                    NODE_TOKENS, zenoh.handlers.Callback(self._on_sample, self._on_dispatch_end), history=True
                 )
             self.connected.set()
             return
+
+    def _on_dispatch_end(self) -> None:
+        """Zenoh's last call on the thread that ran :meth:`_on_sample`, once the subscriber is gone."""
+        self._dispatcher = threading.current_thread()
+        self._dispatch_ended.set()
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         alive = sample.kind == zenoh.SampleKind.PUT
@@ -110,6 +121,11 @@ class LivelinessWatcher:
         inside Zenoh's open while the interpreter exits (a stack that failed before its router answered),
         it came back to Python during finalization and the process aborted ("FATAL: exception not
         rethrown", exit 134) after printing why the run had ended.
+
+        Zenoh's callback thread is waited for last, for the same reason: it ends only once Zenoh drops the
+        closed subscriber's channel, which can come after ``close`` returns. Left waiting in native code
+        while the interpreter exited, it took the same abort when it woke (5 in 260 ``demo`` runs whose battery
+        could not start, four at a time; the core dumps showed this thread).
         """
         self._closing.set()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -123,6 +139,10 @@ class LivelinessWatcher:
         if session is not None:
             with contextlib.suppress(Exception):
                 session.close()
+        if subscriber is not None and self._dispatch_ended.wait(_DISPATCH_END_S):
+            dispatcher = self._dispatcher
+            if dispatcher is not None and dispatcher is not threading.current_thread():
+                dispatcher.join(_DISPATCH_END_S)
 
 
 async def run_check(argv: Sequence[str], *, cwd: Path, env: dict[str, str], timeout_s: float) -> bool:

@@ -30,7 +30,7 @@ from deploy.glass_report import read_glass_marks
 from deploy.launcher import Launcher, free_endpoint
 from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
-from deploy.paths import REPO_ROOT
+from deploy.paths import REPO_ROOT, new_run_dir
 from deploy.trials.chaos import ChaosMonkey
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
@@ -210,8 +210,7 @@ def run_trials(
     if not world.docks:
         raise ValueError(f"{options.world}: the world has no dock")
     shard = f"-shard{options.shard.index}of{options.shard.count}" if options.shard.count > 1 else ""
-    run_dir = options.runs_dir / f"trials-{time.strftime('%Y%m%d-%H%M%S')}-{options.world.stem}{shard}"
-    run_dir.mkdir(parents=True, exist_ok=True)
+    run_dir = new_run_dir(options.runs_dir, "trials-", f"-{options.world.stem}{shard}")
     if options.starts == "beacon":
         starts = beacon_starts(world, options.n, options.seed)
     else:

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from deploy import strict_json
+from deploy.paths import new_run_dir
 from deploy.trials.records import TrialResult, TrialsSummary
 from deploy.trials.summary import combine, summary_reasons
 
@@ -166,7 +166,7 @@ def write_merged(merged: dict[str, MergedWorld], runs_dir: Path) -> Path:
     """Each world's merged ``trials.json`` and histograms under one new run directory; returns it."""
     from deploy.plotting import plot_trial_histograms  # noqa: PLC0415 - matplotlib is slow to import
 
-    out = runs_dir / f"trials-merged-{time.strftime('%Y%m%d-%H%M%S')}"
+    out = new_run_dir(runs_dir, "trials-merged-")
     for world, result in merged.items():
         world_dir = out / world if len(merged) > 1 else out
         world_dir.mkdir(parents=True, exist_ok=True)
