@@ -124,8 +124,8 @@ class LivelinessWatcher:
 
         Zenoh's callback thread is waited for last, for the same reason: it ends only once Zenoh drops the
         closed subscriber's channel, which can come after ``close`` returns. Left waiting in native code
-        while the interpreter exited, it took the same abort when it woke (5 in 260 ``demo`` runs whose battery
-        could not start, four at a time; the core dumps showed this thread).
+        while the interpreter exited, it took the same abort when it woke (5 in 260 ``demo`` runs whose
+        battery could not start, four at a time; a core dump showed this thread).
         """
         self._closing.set()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
