@@ -58,6 +58,16 @@ def world_argument(text: str) -> str:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def world_file_argument(text: str) -> str:
+    """``--world``'s type where one room is run: as :func:`world_argument`, refusing a directory of worlds."""
+    path = Path(world_argument(text))
+    if path.is_dir():
+        first = next(iter(sorted(path.glob("*.yaml"))), None)
+        example = f" such as {first}" if first is not None else ""
+        raise argparse.ArgumentTypeError(f"{text} is a directory of worlds: give one world file{example}")
+    return str(path)
+
+
 #: ``--world generated:KIND``: rooms drawn from the campaign's seed.
 GENERATED_PREFIX = "generated:"
 

@@ -14,7 +14,7 @@ from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, positive_number, real_time_factor
 from deploy.options import add_controller_option, add_detector_option, add_runs_dir_option
 from deploy.progress import is_terminal, progress_period_s
-from deploy.world_names import world_argument
+from deploy.world_names import world_file_argument
 from shared.config_errors import ConfigError
 from shared.world import load_world
 
@@ -63,8 +63,6 @@ def _run(args: argparse.Namespace) -> int:
     from deploy.demo import DemoOptions, run_demo  # noqa: PLC0415 - heavy imports only when used
 
     world = Path(args.world)
-    if not world.is_file():
-        raise ConfigError(f"--world {world}: no such file")
     room = load_world(world)  # a bad world file or start pose is one line, before any process starts
     problem = room.placement_problem(args.start[0], args.start[1]) if args.start else None
     if problem:
@@ -102,7 +100,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "demo", help="dock once on the full stack and report (what `make run` runs)"
     )
     parser.add_argument(
-        "--world", type=world_argument, default="deploy/worlds/seed_room.yaml", help="world file"
+        "--world", type=world_file_argument, default="deploy/worlds/seed_room.yaml", help="world file"
     )
     parser.add_argument(
         "--compose",

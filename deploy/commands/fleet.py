@@ -16,7 +16,7 @@ from deploy import strict_json
 from deploy.arg_types import add_service_option, check_replacements, count, positive_number, real_time_factor
 from deploy.options import add_detector_option, add_runs_dir_option
 from deploy.progress import is_terminal
-from deploy.world_names import world_argument
+from deploy.world_names import world_file_argument
 from shared.config_errors import ConfigError
 
 DEFAULT_WORLD = "deploy/worlds/fleet/warehouse.yaml"
@@ -81,8 +81,6 @@ def _run(args: argparse.Namespace) -> int:
     from deploy.fleet.stack import FleetOptions  # noqa: PLC0415
 
     world = Path(args.world)
-    if not world.is_file():
-        raise ConfigError(f"--world {world}: no such file")
     options = FleetOptions(
         world=world.resolve(),
         robots=args.robots,
@@ -160,7 +158,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--world",
-        type=world_argument,
+        type=world_file_argument,
         default=DEFAULT_WORLD,
         metavar="FILE",
         help=f"a world with docks (and robots; default {DEFAULT_WORLD})",

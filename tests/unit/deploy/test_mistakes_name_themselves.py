@@ -48,3 +48,13 @@ def test_a_world_is_found_by_its_name_and_an_unknown_one_lists_the_shipped_world
     line = _error(capsys, "trials", "--world", "seed_rom")
     assert "no world file or shipped world 'seed_rom'; did you mean seed_room?" in line
     assert "shipped: angled_dock, clutter, corridor" in line
+
+
+@pytest.mark.parametrize("command", [("demo",), ("fleet",), ("conform", "simulator"), ("bench", "messages")])
+def test_a_directory_where_one_room_is_run_names_itself_and_a_file_in_it(
+    capsys: pytest.CaptureFixture[str], command: tuple[str, ...]
+) -> None:
+    # trials and bench ir take a directory as all its worlds; these run one room, and said "no such file".
+    line = _error(capsys, *command, "--world", "unseen")
+    assert "unseen is a directory of worlds: give one world file such as " in line, line
+    assert "deploy/worlds/unseen/" in line and line.endswith(".yaml"), line
