@@ -91,6 +91,13 @@ def _worlds(args: argparse.Namespace) -> list[tuple[Path, int]]:
     return out
 
 
+def _several_worlds(args: argparse.Namespace) -> bool:
+    """Whether the campaign may run ``--n`` trials in each of several worlds (then only its whole count, known
+    once its worlds are, bounds the shards; a ``generated:KIND`` campaign is ``--n`` trials in all)."""
+    names = args.world or [DEFAULT_WORLD]
+    return len(names) > 1 or any(name == "all" or Path(name).is_dir() for name in names)
+
+
 def _generated_rooms(args: argparse.Namespace, kind: str) -> list[Path]:
     from deploy.generated_worlds import generate_rooms  # noqa: PLC0415 - the planner's tool only when used
     from deploy.paths import RUNS_DIR  # noqa: PLC0415
@@ -105,12 +112,18 @@ def _generated_rooms(args: argparse.Namespace, kind: str) -> list[Path]:
 def _run(args: argparse.Namespace) -> int:
     from deploy.trials import TrialOptions, run_trials  # noqa: PLC0415 - heavy imports only when used
 
-    if args.shard.count > args.n:
+    if args.shard.count > args.n and not _several_worlds(args):
         raise ConfigError(f"--shard {args.shard}: {args.n} trials cannot make {args.shard.count} shards")
     worlds = _worlds(args)
+    total = sum(n for _, n in worlds)
+    if args.shard.count > total:
+        raise ConfigError(f"--shard {args.shard}: {total} trials cannot make {args.shard.count} shards")
     console = Console(stderr=args.json)
     per_world = []
-    for number, (world, n) in enumerate(worlds):
+    shards = args.shard.in_worlds([n for _, n in worlds])
+    for number, ((world, n), shard) in enumerate(zip(worlds, shards, strict=True)):
+        if shard is None:  # every trial of this world is another shard's
+            continue
         # each world its own seed, so a campaign does not repeat one pattern of starts everywhere
         starts = args.starts or CONTROLLERS[args.controller].starts
         options = TrialOptions(
@@ -126,7 +139,7 @@ def _run(args: argparse.Namespace) -> int:
             chaos_period_s=args.chaos,
             standby=args.standby,
             compose=args.compose,
-            shard=args.shard,
+            shard=shard,
             replacements=check_replacements(args.replacements),
             **({"runs_dir": args.runs_dir} if args.runs_dir else {}),
         )
@@ -346,7 +359,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="1/1",
         metavar="K/N",
         help="run only the K-th of N disjoint slices of the campaign (the same starts as the "
-        "whole run; combine them with `zendock trials merge`)",
+        "whole run, its trials dealt out in turn across its worlds: with generated:KIND, every N-th "
+        "room; combine them with `zendock trials merge`)",
     )
     add_runs_dir_option(parser, "run directories go")
     add_service_option(parser)

@@ -19,13 +19,17 @@ T = TypeVar("T")
 class Shard:
     """The ``index``-th (1-based) of ``count`` disjoint slices of a campaign's trials.
 
-    Trial ``i`` (0-based, in the campaign's order of starts) belongs to shard ``i % count + 1``: round
-    robin, so every shard gets starts from the whole room rather than one stretch of the list, and the
-    union of the shards is exactly the unsharded campaign, trial indices included.
+    The campaign's trials are numbered across its worlds, in order: a world's trial ``i`` (0-based, in
+    its order of starts) is the campaign's trial ``first + i``, and belongs to shard ``(first + i) % count
+    + 1``. Round robin, so every shard gets starts from the whole room rather than one stretch of the list,
+    a campaign of one trial in each of many rooms (``generated:KIND``) deals its rooms out to the shards,
+    and the union of the shards is exactly the unsharded campaign, trial indices included.
     """
 
     index: int = 1
     count: int = 1
+    #: The campaign's number for this world's first trial: the trials of the worlds before it.
+    first: int = 0
 
     def __post_init__(self) -> None:
         if not (self.count >= 1 and 1 <= self.index <= self.count):
@@ -41,7 +45,19 @@ class Shard:
         return cls(index, count)
 
     def owns(self, trial_index: int) -> bool:
-        return trial_index % self.count == self.index - 1
+        """Whether this world's trial ``trial_index`` is this shard's."""
+        return (self.first + trial_index) % self.count == self.index - 1
+
+    def in_worlds(self, trials_per_world: Sequence[int]) -> list[Shard | None]:
+        """This shard placed in each world of a campaign that runs ``trials_per_world`` trials in its
+        worlds, in order; None for a world none of whose trials is this shard's (run nothing there)."""
+        placed: list[Shard | None] = []
+        first = 0
+        for n in trials_per_world:
+            shard = Shard(self.index, self.count, first)
+            placed.append(shard if any(shard.owns(i) for i in range(min(n, self.count))) else None)
+            first += n
+        return placed
 
     def select(self, items: Sequence[T]) -> list[tuple[int, T]]:
         """This shard's items of the whole campaign's list, each with its index in the whole list."""

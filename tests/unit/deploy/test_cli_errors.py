@@ -134,6 +134,14 @@ def test_trials_merge_names_itself_once(capsys: pytest.CaptureFixture[str]) -> N
     assert line == "zendock trials merge: no/such/shard: no such file or directory", line
 
 
+def test_a_shard_count_is_bounded_by_the_whole_campaigns_trials(capsys: pytest.CaptureFixture[str]) -> None:
+    """A campaign across worlds is sharded as a whole: one trial in each unseen room makes that many."""
+    rooms = len(list((REPO_ROOT / "deploy" / "worlds" / "unseen").glob("*.yaml")))
+    assert _exit_code(["trials", "--world", "deploy/worlds/unseen", "--n", "1", "--shard", "1/30"]) == 2
+    line = _one_error_line(capsys)
+    assert line == f"zendock trials: --shard 1/30: {rooms} trials cannot make 30 shards", line
+
+
 def test_help_shows_the_defaults_an_option_has(capsys: pytest.CaptureFixture[str]) -> None:
     assert _exit_code(["trials", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())

@@ -29,6 +29,33 @@ def test_shards_are_disjoint_and_together_the_whole_campaign_in_its_order(count:
     assert max(len(s) for s in slices) - min(len(s) for s in slices) <= 1  # balanced
 
 
+@pytest.mark.parametrize("count", [2, 3, 4])
+@pytest.mark.parametrize("per_world", [[1] * 7, [3, 1, 4, 1, 5], [10]])
+def test_a_campaigns_trials_are_dealt_out_across_its_worlds(count: int, per_world: list[int]) -> None:
+    owners: dict[tuple[int, int], list[int]] = {}
+    for k in range(1, count + 1):
+        for world, shard in enumerate(Shard(k, count).in_worlds(per_world)):
+            if shard is None:
+                continue
+            for i in range(per_world[world]):
+                if shard.owns(i):
+                    owners.setdefault((world, i), []).append(k)
+    # every trial of every world is run, by exactly one shard
+    assert sorted(owners) == [(w, i) for w, n in enumerate(per_world) for i in range(n)]
+    assert all(len(ks) == 1 for ks in owners.values())
+    loads = [sum(ks == [k] for ks in owners.values()) for k in range(1, count + 1)]
+    assert max(loads) - min(loads) <= 1  # balanced over the whole campaign, not per world
+
+
+def test_a_campaign_of_one_trial_per_room_gives_each_shard_every_nth_room() -> None:
+    rooms = [1] * 5  # generated:KIND: one docking in each fresh room
+    first = [i for i, shard in enumerate(Shard(1, 2).in_worlds(rooms)) if shard is not None]
+    second = [i for i, shard in enumerate(Shard(2, 2).in_worlds(rooms)) if shard is not None]
+    assert (first, second) == ([0, 2, 4], [1, 3])
+    # a room it runs, it runs whole: its one trial is the shard's
+    assert all(shard.owns(0) for shard in Shard(2, 2).in_worlds(rooms) if shard is not None)
+
+
 @pytest.mark.parametrize("text", ["0/2", "3/2", "1", "a/b", "1/0", "1/2/3"])
 def test_a_bad_shard_is_refused_by_name(text: str) -> None:
     with pytest.raises(ValueError, match="shard"):
