@@ -30,7 +30,7 @@ from typing import Any
 import yaml
 
 from deploy.launcher.durations import format_duration
-from deploy.launcher.interpolation import interpolate
+from shared.interpolation import interpolate
 from deploy.launcher.launch import Healthcheck, ModuleRun, ProgramRun, ServiceLaunch
 from deploy.launcher.stack_file import Stack
 

@@ -25,7 +25,7 @@ import yaml
 from deploy.launcher.composition import CompositionError, compose_groups
 from deploy.launcher.durations import format_duration, parse_duration
 from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
-from deploy.launcher.interpolation import InterpolationError, interpolate_tree, parse_env_file
+from shared.interpolation import InterpolationError, interpolate_tree, parse_env_file
 from deploy.launcher.launch import (
     DEFAULT_STOP_GRACE_S,
     NAME_RE,

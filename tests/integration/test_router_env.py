@@ -1,4 +1,5 @@
-"""A bare ``zendock router`` listens where ZENOH_LISTEN says, as the rest of zendock reads it."""
+"""A bare ``zendock router`` listens where ZENOH_LISTEN says, in the environment or in ./.env, as the rest of
+zendock reads it."""
 
 from __future__ import annotations
 
@@ -6,6 +7,9 @@ import os
 import socket
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 from deploy.launcher import free_tcp_port
 from tests.support.processes import wait_until
@@ -17,11 +21,17 @@ def _accepts(port: int) -> bool:
         return probe.connect_ex(("127.0.0.1", port)) == 0
 
 
-def test_a_bare_router_listens_on_zenoh_listen() -> None:
+@pytest.mark.parametrize("where", ["environment", "dotenv"])
+def test_a_bare_router_listens_on_zenoh_listen(where: str, tmp_path: Path) -> None:
     port = free_tcp_port()
-    env = {**os.environ, "ZENOH_LISTEN": f"tcp/127.0.0.1:{port}"}
+    env = {k: v for k, v in os.environ.items() if k != "ZENOH_LISTEN"}
+    if where == "environment":
+        env["ZENOH_LISTEN"] = f"tcp/127.0.0.1:{port}"
+    else:
+        (tmp_path / ".env").write_text(f"# the bus\nexport ZENOH_LISTEN=tcp/127.0.0.1:{port}\n")
     router = subprocess.Popen(
         [sys.executable, "-m", "deploy.cli", "router"],
+        cwd=tmp_path,
         env=env,
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,

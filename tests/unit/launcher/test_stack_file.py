@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from deploy.launcher.durations import format_duration, parse_duration
-from deploy.launcher.interpolation import InterpolationError, interpolate, parse_env_file
+from shared.interpolation import InterpolationError, interpolate, parse_env_file
 from deploy.launcher.stack_file import load_stack
 from shared.config_errors import ConfigError
 

@@ -1,11 +1,15 @@
-"""One reading of where the bus is: flags, then ZENDOCK_CONNECT, then ZENOH_CONNECT (and ZENOH_LISTEN)."""
+"""One reading of where the bus is: flags, then ZENDOCK_CONNECT, then ZENOH_CONNECT (and ZENOH_LISTEN), each
+from the environment, else from ./.env."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 
 from deploy.keys.connection import resolve_endpoints
 from shared.bus_env import connect_from_env, listen_from_env
+from shared.config_errors import ConfigError
 from shared.runtime import build_arg_parser, options_from_args
 from shared.session import DEFAULT_ROUTER_ENDPOINT
 
@@ -41,3 +45,36 @@ def test_a_service_started_by_hand_connects_where_zenoh_connect_says(monkeypatch
     assert options_from_args(build_arg_parser("viz").parse_args([])).connect == ("tcp/127.0.0.1:7001",)
     flagged = build_arg_parser("viz").parse_args(["--connect", "tcp/127.0.0.1:7009"])
     assert options_from_args(flagged).connect == ("tcp/127.0.0.1:7009",)
+
+
+@pytest.fixture
+def in_a_project(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A working directory with no bus variable in the environment."""
+    for name in ("ZENDOCK_CONNECT", "ZENOH_CONNECT", "ZENOH_LISTEN"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_dotenv_moves_the_router_a_service_and_a_cli_command(in_a_project: Path) -> None:
+    (in_a_project / ".env").write_text(
+        "# as zendock up reads it\nexport ZENOH_LISTEN=tcp/127.0.0.1:7623\nZENOH_CONNECT='tcp/127.0.0.1:7623'\n"
+    )
+    assert listen_from_env() == ("tcp/127.0.0.1:7623",)
+    assert options_from_args(build_arg_parser("viz").parse_args([])).connect == ("tcp/127.0.0.1:7623",)
+    assert resolve_endpoints(None) == ("tcp/127.0.0.1:7623",)
+
+
+def test_the_environment_wins_over_dotenv(in_a_project: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    (in_a_project / ".env").write_text("ZENOH_CONNECT=tcp/127.0.0.1:7623\n")
+    monkeypatch.setenv("ZENOH_CONNECT", "tcp/127.0.0.1:7002")
+    assert connect_from_env() == ("tcp/127.0.0.1:7002",)
+    monkeypatch.delenv("ZENOH_CONNECT")
+    monkeypatch.setenv("ZENDOCK_CONNECT", "tcp/127.0.0.1:7001")  # the first variable that is set holds
+    assert connect_from_env() == ("tcp/127.0.0.1:7001",)
+
+
+def test_a_malformed_dotenv_is_named_not_passed_over(in_a_project: Path) -> None:
+    (in_a_project / ".env").write_text("ZENOH_CONNECT=tcp/127.0.0.1:7623\nthis is not a variable\n")
+    with pytest.raises(ConfigError, match=r"\.env:2: expected KEY=VALUE"):
+        connect_from_env()
