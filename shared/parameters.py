@@ -27,6 +27,7 @@ from typing import Any
 import msgspec
 
 from shared import structs
+from shared.suggestions import did_you_mean
 
 #: The ``Meta(extra=...)`` key that marks a field settable at runtime.
 DYNAMIC_KEY = "dynamic"
@@ -160,8 +161,9 @@ class ParameterTable:
 
     def _check_known(self, name: str) -> None:
         if name not in self._fields:
+            settable = self.settable_names()
             raise ParameterRefused(
-                f"{name}: no such parameter (settable: {', '.join(self.settable_names()) or 'none'})"
+                f"{name}: no such parameter{did_you_mean(name, settable)} (settable: {', '.join(settable) or 'none'})"
             )
 
     @staticmethod

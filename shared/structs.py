@@ -27,6 +27,7 @@ from typing import Any, Literal, TypeVar, get_args, get_origin
 import msgspec
 
 from shared.config_errors import ConfigError
+from shared.suggestions import did_you_mean
 
 T = TypeVar("T")
 
@@ -191,7 +192,7 @@ def explain(error: msgspec.ValidationError, record: type, data: Any = None) -> t
             name = found.group("name")
             reason = words
             if pattern is _UNKNOWN:
-                reason += _did_you_mean(name, _names_at(record, parts))
+                reason += did_you_mean(name, _names_at(record, parts))
             return ".".join([*parts, name]), reason
     named = _NAMED.match(message)
     if named and not _BOUND.match(message):
@@ -266,13 +267,6 @@ def _unoptional(kind: Any) -> Any:
 def _names_at(record: Any, parts: list[str]) -> list[str]:
     kind = _type_at(record, parts)
     return field_names(kind) if _is_struct_type(kind) else []
-
-
-def _did_you_mean(name: str, known: list[str]) -> str:
-    import difflib  # noqa: PLC0415 - only a refused name needs it, not a service's start
-
-    close = difflib.get_close_matches(name, known, n=1)
-    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def _plain_reason(message: str, kind: Any) -> str:

@@ -19,7 +19,8 @@ def main(args: argparse.Namespace) -> int:
     if args.quiet:
         return 0
     if args.services:
-        print("\n".join(stack.select((), active_profiles(args)) if active_profiles(args) else stack.services))
+        profiles = active_profiles(args, stack)
+        print("\n".join(stack.select((), profiles) if profiles else stack.services))
     elif args.profiles:
         print("\n".join(stack.profiles))
     else:

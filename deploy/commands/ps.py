@@ -22,6 +22,8 @@ from deploy.launcher.runtime import (
     supervisor_info,
 )
 from deploy.launcher.status import ServiceStatus
+from shared.config_errors import ConfigError
+from shared.suggestions import each_with_a_guess
 
 
 def current_statuses(paths: RuntimePaths) -> tuple[list[ServiceStatus], bool]:
@@ -90,7 +92,7 @@ def format_table(statuses: list[ServiceStatus]) -> str:
 
 
 def main(args: argparse.Namespace) -> int:
-    _, paths, _ = resolve_project(args)
+    _, paths, stack = resolve_project(args)
     stack_file = find_stack_file(args)
     if (stack_file is None or not stack_file.is_file()) and not paths.state_dir.exists():
         raise no_stack_file(
@@ -98,6 +100,14 @@ def main(args: argparse.Namespace) -> int:
         )  # outside a project: nothing to list, and an empty table would hide it
     statuses, live = current_statuses(paths)
     if args.services:
+        known = list(
+            dict.fromkeys([*(stack.services if stack is not None else ()), *(s.name for s in statuses)])
+        )
+        unknown = [name for name in args.services if name not in known]
+        if unknown and known:  # a name the project has no service by: an empty table would hide the typo
+            raise ConfigError(
+                f"no such service: {each_with_a_guess(unknown, known)} (services: {', '.join(known)})"
+            )
         statuses = [s for s in statuses if s.name in args.services]
     if statuses and not live:
         print(

@@ -257,7 +257,7 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
 
 def main(args: argparse.Namespace) -> int:
     stack = load_project_stack(args)
-    services = stack.select(args.services, active_profiles(args))
+    services = stack.select(args.services, active_profiles(args, stack))
     paths = RuntimePaths.for_project(project_dir(args), stack.project_name)
     try:
         if args.detach or args.wait:

@@ -30,9 +30,9 @@ from typing import Any
 import yaml
 
 from deploy.launcher.durations import format_duration
-from shared.interpolation import interpolate
 from deploy.launcher.launch import Healthcheck, ModuleRun, ProgramRun, ServiceLaunch
 from deploy.launcher.stack_file import Stack
+from shared.interpolation import interpolate
 
 IMAGE = "zendock:latest"
 NETWORK = "bus"

@@ -13,6 +13,7 @@ from dataclasses import replace
 from deploy.launcher.launch import GroupRun, ModuleRun, Run, param_flags
 from deploy.launcher.stack_file import Stack
 from shared.config_errors import ConfigError
+from shared.suggestions import did_you_mean
 
 
 def _with_values(run: ModuleRun, values: Mapping[str, object]) -> ModuleRun:
@@ -52,7 +53,8 @@ def with_params(stack: Stack, service: str, values: Mapping[str, object]) -> Sta
     if not found:
         known = sorted({m.service for launch in stack.services.values() for m in _module_runs(launch.run)})
         raise ConfigError(
-            f"--set {service}: the stack runs no zendock service {service!r} (it runs: {', '.join(known)})"
+            f"--set {service}: the stack runs no zendock service {service!r}{did_you_mean(service, known)} "
+            f"(it runs: {', '.join(known)})"
         )
     return replace(stack, services=services)
 

@@ -17,6 +17,7 @@ from deploy.launcher.runtime import RUNTIME_DIRNAME, RuntimePaths
 from deploy.launcher.stack_file import Stack, load_stack, project_name_from_dir, read_document
 from deploy.replacements import apply_replacements
 from shared.config_errors import ConfigError
+from shared.suggestions import each_with_a_guess
 
 STACK_FILE_NAMES = ("stack.yaml", "zendock.yaml", "deploy/stack.yaml")
 
@@ -85,11 +86,24 @@ def load_project_stack(args: argparse.Namespace) -> Stack:
     return apply_replacements(stack, replacements)
 
 
-def active_profiles(args: argparse.Namespace) -> list[str]:
-    """``--profile`` options, else ``$ZENDOCK_PROFILES`` (comma-separated)."""
+def active_profiles(args: argparse.Namespace, stack: Stack | None = None) -> list[str]:
+    """``--profile`` options, else ``$ZENDOCK_PROFILES`` (comma-separated).
+
+    With ``stack``, a profile none of its services has is a :class:`ConfigError` with a "did you mean": it
+    would otherwise start the stack without what the profile was asked for, and say nothing."""
     profiles = list(getattr(args, "profile", None) or [])
+    source = "--profile"
     if not profiles and os.environ.get("ZENDOCK_PROFILES"):
         profiles = [p.strip() for p in os.environ["ZENDOCK_PROFILES"].split(",") if p.strip()]
+        source = "ZENDOCK_PROFILES"
+    if stack is not None:
+        unknown = [p for p in profiles if p not in stack.profiles]
+        if unknown:
+            known = f"its profiles: {', '.join(stack.profiles)}" if stack.profiles else "it has no profiles"
+            raise ConfigError(
+                f"{source} {each_with_a_guess(unknown, stack.profiles)}: no service of {stack.source} "
+                f"has that profile ({known})"
+            )
     return profiles
 
 

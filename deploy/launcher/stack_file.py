@@ -25,7 +25,6 @@ import yaml
 from deploy.launcher.composition import CompositionError, compose_groups
 from deploy.launcher.durations import format_duration, parse_duration
 from deploy.launcher.graph import dependency_order, find_cycle, with_dependencies
-from shared.interpolation import InterpolationError, interpolate_tree, parse_env_file
 from deploy.launcher.launch import (
     DEFAULT_STOP_GRACE_S,
     NAME_RE,
@@ -40,9 +39,11 @@ from deploy.launcher.launch import (
 from deploy.launcher.restart import RestartPolicy, parse_restart_policy
 from deploy.launcher.robot_template import RobotTemplateError, expand_robots
 from shared.config_errors import ConfigError
+from shared.interpolation import InterpolationError, interpolate_tree, parse_env_file
 from shared.names import normalise_namespace
 from shared.session import DEFAULT_ROUTER_ENDPOINT
 from shared.structs import blaming, validate
+from shared.suggestions import each_with_a_guess
 
 DEFAULT_CONNECT = f"${{ZENOH_CONNECT:-{DEFAULT_ROUTER_ENDPOINT}}}"
 DEFAULT_LIVELINESS_TIMEOUT_S = 30.0
@@ -272,7 +273,10 @@ class Stack:
         wanted = list(names)
         unknown = [name for name in wanted if name not in self.services]
         if unknown:
-            raise ConfigError(f"{self.source}: no such service: {', '.join(unknown)}")
+            raise ConfigError(
+                f"{self.source}: no such service: {each_with_a_guess(unknown, self.services)} "
+                f"(services: {', '.join(self.services)})"
+            )
         active = set(profiles)
         if not wanted:
             wanted = [

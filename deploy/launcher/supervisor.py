@@ -24,6 +24,7 @@ from deploy.launcher.restart import FINAL_EXITS, Backoff
 from deploy.launcher.robot_template import service_for
 from deploy.launcher.status import Phase, ServiceStatus, public_state
 from deploy.launcher.zygote import STANDBY_GRACE_S, Zygote
+from shared.suggestions import each_with_a_guess
 
 WATCHER_CLOSE_S = 5.0
 
@@ -559,7 +560,9 @@ class Supervisor:
         names = [service_for(name, services) for name in names]
         unknown = [name for name in names if name not in self.plan.services]
         if unknown:
-            raise KeyError(f"no such service: {', '.join(unknown)} (services: {', '.join(services)})")
+            raise KeyError(
+                f"no such service: {each_with_a_guess(unknown, services)} (services: {', '.join(services)})"
+            )
         return names
 
     # -- control --------------------------------------------------------------------------------------

@@ -101,7 +101,10 @@ def test_param_list_get_set_on_a_running_battery(
     code, _, err = zendock("param", "set", "battery", "capacity_ah", "3")
     assert code == 2 and err.startswith(f"zendock param set: {node}: capacity_ah: read at start-up only")
     code, _, err = zendock("param", "set", "battery", "drain", "3")
-    assert code == 2 and "drain: no such parameter (settable: charge_scale, drain_scale, frozen)" in err
+    assert code == 2 and (
+        "drain: no such parameter (did you mean drain_scale?) (settable: charge_scale, drain_scale, frozen)"
+        in err
+    )
     code, _, err = zendock("param", "get", "battery", "drain")
     assert code == 2 and err.startswith(f"zendock param get: {node}: drain: no such parameter")
     code, out, _ = zendock("param", "get", "battery", "drain_scale", "--json")

@@ -134,6 +134,32 @@ def test_trials_merge_names_itself_once(capsys: pytest.CaptureFixture[str]) -> N
     assert line == "zendock trials merge: no/such/shard: no such file or directory", line
 
 
+@pytest.mark.parametrize(
+    ("argv", "guess"),
+    [
+        (["up", "--profile", "ros2dds"], "--profile ros2dds (did you mean ros2-dds?)"),
+        (["config", "--profile", "vizz", "--services"], "--profile vizz (did you mean viz?)"),
+        (["up", "dockng"], "no such service: dockng (did you mean docking?)"),
+        (["up", "--set", "dockng.auto_dock=false"], "no zendock service 'dockng' (did you mean docking?)"),
+        (["logs", "dockng"], "no such service: dockng (did you mean docking?)"),
+        (["ps", "dockng"], "no such service: dockng (did you mean docking?)"),
+    ],
+)
+def test_a_misspelled_service_or_profile_names_itself(
+    argv: list[str], guess: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import deploy.commands.up
+
+    def refuse(*_args: object, **_kwargs: object) -> int:
+        raise AssertionError(f"zendock {' '.join(argv)} started a stack")
+
+    monkeypatch.setattr(deploy.commands.up, "run_foreground", refuse)
+    monkeypatch.setattr(deploy.commands.up, "run_detached", refuse)
+    assert _exit_code(argv) == 2
+    line = _one_error_line(capsys)
+    assert line.startswith(f"zendock {argv[0]}: ") and guess in line, line
+
+
 def test_a_shard_count_is_bounded_by_the_whole_campaigns_trials(capsys: pytest.CaptureFixture[str]) -> None:
     """A campaign across worlds is sharded as a whole: one trial in each unseen room makes that many."""
     rooms = len(list((REPO_ROOT / "deploy" / "worlds" / "unseen").glob("*.yaml")))

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from deploy.launcher.durations import format_duration, parse_duration
-from shared.interpolation import InterpolationError, interpolate, parse_env_file
 from deploy.launcher.stack_file import load_stack
 from shared.config_errors import ConfigError
+from shared.interpolation import InterpolationError, interpolate, parse_env_file
 
 REPO_ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_STACK = REPO_ROOT / "deploy" / "stack.yaml"

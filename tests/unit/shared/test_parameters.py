@@ -86,7 +86,11 @@ def test_a_good_value_is_written_into_the_live_model() -> None:
             "min_speed_mps, speed_mps)",
         ),
         ("lidar.rate_hz", 5.0, "lidar.rate_hz: read at start-up only"),
-        ("speed", 0.3, "speed: no such parameter (settable: lidar.noise_m, min_speed_mps, speed_mps)"),
+        (
+            "speed",
+            0.3,
+            "speed: no such parameter (did you mean speed_mps?) (settable: lidar.noise_m, min_speed_mps, speed_mps)",
+        ),
     ],
 )
 def test_a_refused_change_names_the_reason_and_changes_nothing(name: str, value: Any, reason: str) -> None:
