@@ -27,7 +27,7 @@ import zenoh
 
 from deploy.options import add_bus_options
 from deploy.paths import REPO_ROOT
-from deploy.progress import Throttle, dock_line
+from deploy.progress import dock_line
 from deploy.world_names import world_argument
 from shared import topics
 from shared.action import ActionClient, ClientGoal, spin_in_background
@@ -203,7 +203,9 @@ def run_action(
     """Send ``goal``, print feedback changes, wait for the result; returns the exit code and the goal.
 
     ``describe_feedback`` turns a feedback message into ``(what changed, line)``; a line is printed when
-    what changed differs from the previous message's, and, with ``repeat_every_s``, at least that often.
+    what changed differs from the previous message's, and, with ``repeat_every_s``, at least that often:
+    the latest feedback described again (its distance then current) whenever no line came for that long,
+    whether or not new feedback arrived.
     """
     node = Node("zendock_cli", session, namespace)
     thread = spin_in_background(node)
@@ -214,23 +216,10 @@ def run_action(
             print(f"no {action_name} server in {where} (is the docking service running?)", file=sys.stderr)
             return EXIT_FAILED, None
         done = threading.Event()
-        previous: list[object] = []
-        throttle = Throttle(repeat_every_s) if repeat_every_s else None
-
-        def on_feedback(feedback: Any) -> None:
-            if describe_feedback is None:
-                return
-            change, line = describe_feedback(feedback)
-            changed = not previous or previous[-1] != change
-            if changed or (throttle is not None and throttle.due(time.monotonic())):
-                previous.append(change)
-                print(line, file=out, flush=True)
-                if changed and throttle is not None:
-                    throttle.due(time.monotonic())
-
-        handle = client.send_goal(goal, on_feedback=on_feedback, on_done=lambda _h: done.set())
+        lines = _FeedbackLines(describe_feedback, out, repeat_every_s)
+        handle = client.send_goal(goal, on_feedback=lines.feedback, on_done=lambda _h: done.set())
         try:
-            finished = wait_interruptibly(done, timeout_s)
+            finished = _wait_repeating(done, timeout_s, lines)
         except KeyboardInterrupt:
             print("interrupted: cancelling", file=sys.stderr)
             client.cancel_goal(handle)
@@ -246,6 +235,72 @@ def run_action(
         node.shutdown()
         thread.join(5.0)
         node.close()
+
+
+class _FeedbackLines:
+    """The lines an action's feedback makes: one on each change, and the latest again once ``repeat_every_s``
+    has passed without a line (:meth:`repeat`, from the waiting thread). Feedback comes on the node's thread."""
+
+    def __init__(
+        self,
+        describe: Callable[[Any], tuple[object, str]] | None,
+        out: TextIO,
+        repeat_every_s: float | None,
+    ) -> None:
+        self._describe = describe
+        self._out = out
+        self.repeat_every_s = repeat_every_s
+        self._lock = threading.Lock()
+        self._latest: Any = None
+        self._change: object = _NOTHING
+        self._printed_at = -math.inf
+
+    def feedback(self, feedback: Any) -> None:
+        if self._describe is None:
+            return
+        change, line = self._describe(feedback)
+        with self._lock:
+            self._latest = feedback
+            if change != self._change:
+                self._change = change
+                self._print(line)
+
+    def repeat(self) -> None:
+        """The latest feedback's line again, when none was printed for ``repeat_every_s``."""
+        if self._describe is None or self.repeat_every_s is None:
+            return
+        with self._lock:
+            if self._latest is None or time.monotonic() - self._printed_at < self.repeat_every_s:
+                return
+            self._print(self._describe(self._latest)[1])
+
+    def next_due_s(self) -> float:
+        """When (monotonic) :meth:`repeat` next has a line to print, if no other comes first."""
+        period = self.repeat_every_s or math.inf
+        with self._lock:
+            return time.monotonic() + period if self._latest is None else self._printed_at + period
+
+    def _print(self, line: str) -> None:
+        print(line, file=self._out, flush=True)
+        self._printed_at = time.monotonic()
+
+
+_NOTHING = object()
+
+
+def _wait_repeating(done: threading.Event, timeout_s: float | None, lines: _FeedbackLines) -> bool:
+    """Wait for ``done`` (at most ``timeout_s``), repeating the progress line as it falls due."""
+    if lines.repeat_every_s is None:
+        return wait_interruptibly(done, timeout_s)
+    deadline = math.inf if timeout_s is None else time.monotonic() + timeout_s
+    while True:
+        # until the next line falls due (a period from the last, or a period on while nothing came yet)
+        wake = min(deadline, max(lines.next_due_s(), time.monotonic() + 0.01))
+        if wait_interruptibly(done, max(0.0, min(wake - time.monotonic(), lines.repeat_every_s))):
+            return True
+        if time.monotonic() >= deadline:
+            return False
+        lines.repeat()
 
 
 def _succeeded(handle: ClientGoal[Any, Any]) -> bool:
