@@ -169,8 +169,18 @@ def commands_of(record: dict[str, Any]) -> list[str]:
     return spans or [" ".join(str(record["command"]).split())]
 
 
-def _commit_cell(record: dict[str, Any]) -> str:
-    return f"`{record['commit']}`" if record["commit"] else f"recorded in `{record['recorded_in']}`"
+#: A commit as measurements name it: 7 to 40 hex digits.
+_COMMIT_RE = re.compile(r"\b[0-9a-f]{7,40}\b")
+
+
+def _commit_cell(record: dict[str, Any], *, hashes_only: bool = False) -> str:
+    """The commit the measurement names (``hashes_only``: just its hashes, for a row of the table; its own
+    page keeps the asides, "(before)", "(after; ...)"), else the one that recorded it."""
+    commit = record["commit"]
+    if not commit:
+        return f"recorded in `{record['recorded_in']}`"
+    hashes = _COMMIT_RE.findall(str(commit)) if hashes_only else []
+    return ", ".join(f"`{h}`" for h in hashes) if hashes else f"`{commit}`"
 
 
 def measurements_page(records: list[dict[str, Any]]) -> str:
@@ -220,7 +230,8 @@ def measurements_page(records: list[dict[str, Any]]) -> str:
                 f" (+{len(commands) - 1} more)" if len(commands) > 1 else ""
             )
             link = f"[{_cell(r['headline'])}](measurements/{measurement_stem(r)}.md)"
-            out.append(f"| {r['order']} | {link} | {command} | {_commit_cell(r)} | {r['date']} |")
+            commit = _commit_cell(r, hashes_only=True)
+            out.append(f"| {r['order']} | {link} | {command} | {commit} | {r['date']} |")
         out.append("")
     out += ["Each run's per-trial data, histograms and logs land in `runs/`.", ""]
     return "\n".join(out)
