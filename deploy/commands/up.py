@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import subprocess
 import sys
 import threading
@@ -153,6 +154,18 @@ def failure_reason(paths: RuntimePaths, status: ServiceStatus) -> str:
     return f"{status.name} failed: {cause or status.detail}"
 
 
+#: How the supervisor words a service stopped by a dependency's failure (``dependency router exited ...``).
+_DEPENDENCY_FAILED = re.compile(r"dependency (\S+) ")
+
+
+def root_failures(failed: list[ServiceStatus]) -> tuple[list[ServiceStatus], list[ServiceStatus]]:
+    """The failures that are causes, and those only waiting on one of them (their detail repeats its cause)."""
+    names = {s.name for s in failed}
+    waiting = [s for s in failed if (m := _DEPENDENCY_FAILED.match(s.detail or "")) and m.group(1) in names]
+    causes = [s for s in failed if s not in waiting]
+    return (causes, waiting) if causes else (failed, [])
+
+
 def not_ready_reason(paths: RuntimePaths, status: ServiceStatus, timeout_s: float) -> str:
     """``docking not healthy after 120s (its last line: ...)``: a service, often a replacement, that runs but
     never declared its node token."""
@@ -236,7 +249,10 @@ def run_detached(args: argparse.Namespace, stack: Stack, services: list[str], pa
         failed = [s for s in statuses if _failed(s)]
         if failed:
             # A service that cannot start ends the run: nothing is left running (the logs are kept).
-            reason = "; ".join(failure_reason(paths, s) for s in failed)
+            causes, waiting = root_failures(failed)
+            reason = "; ".join(failure_reason(paths, s) for s in causes)
+            if waiting:
+                reason += f" ({', '.join(s.name for s in waiting)} could not start without it)"
             bring_down(paths)
             print(
                 f"zendock up: {reason}; the stack is down (`zendock logs` keeps what it printed)",

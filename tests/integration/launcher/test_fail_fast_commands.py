@@ -104,3 +104,6 @@ def test_a_taken_port_ends_up_wait_with_the_port_and_the_fix(mark: str, project:
         endpoint = f"tcp/127.0.0.1:{taken.getsockname()[1]}"
         done, took_s = _zendock(mark, *_command("up --wait", project, tmp_path), endpoint=endpoint)
     _assert_ended_at_once(done, took_s, "router", f"{endpoint} is in use", "ZENOH_LISTEN")
+    last = done.stderr.strip().splitlines()[-1]
+    # said once: a service that waited on the router is named, not given the router's cause again
+    assert last.count(f"{endpoint} is in use") == 1, last
