@@ -40,6 +40,17 @@ def count(text: str) -> int:
     return value
 
 
+def seed(text: str) -> int:
+    """A whole number of at least 0 (a seed; a generated room's name carries it)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be a whole number of at least 0, got {text!r}")
+    return value
+
+
 def real_time_factor(text: str) -> str:
     """The simulator's real-time factor: a positive number, or ``max`` (as fast as it can step)."""
     if text.strip().lower() == "max":

@@ -12,6 +12,7 @@ import difflib
 from pathlib import Path
 
 from deploy.paths import REPO_ROOT
+from shared.suggestions import did_you_mean
 
 WORLDS_DIR = REPO_ROOT / "deploy" / "worlds"
 
@@ -88,7 +89,8 @@ def campaign_world(text: str) -> str:
 
         if kind not in KINDS:
             raise argparse.ArgumentTypeError(
-                f"no kind of generated world {kind!r} (generated:KIND, KIND one of: {', '.join(KINDS)})"
+                f"no kind of generated world {kind!r}{did_you_mean(kind, KINDS)} "
+                f"(generated:KIND, KIND one of: {', '.join(KINDS)})"
             )
         return text
     return world_argument(text)

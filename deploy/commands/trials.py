@@ -21,7 +21,7 @@ from rich.progress import (
 from rich.table import Table
 
 from deploy import strict_json
-from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor
+from deploy.arg_types import add_service_option, check_replacements, count, real_time_factor, seed
 from deploy.options import add_controller_option, add_detector_option, add_runs_dir_option, add_standby_option
 from deploy.progress import TRIALS_PER_LINE, is_terminal, trials_line
 from deploy.world_names import campaign_world, generated_kind
@@ -267,18 +267,24 @@ def _run_world(console: Console, options, run_trials):
 
 
 def collision_lines(results: list, options) -> list[str]:
-    """One line per trial that touched something: what, where, and a command that starts it again from the
-    same pose (a world's starts are drawn from its seed in order, so its first ``index + 1`` end with this
-    one's)."""
+    """One line per trial that touched something or did not dock: what, where, and a command that starts it
+    again from the same pose (a world's starts are drawn from its seed in order, so its first ``index + 1``
+    end with this one's; a generated room's seed is the campaign's plus 1000 for each room before it)."""
     lines = []
     for r in results:
-        if not r.collided:
-            continue
-        touched = ", ".join(f"{c['kind']} at ({c['x']:.2f}, {c['y']:.2f})" for c in r.collided)
         x, y, yaw = r.start
+        trial = f"{options.world.stem} trial {r.index} from ({x:.2f}, {y:.2f}, {yaw:.2f})"
+        if r.collided:
+            touched = ", ".join(f"{c['kind']} at ({c['x']:.2f}, {c['y']:.2f})" for c in r.collided)
+            what = f"collision: {trial} touched {touched}"
+        elif r.too_fast:
+            what = f"not docked: {trial} met the plate faster than the contact speed limit"
+        elif not r.docked:
+            what = f"not docked: {trial} did not charge within the trial's limit"
+        else:
+            continue
         lines.append(
-            f"collision: {options.world.stem} trial {r.index} from ({x:.2f}, {y:.2f}, {yaw:.2f}) touched "
-            f"{touched}; again: zendock trials --world {options.world} --n {r.index + 1} --seed {options.seed} "
+            f"{what}; again: zendock trials --world {options.world} --n {r.index + 1} --seed {options.seed} "
             f"--controller {options.controller} --detector {options.detector} --rtf {options.rtf}"
         )
     return lines
@@ -326,7 +332,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     add_detector_option(parser, "aruco")
     parser.add_argument(
-        "--seed", type=int, default=0, help="seed of the start poses and the simulator's noise"
+        "--seed", type=seed, default=0, help="seed of the start poses and the simulator's noise"
     )
     parser.add_argument(
         "--rtf", type=real_time_factor, default="8", help="simulator real-time factor, or max"

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from deploy.arg_types import count
+from deploy.arg_types import count, seed
 from shared.config_errors import ConfigError
 from shared.world_gen import KINDS
 
@@ -17,10 +17,15 @@ from shared.world_gen import KINDS
 def _generate(args: argparse.Namespace) -> int:
     from deploy.generated_worlds import generate_rooms  # noqa: PLC0415 - the planner's tool only when used
 
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: not a directory")
     try:
-        paths = generate_rooms(args.kind, args.seed, args.count, Path(args.out))
+        paths = generate_rooms(args.kind, args.seed, args.count, out)
     except RuntimeError as exc:
         raise ConfigError(str(exc)) from None
+    except OSError as exc:  # a parent that is a file, no permission, a read-only place
+        raise ConfigError(f"--out {out}: cannot write rooms there: {exc.strerror or exc}") from None
     for path in paths:
         print(path)
     return 0
@@ -41,7 +46,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     generate.add_argument(
         "--kind", choices=KINDS, default="glass", help="what rooms to draw (default: glass)"
     )
-    generate.add_argument("--seed", type=int, default=0, help="the first room's seed (default: 0)")
+    generate.add_argument("--seed", type=seed, default=0, help="the first room's seed (default: 0)")
     generate.add_argument("--count", type=count, default=1, help="how many rooms, seeds on from --seed")
     generate.add_argument("--out", default=".", metavar="DIR", help="where to write them (default: .)")
     generate.set_defaults(func=_generate)

@@ -160,6 +160,26 @@ def test_a_misspelled_service_or_profile_names_itself(
     assert line.startswith(f"zendock {argv[0]}: ") and guess in line, line
 
 
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["worlds", "generate", "--out", "README.md"], "--out README.md: not a directory"),
+        (
+            ["worlds", "generate", "--out", "README.md/rooms"],
+            "--out README.md/rooms: cannot write rooms there",
+        ),
+        (["worlds", "generate", "--seed", "-1"], "argument --seed: must be a whole number of at least 0"),
+        (["trials", "--world", "generated:glas"], "no kind of generated world 'glas' (did you mean glass?)"),
+    ],
+)
+def test_generated_worlds_name_a_bad_place_seed_or_kind(
+    argv: list[str], says: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert _exit_code(argv) == 2
+    line = _one_error_line(capsys)
+    assert says in line, line
+
+
 def test_a_shard_count_is_bounded_by_the_whole_campaigns_trials(capsys: pytest.CaptureFixture[str]) -> None:
     """A campaign across worlds is sharded as a whole: one trial in each unseen room makes that many."""
     rooms = len(list((REPO_ROOT / "deploy" / "worlds" / "unseen").glob("*.yaml")))

@@ -247,5 +247,18 @@ def test_a_trial_that_touched_something_says_what_where_and_how_to_start_it_agai
         "wall at (6.43, 5.50); again: zendock trials --world /rooms/generated-glass-184-1.yaml --n 2 "
         "--seed 84100 --controller graceful --detector synthetic --rtf 5"
     ]
+    lost = _result(2, False, math.nan, math.nan)
+    lost.start = (2.0, 3.0, 0.5)
+    fast = _result(3, False, math.nan, math.nan)
+    fast.start, fast.too_fast = (1.0, 1.0, 0.0), True
+    again = (
+        "zendock trials --world /rooms/generated-glass-184-1.yaml --n {} --seed 84100 --controller graceful"
+    )
+    assert collision_lines([lost, fast], options) == [
+        "not docked: generated-glass-184-1 trial 2 from (2.00, 3.00, 0.50) did not charge within the trial's "
+        f"limit; again: {again.format(3)} --detector synthetic --rtf 5",
+        "not docked: generated-glass-184-1 trial 3 from (1.00, 1.00, 0.00) met the plate faster than the "
+        f"contact speed limit; again: {again.format(4)} --detector synthetic --rtf 5",
+    ]
     assert _trial(asdict(hit)).collided == hit.collided
     assert _trial({k: v for k, v in asdict(clean).items() if k != "collided"}).collided == []
