@@ -276,7 +276,11 @@ def test_a_handoff_holds_the_world_until_the_next_driver_moves_the_robot_or_its_
             return now() > stood + 2.0
 
         wait_until(driven_on, 20.0, lambda: f"still held at {now():.2f} s", interval_s=0.01)
-        cmd.publish(Twist.planar(0.0, 0.0), answers_s=now())
+        # A stop that names no tick answers the one it arrives at. Answering now() would name the clock this
+        # client last read, which flat out lags the world: the world would then await the "thinking" driver
+        # (a command answering an old tick, measurement 91) where the test expects it to run free, and stand
+        # short of the next hold's gap, for as long as the raised wait allows (it failed so once in make test).
+        cmd.publish(Twist.planar(0.0, 0.0))
 
         # A holder that drives next itself: only its let-go ends the hold.
         tick = now()
