@@ -2,11 +2,21 @@
 
 zendock never relies on discovery by multicast: every process connects to (or listens on) the endpoints
 it is given, so tests on free ports and several stacks on one machine never meet by accident.
+
+A process that opens a session also lets Zenoh's callback threads finish at exit
+(:func:`finish_callback_threads`): zenoh-python runs each Python callback on a thread of its own, a daemon
+when the thread that declared the callback is one (an executor spun by ``spin_in_background``, a
+container's member), and the interpreter does not wait for daemon threads. One that wakes while the
+interpreter finalises is made to exit through Rust's ``catch_unwind``, and the process aborts ("FATAL:
+exception not rethrown", exit 134): the failure that ended a CI run in a launcher thread (measurement 128).
 """
 
 from __future__ import annotations
 
+import atexit
 import json
+import threading
+import time
 from pathlib import Path
 
 import msgspec
@@ -69,6 +79,37 @@ def make_config(spec: SessionSpec) -> zenoh.Config:
     return conf
 
 
+#: zenoh-python's name for the thread it runs a Python callback on ends so.
+CALLBACK_THREAD_SUFFIX = "(pyo3-closure)"
+#: How long, in all, exit waits for Zenoh's daemon callback threads (a session left open keeps its
+#: subscribers' threads alive, and exit then waits this long for nothing).
+CALLBACK_THREADS_AT_EXIT_S = 1.0
+_at_exit = threading.Lock()
+_registered = False
+
+
+def finish_callback_threads(timeout_s: float = CALLBACK_THREADS_AT_EXIT_S) -> list[str]:
+    """Wait (``timeout_s`` in all) for Zenoh's daemon callback threads to end; the names of those still
+    running. Run at exit, after the non-daemon threads are joined and before the interpreter finalises;
+    a closed session's threads end within moments of their last callback."""
+    deadline = time.monotonic() + timeout_s
+    current = threading.current_thread()
+    waiting = [
+        t
+        for t in threading.enumerate()
+        if t.daemon and t is not current and t.name.endswith(CALLBACK_THREAD_SUFFIX)
+    ]
+    for thread in waiting:
+        thread.join(max(0.0, deadline - time.monotonic()))
+    return [t.name for t in waiting if t.is_alive()]
+
+
 def open_session(spec: SessionSpec) -> zenoh.Session:
-    """Open a session; use it as a context manager so it is always closed."""
+    """Open a session; use it as a context manager so it is always closed. The first one also registers
+    :func:`finish_callback_threads` to run at exit."""
+    global _registered
+    with _at_exit:
+        if not _registered:
+            atexit.register(finish_callback_threads)
+            _registered = True
     return zenoh.open(make_config(spec))
