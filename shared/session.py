@@ -88,20 +88,14 @@ _at_exit = threading.Lock()
 _registered = False
 
 
-def finish_callback_threads(timeout_s: float = CALLBACK_THREADS_AT_EXIT_S) -> list[str]:
-    """Wait (``timeout_s`` in all) for Zenoh's daemon callback threads to end; the names of those still
-    running. Run at exit, after the non-daemon threads are joined and before the interpreter finalises;
+def finish_callback_threads(timeout_s: float = CALLBACK_THREADS_AT_EXIT_S) -> None:
+    """Wait (``timeout_s`` in all) for Zenoh's daemon callback threads to end. Run at exit, after the non-daemon threads are joined and before the interpreter finalises;
     a closed session's threads end within moments of their last callback."""
     deadline = time.monotonic() + timeout_s
     current = threading.current_thread()
-    waiting = [
-        t
-        for t in threading.enumerate()
-        if t.daemon and t is not current and t.name.endswith(CALLBACK_THREAD_SUFFIX)
-    ]
-    for thread in waiting:
-        thread.join(max(0.0, deadline - time.monotonic()))
-    return [t.name for t in waiting if t.is_alive()]
+    for thread in threading.enumerate():
+        if thread.daemon and thread is not current and thread.name.endswith(CALLBACK_THREAD_SUFFIX):
+            thread.join(max(0.0, deadline - time.monotonic()))
 
 
 def open_session(spec: SessionSpec) -> zenoh.Session:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import re
 import subprocess
 import sys
 import threading
@@ -29,7 +28,7 @@ from deploy.launcher.project import (
 )
 from deploy.launcher.runtime import ControlError, RuntimePaths, request, supervisor_info
 from deploy.launcher.stack_file import Stack
-from deploy.launcher.status import ServiceStatus
+from deploy.launcher.status import ServiceStatus, failed_dependency
 from deploy.options import add_standby_option
 from shared.config_errors import ConfigError
 
@@ -154,14 +153,10 @@ def failure_reason(paths: RuntimePaths, status: ServiceStatus) -> str:
     return f"{status.name} failed: {cause or status.detail}"
 
 
-#: How the supervisor words a service stopped by a dependency's failure (``dependency router exited ...``).
-_DEPENDENCY_FAILED = re.compile(r"dependency (\S+) ")
-
-
 def root_failures(failed: list[ServiceStatus]) -> tuple[list[ServiceStatus], list[ServiceStatus]]:
     """The failures that are causes, and those only waiting on one of them (their detail repeats its cause)."""
     names = {s.name for s in failed}
-    waiting = [s for s in failed if (m := _DEPENDENCY_FAILED.match(s.detail or "")) and m.group(1) in names]
+    waiting = [s for s in failed if failed_dependency(s.detail or "") in names]
     causes = [s for s in failed if s not in waiting]
     return (causes, waiting) if causes else (failed, [])
 

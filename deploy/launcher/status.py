@@ -85,3 +85,16 @@ def public_state(phase: Phase, starts: int) -> str:
     if phase is Phase.WAITING:
         return "restarting" if starts else "stopped"
     return phase.value
+
+
+def dependency_failed_detail(dependency: str, what: str, condition: str) -> str:
+    """A service's detail when it cannot start because ``dependency`` ended (``what``: how it ended)."""
+    return f"dependency {dependency} {what} ({condition} not met)"
+
+
+def failed_dependency(detail: str) -> str | None:
+    """The dependency a :func:`dependency_failed_detail` names; None for any other detail."""
+    if not detail.startswith("dependency "):
+        return None
+    name = detail[len("dependency ") :].split(" ", 1)[0]
+    return name or None

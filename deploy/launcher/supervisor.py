@@ -22,7 +22,7 @@ from deploy.launcher.plan import LaunchPlan, ServicePlan
 from deploy.launcher.process import GroupProcess, ServiceProcess
 from deploy.launcher.restart import FINAL_EXITS, Backoff
 from deploy.launcher.robot_template import service_for
-from deploy.launcher.status import Phase, ServiceStatus, public_state
+from deploy.launcher.status import Phase, ServiceStatus, dependency_failed_detail, public_state
 from deploy.launcher.zygote import STANDBY_GRACE_S, Zygote
 from shared.suggestions import each_with_a_guess
 
@@ -538,9 +538,7 @@ class Supervisor:
             if ended and code == 0 and runner.starts:
                 return None
         if ended:
-            raise DependencyFailed(
-                f"dependency {dependency} {runner.detail or 'exited'} ({condition} not met)"
-            )
+            raise DependencyFailed(dependency_failed_detail(dependency, runner.detail or "exited", condition))
         return f"{dependency} ({condition})"
 
     def with_dependencies(self, names: Iterable[str]) -> list[str]:
