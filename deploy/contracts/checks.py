@@ -451,6 +451,16 @@ def _teleport(ctx: Context, pose: Pose2D) -> None:
         raise ValueError(f"teleport to {pose} refused: {reply.message}")
 
 
+def _pose_reads(ctx: Context, target: Pose2D, timeout_s: float) -> Float64MultiArray | None:
+    """The first ``map_to_base_link_pose2d`` within 5 cm and 0.05 rad of ``target``, else None."""
+
+    def close(m: Float64MultiArray) -> bool:
+        x, y, yaw = (float(v) for v in m.data[:3]) if len(m.data) >= 3 else (math.inf, math.inf, math.inf)
+        return math.hypot(x - target.x, y - target.y) < 0.05 and abs(wrap_angle(yaw - target.yaw)) < 0.05
+
+    return ctx.probe.wait_for(ctx.key("map_to_base_link_pose2d"), Float64MultiArray, close, timeout_s)
+
+
 def in_front_of_dock(world: World, distance_m: float) -> Pose2D:
     """Facing the first dock, ``distance_m`` short of its docked pose."""
     dock = world.docks[0].pose2d
@@ -570,12 +580,7 @@ def pose_behaviour(ctx: Context) -> list[PlannedCheck]:
     def follows() -> tuple[bool, str]:
         target = in_front_of_dock(ctx.world, 1.0)
         _teleport(ctx, target)
-
-        def close(m: Float64MultiArray) -> bool:
-            x, y, yaw = (float(v) for v in m.data[:3]) if len(m.data) >= 3 else (math.inf, math.inf, math.inf)
-            return math.hypot(x - target.x, y - target.y) < 0.05 and abs(wrap_angle(yaw - target.yaw)) < 0.05
-
-        msg = ctx.probe.wait_for(ctx.key("map_to_base_link_pose2d"), Float64MultiArray, close, 5.0)
+        msg = _pose_reads(ctx, target, 5.0)
         return (
             msg is not None,
             f"[{', '.join(f'{v:.3f}' for v in msg.data)}] for truth {target}"
@@ -785,6 +790,10 @@ def perception_behaviour(ctx: Context) -> list[PlannedCheck]:
             if why is not None:
                 problems.append(f"{where}: no room for the robot in this world ({why})")
                 continue
+            # The move counts from when the robot's pose says so: perception settles a side view's mirror
+            # ambiguity by the pose, and a frame taken after the teleport but judged by the pose from
+            # before it is the teleport's doing, not the service's (no robot jumps metres).
+            _pose_reads(ctx, robot, POSE_WAIT_S)
             moved_s = ctx.probe.sim_now() if ctx.sim else None
             _wait_sim(ctx, 0.5)  # most detections of frames from before the move are out of the way
             looked += 1
@@ -874,6 +883,8 @@ FLIPPED_RAD = 0.3
 #: A detection stamped less than this after the teleport's sim time may be of a frame from before it (the
 #: probe hears the sim clock a message late).
 STALE_MARGIN_S = 0.1
+#: How long a viewpoint waits for the robot's pose to read the teleport (wall); past it the check goes on.
+POSE_WAIT_S = 5.0
 #: How many 1.5 s windows the check listens through while only detections of earlier frames arrive.
 ROUND_WINDOWS = 3
 
