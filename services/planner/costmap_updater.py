@@ -339,6 +339,16 @@ class CostmapUpdater:
             self.apply_glass()
         self._log.info("costmap cleared (%s)", what)
 
+    def restore_unheard_glass(self) -> int:
+        """After a look round that stopped early: the glass the last clearing forgot where the sonar has
+        not looked since comes back (:meth:`GlassMemory.restore_unheard`); how many cells of glass."""
+        if self.costmap is None or self.glass is None:
+            return 0
+        restored = self.glass.restore_unheard()
+        self.apply_glass()
+        self._log.info("glass memory the look round did not hear again is back: %d cells of glass", restored)
+        return restored
+
     def clear_square(self, centre: tuple[float, float], side_m: float, outside: bool) -> None:
         """Forget what the lidar saw and the glass memory inside the square of side ``side_m`` round
         ``centre`` (or, ``outside``, everywhere else): Nav2's region clears."""

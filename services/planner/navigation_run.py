@@ -121,7 +121,7 @@ class NavFeedback:
 
 @dataclass(slots=True)
 class NavOrders:
-    """What the node is to do, in this order: publish, plan, clear, feed back, end."""
+    """What the node is to do, in this order: publish, open a way, put glass back, plan, clear, feed back, end."""
 
     #: ``(linear, angular)`` to publish on cmd_vel.
     cmd: tuple[float, float] | None = None
@@ -138,6 +138,9 @@ class NavOrders:
     #: Clear the sensor layers, and as much glass as this says, around :attr:`clear_around`.
     clear: GlassClearing | None = None
     clear_around: Pose2D | None = None
+    #: Before the plan request: the look round after a clearing stopped early, so the glass the clearing
+    #: forgot and the sonar has not heard since comes back (a pane's end is not floor for want of a look).
+    restore_unheard_glass: bool = False
     feedback: NavFeedback | None = None
     end: NavEnd | None = None
 
@@ -517,6 +520,7 @@ class NavigationRun:
                 return
             if step.outcome is not Outcome.SUCCEEDED:
                 log.info("the look round stopped after %.2f rad: %s", step.progress, step.reason)
+                orders.restore_unheard_glass = True
             self._look = self._look_guard = None  # looked round (the wait before it is long over): plan
         orders.cmd = (0.0, 0.0)
         if self.clock_s < self._wait_until_s:

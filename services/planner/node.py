@@ -482,8 +482,8 @@ class PlannerService:
         )
 
     def _carry_out(self, orders: NavOrders) -> None:
-        """Do what the run says, in order: command, a way through suspicion, plan request, path, clearing,
-        feedback, the end."""
+        """Do what the run says, in order: command, a way through suspicion, glass put back, plan request,
+        path, clearing, feedback, the end."""
         run, handle = self._run, self._handle
         now = self._node.now()
         if orders.cmd is not None:
@@ -492,6 +492,8 @@ class PlannerService:
             self._costmap.change(
                 self._layers.open_way_through_suspicion, orders.open_way_from, run.goal, self._way_planner
             )
+        if orders.restore_unheard_glass:
+            self._costmap.change(self._layers.restore_unheard_glass)
         grid = self._costmap.grid
         if orders.plan_from is not None and run is not None and grid is not None:
             self._planning_in_flight = True

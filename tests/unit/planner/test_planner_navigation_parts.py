@@ -416,6 +416,61 @@ def test_clearing_round_the_robot_keeps_the_glass_within_its_turning_reach() -> 
     assert not _is_glass(memory, 1.6, 1.5), "the echo beyond the reach should be forgotten"
 
 
+def test_glass_a_clearing_forgot_comes_back_where_the_sonar_has_not_heard_since() -> None:
+    """A look round that could not turn heard nothing again: a pane's end forgotten for want of that look
+    was what the robot drove into next (generated room 103)."""
+    memory = _glass_memory(suspicion_m=0.0)
+    memory.add_reading((1.0, 1.5, 0.0), 0.6, 0.5, 0.02, 3.0)  # glass 0.6 m ahead
+    memory.add_reading((1.0, 1.5, math.pi / 2), 0.6, 0.5, 0.02, 3.0)  # and 0.6 m to the left
+    assert _is_glass(memory, 1.6, 1.5) and _is_glass(memory, 1.0, 2.1)
+    memory.clear_around((1.0, 1.5), 1.0, keep_within_m=memory.turning_reach_m)
+    assert not _is_glass(memory, 1.6, 1.5) and not _is_glass(memory, 1.0, 2.1)
+    memory.add_reading((1.0, 1.5, 0.0), 3.0, 0.5, 0.02, 3.0)  # looked ahead again: nothing there now
+    assert memory.restore_unheard() > 0
+    assert not _is_glass(memory, 1.6, 1.5), "what the sonar heard since the clearing stands"
+    assert _is_glass(memory, 1.0, 2.1), "the glass nobody looked at again is back"
+    assert memory.restore_unheard() == 0, "one clearing is put back once"
+
+
+def _slows_near(memory: GlassMemory, x: float, y: float) -> bool:
+    """Whether the robot slows for glass in the cell of ``(x, y)`` (:meth:`GlassMemory.heard_cells_xy`)."""
+    heard = memory.heard_cells_xy()
+    return bool(len(heard)) and float(np.min(np.hypot(heard[:, 0] - x, heard[:, 1] - y))) < 0.05
+
+
+@pytest.mark.parametrize("clearing", ["around", "all", "square"])
+def test_the_robot_slows_near_forgotten_glass_until_the_sonar_looks_there_again(clearing: str) -> None:
+    """A clearing forgets glass so that a plan may pass where a spurious echo stood; a pane's end forgotten
+    that way and not heard again was driven into at 0.35 m/s (generated room 103)."""
+    memory = _glass_memory(suspicion_m=0.0)
+    memory.add_reading((1.0, 1.5, 0.0), 0.6, 0.5, 0.02, 3.0)  # glass 0.6 m ahead
+    assert _is_glass(memory, 1.6, 1.5) and _slows_near(memory, 1.6, 1.5)
+    if clearing == "around":
+        memory.clear_around((1.0, 1.5), 1.0, keep_within_m=memory.turning_reach_m)
+    elif clearing == "all":
+        memory.clear()
+    else:
+        memory.clear_cells(memory.frame.cells_within((1.6, 1.5), 0.3))
+    assert not _is_glass(memory, 1.6, 1.5), "forgotten: the planner may pass"
+    assert _slows_near(memory, 1.6, 1.5), "but not at full speed"
+    memory.add_reading((1.0, 1.5, 0.0), 3.0, 0.5, 0.02, 3.0)  # looked again: nothing there now
+    assert not _slows_near(memory, 1.6, 1.5)
+    memory.clear()  # a later clearing does not bring back what the sonar has since found free
+    assert not _slows_near(memory, 1.6, 1.5)
+
+
+def test_glass_cleared_on_request_or_all_at_once_is_not_put_back() -> None:
+    memory = _glass_memory(suspicion_m=0.0)
+    memory.add_reading((1.0, 1.5, 0.0), 0.6, 0.5, 0.02, 3.0)
+    memory.clear_around((1.0, 1.5), 1.0, keep_within_m=memory.turning_reach_m)
+    memory.clear()  # a recovery that forgot everything (or Nav2's clear_entirely): nothing to put back
+    assert memory.restore_unheard() == 0 and not _is_glass(memory, 1.6, 1.5)
+    memory.add_reading((1.0, 1.5, 0.0), 0.6, 0.5, 0.02, 3.0)
+    memory.clear_around((1.0, 1.5), 1.0, keep_within_m=memory.turning_reach_m)
+    memory.clear_cells(memory.frame.cells_within((1.6, 1.5), 0.2))  # a region clear asked for since
+    assert memory.restore_unheard() == 0 and not _is_glass(memory, 1.6, 1.5)
+
+
 def test_recoveries_forget_glass_round_the_robot_and_all_of_it_only_when_no_path_is_found_again() -> None:
     kept, around, everything = GlassClearing.KEEP, GlassClearing.AROUND_ROBOT, GlassClearing.ALL
     # following failed (blocked, stuck): a pane's end seen once stays known however often it fails

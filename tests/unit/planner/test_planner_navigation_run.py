@@ -45,6 +45,7 @@ class KinematicWorld:
         self.ends: list = []
         self.feedback: list = []
         self.clears: list[GlassClearing] = []
+        self.restores: list[bool] = []  # per glass put back: whether a plan was asked for in the same orders
         self.plans = 0
         #: (pose, how many plans had been asked for before it) of each way-through-suspicion order.
         self.open_ways: list[tuple[Pose2D, int]] = []
@@ -68,6 +69,8 @@ class KinematicWorld:
             self.cmd = orders.cmd
         if orders.clear is not None:
             self.clears.append(orders.clear)
+        if orders.restore_unheard_glass:
+            self.restores.append(orders.plan_from is not None)  # put back before the plan it is for
         if orders.feedback is not None:
             self.feedback.append(orders.feedback)
         if orders.end is not None:
@@ -200,6 +203,7 @@ def test_a_recovery_that_forgets_heard_glass_turns_once_in_place_before_it_plans
         GlassClearing.ALL,
     ]
     assert len(looks) == 2, "one look round for each clearing that forgot heard glass"
+    assert world.restores == [], "a look round that turned once round heard again what it could"
     for turned in looks:
         assert abs(turned - 2.0 * math.pi) < 0.15, f"turned {turned:.2f} rad, not once round"
     assert [end.ending for end in world.ends] == [Ending.ABORTED]
@@ -226,6 +230,7 @@ def test_a_look_round_keeps_its_corners_off_the_glass_the_clearing_just_forgot()
         costs = heard.footprint_costs(pose, *footprint)
         assert costs[0] < LETHAL_OBSTACLE, f"a corner met the pane at {world.pose} in {run.phase}"
     assert GlassClearing.AROUND_ROBOT in world.clears and looked_ticks > 0, "no look round was tried"
+    assert world.restores and all(world.restores), "the stopped look round's glass goes back before planning"
 
 
 def _drive_past_flickers(params: Params) -> tuple[KinematicWorld, NavigationRun]:
