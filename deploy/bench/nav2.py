@@ -125,6 +125,11 @@ def one_run(idle_s: float, busy_s: float) -> Nav2Run:
             finally:
                 busy_user.kill()
                 busy_user.wait(timeout=10)
+        except psutil.NoSuchProcess as exc:
+            last = launcher.logs("ros2_dds", tail_lines=5)
+            raise BenchError(
+                f"ros2_dds (pid {exc.pid}) exited while it was measured; its last lines:\n" + "\n".join(last)
+            ) from None
         finally:
             launcher.down()
     return Nav2Run(
