@@ -108,17 +108,22 @@ def _context(probe: _LaggingProbe, world: Any) -> Any:
     )
 
 
+def _look_round(probe: _LaggingProbe, world: Any, monkeypatch: pytest.MonkeyPatch) -> tuple[bool, str]:
+    """The look from round the dock, with ``probe`` playing the bus and its teleports."""
+    monkeypatch.setattr(checks, "_teleport", lambda _ctx, pose: probe.moved(pose))
+    sees_round = {c.name: c for c in checks.perception_behaviour(_context(probe, world))}[
+        "sees the dock from 0.4 to 3 m and 40 degrees aside"
+    ]
+    return sees_round.body()
+
+
 @pytest.mark.parametrize("late_windows", [0, 1, 2])
 def test_detections_of_frames_from_before_the_move_are_not_judged_against_it(
     late_windows: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     world = load_world(SEED_ROOM)
     probe = _LaggingProbe(dock=world.docks[0].pose2d, late_windows=late_windows)
-    monkeypatch.setattr(checks, "_teleport", lambda _ctx, pose: probe.moved(pose))
-    sees_round = {c.name: c for c in checks.perception_behaviour(_context(probe, world))}[
-        "sees the dock from 0.4 to 3 m and 40 degrees aside"
-    ]
-    passed, evidence = sees_round.body()
+    passed, evidence = _look_round(probe, world, monkeypatch)
     assert passed, evidence
     assert "worst median 0 mm" in evidence, evidence
 
@@ -126,11 +131,7 @@ def test_detections_of_frames_from_before_the_move_are_not_judged_against_it(
 def test_only_detections_from_before_the_move_say_so(monkeypatch: pytest.MonkeyPatch) -> None:
     world = load_world(SEED_ROOM)
     probe = _LaggingProbe(dock=world.docks[0].pose2d, late_windows=checks.ROUND_WINDOWS)
-    monkeypatch.setattr(checks, "_teleport", lambda _ctx, pose: probe.moved(pose))
-    sees_round = {c.name: c for c in checks.perception_behaviour(_context(probe, world))}[
-        "sees the dock from 0.4 to 3 m and 40 degrees aside"
-    ]
-    passed, evidence = sees_round.body()
+    passed, evidence = _look_round(probe, world, monkeypatch)
     assert not passed
     assert (
         "no detection in 4.5 s of a frame taken after the move (12 of frames from before it)" in evidence
@@ -143,10 +144,6 @@ def test_frames_taken_before_the_pose_reads_the_move_are_not_judged_against_it(
     """A loaded pose service reads a teleport late; perception meanwhile settles mirror views by the old pose."""
     world = load_world(SEED_ROOM)
     probe = _LaggingProbe(dock=world.docks[0].pose2d, late_windows=0, pose_lag_s=0.4)
-    monkeypatch.setattr(checks, "_teleport", lambda _ctx, pose: probe.moved(pose))
-    sees_round = {c.name: c for c in checks.perception_behaviour(_context(probe, world))}[
-        "sees the dock from 0.4 to 3 m and 40 degrees aside"
-    ]
-    passed, evidence = sees_round.body()
+    passed, evidence = _look_round(probe, world, monkeypatch)
     assert passed, evidence
     assert "worst median 0 mm and 0.000 rad" in evidence, evidence
