@@ -10,10 +10,11 @@ know and the closest it does (:func:`difflib.get_close_matches`), and an invalid
 from __future__ import annotations
 
 import argparse
-import difflib
 import re
 from collections.abc import Sequence
 from typing import NoReturn
+
+from shared.suggestions import closest_names
 
 _INVALID_CHOICE = re.compile(
     r"argument (?P<arg>.+?): invalid choice: '(?P<value>.*?)' \(choose from (?P<choices>.*)\)"
@@ -21,7 +22,7 @@ _INVALID_CHOICE = re.compile(
 
 
 def _closest(word: str, candidates: Sequence[str]) -> str | None:
-    found = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    found = closest_names(word, candidates)
     return found[0] if found else None
 
 

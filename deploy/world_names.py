@@ -8,11 +8,10 @@ A ``--world`` value is a world file or a directory of them as given, else the na
 from __future__ import annotations
 
 import argparse
-import difflib
 from pathlib import Path
 
 from deploy.paths import REPO_ROOT
-from shared.suggestions import did_you_mean
+from shared.suggestions import closest_names, did_you_mean
 
 WORLDS_DIR = REPO_ROOT / "deploy" / "worlds"
 
@@ -42,7 +41,7 @@ def find_world(text: str) -> Path:
         return names[name]
     if given.is_absolute() or text.startswith("."):
         raise ValueError(f"{text}: no such file or directory")
-    close = difflib.get_close_matches(name, list(names), n=3, cutoff=0.6)
+    close = closest_names(name, names, n=3)
     hint = f"did you mean {' or '.join(close)}? " if close else ""
     top = ", ".join(sorted(p.stem for p in WORLDS_DIR.glob("*.yaml")))
     raise ValueError(

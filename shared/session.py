@@ -89,8 +89,10 @@ _registered = False
 
 
 def finish_callback_threads(timeout_s: float = CALLBACK_THREADS_AT_EXIT_S) -> None:
-    """Wait (``timeout_s`` in all) for Zenoh's daemon callback threads to end. Run at exit, after the non-daemon threads are joined and before the interpreter finalises;
-    a closed session's threads end within moments of their last callback."""
+    """Wait (``timeout_s`` in all) for Zenoh's daemon callback threads to end.
+
+    Run at exit, after the non-daemon threads are joined and before the interpreter finalises; a closed
+    session's threads end within moments of their last callback."""
     deadline = time.monotonic() + timeout_s
     current = threading.current_thread()
     for thread in threading.enumerate():

@@ -9,11 +9,16 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 
-def did_you_mean(name: str, known: Iterable[str]) -> str:
-    """`` (did you mean X?)`` with the known name closest to ``name``; empty when none is close."""
+def closest_names(name: str, known: Iterable[str], n: int = 1, cutoff: float = 0.6) -> list[str]:
+    """Up to ``n`` known names closest to ``name``, closest first, none below ``cutoff``."""
     import difflib  # noqa: PLC0415 - only a refused name needs it, not a service's start
 
-    close = difflib.get_close_matches(name, list(known), n=1)
+    return difflib.get_close_matches(name, list(known), n=n, cutoff=cutoff)
+
+
+def did_you_mean(name: str, known: Iterable[str]) -> str:
+    """`` (did you mean X?)`` with the known name closest to ``name``; empty when none is close."""
+    close = closest_names(name, known)
     return f" (did you mean {close[0]}?)" if close else ""
 
 
@@ -23,4 +28,12 @@ def each_with_a_guess(names: Iterable[str], known: Iterable[str]) -> str:
     return ", ".join(f"{name}{did_you_mean(name, candidates)}" for name in names)
 
 
-__all__ = ["did_you_mean", "each_with_a_guess"]
+def no_such(what: str, unknown: Iterable[str], known: Iterable[str]) -> str:
+    """``no such service: plnner (did you mean planner?) (services: a, b)``: the names refused, each with
+    its guess, and the names there are (left out when there are none)."""
+    candidates = list(known)
+    listed = f" ({what}s: {', '.join(candidates)})" if candidates else ""
+    return f"no such {what}: {each_with_a_guess(unknown, candidates)}{listed}"
+
+
+__all__ = ["closest_names", "did_you_mean", "each_with_a_guess", "no_such"]

@@ -15,7 +15,7 @@ from deploy.launcher.printer import Printer
 from deploy.launcher.project import add_project_options, resolve_project
 from deploy.launcher.robot_template import service_for
 from deploy.launcher.runtime import supervisor_info
-from shared.suggestions import each_with_a_guess
+from shared.suggestions import no_such
 
 FOLLOW_POLL_S = 0.2
 
@@ -31,8 +31,7 @@ def main(args: argparse.Namespace) -> int:
     services = [service_for(s, known) for s in args.services] or available
     unknown = [s for s in services if s not in known]
     if unknown:
-        listed = f" (services: {', '.join(known)})" if known else ""
-        print(f"zendock logs: no such service: {each_with_a_guess(unknown, known)}{listed}", file=sys.stderr)
+        print(f"zendock logs: {no_such('service', unknown, known)}", file=sys.stderr)
         return 2
     missing = [s for s in services if s not in available]
     if missing:

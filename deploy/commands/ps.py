@@ -23,7 +23,7 @@ from deploy.launcher.runtime import (
 )
 from deploy.launcher.status import ServiceStatus
 from shared.config_errors import ConfigError
-from shared.suggestions import each_with_a_guess
+from shared.suggestions import no_such
 
 
 def current_statuses(paths: RuntimePaths) -> tuple[list[ServiceStatus], bool]:
@@ -105,9 +105,7 @@ def main(args: argparse.Namespace) -> int:
         )
         unknown = [name for name in args.services if name not in known]
         if unknown and known:  # a name the project has no service by: an empty table would hide the typo
-            raise ConfigError(
-                f"no such service: {each_with_a_guess(unknown, known)} (services: {', '.join(known)})"
-            )
+            raise ConfigError(no_such("service", unknown, known))
         statuses = [s for s in statuses if s.name in args.services]
     if statuses and not live:
         print(

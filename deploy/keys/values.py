@@ -10,7 +10,6 @@ schema: any error names the field, and nothing is sent.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import time
 import typing
 from collections.abc import Callable
@@ -22,6 +21,7 @@ from deploy.keys.errors import EXIT_USAGE, KeysError
 from deploy.keys.types import known_types
 from shared.messages import Header, Time
 from shared.schema import Message, MessageError
+from shared.suggestions import closest_names
 
 NOW = "now"
 AUTO = "auto"
@@ -42,7 +42,7 @@ def resolve_type(type_text: str) -> type[Message]:
             return types[found[0]]
         if len(found) > 1:
             raise KeysError(f"type {text!r} is ambiguous: {', '.join(sorted(found))}", EXIT_USAGE)
-    close = difflib.get_close_matches(text, list(types), n=3, cutoff=0.5)
+    close = closest_names(text, types, n=3, cutoff=0.5)
     hint = f"; did you mean {' or '.join(close)}?" if close else ""
     raise KeysError(f"unknown message type {text!r}{hint}", EXIT_USAGE)
 

@@ -43,7 +43,7 @@ from shared.interpolation import InterpolationError, interpolate_tree, parse_env
 from shared.names import normalise_namespace
 from shared.session import DEFAULT_ROUTER_ENDPOINT
 from shared.structs import blaming, validate
-from shared.suggestions import each_with_a_guess
+from shared.suggestions import no_such
 
 DEFAULT_CONNECT = f"${{ZENOH_CONNECT:-{DEFAULT_ROUTER_ENDPOINT}}}"
 DEFAULT_LIVELINESS_TIMEOUT_S = 30.0
@@ -273,10 +273,7 @@ class Stack:
         wanted = list(names)
         unknown = [name for name in wanted if name not in self.services]
         if unknown:
-            raise ConfigError(
-                f"{self.source}: no such service: {each_with_a_guess(unknown, self.services)} "
-                f"(services: {', '.join(self.services)})"
-            )
+            raise ConfigError(f"{self.source}: {no_such('service', unknown, self.services)}")
         active = set(profiles)
         if not wanted:
             wanted = [

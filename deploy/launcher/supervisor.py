@@ -24,7 +24,7 @@ from deploy.launcher.restart import FINAL_EXITS, Backoff
 from deploy.launcher.robot_template import service_for
 from deploy.launcher.status import Phase, ServiceStatus, dependency_failed_detail, public_state
 from deploy.launcher.zygote import STANDBY_GRACE_S, Zygote
-from shared.suggestions import each_with_a_guess
+from shared.suggestions import no_such
 
 WATCHER_CLOSE_S = 5.0
 
@@ -558,9 +558,7 @@ class Supervisor:
         names = [service_for(name, services) for name in names]
         unknown = [name for name in names if name not in self.plan.services]
         if unknown:
-            raise KeyError(
-                f"no such service: {each_with_a_guess(unknown, services)} (services: {', '.join(services)})"
-            )
+            raise KeyError(no_such("service", unknown, services))
         return names
 
     # -- control --------------------------------------------------------------------------------------
