@@ -46,6 +46,7 @@ def _summary_table(summary: dict) -> Table:
         "max_arrival_speed_mps": lambda v: f"{v:.3f} m/s",
         "median_glass_coverage": lambda v: f"{100 * v:.0f} %",
         "heard_panes_found": lambda v: f"{100 * v:.0f} %",
+        "p05_glass_clearance_m": lambda v: f"{100 * v:.1f} cm",
     }
     from deploy.trials.records import HEADLINE_KEYS  # noqa: PLC0415 - the package loads the campaign
 

@@ -32,6 +32,7 @@ from deploy.memory import PeakRssSampler
 from deploy.observer import RunObserver, RunRecord
 from deploy.paths import REPO_ROOT, new_run_dir
 from deploy.trials.chaos import ChaosMonkey
+from deploy.trials.glass_clearance import closest_glass_pass
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.stack import GLASS_MEMORY_FILE, trials_stack
 from deploy.trials.starts import beacon_starts, lower_bound_parts, reachable_starts
@@ -171,6 +172,11 @@ def _run_one(
             for kind, (x, y) in zip(record.collision_kinds, record.collision_points, strict=True)
         ],
     )
+    closest = closest_glass_pass(world, record.driven)
+    if closest is not None:
+        result.glass_clearance_m = round(closest.clearance_m, 4)
+        if math.isfinite(closest.x):
+            result.glass_closest_xy = [round(closest.x, 3), round(closest.y, 3)]
     # The planner writes its glass memory at most once a second: this is it within a second of the end.
     glass = read_glass_marks(state_dir / robot / GLASS_MEMORY_FILE, world)
     if glass is not None:

@@ -140,6 +140,11 @@ class TrialResult:
     #: What each collision touched and where, in order: ``{"kind": "glass", "x": ..., "y": ...}`` (map frame,
     #: metres; kind as the simulator's ``collisions`` key gives it).
     collided: list[dict[str, Any]] = field(default_factory=list)
+    #: The closest the robot's footprint came to a pane during the trial, on ground truth (metres, 0 when it
+    #: touched, at most 1; NaN: the world has no glass), and the pane point nearest then (see
+    #: :mod:`deploy.trials.glass_clearance`).
+    glass_clearance_m: float = math.nan
+    glass_closest_xy: list[float] = field(default_factory=list)
 
 
 #: A campaign's figures as its JSON line and its summary table give them, in order.
@@ -163,6 +168,8 @@ HEADLINE_KEYS = (
     "p95_false_glass_cells",
     "median_glass_coverage",
     "heard_panes_found",
+    "near_glass_trials",
+    "p05_glass_clearance_m",
 )
 
 
@@ -197,6 +204,11 @@ class TrialsSummary:
     median_glass_coverage: float = math.nan
     #: Of the panes the sonar heard, over every trial, the share the glass memory marked (NaN: none heard).
     heard_panes_found: float = math.nan
+    #: Trials whose footprint came within ``NEAR_GLASS_M`` of a pane (touches included), and the 5th
+    #: percentile of the trials' closest passes (see :mod:`deploy.trials.glass_clearance`; 0 and NaN in a
+    #: world without glass): the risk of touching glass, measured on every pass and not only the rare touch.
+    near_glass_trials: int = 0
+    p05_glass_clearance_m: float = math.nan
     #: Each replaced service and the command that ran in its place (``--service``): whose figures these are.
     replaced_services: dict[str, str] = field(default_factory=dict)
     #: Where the time to dock goes: per docking state, the median over docked trials of its sim seconds

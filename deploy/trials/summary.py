@@ -7,6 +7,7 @@ import math
 from deploy.percentiles import median, percentile
 from deploy.replacements import replacements_report
 from deploy.trials.chaos import combine_chaos
+from deploy.trials.glass_clearance import NEAR_GLASS_M
 from deploy.trials.records import TrialOptions, TrialResult, TrialsSummary
 from deploy.trials.time_over_bound import PARTS
 from shared.world import World
@@ -30,6 +31,7 @@ def summarise_results(
     bounded = [r for r in ok if math.isfinite(r.lower_bound_s) and r.lower_bound_s > 0]
     # every mating counts, the ones too fast to be a docking above all
     arrivals = [r.arrival_speed_mps for r in results if math.isfinite(r.arrival_speed_mps)]
+    clearances = [r.glass_clearance_m for r in results if math.isfinite(r.glass_clearance_m)]
     return TrialsSummary(
         n=len(results),
         successes=len(ok),
@@ -49,6 +51,8 @@ def summarise_results(
         p95_false_glass_cells=percentile(false_glass, 0.95),
         median_glass_coverage=median(coverage),
         heard_panes_found=_share(sum(r.panes_found for r in results), sum(r.panes_heard for r in results)),
+        near_glass_trials=sum(1 for c in clearances if c < NEAR_GLASS_M),
+        p05_glass_clearance_m=percentile(clearances, 0.05),
         median_phase_s=median_phases([r.phase_s for r in ok]),
         median_arrival_speed_mps=median(arrivals),
         max_arrival_speed_mps=max(arrivals) if arrivals else math.nan,
@@ -136,4 +140,6 @@ def summary_reasons(summary: TrialsSummary) -> dict[str, str]:
         "median_glass_coverage": "the world has no glass, or no planner wrote its glass memory",
         "glass_coverage": "the world has no glass, or the planner had written no glass memory",
         "heard_panes_found": "the sonar heard no pane, or no planner wrote its glass memory",
+        "p05_glass_clearance_m": "the world has no glass",
+        "glass_clearance_m": "the world has no glass",
     }

@@ -138,6 +138,8 @@ def test_summary_counts_only_docked_runs_in_the_medians() -> None:
         "p95_false_glass_cells",
         "median_glass_coverage",
         "heard_panes_found",
+        "near_glass_trials",
+        "p05_glass_clearance_m",
     }
     assert summary.median_time_ratio == pytest.approx(3.75)  # 10/4 and 20/4
     assert (summary.median_arrival_speed_mps, summary.max_arrival_speed_mps) == pytest.approx((0.12, 0.3))
