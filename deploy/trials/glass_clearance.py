@@ -70,19 +70,18 @@ def closest_glass_pass(
     lo, hi = poses[:, :2].min(axis=0) - reach, poses[:, :2].max(axis=0) + reach
     near = points[np.all((points >= lo) & (points <= hi), axis=1)]
     for x, y, yaw in poses if len(near) else ():
-        dx, dy = near[:, 0] - x, near[:, 1] - y
-        close = dx * dx + dy * dy <= reach * reach
-        if not close.any():
+        close = near[((near[:, 0] - x) ** 2 + (near[:, 1] - y) ** 2) <= reach * reach]
+        if not len(close):
             continue
+        dx, dy = close[:, 0] - x, close[:, 1] - y
         c, s = math.cos(yaw), math.sin(yaw)
         # each pane point in the body frame, then its distance to the rectangle (0 inside it)
-        bx = np.abs(c * dx[close] + s * dy[close]) - half_l
-        by = np.abs(-s * dx[close] + c * dy[close]) - half_w
+        bx = np.abs(c * dx + s * dy) - half_l
+        by = np.abs(-s * dx + c * dy) - half_w
         gaps = np.hypot(np.maximum(bx, 0.0), np.maximum(by, 0.0))
         i = int(np.argmin(gaps))
         if gaps[i] < best.clearance_m:
-            px, py = near[close][i]
-            best = GlassPass(float(gaps[i]), float(px), float(py))
+            best = GlassPass(float(gaps[i]), float(close[i, 0]), float(close[i, 1]))
     return best
 
 
