@@ -28,7 +28,6 @@ import typing
 from collections.abc import Callable
 from typing import Annotated, Any, ClassVar, TypeVar, dataclass_transform
 
-import msgpack
 import msgspec
 import numpy as np
 
@@ -684,7 +683,7 @@ def _generate_fixed_codec(cls: type[Message]) -> tuple[Callable[[Any], Any], Cal
         pending += bytes([0x80 | len(c._FIELDS)])
         values = []
         for field, _, _ in c._FIELDS:
-            pending += msgpack.packb(field, use_bin_type=True)
+            pending += _PACK(field)
             annotation = hints[field]
             sub_path = f"{path}.{field}"
             if isinstance(annotation, type) and issubclass(annotation, Message):

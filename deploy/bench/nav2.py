@@ -7,7 +7,8 @@ domain (discovery on loopback), waits for it to be healthy, then runs the rclpy 
 ``waitUntilNav2Active()`` speaks (``amcl/get_state``, a zero ``/initialpose`` until ``/amcl_pose``,
 ``bt_navigator/get_state``). Reported per repeat: the seconds to healthy, the protocol's own seconds
 and the total from ``up``; then the face's CPU (share of one core) and RSS (its process and children)
-while idle, and while a ROS 2 user echoes the battery and the clock and drives on ``/cmd_vel``.
+while idle, and while a ROS 2 user echoes the battery and the clock and drives on ``/cmd_vel`` (Twist);
+then its RSS once a user has driven with TwistStamped too, which the face takes on a second DDS participant.
 """
 
 from __future__ import annotations
@@ -31,8 +32,10 @@ from deploy.paths import REPO_ROOT
 
 ROS2_PYTHON = REPO_ROOT / ".venv-ros2" / "bin" / "python"
 USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
-#: What the busy user does while the face's CPU is measured.
-BUSY_STEPS = "battery,clock,drive,drive_stamped"
+#: What the busy user does while the face's CPU is measured: /cmd_vel as Twist, Jazzy's default.
+BUSY_STEPS = "battery,clock,drive"
+#: Then /cmd_vel as TwistStamped, which the face takes on a second DDS participant made when first needed.
+STAMPED_STEPS = "drive_stamped"
 
 
 class BenchError(RuntimeError):
@@ -48,6 +51,7 @@ class Nav2Run:
     face_cpu_busy: float
     face_rss_idle_mb: float
     face_rss_busy_mb: float
+    face_rss_stamped_mb: float
 
 
 def _user_env(domain: int) -> dict[str, str]:
@@ -98,6 +102,22 @@ def _protocol_seconds(domain: int) -> float:
     raise BenchError(f"the rclpy user reported nothing: {done.stderr[-1500:]}")
 
 
+def _busy(domain: int, steps: str, seconds: float, face: list[psutil.Process]) -> tuple[float, float]:
+    """The face's CPU share and RSS while an rclpy user runs ``steps``."""
+    user = subprocess.Popen(
+        [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", steps],
+        cwd=REPO_ROOT,
+        env=_user_env(domain),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        return _cpu_share(face, seconds), _rss_mb(face)
+    finally:
+        user.kill()
+        user.wait(timeout=10)
+
+
 def one_run(idle_s: float, busy_s: float) -> Nav2Run:
     domain = random.randint(100, 200)
     with tempfile.TemporaryDirectory(prefix="zendock-bench-nav2-") as tmp:
@@ -112,19 +132,8 @@ def one_run(idle_s: float, busy_s: float) -> Nav2Run:
             face = _face_processes(launcher)
             idle = _cpu_share(face, idle_s)
             rss_idle = _rss_mb(face)
-            busy_user = subprocess.Popen(
-                [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", BUSY_STEPS],
-                cwd=REPO_ROOT,
-                env=_user_env(domain),
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL,
-            )
-            try:
-                busy = _cpu_share(face, busy_s)
-                rss_busy = _rss_mb(face)
-            finally:
-                busy_user.kill()
-                busy_user.wait(timeout=10)
+            busy, rss_busy = _busy(domain, BUSY_STEPS, busy_s, face)
+            _, rss_stamped = _busy(domain, STAMPED_STEPS, busy_s, face)
         except psutil.NoSuchProcess as exc:
             last = launcher.logs("ros2_dds", tail_lines=5)
             raise BenchError(
@@ -140,6 +149,7 @@ def one_run(idle_s: float, busy_s: float) -> Nav2Run:
         round(busy, 4),
         round(rss_idle, 1),
         round(rss_busy, 1),
+        round(rss_stamped, 1),
     )
 
 

@@ -49,6 +49,7 @@ import zenoh
 from msgspec import Meta
 
 from services.ros2_dds.convert import ConversionError, from_ros, ros_class, to_ros
+from services.ros2_dds.lazy_interfaces import load_interfaces_on_use, load_on_first_use
 from shared import topics
 from shared.action import ActionClient, ClientGoal
 from shared.interface_types import GoalStatusCode
@@ -197,6 +198,8 @@ class Ros2Dds:
         os.environ.setdefault("FASTRTPS_DEFAULT_PROFILES_FILE", str(FAST_DDS_PROFILES))
         os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy: it would only warn
         keep_rosidl_generator_out()
+        load_interfaces_on_use()
+        load_on_first_use("yaml")  # rclpy.parameter's, for parameter strings and files
         import rclpy  # noqa: PLC0415 - only in .venv-ros2; imported when the service starts
         from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415
         from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415

@@ -219,3 +219,33 @@ def test_the_face_keeps_rosidls_code_generator_out_and_its_messages_still_work()
     )
     assert late.returncode == 0, late.stderr[-3000:]
     assert late.stdout.strip() == "False"
+
+
+def test_the_face_loads_each_interface_and_yaml_on_first_use_and_they_still_work() -> None:
+    """A generated ``<pkg>/msg/__init__`` imports every message of its package, and rclpy.parameter imports
+    yaml for parameter strings: the face imports each class when it is first read, and yaml when a
+    parameter string is parsed. The classes are rclpy's own: they get their type support and serialise."""
+    code = (
+        "import sys\n"
+        "from services.ros2_dds.lazy_interfaces import load_interfaces_on_use, load_on_first_use\n"
+        "assert load_interfaces_on_use() and load_on_first_use('yaml')\n"
+        "import rclpy.parameter\n"
+        "from rclpy.serialization import deserialize_message, serialize_message\n"
+        "from nav2_msgs.action import NavigateToPose\n"
+        "from geometry_msgs.msg import PoseWithCovarianceStamped\n"
+        "msg = PoseWithCovarianceStamped()\n"
+        "msg.pose.covariance[35] = 0.25\n"
+        "back = deserialize_message(serialize_message(msg), PoseWithCovarianceStamped)\n"
+        "goal = NavigateToPose.Goal()\n"
+        "goal.pose.pose.position.x = 2.0\n"
+        "again = deserialize_message(serialize_message(goal), NavigateToPose.Goal)\n"
+        "nav2 = sorted(m for m in sys.modules if m.startswith('nav2_msgs.action._'))\n"
+        "before = 'yaml.parser' in sys.modules\n"
+        "value = rclpy.parameter.get_parameter_value('0.5').double_value\n"
+        "print(back.pose.covariance[35], again.pose.pose.position.x, nav2, before, value)\n"
+    )
+    done = _in_ros2_python("-c", code)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == ["0.25", "2.0", "['nav2_msgs.action._navigate_to_pose']", "False", "0.5"], (
+        done.stdout
+    )
