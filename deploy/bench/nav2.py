@@ -8,7 +8,8 @@ domain (discovery on loopback), waits for it to be healthy, then runs the rclpy 
 ``bt_navigator/get_state``). Reported per repeat: the seconds to healthy, the protocol's own seconds
 and the total from ``up``; then the face's CPU (share of one core) and RSS (its process and children)
 while idle, and while a ROS 2 user echoes the battery and the clock and drives on ``/cmd_vel`` (Twist);
-then its RSS once a user has driven with TwistStamped too, which the face takes on a second DDS participant.
+then its RSS once a user has driven the robot with TwistStamped, which the face takes on a second DDS
+participant. (Before 3 December 2026 the busy figures included the TwistStamped drive.)
 """
 
 from __future__ import annotations
@@ -118,6 +119,26 @@ def _busy(domain: int, steps: str, seconds: float, face: list[psutil.Process]) -
         user.wait(timeout=10)
 
 
+def _after_stamped(domain: int, face: list[psutil.Process]) -> float:
+    """The face's RSS once an rclpy user has driven the robot with TwistStamped (through the face's second
+    participant: the robot moved, or the bench says it did not)."""
+    done = subprocess.run(
+        [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", STAMPED_STEPS],
+        cwd=REPO_ROOT,
+        env=_user_env(domain),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    steps = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    if not any(step.get("step") == "cmd_vel_stamped_odom" and step.get("ok") for step in steps):
+        raise BenchError(
+            f"driving with TwistStamped through the face did not move the robot: {steps or done.stderr[-1500:]}"
+        )
+    return _rss_mb(face)
+
+
 def one_run(idle_s: float, busy_s: float) -> Nav2Run:
     domain = random.randint(100, 200)
     with tempfile.TemporaryDirectory(prefix="zendock-bench-nav2-") as tmp:
@@ -133,7 +154,7 @@ def one_run(idle_s: float, busy_s: float) -> Nav2Run:
             idle = _cpu_share(face, idle_s)
             rss_idle = _rss_mb(face)
             busy, rss_busy = _busy(domain, BUSY_STEPS, busy_s, face)
-            _, rss_stamped = _busy(domain, STAMPED_STEPS, busy_s, face)
+            rss_stamped = _after_stamped(domain, face)
         except psutil.NoSuchProcess as exc:
             last = launcher.logs("ros2_dds", tail_lines=5)
             raise BenchError(

@@ -1,10 +1,10 @@
 """Load a ROS 2 interface package's classes one at a time, as the face first asks for each.
 
 A generated ``<pkg>/msg/__init__.py`` (and ``srv``, ``action``) is nothing but one ``from
-<pkg>.msg._snake_name import Name`` line per interface, so ``from nav2_msgs.msg import BehaviorTreeLog``
-executes every message module of the package: code, class objects and metaclasses the face never uses
-(nav2_msgs alone is 29 modules and 1.6 MB of bytecode). :func:`load_interfaces_on_use` puts a finder
-ahead of the path finder that gives such a package a module whose attributes are imported on first
+<pkg>.msg._snake_name import Name`` line per interface, so ``from nav2_msgs.action import NavigateToPose``
+executes every action module of the package: code, class objects and metaclasses the face never uses
+(``nav2_msgs.action`` alone is 15 modules and 1.3 MB of bytecode). :func:`load_interfaces_on_use` puts a
+finder ahead of the path finder that gives such a package a module whose attributes are imported on first
 access (PEP 562's module ``__getattr__``), from the same ``from ... import ...`` lines read as text.
 
 A package whose ``__init__`` holds anything else is loaded the ordinary way; so is every other module.
@@ -18,6 +18,7 @@ import importlib
 import importlib.machinery
 import importlib.util
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -117,15 +118,53 @@ def load_interfaces_on_use() -> bool:
     return True
 
 
+#: The packages :func:`load_on_first_use` stood in for.
+_STOOD_IN: set[str] = set()
+
+
+class _MadeByItsPackage:
+    """``import pkg.sub`` under a stood-in package: reading the stand-in's ``__path__`` imported the package,
+    whose own import may have made ``pkg.sub`` already. Python would run ``pkg.sub`` a second time (two
+    copies of its classes, one of them the package's); this finder hands over the one the package made."""
+
+    def find_spec(
+        self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
+    ) -> importlib.machinery.ModuleSpec | None:
+        made = sys.modules.get(fullname)
+        if made is None or fullname.rpartition(".")[0] not in _STOOD_IN:
+            return None
+        loader: Any = _AlreadyMade(made)  # a loader by protocol (see _OnUseLoader)
+        return importlib.machinery.ModuleSpec(fullname, loader)
+
+
+class _AlreadyMade:
+    """Loads a module that is already made: the same object, its own spec kept."""
+
+    def __init__(self, module: ModuleType) -> None:
+        self._module = module
+        self._spec = module.__spec__
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
+        return self._module
+
+    def exec_module(self, module: ModuleType) -> None:
+        module.__spec__ = self._spec  # the import machinery set ours
+
+
+#: One module stood in for is imported at a time: two threads reading it first must not both swap it.
+_STAND_IN_LOCK = threading.RLock()
+
+
 class _OnFirstUse(ModuleType):
     """Stands in for a module until an attribute is read, then imports it and hands every read on to it."""
 
     def __getattr__(self, attr: str) -> Any:
         name = self.__name__
-        if sys.modules.get(name) is self:
-            del sys.modules[name]
-        real = importlib.import_module(name)
-        self.__dict__.update(real.__dict__)  # later reads find the real attributes directly
+        with _STAND_IN_LOCK:
+            if sys.modules.get(name) is self:
+                sys.modules.pop(name)
+            real = importlib.import_module(name)
+            self.__dict__.update(real.__dict__)  # later reads find the real attributes directly
         return getattr(real, attr)
 
 
@@ -146,4 +185,8 @@ def load_on_first_use(name: str) -> bool:
     placeholder = _OnFirstUse(name)
     placeholder.__spec__ = spec
     sys.modules[name] = placeholder
+    if spec.submodule_search_locations is not None:
+        _STOOD_IN.add(name)
+        if not any(isinstance(finder, _MadeByItsPackage) for finder in sys.meta_path):
+            sys.meta_path.insert(0, _MadeByItsPackage())
     return True

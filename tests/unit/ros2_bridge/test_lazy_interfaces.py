@@ -9,6 +9,8 @@ from pathlib import Path
 
 from services.ros2_dds.lazy_interfaces import interface_index
 
+REPO_ROOT = Path(__file__).resolve().parents[3]
+
 GENERATED = "from demo_msgs.msg._first import First  # noqa: F401\nfrom demo_msgs.msg._second_one import SecondOne  # noqa: F401\n"
 
 
@@ -45,7 +47,7 @@ def _run(root: Path, body: str) -> str:
     )
     result = subprocess.run(
         [sys.executable, "-c", script + textwrap.dedent(body)],
-        env={"PYTHONPATH": f"{root}:{Path.cwd()}", "PYTHONDONTWRITEBYTECODE": "1"},
+        env={"PYTHONPATH": f"{root}:{REPO_ROOT}", "PYTHONDONTWRITEBYTECODE": "1"},
         capture_output=True,
         text=True,
         timeout=30,
@@ -85,3 +87,56 @@ def test_a_package_that_is_not_generated_loads_the_ordinary_way(tmp_path: Path) 
         """,
     )
     assert out.strip() == "True ['demo_msgs.msg._first', 'demo_msgs.msg._second_one']"
+
+
+def _stood_in_package(root: Path) -> None:
+    package = root / "demo_pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("from demo_pkg.sub import Thing\n")
+    (package / "sub.py").write_text(
+        "import builtins\nbuiltins.SUB_RUNS = getattr(builtins, 'SUB_RUNS', 0) + 1\nclass Thing:\n    pass\n"
+    )
+
+
+def test_a_stand_in_imports_its_module_on_the_first_read_and_only_once(tmp_path: Path) -> None:
+    _stood_in_package(tmp_path)
+    out = _run(
+        tmp_path,
+        """
+        import builtins, sys, threading
+        from services.ros2_dds.lazy_interfaces import load_on_first_use
+        print(load_on_first_use("demo_pkg"), load_on_first_use("demo_pkg"), load_on_first_use("no_such_pkg"))
+        import demo_pkg
+        print(getattr(builtins, "SUB_RUNS", 0))
+        sys.setswitchinterval(1e-6)
+        errors = []
+        def read():
+            try:
+                demo_pkg.Thing
+            except Exception as exc:
+                errors.append(exc)
+        threads = [threading.Thread(target=read) for _ in range(8)]
+        [t.start() for t in threads]
+        [t.join() for t in threads]
+        print(errors, builtins.SUB_RUNS, demo_pkg.Thing is sys.modules["demo_pkg.sub"].Thing)
+        """,
+    )
+    assert out.splitlines() == ["True False False", "0", "[] 1 True"]
+
+
+def test_a_submodule_imported_before_the_first_read_runs_once(tmp_path: Path) -> None:
+    """``import pkg.sub`` reads the stand-in's ``__path__``, which imports the package, which imports
+    ``pkg.sub``: it must not run a second time (two copies of its classes)."""
+    _stood_in_package(tmp_path)
+    out = _run(
+        tmp_path,
+        """
+        import builtins, sys
+        from services.ros2_dds.lazy_interfaces import load_on_first_use
+        load_on_first_use("demo_pkg")
+        import demo_pkg.sub
+        print(builtins.SUB_RUNS, demo_pkg.sub.Thing is sys.modules["demo_pkg"].Thing)
+        print(sys.modules["demo_pkg.sub"].__spec__.origin.endswith("sub.py"))
+        """,
+    )
+    assert out.splitlines() == ["1 True", "True"]
