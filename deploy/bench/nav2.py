@@ -83,9 +83,10 @@ def _rss_mb(processes: list[psutil.Process]) -> float:
     return sum(p.memory_info().rss for p in processes) / 1e6
 
 
-def _protocol_seconds(domain: int) -> float:
+def _user_steps(domain: int, steps: str) -> tuple[list[dict[str, Any]], str]:
+    """Run the rclpy user's ``steps`` to the end: the steps' reports, and the end of its stderr."""
     done = subprocess.run(
-        [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", "nav2_active"],
+        [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", steps],
         cwd=REPO_ROOT,
         env=_user_env(domain),
         capture_output=True,
@@ -93,14 +94,19 @@ def _protocol_seconds(domain: int) -> float:
         timeout=120,
         check=False,
     )
-    for line in done.stdout.splitlines():
-        if line.startswith("{"):
-            step = json.loads(line)
-            if step.get("step") == "nav2_active":
-                if not step["ok"]:
-                    raise BenchError(f"waitUntilNav2Active's protocol failed: {line}")
-                return float(step["seconds"])
-    raise BenchError(f"the rclpy user reported nothing: {done.stderr[-1500:]}")
+    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")], done.stderr[
+        -1500:
+    ]
+
+
+def _protocol_seconds(domain: int) -> float:
+    reports, stderr = _user_steps(domain, "nav2_active")
+    for step in reports:
+        if step.get("step") == "nav2_active":
+            if not step["ok"]:
+                raise BenchError(f"waitUntilNav2Active's protocol failed: {json.dumps(step)}")
+            return float(step["seconds"])
+    raise BenchError(f"the rclpy user reported nothing: {stderr}")
 
 
 def _busy(domain: int, steps: str, seconds: float, face: list[psutil.Process]) -> tuple[float, float]:
@@ -122,19 +128,10 @@ def _busy(domain: int, steps: str, seconds: float, face: list[psutil.Process]) -
 def _after_stamped(domain: int, face: list[psutil.Process]) -> float:
     """The face's RSS once an rclpy user has driven the robot with TwistStamped (through the face's second
     participant: the robot moved, or the bench says it did not)."""
-    done = subprocess.run(
-        [str(ROS2_PYTHON), str(USER_SCRIPT), "--steps", STAMPED_STEPS],
-        cwd=REPO_ROOT,
-        env=_user_env(domain),
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    steps = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    if not any(step.get("step") == "cmd_vel_stamped_odom" and step.get("ok") for step in steps):
+    reports, stderr = _user_steps(domain, STAMPED_STEPS)
+    if not any(step.get("step") == "cmd_vel_stamped_odom" and step.get("ok") for step in reports):
         raise BenchError(
-            f"driving with TwistStamped through the face did not move the robot: {steps or done.stderr[-1500:]}"
+            f"driving with TwistStamped through the face did not move the robot: {reports or stderr}"
         )
     return _rss_mb(face)
 
