@@ -94,9 +94,8 @@ def _user_steps(domain: int, steps: str) -> tuple[list[dict[str, Any]], str]:
         timeout=120,
         check=False,
     )
-    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")], done.stderr[
-        -1500:
-    ]
+    reports = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    return reports, done.stderr[-1500:]
 
 
 def _protocol_seconds(domain: int) -> float:

@@ -57,7 +57,7 @@ class _OnUseLoader:
     """Executes nothing at import: the module's ``__getattr__`` imports each class when it is first read.
 
     (The loader and finder protocols are met without ``importlib.abc``, which imports ``tempfile`` and
-    ``shutil`` through ``importlib.resources``: 1.3 MB of the face's RSS.)
+    ``shutil`` through ``importlib.resources``: 1.3 MB of RSS when imported on their own.)
     """
 
     def __init__(self, index: dict[str, str]) -> None:
