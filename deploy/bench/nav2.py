@@ -8,8 +8,9 @@ domain (discovery on loopback), waits for it to be healthy, then runs the rclpy 
 ``bt_navigator/get_state``). Reported per repeat: the seconds to healthy, the protocol's own seconds
 and the total from ``up``; then the face's CPU (share of one core) and RSS (its process and children)
 while idle, and while a ROS 2 user echoes the battery and the clock and drives on ``/cmd_vel`` (Twist);
-then its RSS once a user has driven the robot with TwistStamped, which the face takes on a second DDS
-participant. (Before 3 December 2026 the busy figures included the TwistStamped drive.)
+then its RSS once a user has driven the robot with TwistStamped, which the face's node takes by swapping the
+type it holds /cmd_vel under (before measurement 134, on a second DDS participant). (Before 3 December 2026
+the busy figures included the TwistStamped drive.)
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ ROS2_PYTHON = REPO_ROOT / ".venv-ros2" / "bin" / "python"
 USER_SCRIPT = REPO_ROOT / "tests" / "support" / "ros2_user.py"
 #: What the busy user does while the face's CPU is measured: /cmd_vel as Twist, Jazzy's default.
 BUSY_STEPS = "battery,clock,drive"
-#: Then /cmd_vel as TwistStamped, which the face takes on a second DDS participant made when first needed.
+#: Then /cmd_vel as TwistStamped, which the face takes by swapping its subscription's type.
 STAMPED_STEPS = "drive_stamped"
 
 

@@ -11,9 +11,9 @@ loopback only (``discovery_range``):
   ROS 2 subscription matches the publisher (polled every ``demand_poll_s``); transient-local topics
   (``/map``, ``/tf_static``) are always read, published TRANSIENT_LOCAL, and the last one is published
   again when its node comes back, so a late subscriber gets it;
-* ROS 2 -> zendock: ``/cmd_vel`` (Twist; TwistStamped too once a ROS 2 node publishes it so, through a
-  second DDS participant's node ``simulator_twist_stamped``: one participant cannot have a topic under two
-  types), ``/goal_pose`` (a ``navigate_to_pose`` goal), ``/initialpose``
+* ROS 2 -> zendock: ``/cmd_vel`` (Twist, or TwistStamped while ROS 2 nodes publish it so; while both are
+  published at once, TwistStamped on a second DDS participant's node ``simulator_twist_stamped``: one
+  participant cannot have a topic under two types), ``/goal_pose`` (a ``navigate_to_pose`` goal), ``/initialpose``
   (``simulator/set_localisation``);
 * ``navigate_to_pose``, ``dock_robot``, ``undock_robot``: rclpy ActionServers relaying goal, feedback,
   result and cancel to zendock's action servers (:class:`shared.action.ActionClient`); zendock's server
@@ -180,7 +180,12 @@ class _Face:
     node: Any
     action_servers: list[Any] = field(default_factory=list)
     services: list[Any] = field(default_factory=list)
-    extra: list[Any] = field(default_factory=list)  # nodes of the second participant (TwistStamped)
+    group: Any = None  # the callback group of its node's servers and subscriptions
+    #: ROS 2 -> zendock topics on its node: topic -> (the type it is taken under, the subscription, or None
+    #: until it can be made again after a swap of type)
+    inlets: dict[str, tuple[Inbound, Any]] = field(default_factory=dict)
+    #: nodes of the second participant, each taking one topic under a second type: (topic, type) -> node
+    extra: dict[tuple[str, str], Any] = field(default_factory=dict)
 
 
 class Ros2Dds:
@@ -193,7 +198,7 @@ class Ros2Dds:
         self._lock = threading.RLock()  # rclpy entities of the faces: created, used and destroyed under it
         self._closing = False
 
-        # --- rclpy: a context (one DDS participant); a second one carries /cmd_vel as TwistStamped if asked
+        # --- rclpy: a context (one DDS participant); a second one takes /cmd_vel under a second type if asked
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = params.discovery_range
         os.environ.setdefault("FASTRTPS_DEFAULT_PROFILES_FILE", str(FAST_DDS_PROFILES))
         os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy: it would only warn
@@ -335,15 +340,10 @@ class Ros2Dds:
                     )
                     if outlet.last is not None:
                         outlet.publisher.publish(outlet.last)
-            for inbound in INBOUND:
-                if inbound.owner == owner and inbound.ros_type != TWIST_STAMPED:  # that one: _poll_stamped
-                    rnode.create_subscription(
-                        ros_class(inbound.ros_type),
-                        inbound.ros_topic,
-                        self._inlet(inbound),
-                        rclpy_qos(QosProfile()),
-                        callback_group=group,
-                    )
+            face.group = group
+            for inbound in INBOUND:  # a topic's first type; _poll_inlet_types follows what ROS 2 publishes
+                if inbound.owner == owner and inbound.ros_topic not in face.inlets:
+                    face.inlets[inbound.ros_topic] = (inbound, self._subscribe(rnode, inbound, group))
             for action in ACTIONS:
                 if action.owner != owner:
                     continue
@@ -392,7 +392,7 @@ class Ros2Dds:
                 face.node.destroy_service(served)
             for executor, rnode in [
                 (self.executors[0], face.node),
-                *((self.executors[-1], e) for e in face.extra),
+                *((self.executors[-1], e) for e in face.extra.values()),
             ]:
                 executor.remove_node(rnode)
                 rnode.destroy_node()
@@ -400,7 +400,7 @@ class Ros2Dds:
     # --- zendock -> ROS 2 ----------------------------------------------------------------------------
 
     def _poll_demand(self) -> None:
-        self._poll_stamped()
+        self._poll_inlet_types()
         with self._lock:
             for outlet in self.outlets:
                 if outlet.route.latched:
@@ -420,31 +420,80 @@ class Ros2Dds:
                         "no ROS 2 subscription to /%s left: no longer forwarding it", outlet.route.ros_topic
                     )
 
-    def _poll_stamped(self) -> None:
-        """/cmd_vel as TwistStamped, once a ROS 2 node publishes it so: a DDS participant cannot have a topic
-        under two types, so it is a second participant's node (``<owner>_twist_stamped``)."""
-        for inbound in INBOUND:
-            face = self.faces.get(inbound.owner)
-            if inbound.ros_type != TWIST_STAMPED or face is None or face.extra:
-                continue
-            with self._lock:
-                infos = face.node.get_publishers_info_by_topic(f"/{inbound.ros_topic}")
-                if not any(info.topic_type == TWIST_STAMPED for info in infos):
+    def _poll_inlet_types(self) -> None:
+        """A topic ROS 2 publishes under more than one type (/cmd_vel: Twist, or TwistStamped as Jazzy's
+        controllers send it) is taken under whichever its publishers use.
+
+        One DDS participant cannot have a topic under two types. So the face's node holds the topic under one
+        type and swaps to the type the publishers use, and back to the first (Jazzy's default) once none is
+        left; only while both types are published at once does a second participant (made the first time it
+        is needed, a participant costs some 4.5 MB) take the other, on a node ``<owner>_<type>``."""
+        for face in list(self.faces.values()):
+            for topic, (held, subscription) in list(face.inlets.items()):
+                choices = [i for i in INBOUND if i.ros_topic == topic and i.owner == face.owner]
+                if len(choices) < 2:
                     continue
-                if len(self.contexts) < 2:  # made the first time it is needed: a participant costs
-                    self._participant(2)
-                extra = self._create_node(f"{inbound.owner}_twist_stamped", self.contexts[1])
-                extra.create_subscription(
-                    ros_class(inbound.ros_type),
-                    inbound.ros_topic,
-                    self._inlet(inbound),
-                    rclpy_qos(QosProfile()),
-                )
-                face.extra.append(extra)
-                self.executors[1].add_node(extra)
-            self.node.log.info(
-                "a ROS 2 node publishes /%s as %s: taking it too", inbound.ros_topic, inbound.ros_type
-            )
+                with self._lock:
+                    if self.faces.get(face.owner) is not face:
+                        continue
+                    if subscription is None and not self._resubscribe(face, topic, held):
+                        continue
+                    published = {
+                        info.topic_type for info in face.node.get_publishers_info_by_topic(f"/{topic}")
+                    }
+                    wanted = [i for i in choices if i.ros_type in published]
+                    if held.ros_type not in published:
+                        chosen = wanted[0] if wanted else choices[0]
+                        if chosen is not held:
+                            self._swap_inlet(face, topic, chosen)
+                        continue
+                    for inbound in wanted:
+                        if inbound is not held and (topic, inbound.ros_type) not in face.extra:
+                            self._second_participant_inlet(face, inbound)
+
+    def _swap_inlet(self, face: _Face, topic: str, inbound: Inbound) -> None:
+        """The face's node takes ``topic`` under ``inbound``'s type instead (under ``self._lock``).
+
+        rclpy destroys a subscription once its executor no longer waits on it, and until then the topic keeps
+        its old type in the participant: the new subscription is made now if it can be, else at a later poll."""
+        _, subscription = face.inlets[topic]
+        face.node.destroy_subscription(subscription)
+        face.inlets[topic] = (inbound, None)
+        self._resubscribe(face, topic, inbound)
+
+    def _resubscribe(self, face: _Face, topic: str, inbound: Inbound) -> bool:
+        try:
+            face.inlets[topic] = (inbound, self._subscribe(face.node, inbound, face.group))
+        except Exception:  # rclpy's RCLError: the old type's topic is not gone yet
+            return False
+        self.node.log.info("ROS 2 publishes /%s as %s: taking it so", topic, inbound.ros_type)
+        return True
+
+    def _second_participant_inlet(self, face: _Face, inbound: Inbound) -> None:
+        """``inbound`` on a node of the second participant, while the face's node holds its topic's other type."""
+        if len(self.contexts) < 2:
+            self._participant(2)
+        short = inbound.ros_type.rsplit("/", 1)[-1]
+        snake = "".join(f"_{c.lower()}" if c.isupper() else c for c in short).lstrip("_")
+        extra = self._create_node(f"{face.owner}_{snake}", self.contexts[1])
+        self._subscribe(extra, inbound, None)
+        face.extra[(inbound.ros_topic, inbound.ros_type)] = extra
+        self.executors[1].add_node(extra)
+        self.node.log.info(
+            "ROS 2 publishes /%s as %s too: taking that on a second participant's node /%s",
+            inbound.ros_topic,
+            inbound.ros_type,
+            extra.get_name(),
+        )
+
+    def _subscribe(self, rnode: Any, inbound: Inbound, group: Any) -> Any:
+        return rnode.create_subscription(
+            ros_class(inbound.ros_type),
+            inbound.ros_topic,
+            self._inlet(inbound),
+            rclpy_qos(QosProfile()),
+            callback_group=group,
+        )
 
     def _feed(self, outlet: _Outlet) -> None:
         qos = SENSOR_DATA if outlet.route.qos.reliability is Reliability.BEST_EFFORT else QoS(depth=10)

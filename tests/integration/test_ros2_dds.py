@@ -128,6 +128,12 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     assert clock["sim_seconds_per_wall_second"] and clock["sim_seconds_per_wall_second"] > 1.5, clock
     check("cmd_vel_odom")
     check("cmd_vel_stamped_odom")
+    check("cmd_vel_mixed_odom")
+    # both types at once: one of them on a second participant's node (which, depends on how soon the face
+    # saw the last step's TwistStamped publisher go)
+    assert "taking that on a second participant's node /simulator_twist" in "\n".join(
+        launcher.logs("ros2_dds")
+    ), face_log
     paths = check("paths")
     assert paths["staging"]["frame"] == "map" and paths["staging"]["ends"][1] == [0.0, 2.0], paths
     assert (

@@ -445,6 +445,23 @@ class User:
         forward.twist.linear.x = -0.2
         self._drive(TwistStamped, forward, "cmd_vel_stamped_odom", 1.0)
 
+    def drive_mixed(self) -> None:
+        """TwistStamped while another publisher holds /cmd_vel as Twist: both types at once (the face takes
+        the second on a second DDS participant). The Twist publisher is another participant's too: one
+        participant cannot have a topic under two types, the user's no more than the face's."""
+        other = rclpy.Context()
+        rclpy.init(context=other)
+        holder = rclpy.create_node("twist_holder", context=other)
+        try:
+            holder.create_publisher(Twist, "/cmd_vel", 10)
+            forward = TwistStamped()
+            forward.header.frame_id = "base_link"
+            forward.twist.linear.x = 0.2
+            self._drive(TwistStamped, forward, "cmd_vel_mixed_odom", 1.0)
+        finally:
+            holder.destroy_node()
+            rclpy.shutdown(context=other)
+
     def robot_pose(self) -> tuple[float, float, float] | None:
         got = self.collect(Float64MultiArray, "/map_to_base_link_pose2d", 1, 10.0)
         return tuple(got[-1].data[:3]) if got else None  # type: ignore[return-value]
@@ -950,6 +967,7 @@ STEPS = (
     "clock",
     "drive",
     "drive_stamped",
+    "drive_mixed",
     "paths",
     "navigate",
     "behaviors",
