@@ -98,11 +98,11 @@ def _run(args: argparse.Namespace) -> int:
     console = Console(stderr=args.json)
     live_wanted = not args.json and is_terminal(sys.stdout)
     # a live table on a terminal; otherwise a line every 10 s on stderr, so stdout stays the report
-    err = Console(stderr=True, highlight=False)
 
     def progress_line(sim_s: float, robots) -> None:
+        # plain text: a styled console caches each new line it measures, and a long run prints thousands
         parts = [f"{r.name} {r.state or '?'} {100 * r.battery:.0f}% {r.dockings}d" for r in robots]
-        err.print(f"[dim]{sim_s:7.0f} s[/] " + " | ".join(parts))
+        print(f"{sim_s:7.0f} s " + " | ".join(parts), file=sys.stderr, flush=True)
 
     def log(text: str) -> None:
         console.print(f"[dim]fleet:[/] {text}")

@@ -31,37 +31,53 @@ WAITING_STATE = "WAITING_FOR_DOCK"
 GIVING_WAY_STATE = "GIVING_WAY"
 #: Ground truth that jumps further than this between samples was a teleport, not a drive.
 TELEPORT_JUMP_M = 0.3
-#: Track points for the picture are kept this far apart.
+#: Track points for the picture are kept this far apart (at first: see :data:`TRACK_POINTS_MAX`).
 TRACK_STEP_M = 0.1
+#: A track longer than this drops every other point and doubles its step, so a run of any length keeps a
+#: bounded picture (about 1 h of patrolling at the first step; 128 KiB a robot).
+TRACK_POINTS_MAX = 8192
 #: Two robots' reports of one contact between them are this close in sim time.
 PAIR_WINDOW_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
 
 
 class Track:
-    """A robot's ground-truth track: points at least :data:`TRACK_STEP_M` apart, in order.
+    """A robot's ground-truth track: points at least :attr:`step` metres apart, in order, at most
+    :data:`TRACK_POINTS_MAX` of them.
 
     Kept as two arrays of doubles, 16 bytes a point, several times smaller than a list of ``(x, y)`` tuples:
-    over a long fleet run the tracks were most of what zendock's own process grew by (measurement 98)."""
+    over a long fleet run the tracks were most of what zendock's own process grew by. Past the cap the track
+    thins itself (every other point, twice the step), so it stops growing however long the run."""
 
-    __slots__ = ("xs", "ys")
+    __slots__ = ("step", "xs", "ys")
 
-    def __init__(self, points: Iterable[tuple[float, float]] = ()) -> None:
+    def __init__(self, points: Iterable[tuple[float, float]] = (), step: float = TRACK_STEP_M) -> None:
         self.xs = array("d")
         self.ys = array("d")
+        self.step = step
         for x, y in points:
             self.add(x, y)
 
     def add(self, x: float, y: float) -> None:
+        """Append a point as it is, thinning the track when it passes the cap."""
         self.xs.append(x)
         self.ys.append(y)
+        if len(self.xs) > TRACK_POINTS_MAX:
+            self.xs = self.xs[::2]
+            self.ys = self.ys[::2]
+            self.step *= 2.0
+
+    def follow(self, x: float, y: float) -> None:
+        """Append the point if it is at least a step from the last one (or is the first)."""
+        if not self.xs or math.dist((self.xs[-1], self.ys[-1]), (x, y)) >= self.step:
+            self.add(x, y)
 
     def last(self) -> tuple[float, float]:
         """The latest point (``IndexError`` when there is none)."""
         return self.xs[-1], self.ys[-1]
 
     def copy(self) -> Track:
-        twin = Track()
+        twin = Track(step=self.step)
         twin.xs = array("d", self.xs)
         twin.ys = array("d", self.ys)
         return twin
@@ -181,8 +197,7 @@ class FleetMonitor:
                 if step < TELEPORT_JUMP_M:
                     tally.distance_m += step
             tally.last_pose = here
-            if not tally.track or math.dist(tally.track.last(), here) >= TRACK_STEP_M:
-                tally.track.add(p.x, p.y)
+            tally.track.follow(p.x, p.y)
 
     def _on_battery(self, robot: str, msg: BatteryState) -> None:
         with self._lock:
@@ -245,14 +260,17 @@ class FleetMonitor:
     # --- reading --------------------------------------------------------------------------------------
 
     def snapshot(
-        self,
+        self, *, tracks: bool = True
     ) -> tuple[float, list[RobotTally], list[Conflict], list[tuple[float, float, float, str, str]]]:
+        """A copy of everything heard so far. ``tracks=False`` leaves each robot's track empty: progress
+        lines, every few seconds, need no track, and copying every track each time cost memory that the
+        allocator did not give back."""
         with self._lock:
             robots = [
                 RobotTally(
                     **{
                         **t.__dict__,
-                        "track": t.track.copy(),
+                        "track": t.track.copy() if tracks else Track(step=t.track.step),
                         "collision_kinds": dict(t.collision_kinds),
                         "give_ways_s": list(t.give_ways_s),
                     }

@@ -203,7 +203,7 @@ def _watch(
             raise ServiceError(f"the simulator's clock stopped at {sim_now:.1f} s")
         if progress is not None and time.monotonic() - last_progress >= progress_period_s:
             last_progress = time.monotonic()
-            sim_now, tallies, _, _ = monitor.snapshot()
+            sim_now, tallies, _, _ = monitor.snapshot(tracks=False)
             progress(sim_now - sim_start, tallies)
         time.sleep(0.5)
 

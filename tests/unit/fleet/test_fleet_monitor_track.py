@@ -1,4 +1,4 @@
-"""The fleet monitor's tracks: a point every 10 cm of ground truth, kept compact, copied whole."""
+"""The fleet monitor's tracks: a point every 10 cm of ground truth, kept compact and bounded, copied whole."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from deploy.fleet.monitor import TRACK_STEP_M, FleetMonitor, Track
+from deploy.fleet.monitor import TRACK_POINTS_MAX, TRACK_STEP_M, FleetMonitor, Track
 from shared.messages import Clock, Point, Pose, PoseStamped, Time
 
 
@@ -42,9 +42,25 @@ def test_a_track_keeps_its_points_in_order_and_a_copy_is_its_own() -> None:
 
 
 def test_a_track_costs_sixteen_bytes_a_point() -> None:
-    track = Track((float(i), float(i)) for i in range(10_000))
+    track = Track((float(i), float(i)) for i in range(TRACK_POINTS_MAX))
     assert track.xs.itemsize + track.ys.itemsize == 16
-    assert len(track.xs) == len(track.ys) == 10_000
+    assert len(track.xs) == len(track.ys) == TRACK_POINTS_MAX
+
+
+def test_a_track_past_its_cap_thins_itself_and_doubles_its_step() -> None:
+    track = Track()
+    for i in range(TRACK_POINTS_MAX):
+        track.follow(float(i), 0.0)
+    assert len(track) == TRACK_POINTS_MAX and track.step == TRACK_STEP_M
+    track.follow(float(TRACK_POINTS_MAX), 0.0)
+    assert len(track) == TRACK_POINTS_MAX // 2 + 1 and track.step == 2 * TRACK_STEP_M
+    assert track.xs[0] == 0.0 and track.xs[1] == 2.0, "every other point kept"
+    xs = list(track.xs)
+    assert xs == sorted(xs), "still in order"
+    for i in range(TRACK_POINTS_MAX + 1, 20 * TRACK_POINTS_MAX):
+        track.follow(float(i), 0.0)
+    assert len(track) <= TRACK_POINTS_MAX, "however long the run, the track stays under its cap"
+    assert track.copy().step == track.step
 
 
 def test_the_monitor_adds_a_point_once_the_robot_has_moved_a_track_step() -> None:
@@ -59,6 +75,16 @@ def test_the_monitor_adds_a_point_once_the_robot_has_moved_a_track_step() -> Non
     session.put("r1/ground_truth_pose", _truth(0.5, 0.0))
     assert len(tally.track) == 3, "a snapshot's track is a copy, not the live one"
     assert len(monitor.snapshot()[1][0].track) == 4
+
+
+def test_a_snapshot_for_progress_copies_no_track() -> None:
+    session = _Session()
+    monitor = FleetMonitor(session, ["r1"])  # type: ignore[arg-type]
+    for x in (0.0, 0.2, 0.4):
+        session.put("r1/ground_truth_pose", _truth(x, 0.0))
+    _, (light,), _, _ = monitor.snapshot(tracks=False)
+    assert len(light.track) == 0 and light.distance_m == pytest.approx(0.4)
+    assert len(monitor.snapshot()[1][0].track) == 3, "the live track is untouched"
 
 
 def test_the_clock_is_read_without_a_snapshot() -> None:
