@@ -34,8 +34,8 @@ TELEPORT_JUMP_M = 0.3
 #: Track points for the picture are kept this far apart (at first: see :data:`TRACK_POINTS_MAX`).
 TRACK_STEP_M = 0.1
 #: A track longer than this drops every other point and doubles its step, so a run of any length keeps a
-#: bounded picture (about 1 h of patrolling at the first step; 128 KiB a robot).
-TRACK_POINTS_MAX = 8192
+#: bounded picture (about half an hour of patrolling at the first step; 64 KiB a robot).
+TRACK_POINTS_MAX = 4096
 #: Two robots' reports of one contact between them are this close in sim time.
 PAIR_WINDOW_S = 1.0
 _CHARGING = (BatteryState.POWER_SUPPLY_STATUS_CHARGING, BatteryState.POWER_SUPPLY_STATUS_FULL)
