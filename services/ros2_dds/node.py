@@ -427,7 +427,8 @@ class Ros2Dds:
         One DDS participant cannot have a topic under two types. So the face's node holds the topic under one
         type and swaps to the type the publishers use, and back to the first (Jazzy's default) once none is
         left; only while both types are published at once does a second participant (made the first time it
-        is needed, a participant costs some 4.5 MB) take the other, on a node ``<owner>_<type>``."""
+        is needed, a participant costs some 4.5 MB) take the other, on a node ``<owner>_<type>`` that goes
+        once the two are not both published."""
         for face in list(self.faces.values()):
             for topic, (held, subscription) in list(face.inlets.items()):
                 choices = [i for i in INBOUND if i.ros_topic == topic and i.owner == face.owner]
@@ -446,7 +447,12 @@ class Ros2Dds:
                         chosen = wanted[0] if wanted else choices[0]
                         if chosen is not held:
                             self._swap_inlet(face, topic, chosen)
-                        continue
+                        held, subscription = face.inlets[topic]
+                        if subscription is None:
+                            continue
+                    for key in [k for k in face.extra if k[0] == topic]:
+                        if key[1] == held.ros_type or key[1] not in published:  # a duplicate, or unused
+                            self._drop_second_participant_inlet(face, key)
                     for inbound in wanted:
                         if inbound is not held and (topic, inbound.ros_type) not in face.extra:
                             self._second_participant_inlet(face, inbound)
@@ -484,6 +490,20 @@ class Ros2Dds:
             inbound.ros_topic,
             inbound.ros_type,
             extra.get_name(),
+        )
+
+    def _drop_second_participant_inlet(self, face: _Face, key: tuple[str, str]) -> None:
+        """The second participant's node for ``key`` (topic, type) goes: no ROS 2 node publishes that type
+        any more, or the face's own node now takes it (two would hand each message on twice). The participant
+        itself stays, ready for the next time."""
+        extra = face.extra.pop(key)
+        name = extra.get_name()
+        self.executors[-1].remove_node(extra)
+        extra.destroy_node()
+        self.node.log.info(
+            "the second participant's node /%s is gone: ROS 2 publishes /%s under one type again",
+            name,
+            key[0],
         )
 
     def _subscribe(self, rnode: Any, inbound: Inbound, group: Any) -> Any:

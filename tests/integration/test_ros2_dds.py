@@ -7,6 +7,7 @@ import json
 import math
 import os
 import random
+import re
 import subprocess
 import threading
 import time
@@ -131,9 +132,10 @@ def test_a_rclpy_user_sees_drives_and_docks_the_robot(dds_stack: tuple[Launcher,
     check("cmd_vel_mixed_odom")
     # both types at once: one of them on a second participant's node (which, depends on how soon the face
     # saw the last step's TwistStamped publisher go)
-    assert "taking that on a second participant's node /simulator_twist" in "\n".join(
-        launcher.logs("ros2_dds")
-    ), face_log
+    face_lines = "\n".join(launcher.logs("ros2_dds"))
+    assert "taking that on a second participant's node /simulator_twist" in face_lines, face_log
+    # and that node goes once the user's publishers have (the steps after take long enough for a poll)
+    assert re.search(r"the second participant's node /simulator_twist\w* is gone", face_lines), face_log
     paths = check("paths")
     assert paths["staging"]["frame"] == "map" and paths["staging"]["ends"][1] == [0.0, 2.0], paths
     assert (
