@@ -149,7 +149,7 @@ def run_fleet(
     )
     report.replaced_services = replacements_report(options.replacements)
     (run_dir / "fleet.json").write_text(strict_json.dumps(report.to_json(), indent=2) + "\n")
-    # Every robot's ground-truth track (x, y every 10 cm), for reading a run afterwards.
+    # Every robot's ground-truth track (x, y every 10 cm; 20, 40 ... once thinned past TRACK_POINTS_MAX).
     tracks = {t.name: [[round(x, 2), round(y, 2)] for x, y in t.track] for t in tallies}
     (run_dir / "tracks.json").write_text(strict_json.dumps(tracks) + "\n")
     from deploy.fleet.picture import plot_fleet  # noqa: PLC0415 - matplotlib is slow to import
