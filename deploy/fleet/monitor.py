@@ -69,7 +69,7 @@ class Track:
 
     def follow(self, x: float, y: float) -> None:
         """Append the point if it is at least a step from the last one (or is the first)."""
-        if not self.xs or math.dist((self.xs[-1], self.ys[-1]), (x, y)) >= self.step:
+        if not self.xs or math.dist(self.last(), (x, y)) >= self.step:
             self.add(x, y)
 
     def last(self) -> tuple[float, float]:
