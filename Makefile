@@ -32,8 +32,10 @@ $(TEST_STAMP): $(STAMP)
 # zendock's own bytecode. Python writes a module's cache on its first import unless PYTHONDONTWRITEBYTECODE
 # is set; with it set and no cache, every service start compiles all it imports (what that costs:
 # docs/measurements, 107). compileall writes only what is missing or older than its source.
+# The DDS face runs with -OO (deploy/stack.yaml), which reads its own cache files (.opt-2.pyc).
 bytecode: $(STAMP)
 	$(BIN)/python -m compileall -q -j 0 shared services deploy
+	$(BIN)/python -OO -m compileall -q -j 0 shared services
 
 run: $(STAMP) bytecode
 	$(BIN)/zendock demo
