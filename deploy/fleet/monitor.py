@@ -45,48 +45,62 @@ class Track:
     """A robot's ground-truth track: points at least :attr:`step` metres apart, in order, at most
     :data:`TRACK_POINTS_MAX` of them.
 
-    Kept as two arrays of doubles, 16 bytes a point, several times smaller than a list of ``(x, y)`` tuples:
-    over a long fleet run the tracks were most of what zendock's own process grew by. Past the cap the track
-    thins itself (every other point, twice the step), so it stops growing however long the run."""
+    Kept as two arrays of doubles, 16 bytes a point, several times smaller than a list of ``(x, y)`` tuples,
+    each allocated whole when the track is made (64 KiB a robot) and filled in place: over a long fleet run
+    the tracks were most of what zendock's own process grew by, first as they filled, then as they were
+    copied and thinned. Past the cap the track thins itself in place (every other point, twice the step), so
+    it takes the same memory however long the run."""
 
-    __slots__ = ("step", "xs", "ys")
+    __slots__ = ("_count", "step", "xs", "ys")
 
     def __init__(self, points: Iterable[tuple[float, float]] = (), step: float = TRACK_STEP_M) -> None:
-        self.xs = array("d")
-        self.ys = array("d")
+        self.xs = array("d", bytes(8 * TRACK_POINTS_MAX))
+        self.ys = array("d", bytes(8 * TRACK_POINTS_MAX))
+        self._count = 0
         self.step = step
         for x, y in points:
             self.add(x, y)
 
     def add(self, x: float, y: float) -> None:
-        """Append a point as it is, thinning the track when it passes the cap."""
-        self.xs.append(x)
-        self.ys.append(y)
-        if len(self.xs) > TRACK_POINTS_MAX:
-            self.xs = self.xs[::2]
-            self.ys = self.ys[::2]
-            self.step *= 2.0
+        """Append a point as it is, thinning the track first when it is full."""
+        if self._count == TRACK_POINTS_MAX:
+            self._thin()
+        self.xs[self._count] = x
+        self.ys[self._count] = y
+        self._count += 1
+
+    def _thin(self) -> None:
+        """Keep every other point (the first among them), in place, and double the step."""
+        kept = (self._count + 1) // 2
+        for i in range(kept):
+            self.xs[i] = self.xs[2 * i]
+            self.ys[i] = self.ys[2 * i]
+        self._count = kept
+        self.step *= 2.0
 
     def follow(self, x: float, y: float) -> None:
         """Append the point if it is at least a step from the last one (or is the first)."""
-        if not self.xs or math.dist(self.last(), (x, y)) >= self.step:
+        if not self._count or math.dist(self.last(), (x, y)) >= self.step:
             self.add(x, y)
 
     def last(self) -> tuple[float, float]:
         """The latest point (``IndexError`` when there is none)."""
-        return self.xs[-1], self.ys[-1]
+        if not self._count:
+            raise IndexError("the track has no point yet")
+        return self.xs[self._count - 1], self.ys[self._count - 1]
 
     def copy(self) -> Track:
         twin = Track(step=self.step)
-        twin.xs = array("d", self.xs)
-        twin.ys = array("d", self.ys)
+        twin.xs[: self._count] = self.xs[: self._count]
+        twin.ys[: self._count] = self.ys[: self._count]
+        twin._count = self._count
         return twin
 
     def __len__(self) -> int:
-        return len(self.xs)
+        return self._count
 
     def __iter__(self) -> Iterator[tuple[float, float]]:
-        return zip(self.xs, self.ys, strict=True)
+        return zip(self.xs[: self._count], self.ys[: self._count], strict=True)
 
 
 @dataclass

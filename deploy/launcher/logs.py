@@ -105,6 +105,81 @@ EVENT_PREFIX = "[zendock] "
 _ERROR_RE = re.compile(r"\berror\b", re.IGNORECASE)
 
 
+class RunFailure:
+    """Why a service's run failed, read line by line as the run prints: :func:`failure_line`'s answer over
+    the run's last ``window_lines`` lines (all of them when None), in memory that does not grow with them.
+
+    The supervisor feeds it every line of the current run. It keeps the last line, where the last traceback
+    began, and the lines that say ``error`` still inside the window (a healthy service prints none), so a
+    service that prints for hours costs the launcher a few lines, not a tail of hundreds. A
+    ``[zendock] started`` event begins a new run's account; the launcher's ``cannot start`` line is kept
+    across runs, as :func:`failure_line` keeps it.
+    """
+
+    __slots__ = (
+        "_count",
+        "_errors",
+        "_last",
+        "_last_at",
+        "_spawn",
+        "_spawn_at",
+        "_traceback_at",
+        "window_lines",
+    )
+
+    def __init__(self, window_lines: int | None = None) -> None:
+        self.window_lines = window_lines
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget everything: a new run starts its own account."""
+        self._spawn: str | None = None
+        self._spawn_at = 0
+        self._count = 0
+        self._begin_run()
+
+    def _begin_run(self) -> None:
+        self._last: str | None = None
+        self._last_at = 0
+        self._traceback_at = 0
+        self._errors: deque[tuple[int, str]] = deque()
+
+    def add(self, text: str) -> None:
+        self._count += 1
+        if text.startswith(EVENT_PREFIX):
+            if text.startswith(f"{EVENT_PREFIX}started"):
+                self._begin_run()
+            elif text.startswith(f"{EVENT_PREFIX}cannot start"):
+                self._spawn, self._spawn_at = text, self._count
+            return
+        stripped = text.strip()
+        if not stripped:
+            return
+        self._last, self._last_at = stripped, self._count
+        if text.startswith("Traceback"):
+            self._traceback_at = self._count
+        if _ERROR_RE.search(text):
+            self._errors.append((self._count, stripped))
+            self._forget_before_window()
+
+    def _forget_before_window(self) -> int:
+        """Drop the error lines that have left the window; the number of the window's first line."""
+        first = 1 if self.window_lines is None else self._count - self.window_lines + 1
+        while self._errors and self._errors[0][0] < first:
+            self._errors.popleft()
+        return first
+
+    def reason(self) -> str | None:
+        first = self._forget_before_window()
+        if self._last is None or self._last_at < first:
+            # It never ran: the launcher's own line says why (``cannot start .venv-ros2/bin/python: ...``).
+            spawn = self._spawn if self._spawn_at >= first else None
+            return spawn.removeprefix(EVENT_PREFIX).strip() if spawn else None
+        if self._traceback_at and self._traceback_at >= first:
+            return self._last
+        return self._errors[0][1] if self._errors else self._last
+
+
 def failure_line(lines: list[str]) -> str | None:
     """The line that says why a service's last run failed, from its log's texts (oldest first).
 
@@ -113,19 +188,10 @@ def failure_line(lines: list[str]) -> str | None:
     else the last line the service printed; for a program that could not be started at all, the launcher's
     line saying why. None when there is nothing.
     """
-    starts = [i for i, text in enumerate(lines) if text.startswith(f"{EVENT_PREFIX}started")]
-    output = [
-        text
-        for text in lines[starts[-1] + 1 if starts else 0 :]
-        if text.strip() and not text.startswith(EVENT_PREFIX)
-    ]
-    if not output:
-        # It never ran: the launcher's own line says why (``cannot start .venv-ros2/bin/python: ...``).
-        spawn = [text for text in lines if text.startswith(f"{EVENT_PREFIX}cannot start")]
-        return spawn[-1].removeprefix(EVENT_PREFIX).strip() if spawn else None
-    if any(text.startswith("Traceback") for text in output):
-        return output[-1].strip()
-    return next((text.strip() for text in output if _ERROR_RE.search(text)), output[-1].strip())
+    failure = RunFailure()
+    for text in lines:
+        failure.add(text)
+    return failure.reason()
 
 
 def merge_by_time(per_service: list[list[LogLine]]) -> list[LogLine]:

@@ -11,13 +11,12 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import time
-from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from deploy.launcher.graph import dependency_order, with_dependencies
 from deploy.launcher.health import LivelinessWatcher, run_check
-from deploy.launcher.logs import EVENT_PREFIX, RotatingLog, failure_line
+from deploy.launcher.logs import EVENT_PREFIX, RotatingLog, RunFailure
 from deploy.launcher.plan import LaunchPlan, ServicePlan
 from deploy.launcher.process import GroupProcess, ServiceProcess
 from deploy.launcher.restart import FINAL_EXITS, Backoff
@@ -43,8 +42,8 @@ def missing_program_hint(program: str) -> str:
     return ""
 
 
-#: How many of a run's last lines are kept to say why it ended.
-RUN_LINES_KEPT = 200
+#: Why a run ended is read from its last lines, this many of them (the launcher's events among them).
+RUN_LINES_READ = 200
 
 
 def _describe_exit(code: int) -> str:
@@ -69,8 +68,8 @@ class ServiceRunner:
         #: Why the last run ended: its exit and the line that says why (``ps`` shows it while restarting
         #: and once it runs again).
         self.last_exit = ""
-        #: The current run's lines (and the launcher's events), for :func:`failure_line` when it ends.
-        self._run_lines: deque[str] = deque(maxlen=RUN_LINES_KEPT)
+        #: Why the current run ends, followed as its lines (and the launcher's events) come.
+        self._run_failure = RunFailure(window_lines=RUN_LINES_READ)
         self.next_start_at: float | None = None
         self._launched_wall: float | None = None
         self._health = "none"
@@ -91,7 +90,7 @@ class ServiceRunner:
 
     # -- output -------------------------------------------------------------------------------------
     def output(self, text: str) -> None:
-        self._run_lines.append(text)
+        self._run_failure.add(text)
         if self._log is not None:
             self._log.write(text)
         self._sup.emit_line(self.name, text)
@@ -359,10 +358,10 @@ class ServiceRunner:
                 break
             launched_at = time.monotonic()
             self._launched_wall = time.time()
-            self._run_lines.clear()  # why this run ends is this run's to say
+            self._run_failure.clear()  # why this run ends is this run's to say
             code = await self._run_once(launched_at)
             self.exit_code = code
-            why = failure_line(list(self._run_lines))
+            why = self._run_failure.reason()
             self.last_exit = _describe_exit(code) + (f": {why}" if why else "")
             if self._stopping:
                 break

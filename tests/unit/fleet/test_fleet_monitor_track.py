@@ -47,6 +47,18 @@ def test_a_track_costs_sixteen_bytes_a_point() -> None:
     assert len(track.xs) == len(track.ys) == TRACK_POINTS_MAX
 
 
+def test_a_track_takes_its_memory_once_and_keeps_it() -> None:
+    """Its arrays are allocated whole when it is made and never grow, move or shrink: the run's length does
+    not change what a track costs."""
+    track = Track()
+    where = (track.xs.buffer_info(), track.ys.buffer_info())
+    assert where[0][1] == where[1][1] == TRACK_POINTS_MAX
+    for i in range(5 * TRACK_POINTS_MAX):
+        track.add(float(i), float(-i))
+    assert (track.xs.buffer_info(), track.ys.buffer_info()) == where
+    assert track.last() == (float(5 * TRACK_POINTS_MAX - 1), float(1 - 5 * TRACK_POINTS_MAX))
+
+
 def test_a_track_past_its_cap_thins_itself_and_doubles_its_step() -> None:
     track = Track()
     for i in range(TRACK_POINTS_MAX):
@@ -54,9 +66,9 @@ def test_a_track_past_its_cap_thins_itself_and_doubles_its_step() -> None:
     assert len(track) == TRACK_POINTS_MAX and track.step == TRACK_STEP_M
     track.follow(float(TRACK_POINTS_MAX), 0.0)
     assert len(track) == TRACK_POINTS_MAX // 2 + 1 and track.step == 2 * TRACK_STEP_M
-    assert track.xs[0] == 0.0 and track.xs[1] == 2.0, "every other point kept"
-    xs = list(track.xs)
-    assert xs == sorted(xs), "still in order"
+    xs = [x for x, _ in track]
+    assert xs[:3] == [0.0, 2.0, 4.0] and xs[-2:] == [float(TRACK_POINTS_MAX - 2), float(TRACK_POINTS_MAX)]
+    assert xs == sorted(xs), "every other point kept, still in order, the newest last"
     for i in range(TRACK_POINTS_MAX + 1, 20 * TRACK_POINTS_MAX):
         track.follow(float(i), 0.0)
     assert len(track) <= TRACK_POINTS_MAX, "however long the run, the track stays under its cap"

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import io
+import random
+from collections import deque
 from pathlib import Path
 
 from deploy.launcher.logs import (
     Follower,
     LogLine,
     RotatingLog,
+    RunFailure,
     failure_line,
     log_files,
     merge_by_time,
@@ -103,3 +106,45 @@ def test_failure_line_is_the_cause_from_the_last_run() -> None:
         == "last words"
     )
     assert failure_line(["[zendock] started (pid 5)", "[zendock] exited with code 1"]) is None
+
+
+def test_run_failure_follows_a_run_as_failure_line_reads_its_last_lines() -> None:
+    """Fed line by line, it gives :func:`failure_line`'s answer over the window's lines, whatever they are."""
+    vocabulary = [
+        "[zendock] started (pid 7)",
+        "[zendock] cannot start .venv-ros2/bin/python: No such file",
+        "[zendock] exited with code 1",
+        "Traceback (most recent call last):",
+        "error: world.yaml: cannot read",
+        "ValueError: bad pose",
+        "planning a path",
+        "   ",
+        "docked",
+    ]
+    rng = random.Random(57)
+    for window in (1, 5, 40):
+        failure = RunFailure(window_lines=window)
+        kept: deque[str] = deque(maxlen=window)
+        for step in range(3000):
+            text = rng.choice(vocabulary)
+            failure.add(text)
+            kept.append(text)
+            assert failure.reason() == failure_line(list(kept)), f"window {window}, line {step}: {list(kept)}"
+            if rng.random() < 0.01:
+                failure.clear()
+                kept.clear()
+
+
+def test_run_failure_forgets_an_error_once_it_leaves_the_window() -> None:
+    failure = RunFailure(window_lines=200)
+    failure.add("[zendock] started (pid 9)")
+    failure.add("error: a transient one, long ago")
+    for i in range(199):
+        failure.add(f"patrolling, lap {i}")
+    assert failure.reason() == "error: a transient one, long ago"
+    failure.add("patrolling, lap 199")
+    assert failure.reason() == "patrolling, lap 199", "the error is older than the window's lines"
+    unbounded = RunFailure()
+    for text in ["[zendock] started (pid 9)", "error: the first", *(f"line {i}" for i in range(1000))]:
+        unbounded.add(text)
+    assert unbounded.reason() == "error: the first"
