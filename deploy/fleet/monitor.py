@@ -49,7 +49,8 @@ class Track:
     each allocated whole when the track is made (64 KiB a robot) and filled in place: over a long fleet run
     the tracks were most of what zendock's own process grew by, first as they filled, then as they were
     copied and thinned. Past the cap the track thins itself in place (every other point, twice the step), so
-    it takes the same memory however long the run."""
+    it takes the same memory however long the run. Only the first ``len(track)`` items of :attr:`xs` and
+    :attr:`ys` are points; iterate the track to read them."""
 
     __slots__ = ("_count", "step", "xs", "ys")
 
@@ -70,7 +71,7 @@ class Track:
         self._count += 1
 
     def _thin(self) -> None:
-        """Keep every other point (the first among them), in place, and double the step."""
+        """Keep every other point, the first included, in place, and double the step."""
         kept = (self._count + 1) // 2
         for i in range(kept):
             self.xs[i] = self.xs[2 * i]
