@@ -73,11 +73,17 @@ class Track:
     def _thin(self) -> None:
         """Keep every other point, the first included, in place, and double the step."""
         kept = (self._count + 1) // 2
-        for i in range(kept):
-            self.xs[i] = self.xs[2 * i]
-            self.ys[i] = self.ys[2 * i]
+        self.xs[:kept] = self.xs[: self._count : 2]
+        self.ys[:kept] = self.ys[: self._count : 2]
         self._count = kept
         self.step *= 2.0
+
+    @classmethod
+    def without_points(cls, step: float = TRACK_STEP_M) -> Track:
+        """An empty track that takes no memory, for a snapshot without tracks; it can hold no point."""
+        track = cls.__new__(cls)
+        track.xs, track.ys, track._count, track.step = array("d"), array("d"), 0, step
+        return track
 
     def follow(self, x: float, y: float) -> None:
         """Append the point if it is at least a step from the last one (or is the first)."""
@@ -285,7 +291,7 @@ class FleetMonitor:
                 RobotTally(
                     **{
                         **t.__dict__,
-                        "track": t.track.copy() if tracks else Track(step=t.track.step),
+                        "track": t.track.copy() if tracks else Track.without_points(t.track.step),
                         "collision_kinds": dict(t.collision_kinds),
                         "give_ways_s": list(t.give_ways_s),
                     }
