@@ -407,11 +407,14 @@ class User:
             last_clock=round(stamps[-1], 3) if stamps else None,
         )
 
-    def _drive(self, msg_type: Any, forward: Any, step: str, seconds: float) -> None:
+    def _drive(
+        self, msg_type: Any, forward: Any, step: str, seconds: float, ready: Any = lambda: True
+    ) -> None:
+        """Drive with ``forward`` once /odom arrives, the publisher is matched and ``ready()`` holds."""
         odom: list[Odometry] = []
         sub = self.node.create_subscription(Odometry, "/odom", odom.append, 10)
         pub = self.node.create_publisher(msg_type, "/cmd_vel", 10)
-        matched = self.spin_until(lambda: bool(odom) and pub.get_subscription_count() > 0, 10.0)
+        matched = self.spin_until(lambda: bool(odom) and pub.get_subscription_count() > 0 and ready(), 10.0)
         start = odom[-1].pose.pose.position if odom else None
 
         def moved_m() -> float:
@@ -457,7 +460,14 @@ class User:
             forward = TwistStamped()
             forward.header.frame_id = "base_link"
             forward.twist.linear.x = 0.2
-            self._drive(TwistStamped, forward, "cmd_vel_mixed_odom", 1.0)
+
+            def both_types_taken() -> bool:
+                # the face takes each type on a node of its own once it has seen both publishers: drive
+                # then, not while it may still hold the topic under the last step's type alone
+                types = {i.topic_type for i in self.node.get_subscriptions_info_by_topic("/cmd_vel")}
+                return {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"} <= types
+
+            self._drive(TwistStamped, forward, "cmd_vel_mixed_odom", 1.0, ready=both_types_taken)
         finally:
             holder.destroy_node()
             rclpy.shutdown(context=other)
