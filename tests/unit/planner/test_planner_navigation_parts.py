@@ -285,6 +285,18 @@ def test_a_corridor_side_wall_explains_the_echo_at_the_cone_edge() -> None:
     assert echo_explained_by_lidar((0.0, 0.0, 0.0), echo, 0.5, sides)
 
 
+def test_a_wall_beside_a_panes_end_does_not_explain_the_ends_echo() -> None:
+    # A wall 0.32 m to the right, parallel to the heading; a pane's end 0.9 m ahead, inside the cone. The
+    # wall enters the cone (0.25 rad) 1.25 m out, so the 0.9 m echo is not the wall's: its nearest lidar
+    # hit in the cone widened by two beams lies 1.16 m away. Widened by 0.1 rad, the wall's hits from 0.94 m
+    # on had explained the echo, and the pane's end was cleared as floor.
+    wall = _wall_hits(0.0, 4.0, -0.32, 0.01)
+    assert not echo_explained_by_lidar((0.0, 0.0, 0.0), 0.9, 0.5, wall)
+    assert echo_explained_by_lidar((0.0, 0.0, 0.0), 0.9, 0.5, wall, margin_rad=0.1)
+    # The wall's own echo, from where the cone's edge meets it, is still the wall's.
+    assert echo_explained_by_lidar((0.0, 0.0, 0.0), 0.32 / math.sin(0.25), 0.5, wall)
+
+
 def test_glass_is_not_explained_by_what_the_lidar_sees_through_it() -> None:
     behind = _wall_hits(-1.0, 1.0, 3.5)  # the lidar's light went through the pane at 1.4 m
     assert not echo_explained_by_lidar((0.0, 0.0, math.pi / 2), 1.4, 0.5, behind)
