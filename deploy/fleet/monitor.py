@@ -54,9 +54,15 @@ class Track:
 
     __slots__ = ("_count", "step", "xs", "ys")
 
-    def __init__(self, points: Iterable[tuple[float, float]] = (), step: float = TRACK_STEP_M) -> None:
-        self.xs = array("d", bytes(8 * TRACK_POINTS_MAX))
-        self.ys = array("d", bytes(8 * TRACK_POINTS_MAX))
+    def __init__(
+        self,
+        points: Iterable[tuple[float, float]] = (),
+        step: float = TRACK_STEP_M,
+        *,
+        capacity: int = TRACK_POINTS_MAX,
+    ) -> None:
+        self.xs = array("d", bytes(8 * capacity))
+        self.ys = array("d", bytes(8 * capacity))
         self._count = 0
         self.step = step
         for x, y in points:
@@ -81,9 +87,7 @@ class Track:
     @classmethod
     def without_points(cls, step: float = TRACK_STEP_M) -> Track:
         """An empty track that takes no memory, for a snapshot without tracks; it can hold no point."""
-        track = cls.__new__(cls)
-        track.xs, track.ys, track._count, track.step = array("d"), array("d"), 0, step
-        return track
+        return cls(step=step, capacity=0)
 
     def follow(self, x: float, y: float) -> None:
         """Append the point if it is at least a step from the last one (or is the first)."""

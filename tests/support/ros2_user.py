@@ -408,7 +408,12 @@ class User:
         )
 
     def _drive(
-        self, msg_type: Any, forward: Any, step: str, seconds: float, ready: Any = lambda: True
+        self,
+        msg_type: Any,
+        forward: Any,
+        step: str,
+        seconds: float,
+        ready: Callable[[], bool] = lambda: True,
     ) -> None:
         """Drive with ``forward`` once /odom arrives, the publisher is matched and ``ready()`` holds."""
         odom: list[Odometry] = []
