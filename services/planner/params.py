@@ -81,6 +81,14 @@ class Params(ServiceParams):
             description="over this last stretch of the path the speed falls in proportion to what is left",
         ),
     ] = 0.3
+    approach_decel_mps2: Annotated[
+        float,
+        Meta(
+            ge=0.0,
+            description="above 0: the path's end is met braking at this rate, full speed until the brake must "
+            "start, instead of approach_velocity_scaling_dist_m's proportional slowing (0: that law)",
+        ),
+    ] = 0.75
     open_loop_acceleration: Annotated[
         bool,
         Meta(description="ramp from the last command (true) or from the measured twist, which lags (false)"),
@@ -333,6 +341,7 @@ class Params(ServiceParams):
             rotate_to_heading_angular_vel_radps=self.max_angular_vel_radps,
             regulated_linear_scaling_min_radius_m=self.regulated_linear_scaling_min_radius_m,
             approach_velocity_scaling_dist_m=self.approach_velocity_scaling_dist_m,
+            approach_decel_mps2=self.approach_decel_mps2,
             cost_scaling_dist_m=self.cost_scaling_dist_m,
             inflation_cost_scaling_factor=costmap.cost_scaling_factor,
             inscribed_radius_m=costmap.inscribed_radius_m,

@@ -4,7 +4,7 @@ After nav2_regulated_pure_pursuit_controller (Macenski et al., 2023, "Regulated 
 Path Tracking"): steer along the arc through a lookahead point (curvature ``2 y / L^2`` in the robot
 frame), with the lookahead scaled by speed, and regulate the linear speed down on tight curves
 (``regulated_linear_scaling_min_radius``), close to obstacles (cost regulation, inverting the inflation
-formula to a distance), and on the final approach. Large heading errors at the start are fixed by
+formula to a distance), and on the final approach (Nav2's proportional law, or braking at a constant rate). Large heading errors at the start are fixed by
 rotating in place, and the final yaw by rotating in place once inside the xy goal tolerance (which
 latches, like Nav2's stateful goal checker). Before a command goes out, the arc it commands is projected
 forward up to ``max_allowed_time_to_collision_s`` (and no further than the lookahead point) over the
@@ -62,9 +62,12 @@ class PurePursuitParams:
     cost_scaling_gain: float = 1.0
     inflation_cost_scaling_factor: float = 3.0
     inscribed_radius_m: float = 0.5 * min(ROBOT_LENGTH_M, ROBOT_WIDTH_M)
-    # Approach.
+    # Approach: with ``approach_decel_mps2`` 0 the speed falls in proportion to the path left over its last
+    # ``approach_velocity_scaling_dist_m`` (Nav2's law); above 0 it brakes at that rate to stop
+    # ``APPROACH_STOP_SHORT`` of the goal tolerance short of the goal (:meth:`approach_speed`).
     approach_velocity_scaling_dist_m: float = 0.6
     min_approach_linear_velocity_mps: float = 0.05
+    approach_decel_mps2: float = 0.0
     # Rotate in place.
     use_rotate_to_heading: bool = True
     rotate_to_heading_angular_vel_radps: float = 1.5
@@ -156,6 +159,30 @@ def project_arc(pose: Pose2D, linear_mps: float, angular_radps: float, times_s: 
         x = pose.x + r * (np.sin(yaw) - math.sin(pose.yaw))
         y = pose.y - r * (np.cos(yaw) - math.cos(pose.yaw))
     return np.stack([x, y, yaw], axis=1)
+
+
+#: The braking approach aims to stop this fraction of the xy goal tolerance short of the goal: the drive's
+#: lag (a late pose, a command a tick late) then spends its margin inside the tolerance, not past it.
+APPROACH_STOP_SHORT = 0.4
+
+
+def approach_speed(remaining_m: float, cruise_mps: float, params: PurePursuitParams) -> float:
+    """The fastest speed allowed with ``remaining_m`` of path left, never above ``cruise_mps``.
+
+    Nav2's law (``approach_decel_mps2`` 0) scales the speed by the fraction of
+    ``approach_velocity_scaling_dist_m`` left: the speed decays exponentially, and over the last 0.3 m the
+    robot loses about half a second against full speed. Braking at a constant rate instead,
+    ``v = sqrt(2 a d)``, keeps full speed until the brake must start, and the tolerance takes the last
+    centimetres (0.10-0.15 s lost at 0.75 m/s^2 with the simulator's drive, a tick of lag or none).
+    Never below ``min_approach_linear_velocity_mps``: the robot still reaches the tolerance.
+    """
+    p = params
+    if p.approach_decel_mps2 > 0.0:
+        short_m = APPROACH_STOP_SHORT * p.xy_goal_tolerance_m
+        approach = math.sqrt(2.0 * p.approach_decel_mps2 * max(0.0, remaining_m - short_m))
+    else:
+        approach = cruise_mps * remaining_m / p.approach_velocity_scaling_dist_m
+    return min(cruise_mps, max(approach, p.min_approach_linear_velocity_mps))
 
 
 #: A robot stopped within this many xy tolerances of the goal has arrived (its pose jitters by a centimetre
@@ -340,9 +367,7 @@ class RegulatedPurePursuit:
             v = min(v, cost_regulated_speed(costmap.cost_at(pose.x, pose.y), desired, p))
         v = max(v, p.regulated_linear_scaling_min_speed_mps)
         remaining_m = float(self._arc_length[-1] - self._arc_length[self._closest_index])
-        approach = v * remaining_m / p.approach_velocity_scaling_dist_m
-        v = min(v, max(approach, p.min_approach_linear_velocity_mps))
-        return min(v, desired)
+        return min(approach_speed(remaining_m, v, p), desired)
 
     def _checked(
         self,

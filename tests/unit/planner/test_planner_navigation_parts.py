@@ -502,6 +502,7 @@ def test_follower_settings_come_from_the_planner_parameters() -> None:
     follower = Params().follower_params()
     assert follower.approach_velocity_scaling_dist_m == pytest.approx(0.3)
     assert follower.regulated_linear_scaling_min_radius_m == pytest.approx(0.6)
+    assert follower.approach_decel_mps2 == pytest.approx(0.75)
     tuned = Params(
         approach_velocity_scaling_dist_m=0.6, regulated_linear_scaling_min_radius_m=0.9
     ).follower_params()

@@ -10,6 +10,7 @@ import pytest
 from services.planner.costmap import CostmapParams, LayeredCostmap
 from services.planner.occupancy_map import OCC_FREE, OCC_OCCUPIED, OccupancyMap
 from services.planner.pure_pursuit import (
+    APPROACH_STOP_SHORT,
     FollowStatus,
     PurePursuitParams,
     RegulatedPurePursuit,
@@ -137,6 +138,37 @@ def test_slows_on_the_final_approach() -> None:
     assert near.linear_mps == pytest.approx(0.5 * 0.15 / 0.6)  # 0.15 m left of the 0.6 m approach
     braking = follower.compute_velocity_command(Pose2D(1.85, 0.0, 0.0), (0.5, 0.0), DT)
     assert braking.linear_mps == pytest.approx(0.5 - 1.5 * DT)  # no harder than max_linear_decel
+
+
+def test_the_braking_approach_keeps_full_speed_until_the_brake_must_start() -> None:
+    follower = _follower(_straight(2.0), approach_decel_mps2=0.75)
+    far = follower.compute_velocity_command(Pose2D(1.5, 0.0, 0.0), (0.5, 0.0), DT)
+    assert far.linear_mps == pytest.approx(0.5)  # 0.5 m left: the Nav2 law would be slowing already
+    near = follower.compute_velocity_command(Pose2D(1.85, 0.0, 0.0), (0.5, 0.0), DT)
+    short_m = APPROACH_STOP_SHORT * follower.params.xy_goal_tolerance_m
+    assert near.linear_mps == pytest.approx(math.sqrt(2.0 * 0.75 * (0.15 - short_m)))
+
+
+def _time_to_the_goal(follower: RegulatedPurePursuit, pose: Pose2D, v: float) -> tuple[float, Pose2D]:
+    """Drive the follower's commands exactly until it says the goal is reached (sim seconds)."""
+    t = 0.0
+    w = 0.0
+    while t < 30.0:
+        command = follower.compute_velocity_command(pose, (v, w), DT)
+        if command.status is FollowStatus.GOAL_REACHED:
+            return t, pose
+        v, w = command.linear_mps, command.angular_radps
+        pose = _drive(pose, v, w)
+        t += DT
+    raise AssertionError(f"the goal was not reached in 30 s; the robot is at {pose}")
+
+
+def test_the_braking_approach_arrives_sooner_and_inside_the_tolerance() -> None:
+    nav2_s, _ = _time_to_the_goal(_follower(_straight(2.0)), Pose2D(0.0, 0.0, 0.0), 0.5)
+    braking = _follower(_straight(2.0), approach_decel_mps2=0.75)
+    braking_s, end = _time_to_the_goal(braking, Pose2D(0.0, 0.0, 0.0), 0.5)
+    assert braking_s < nav2_s - 0.3, (braking_s, nav2_s)
+    assert 2.0 - braking.params.xy_goal_tolerance_m <= end.x <= 2.0  # inside the tolerance, not past the goal
 
 
 def test_acceleration_limits_from_rest() -> None:
