@@ -22,6 +22,7 @@ from deploy.paths import REPO_ROOT
 from deploy.service_tools import run_tool
 from deploy.trials.time_over_bound import BOUND_MAX_LINEAR_MPS
 from shared.action import spin_in_background
+from shared.endpoints import ServiceError
 from shared.geometry import Pose2D
 from shared.interfaces.simulator import SIM_STATE, SimStateRequest, SimStateResponse
 from shared.messages import PoseStamped
@@ -138,8 +139,21 @@ def _drive_world(
                 if not nav.wait_until_active(60.0):
                     raise RuntimeError(f"no navigation server came up:\n{stack.tails()}")
 
-                def state() -> SimStateResponse:
-                    return call_service(session, f"{namespace}/simulator/state", SIM_STATE, SimStateRequest())
+                def state(wait_s: float = 5.0) -> SimStateResponse:
+                    """The simulator's state, asked every half second for up to ``wait_s``: a request sent before
+                    its service is declared finds no one, however long it waits."""
+                    deadline = time.monotonic() + wait_s
+                    while True:
+                        try:
+                            return call_service(
+                                session, f"{namespace}/simulator/state", SIM_STATE, SimStateRequest(), 0.5
+                            )
+                        except ServiceError as exc:
+                            if time.monotonic() < deadline:
+                                continue
+                            raise RuntimeError(f"{exc}; the services' logs end:\n{stack.tails()}") from None
+
+                state(wait_s=60.0)  # the navigation server can be up before the simulator answers
 
                 for goal in goals:
                     before = state()
