@@ -47,6 +47,7 @@ from services.planner.path_server import PathServer
 from services.planner.planning_worker import PlanningWorker, PlanOutcome, PlanRequest
 from services.planner.pose_sequences import PoseSequences
 from services.planner.recovery import GlassClearing
+from services.planner.world_hold import WorldHold
 from shared import topics
 from shared.action import ActionServer, ServerGoalHandle
 from shared.geometry import Pose2D
@@ -88,6 +89,7 @@ from shared.messages import (
     LaserScan,
     OccupancyGrid,
     Odometry,
+    PacingHold,
     Path,
     Pose,
     PoseStamped,
@@ -182,6 +184,10 @@ class PlannerService:
         self._last_costmap_update_s = -math.inf
 
         self._cmd_pub = node.create_publisher(Twist, topics.CMD_VEL, RELIABLE)
+        #: On sim time: the world held while the planner works with its robot standing (world_hold.py).
+        self._world_hold = WorldHold(
+            node.create_publisher(PacingHold, topics.PACING_HOLD, RELIABLE).publish, node.use_sim_time
+        )
         #: The sim time of the last snapshot: the tick the next command answers.
         self._snapshot_s = -math.inf
         self._plan_pub = node.create_publisher(Path, topics.PLAN, RELIABLE)
@@ -423,15 +429,28 @@ class PlannerService:
 
     def _on_plan_outcome(self, outcome: PlanOutcome) -> None:
         self._planning_in_flight = False
-        run, handle = self._run, self._handle
-        if run is None or handle is None or not handle.active:
-            return
-        first = run.plan is None
-        self._carry_out(run.plan_outcome(outcome, self._snapshot()))
-        if first and run.plan is not None:
-            # The first path: drive on it now, not a control period later. The world may be holding for
-            # this goal's command (the stops before it answered the tick that asked for the plan).
-            self._on_control_tick()
+        hold = self._world_hold
+        now = self._node.now()
+        # A hold for this plan lasts until the outcome is acted on (a first path's command is out, or the
+        # next work has begun), not a moment less: the world would run on in between.
+        standing = "plan" in hold.reasons
+        if standing:
+            hold.begin("plan outcome", now)
+        hold.end("plan", now)
+        try:
+            run, handle = self._run, self._handle
+            if run is None or handle is None or not handle.active:
+                return
+            first = run.plan is None
+            before = run.plan
+            self._carry_out(run.plan_outcome(outcome, self._snapshot()))
+            if run.plan is not None and (first or (standing and run.plan is not before)):
+                # The first path, or one the robot stood for: drive on it now, not a control period later.
+                # The world is holding for this goal's command (the stops before it answered the tick that
+                # asked for the plan, or the hold above).
+                self._on_control_tick()
+        finally:
+            hold.end("plan outcome", self._node.now())
 
     def _on_control_tick(self) -> None:
         if self._behaviors.active:
@@ -488,20 +507,26 @@ class PlannerService:
         now = self._node.now()
         if orders.cmd is not None:
             self._publish_cmd(*orders.cmd, answers_s=orders.cmd_answers_s)
+        hold = self._world_hold
         if orders.open_way_from is not None and run is not None:
-            self._costmap.change(
-                self._layers.open_way_through_suspicion, orders.open_way_from, run.goal, self._way_planner
-            )
+            with hold.during("way through suspicion", now):  # two searches, on this thread
+                self._costmap.change(
+                    self._layers.open_way_through_suspicion, orders.open_way_from, run.goal, self._way_planner
+                )
         if orders.restore_unheard_glass:
-            self._costmap.change(self._layers.restore_unheard_glass)
+            with hold.during("glass put back", now):
+                self._costmap.change(self._layers.restore_unheard_glass)
         grid = self._costmap.grid
         if orders.plan_from is not None and run is not None and grid is not None:
+            if self._last_cmd == (0.0, 0.0):
+                hold.begin("plan", now)  # the robot stands until the plan is back (_on_plan_outcome)
             self._planning_in_flight = True
             self._worker.submit(PlanRequest(run.generation, grid, orders.plan_from, run.goal))
         if orders.path is not None:
             self._plan_pub.publish(path_message(orders.path, now, topics.MAP_FRAME))
         if orders.clear is not None:
-            self._costmap.change(self._layers.clear, orders.clear, orders.clear_around)
+            with hold.during("clearing", now):
+                self._costmap.change(self._layers.clear, orders.clear, orders.clear_around)
         if orders.feedback is not None and handle is not None:
             feedback = orders.feedback
             handle.publish_feedback(
@@ -516,6 +541,7 @@ class PlannerService:
                 )
             )
         if orders.end is not None and handle is not None:
+            hold.end_all(now)
             self._run = self._handle = None
             result = _result(orders.end.code, orders.end.message)
             if orders.end.ending is Ending.SUCCEEDED:

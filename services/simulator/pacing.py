@@ -5,7 +5,8 @@ command computed for sim time ``t`` arrives when the world is already at ``t + 0
 drives blind in between. A lockstep simulator would wait for every controller at every step; this one
 waits only when it matters -- while a robot moves on a command older than ``driver_gap_s`` of sim
 time, or while its localisation (``map_to_base_link_pose2d``) is older than ``pose_gap_s`` -- and
-never longer than ``driver_wait_max_s`` of wall time for the same late input, so a service that died
+never longer than ``driver_wait_max_s`` of wall time for the same late input (``hold_wait_max_s`` for a
+hold a controller announced while it works: a plan, a costmap change), so a service that died
 cannot freeze the world (the ``cmd_vel`` watchdog then stops its robot as usual). The achieved
 real-time factor is then what the whole stack sustains, not what the physics alone could do.
 
@@ -57,6 +58,15 @@ class PacingParams(ComponentParams, frozen=True):
     driver_wait_max_s: Annotated[
         float, Meta(ge=0, description="wait at most this long (wall) for one late command")
     ] = 0.1
+    #: The longest wait while every late input is a hold a live service announced (wall seconds).
+    hold_wait_max_s: Annotated[
+        float,
+        Meta(
+            ge=0,
+            description="wait at most this long (wall) while only announced holds are late: a controller "
+            "that said it is at work (a plan, a costmap change) is waited for, not stepped past",
+        ),
+    ] = 2.0
     #: A robot's pose is late once this old (sim seconds): three periods of the 10 Hz pose.
     pose_gap_s: Annotated[float, Meta(gt=0, description="a robot's pose older than this (sim) is late")] = 0.3
     #: Lockstep: a moving robot's command is late once its own controller's period (from the cadence of its
@@ -218,13 +228,21 @@ class DriverPacer:
             self._gave_up_current = False
             self.holds += 1
         waited = wall_now_s - self._since_wall_s
-        if waited >= self.params.driver_wait_max_s:
+        if waited >= self._budget_s(late):
             if not self._gave_up_current:
                 self._gave_up_current = True
                 self.gave_up += 1
                 self.gave_up_on = tuple((name, sim_now_s - last_s) for name, last_s in late)
             return False  # budget spent on these commands: step on until a new command arrives
         return True
+
+    def _budget_s(self, late: tuple[tuple[str, float], ...]) -> float:
+        """How long the world waits for ``late``: an announced hold's budget when nothing else is late (its
+        holder said it is at work, and lets go when done; a holder that died is waited for that long once),
+        else the budget for a late command or pose."""
+        if all(_input_kind(name) == "hold" for name, _ in late):
+            return max(self.params.hold_wait_max_s, self.params.driver_wait_max_s)
+        return self.params.driver_wait_max_s
 
     def note_held(self, seconds: float) -> None:
         seconds = max(0.0, seconds)

@@ -36,6 +36,7 @@ from shared.messages import (
     LaserScan,
     OccupancyGrid,
     Odometry,
+    PacingHold,
     Path,
     Range,
     TFMessage,
@@ -45,7 +46,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="planner",
     summary="Navigation (Nav2's role): the map, a costmap with glass from the sonar, A*, a path follower.",
-    version="1.1",
+    version="1.2",
     publishes=(
         Topic(
             topics.CMD_VEL,
@@ -55,6 +56,14 @@ CONTRACT = Contract(
             when="while navigating",
             about="drives toward the goal, one command per control tick; its attachment carries the "
             "tick's sim time",
+        ),
+        Topic(
+            topics.PACING_HOLD,
+            PacingHold,
+            RELIABLE,
+            when="on sim time, while it works with its robot standing: a plan after a stop, the way "
+            "through suspected glass, glass put back, a clearing",
+            about="hold the world from this tick until the planner lets go (hold false; until_driven false)",
         ),
         Topic(
             topics.PLAN,

@@ -27,7 +27,7 @@ from shared.messages import (
 CONTRACT = Contract(
     service="simulator",
     summary="The world (pymunk): a differential-drive robot, its sensors, the docks' contacts, the clock.",
-    version="1.2",
+    version="1.3",
     publishes=(
         Topic(topics.CLOCK, Clock, CLOCK_QOS, rate_hz=20.0, about="sim time: every other service's clock"),
         Topic(
@@ -134,8 +134,9 @@ CONTRACT = Contract(
             PacingHold,
             QoS(depth=4),
             when="optional: pacing",
-            about="a handoff between drivers: the world waits (briefly) until its holder lets go or, "
-            "until_driven, a command that moves the robot answers the hold's tick or a later one",
+            about="a handoff between drivers, or a driver at work with its robot standing: the world waits "
+            "until its holder lets go or, until_driven, a command that moves the robot answers the hold's "
+            "tick or a later one; at most pacing.hold_wait_max_s of wall time while only holds are late",
         ),
         Topic(
             topics.POSE2D,

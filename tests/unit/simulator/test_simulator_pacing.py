@@ -141,6 +141,21 @@ def test_a_hold_lapses_once_the_world_has_run_well_past_it() -> None:
     assert handoff.current(4.61 + HOLD_LAPSE_S) is None
 
 
+def test_an_announced_hold_alone_is_waited_for_on_its_own_longer_budget() -> None:
+    """A controller that said it is at work (a plan, a costmap change) is waited for up to hold_wait_max_s;
+    a late command beside the hold brings back the shorter budget of a command."""
+    params = PacingParams(driver_gap_s=0.15, driver_wait_max_s=0.1, hold_wait_max_s=2.0)
+    pacer = DriverPacer(params)
+    hold = [Driver("r0:hold", 1.0, True)]
+    assert pacer.hold(2.0, 10.0, hold)
+    assert pacer.hold(2.0, 11.9, hold)  # 1.9 s of wall time: still waiting
+    assert not pacer.hold(2.0, 12.0, hold)  # the budget is spent: step on
+    assert pacer.gave_up == 1
+    with_command = [Driver("r0:hold", 3.0, True), Driver("r1", 3.0, moving=True)]
+    assert pacer.hold(4.0, 20.0, with_command)
+    assert not pacer.hold(4.0, 20.11, with_command)
+
+
 def test_time_held_for_a_handoff_is_counted_apart() -> None:
     pacer = DriverPacer(PARAMS)
     assert pacer.hold(2.0, 0.0, [Driver("r0:hold", 1.0, True)])
