@@ -410,16 +410,17 @@ class CollisionEvent(Message):
 
 @message("zendock_msgs/msg/PacingHold")
 class PacingHold(Message):
-    """A handoff of the robot between controllers, for a simulator that paces itself by its drivers.
+    """A robot standing for its controllers, for a simulator that paces itself by its drivers.
 
     While a robot moves, the world waits for the command of each of its controller's ticks; a robot
-    standing still is waited for by nobody. Between two drivers it stands: the docking service has sent
-    the planner a goal, or has cancelled the planner's goal and waits for it to end before it drives. A
+    standing still is waited for by nobody. It stands between two drivers (the docking service has sent
+    the planner a goal, or has cancelled the planner's goal and waits for it to end before it drives), and
+    while a driver works before it can drive on (the planner's plan after a stop, a costmap change). A
     hold (``hold`` true) says: from ``header.stamp`` (the sim time of the tick the ``holder`` decided on),
     do not run the world on until the holder lets go (``hold`` false) or, with ``until_driven``, until a
     command that moves the robot answers that tick or a later one (the next driver has taken over; a hold
-    arriving after such a command is stale and ignored). The simulator waits as it waits for a late
-    command, never longer than its budget for one late input.
+    arriving after such a command is stale and ignored). The simulator waits, while nothing but holds is
+    late, up to its budget for a hold (``pacing.hold_wait_max_s``).
     """
 
     header: Header = field(default_factory=Header)

@@ -4,11 +4,11 @@ After nav2_regulated_pure_pursuit_controller (Macenski et al., 2023, "Regulated 
 Path Tracking"): steer along the arc through a lookahead point (curvature ``2 y / L^2`` in the robot
 frame), with the lookahead scaled by speed, and regulate the linear speed down on tight curves
 (``regulated_linear_scaling_min_radius``), close to obstacles (cost regulation, inverting the inflation
-formula to a distance), and on the final approach (Nav2's proportional law, or braking at a constant rate). Large heading errors at the start are fixed by
-rotating in place, and the final yaw by rotating in place once inside the xy goal tolerance (which
-latches, like Nav2's stateful goal checker). Before a command goes out, the arc it commands is projected
-forward up to ``max_allowed_time_to_collision_s`` (and no further than the lookahead point) over the
-costmap; a lethal footprint stops the robot.
+formula to a distance), and on the final approach (Nav2's proportional law, or braking at a constant
+rate). Large heading errors at the start are fixed by rotating in place, and the final yaw by rotating
+in place once inside the xy goal tolerance (which latches, like Nav2's stateful goal checker). Before a
+command goes out, the arc it commands is projected forward up to ``max_allowed_time_to_collision_s`` (and
+no further than the lookahead point) over the costmap; a lethal footprint stops the robot.
 
 State is explicit: the path, how far along it the robot has got, and whether the goal position has been
 reached. Everything else is a function of the inputs to :meth:`RegulatedPurePursuit.compute_velocity_command`.
@@ -64,7 +64,7 @@ class PurePursuitParams:
     inscribed_radius_m: float = 0.5 * min(ROBOT_LENGTH_M, ROBOT_WIDTH_M)
     # Approach: with ``approach_decel_mps2`` 0 the speed falls in proportion to the path left over its last
     # ``approach_velocity_scaling_dist_m`` (Nav2's law); above 0 it brakes at that rate to stop
-    # ``APPROACH_STOP_SHORT`` of the goal tolerance short of the goal (:meth:`approach_speed`).
+    # ``APPROACH_STOP_SHORT`` of the goal tolerance short of the goal (:func:`approach_speed`).
     approach_velocity_scaling_dist_m: float = 0.6
     min_approach_linear_velocity_mps: float = 0.05
     approach_decel_mps2: float = 0.0
