@@ -259,7 +259,7 @@ class SimulatorService:
             "stepping on at %.2f s without %s: waited %g s (wall) for it (%d times so far)",
             self.time_s,
             late,
-            self.params.pacing.driver_wait_max_s,
+            pacer.gave_up_after_s,
             pacer.gave_up,
         )
 

@@ -208,6 +208,8 @@ class DriverPacer:
         #: last of them waited for (names and how late, sim seconds).
         self.gave_up = 0
         self.gave_up_on: tuple[tuple[str, float], ...] = ()
+        #: The wall seconds that last wait was allowed (a late command's budget, or a hold's).
+        self.gave_up_after_s = 0.0
         self._gave_up_current = False
 
     def hold(self, sim_now_s: float, wall_now_s: float, drivers: Iterable[Driver]) -> bool:
@@ -228,10 +230,12 @@ class DriverPacer:
             self._gave_up_current = False
             self.holds += 1
         waited = wall_now_s - self._since_wall_s
-        if waited >= self._budget_s(late):
+        budget_s = self._budget_s(late)
+        if waited >= budget_s:
             if not self._gave_up_current:
                 self._gave_up_current = True
                 self.gave_up += 1
+                self.gave_up_after_s = budget_s
                 self.gave_up_on = tuple((name, sim_now_s - last_s) for name, last_s in late)
             return False  # budget spent on these commands: step on until a new command arrives
         return True

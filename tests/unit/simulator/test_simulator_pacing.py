@@ -48,7 +48,7 @@ def test_a_wait_that_runs_out_is_counted_once_with_what_it_waited_for() -> None:
     late = [Driver("r0", 1.0, moving=True)]
     assert pacer.hold(1.2, 10.0, late)
     assert not pacer.hold(1.2, 10.11, late) and not pacer.hold(1.21, 10.12, late)
-    assert pacer.gave_up == 1
+    assert pacer.gave_up == 1 and pacer.gave_up_after_s == 0.1
     assert pacer.gave_up_on == (("r0", pytest.approx(0.2)),)
     assert pacing_stats(pacer, 1.21)["pacing_gave_up"] == 1.0
 
@@ -150,7 +150,7 @@ def test_an_announced_hold_alone_is_waited_for_on_its_own_longer_budget() -> Non
     assert pacer.hold(2.0, 10.0, hold)
     assert pacer.hold(2.0, 11.9, hold)  # 1.9 s of wall time: still waiting
     assert not pacer.hold(2.0, 12.0, hold)  # the budget is spent: step on
-    assert pacer.gave_up == 1
+    assert pacer.gave_up == 1 and pacer.gave_up_after_s == 2.0  # what the log says it waited
     with_command = [Driver("r0:hold", 3.0, True), Driver("r1", 3.0, moving=True)]
     assert pacer.hold(4.0, 20.0, with_command)
     assert not pacer.hold(4.0, 20.11, with_command)
