@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import zenoh
 
-from services.simulator.pacing import PacingParams
+from services.simulator.pacing import CADENCE_BREAK_S, PacingParams
 from services.simulator.params import ClockParams
 from shared.interfaces.simulator import SIM_STATE, TELEPORT, SimStateRequest, TeleportRequest
 from shared.messages import (
@@ -280,6 +280,15 @@ def test_a_handoff_holds_the_world_until_the_next_driver_moves_the_robot_or_its_
         # client last read, which flat out lags the world: the world would then await the "thinking" driver
         # (a command answering an old tick, measurement 91) where the test expects it to run free, and stand
         # short of the next hold's gap, for as long as the raised wait allows (it failed so once in make test).
+        cmd.publish(Twist.planar(0.0, 0.0))
+        # The robot's gap, and so how far past a hold's tick the world stands, is now its driver's lockstep
+        # gap (1.2 periods of the ticks its commands answered), not driver_gap_s: this driver answers the
+        # newest clock it has read, 0.15 s apart on a quiet machine, but 0.05 s apart on a busy one, and a
+        # 0.06 s gap stood the world with its last clock a period short of HELD_PAST_TICK_S (make test: "the
+        # world never stopped; clock at 2.85 s"). A stop after a pause longer than CADENCE_BREAK_S forgets the
+        # cadence (the world stood at most a driver's gap past the newest tick answered before the first stop).
+        resume_s = now() + PacingParams().driver_gap_s + CADENCE_BREAK_S + 0.1
+        wait_until(lambda: now() > resume_s, 20.0, lambda: f"the world stood at {now():.2f} s after the stop")
         cmd.publish(Twist.planar(0.0, 0.0))
 
         # A holder that drives next itself: only its let-go ends the hold.
