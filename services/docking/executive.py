@@ -109,6 +109,12 @@ class Executive:
 
     # --- what happens ----------------------------------------------------------------------------------
 
+    @property
+    def decision_due(self) -> bool:
+        """Whether the mission has something to start that should not wait for the next tick: the battery
+        trigger just fired (the node then ticks at once, so the docking begins on the reading's own time)."""
+        return self.mission.dock_wanted
+
     def battery_reading(self, percentage: float, charging: bool) -> Effects:
         if not self.mission.battery(percentage, charging):
             return []

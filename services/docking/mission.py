@@ -83,6 +83,11 @@ class Mission:
             self._dock_wanted = True
 
     @property
+    def dock_wanted(self) -> bool:
+        """Whether the next decision starts a docking (the trigger fired, or auto_dock came on while low)."""
+        return self._dock_wanted
+
+    @property
     def low(self) -> bool:
         return math.isfinite(self.percentage) and self.percentage < self.trigger.threshold
 

@@ -178,6 +178,8 @@ class DockingService:
         self._carry_out(
             self.executive.battery_reading(msg.percentage, msg.power_supply_status in CHARGING_STATUSES), now
         )
+        if self.executive.decision_due:
+            self._on_tick()  # go home on the reading's own time, not up to a control period later
 
     def _heard(self, now_s: float, *, tick: bool = False, clock_reset: bool = False) -> Heard:
         busy = not self.nav.is_task_complete()

@@ -99,6 +99,19 @@ def test_a_low_battery_starts_a_docking_run_that_asks_for_detections_from_the_st
     assert not _of(effects, GoalEnded), "nobody asked: no action to answer"
 
 
+def test_a_trigger_that_fires_asks_for_a_tick_at_once_and_a_reading_that_does_not_fire_does_not() -> None:
+    ex = _executive()
+    ex.battery_reading(0.5, False)
+    assert not ex.decision_due, "above the threshold: nothing to start"
+    ex.battery_reading(0.2, False)
+    assert ex.decision_due, "the trigger fired: the docking should start on this reading's time"
+    ex.step(_heard(0.0, battery=0.2))
+    assert ex.task is not None and ex.life.kind is TaskKind.DOCK
+    assert not ex.decision_due, "the tick started it"
+    ex.battery_reading(0.19, False)
+    assert not ex.decision_due, "still low, already docking: the trigger does not fire again"
+
+
 def test_a_goal_that_replaces_another_cancels_it_and_a_foreign_cancel_is_answered_at_once() -> None:
     ex = _executive()
     dock_goal = Goal(object(), TaskKind.DOCK)
