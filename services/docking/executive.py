@@ -111,8 +111,9 @@ class Executive:
 
     @property
     def decision_due(self) -> bool:
-        """Whether the mission has something to start that should not wait for the next tick: the battery
-        trigger just fired (the node then ticks at once, so the docking begins on the reading's own time)."""
+        """Whether the mission has a docking to start (the battery trigger fired, or auto_dock came on while
+        low): the node then ticks at once, so the docking begins on the reading's own time, not up to a
+        control period later."""
         return self.mission.dock_wanted
 
     def battery_reading(self, percentage: float, charging: bool) -> Effects:

@@ -179,7 +179,7 @@ class DockingService:
             self.executive.battery_reading(msg.percentage, msg.power_supply_status in CHARGING_STATUSES), now
         )
         if self.executive.decision_due:
-            self._on_tick()  # go home on the reading's own time, not up to a control period later
+            self._on_tick()
 
     def _heard(self, now_s: float, *, tick: bool = False, clock_reset: bool = False) -> Heard:
         busy = not self.nav.is_task_complete()
@@ -196,7 +196,8 @@ class DockingService:
 
     def _on_tick(self) -> None:
         """The control tick; also run as soon as a planner goal ends, so that the approach taking over from
-        navigation starts as the planner lets go (its last command was a stop), not up to a period later."""
+        navigation starts as the planner lets go (its last command was a stop), not up to a period later,
+        and as soon as the mission has a docking to start (:attr:`Executive.decision_due`)."""
         now = self.node.now()
         reset = clock_went_back(now, self._last_now_s)
         if reset:
