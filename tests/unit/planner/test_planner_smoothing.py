@@ -220,3 +220,61 @@ def test_the_gap_is_still_taken_when_the_way_round_is_too_long_or_missing() -> N
         _gap_room(detour_wall_to_m=0.8), (0.0, -0.4, math.pi / 2), (0.0, 0.4, math.pi / 2)
     )
     assert short_hop.length_m < 1.2  # 0.8 m through the gap beats a detour of several metres
+
+
+def _door_room(door_to_m: float, avoid_door: bool) -> CostGrid:
+    """A wall across a 4 m room at y = 0, open west of x = -1.2 (a wide way) and from 0.2 m east of x = 0
+    to ``door_to_m`` (a door); with ``avoid_door`` the door's cells are floor to go round if possible."""
+    n = 80  # 0.05 m cells, origin (-2, -2)
+    data = np.full((n, n), OCC_FREE, dtype=np.int8)
+    wall_row = 40
+    xs = -2.0 + (np.arange(n) + 0.5) * 0.05
+    door = (xs > -0.2) & (xs < door_to_m)
+    data[wall_row, (xs > -1.2) & ~door] = OCC_OCCUPIED
+    costmap = LayeredCostmap(OccupancyMap(0.05, (-2.0, -2.0, 0.0), data))
+    if avoid_door:
+        avoid = np.zeros((n, n), dtype=bool)
+        avoid[wall_row - 1 : wall_row + 2, door] = True
+        costmap.set_avoid(avoid)
+    return costmap.grid()
+
+
+def test_a_path_goes_round_floor_to_avoid_when_the_way_round_is_not_much_longer() -> None:
+    """A gap where a pane's unseen end may lie: the planner takes the wide way when it is at most
+    ``avoid_detour_factor`` times longer, and the gap when it is not (or when avoiding is off)."""
+    start, goal = (-0.5, -1.0, math.pi / 2), (-0.5, 1.0, math.pi / 2)
+    plain = GlobalPlanner().compute_path(_door_room(0.6, avoid_door=False), start, goal)
+    grid = _door_room(0.6, avoid_door=True)
+    assert grid.avoid is not None
+    round_it = GlobalPlanner().compute_path(grid, start, goal)
+    assert plain.poses[np.abs(plain.poses[:, 1]) < 0.05, 0].min() > -0.3, "without the mask it takes the door"
+    assert round_it.poses[np.abs(round_it.poses[:, 1]) < 0.05, 0].max() < -1.2, "it still takes the door"
+    assert round_it.length_m <= 2.0 * plain.length_m
+    strict = GlobalPlanner(GlobalPlannerParams(avoid_detour_factor=1.05)).compute_path(grid, start, goal)
+    off = GlobalPlanner(GlobalPlannerParams(avoid_detour_factor=0.0)).compute_path(grid, start, goal)
+    for path in (strict, off):
+        assert path.poses[np.abs(path.poses[:, 1]) < 0.05, 0].min() > -0.3, "the way round was too long"
+    with pytest.raises(ValueError, match="avoid_detour_factor"):
+        GlobalPlannerParams(avoid_detour_factor=-1.0)
+
+
+def test_floor_to_avoid_is_carried_by_each_snapshot_and_changes_no_cost() -> None:
+    plain, marked = _door_room(0.6, avoid_door=False), _door_room(0.6, avoid_door=True)
+    assert plain.avoid is None
+    assert np.array_equal(plain.costs, marked.costs)
+    costmap = LayeredCostmap(OccupancyMap(0.05, (0.0, 0.0, 0.0), np.zeros((10, 10), dtype=np.int8)))
+    first = costmap.grid()
+    costmap.set_avoid(np.zeros((10, 10), dtype=bool))  # nothing to avoid: the snapshot stays
+    assert costmap.grid() is first
+    mask = np.zeros((10, 10), dtype=bool)
+    mask[5, 5] = True
+    costmap.set_avoid(mask)
+    second = costmap.grid()
+    assert second is not first and second.avoid is not None and second.avoid[5, 5]
+    assert costmap.grid() is second
+    costmap.set_avoid(mask.copy())  # the same mask again: still the same snapshot
+    assert costmap.grid() is second
+    costmap.set_avoid(None)
+    assert costmap.grid().avoid is None
+    with pytest.raises(ValueError, match="avoid mask"):
+        costmap.set_avoid(np.zeros((3, 3), dtype=bool))
