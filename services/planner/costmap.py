@@ -122,14 +122,10 @@ def footprint_outline(length_m: float, width_m: float, spacing_m: float) -> np.n
 
 @dataclass(frozen=True, eq=False)
 class CostGrid:
-    """An immutable snapshot of master costs (uint8, ``costs[iy, ix]``) on a :class:`GridFrame`, and the
-    cells a path should go round when another way is not much longer (``avoid``, boolean like ``costs``;
-    None: none), such as the floor where a pane's end may lie unseen (see
-    :meth:`LayeredCostmap.set_avoid`)."""
+    """An immutable snapshot of master costs (uint8, ``costs[iy, ix]``) on a :class:`GridFrame`."""
 
     frame: GridFrame
     costs: np.ndarray
-    avoid: np.ndarray | None = None
 
     def cost_at(self, x: float, y: float) -> int:
         """Cost of the cell under a world point; :data:`NO_INFORMATION` off the grid."""
@@ -233,8 +229,6 @@ class LayeredCostmap:
         #: The combined costs the last snapshot was inflated from (None: inflate the whole grid next).
         self._inflated_from: np.ndarray | None = None
         self._last: CostGrid | None = None
-        #: Cells a plan should go round if it can (see :meth:`set_avoid`); None: none.
-        self._avoid: np.ndarray | None = None
         self.set_static_map(static_map)
 
     @property
@@ -257,7 +251,6 @@ class LayeredCostmap:
         if not same_grid:
             self._obstacle = np.full(static_map.data.shape, NO_INFORMATION, dtype=np.uint8)
             self._inflated_from = None
-            self._avoid = None
         self._cached = None
 
     def grid_over(self, static_map: OccupancyMap) -> CostGrid:
@@ -267,26 +260,6 @@ class LayeredCostmap:
             raise ValueError("grid_over needs a static map on the costmap's own grid")
         master = self._merged(self._static_layer_of(static_map))
         return _snapshot(self._frame, inflate(master, self._frame.resolution_m, self.params))
-
-    def set_avoid(self, avoid: np.ndarray | None) -> None:
-        """Cells a plan goes round when another way is not much longer (boolean grid, None: none), carried
-        by each :meth:`grid` snapshot as :attr:`CostGrid.avoid`. They cost nothing and inflate nothing: the
-        costs, and what the robot may touch, stay as the layers say."""
-        if avoid is not None:
-            if avoid.shape != self._frame.shape:
-                raise ValueError(
-                    f"an avoid mask of shape {avoid.shape} does not fit the grid {self._frame.shape}"
-                )
-            if not avoid.any():
-                avoid = None
-        if avoid is None and self._avoid is None:
-            return
-        if avoid is not None and self._avoid is not None and np.array_equal(avoid, self._avoid):
-            return
-        self._avoid = None if avoid is None else avoid.copy()
-        if self._avoid is not None:
-            self._avoid.flags.writeable = False
-        self._cached = None
 
     def _static_layer_of(self, static_map: OccupancyMap) -> np.ndarray:
         data = static_map.data
@@ -371,11 +344,8 @@ class LayeredCostmap:
         """The inflated master costmap, recomputed only after a change."""
         if self._cached is None:
             master = self.combined_costs()
-            inflated = self._inflated(master)
-            self._inflated_from, self._last = master, inflated
-            self._cached = (
-                inflated if self._avoid is None else CostGrid(inflated.frame, inflated.costs, self._avoid)
-            )
+            self._cached = self._inflated(master)
+            self._inflated_from, self._last = master, self._cached
         return self._cached
 
     def _inflated(self, master: np.ndarray) -> CostGrid:

@@ -280,8 +280,6 @@ class CostmapUpdater:
             except OSError as exc:
                 self._log.warning("glass memory not saved to %s: %s", self._params.glass_memory_file, exc)
         glass = self.glass.glass_mask()
-        # Where a pane's end may lie unseen short of a wall: the planner goes round if it can.
-        self.costmap.set_avoid(self.glass.unverified_gap_mask())
         if self._applied_glass is not None and np.array_equal(glass, self._applied_glass):
             return
         self._applied_glass = glass

@@ -27,12 +27,6 @@ arc is also held as glass for ``echo_hold_s`` (Nav2 pairs its range layer with a
 the same reason): long enough to steer round what was just heard, too short to pile up false glass. The
 held arcs never enter the memory kept on file and never count in the yardstick; only the evidence does.
 
-Where a pane's line (marked, or a heard line) stops short of a wall or of another pane, the floor between
-that nobody has looked at is an *unverified gap* (:meth:`GlassMemory.unverified_gap_mask`): the pane's real
-end may lie anywhere in it. It is not glass, so the way past the end stays open, but the planner goes round
-it when another way is not much longer, and the robot slows near it (measurement 121: every collision in the
-generated glass rooms was a corner clipping an end in such a gap).
-
 A pane goes on in its own direction, too: a run of marks along a straight line, long enough to be a pane,
 is carried on along that line past both ends, through floor the sonar has never looked at, for
 ``pane_extension_m`` (:mod:`services.planner.pane_extension`). Rounding the far end of a pane heard only
@@ -66,7 +60,7 @@ from services.planner.costmap import FREE_SPACE, LETHAL_OBSTACLE, NO_INFORMATION
 from services.planner.distance_transform import squared_distance_to_marks
 from services.planner.echo_pairing import Echo, EchoPairing, placed_by
 from services.planner.grid_frame import GridFrame
-from services.planner.pane_extension import MAX_GAP_CELLS, extensions_and_gaps
+from services.planner.pane_extension import MAX_GAP_CELLS, pane_extensions
 from services.planner.range_sensor_model import RangeSensorModel, reading_evidence
 
 #: Evidence above this (log-odds; P = 0.55) and below the mark threshold is suspected glass.
@@ -121,8 +115,6 @@ class GlassMemory:
         #: Squared distance (cells) to the static map's walls, exact out to the farthest a line stops short
         #: of them (see :meth:`set_walls`); None until the walls are known.
         self._wall_squared: np.ndarray | None = None
-        #: The static map's walls (boolean grid); an unverified gap ends at them. None until known.
-        self._walls: np.ndarray | None = None
         #: Cells a recovery cleared (:meth:`clear_around`): no pane's extension comes back into them. It
         #: would refill at once the floor the recovery had just forgotten to let the robot out, and the
         #: robot would be blocked again, recovery after recovery.
@@ -134,14 +126,10 @@ class GlassMemory:
         #: What the last :meth:`clear_around` forgot, as it was: the cells ``(N, 2)``, then their log-odds,
         #: looked-at, excused and cleared-by-recovery values (see :meth:`restore_unheard`).
         self._forgotten: tuple[np.ndarray, ...] | None = None
-        #: The last extension, the marks and looked-at cells it was drawn from (most updates change no mark),
-        #: and the unverified gaps beside it.
-        self._extension_cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
-        #: The last heard line's extension, the heard cells it was drawn from, the cells near the line, and
-        #: the unverified gaps beside it.
-        self._heard_line_cache: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
-        #: The two gap grids above as last combined (by identity), and the gaps grown by a cell.
-        self._gap_cache: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None
+        #: The last extension and the marks it was drawn from (most updates change no mark).
+        self._extension_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        #: The last heard line's extension and the heard cells it was drawn from.
+        self._heard_line_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         if not (math.isfinite(echo_hold_s) and echo_hold_s >= 0):
             raise ValueError(f"echo_hold_s must be a non-negative number, got {echo_hold_s}")
         self.echo_hold_s = echo_hold_s
@@ -496,10 +484,6 @@ class GlassMemory:
             # Where a pane probably goes on unheard, too: otherwise the robot rounds such ends at full speed
             # (measurement 81).
             heard = heard | self.pane_extension_mask()[rows, cols]
-            # And where its real end may lie, short of a wall (measurement 121).
-            gaps = self._grown_gaps()
-            if gaps is not None:
-                heard = heard | (gaps[rows, cols] & ~self._seen[rows, cols])
         # And glass a clearing forgot that the sonar has not looked at again: forgotten is not gone.
         heard = heard | (self._forgotten_glass[rows, cols] & ~self._seen[rows, cols])
         iy, ix = np.nonzero(heard)
@@ -513,7 +497,6 @@ class GlassMemory:
             raise ValueError(f"walls of shape {walls.shape} do not fit the grid {self.frame.shape}")
         farthest_m = max(self._robot_gap_m(), self._heard_line_gap_m())
         self._wall_squared = squared_distance_to_marks(walls, farthest_m / self.frame.resolution_m)
-        self._walls = walls.astype(bool, copy=True)
         self._extension_cache = None
         self._heard_line_cache = None
 
@@ -532,48 +515,13 @@ class GlassMemory:
 
     def pane_extension_mask(self) -> np.ndarray:
         """Boolean ``(height, width)``: where the marked panes probably go on, unseen (see the module doc)."""
-        return self._extension_and_gaps()[0]
-
-    def _extension_and_gaps(self) -> tuple[np.ndarray, np.ndarray]:
-        """The marked panes' extension and the unverified gaps beside it, cached while no mark and no
-        looked-at cell changes."""
         marks = self._log_odds >= self.model.mark_log_odds
         cached = self._extension_cache
         if cached is not None and np.array_equal(cached[0], marks) and np.array_equal(cached[1], self._seen):
-            return cached[2], cached[3]
-        extension, gaps = self._extend(marks, self._seen, self.pane_extension_m)
-        self._extension_cache = (marks, self._seen.copy(), extension, gaps)
-        return extension, gaps
-
-    def unverified_gap_mask(self) -> np.ndarray:
-        """Boolean ``(height, width)``: the unverified gaps (see the module doc) beside the marked panes'
-        extensions and the heard lines as last drawn, grown by a cell so that no diagonal step slips through
-        one, less what the sonar has looked at. Empty without walls known or without a pane extension."""
-        grown = self._grown_gaps()
-        return grown & ~self._seen if grown is not None else np.zeros(self.frame.shape, dtype=bool)
-
-    def _grown_gaps(self) -> np.ndarray | None:
-        """The unverified gaps grown by a cell, not yet less the looked-at cells; None when there are none.
-        Cached while the extension and the heard lines they come from stay as drawn: the slowdown asks at
-        every control tick (see :meth:`heard_cells_xy`)."""
-        if self.pane_extension_m <= 0 or self._walls is None:
-            return None
-        extension_gaps = self._extension_and_gaps()[1]
-        line_gaps = self._heard_line_cache[3] if self._heard_line_cache is not None else None
-        cached = self._gap_cache
-        if cached is not None and cached[0] is extension_gaps and cached[1] is line_gaps:
             return cached[2]
-        gaps = extension_gaps if line_gaps is None else extension_gaps | line_gaps
-        grown: np.ndarray | None = None
-        if gaps.any():
-            grown = gaps.copy()
-            grown[1:, :] |= gaps[:-1, :]
-            grown[:-1, :] |= gaps[1:, :]
-            grown[:, 1:] |= gaps[:, :-1]
-            grown[:, :-1] |= gaps[:, 1:]
-            grown &= ~self._walls
-        self._gap_cache = (extension_gaps, line_gaps, grown)
-        return grown
+        extension = self._extend(marks, self._seen, self.pane_extension_m)
+        self._extension_cache = (marks, self._seen.copy(), extension)
+        return extension
 
     def _extend(
         self,
@@ -582,21 +530,17 @@ class GlassMemory:
         reach_m: float,
         max_gap_cells: float = MAX_GAP_CELLS,
         gap_m: float | None = None,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> np.ndarray:
         """Runs of ``cells`` along lines (gaps of up to ``max_gap_cells`` within a run) carried on for
         ``reach_m`` through floor not ``looked_at``, stopping ``gap_m`` short of walls and of other panes
         (a pane's extension: :meth:`_robot_gap_m`, the default) and at floor a recovery cleared (see
-        :func:`~services.planner.pane_extension.extensions_and_gaps`); and the unverified gaps where it
-        stopped short, through to the wall, the other pane or floor a recovery cleared."""
+        :func:`pane_extensions`)."""
         gap_m = self._robot_gap_m() if gap_m is None else gap_m
         stops = self._cleared_by_recovery
-        solid = self._cleared_by_recovery
         if self._wall_squared is not None:
             gap_cells = gap_m / self.frame.resolution_m
             stops = stops | (self._wall_squared <= gap_cells * gap_cells)
-        if self._walls is not None:
-            solid = solid | self._walls
-        return extensions_and_gaps(
+        return pane_extensions(
             cells,
             looked_at,
             self.frame.resolution_m,
@@ -604,8 +548,6 @@ class GlassMemory:
             blocked=stops,
             clearance_m=gap_m,
             max_gap_cells=max_gap_cells,
-            solid=solid,
-            gap_reach_m=gap_m + self.frame.resolution_m,
         )
 
     def heard_line_mask(self, heard: np.ndarray) -> np.ndarray:
@@ -619,7 +561,7 @@ class GlassMemory:
             return np.zeros_like(heard)
         cached = self._heard_line_cache
         if cached is not None:
-            before, line, near_line, _ = cached
+            before, line, near_line = cached
             changed = before ^ heard
             if (
                 np.count_nonzero(changed)
@@ -628,11 +570,11 @@ class GlassMemory:
             ):
                 return line
         gap_cells = HEARD_LINE_MAX_GAP_M / self.frame.resolution_m
-        line, gaps = self._extend(
+        line = self._extend(
             heard, np.zeros_like(heard), reach_m, max_gap_cells=gap_cells, gap_m=self._heard_line_gap_m()
         )
         near_line = squared_distance_to_marks(line, HEARD_LINE_NEAR_CELLS) <= HEARD_LINE_NEAR_CELLS**2
-        self._heard_line_cache = (heard.copy(), line, near_line, gaps)
+        self._heard_line_cache = (heard.copy(), line, near_line)
         return line
 
     def suspicion_mask(self, radius_share: float = 1.0) -> np.ndarray:

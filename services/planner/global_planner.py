@@ -6,11 +6,6 @@ every move inside it. So when the path passes cells closer to an obstacle than t
 radius (``preferred_clearance_cost`` and above), the planner also searches with those cells closed
 (except around the start and the goal) and takes that path unless it is much longer.
 
-Unverified floor: a grid may name cells to go round (:attr:`CostGrid.avoid`: where a pane's unseen end may
-lie, a gap short of a wall the robot may or may not fit through). When the path crosses them, the planner
-searches again with them closed and takes that path unless it is more than ``avoid_detour_factor`` times
-longer; when the only way is through them, it goes through.
-
 Large grids are searched at half resolution (nav2 Smac planner's ``downsample_costmap``): the coarse
 grid is conservative (a coarse cell is as costly as the worst cell under it), and smoothing then runs
 against the full-resolution costmap. Small rooms are searched at full resolution.
@@ -49,8 +44,6 @@ class GlobalPlannerParams:
     clearance_detour_factor: float = 2.0
     #: Around the start and the goal the costs stay as they are, so a robot can leave a tight spot.
     clearance_free_radius_m: float = 0.35
-    #: A path round the grid's ``avoid`` cells is taken when it is at most this many times longer (0: off).
-    avoid_detour_factor: float = 2.0
     #: End the path along the goal's heading where there is room (:mod:`services.planner.goal_heading`);
     #: None: the path ends however A* reached the goal, and the follower turns there on the spot.
     goal_heading: GoalHeadingParams | None = field(default_factory=GoalHeadingParams)
@@ -58,10 +51,6 @@ class GlobalPlannerParams:
     def __post_init__(self) -> None:
         if self.downsample_factor < 1:
             raise ValueError(f"downsample_factor must be a positive integer, got {self.downsample_factor}")
-        if not (math.isfinite(self.avoid_detour_factor) and self.avoid_detour_factor >= 0):
-            raise ValueError(
-                f"avoid_detour_factor must be a non-negative number, got {self.avoid_detour_factor}"
-            )
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,10 +86,7 @@ class GlobalPlanner:
         """
         t0 = time.perf_counter()
         start_pose = _pose(start)
-        goal_pose = _pose(goal)
-        path = self._round_avoided(
-            grid, self._roomy_path(grid, start_pose, goal_pose, t0), start_pose, goal_pose, t0
-        )
+        path = self._roomy_path(grid, start_pose, _pose(goal), t0)
         if self.params.goal_heading is None or path.goal_snapped:
             return path
         poses = arrive_along_heading(grid, path.poses, self.params.goal_heading, start_pose.yaw)
@@ -124,34 +110,6 @@ class GlobalPlanner:
                 return path
             if alternative.length_m <= self.params.clearance_detour_factor * path.length_m:
                 return replace(alternative, expansions=alternative.expansions + path.expansions)
-        return path
-
-    def _round_avoided(
-        self, grid: CostGrid, path: PlannedPath, start_pose: Pose2D, goal_pose: Pose2D, t0: float
-    ) -> PlannedPath:
-        """``path``, or one round the grid's ``avoid`` cells when it crosses them and that one is not much
-        longer (see the module docstring)."""
-        avoid = grid.avoid
-        factor = self.params.avoid_detour_factor
-        if avoid is None or factor <= 0:
-            return path
-        points = np.concatenate([path.poses[:, :2], np.asarray(path.grid_points, dtype=float).reshape(-1, 2)])
-        if not _crosses(grid, avoid, points):
-            return path
-        closed = CostGrid(
-            grid.frame,
-            np.where(avoid, np.uint8(INSCRIBED_INFLATED_OBSTACLE), grid.costs).astype(grid.costs.dtype),
-        )
-        try:
-            alternative = self._plan_on(closed, start_pose, goal_pose, t0)
-        except PlanningError:
-            return path
-        if alternative.start_snapped > path.start_snapped or alternative.goal_snapped > path.goal_snapped:
-            return (
-                path  # the way round starts or ends elsewhere: the robot stands at the gap, or the goal does
-            )
-        if alternative.length_m <= factor * path.length_m:
-            return replace(alternative, expansions=alternative.expansions + path.expansions)
         return path
 
     def _plan_on(self, grid: CostGrid, start_pose: Pose2D, goal_pose: Pose2D, t0: float) -> PlannedPath:
@@ -212,15 +170,6 @@ def _passes_closed_cells(roomy: CostGrid, grid: CostGrid, points_xy: np.ndarray)
     ok = grid.frame.cells_in_bounds(cells)
     cells = cells[ok]
     return bool(np.any(closed[cells[:, 1], cells[:, 0]]))
-
-
-def _crosses(grid: CostGrid, mask: np.ndarray, points_xy: np.ndarray) -> bool:
-    """Whether any of ``points_xy`` ``(N, 2)`` lies in a cell of ``mask``."""
-    if len(points_xy) == 0:
-        return False
-    cells = grid.frame.world_to_cells(points_xy)
-    cells = cells[grid.frame.cells_in_bounds(cells)]
-    return bool(np.any(mask[cells[:, 1], cells[:, 0]]))
 
 
 def _pose(pose: PoseLike) -> Pose2D:

@@ -14,13 +14,6 @@ close the way past its end before the sonar has looked, and the planner would fi
 grid's edge. Like suspicion, the extension never enters the kept memory: once the robot faces it, the cells
 are looked at and it is gone.
 
-Where the line stops short of a wall or of a pane across it, the floor between is a gap the robot may
-fit through, or may not: the real end can lie anywhere in it. Those cells, through to the wall or the other
-pane and not yet looked at, are the *unverified gap* (:func:`extensions_and_gaps`). They are not glass (the
-way past a pane's end stays open), but the planner goes round them when another way is not much longer,
-and the robot slows near them: a front corner clipped such ends, 0.44-0.63 m from a wall, in 3-4 trials of
-every hundred generated glass rooms (measurement 121).
-
 Pure numpy on grid arrays (``array[iy, ix]``): no bus, no costmap.
 """
 
@@ -109,39 +102,16 @@ def pane_extensions(
     ``extension_m``, and never closer than ``clearance_m`` to another line's marks: two panes' extensions
     closed the gap between their ends, the way to the dock in oblique_glass, before the sonar had looked.
     ``max_gap_cells``: the longest gap along a line within one run (see :func:`pane_runs`)."""
-    return extensions_and_gaps(
-        marks, looked_at, resolution_m, extension_m, blocked, clearance_m, max_gap_cells
-    )[0]
-
-
-def extensions_and_gaps(
-    marks: np.ndarray,
-    looked_at: np.ndarray,
-    resolution_m: float,
-    extension_m: float,
-    blocked: np.ndarray | None = None,
-    clearance_m: float = 0.0,
-    max_gap_cells: float = MAX_GAP_CELLS,
-    solid: np.ndarray | None = None,
-    gap_reach_m: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`pane_extensions`, and the unverified gaps beside them (see the module doc): where a line
-    stopped at ``blocked`` floor or ``clearance_m`` short of another pane, the cells farther along it, for up
-    to ``gap_reach_m``, until a ``solid`` cell (a wall), a mark, a looked-at cell or the grid's edge.
-    ``solid`` cells are never part of a gap; without ``gap_reach_m`` there are none."""
     extended = np.zeros(marks.shape, dtype=bool)
-    gaps = np.zeros(marks.shape, dtype=bool)
     if extension_m <= 0 or not marks.any():
-        return extended, gaps
+        return extended
     height, width = marks.shape
     steps = max(1, math.ceil(2.0 * extension_m / resolution_m))  # half-cell steps: no cell skipped
     reach_cells = extension_m / resolution_m
     clearance_cells = clearance_m / resolution_m
-    gap_steps = math.ceil(2.0 * gap_reach_m / resolution_m)
     runs = pane_runs(marks, resolution_m, max_gap_cells)
     for end, direction, own in runs:
         path = end + direction * (np.arange(1, steps + 1)[:, None] * (reach_cells / steps))
-        stopped_short = False
         if clearance_cells > 0:
             # Other panes: lines across this one. A line alongside it is its own false glass, or the
             # other side of its band of marks.
@@ -157,49 +127,16 @@ def extensions_and_gaps(
                 too_close = np.nonzero(distance < clearance_cells)[0]
                 if len(too_close):
                     path = path[: too_close[0]]
-                    stopped_short = True
-        last = end
         for x, y in path:
             ix, iy = math.floor(x), math.floor(y)
             if not (0 <= ix < width and 0 <= iy < height):
-                stopped_short = False
                 break
             if marks[iy, ix]:
-                last = np.array([x, y])
                 continue  # still the pane (or another run of it)
-            if looked_at[iy, ix]:
-                stopped_short = False
-                break
-            if blocked is not None and blocked[iy, ix]:
-                stopped_short = True
+            if looked_at[iy, ix] or (blocked is not None and blocked[iy, ix]):
                 break
             extended[iy, ix] = True
-            last = np.array([x, y])
-        if stopped_short and gap_steps > 0:
-            _walk_gap(last, direction, gap_steps, marks, looked_at, solid, gaps)
-    return extended, gaps
+    return extended
 
 
-def _walk_gap(
-    start: np.ndarray,
-    direction: np.ndarray,
-    steps: int,
-    marks: np.ndarray,
-    looked_at: np.ndarray,
-    solid: np.ndarray | None,
-    gaps: np.ndarray,
-) -> None:
-    """Mark in ``gaps`` the cells along ``direction`` from ``start`` (cell units; half-cell steps, ``steps``
-    of them) up to the first solid, marked or looked-at cell or the grid's edge."""
-    height, width = marks.shape
-    for k in range(1, steps + 1):
-        x, y = start + direction * (0.5 * k)
-        ix, iy = math.floor(x), math.floor(y)
-        if not (0 <= ix < width and 0 <= iy < height):
-            return
-        if marks[iy, ix] or looked_at[iy, ix] or (solid is not None and solid[iy, ix]):
-            return
-        gaps[iy, ix] = True
-
-
-__all__ = ["MIN_PANE_LENGTH_M", "extensions_and_gaps", "pane_extensions", "pane_runs"]
+__all__ = ["MIN_PANE_LENGTH_M", "pane_extensions", "pane_runs"]

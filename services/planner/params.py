@@ -203,14 +203,6 @@ class Params(ServiceParams):
             description="avoid gaps only the inscribed circle fits through when a path with room to turn exists"
         ),
     ] = True
-    unverified_gap_detour_factor: Annotated[
-        float,
-        Meta(
-            ge=0.0,
-            description="a path that crosses a gap where a pane's unseen end may lie (short of a wall or of "
-            "another pane) goes round it when that is at most this many times longer (0: always through)",
-        ),
-    ] = 2.0
     snap_radius_m: Annotated[
         float, Meta(ge=0.0, description="a blocked start or goal snaps this far at most")
     ] = 0.3
@@ -317,7 +309,6 @@ class Params(ServiceParams):
             astar=self.astar_params(),
             smoothing=SmoothingParams(cost_weight=self.cost_weight, allow_unknown=self.allow_unknown),
             preferred_clearance_cost=room_to_turn if self.prefer_room_to_turn else 0,
-            avoid_detour_factor=self.unverified_gap_detour_factor,
             goal_heading=self._goal_heading_params() if self.arrive_along_goal_heading else None,
         )
 

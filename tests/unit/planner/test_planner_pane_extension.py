@@ -10,7 +10,7 @@ import pytest
 from services.planner.costmap import LETHAL_OBSTACLE, CostmapParams
 from services.planner.glass_memory import HEARD_LINE_EXTENSION_M, GlassMemory
 from services.planner.grid_frame import GridFrame
-from services.planner.pane_extension import extensions_and_gaps, pane_extensions, pane_runs
+from services.planner.pane_extension import pane_extensions, pane_runs
 from services.planner.rasterize import map_from_world
 from shared.world import parse_world
 
@@ -114,55 +114,6 @@ def test_an_extension_leaves_the_robot_a_way_between_the_pane_and_a_wall() -> No
     assert not glass[:, frame.world_to_cell(3.5 - gap, 1.0)[0] :].any()  # ... but leaves a way past its end
     with pytest.raises(ValueError, match="walls"):
         memory.set_walls(np.zeros((3, 3), dtype=bool))
-
-
-def test_where_a_line_stops_short_of_a_wall_the_floor_up_to_the_wall_is_an_unverified_gap() -> None:
-    """The pane's real end may lie anywhere between where its extension stopped and the wall: those cells
-    are the gap, up to the wall and no further; a line that ran out of reach, or stopped at floor the
-    sonar looked at, leaves none."""
-    marks = _pane()  # along row 20, columns 10..29
-    walls = np.zeros_like(marks)
-    walls[:, 45] = True
-    margin = walls.copy()
-    margin[:, 32:45] = True  # the robot's gap beside the wall
-    extended, gaps = extensions_and_gaps(
-        marks, np.zeros_like(marks), RES, 1.0, blocked=margin, solid=walls, gap_reach_m=0.8
-    )
-    assert set(np.nonzero(gaps.any(axis=0))[0].tolist()) == set(range(32, 45))
-    assert (
-        not (gaps & extended).any()
-        and not gaps[:, :30].any()
-        and set(np.nonzero(gaps.any(axis=1))[0]) <= {20, 21}
-    )
-    looked_at = np.zeros_like(marks)
-    looked_at[:, 31] = True  # the sonar looked past the marks first: the pane ended there
-    assert not extensions_and_gaps(marks, looked_at, RES, 1.0, blocked=margin, solid=walls, gap_reach_m=0.8)[
-        1
-    ][:, 30:].any()
-    far = np.zeros_like(margin)
-    far[:, 70:] = True  # a wall beyond the extension's reach: no gap
-    assert not extensions_and_gaps(marks, np.zeros_like(marks), RES, 1.0, blocked=far, gap_reach_m=0.8)[
-        1
-    ].any()
-    assert not extensions_and_gaps(marks, np.zeros_like(marks), RES, 1.0, blocked=margin)[1].any()
-
-
-def test_the_glass_memory_names_the_gap_beside_a_panes_end_until_the_sonar_looks() -> None:
-    frame = GridFrame(RES, (0.0, 0.0, 0.0), 80, 40)
-    memory = GlassMemory(frame, CostmapParams(), suspicion_radius_m=0.0, pane_extension_m=2.0)
-    _hear_a_pane_along_y_1(memory)
-    assert not memory.unverified_gap_mask().any(), "no walls known: no gap"
-    walls = np.zeros(frame.shape, dtype=bool)
-    walls[:, 70] = True  # a wall across the pane's line at x = 3.5
-    memory.set_walls(walls)
-    gaps = memory.unverified_gap_mask()
-    ix, iy = frame.world_to_cell(3.3, 1.0)
-    assert gaps[iy, ix], "the floor between the extension's end and the wall is not named"
-    assert not gaps[walls].any()
-    assert not gaps[:, : frame.world_to_cell(2.5, 1.0)[0]].any(), "the gap starts where the extension stops"
-    assert len(memory.heard_cells_xy((3.3, 1.0), 0.2)), "the robot does not slow near the gap"
-    memory.add_reading((3.2, 0.4, math.pi / 2), math.inf, 0.5, 0.02, 3.0)  # the sonar looks: nothing there
-    assert not memory.unverified_gap_mask()[iy, ix]
 
 
 def test_a_pane_does_not_extend_back_into_floor_a_recovery_cleared() -> None:
